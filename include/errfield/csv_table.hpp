@@ -1,0 +1,59 @@
+#pragma once
+/// A CSV file as exported by tracker software and robot controllers, read into memory with every
+/// cell kept as text until a column is asked for as numbers. Use it at the edge of a program; the
+/// estimators take plain vectors and matrices.
+///
+/// Accepted: a UTF-8 byte-order mark, CRLF or LF line ends, ',' or ';' as delimiter (detected from
+/// the header line), double-quoted cells, blank lines and lines starting with '#' (skipped), and a
+/// unit after a column name ("x [mm]" or "x (mm)" is found as "x"). Rejected with an InputError
+/// naming file, row and column: a row with a different number of cells than the header, duplicate
+/// column names, and — when a column is read as numbers — empty, non-numeric, NaN or infinite cells.
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace errfield {
+
+class CsvTable {
+ public:
+  /// Reads and parses `path`. Throws InputError if the file cannot be opened or is malformed.
+  static CsvTable read(const std::string& path);
+  /// Parses text already in memory; `source` names it in error messages.
+  static CsvTable parse(std::string_view text, std::string source);
+
+  const std::string& source() const noexcept { return source_; }
+  const std::vector<std::string>& header() const noexcept { return header_; }
+  std::size_t row_count() const noexcept { return rows_.size(); }
+  const std::vector<std::string>& row(std::size_t i) const { return rows_.at(i); }
+  /// Line number in the file (1-based) of data row i, for messages.
+  std::size_t line_of_row(std::size_t i) const { return lines_.at(i); }
+
+  bool has_column(std::string_view name) const noexcept;
+  /// Index of a column; throws InputError listing the available columns when it is missing.
+  std::size_t column_index(std::string_view name) const;
+  /// A column as numbers; throws InputError naming file, line and column for a bad cell.
+  std::vector<double> numeric_column(std::string_view name) const;
+  /// Several columns as a rows x names.size() matrix (row-major semantics: row i is data row i).
+  Eigen::MatrixXd numeric_columns(const std::vector<std::string>& names) const;
+
+ private:
+  std::string source_;
+  std::vector<std::string> header_;
+  std::vector<std::string> keys_;  // header names without units, for lookup
+  std::vector<std::vector<std::string>> rows_;
+  std::vector<std::size_t> lines_;
+};
+
+/// Shortest text that reads back to exactly `value` ("nan" and "inf" never occur in our outputs;
+/// callers write an empty cell for a missing value instead).
+std::string format_number(double value);
+
+/// Splits "a,b,c" into {"a","b","c"}, trimming spaces; empty items are an ArgumentError naming
+/// `what` (the option being parsed).
+std::vector<std::string> split_list(std::string_view text, std::string_view what);
+
+}  // namespace errfield

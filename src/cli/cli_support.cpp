@@ -1,0 +1,30 @@
+#include "cli/cli_support.hpp"
+
+#include <unistd.h>
+
+namespace errfield::cli {
+
+Progress::Progress(std::string label, std::size_t total)
+    : label_(std::move(label)),
+      total_(total),
+      enabled_(::isatty(STDERR_FILENO) != 0),
+      start_(std::chrono::steady_clock::now()),
+      last_(start_) {}
+
+void Progress::update(std::size_t done) {
+  if (!enabled_) return;
+  const auto now = std::chrono::steady_clock::now();
+  if (now - start_ < std::chrono::seconds(1) || now - last_ < std::chrono::milliseconds(200)) return;
+  last_ = now;
+  const double pct = total_ ? 100.0 * static_cast<double>(done) / static_cast<double>(total_) : 0.0;
+  std::fprintf(stderr, "\r%s: %zu/%zu (%.0f%%)   ", label_.c_str(), done, total_, pct);
+  std::fflush(stderr);
+  printed_ = true;
+}
+
+void Progress::finish() {
+  if (printed_) std::fprintf(stderr, "\r%*s\r", static_cast<int>(label_.size() + 40), "");
+  printed_ = false;
+}
+
+}  // namespace errfield::cli

@@ -1,0 +1,75 @@
+#pragma once
+// Small helpers shared by the subcommands: reading columns, writing result tables atomically,
+// and a progress line on the terminal for long runs.
+
+#include <chrono>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "errfield/atomic_file.hpp"
+#include "errfield/csv_table.hpp"
+
+namespace errfield::cli {
+
+/// A table to write: column names and, per column, one cell per row (an empty string is an
+/// empty cell). Writing it is atomic (AtomicFileWriter).
+struct OutputTable {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> columns;
+
+  void add_column(std::string name, std::vector<std::string> cells) {
+    header.push_back(std::move(name));
+    columns.push_back(std::move(cells));
+  }
+  void add_numeric_column(std::string name, const std::vector<double>& values) {
+    std::vector<std::string> cells;
+    cells.reserve(values.size());
+    for (double v : values) cells.push_back(format_number(v));
+    add_column(std::move(name), std::move(cells));
+  }
+  /// Copies every column of `input` (used to keep the targets' columns in an output).
+  void add_all_columns(const CsvTable& input) {
+    for (std::size_t c = 0; c < input.header().size(); ++c) {
+      std::vector<std::string> cells(input.row_count());
+      for (std::size_t r = 0; r < input.row_count(); ++r) cells[r] = input.row(r)[c];
+      add_column(input.header()[c], std::move(cells));
+    }
+  }
+  std::string to_csv() const {
+    std::string out;
+    for (std::size_t c = 0; c < header.size(); ++c) out += (c ? "," : "") + header[c];
+    out += "\n";
+    const std::size_t rows = columns.empty() ? 0 : columns.front().size();
+    for (std::size_t r = 0; r < rows; ++r) {
+      for (std::size_t c = 0; c < columns.size(); ++c) {
+        if (c) out += ",";
+        out += columns[c][r];
+      }
+      out += "\n";
+    }
+    return out;
+  }
+  void write(const std::string& path) const { write_file_atomically(path, to_csv()); }
+};
+
+/// Prints "label: i/n (p%)" to stderr at most every 0.2 s, only when stderr is a terminal and the
+/// job has run for more than a second; finish() clears the line.
+class Progress {
+ public:
+  Progress(std::string label, std::size_t total);
+  void update(std::size_t done);
+  void finish();
+
+ private:
+  std::string label_;
+  std::size_t total_;
+  bool enabled_;
+  bool printed_ = false;
+  std::chrono::steady_clock::time_point start_;
+  std::chrono::steady_clock::time_point last_;
+};
+
+}  // namespace errfield::cli

@@ -1,0 +1,97 @@
+#include "errfield/atomic_file.hpp"
+
+#include <csignal>
+#include <cstdio>
+#include <mutex>
+#include <random>
+#include <set>
+#include <unistd.h>
+
+#include "errfield/error.hpp"
+
+namespace errfield {
+namespace {
+
+// Temporary files currently open, so that SIGINT/SIGTERM can remove them before the process dies.
+// A fixed-size table of C strings: the signal handler may only call async-signal-safe functions.
+constexpr int kMaxPending = 64;
+char g_pending[kMaxPending][4096];
+volatile std::sig_atomic_t g_pending_used[kMaxPending];
+std::mutex g_pending_mutex;
+std::once_flag g_handlers_installed;
+
+extern "C" void remove_pending_and_reraise(int signal_number) {
+  for (int i = 0; i < kMaxPending; ++i)
+    if (g_pending_used[i]) ::unlink(g_pending[i]);
+  std::signal(signal_number, SIG_DFL);
+  std::raise(signal_number);
+}
+
+int register_pending(const std::string& path) {
+  std::call_once(g_handlers_installed, [] {
+    std::signal(SIGINT, remove_pending_and_reraise);
+    std::signal(SIGTERM, remove_pending_and_reraise);
+  });
+  std::lock_guard lock(g_pending_mutex);
+  for (int i = 0; i < kMaxPending; ++i) {
+    if (!g_pending_used[i] && path.size() < sizeof g_pending[i]) {
+      std::snprintf(g_pending[i], sizeof g_pending[i], "%s", path.c_str());
+      g_pending_used[i] = 1;
+      return i;
+    }
+  }
+  return -1;  // table full: the file is still written atomically, only not cleaned on a signal
+}
+
+void unregister_pending(int slot) {
+  if (slot < 0) return;
+  std::lock_guard lock(g_pending_mutex);
+  g_pending_used[slot] = 0;
+}
+
+}  // namespace
+
+AtomicFileWriter::AtomicFileWriter(std::filesystem::path target) : target_(std::move(target)) {
+  std::random_device rd;
+  const auto dir = target_.has_parent_path() ? target_.parent_path() : std::filesystem::path(".");
+  std::string name = ".";
+  name.append(target_.filename().string());
+  name.append(".tmp");
+  name.append(std::to_string(::getpid()));
+  name.push_back('_');
+  name.append(std::to_string(rd() % 1000000));
+  temporary_ = dir / name;
+  out_.open(temporary_, std::ios::binary | std::ios::trunc);
+  if (!out_)
+    throw Error(target_.string() + ": cannot create output file (temporary " + temporary_.string() +
+                ")");
+  slot_ = register_pending(temporary_.string());
+}
+
+AtomicFileWriter::~AtomicFileWriter() {
+  if (!committed_) {
+    out_.close();
+    std::error_code ec;
+    std::filesystem::remove(temporary_, ec);
+  }
+  unregister_pending(slot_);
+}
+
+void AtomicFileWriter::commit() {
+  out_.flush();
+  const bool ok = static_cast<bool>(out_);
+  out_.close();
+  if (!ok || out_.fail()) throw Error(target_.string() + ": write failed (disk full?)");
+  std::error_code ec;
+  std::filesystem::rename(temporary_, target_, ec);
+  if (ec) throw Error(target_.string() + ": cannot replace file: " + ec.message());
+  committed_ = true;
+}
+
+void write_file_atomically(const std::filesystem::path& target, std::string_view content) {
+  AtomicFileWriter writer(target);
+  writer.stream().write(content.data(), static_cast<std::streamsize>(content.size()));
+  writer.commit();
+}
+
+}  // namespace errfield

@@ -1,0 +1,209 @@
+#include "errfield/csv_table.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "errfield/error.hpp"
+
+namespace errfield {
+namespace {
+
+std::string trim(std::string_view s) {
+  const auto first = s.find_first_not_of(" \t");
+  if (first == std::string_view::npos) return {};
+  const auto last = s.find_last_not_of(" \t");
+  return std::string(s.substr(first, last - first + 1));
+}
+
+// "x [mm]" and "x (mm)" are looked up as "x": tracker exports put units in headers.
+std::string strip_unit(const std::string& name) {
+  const auto pos = name.find_first_of("[(");
+  if (pos == std::string::npos || pos == 0) return name;
+  return trim(std::string_view(name).substr(0, pos));
+}
+
+std::vector<std::string> split_line(std::string_view line, char delimiter, const std::string& source,
+                                    std::size_t line_number) {
+  std::vector<std::string> cells;
+  std::string cell;
+  bool quoted = false;
+  bool was_quoted = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"') {
+        if (i + 1 < line.size() && line[i + 1] == '"') {
+          cell += '"';
+          ++i;
+        } else {
+          quoted = false;
+        }
+      } else {
+        cell += c;
+      }
+    } else if (c == '"') {
+      quoted = true;
+      was_quoted = true;
+    } else if (c == delimiter) {
+      cells.push_back(was_quoted ? cell : trim(cell));
+      cell.clear();
+      was_quoted = false;
+    } else {
+      cell += c;
+    }
+  }
+  if (quoted)
+    throw InputError(source + ":" + std::to_string(line_number) + ": unterminated quoted cell",
+                     source, line_number);
+  cells.push_back(was_quoted ? cell : trim(cell));
+  return cells;
+}
+
+}  // namespace
+
+CsvTable CsvTable::read(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open file for reading", path);
+  std::ostringstream buffer;
+  buffer << in.rdbuf();
+  if (in.bad()) throw InputError(path + ": read error", path);
+  return parse(buffer.str(), path);
+}
+
+CsvTable CsvTable::parse(std::string_view text, std::string source) {
+  CsvTable table;
+  table.source_ = std::move(source);
+  const std::string& src = table.source_;
+  if (text.size() >= 3 && static_cast<unsigned char>(text[0]) == 0xEF &&
+      static_cast<unsigned char>(text[1]) == 0xBB && static_cast<unsigned char>(text[2]) == 0xBF)
+    text.remove_prefix(3);
+  if (text.find('\0') != std::string_view::npos)
+    throw InputError(src + ": contains a NUL byte; expected a text CSV file", src);
+
+  char delimiter = ',';
+  bool have_header = false;
+  std::size_t line_number = 0;
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    auto end = text.find('\n', pos);
+    if (end == std::string_view::npos) end = text.size();
+    std::string_view line = text.substr(pos, end - pos);
+    pos = end + 1;
+    ++line_number;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    const std::string trimmed = trim(line);
+    if (trimmed.empty() || trimmed[0] == '#') {
+      if (end == text.size()) break;
+      continue;
+    }
+    if (!have_header) {
+      if (line.find(',') == std::string_view::npos && line.find(';') != std::string_view::npos)
+        delimiter = ';';
+      table.header_ = split_line(line, delimiter, src, line_number);
+      for (std::size_t c = 0; c < table.header_.size(); ++c) {
+        if (table.header_[c].empty())
+          throw InputError(src + ":" + std::to_string(line_number) + ": column " +
+                               std::to_string(c + 1) + " of the header has no name",
+                           src, line_number);
+        table.keys_.push_back(strip_unit(table.header_[c]));
+      }
+      for (std::size_t a = 0; a < table.keys_.size(); ++a)
+        for (std::size_t b = a + 1; b < table.keys_.size(); ++b)
+          if (table.keys_[a] == table.keys_[b])
+            throw InputError(src + ":" + std::to_string(line_number) + ": column '" +
+                                 table.keys_[a] + "' appears twice in the header (columns " +
+                                 std::to_string(a + 1) + " and " + std::to_string(b + 1) + ")",
+                             src, line_number, table.keys_[a]);
+      have_header = true;
+    } else {
+      auto cells = split_line(line, delimiter, src, line_number);
+      if (cells.size() != table.header_.size())
+        throw InputError(src + ":" + std::to_string(line_number) + ": row has " +
+                             std::to_string(cells.size()) + " cells; the header has " +
+                             std::to_string(table.header_.size()),
+                         src, line_number);
+      table.rows_.push_back(std::move(cells));
+      table.lines_.push_back(line_number);
+    }
+    if (end == text.size()) break;
+  }
+  if (!have_header) throw InputError(src + ": file is empty; expected a header line", src);
+  return table;
+}
+
+bool CsvTable::has_column(std::string_view name) const noexcept {
+  const std::string key = strip_unit(trim(name));
+  return std::find(keys_.begin(), keys_.end(), key) != keys_.end();
+}
+
+std::size_t CsvTable::column_index(std::string_view name) const {
+  const std::string key = strip_unit(trim(name));
+  const auto it = std::find(keys_.begin(), keys_.end(), key);
+  if (it == keys_.end()) {
+    std::string available;
+    for (const auto& h : header_) available += (available.empty() ? "" : ",") + h;
+    throw InputError(source_ + ": no column '" + std::string(name) + "'; the header has: " +
+                         available,
+                     source_, 1, std::string(name));
+  }
+  return static_cast<std::size_t>(it - keys_.begin());
+}
+
+std::vector<double> CsvTable::numeric_column(std::string_view name) const {
+  const std::size_t c = column_index(name);
+  std::vector<double> out(rows_.size());
+  for (std::size_t r = 0; r < rows_.size(); ++r) {
+    const std::string& cell = rows_[r][c];
+    const std::string where = source_ + ":" + std::to_string(lines_[r]) + ": column '" +
+                              header_[c] + "'";
+    if (cell.empty()) throw InputError(where + " is empty; expected a number", source_, lines_[r], header_[c]);
+    double v = 0.0;
+    const char* first = cell.data();
+    const char* last = cell.data() + cell.size();
+    if (*first == '+') ++first;
+    const auto res = std::from_chars(first, last, v);
+    if (res.ec != std::errc() || res.ptr != last)
+      throw InputError(where + ": '" + cell + "' is not a number", source_, lines_[r], header_[c]);
+    if (!std::isfinite(v))
+      throw InputError(where + ": '" + cell + "' is not a finite number", source_, lines_[r], header_[c]);
+    out[r] = v;
+  }
+  return out;
+}
+
+Eigen::MatrixXd CsvTable::numeric_columns(const std::vector<std::string>& names) const {
+  Eigen::MatrixXd m(static_cast<Eigen::Index>(rows_.size()), static_cast<Eigen::Index>(names.size()));
+  for (std::size_t j = 0; j < names.size(); ++j) {
+    const auto col = numeric_column(names[j]);
+    for (std::size_t i = 0; i < col.size(); ++i)
+      m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = col[i];
+  }
+  return m;
+}
+
+std::string format_number(double value) {
+  char buf[64];
+  const auto res = std::to_chars(buf, buf + sizeof buf, value);
+  return std::string(buf, res.ptr);
+}
+
+std::vector<std::string> split_list(std::string_view text, std::string_view what) {
+  std::vector<std::string> items;
+  std::size_t pos = 0;
+  while (true) {
+    const auto end = text.find(',', pos);
+    std::string item = trim(text.substr(pos, end == std::string_view::npos ? std::string_view::npos : end - pos));
+    if (item.empty())
+      throw ArgumentError(std::string(what) + ": empty item in '" + std::string(text) +
+                          "'; expected a comma-separated list such as x,y,z");
+    items.push_back(std::move(item));
+    if (end == std::string_view::npos) break;
+    pos = end + 1;
+  }
+  return items;
+}
+
+}  // namespace errfield

@@ -1,0 +1,312 @@
+#include "errfield/variogram_model.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <limits>
+
+#include <nlohmann/json.hpp>
+
+#include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
+
+namespace errfield {
+namespace {
+
+constexpr ModelKind kAllKinds[] = {ModelKind::Nugget,   ModelKind::Spherical, ModelKind::Exponential,
+                                   ModelKind::Gaussian, ModelKind::Matern,    ModelKind::Wendland,
+                                   ModelKind::Power,    ModelKind::Linear};
+
+std::string describe(const ModelComponent& c, std::size_t index) {
+  return "component " + std::to_string(index + 1) + " (" + std::string(model_kind_name(c.kind)) + ")";
+}
+
+void validate(const ModelComponent& c, std::size_t index) {
+  auto fail = [&](const std::string& what, double v, const std::string& expected) {
+    throw ArgumentError("variogram model " + describe(c, index) + ": " + what + " = " +
+                        format_number(v) + "; expected " + expected);
+  };
+  if (!(c.sill >= 0.0) || !std::isfinite(c.sill)) fail("sill", c.sill, "a finite value >= 0");
+  switch (c.kind) {
+    case ModelKind::Nugget:
+    case ModelKind::Linear:
+      break;
+    case ModelKind::Power:
+      if (!(c.range > 0.0 && c.range < 2.0)) fail("exponent", c.range, "0 < exponent < 2");
+      break;
+    case ModelKind::Matern:
+      if (!(c.nu > 0.0) || !std::isfinite(c.nu)) fail("nu", c.nu, "a finite value > 0");
+      [[fallthrough]];
+    default:
+      if (!(c.range > 0.0) || !std::isfinite(c.range)) fail("range", c.range, "a finite value > 0");
+  }
+}
+
+double parse_double(std::string_view text, std::string_view context) {
+  double v = 0.0;
+  const char* first = text.data();
+  const char* last = text.data() + text.size();
+  if (first != last && *first == '+') ++first;
+  const auto res = std::from_chars(first, last, v);
+  if (first == last || res.ec != std::errc() || res.ptr != last || !std::isfinite(v))
+    throw ArgumentError("variogram model: '" + std::string(text) + "' in '" + std::string(context) +
+                        "' is not a finite number");
+  return v;
+}
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t')) s.remove_suffix(1);
+  return s;
+}
+
+ModelComponent parse_component(std::string_view term) {
+  const std::string context(term);
+  const auto open = term.find('(');
+  if (open == std::string_view::npos || term.back() != ')')
+    throw ArgumentError("variogram model: '" + context +
+                        "' is not of the form kind(sill=S,range=A), e.g. sph(sill=0.3,range=400)");
+  ModelComponent c;
+  c.kind = model_kind_from_name(trim(term.substr(0, open)));
+  c.range = 0.0;
+  std::string_view args = term.substr(open + 1, term.size() - open - 2);
+  // Positional order: sill, range (exponent for pow), nu.
+  const char* positional_names[] = {"sill", "range", "nu"};
+  bool seen[3] = {false, false, false};
+  std::size_t position = 0;
+  while (!trim(args).empty()) {
+    const auto comma = args.find(',');
+    std::string_view item = trim(args.substr(0, comma));
+    args = comma == std::string_view::npos ? std::string_view{} : args.substr(comma + 1);
+    std::string_view key;
+    std::string_view value = item;
+    const auto eq = item.find('=');
+    if (eq != std::string_view::npos) {
+      key = trim(item.substr(0, eq));
+      value = trim(item.substr(eq + 1));
+    } else {
+      if (position >= 3)
+        throw ArgumentError("variogram model: too many arguments in '" + context + "'");
+      key = positional_names[position];
+    }
+    ++position;
+    int slot = -1;
+    if (key == "sill" || key == "psill" || key == "slope") slot = 0;
+    else if (key == "range" || key == "exponent" || key == "a") slot = 1;
+    else if (key == "nu" || key == "kappa") slot = 2;
+    else
+      throw ArgumentError("variogram model: unknown parameter '" + std::string(key) + "' in '" +
+                          context + "'; known: sill, range, nu (exponent for pow, slope for lin)");
+    if (seen[slot])
+      throw ArgumentError("variogram model: parameter '" + std::string(key) + "' given twice in '" +
+                          context + "'");
+    seen[slot] = true;
+    const double v = parse_double(value, context);
+    if (slot == 0) c.sill = v;
+    else if (slot == 1) c.range = v;
+    else c.nu = v;
+    if (comma == std::string_view::npos) break;
+  }
+  if (!seen[0])
+    throw ArgumentError("variogram model: '" + context + "' has no sill");
+  const bool needs_range = c.kind != ModelKind::Nugget && c.kind != ModelKind::Linear;
+  if (needs_range && !seen[1])
+    throw ArgumentError("variogram model: '" + context + "' has no " +
+                        (c.kind == ModelKind::Power ? "exponent" : "range"));
+  if (c.kind == ModelKind::Matern && !seen[2])
+    throw ArgumentError("variogram model: '" + context + "' has no nu (Matérn smoothness)");
+  return c;
+}
+
+}  // namespace
+
+std::string_view model_kind_name(ModelKind kind) {
+  switch (kind) {
+    case ModelKind::Nugget: return "nug";
+    case ModelKind::Spherical: return "sph";
+    case ModelKind::Exponential: return "exp";
+    case ModelKind::Gaussian: return "gau";
+    case ModelKind::Matern: return "mat";
+    case ModelKind::Wendland: return "wen";
+    case ModelKind::Power: return "pow";
+    case ModelKind::Linear: return "lin";
+  }
+  return "?";
+}
+
+ModelKind model_kind_from_name(std::string_view name) {
+  std::string lower(name);
+  for (auto& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  for (const ModelKind k : kAllKinds)
+    if (model_kind_name(k) == lower) return k;
+  throw ArgumentError("variogram model: unknown model '" + std::string(name) +
+                      "'; known: nug, sph, exp, gau, mat, wen, pow, lin");
+}
+
+double ModelComponent::gamma(double h) const {
+  if (h <= 0.0) return 0.0;
+  switch (kind) {
+    case ModelKind::Nugget:
+      return sill;
+    case ModelKind::Spherical: {
+      if (h >= range) return sill;
+      const double r = h / range;
+      return sill * (1.5 * r - 0.5 * r * r * r);
+    }
+    case ModelKind::Exponential:
+      return sill * -std::expm1(-h / range);
+    case ModelKind::Gaussian: {
+      const double r = h / range;
+      return sill * -std::expm1(-r * r);
+    }
+    case ModelKind::Matern: {
+      const double r = h / range;
+      // K_nu underflows far out; the correlation is then 0 to double precision.
+      if (r > 700.0) return sill;
+      const double corr = std::pow(2.0, 1.0 - nu) / std::tgamma(nu) * std::pow(r, nu) *
+                          std::cyl_bessel_k(nu, r);
+      return sill * (1.0 - corr);
+    }
+    case ModelKind::Wendland: {
+      if (h >= range) return sill;
+      const double r = h / range;
+      const double t = 1.0 - r;
+      return sill * (1.0 - t * t * t * t * (4.0 * r + 1.0));
+    }
+    case ModelKind::Power:
+      return sill * std::pow(h, range);
+    case ModelKind::Linear:
+      return sill * h;
+  }
+  return 0.0;
+}
+
+VariogramModel::VariogramModel(std::vector<ModelComponent> components)
+    : components_(std::move(components)) {
+  if (components_.empty()) throw ArgumentError("variogram model: no components");
+  for (std::size_t i = 0; i < components_.size(); ++i) validate(components_[i], i);
+}
+
+VariogramModel VariogramModel::parse(std::string_view text) {
+  std::vector<ModelComponent> components;
+  int depth = 0;
+  std::size_t start = 0;
+  for (std::size_t i = 0; i <= text.size(); ++i) {
+    if (i < text.size() && text[i] == '(') ++depth;
+    if (i < text.size() && text[i] == ')') --depth;
+    if (depth < 0)
+      throw ArgumentError("variogram model: unbalanced ')' in '" + std::string(text) + "'");
+    // '+' inside parentheses belongs to a number ("1e+3"); only depth-0 '+' joins components.
+    if (i == text.size() || (text[i] == '+' && depth == 0)) {
+      const std::string_view term = trim(text.substr(start, i - start));
+      if (term.empty())
+        throw ArgumentError("variogram model: empty term in '" + std::string(text) +
+                            "'; expected e.g. sph(sill=0.3,range=400)+nug(0.002)");
+      components.push_back(parse_component(term));
+      start = i + 1;
+    }
+  }
+  if (depth != 0) throw ArgumentError("variogram model: unbalanced '(' in '" + std::string(text) + "'");
+  return VariogramModel(std::move(components));
+}
+
+std::string VariogramModel::to_string() const {
+  std::string out;
+  for (const auto& c : components_) {
+    if (!out.empty()) out += "+";
+    out += model_kind_name(c.kind);
+    switch (c.kind) {
+      case ModelKind::Nugget: out += "(sill=" + format_number(c.sill) + ")"; break;
+      case ModelKind::Linear: out += "(slope=" + format_number(c.sill) + ")"; break;
+      case ModelKind::Power:
+        out += "(sill=" + format_number(c.sill) + ",exponent=" + format_number(c.range) + ")";
+        break;
+      case ModelKind::Matern:
+        out += "(sill=" + format_number(c.sill) + ",range=" + format_number(c.range) +
+               ",nu=" + format_number(c.nu) + ")";
+        break;
+      default:
+        out += "(sill=" + format_number(c.sill) + ",range=" + format_number(c.range) + ")";
+    }
+  }
+  return out;
+}
+
+double VariogramModel::gamma(double h) const {
+  double g = 0.0;
+  for (const auto& c : components_) g += c.gamma(h);
+  return g;
+}
+
+double VariogramModel::sill() const {
+  double s = 0.0;
+  for (const auto& c : components_) s += c.sill;
+  return s;
+}
+
+double VariogramModel::nugget() const {
+  double s = 0.0;
+  for (const auto& c : components_)
+    if (c.kind == ModelKind::Nugget) s += c.sill;
+  return s;
+}
+
+bool VariogramModel::bounded() const {
+  for (const auto& c : components_)
+    if (!c.bounded()) return false;
+  return true;
+}
+
+bool VariogramModel::compact() const {
+  for (const auto& c : components_)
+    if (c.kind != ModelKind::Nugget && !c.compact()) return false;
+  return true;
+}
+
+double VariogramModel::support() const {
+  if (!compact()) return std::numeric_limits<double>::infinity();
+  double r = 0.0;
+  for (const auto& c : components_)
+    if (c.kind != ModelKind::Nugget) r = std::max(r, c.range);
+  return r;
+}
+
+void to_json(nlohmann::json& j, const VariogramModel& model) {
+  j = nlohmann::json::object();
+  auto& arr = j["components"] = nlohmann::json::array();
+  for (const auto& c : model.components()) {
+    nlohmann::json e{{"kind", std::string(model_kind_name(c.kind))}, {"sill", c.sill}};
+    if (c.kind == ModelKind::Power) e["exponent"] = c.range;
+    else if (c.kind != ModelKind::Nugget && c.kind != ModelKind::Linear) e["range"] = c.range;
+    if (c.kind == ModelKind::Matern) e["nu"] = c.nu;
+    arr.push_back(std::move(e));
+  }
+  j["expression"] = model.to_string();
+}
+
+void from_json(const nlohmann::json& j, VariogramModel& model) {
+  if (!j.is_object() || !j.contains("components") || !j["components"].is_array())
+    throw ArgumentError("variogram model JSON: expected an object with a 'components' array");
+  std::vector<ModelComponent> components;
+  std::size_t index = 0;
+  for (const auto& e : j["components"]) {
+    ++index;
+    const std::string where = "variogram model JSON: components[" + std::to_string(index - 1) + "]";
+    auto number = [&](const char* key) -> double {
+      if (!e.contains(key) || !e[key].is_number())
+        throw ArgumentError(where + ": missing or non-numeric '" + key + "'");
+      return e[key].get<double>();
+    };
+    if (!e.is_object() || !e.contains("kind") || !e["kind"].is_string())
+      throw ArgumentError(where + ": expected an object with a string 'kind'");
+    ModelComponent c;
+    c.kind = model_kind_from_name(e["kind"].get<std::string>());
+    c.sill = number("sill");
+    if (c.kind == ModelKind::Power) c.range = number("exponent");
+    else if (c.kind != ModelKind::Nugget && c.kind != ModelKind::Linear) c.range = number("range");
+    if (c.kind == ModelKind::Matern) c.nu = number("nu");
+    components.push_back(c);
+  }
+  model = VariogramModel(std::move(components));
+}
+
+}  // namespace errfield

@@ -1,0 +1,57 @@
+#include "errfield/csv_table.hpp"
+
+#include <gtest/gtest.h>
+
+#include "errfield/error.hpp"
+
+namespace errfield {
+namespace {
+
+TEST(CsvTable, ReadsBomCrlfSemicolonsCommentsAndUnits) {
+  const auto t = CsvTable::parse("\xEF\xBB\xBFx [mm];y (mm);v\r\n# comment\r\n\r\n1;2;3\r\n4; 5 ;6\r\n", "mem.csv");
+  ASSERT_EQ(t.row_count(), 2u);
+  EXPECT_EQ(t.numeric_column("x"), (std::vector<double>{1, 4}));
+  EXPECT_EQ(t.numeric_column("y"), (std::vector<double>{2, 5}));
+  EXPECT_EQ(t.line_of_row(1), 5u);
+}
+
+TEST(CsvTable, QuotedCellsKeepDelimiters) {
+  const auto t = CsvTable::parse("name,v\n\"a,b\",1\n", "q.csv");
+  EXPECT_EQ(t.row(0)[0], "a,b");
+}
+
+TEST(CsvTable, BadCellNamesFileLineAndColumn) {
+  const auto t = CsvTable::parse("x,v\n1,2\n3,abc\n", "bad.csv");
+  try {
+    t.numeric_column("v");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "bad.csv");
+    EXPECT_EQ(e.row(), 3u);
+    EXPECT_EQ(e.column(), "v");
+    EXPECT_NE(std::string(e.what()).find("'abc'"), std::string::npos);
+  }
+}
+
+TEST(CsvTable, RejectsNanInfEmptyAndMissingColumns) {
+  const auto t = CsvTable::parse("x,v,w,e\n1,nan,inf,\n", "n.csv");
+  EXPECT_THROW(t.numeric_column("v"), InputError);
+  EXPECT_THROW(t.numeric_column("w"), InputError);
+  EXPECT_THROW(t.numeric_column("e"), InputError);
+  EXPECT_THROW(t.numeric_column("zz"), InputError);
+}
+
+TEST(CsvTable, RejectsRaggedRowsAndDuplicateColumns) {
+  EXPECT_THROW(CsvTable::parse("x,v\n1,2,3\n", "r.csv"), InputError);
+  EXPECT_THROW(CsvTable::parse("x,x\n1,2\n", "d.csv"), InputError);
+  EXPECT_THROW(CsvTable::parse("", "e.csv"), InputError);
+}
+
+TEST(FormatNumber, RoundTripsExactly) {
+  for (double v : {0.1, 1.0 / 3.0, -1234.5678e-12, 6.02e23}) {
+    EXPECT_EQ(std::stod(format_number(v)), v);
+  }
+}
+
+}  // namespace
+}  // namespace errfield
