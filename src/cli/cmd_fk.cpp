@@ -1,0 +1,61 @@
+// `errfield fk`: forward kinematics of a list of joint vectors.
+
+#include <iostream>
+
+#include "cli/cli_support.hpp"
+#include "cli/command_registry.hpp"
+#include "cli/robot_cli.hpp"
+#include "errfield/robot/kinematics.hpp"
+
+namespace errfield::cli {
+namespace {
+
+struct FkArgs {
+  std::string input, robot, frame = "tool", out;
+};
+
+void run_fk(const FkArgs& a) {
+  const robot::MdhModel model = load_robot_or_default(a.robot);
+  const robot::EndFrame frame = robot::parse_end_frame(a.frame);
+  const CsvTable table = CsvTable::read(a.input);
+  const auto joints = read_joint_columns(table);
+  const std::size_t n = joints.size();
+  std::vector<double> x(n), y(n), z(n);
+  std::vector<std::vector<double>> r(9, std::vector<double>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Isometry3d t = robot::forward_kinematics(model, joints[i], frame);
+    x[i] = t.translation().x();
+    y[i] = t.translation().y();
+    z[i] = t.translation().z();
+    for (int k = 0; k < 9; ++k) r[static_cast<std::size_t>(k)][i] = t.linear()(k / 3, k % 3);
+  }
+  OutputTable out;
+  out.add_all_columns(table);
+  out.add_numeric_column("x", x);
+  out.add_numeric_column("y", y);
+  out.add_numeric_column("z", z);
+  for (int k = 0; k < 9; ++k) out.add_numeric_column(rotation_column_names()[static_cast<std::size_t>(k)], r[static_cast<std::size_t>(k)]);
+  out.write(a.out);
+  std::cerr << "fk: " << n << " poses of " << model.name() << " (" << a.frame << " frame) written to " << a.out << "\n";
+}
+
+void add_fk_command(CLI::App& app) {
+  auto args = std::make_shared<FkArgs>();
+  auto* cmd = app.add_subcommand(
+      "fk",
+      "Forward kinematics: joint angles -> tool or flange poses.\n"
+      "Input columns q1..q6 (degrees); output keeps the input columns and adds x,y,z (mm, world frame)\n"
+      "and the rotation matrix r11,r12,r13,r21,r22,r23,r31,r32,r33.\n"
+      "Example: errfield fk --input joints.csv --robot robot.json --frame tool --out poses.csv");
+  cmd->add_option("--input", args->input, "CSV with columns q1..q6 (deg)")->required();
+  cmd->add_option("--robot", args->robot,
+                  "robot description JSON (docs/robot.md); default: built-in nominal ER20-C10, no tool");
+  cmd->add_option("--frame", args->frame, "flange or tool (default tool)");
+  cmd->add_option("--out", args->out, "output CSV (written atomically)")->required();
+  cmd->callback([args] { run_fk(*args); });
+}
+
+Registration reg{"fk", 60, &add_fk_command};
+
+}  // namespace
+}  // namespace errfield::cli

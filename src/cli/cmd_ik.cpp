@@ -1,0 +1,144 @@
+// `errfield ik`: inverse kinematics of a list of target poses.
+
+#include <iostream>
+#include <numbers>
+
+#include "cli/cli_support.hpp"
+#include "cli/command_registry.hpp"
+#include "cli/robot_cli.hpp"
+#include "errfield/error.hpp"
+#include "errfield/robot/inverse_kinematics.hpp"
+
+namespace errfield::cli {
+namespace {
+
+struct IkArgs {
+  std::string input, robot, frame = "tool", out;
+  bool position_only = false;
+  int max_iterations = 100;
+};
+
+void run_ik(const IkArgs& a) {
+  const robot::MdhModel model = load_robot_or_default(a.robot);
+  robot::IkOptions options;
+  options.frame = robot::parse_end_frame(a.frame);
+  options.position_only = a.position_only;
+  options.max_iterations = a.max_iterations;
+  options.validate();
+  const CsvTable table = CsvTable::read(a.input);
+  const Eigen::MatrixXd xyz = table.numeric_columns({"x", "y", "z"});
+  const std::size_t n = static_cast<std::size_t>(xyz.rows());
+
+  const bool has_matrix = table.has_column("r11");
+  const bool has_euler = table.has_column("rx");
+  std::vector<Eigen::Matrix3d> rotations(n, Eigen::Matrix3d::Identity());
+  if (!a.position_only) {
+    if (has_matrix) {
+      const Eigen::MatrixXd r = table.numeric_columns(rotation_column_names());
+      for (std::size_t i = 0; i < n; ++i) {
+        Eigen::Matrix3d m;
+        for (int k = 0; k < 9; ++k) m(k / 3, k % 3) = r(static_cast<Eigen::Index>(i), k);
+        const double orth = (m.transpose() * m - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+        if (orth > 1e-6 || m.determinant() < 0)
+          throw InputError(table.source() + ":" + std::to_string(table.line_of_row(i)) +
+                               ": r11..r33 is not a rotation matrix (|R^T R - I| = " + std::to_string(orth) + ")",
+                           table.source(), table.line_of_row(i), "r11");
+        // Re-orthonormalize so a matrix printed with 6 digits is still an exact rotation.
+        Eigen::JacobiSVD<Eigen::Matrix3d> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
+        rotations[i] = svd.matrixU() * svd.matrixV().transpose();
+      }
+    } else if (has_euler) {
+      const Eigen::MatrixXd e = table.numeric_columns({"rx", "ry", "rz"});
+      for (std::size_t i = 0; i < n; ++i) {
+        const auto r = static_cast<Eigen::Index>(i);
+        rotations[i] = robot::rotation_from_rpy_deg(e(r, 0), e(r, 1), e(r, 2));
+      }
+    } else {
+      throw InputError(table.source() +
+                           ": no orientation columns: expected r11..r33 (rotation matrix) or rx,ry,rz (deg, "
+                           "R = Rz(rz) Ry(ry) Rx(rx)); use --position-only for 3-D targets",
+                       table.source(), 1, "r11");
+    }
+  }
+  const bool has_seed = has_joint_columns(table);
+  std::vector<robot::JointVector> seeds;
+  if (has_seed) seeds = read_joint_columns(table);
+
+  std::vector<std::vector<double>> q(robot::kJointCount, std::vector<double>(n));
+  std::vector<std::string> status(n);
+  std::vector<double> res_mm(n), res_deg(n);
+  std::size_t failures = 0;
+  robot::JointVector previous;
+  bool have_previous = false;
+  Progress progress("ik", n);
+  for (std::size_t i = 0; i < n; ++i) {
+    Eigen::Isometry3d target = Eigen::Isometry3d::Identity();
+    target.linear() = rotations[i];
+    target.translation() = xyz.row(static_cast<Eigen::Index>(i)).transpose();
+    robot::IkResult r;
+    if (has_seed) {
+      r = robot::inverse_kinematics(model, target, seeds[i], options);
+    } else {
+      // Without seeds, the previous row's solution keeps neighbouring targets on one branch.
+      if (have_previous) r = robot::inverse_kinematics(model, target, previous, options);
+      if (!have_previous || !r.ok()) r = robot::inverse_kinematics_multistart(model, target, options);
+    }
+    if (r.ok()) {
+      previous = r.q_deg;
+      have_previous = true;
+    } else {
+      ++failures;
+    }
+    for (int k = 0; k < robot::kJointCount; ++k) q[static_cast<std::size_t>(k)][i] = r.q_deg[k];
+    status[i] = robot::to_string(r.status);
+    res_mm[i] = r.position_residual_mm;
+    res_deg[i] = r.orientation_residual_rad * 180.0 / std::numbers::pi;
+    progress.update(i + 1);
+  }
+  progress.finish();
+  OutputTable out;
+  // Input columns are kept, except seed columns q1..q6, which the solution replaces.
+  const auto qnames = joint_column_names();
+  for (std::size_t c = 0; c < table.header().size(); ++c) {
+    bool is_seed = false;
+    for (const auto& qn : qnames) is_seed = is_seed || (has_seed && table.column_index(qn) == c);
+    if (is_seed) continue;
+    std::vector<std::string> cells(n);
+    for (std::size_t r = 0; r < n; ++r) cells[r] = table.row(r)[c];
+    out.add_column(table.header()[c], std::move(cells));
+  }
+  for (int k = 0; k < robot::kJointCount; ++k) out.add_numeric_column(qnames[static_cast<std::size_t>(k)], q[static_cast<std::size_t>(k)]);
+  out.add_column("status", status);
+  out.add_numeric_column("residual_mm", res_mm);
+  out.add_numeric_column("residual_deg", res_deg);
+  out.write(a.out);
+  std::cerr << "ik: " << n - failures << " of " << n << " targets solved";
+  if (failures) std::cerr << "; " << failures << " not (see the status and residual columns)";
+  std::cerr << "; written to " << a.out << "\n";
+}
+
+void add_ik_command(CLI::App& app) {
+  auto args = std::make_shared<IkArgs>();
+  auto* cmd = app.add_subcommand(
+      "ik",
+      "Inverse kinematics: target poses -> joint angles (damped least squares within the joint limits).\n"
+      "Input columns x,y,z (mm) and either r11..r33 (rotation matrix, row-major) or rx,ry,rz (deg,\n"
+      "fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx)); optional seed columns q1..q6 (deg). Without seeds\n"
+      "each row starts from the previous row's solution (first row: a few standard postures).\n"
+      "Output: the input columns (seeds replaced) plus q1..q6 (deg), status (converged, joint_limits,\n"
+      "unreachable, max_iterations), residual_mm and residual_deg.\n"
+      "Example: errfield ik --input targets.csv --robot robot.json --out joints.csv");
+  cmd->add_option("--input", args->input, "CSV with x,y,z and r11..r33 or rx,ry,rz")->required();
+  cmd->add_option("--robot", args->robot,
+                  "robot description JSON (docs/robot.md); default: built-in nominal ER20-C10, no tool");
+  cmd->add_option("--frame", args->frame, "flange or tool (default tool)");
+  cmd->add_flag("--position-only", args->position_only, "match the position only (orientation free)");
+  cmd->add_option("--max-iterations", args->max_iterations, "iteration budget per target (default 100)");
+  cmd->add_option("--out", args->out, "output CSV (written atomically)")->required();
+  cmd->callback([args] { run_ik(*args); });
+}
+
+Registration reg{"ik", 61, &add_ik_command};
+
+}  // namespace
+}  // namespace errfield::cli

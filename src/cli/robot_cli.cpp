@@ -1,0 +1,33 @@
+#include "cli/robot_cli.hpp"
+
+namespace errfield::cli {
+
+robot::MdhModel load_robot_or_default(const std::string& path) {
+  return path.empty() ? robot::MdhModel::er20_c10() : robot::MdhModel::load(path);
+}
+
+std::vector<std::string> joint_column_names(const std::string& prefix) {
+  std::vector<std::string> names;
+  for (int i = 1; i <= robot::kJointCount; ++i) names.push_back(prefix + std::to_string(i));
+  return names;
+}
+
+bool has_joint_columns(const CsvTable& table, const std::string& prefix) {
+  for (const auto& n : joint_column_names(prefix))
+    if (!table.has_column(n)) return false;
+  return true;
+}
+
+std::vector<robot::JointVector> read_joint_columns(const CsvTable& table, const std::string& prefix) {
+  const Eigen::MatrixXd m = table.numeric_columns(joint_column_names(prefix));
+  std::vector<robot::JointVector> q(static_cast<std::size_t>(m.rows()));
+  for (Eigen::Index r = 0; r < m.rows(); ++r) q[static_cast<std::size_t>(r)] = m.row(r).transpose();
+  return q;
+}
+
+const std::vector<std::string>& rotation_column_names() {
+  static const std::vector<std::string> names{"r11", "r12", "r13", "r21", "r22", "r23", "r31", "r32", "r33"};
+  return names;
+}
+
+}  // namespace errfield::cli

@@ -1,0 +1,232 @@
+#include "errfield/robot/mdh_model.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "errfield/atomic_file.hpp"
+#include "errfield/error.hpp"
+
+namespace errfield::robot {
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s.precision(17);
+  s << v;
+  return s.str();
+}
+
+void check_rigid(const Eigen::Isometry3d& t, const std::string& what) {
+  if (!t.matrix().allFinite()) throw ArgumentError("MdhModel: " + what + " transform has a non-finite entry");
+  const double orth = (t.linear().transpose() * t.linear() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (orth > 1e-9 || t.linear().determinant() < 0)
+    throw ArgumentError("MdhModel: " + what + " rotation is not a proper rotation matrix (|R^T R - I| = " +
+                        fmt(orth) + ", expected <= 1e-9)");
+}
+
+MdhLinkConstants make_constants(const MdhLink& l) {
+  MdhLinkConstants c;
+  c.r_const = (Eigen::AngleAxisd(l.alpha_deg * kDeg, Eigen::Vector3d::UnitX()) *
+               Eigen::AngleAxisd(l.beta_deg * kDeg, Eigen::Vector3d::UnitY()))
+                  .toRotationMatrix();
+  c.a_mm = l.a_mm;
+  c.d_mm = l.d_mm;
+  c.cos_theta0 = std::cos(l.theta0_deg * kDeg);
+  c.sin_theta0 = std::sin(l.theta0_deg * kDeg);
+  return c;
+}
+
+// ---- JSON reading with field paths in messages -------------------------------------------------
+
+[[noreturn]] void fail(const std::string& source, const std::string& field, const std::string& what) {
+  throw InputError(source + ": " + field + ": " + what, source, 0, field);
+}
+
+double number_at(const nlohmann::json& obj, const std::string& key, const std::string& path,
+                 const std::string& source, const double* fallback) {
+  const auto it = obj.find(key);
+  if (it == obj.end()) {
+    if (fallback) return *fallback;
+    fail(source, path + key, "missing (expected a number)");
+  }
+  if (!it->is_number()) fail(source, path + key, "expected a number, got " + it->dump());
+  const double v = it->get<double>();
+  if (!std::isfinite(v)) fail(source, path + key, "expected a finite number, got " + it->dump());
+  return v;
+}
+
+void check_keys(const nlohmann::json& obj, std::initializer_list<const char*> allowed, const std::string& path,
+                const std::string& source) {
+  for (auto it = obj.begin(); it != obj.end(); ++it) {
+    bool ok = false;
+    for (const char* a : allowed) ok = ok || it.key() == a;
+    if (!ok) {
+      std::string list;
+      for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
+      fail(source, path + it.key(), "unknown field (expected one of: " + list + ")");
+    }
+  }
+}
+
+Eigen::Isometry3d pose_from_json(const nlohmann::json& j, const std::string& path, const std::string& source) {
+  if (!j.is_object()) fail(source, path, "expected an object {x_mm, y_mm, z_mm, rx_deg, ry_deg, rz_deg}, got " + j.dump());
+  check_keys(j, {"x_mm", "y_mm", "z_mm", "rx_deg", "ry_deg", "rz_deg"}, path + ".", source);
+  const double zero = 0.0;
+  PoseXyzRpy p;
+  p.x_mm = number_at(j, "x_mm", path + ".", source, &zero);
+  p.y_mm = number_at(j, "y_mm", path + ".", source, &zero);
+  p.z_mm = number_at(j, "z_mm", path + ".", source, &zero);
+  p.rx_deg = number_at(j, "rx_deg", path + ".", source, &zero);
+  p.ry_deg = number_at(j, "ry_deg", path + ".", source, &zero);
+  p.rz_deg = number_at(j, "rz_deg", path + ".", source, &zero);
+  return to_isometry(p);
+}
+
+nlohmann::json pose_to_json(const Eigen::Isometry3d& t) {
+  const PoseXyzRpy p = to_xyz_rpy(t);
+  return {{"x_mm", p.x_mm}, {"y_mm", p.y_mm}, {"z_mm", p.z_mm},
+          {"rx_deg", p.rx_deg}, {"ry_deg", p.ry_deg}, {"rz_deg", p.rz_deg}};
+}
+
+}  // namespace
+
+MdhModel::MdhModel(std::string name, const std::array<MdhLink, kJointCount>& links, const Eigen::Isometry3d& base,
+                   const Eigen::Isometry3d& tool)
+    : name_(std::move(name)), links_(links), base_(base), tool_(tool) {
+  for (int i = 0; i < kJointCount; ++i) {
+    const MdhLink& l = links_[static_cast<std::size_t>(i)];
+    const std::string where = "MdhModel: link " + std::to_string(i + 1) + " ";
+    const std::pair<const char*, double> fields[] = {{"alpha_deg", l.alpha_deg}, {"a_mm", l.a_mm},
+                                                     {"theta0_deg", l.theta0_deg}, {"d_mm", l.d_mm},
+                                                     {"beta_deg", l.beta_deg}, {"q_min_deg", l.q_min_deg},
+                                                     {"q_max_deg", l.q_max_deg}};
+    for (const auto& [field, v] : fields)
+      if (!std::isfinite(v)) throw ArgumentError(where + field + " = " + fmt(v) + ", expected a finite number");
+    if (!(l.q_min_deg < l.q_max_deg))
+      throw ArgumentError(where + "joint limits: q_min_deg = " + fmt(l.q_min_deg) + " must be < q_max_deg = " +
+                          fmt(l.q_max_deg));
+    constants_[static_cast<std::size_t>(i)] = make_constants(l);
+  }
+  check_rigid(base_, "base");
+  check_rigid(tool_, "tool");
+}
+
+MdhModel MdhModel::er20_c10() {
+  // SPEC Table 1 (alpha_{i-1}, a_{i-1}, theta0_i, d_i); limits: see header comment.
+  const std::array<MdhLink, kJointCount> links{{
+      {0.0, 0.0, 0.0, 504.0, 0.0, -170.0, 170.0},
+      {90.0, 166.605, 0.0, 0.0, 0.0, -150.0, 90.0},
+      {0.0, -782.27, 0.0, 0.0, 0.0, -80.0, 180.0},
+      {-90.0, -138.826, 0.0, 761.35, 0.0, -180.0, 180.0},
+      {90.0, 0.0, 0.0, 0.0, 0.0, -135.0, 135.0},
+      {-90.0, 0.0, 0.0, 125.0, 0.0, -360.0, 360.0},
+  }};
+  return MdhModel("ER20-C10", links);
+}
+
+MdhModel MdhModel::from_json(const nlohmann::json& j, const std::string& source) {
+  if (!j.is_object()) fail(source, "(top level)", "expected a JSON object, got " + j.dump().substr(0, 60));
+  check_keys(j, {"name", "units", "links", "base", "tool", "comment"}, "", source);
+  std::string name = "robot";
+  if (const auto it = j.find("name"); it != j.end()) {
+    if (!it->is_string()) fail(source, "name", "expected a string, got " + it->dump());
+    name = it->get<std::string>();
+  }
+  if (const auto it = j.find("units"); it != j.end()) {
+    // Optional and informative; if present it must agree with what the field names say.
+    if (!it->is_object()) fail(source, "units", "expected {\"length\": \"mm\", \"angle\": \"deg\"}, got " + it->dump());
+    if (it->contains("length") && (*it)["length"] != "mm")
+      fail(source, "units.length", "only \"mm\" is supported, got " + (*it)["length"].dump());
+    if (it->contains("angle") && (*it)["angle"] != "deg")
+      fail(source, "units.angle", "only \"deg\" is supported, got " + (*it)["angle"].dump());
+  }
+  const auto links_it = j.find("links");
+  if (links_it == j.end()) fail(source, "links", "missing (expected an array of 6 link objects)");
+  if (!links_it->is_array() || links_it->size() != kJointCount)
+    fail(source, "links", "expected an array of 6 link objects, got " +
+                              (links_it->is_array() ? std::to_string(links_it->size()) + " entries" : links_it->dump()));
+  std::array<MdhLink, kJointCount> links;
+  const double zero = 0.0, lo = -180.0, hi = 180.0;
+  for (int i = 0; i < kJointCount; ++i) {
+    const auto& l = (*links_it)[static_cast<std::size_t>(i)];
+    const std::string path = "links[" + std::to_string(i) + "].";
+    if (!l.is_object()) fail(source, path.substr(0, path.size() - 1), "expected an object, got " + l.dump());
+    check_keys(l, {"alpha_deg", "a_mm", "theta0_deg", "d_mm", "beta_deg", "q_min_deg", "q_max_deg"}, path, source);
+    MdhLink& m = links[static_cast<std::size_t>(i)];
+    m.alpha_deg = number_at(l, "alpha_deg", path, source, nullptr);
+    m.a_mm = number_at(l, "a_mm", path, source, nullptr);
+    m.theta0_deg = number_at(l, "theta0_deg", path, source, nullptr);
+    m.d_mm = number_at(l, "d_mm", path, source, nullptr);
+    m.beta_deg = number_at(l, "beta_deg", path, source, &zero);
+    m.q_min_deg = number_at(l, "q_min_deg", path, source, &lo);
+    m.q_max_deg = number_at(l, "q_max_deg", path, source, &hi);
+    if (!(m.q_min_deg < m.q_max_deg))
+      fail(source, path + "q_min_deg", "must be < q_max_deg (" + fmt(m.q_min_deg) + " >= " + fmt(m.q_max_deg) + ")");
+  }
+  Eigen::Isometry3d base = Eigen::Isometry3d::Identity(), tool = Eigen::Isometry3d::Identity();
+  if (const auto it = j.find("base"); it != j.end()) base = pose_from_json(*it, "base", source);
+  if (const auto it = j.find("tool"); it != j.end()) tool = pose_from_json(*it, "tool", source);
+  return MdhModel(std::move(name), links, base, tool);
+}
+
+MdhModel MdhModel::load(const std::filesystem::path& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError("cannot open robot description '" + path.string() + "'", path.string());
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(path.string() + ": not valid JSON: " + e.what(), path.string());
+  }
+  return from_json(j, path.string());
+}
+
+nlohmann::json MdhModel::to_json() const {
+  nlohmann::json links = nlohmann::json::array();
+  for (const MdhLink& l : links_)
+    links.push_back({{"alpha_deg", l.alpha_deg}, {"a_mm", l.a_mm}, {"theta0_deg", l.theta0_deg}, {"d_mm", l.d_mm},
+                     {"beta_deg", l.beta_deg}, {"q_min_deg", l.q_min_deg}, {"q_max_deg", l.q_max_deg}});
+  return {{"name", name_},
+          {"units", {{"length", "mm"}, {"angle", "deg"}}},
+          {"links", links},
+          {"base", pose_to_json(base_)},
+          {"tool", pose_to_json(tool_)}};
+}
+
+void MdhModel::save(const std::filesystem::path& path) const { write_file_atomically(path, to_json().dump(2) + "\n"); }
+
+JointVector MdhModel::q_min_deg() const {
+  JointVector q;
+  for (int i = 0; i < kJointCount; ++i) q[i] = links_[static_cast<std::size_t>(i)].q_min_deg;
+  return q;
+}
+
+JointVector MdhModel::q_max_deg() const {
+  JointVector q;
+  for (int i = 0; i < kJointCount; ++i) q[i] = links_[static_cast<std::size_t>(i)].q_max_deg;
+  return q;
+}
+
+bool MdhModel::within_limits(const JointVector& q_deg, double slack_deg) const {
+  for (int i = 0; i < kJointCount; ++i) {
+    const MdhLink& l = links_[static_cast<std::size_t>(i)];
+    if (!(q_deg[i] >= l.q_min_deg - slack_deg && q_deg[i] <= l.q_max_deg + slack_deg)) return false;
+  }
+  return true;
+}
+
+MdhModel MdhModel::with_base(const Eigen::Isometry3d& base) const { return MdhModel(name_, links_, base, tool_); }
+MdhModel MdhModel::with_tool(const Eigen::Isometry3d& tool) const { return MdhModel(name_, links_, base_, tool); }
+MdhModel MdhModel::with_links(const std::array<MdhLink, kJointCount>& links) const {
+  return MdhModel(name_, links, base_, tool_);
+}
+MdhModel MdhModel::with_name(std::string name) const { return MdhModel(std::move(name), links_, base_, tool_); }
+
+}  // namespace errfield::robot

@@ -1,0 +1,133 @@
+// End-to-end tests of the robot subcommands through the real `errfield` executable.
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "errfield/csv_table.hpp"
+#include "errfield/robot/kinematics.hpp"
+
+namespace errfield::robot {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliRun {
+  int code;
+  std::string err;
+};
+
+class RobotCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("errfield_robot_cli_" + std::to_string(::getpid()) + "_" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  void write(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
+  CliRun run(const std::string& args) const {
+    const std::string err = path("stderr.txt");
+    const int rc = std::system((std::string(ERRFIELD_CLI_PATH) + " " + args + " 2>" + err).c_str());
+    std::ifstream in(err);
+    std::stringstream s;
+    s << in.rdbuf();
+    return {WEXITSTATUS(rc), s.str()};
+  }
+  fs::path dir_;
+};
+
+TEST_F(RobotCli, FkThenIkRoundTripsWithUserRobotJson) {
+  // A user robot: the ER20 table with a tool and a base, saved as JSON.
+  const MdhModel m = MdhModel::er20_c10().with_tool(to_isometry({0.018, -0.012, 77.025, 0.011, -0.015, 0.008}))
+                         .with_base(to_isometry({10, 20, 30, 0, 0, 5}));
+  m.save(path("robot.json"));
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::string csv = "label,q1,q2,q3,q4,q5,q6\n";
+  std::vector<JointVector> qs;
+  for (int i = 0; i < 20; ++i) {
+    JointVector q;
+    q << 30 * u(rng), -100 + 20 * u(rng), -20 + 20 * u(rng), 40 * u(rng), -60 + 20 * u(rng), 90 * u(rng);
+    qs.push_back(q);
+    csv.append("p").append(std::to_string(i));
+    for (int k = 0; k < 6; ++k) csv.append(",").append(format_number(q[k]));
+    csv += "\n";
+  }
+  write("joints.csv", csv);
+  auto r = run("fk --input " + path("joints.csv") + " --robot " + path("robot.json") + " --out " + path("poses.csv"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const CsvTable poses = CsvTable::read(path("poses.csv"));
+  ASSERT_EQ(poses.row_count(), 20u);
+  EXPECT_EQ(poses.row(3)[0], "p3");  // input columns kept
+  const auto x = poses.numeric_column("x"), r23 = poses.numeric_column("r23");
+  for (std::size_t i = 0; i < qs.size(); ++i) {
+    const Eigen::Isometry3d t = forward_kinematics(m, qs[i], EndFrame::tool);
+    EXPECT_DOUBLE_EQ(x[i], t.translation().x());
+    EXPECT_DOUBLE_EQ(r23[i], t.linear()(1, 2));
+  }
+  // IK of those poses without seeds (each row seeds the next) must return joints whose FK is the pose.
+  std::string targets = "x,y,z,r11,r12,r13,r21,r22,r23,r31,r32,r33\n";
+  for (std::size_t i = 0; i < poses.row_count(); ++i) {
+    for (int c = 7; c < 19; ++c) targets.append(c > 7 ? "," : "").append(poses.row(i)[static_cast<std::size_t>(c)]);
+    targets += "\n";
+  }
+  write("targets.csv", targets);
+  r = run("ik --input " + path("targets.csv") + " --robot " + path("robot.json") + " --out " + path("ik.csv"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const CsvTable ik = CsvTable::read(path("ik.csv"));
+  const auto q = [&] {
+    std::vector<JointVector> out(ik.row_count());
+    const Eigen::MatrixXd m2 = ik.numeric_columns({"q1", "q2", "q3", "q4", "q5", "q6"});
+    for (Eigen::Index i = 0; i < m2.rows(); ++i) out[static_cast<std::size_t>(i)] = m2.row(i).transpose();
+    return out;
+  }();
+  const auto status_col = ik.column_index("status");
+  for (std::size_t i = 0; i < ik.row_count(); ++i) {
+    EXPECT_EQ(ik.row(i)[status_col], "converged") << "row " << i;
+    const Eigen::Isometry3d t = forward_kinematics(m, q[i], EndFrame::tool);
+    const Eigen::Isometry3d want = forward_kinematics(m, qs[i], EndFrame::tool);
+    EXPECT_LT((t.translation() - want.translation()).norm(), 1e-6);
+    EXPECT_LT((t.linear() - want.linear()).cwiseAbs().maxCoeff(), 1e-9);
+  }
+}
+
+TEST_F(RobotCli, IkAcceptsEulerAnglesAndReportsUnreachable) {
+  write("t.csv", "x,y,z,rx,ry,rz\n1000,0,600,180,0,0\n6000,0,600,180,0,0\n");
+  const auto r = run("ik --input " + path("t.csv") + " --out " + path("o.csv"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.err.find("1 of 2 targets solved"), std::string::npos) << r.err;
+  const CsvTable o = CsvTable::read(path("o.csv"));
+  EXPECT_EQ(o.row(0)[o.column_index("status")], "converged");
+  EXPECT_NE(o.row(1)[o.column_index("status")], "converged");
+  EXPECT_GT(o.numeric_column("residual_mm")[1], 1000.0);
+  const JointVector q = o.numeric_columns({"q1", "q2", "q3", "q4", "q5", "q6"}).row(0).transpose();
+  const Eigen::Isometry3d t = forward_kinematics(MdhModel::er20_c10(), q);
+  EXPECT_LT((t.translation() - Eigen::Vector3d(1000, 0, 600)).norm(), 1e-6);
+  EXPECT_LT((t.linear().col(2) - Eigen::Vector3d(0, 0, -1)).norm(), 1e-9);  // tool down
+}
+
+TEST_F(RobotCli, BadInputNamesFileRowAndColumn) {
+  write("j.csv", "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n0,abc,0,0,0,0\n");
+  auto r = run("fk --input " + path("j.csv") + " --out " + path("o.csv"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("j.csv"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("q2"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("abc"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("o.csv")));
+  write("bad.json", "{\"links\": 3}");
+  r = run("fk --input " + path("j.csv") + " --robot " + path("bad.json") + " --out " + path("o.csv"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("links"), std::string::npos) << r.err;
+  r = run("fk --input " + path("j.csv") + " --frame elbow --out " + path("o.csv"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("elbow"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace errfield::robot
