@@ -1,0 +1,260 @@
+#include "errfield/empirical_variogram.hpp"
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "errfield/csv_table.hpp"
+
+namespace errfield {
+
+std::string_view estimator_name(VariogramEstimator e) {
+  switch (e) {
+    case VariogramEstimator::Matheron: return "matheron";
+    case VariogramEstimator::CressieHawkins: return "cressie";
+  }
+  return "?";
+}
+
+VariogramEstimator estimator_from_name(std::string_view name) {
+  if (name == "matheron") return VariogramEstimator::Matheron;
+  if (name == "cressie" || name == "cressie-hawkins") return VariogramEstimator::CressieHawkins;
+  throw ArgumentError("estimator: unknown name '" + std::string(name) +
+                      "'; known: matheron, cressie");
+}
+
+std::string_view convention_name(BinConvention c) {
+  switch (c) {
+    case BinConvention::HalfOpen: return "paper";
+    case BinConvention::Gstat: return "gstat";
+  }
+  return "?";
+}
+
+BinConvention convention_from_name(std::string_view name) {
+  if (name == "paper" || name == "half-open") return BinConvention::HalfOpen;
+  if (name == "gstat") return BinConvention::Gstat;
+  throw ArgumentError("convention: unknown name '" + std::string(name) + "'; known: paper, gstat");
+}
+
+LagBins LagBins::uniform(double lo, double max_lag, double width) {
+  if (!std::isfinite(width) || !(width > 0.0))
+    throw ArgumentError("lag bins: width = " + format_number(width) + "; expected a finite value > 0");
+  if (!std::isfinite(lo) || !(lo >= 0.0))
+    throw ArgumentError("lag bins: lower edge = " + format_number(lo) + "; expected a finite value >= 0");
+  if (!std::isfinite(max_lag) || !(max_lag > lo))
+    throw ArgumentError("lag bins: max_lag = " + format_number(max_lag) +
+                        "; expected a finite value > the lower edge " + format_number(lo));
+  const double q = (max_lag - lo) / width;
+  double n = std::round(q);
+  if (std::fabs(q - n) > 1e-9 * std::max(1.0, q)) n = std::ceil(q);
+  if (n > 1e7)
+    throw ArgumentError("lag bins: width = " + format_number(width) + " up to max_lag = " +
+                        format_number(max_lag) + " gives " + format_number(n) +
+                        " bins; expected at most 10^7 (use a larger width)");
+  LagBins b;
+  const std::size_t count = static_cast<std::size_t>(n);
+  b.edges_.resize(count + 1);
+  for (std::size_t k = 0; k <= count; ++k) b.edges_[k] = lo + static_cast<double>(k) * width;
+  for (std::size_t k = 0; k < count; ++k)
+    if (!(b.edges_[k + 1] > b.edges_[k]))
+      throw ArgumentError("lag bins: width = " + format_number(width) +
+                          " is too small to separate edges near " + format_number(b.edges_[k]));
+  b.uniform_ = true;
+  return b;
+}
+
+LagBins LagBins::from_edges(std::vector<double> edges) {
+  if (edges.size() < 2)
+    throw ArgumentError("lag bins: edges has " + std::to_string(edges.size()) +
+                        " value(s); expected at least 2 (the bin edges e_0 < e_1 < ...)");
+  for (std::size_t k = 0; k < edges.size(); ++k) {
+    if (!std::isfinite(edges[k]))
+      throw ArgumentError("lag bins: edges[" + std::to_string(k) + "] is not finite");
+    if (k == 0 && edges[0] < 0.0)
+      throw ArgumentError("lag bins: edges[0] = " + format_number(edges[0]) + "; expected >= 0");
+    if (k > 0 && !(edges[k] > edges[k - 1]))
+      throw ArgumentError("lag bins: edges[" + std::to_string(k) + "] = " + format_number(edges[k]) +
+                          " is not greater than edges[" + std::to_string(k - 1) + "] = " +
+                          format_number(edges[k - 1]) + "; edges must be strictly increasing");
+  }
+  LagBins b;
+  b.edges_ = std::move(edges);
+  // Equally spaced explicit edges get the fast lookup too (it is exact either way).
+  const double w = b.edges_[1] - b.edges_[0];
+  bool uniform = b.edges_.size() <= 100001;  // the lookup's guess stays far within kNearEdge
+  for (std::size_t k = 1; k + 1 < b.edges_.size() && uniform; ++k)
+    uniform = std::fabs((b.edges_[k + 1] - b.edges_[k]) - w) <= 1e-12 * w;
+  b.uniform_ = uniform;
+  return b;
+}
+
+void EmpiricalVariogramOptions::validate() const {
+  if (!(pair_fraction > 0.0 && pair_fraction <= 1.0))
+    throw ArgumentError("variogram options: pair_fraction = " + format_number(pair_fraction) +
+                        "; expected 0 < pair_fraction <= 1");
+  if (threads < 0)
+    throw ArgumentError("variogram options: threads = " + std::to_string(threads) +
+                        "; expected >= 0 (0 = OpenMP default)");
+}
+
+namespace detail {
+
+std::vector<std::size_t> variogram_chunk_rows(std::size_t n) {
+  std::vector<std::size_t> rows{1};
+  if (n < 2) {
+    rows.push_back(1);
+    return rows;
+  }
+  // Rows 1..n-1; rows below r hold r(r-1)/2 pairs. Cut where the pair count passes c/C of the total.
+  const double total = 0.5 * static_cast<double>(n) * static_cast<double>(n - 1);
+  std::size_t r = 1;
+  for (std::size_t c = 1; c < kVariogramChunks; ++c) {
+    const double target = total * static_cast<double>(c) / static_cast<double>(kVariogramChunks);
+    while (r < n && 0.5 * static_cast<double>(r) * static_cast<double>(r - 1) < target) ++r;
+    rows.push_back(r);
+  }
+  rows.push_back(n);
+  return rows;
+}
+
+void check_variogram_values(const Eigen::MatrixXd& values, std::size_t n_locations) {
+  if (n_locations < 2)
+    throw InputError("empirical variogram: " + std::to_string(n_locations) +
+                     " location(s); need at least 2 to form a pair");
+  if (static_cast<std::size_t>(values.rows()) != n_locations)
+    throw ArgumentError("empirical variogram: " + std::to_string(values.rows()) + " values for " +
+                        std::to_string(n_locations) + " locations; expected one value row per location");
+  if (values.cols() < 1)
+    throw ArgumentError("empirical variogram: values have 0 components; expected at least 1");
+  for (Eigen::Index i = 0; i < values.rows(); ++i)
+    for (Eigen::Index c = 0; c < values.cols(); ++c)
+      if (!std::isfinite(values(i, c)))
+        throw InputError("empirical variogram: value row " + std::to_string(i) + ", component " +
+                         std::to_string(c) + " is " + format_number(values(i, c)) +
+                         "; expected a finite number");
+}
+
+void throw_bad_coordinate(std::size_t row, int coordinate, double value) {
+  throw InputError("empirical variogram: location row " + std::to_string(row) + ", coordinate " +
+                   std::to_string(coordinate) + " is " + format_number(value) +
+                   "; expected a finite number");
+}
+
+void throw_dimension_mismatch(std::size_t row, int dimension, int expected) {
+  throw ArgumentError("empirical variogram: location row " + std::to_string(row) + " has " +
+                      std::to_string(dimension) + " coordinates; location row 0 has " +
+                      std::to_string(expected));
+}
+
+kernels::BinLayout variogram_bin_layout(const LagBins& bins, const EmpiricalVariogramOptions& o) {
+  kernels::BinLayout layout;
+  layout.edges = bins.edges().data();
+  layout.bins = bins.size();
+  layout.gstat = o.convention == BinConvention::Gstat;
+  layout.uniform = bins.is_uniform();
+  layout.inv_width = 1.0 / (bins.edges()[1] - bins.edges()[0]);
+  return layout;
+}
+
+std::uint64_t variogram_keep_below(double fraction) {
+  const long double x = std::ceil(static_cast<long double>(fraction) * 18446744073709551616.0L);
+  if (x >= 18446744073709551615.0L) return std::numeric_limits<std::uint64_t>::max();
+  return static_cast<std::uint64_t>(x);
+}
+
+EmpiricalVariogram finalize_variogram(const LagBins& bins, const EmpiricalVariogramOptions& o,
+                                      int components, std::size_t chunks,
+                                      const std::vector<std::uint64_t>& count,
+                                      const std::vector<double>& lag,
+                                      const std::vector<double>& stat) {
+  const std::size_t B = bins.size();
+  const std::size_t stride = B + 1;  // per-chunk arrays carry a discard slot at the end
+  const std::size_t K = static_cast<std::size_t>(components);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EmpiricalVariogram out;
+  out.estimator = o.estimator;
+  out.convention = o.convention;
+  out.pair_fraction = o.pair_fraction;
+  out.bins.resize(B);
+  out.component_gamma.resize(static_cast<Eigen::Index>(B), components);
+  std::vector<double> s(K);
+  for (std::size_t b = 0; b < B; ++b) {
+    std::uint64_t n = 0;
+    double lag_sum = 0.0;
+    std::fill(s.begin(), s.end(), 0.0);
+    for (std::size_t c = 0; c < chunks; ++c) {  // fixed order: chunk 0, 1, ...
+      n += count[c * stride + b];
+      lag_sum += lag[c * stride + b];
+      for (std::size_t k = 0; k < K; ++k) s[k] += stat[(c * stride + b) * K + k];
+    }
+    VariogramBin& bin = out.bins[b];
+    bin.lag_lo = bins.lag_lo(b);
+    bin.lag_hi = bins.lag_hi(b);
+    bin.pairs = n;
+    if (n == 0) {
+      bin.lag_mean = bin.gamma = nan;
+      for (std::size_t k = 0; k < K; ++k) out.component_gamma(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(k)) = nan;
+      continue;
+    }
+    const double nd = static_cast<double>(n);
+    bin.lag_mean = lag_sum / nd;
+    double total = 0.0;
+    for (std::size_t k = 0; k < K; ++k) {
+      double g;
+      if (o.estimator == VariogramEstimator::Matheron) {
+        g = s[k] / (2.0 * nd);
+      } else {
+        const double m = s[k] / nd;
+        g = 0.5 * (m * m) * (m * m) / (0.457 + 0.494 / nd);
+      }
+      out.component_gamma(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(k)) = g;
+      total += g;
+    }
+    bin.gamma = total;
+  }
+  return out;
+}
+
+}  // namespace detail
+
+EmpiricalVariogram empirical_variogram(const Eigen::MatrixXd& coordinates,
+                                       const Eigen::MatrixXd& values, const LagBins& bins,
+                                       const EmpiricalVariogramOptions& options) {
+  const Eigen::Index n = coordinates.rows();
+  const Eigen::Index d = coordinates.cols();
+  if (d < 1) throw ArgumentError("empirical variogram: coordinates have 0 columns; expected at least 1");
+  auto run = [&]<class L>(L) {
+    std::vector<L> loc(static_cast<std::size_t>(n));
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if constexpr (std::is_same_v<L, double>) loc[static_cast<std::size_t>(i)] = coordinates(i, 0);
+      else loc[static_cast<std::size_t>(i)] = coordinates.row(i).transpose();
+    }
+    return empirical_variogram<L, EuclideanMetric>(std::span<const L>(loc), values, EuclideanMetric{},
+                                                   bins, options);
+  };
+  switch (d) {
+    case 1: return run(double{});
+    case 2: return run(Eigen::Vector2d{});
+    case 3: return run(Eigen::Vector3d{});
+    case 6: return run(Eigen::Matrix<double, 6, 1>{});
+    default: return run(Eigen::VectorXd{});
+  }
+}
+
+#define ERRFIELD_VARIOGRAM_INSTANTIATE(L, M)                                                    \
+  template EmpiricalVariogram empirical_variogram<L, M>(std::span<const L>,                     \
+                                                        const Eigen::MatrixXd&, const M&,       \
+                                                        const LagBins&,                         \
+                                                        const EmpiricalVariogramOptions&);
+#define ERRFIELD_VARIOGRAM_INSTANTIATE_METRICS(L)    \
+  ERRFIELD_VARIOGRAM_INSTANTIATE(L, EuclideanMetric)  \
+  ERRFIELD_VARIOGRAM_INSTANTIATE(L, JointSpaceMetric) \
+  ERRFIELD_VARIOGRAM_INSTANTIATE(L, WeightedEuclideanMetric)
+ERRFIELD_VARIOGRAM_INSTANTIATE_METRICS(double)
+ERRFIELD_VARIOGRAM_INSTANTIATE_METRICS(Eigen::Vector2d)
+ERRFIELD_VARIOGRAM_INSTANTIATE_METRICS(Eigen::Vector3d)
+ERRFIELD_VARIOGRAM_INSTANTIATE_METRICS(detail::Location6d)
+ERRFIELD_VARIOGRAM_INSTANTIATE_METRICS(Eigen::VectorXd)
+
+}  // namespace errfield
