@@ -1,0 +1,166 @@
+// End-to-end tests of `errfield variogram` and `errfield fit-variogram` through the executable.
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "errfield/csv_table.hpp"
+#include "errfield/empirical_variogram.hpp"
+
+namespace errfield {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliRun {
+  int code;
+  std::string out;
+  std::string err;
+};
+
+class VariogramCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("errfield_vario_cli_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  void write(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
+  std::string read(const std::string& name) const {
+    std::ifstream in(path(name));
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  }
+  CliRun run(const std::string& args) const {
+    const int rc = std::system((std::string(ERRFIELD_CLI_PATH) + " " + args + " >" + path("stdout.txt") +
+                                " 2>" + path("stderr.txt"))
+                                   .c_str());
+    return {WEXITSTATUS(rc), read("stdout.txt"), read("stderr.txt")};
+  }
+  fs::path dir_;
+};
+
+// Simulated data: 3-D points and a smooth scalar plus a 3-vector value.
+std::string simulated_csv(int n, std::uint64_t seed, Eigen::MatrixXd* x, Eigen::MatrixXd* z) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1000.0);
+  std::normal_distribution<double> g(0.0, 0.05);
+  x->resize(n, 3);
+  z->resize(n, 4);
+  std::string csv = "id,x [mm],y,z,dL,dx,dy,dz\n";
+  for (int i = 0; i < n; ++i) {
+    for (int a = 0; a < 3; ++a) (*x)(i, a) = std::round(u(rng));  // integers: lags hit bin edges
+    (*z)(i, 0) = std::sin((*x)(i, 0) / 300.0) + g(rng);
+    for (int c = 1; c < 4; ++c) (*z)(i, c) = std::cos((*x)(i, c - 1) / 200.0) + g(rng);
+    csv += std::to_string(i);
+    for (int a = 0; a < 3; ++a) csv.append(",").append(format_number((*x)(i, a)));
+    for (int c = 0; c < 4; ++c) csv.append(",").append(format_number((*z)(i, c)));
+    csv += "\n";
+  }
+  return csv;
+}
+
+TEST_F(VariogramCli, WritesExactColumnsAndAgreesWithTheLibrary) {
+  Eigen::MatrixXd x, z;
+  write("in.csv", simulated_csv(300, 1, &x, &z));
+  const auto r = run("variogram --input " + path("in.csv") +
+                     " --coords x,y,z --value dL --bins 0:2000:100 --out " + path("v.csv"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const CsvTable t = CsvTable::read(path("v.csv"));
+  ASSERT_EQ(t.header(), (std::vector<std::string>{"lag_lo", "lag_hi", "lag_mean", "gamma", "pairs"}));
+  const auto lib = empirical_variogram(x, z.col(0), LagBins::uniform(0.0, 2000.0, 100.0));
+  ASSERT_EQ(t.row_count(), 20u);
+  bool saw_empty = false;
+  for (std::size_t b = 0; b < 20; ++b) {
+    EXPECT_EQ(std::stod(t.row(b)[0]), 100.0 * b);
+    EXPECT_EQ(std::stoull(t.row(b)[4]), lib.bins[b].pairs);
+    if (lib.bins[b].pairs == 0) {
+      saw_empty = true;
+      EXPECT_EQ(t.row(b)[2], "");
+      EXPECT_EQ(t.row(b)[3], "");
+    } else {
+      EXPECT_EQ(std::stod(t.row(b)[3]), lib.bins[b].gamma);  // shortest round-trip text
+      EXPECT_EQ(std::stod(t.row(b)[2]), lib.bins[b].lag_mean);
+    }
+  }
+  EXPECT_TRUE(saw_empty) << "max lag of 1000^3 cube is 1732, so the last bins must be empty";
+}
+
+TEST_F(VariogramCli, VectorValueExplicitEdgesStdoutAndPerComponent) {
+  Eigen::MatrixXd x, z;
+  write("in.csv", simulated_csv(200, 2, &x, &z));
+  const auto r = run("variogram --input " + path("in.csv") +
+                     " --coords x,y,z --value dx,dy,dz --bins 0,50,100,300,700 --convention gstat "
+                     "--estimator cressie --per-component");
+  ASSERT_EQ(r.code, 0) << r.err;
+  const CsvTable t = CsvTable::parse(r.out, "stdout");
+  ASSERT_EQ(t.header(), (std::vector<std::string>{"lag_lo", "lag_hi", "lag_mean", "gamma", "pairs",
+                                                  "gamma_dx", "gamma_dy", "gamma_dz"}));
+  EmpiricalVariogramOptions o;
+  o.convention = BinConvention::Gstat;
+  o.estimator = VariogramEstimator::CressieHawkins;
+  const auto lib = empirical_variogram(x, z.rightCols(3), LagBins::from_edges({0, 50, 100, 300, 700}), o);
+  ASSERT_EQ(t.row_count(), 4u);
+  for (std::size_t b = 0; b < 4; ++b) {
+    EXPECT_EQ(std::stod(t.row(b)[3]), lib.bins[b].gamma);
+    for (int c = 0; c < 3; ++c)
+      EXPECT_EQ(std::stod(t.row(b)[5 + c]), lib.component_gamma(static_cast<Eigen::Index>(b), c));
+  }
+}
+
+TEST_F(VariogramCli, BadInputExitsNonZeroNamingWhereAndWritesNothing) {
+  write("bad.csv", "x,y,v\n0,0,1\n1,0,abc\n2,0,3\n");
+  auto r = run("variogram --input " + path("bad.csv") + " --coords x,y --value v --bins 0:5:1 --out " +
+               path("o.csv"));
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("bad.csv"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find(":3"), std::string::npos) << r.err;  // line 3 holds 'abc'
+  EXPECT_NE(r.err.find("'v'"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("o.csv")));
+
+  write("ok.csv", "x,y,v\n0,0,1\n1,0,2\n2,0,3\n");
+  r = run("variogram --input " + path("ok.csv") + " --coords x,w --value v --bins 0:5:1");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("'w'"), std::string::npos) << r.err;
+  r = run("variogram --input " + path("ok.csv") + " --coords x,y --value v --bins 0:5:0");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("width"), std::string::npos) << r.err;
+  r = run("variogram --input " + path("ok.csv") + " --coords x,y --value v --bins 0,2,1");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("edges[2]"), std::string::npos) << r.err;
+  r = run("variogram --input " + path("ok.csv") + " --coords x,y --value v --bins 0:5");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("--bins"), std::string::npos) << r.err;
+  r = run("variogram --input " + path("ok.csv") + " --coords x,y --value v --bins 0:5:1 --estimator dowd2");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("matheron"), std::string::npos) << r.err;
+  r = run("variogram --input " + path("missing.csv") + " --coords x,y --value v --bins 0:5:1");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("missing.csv"), std::string::npos) << r.err;
+  write("one.csv", "x,y,v\n0,0,1\n");
+  r = run("variogram --input " + path("one.csv") + " --coords x,y --value v --bins 0:5:1");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("at least 2"), std::string::npos) << r.err;
+  write("nan.csv", "x,y,v\n0,0,1\n1,0,nan\n");
+  r = run("variogram --input " + path("nan.csv") + " --coords x,y --value v --bins 0:5:1");
+  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.err.find("nan.csv"), std::string::npos) << r.err;
+  r = run("variogram --help");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.out.find("Example"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace errfield
