@@ -14,6 +14,9 @@
 
 #include "errfield/csv_table.hpp"
 #include "errfield/empirical_variogram.hpp"
+#include "errfield/variogram_fit.hpp"
+
+#include <nlohmann/json.hpp>
 
 namespace errfield {
 namespace {
@@ -160,6 +163,46 @@ TEST_F(VariogramCli, BadInputExitsNonZeroNamingWhereAndWritesNothing) {
   r = run("variogram --help");
   EXPECT_EQ(r.code, 0);
   EXPECT_NE(r.out.find("Example"), std::string::npos);
+}
+
+TEST_F(VariogramCli, FitVariogramPrintsAndWritesALoadableModel) {
+  Eigen::MatrixXd x, z;
+  write("in.csv", simulated_csv(300, 3, &x, &z));
+  ASSERT_EQ(run("variogram --input " + path("in.csv") + " --coords x,y,z --value dL --bins 0:2000:100 --out " +
+                path("v.csv"))
+                .code,
+            0);
+  const auto r = run("fit-variogram --input " + path("v.csv") +
+                     " --model gau --nugget free --weights cressie --out " + path("m.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("gau(sill="), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("weighted SSE (cressie)"), std::string::npos) << r.out;
+  const auto j = nlohmann::json::parse(read("m.json"));
+  const auto model = j.get<VariogramModel>();
+  EXPECT_EQ(model.to_string(), r.out.substr(0, r.out.find('\n')));
+  // The same fit through the library, on the same (empty-bin-free) data.
+  const auto lib_vg = empirical_variogram(x, z.col(0), LagBins::uniform(0.0, 2000.0, 100.0));
+  VariogramFitOptions o;
+  o.weighting = FitWeighting::Cressie;
+  const auto lib = fit_variogram(lib_vg, {{ModelKind::Gaussian, 0, 0, 0.5}}, o);
+  EXPECT_NEAR(j["fit"]["weighted_sse"].get<double>(), lib.weighted_sse, 1e-12 * lib.weighted_sse);
+
+  auto bad = run("fit-variogram --input " + path("v.csv") + " --model mat");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.err.find("--nu"), std::string::npos) << bad.err;
+  bad = run("fit-variogram --input " + path("v.csv") + " --model sph --nugget fixed=abc");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.err.find("--nugget"), std::string::npos) << bad.err;
+  bad = run("fit-variogram --input " + path("v.csv") + " --model sph --weights ols");
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.err.find("nj_h2"), std::string::npos) << bad.err;
+  write("bad.csv", "lag_lo,lag_hi,lag_mean,gamma,pairs\n0,1,0.5,0.1,3\n1,2,1.5,x,4\n2,3,2.5,0.3,5\n");
+  bad = run("fit-variogram --input " + path("bad.csv") + " --model sph --out " + path("bad.json"));
+  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.err.find("bad.csv:3"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("'gamma'"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(path("bad.json")));
+  EXPECT_EQ(run("fit-variogram --help").code, 0);
 }
 
 }  // namespace

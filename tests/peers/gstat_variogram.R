@@ -1,0 +1,39 @@
+#!/usr/bin/env Rscript
+# Peer reference for tests/peers/gstat_variogram_test.cpp: R gstat's empirical variogram and
+# fit.variogram on data the test generates.
+#
+#   Rscript gstat_variogram.R <data.csv> <boundaries "b1,b2,..."> <out_prefix>
+#
+# data.csv has columns x,y,z,v. Writes
+#   <out_prefix>_matheron.csv, <out_prefix>_cressie.csv : np,dist,gamma (gstat's non-empty bins)
+#   <out_prefix>_fit.csv : model,method,psill,range,nugget,sserr,singular — fit.variogram of the
+#                          Matheron variogram for Sph/Exp/Gau + nugget and fit.method 1, 2, 7.
+suppressPackageStartupMessages({ library(gstat); library(sp) })
+args <- commandArgs(trailingOnly = TRUE)
+if (length(args) != 3) stop("usage: gstat_variogram.R data.csv b1,b2,... out_prefix")
+d <- read.csv(args[1])
+b <- as.numeric(strsplit(args[2], ",")[[1]])
+prefix <- args[3]
+coordinates(d) <- ~x + y + z
+fmt <- function(df) {  # every number with 17 significant digits, no padding
+  for (k in names(df)) if (is.numeric(df[[k]])) df[[k]] <- sprintf("%.17g", df[[k]])
+  df
+}
+vm <- variogram(v ~ 1, d, boundaries = b)
+write.csv(fmt(data.frame(np = vm$np, dist = vm$dist, gamma = vm$gamma)),
+          paste0(prefix, "_matheron.csv"), row.names = FALSE, quote = FALSE)
+vc <- variogram(v ~ 1, d, boundaries = b, cressie = TRUE)
+write.csv(fmt(data.frame(np = vc$np, dist = vc$dist, gamma = vc$gamma)),
+          paste0(prefix, "_cressie.csv"), row.names = FALSE, quote = FALSE)
+rows <- list()
+for (m in c("Sph", "Exp", "Gau")) {
+  for (method in c(1, 2, 7)) {
+    start <- vgm(psill = 0.8 * max(vm$gamma), model = m, range = max(vm$dist) / 3,
+                 nugget = 0.5 * min(vm$gamma))
+    f <- suppressWarnings(fit.variogram(vm, start, fit.method = method))
+    rows[[length(rows) + 1]] <- data.frame(
+      model = tolower(m), method = method, psill = f$psill[2], range = f$range[2],
+      nugget = f$psill[1], sserr = attr(f, "SSErr"), singular = attr(f, "singular"))
+  }
+}
+write.csv(fmt(do.call(rbind, rows)), paste0(prefix, "_fit.csv"), row.names = FALSE, quote = FALSE)
