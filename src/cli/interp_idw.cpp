@@ -6,7 +6,9 @@
 
 #include "cli/interpolation_methods.hpp"
 #include "errfield/error.hpp"
+#include "errfield/cross_validation.hpp"
 #include "errfield/grid_idw.hpp"
+#include "errfield/scattered_idw.hpp"
 
 namespace errfield::cli {
 namespace {
@@ -65,6 +67,71 @@ InterpolationResult interpolate_grid(const InterpolationRequest& r) {
     return result;
   });
 }
+
+std::vector<Eigen::VectorXd> rows_as_points(const Eigen::MatrixXd& m) {
+  std::vector<Eigen::VectorXd> p(static_cast<std::size_t>(m.rows()));
+  for (Eigen::Index i = 0; i < m.rows(); ++i) p[static_cast<std::size_t>(i)] = m.row(i).transpose();
+  return p;
+}
+
+ScatteredIdwOptions scattered_options(const SharedInterpolationOptions& shared) {
+  ScatteredIdwOptions o;
+  o.power = shared.power.value_or(2.0);
+  o.neighbors = shared.neighbors.value_or(0);
+  if (shared.radius) o.radius = *shared.radius;
+  return o;
+}
+
+InterpolationResult interpolate_scattered(const InterpolationRequest& r) {
+  const ScatteredIdwOptions options = scattered_options(r.shared);
+  const auto points = rows_as_points(r.sample_coords);
+  const auto targets = rows_as_points(r.target_coords);
+  return with_value_type(r.value_columns.size(), [&]<class V>() {
+    const ScatteredIdw<Eigen::VectorXd, V> idw(points, rows_as_values<V>(r.sample_values), options);
+    std::vector<V> out(targets.size());
+    std::vector<ScatteredIdwStatus> status(targets.size());
+    idw.predict_with_status(std::span<const Eigen::VectorXd>(targets), std::span<V>(out), std::span<ScatteredIdwStatus>(status));
+    InterpolationResult result;
+    std::size_t none = 0, first = 0;
+    for (std::size_t i = 0; i < status.size(); ++i)
+      if (status[i] == ScatteredIdwStatus::NoNeighbours && none++ == 0) first = i;
+    if (none)
+      result.notes.push_back(std::to_string(none) + " of " + std::to_string(status.size()) +
+                             " targets have no sample within --radius " + format_number(options.radius) +
+                             " (first: " + r.target_labels(first) + "); their prediction cells are empty");
+    result.pred = values_as_rows(out);
+    return result;
+  });
+}
+
+CrossValidationOutput cross_validate_scattered(const CrossValidationRequest& r) {
+  const auto points = rows_as_points(r.sample_coords);
+  CrossValidationOptions cv;
+  cv.folds = r.folds;
+  cv.seed = r.seed;
+  return with_value_type(r.value_columns.size(), [&]<class V>() {
+    ScatteredIdwEstimator<Eigen::VectorXd, V> estimator;
+    estimator.options = scattered_options(r.shared);
+    const auto values = rows_as_values<V>(r.sample_values);
+    const auto result = cross_validate(estimator, std::span<const Eigen::VectorXd>(points), std::span<const V>(values), cv);
+    CrossValidationOutput out;
+    out.fold = result.fold;
+    out.pred = values_as_rows(result.predicted);
+    out.variance = result.variance;
+    return out;
+  });
+}
+
+InterpolationMethodRegistration scattered_method{{
+    "idw",
+    "inverse-distance weighting over scattered samples in any number of coordinates: the --neighbors K "
+    "nearest and/or those within --radius R (default all), weights 1/d^p (p = 2 unless --power, as gstat's "
+    "idw); exact at the samples; a target with no sample within --radius gets empty cells",
+    {"--power", "--neighbors", "--radius"},
+    nullptr,
+    &interpolate_scattered,
+    &cross_validate_scattered,
+}};
 
 InterpolationMethodRegistration grid_method{{
     "idw-grid",

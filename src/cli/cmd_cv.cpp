@@ -1,0 +1,210 @@
+// `errfield cv`: leave-one-out or k-fold cross-validation of a scattered estimator on a samples
+// CSV; prints the summary and optionally writes the per-sample predictions and residuals.
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+#include "cli/cli_support.hpp"
+#include "cli/command_registry.hpp"
+#include "cli/interpolation_methods.hpp"
+#include "errfield/cross_validation.hpp"
+#include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
+
+namespace errfield::cli {
+namespace {
+
+struct CvArgs {
+  std::string method;
+  std::string samples;
+  std::string coords;
+  std::string value;
+  std::string folds = "loo";
+  std::uint64_t seed = 1;
+  std::string out;
+  double power = 0.0;
+  std::size_t neighbors = 0;
+  double radius = 0.0;
+};
+
+struct CvHandles {
+  CLI::Option* power = nullptr;
+  CLI::Option* neighbors = nullptr;
+  CLI::Option* radius = nullptr;
+  CLI::Option* seed = nullptr;
+};
+
+std::size_t parse_folds(const std::string& text) {
+  if (text == "loo") return 0;
+  std::size_t pos = 0;
+  unsigned long long k = 0;
+  try {
+    k = std::stoull(text, &pos);
+  } catch (const std::exception&) {
+    pos = 0;
+  }
+  if (pos != text.size() || text.empty() || text[0] == '-' || k < 2)
+    throw ArgumentError("--folds is '" + text + "'; expected 'loo' (leave-one-out) or a number of folds >= 2");
+  return static_cast<std::size_t>(k);
+}
+
+std::string cell(double v) { return std::isnan(v) ? std::string() : format_number(v); }
+
+std::string with_unit(double v, const std::string& unit) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return unit.empty() ? std::string(buf) : std::string(buf) + " " + unit;
+}
+
+void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& owners) {
+  const InterpolationMethod& method = find_method(a.method, true);
+  owners.check(method.name, method.accepts, {h.power, h.neighbors, h.radius});
+
+  CrossValidationRequest r;
+  r.coord_columns = split_list(a.coords, "--coords");
+  r.value_columns = split_list(a.value, "--value");
+  r.folds = parse_folds(a.folds);
+  r.seed = a.seed;
+  if (r.folds == 0 && h.seed->count())
+    throw ArgumentError("--seed applies to k-fold cross-validation (--folds K), not to --folds loo");
+  if (h.power->count()) {
+    if (!(a.power >= 0.0) || !std::isfinite(a.power))
+      throw ArgumentError("--power is " + format_number(a.power) + "; expected a finite value >= 0");
+    r.shared.power = a.power;
+  }
+  if (h.neighbors->count()) {
+    if (a.neighbors < 1) throw ArgumentError("--neighbors is 0; expected at least 1");
+    r.shared.neighbors = a.neighbors;
+  }
+  if (h.radius->count()) {
+    if (!(a.radius > 0.0) || !std::isfinite(a.radius))
+      throw ArgumentError("--radius is " + format_number(a.radius) + "; expected a finite value > 0");
+    r.shared.radius = a.radius;
+  }
+  with_value_type(r.value_columns.size(), []<class V>() {});
+
+  const CsvTable samples = CsvTable::read(a.samples);
+  const std::size_t n = samples.row_count();
+  if (n < 2)
+    throw InputError(a.samples + ": " + std::to_string(n) + " data rows; cross-validation needs at least 2", a.samples);
+  if (r.folds > n)
+    throw ArgumentError("--folds " + std::to_string(r.folds) + " for " + std::to_string(n) + " samples in " + a.samples +
+                        "; expected at most one fold per sample");
+  r.samples = &samples;
+  r.sample_coords = samples.numeric_columns(r.coord_columns);
+  r.sample_values = samples.numeric_columns(r.value_columns);
+  r.sample_labels = row_labels_of(samples, "sample");
+
+  const std::size_t c = r.value_columns.size();
+  std::vector<std::string> pred_names, res_names;
+  for (const auto& v : r.value_columns) {
+    pred_names.push_back(c == 1 ? "pred" : "pred_" + v);
+    res_names.push_back(c == 1 ? "residual" : "residual_" + v);
+  }
+  std::vector<std::string> added{"fold"};
+  added.insert(added.end(), pred_names.begin(), pred_names.end());
+  added.insert(added.end(), res_names.begin(), res_names.end());
+  added.push_back("abs_residual");
+  added.push_back("var");
+  if (!a.out.empty())
+    for (const auto& name : added)
+      if (samples.has_column(name))
+        throw InputError(a.samples + ": already has a column '" + name + "', which the output would repeat; rename it",
+                         a.samples, 1, name);
+
+  const CrossValidationOutput result = method.cross_validate(r);
+  const auto rows = static_cast<Eigen::Index>(n);
+  if (result.pred.rows() != rows || result.pred.cols() != static_cast<Eigen::Index>(c) || result.fold.size() != n)
+    throw Error("cv: method " + method.name + " returned results of the wrong size");
+  const Eigen::MatrixXd residuals = r.sample_values - result.pred;
+  const CrossValidationSummary s = summarize_residuals(residuals, result.variance);
+
+  if (!a.out.empty()) {
+    OutputTable out;
+    out.add_all_columns(samples);
+    std::vector<std::string> folds(n);
+    for (std::size_t i = 0; i < n; ++i) folds[i] = std::to_string(result.fold[i]);
+    out.add_column("fold", std::move(folds));
+    for (std::size_t k = 0; k < c; ++k) {
+      std::vector<std::string> p(n), e(n);
+      for (std::size_t i = 0; i < n; ++i) {
+        p[i] = cell(result.pred(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)));
+        e[i] = cell(residuals(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)));
+      }
+      out.add_column(pred_names[k], std::move(p));
+      out.add_column(res_names[k], std::move(e));
+    }
+    std::vector<std::string> abs(n);
+    for (std::size_t i = 0; i < n; ++i) abs[i] = cell(residuals.row(static_cast<Eigen::Index>(i)).norm());
+    out.add_column("abs_residual", std::move(abs));
+    if (!result.variance.empty()) {
+      std::vector<std::string> var(n);
+      for (std::size_t i = 0; i < n; ++i) var[i] = cell(result.variance[i]);
+      out.add_column("var", std::move(var));
+    }
+    out.write(a.out);
+  }
+
+  // Units from the value columns' headers ("dL [mm]"); shown only when all columns agree.
+  std::string unit = unit_of_column(samples, r.value_columns.front());
+  for (const auto& v : r.value_columns)
+    if (unit_of_column(samples, v) != unit) unit.clear();
+  const std::string what = c == 1 ? r.value_columns.front() : "(" + a.value + ")";
+  std::cout << "cross-validation of --method " << method.name << " on " << a.samples << ": " << n << " samples, "
+            << (r.folds == 0 ? std::string("leave-one-out") : std::to_string(r.folds) + "-fold (seed " + std::to_string(r.seed) + ")")
+            << "\n";
+  std::cout << "  value            " << what << (unit.empty() ? "" : " [" + unit + "]") << "\n";
+  std::cout << "  predicted        " << s.predicted << " of " << s.samples << "\n";
+  if (s.predicted > 0) {
+    std::cout << "  mean error       ";
+    for (std::size_t k = 0; k < c; ++k) std::cout << (k ? ", " : "") << with_unit(s.mean_error[k], unit);
+    std::cout << "   (observed - predicted" << (c > 1 ? ", per component" : "") << ")\n";
+    std::cout << "  mean |error|     " << with_unit(s.mean_abs_error, unit) << (c > 1 ? "   (Euclidean norm)" : "") << "\n";
+    std::cout << "  max |error|      " << with_unit(s.max_abs_error, unit) << "   at " << r.sample_labels(s.max_abs_index)
+              << "\n";
+    std::cout << "  RMS error        " << with_unit(s.rms_error, unit) << "\n";
+    if (s.mean_z) {
+      std::cout << "  mean z           " << with_unit(*s.mean_z, "") << "   (residual / prediction sd; ~0)\n";
+      std::cout << "  mean z^2         " << with_unit(*s.mean_squared_z, "") << "   (~1 when the variance is right)\n";
+    }
+  }
+  if (s.predicted < s.samples)
+    std::cout << "  " << (s.samples - s.predicted) << " samples had no prediction (e.g. no neighbour within --radius)\n";
+  for (const auto& note : result.notes) std::cerr << "errfield cv: " << note << "\n";
+  if (!a.out.empty()) std::cout << "wrote " << a.out << "\n";
+}
+
+void add_cv_command(CLI::App& app) {
+  auto args = std::make_shared<CvArgs>();
+  auto handles = std::make_shared<CvHandles>();
+  CLI::App* cmd = app.add_subcommand("cv", "Cross-validate an interpolation method on samples (leave-one-out or k-fold)");
+  cmd->footer(
+      "Each sample (leave-one-out) or each of K folds is predicted from the other samples; the summary\n"
+      "gives the mean error (observed - predicted), mean and max |error| and the RMS error, in the unit\n"
+      "of the value column (e.g. 'dL [mm]' -> mm). k-fold folds come from a seeded shuffle: the same\n"
+      "--seed gives the same folds everywhere. --out writes every sample column plus fold, pred,\n"
+      "residual and abs_residual (vector values: pred_<col>, residual_<col>; abs_residual is the norm).\n\n"
+      "Methods: " + method_names(true) + "\n\n"
+      "Example:\n"
+      "  errfield cv --method idw --samples samples.csv --coords x,y,z --value dL --neighbors 8 --folds 10 \\\n"
+      "      --seed 42 --out cv_points.csv\n");
+  cmd->add_option("--method", args->method, "Method to validate: " + method_names(true))->required();
+  cmd->add_option("--samples", args->samples, "CSV with the samples (coordinates and values)")->required();
+  cmd->add_option("--coords", args->coords, "Coordinate columns, comma-separated (any number)")->required();
+  cmd->add_option("--value", args->value, "Value column, or 2-3 comma-separated columns of a vector value")->required();
+  cmd->add_option("--folds", args->folds, "'loo' (leave-one-out, default) or the number of folds K >= 2");
+  handles->seed = cmd->add_option("--seed", args->seed, "Seed of the k-fold assignment (default 1)");
+  cmd->add_option("--out", args->out, "Optional CSV of per-sample predictions and residuals");
+  handles->power = cmd->add_option("--power", args->power, "Power p of the inverse-distance weights (idw: default 2)");
+  handles->neighbors = cmd->add_option("--neighbors", args->neighbors, "Use the K nearest samples (default: all)");
+  handles->radius = cmd->add_option("--radius", args->radius, "Use only samples within this distance (coordinates' unit)");
+  auto owners = std::make_shared<MethodOptionOwnership>(add_method_options(*cmd, true));
+  cmd->callback([args, handles, owners] { run_cv(*args, *handles, *owners); });
+}
+
+Registration reg{"cv", 35, &add_cv_command};
+
+}  // namespace
+}  // namespace errfield::cli
