@@ -1,0 +1,400 @@
+#pragma once
+/// Kriging: the best linear unbiased predictor of an error field at new locations, with its
+/// prediction variance. Use it instead of IDW when the data are irregular, when you want to know
+/// how uncertain a prediction is, or when a fitted variogram says how the error decorrelates.
+///
+/// Variants (KrigingOptions::kind): simple (known mean), ordinary (unknown constant mean) and
+/// universal (polynomial drift of order 0, 1 or 2 in the coordinates plus user drift functions).
+/// Back ends (KrigingOptions::backend), one interface:
+///   - Dense: one Cholesky factorization of the N x N covariance; any N whose matrix fits in
+///     memory (N up to ~20,000; the memory budget is checked and a ResourceError names the others).
+///   - Local: the k nearest samples (or those within a radius) per target, a small dense solve per
+///     target; N up to 10^6 and beyond.
+///   - Sparse: compactly supported models (sph, wen, plus nugget) only; the sparse covariance is
+///     factored once by CHOLMOD; for large N with a short range.
+/// The mathematics, variance conventions and the choice of back end are in docs/kriging.md.
+///
+/// Conventions follow gstat's `krige`: the model is a VariogramModel in gstat's `vgm` vocabulary
+/// (`range` of exp/gau is the scale parameter a, not the practical range); by default the nugget is
+/// micro-scale variance, so kriging is exact at the data and the variance there is 0; optionally
+/// the nugget is measurement error (NuggetTreatment::MeasurementError, like gstat's `Err`): the
+/// prediction is then of the error-free signal and smooths the data.
+///
+/// Vector values (e.g. a 3-D position error) are kriged component by component with one shared
+/// factorization (several right-hand sides). This is the intrinsic coregionalization model with
+/// one variogram for every component: the weights, and hence the kriging variance, are the same
+/// for all components; cross-covariances between components are not used. See docs/kriging.md.
+///
+/// Thread safety: a constructed Kriging object is immutable; predict() may be called concurrently.
+/// predict() itself runs OpenMP over targets.
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "errfield/concepts.hpp"
+#include "errfield/error.hpp"
+#include "errfield/metrics.hpp"
+#include "errfield/variogram_model.hpp"
+
+namespace errfield {
+
+/// Which mean the field is assumed to have.
+enum class KrigingKind {
+  Simple,     ///< known constant mean (KrigingOptions::simple_mean)
+  Ordinary,   ///< unknown constant mean, estimated jointly (weights sum to 1)
+  Universal,  ///< unknown polynomial drift (KrigingOptions::drift_order) + drift_functions
+};
+
+/// How predictions are computed; all give the same answer where they overlap (tested).
+enum class KrigingBackend { Dense, Local, Sparse };
+
+/// What the nugget of the model stands for.
+enum class NuggetTreatment {
+  /// gstat's `krige` default: micro-scale variation. Exact at data points (variance 0 there),
+  /// the variance far from data reaches the total sill.
+  MicroScale,
+  /// Measurement error (gstat's `Err`): predictions are of the error-free signal, smooth the data,
+  /// and the variance is that of the signal (reaches sill - nugget far from the data).
+  MeasurementError,
+};
+
+/// What to do with samples closer than KrigingOptions::duplicate_distance.
+enum class DuplicatePolicy {
+  Error,    ///< throw InputError naming the two sample indices and their lag
+  Average,  ///< merge each group into its first sample: mean value, variance of the mean
+};
+
+/// Outcome of a factorization or a prediction. Ok and IllConditioned come with predictions.
+enum class KrigingStatus {
+  Ok,
+  IllConditioned,       ///< solved, but the condition number exceeded max_condition_number
+  NotPositiveDefinite,  ///< covariance not positive definite even after the jitter retries
+  SingularDrift,        ///< drift terms linearly dependent at the samples (F'K^-1F singular)
+  TooFewSamples,        ///< fewer samples (or neighbours) than drift terms, or none at all
+};
+
+std::string_view kriging_status_name(KrigingStatus status);
+std::string_view kriging_kind_name(KrigingKind kind);
+std::string_view kriging_backend_name(KrigingBackend backend);
+/// "dense" | "local" | "sparse"; throws ArgumentError listing the choices.
+KrigingBackend kriging_backend_from_name(std::string_view name);
+
+/// A user drift function of the sample coordinates (the Location's own coordinates, not the
+/// metric's embedding). Called once per sample and per target, never in a hot loop.
+using DriftFunction = std::function<double(std::span<const double> coordinates)>;
+
+/// Everything that decides how kriging is done. Plain data; call validate() (the Kriging
+/// constructor does) to get an ArgumentError naming the first bad field.
+struct KrigingOptions {
+  KrigingKind kind = KrigingKind::Ordinary;
+  /// Simple kriging mean, per value component: empty = 0, one entry = same for all components.
+  std::vector<double> simple_mean;
+  /// Universal kriging: polynomial drift order in the coordinates, 0, 1 or 2 (order 0 is a
+  /// constant, i.e. ordinary kriging plus the drift_functions).
+  int drift_order = 1;
+  /// Universal kriging: extra drift terms (added to the polynomial ones).
+  std::vector<DriftFunction> drift_functions;
+  NuggetTreatment nugget = NuggetTreatment::MicroScale;
+
+  KrigingBackend backend = KrigingBackend::Dense;
+  /// Local: number of nearest samples per target (gstat's nmax); 0 = no limit (then radius must
+  /// be finite). Must be at least the number of drift terms.
+  std::size_t neighbors = 0;
+  /// Local: only samples at lag < radius (gstat's maxdist), lag unit; infinity = no limit.
+  double radius = std::numeric_limits<double>::infinity();
+
+  bool compute_variance = true;
+  /// Return the kriging weights of every target (dense: N per target; local: k per target).
+  /// Not available with the sparse back end.
+  bool keep_weights = false;
+
+  /// Samples at lag <= duplicate_distance are duplicates (0 = only exactly equal locations).
+  double duplicate_distance = 0.0;
+  DuplicatePolicy duplicates = DuplicatePolicy::Error;
+
+  /// Factorization policy: when the covariance is not numerically positive definite, add
+  /// jitter = initial_jitter * total sill to the diagonal and retry, multiplying it by
+  /// jitter_growth each time, at most max_jitter_retries times. The jitter used is reported.
+  int max_jitter_retries = 4;
+  double initial_jitter = 1e-12;
+  double jitter_growth = 100.0;
+  /// Above this (estimated, 1-norm) condition number the status is IllConditioned.
+  double max_condition_number = 1e12;
+
+  /// Dense: bytes the N x N matrices may take (K and its factor); beyond it ResourceError.
+  std::size_t dense_memory_budget_bytes = std::size_t{4} << 30;
+  /// Targets per batch of the dense/sparse variance solves (memory N x batch per thread).
+  std::size_t target_batch = 256;
+  /// OpenMP threads for predict(); 0 = OpenMP's default.
+  int threads = 0;
+
+  /// Throws ArgumentError naming the field, its value and what is expected.
+  void validate() const;
+};
+
+/// How the samples were factored.
+struct KrigingReport {
+  KrigingStatus status = KrigingStatus::Ok;
+  std::string message;  ///< human-readable detail (empty when Ok and nothing to say)
+  /// Estimated condition number of the covariance matrix (dense: 1-norm estimate from the
+  /// Cholesky factor; sparse: CHOLMOD's rough estimate); NaN where not computed (local).
+  double condition_number = std::numeric_limits<double>::quiet_NaN();
+  double jitter = 0.0;               ///< absolute value added to the diagonal (0 = none)
+  std::size_t samples_used = 0;      ///< after merging duplicates
+  std::size_t merged_duplicates = 0; ///< samples folded into another by DuplicatePolicy::Average
+  std::size_t drift_terms = 0;       ///< columns of the drift matrix F (0 for simple kriging)
+  /// True when predictions are available (Ok or IllConditioned).
+  bool usable() const { return status == KrigingStatus::Ok || status == KrigingStatus::IllConditioned; }
+};
+
+/// Kriging weights in compressed rows: the weights of target t are weight[k] on sample
+/// sample[k] for k in [offset[t], offset[t+1]). Sample indices are those given to the constructor.
+struct KrigingWeights {
+  std::vector<std::size_t> offset;
+  std::vector<std::size_t> sample;
+  std::vector<double> weight;
+};
+
+/// Predictions at targets. Targets that could not be solved (local back end: too few
+/// neighbours, singular local system) have NaN mean and variance, and `status`/`message` say how
+/// many and which came first; with a usable status every value is finite.
+template <class V>
+struct KrigingPrediction {
+  KrigingStatus status = KrigingStatus::Ok;
+  std::string message;
+  std::vector<V> mean;            ///< one per target
+  std::vector<double> variance;   ///< one per target (same for every component); empty if not asked
+  KrigingWeights weights;         ///< empty unless keep_weights
+  std::size_t failed_targets = 0;
+  bool usable() const { return status == KrigingStatus::Ok || status == KrigingStatus::IllConditioned; }
+};
+
+/// Cross-validation of kriging: per-sample prediction from the other samples (LOO) or from the
+/// other folds (k-fold), residual = observed - predicted, and summaries.
+template <class V>
+struct KrigingCrossValidation {
+  KrigingStatus status = KrigingStatus::Ok;
+  std::string message;
+  std::vector<V> prediction;    ///< one per (merged) sample
+  std::vector<V> residual;      ///< observed - predicted
+  std::vector<double> variance; ///< variance of the residual of the observation
+  double mean_error = 0.0;      ///< mean residual (all components pooled)
+  double rms_error = 0.0;       ///< sqrt(mean squared residual norm)
+  double max_abs_error = 0.0;   ///< largest residual norm
+  double mean_squared_z = 0.0;  ///< mean of |residual|^2 / (components * variance); ~1 if calibrated
+};
+
+/// A metric kriging can use: one that is Euclidean after scaling each coordinate, so that the
+/// covariance models stay positive definite and a kd-tree can find neighbours. Specialize
+/// `scales` (empty = unscaled) for another such metric.
+template <class M>
+struct EuclideanEmbedding;
+template <>
+struct EuclideanEmbedding<EuclideanMetric> {
+  static std::vector<double> scales(const EuclideanMetric&) { return {}; }
+};
+template <>
+struct EuclideanEmbedding<JointSpaceMetric> {
+  static std::vector<double> scales(const JointSpaceMetric&) { return {}; }
+};
+template <>
+struct EuclideanEmbedding<WeightedEuclideanMetric> {
+  static std::vector<double> scales(const WeightedEuclideanMetric& m) {
+    std::vector<double> s;
+    for (double w : m.weights()) s.push_back(std::sqrt(w));
+    return s;
+  }
+};
+
+template <class M>
+concept EmbeddableMetric = requires(const M& m) {
+  { EuclideanEmbedding<M>::scales(m) } -> std::convertible_to<std::vector<double>>;
+};
+
+namespace detail {
+class KrigingEngine;
+/// Type-erased result of the engine: one row per target, one column per value component.
+struct KrigingOutput {
+  KrigingStatus status = KrigingStatus::Ok;
+  std::string message;
+  Eigen::MatrixXd mean;
+  Eigen::VectorXd variance;
+  Eigen::MatrixXd residual;  // cross-validation only
+  KrigingWeights weights;
+  std::size_t failed_targets = 0;
+};
+std::shared_ptr<const KrigingEngine> make_kriging_engine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw,
+                                                         Eigen::MatrixXd values,
+                                                         Eigen::VectorXd measurement_variance,
+                                                         const VariogramModel& model,
+                                                         const KrigingOptions& options);
+const KrigingReport& engine_report(const KrigingEngine& engine);
+KrigingOutput engine_predict(const KrigingEngine& engine, const Eigen::MatrixXd& embedded,
+                             const Eigen::MatrixXd& raw);
+KrigingOutput engine_leave_one_out(const KrigingEngine& engine);
+KrigingOutput engine_k_fold(const KrigingEngine& engine, int folds, std::uint64_t seed);
+}  // namespace detail
+
+/// Kriging over samples of any Location type, Value type and Euclidean-embeddable Metric.
+///
+/// Construction validates the options and data (throws ArgumentError / InputError naming the
+/// offending field, sample and value; ResourceError when the dense matrices exceed the budget) and,
+/// for the dense and sparse back ends, factors the covariance once: O(N^3/3) dense. Numerical
+/// outcomes of the factorization are in report(), never thrown.
+template <Location L, Value V, class M = EuclideanMetric>
+  requires Metric<M, L> && EmbeddableMetric<M>
+class Kriging {
+ public:
+  /// samples: N locations; values: N values; measurement_variance: empty or N values >= 0 in the
+  /// value unit squared (added to the diagonal, per point; e.g. a tracker's variance).
+  Kriging(std::span<const L> samples, std::span<const V> values, const VariogramModel& model,
+          const KrigingOptions& options = {}, const M& metric = {},
+          std::span<const double> measurement_variance = {})
+      : scales_(EuclideanEmbedding<M>::scales(metric)) {
+    options.validate();
+    if (samples.size() != values.size())
+      throw ArgumentError("kriging: " + std::to_string(samples.size()) + " sample locations but " +
+                          std::to_string(values.size()) + " values; expected one value per location");
+    if (!measurement_variance.empty() && measurement_variance.size() != samples.size())
+      throw ArgumentError("kriging: " + std::to_string(measurement_variance.size()) +
+                          " measurement variances for " + std::to_string(samples.size()) +
+                          " samples; expected none or one per sample");
+    if (samples.empty()) throw InputError("kriging: no samples");
+    dimension_ = LocationTraits<L>::size(samples[0]);
+    Eigen::MatrixXd raw = to_matrix(samples, "sample");
+    Eigen::MatrixXd values_matrix(static_cast<Eigen::Index>(values.size()), kComponents);
+    for (std::size_t i = 0; i < values.size(); ++i)
+      for (int c = 0; c < kComponents; ++c) {
+        const double v = ValueTraits<V>::component(values[i], c);
+        if (!std::isfinite(v))
+          throw InputError("kriging: value of sample " + std::to_string(i) + " (component " +
+                           std::to_string(c) + ") is " + std::to_string(v) + "; expected a finite number");
+        values_matrix(static_cast<Eigen::Index>(i), c) = v;
+      }
+    Eigen::VectorXd meas = Eigen::Map<const Eigen::VectorXd>(
+        measurement_variance.data(), static_cast<Eigen::Index>(measurement_variance.size()));
+    Eigen::MatrixXd embedded = embed(raw);
+    engine_ = detail::make_kriging_engine(std::move(embedded), std::move(raw), std::move(values_matrix),
+                                          std::move(meas), model, options);
+  }
+
+  /// Outcome of the set-up (factorization for dense/sparse).
+  const KrigingReport& report() const { return detail::engine_report(*engine_); }
+
+  /// Predicts at the targets. O(M N) for the means, plus O(M N^2) for dense variances; local
+  /// O(M k^3). Throws ArgumentError when a target has the wrong dimension or a non-finite coordinate.
+  KrigingPrediction<V> predict(std::span<const L> targets) const {
+    Eigen::MatrixXd raw = to_matrix(targets, "target");
+    return convert_prediction(detail::engine_predict(*engine_, embed(raw), raw));
+  }
+
+  /// Leave-one-out cross-validation: closed form for the dense back end (Dubrule 1983), one local
+  /// solve per sample for the local back end; not offered for sparse (use k_fold).
+  KrigingCrossValidation<V> leave_one_out() const {
+    return convert_cv(detail::engine_leave_one_out(*engine_));
+  }
+
+  /// k-fold cross-validation with a deterministic shuffle from `seed`; every back end.
+  KrigingCrossValidation<V> k_fold(int folds, std::uint64_t seed = 1) const {
+    return convert_cv(detail::engine_k_fold(*engine_, folds, seed));
+  }
+
+ private:
+  static constexpr int kComponents = ValueTraits<V>::kComponents;
+
+  Eigen::MatrixXd to_matrix(std::span<const L> points, const char* what) const {
+    Eigen::MatrixXd m(dimension_, static_cast<Eigen::Index>(points.size()));
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const int d = LocationTraits<L>::size(points[i]);
+      if (d != dimension_)
+        throw ArgumentError(std::string("kriging: ") + what + " " + std::to_string(i) + " has " +
+                            std::to_string(d) + " coordinates; expected " + std::to_string(dimension_));
+      for (int k = 0; k < d; ++k) {
+        const double x = LocationTraits<L>::coordinate(points[i], k);
+        if (!std::isfinite(x))
+          throw InputError(std::string("kriging: coordinate ") + std::to_string(k) + " of " + what +
+                           " " + std::to_string(i) + " is " + std::to_string(x) +
+                           "; expected a finite number");
+        m(k, static_cast<Eigen::Index>(i)) = x;
+      }
+    }
+    return m;
+  }
+
+  Eigen::MatrixXd embed(const Eigen::MatrixXd& raw) const {
+    if (scales_.empty()) return raw;
+    if (static_cast<int>(scales_.size()) != dimension_)
+      throw ArgumentError("kriging: the metric has " + std::to_string(scales_.size()) +
+                          " weights but locations have " + std::to_string(dimension_) + " coordinates");
+    Eigen::MatrixXd e = raw;
+    for (int k = 0; k < dimension_; ++k) e.row(k) *= scales_[static_cast<std::size_t>(k)];
+    return e;
+  }
+
+  static V row_value(const Eigen::MatrixXd& m, Eigen::Index r) {
+    V v = ValueTraits<V>::zero();
+    // Select the writable overload explicitly: for double, component(double) and
+    // component(double&) are otherwise ambiguous on an lvalue.
+    double& (*writable)(V&, int) = &ValueTraits<V>::component;
+    for (int c = 0; c < kComponents; ++c) writable(v, c) = m(r, c);
+    return v;
+  }
+
+  static KrigingPrediction<V> convert_prediction(detail::KrigingOutput out) {
+    KrigingPrediction<V> p;
+    p.status = out.status;
+    p.message = std::move(out.message);
+    p.failed_targets = out.failed_targets;
+    p.mean.reserve(static_cast<std::size_t>(out.mean.rows()));
+    for (Eigen::Index r = 0; r < out.mean.rows(); ++r) p.mean.push_back(row_value(out.mean, r));
+    p.variance.assign(out.variance.data(), out.variance.data() + out.variance.size());
+    p.weights = std::move(out.weights);
+    return p;
+  }
+
+  static KrigingCrossValidation<V> convert_cv(detail::KrigingOutput out) {
+    KrigingCrossValidation<V> cv;
+    cv.status = out.status;
+    cv.message = std::move(out.message);
+    const Eigen::Index n = out.mean.rows();
+    double sum = 0.0, sum_sq = 0.0, max_abs = 0.0, z2 = 0.0;
+    std::size_t z_count = 0;
+    for (Eigen::Index r = 0; r < n; ++r) {
+      cv.prediction.push_back(row_value(out.mean, r));
+      cv.residual.push_back(row_value(out.residual, r));
+      const double norm2 = out.residual.row(r).squaredNorm();
+      sum += out.residual.row(r).sum();
+      sum_sq += norm2;
+      max_abs = std::max(max_abs, std::sqrt(norm2));
+      if (out.variance.size() == n && out.variance[r] > 0.0) {
+        z2 += norm2 / (kComponents * out.variance[r]);
+        ++z_count;
+      }
+    }
+    cv.variance.assign(out.variance.data(), out.variance.data() + out.variance.size());
+    if (n > 0) {
+      cv.mean_error = sum / static_cast<double>(n * kComponents);
+      cv.rms_error = std::sqrt(sum_sq / static_cast<double>(n));
+      cv.max_abs_error = max_abs;
+      cv.mean_squared_z = z_count ? z2 / static_cast<double>(z_count) : 0.0;
+    }
+    return cv;
+  }
+
+  std::vector<double> scales_;
+  int dimension_ = 0;
+  std::shared_ptr<const detail::KrigingEngine> engine_;
+};
+
+}  // namespace errfield

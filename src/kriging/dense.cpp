@@ -1,0 +1,179 @@
+// Dense back end: one Cholesky factorization of the N x N covariance; predictions in batches of
+// targets, means from the precomputed alpha/beta (O(N) per target), variances from one blocked
+// triangular solve per batch. OpenMP over batches, one workspace per thread.
+
+#include <algorithm>
+#include <cmath>
+
+#include <omp.h>
+
+#include "errfield/csv_table.hpp"
+#include "kriging/kriging_engine.hpp"
+
+namespace errfield::detail {
+
+void KrigingEngine::setup_dense() {
+  const auto n = static_cast<std::size_t>(points_.cols());
+  // K and its factor live side by side while factoring; leave-one-out needs one more N x N.
+  const double bytes = 2.0 * static_cast<double>(n) * static_cast<double>(n) * sizeof(double);
+  if (bytes > static_cast<double>(options_.dense_memory_budget_bytes))
+    throw ResourceError("kriging: the dense back end needs ~" + format_number(std::round(bytes / (1 << 20))) +
+                        " MiB for N = " + std::to_string(n) + " samples, over dense_memory_budget_bytes = " +
+                        format_number(std::round(static_cast<double>(options_.dense_memory_budget_bytes) / (1 << 20))) +
+                        " MiB; use the local back end (k nearest neighbours) or, with a compactly supported "
+                        "model (sph, wen), the sparse back end");
+  const auto ni = static_cast<Eigen::Index>(n);
+  Eigen::MatrixXd k(ni, ni);
+  const double zero = kernel_.sill();
+#pragma omp parallel for schedule(dynamic, 16) num_threads(thread_count())
+  for (Eigen::Index j = 0; j < ni; ++j) {
+    // lower triangle only (LLT reads nothing else): points j..N-1 against point j
+    kernels::covariance_block(kernel_, points_.col(j).data(), static_cast<std::size_t>(ni - j), points_.col(j).data(), 1,
+                              dimension_, zero, &k(j, j), static_cast<std::size_t>(ni));
+  }
+  k.diagonal() += meas_;
+
+  double jitter = 0.0;
+  for (int attempt = 0;; ++attempt) {
+    llt_.compute(k);
+    if (llt_.info() == Eigen::Success) break;
+    if (attempt >= options_.max_jitter_retries) {
+      report_.status = KrigingStatus::NotPositiveDefinite;
+      report_.message = "covariance matrix of the " + std::to_string(n) +
+                        " samples is not positive definite" +
+                        (jitter > 0 ? " even with jitter " + format_number(jitter) + " on the diagonal" : std::string()) +
+                        " (check for near-duplicate samples or an invalid model)";
+      report_.jitter = jitter;
+      return;
+    }
+    const double add = attempt == 0 ? options_.initial_jitter * kernel_.sill()
+                                    : jitter * (options_.jitter_growth - 1.0);
+    k.diagonal().array() += add;
+    jitter += add;
+  }
+  report_.jitter = jitter;
+  if (jitter > 0.0)
+    report_.message = "added jitter " + format_number(jitter) + " to the diagonal to factor the covariance";
+  k.resize(0, 0);
+  check_condition(llt_.rcond());
+
+  const auto& l = llt_.matrixL();
+  Eigen::MatrixXd y = values_;
+  l.solveInPlace(y);
+  if (drift_terms_ > 0) {
+    q_ = f_;
+    l.solveInPlace(q_);
+    g_llt_.compute(q_.transpose() * q_);
+    const double g_rcond = g_llt_.info() == Eigen::Success ? g_llt_.rcond() : 0.0;
+    if (!(g_rcond > 1e-14)) {
+      report_.status = KrigingStatus::SingularDrift;
+      report_.message = "the " + std::to_string(drift_terms_) +
+                        " drift terms are (nearly) linearly dependent at the samples (reciprocal condition " +
+                        format_number(g_rcond) + "), e.g. all samples on a plane with a drift in all coordinates";
+      return;
+    }
+    beta_ = g_llt_.solve(q_.transpose() * y);
+    y -= q_ * beta_;
+  } else {
+    beta_.resize(0, components_);
+  }
+  alpha_ = y;
+  llt_.matrixU().solveInPlace(alpha_);
+}
+
+KrigingOutput KrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) const {
+  const Eigen::Index n = points_.cols(), m = embedded.cols(), p = drift_terms_;
+  const Eigen::Index batch = static_cast<Eigen::Index>(options_.target_batch);
+  const bool want_var = options_.compute_variance, want_w = options_.keep_weights;
+  const double c00 = target_variance();
+  const Eigen::MatrixXd f0_all = drift_matrix(raw);  // p x M (validated before the parallel region)
+  KrigingOutput out;
+  out.status = report_.status;
+  out.message = report_.message;
+  out.mean.resize(m, components_);
+  if (want_var) out.variance.resize(m);
+  Eigen::MatrixXd weights;
+  if (want_w) weights.resize(n, m);
+  const Eigen::Index batches = (m + batch - 1) / batch;
+  const auto& l = llt_.matrixL();
+
+#pragma omp parallel num_threads(thread_count())
+  {
+    // one workspace per thread, allocated once
+    Eigen::MatrixXd c0(n, batch), w, r, s;
+    if (want_w) w.resize(n, batch);
+#pragma omp for schedule(dynamic, 1)
+    for (Eigen::Index b = 0; b < batches; ++b) {
+      const Eigen::Index start = b * batch, cnt = std::min(batch, m - start);
+      kernels::covariance_block(kernel_, points_.data(), static_cast<std::size_t>(n), embedded.col(start).data(),
+                                static_cast<std::size_t>(cnt), dimension_, c00, c0.data(), static_cast<std::size_t>(n));
+      auto c = c0.leftCols(cnt);
+      auto f0 = f0_all.middleCols(start, cnt);
+      out.mean.middleRows(start, cnt).noalias() = c.transpose() * alpha_;
+      if (p > 0) out.mean.middleRows(start, cnt).noalias() += f0.transpose() * beta_;
+      if (!want_var && !want_w) continue;
+      l.solveInPlace(c);  // c := W = L^-1 c0
+      if (want_var) out.variance.segment(start, cnt) = (c00 - c.colwise().squaredNorm().array()).transpose();
+      if (p > 0) {
+        r.noalias() = f0 - q_.transpose() * c;  // p x cnt
+        s = r;
+        g_llt_.matrixL().solveInPlace(s);
+        if (want_var) out.variance.segment(start, cnt) += s.colwise().squaredNorm().transpose();
+      }
+      if (want_w) {
+        auto wb = w.leftCols(cnt);
+        wb = c;
+        if (p > 0) wb.noalias() += q_ * g_llt_.solve(r);
+        llt_.matrixU().solveInPlace(wb);
+        weights.middleCols(start, cnt) = wb;
+      }
+    }
+  }
+  // Rounding can leave variances of order -1e-16 * sill at the data; clamp them to 0.
+  if (want_var) out.variance = out.variance.cwiseMax(0.0);
+  add_simple_mean(out.mean);
+  if (want_w) {
+    out.weights.offset.resize(static_cast<std::size_t>(m) + 1);
+    out.weights.sample.resize(static_cast<std::size_t>(n * m));
+    out.weights.weight.assign(weights.data(), weights.data() + n * m);
+    for (Eigen::Index t = 0; t <= m; ++t) out.weights.offset[static_cast<std::size_t>(t)] = static_cast<std::size_t>(t * n);
+    for (Eigen::Index t = 0; t < m; ++t)
+      for (Eigen::Index i = 0; i < n; ++i)
+        out.weights.sample[static_cast<std::size_t>(t * n + i)] = original_index_[static_cast<std::size_t>(i)];
+  }
+  return out;
+}
+
+KrigingOutput KrigingEngine::loo_dense() const {
+  // Closed form (Dubrule 1983): with A the bordered system [K F; F' 0] and P its inverse's top-left
+  // block, P = K^-1 - K^-1 F G^-1 F' K^-1, the leave-one-out residual is alpha_i / P_ii and its
+  // variance 1 / P_ii.
+  const Eigen::Index n = points_.cols();
+  const double bytes = static_cast<double>(n) * static_cast<double>(n) * sizeof(double);
+  if (bytes > static_cast<double>(options_.dense_memory_budget_bytes))
+    throw ResourceError("kriging: closed-form leave-one-out needs another " + format_number(std::round(bytes / (1 << 20))) +
+                        " MiB; use k_fold or the local back end");
+  Eigen::MatrixXd linv = Eigen::MatrixXd::Identity(n, n);
+  llt_.matrixL().solveInPlace(linv);
+  Eigen::VectorXd pdiag = linv.colwise().squaredNorm().transpose();  // diag(K^-1)
+  if (drift_terms_ > 0) {
+    Eigen::MatrixXd kinv_f = q_;
+    llt_.matrixU().solveInPlace(kinv_f);  // K^-1 F
+    Eigen::MatrixXd t = kinv_f.transpose();
+    g_llt_.matrixL().solveInPlace(t);  // Lg^-1 F'K^-1
+    pdiag -= t.colwise().squaredNorm().transpose();
+  }
+  KrigingOutput out;
+  out.status = report_.status;
+  out.message = report_.message;
+  out.residual.resize(n, components_);
+  out.variance.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    out.residual.row(i) = alpha_.row(i) / pdiag[i];
+    out.variance[i] = 1.0 / pdiag[i];
+  }
+  out.mean = observed_ - out.residual;
+  return out;
+}
+
+}  // namespace errfield::detail

@@ -1,0 +1,420 @@
+#include "kriging/kriging_engine.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+
+#include <omp.h>
+
+#include "errfield/csv_table.hpp"
+#include "kriging/cholmod_factor.hpp"
+
+namespace errfield {
+
+std::string_view kriging_status_name(KrigingStatus status) {
+  switch (status) {
+    case KrigingStatus::Ok: return "ok";
+    case KrigingStatus::IllConditioned: return "ill-conditioned";
+    case KrigingStatus::NotPositiveDefinite: return "not positive definite";
+    case KrigingStatus::SingularDrift: return "singular drift";
+    case KrigingStatus::TooFewSamples: return "too few samples";
+  }
+  return "?";
+}
+
+std::string_view kriging_kind_name(KrigingKind kind) {
+  switch (kind) {
+    case KrigingKind::Simple: return "simple";
+    case KrigingKind::Ordinary: return "ordinary";
+    case KrigingKind::Universal: return "universal";
+  }
+  return "?";
+}
+
+std::string_view kriging_backend_name(KrigingBackend backend) {
+  switch (backend) {
+    case KrigingBackend::Dense: return "dense";
+    case KrigingBackend::Local: return "local";
+    case KrigingBackend::Sparse: return "sparse";
+  }
+  return "?";
+}
+
+KrigingBackend kriging_backend_from_name(std::string_view name) {
+  for (auto b : {KrigingBackend::Dense, KrigingBackend::Local, KrigingBackend::Sparse})
+    if (kriging_backend_name(b) == name) return b;
+  throw ArgumentError("kriging: unknown back end '" + std::string(name) + "'; expected dense, local or sparse");
+}
+
+void KrigingOptions::validate() const {
+  auto fail = [](const std::string& field, const std::string& value, const std::string& expected) {
+    throw ArgumentError("kriging options: " + field + " = " + value + "; expected " + expected);
+  };
+  if (kind == KrigingKind::Universal && (drift_order < 0 || drift_order > 2))
+    fail("drift_order", std::to_string(drift_order), "0, 1 or 2");
+  if (kind != KrigingKind::Universal && !drift_functions.empty())
+    fail("drift_functions", std::to_string(drift_functions.size()) + " functions",
+         "none unless kind is Universal");
+  for (std::size_t i = 0; i < drift_functions.size(); ++i)
+    if (!drift_functions[i]) fail("drift_functions[" + std::to_string(i) + "]", "empty", "a callable");
+  for (double m : simple_mean)
+    if (!std::isfinite(m)) fail("simple_mean", format_number(m), "finite numbers");
+  if (!(radius > 0.0)) fail("radius", format_number(radius), "a value > 0 (infinity = no limit)");
+  if (backend == KrigingBackend::Local && neighbors == 0 && !std::isfinite(radius))
+    fail("neighbors", "0 with radius = infinity", "a neighbour count k > 0 or a finite radius for the local back end");
+  if (backend == KrigingBackend::Sparse && keep_weights)
+    fail("keep_weights", "true", "false with the sparse back end (its weights are dense); use dense or local");
+  if (!(duplicate_distance >= 0.0) || !std::isfinite(duplicate_distance))
+    fail("duplicate_distance", format_number(duplicate_distance), "a finite value >= 0");
+  if (max_jitter_retries < 0) fail("max_jitter_retries", std::to_string(max_jitter_retries), ">= 0");
+  if (!(initial_jitter > 0.0) || !std::isfinite(initial_jitter))
+    fail("initial_jitter", format_number(initial_jitter), "a finite value > 0");
+  if (!(jitter_growth > 1.0) || !std::isfinite(jitter_growth))
+    fail("jitter_growth", format_number(jitter_growth), "a finite value > 1");
+  if (!(max_condition_number > 1.0)) fail("max_condition_number", format_number(max_condition_number), "> 1");
+  if (target_batch == 0) fail("target_batch", "0", ">= 1");
+  if (threads < 0) fail("threads", std::to_string(threads), ">= 0 (0 = OpenMP default)");
+}
+
+namespace detail {
+
+KrigingEngine::KrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, Eigen::MatrixXd values,
+                             Eigen::VectorXd measurement_variance, const VariogramModel& model,
+                             const KrigingOptions& options)
+    : options_(options),
+      model_(model),
+      kernel_(model),
+      points_(std::move(embedded)),
+      raw_(std::move(raw)),
+      values_(std::move(values)),
+      meas_(std::move(measurement_variance)) {
+  options_.validate();
+  dimension_ = static_cast<int>(points_.rows());
+  components_ = static_cast<int>(values_.cols());
+  const auto n = static_cast<std::size_t>(points_.cols());
+  if (meas_.size() == 0) meas_ = Eigen::VectorXd::Zero(points_.cols());
+  for (Eigen::Index i = 0; i < meas_.size(); ++i)
+    if (!(meas_[i] >= 0.0) || !std::isfinite(meas_[i]))
+      throw InputError("kriging: measurement variance of sample " + std::to_string(i) + " is " +
+                       format_number(meas_[i]) + "; expected a finite value >= 0");
+  if (options_.backend == KrigingBackend::Sparse && !model_.compact())
+    throw ArgumentError("kriging: the sparse back end needs a compactly supported model (sph or wen, "
+                        "plus nugget); got '" + model_.to_string() + "'. Use the dense or local back end");
+
+  simple_mean_ = Eigen::VectorXd::Zero(components_);
+  if (options_.kind == KrigingKind::Simple) {
+    const auto& m = options_.simple_mean;
+    if (m.size() == 1) simple_mean_.setConstant(m[0]);
+    else if (m.size() == static_cast<std::size_t>(components_))
+      for (int c = 0; c < components_; ++c) simple_mean_[c] = m[static_cast<std::size_t>(c)];
+    else if (!m.empty())
+      throw ArgumentError("kriging options: simple_mean has " + std::to_string(m.size()) +
+                          " entries; expected 0, 1 or " + std::to_string(components_) + " (one per component)");
+  }
+
+  original_index_.resize(n);
+  std::iota(original_index_.begin(), original_index_.end(), std::size_t{0});
+  tree_ = std::make_unique<PointTree>(points_);
+  merge_duplicates();
+  observed_ = values_;
+  if (options_.kind == KrigingKind::Simple) values_.rowwise() -= simple_mean_.transpose();
+
+  build_drift();
+  report_.samples_used = static_cast<std::size_t>(points_.cols());
+  report_.drift_terms = static_cast<std::size_t>(drift_terms_);
+  if (options_.backend == KrigingBackend::Local && options_.neighbors > 0 &&
+      options_.neighbors < static_cast<std::size_t>(std::max(drift_terms_, 1)))
+    throw ArgumentError("kriging options: neighbors = " + std::to_string(options_.neighbors) + " but " +
+                        std::string(kriging_kind_name(options_.kind)) + " kriging here has " +
+                        std::to_string(drift_terms_) + " drift terms; expected neighbors >= " +
+                        std::to_string(std::max(drift_terms_, 1)));
+  if (points_.cols() < std::max(drift_terms_, 1)) {
+    report_.status = KrigingStatus::TooFewSamples;
+    report_.message = std::to_string(points_.cols()) + " samples for " + std::to_string(drift_terms_) +
+                      " drift terms; need at least as many samples as drift terms";
+    return;
+  }
+  if (options_.backend == KrigingBackend::Dense) setup_dense();
+  else if (options_.backend == KrigingBackend::Sparse) setup_sparse();
+}
+
+KrigingEngine::~KrigingEngine() = default;
+
+int KrigingEngine::thread_count() const {
+  return options_.threads > 0 ? options_.threads : omp_get_max_threads();
+}
+
+double KrigingEngine::target_variance() const {
+  return options_.nugget == NuggetTreatment::MicroScale ? kernel_.sill() : kernel_.sill() - kernel_.nugget();
+}
+
+void KrigingEngine::merge_duplicates() {
+  const auto n = static_cast<std::size_t>(points_.cols());
+  if (n < 2) return;
+  const double tol = options_.duplicate_distance;
+  const double tol2 = tol * tol;
+  if (options_.duplicates == DuplicatePolicy::Error) {
+    std::size_t idx[2];
+    double d2[2];
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t found = tree_->nearest(points_.col(static_cast<Eigen::Index>(i)).data(), 2, idx, d2);
+      for (std::size_t k = 0; k < found; ++k) {
+        if (idx[k] == i || d2[k] > tol2) continue;
+        const std::size_t a = std::min(i, idx[k]), b = std::max(i, idx[k]);
+        throw InputError("kriging: samples " + std::to_string(a) + " and " + std::to_string(b) +
+                         " are duplicates (lag " + format_number(std::sqrt(d2[k])) +
+                         (tol > 0 ? " <= duplicate_distance " + format_number(tol) : std::string(", same location")) +
+                         "); remove one, or set duplicates = Average to merge them");
+      }
+    }
+    return;
+  }
+  // Average: union of all pairs within tol, each group represented by its lowest index.
+  std::vector<std::size_t> parent(n);
+  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  auto find = [&](std::size_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  std::vector<std::pair<std::size_t, double>> hits;
+  // radius search is strict (<); nudge so that lag == tol counts, and lag 0 when tol == 0.
+  const double r2 = tol2 > 0.0 ? tol2 * (1.0 + 1e-12) : std::numeric_limits<double>::min();
+  for (std::size_t i = 0; i < n; ++i) {
+    tree_->within(points_.col(static_cast<Eigen::Index>(i)).data(), r2, hits);
+    for (const auto& [j, d2] : hits) {
+      const std::size_t a = find(i), b = find(j);
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+  }
+  std::vector<std::size_t> group_of(n), count;
+  std::vector<std::size_t> keep;
+  std::vector<std::size_t> slot(n, n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t root = find(i);
+    if (slot[root] == n) {
+      slot[root] = keep.size();
+      keep.push_back(root);
+      count.push_back(0);
+    }
+    group_of[i] = slot[root];
+    ++count[slot[root]];
+  }
+  if (keep.size() == n) return;
+  const auto m = static_cast<Eigen::Index>(keep.size());
+  Eigen::MatrixXd pts(dimension_, m), raw(dimension_, m), vals = Eigen::MatrixXd::Zero(m, components_);
+  Eigen::VectorXd meas = Eigen::VectorXd::Zero(m);
+  for (Eigen::Index g = 0; g < m; ++g) {
+    pts.col(g) = points_.col(static_cast<Eigen::Index>(keep[static_cast<std::size_t>(g)]));
+    raw.col(g) = raw_.col(static_cast<Eigen::Index>(keep[static_cast<std::size_t>(g)]));
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto g = static_cast<Eigen::Index>(group_of[i]);
+    vals.row(g) += values_.row(static_cast<Eigen::Index>(i));
+    meas[g] += meas_[static_cast<Eigen::Index>(i)];
+  }
+  for (Eigen::Index g = 0; g < m; ++g) {
+    const double c = static_cast<double>(count[static_cast<std::size_t>(g)]);
+    vals.row(g) /= c;
+    meas[g] /= c * c;  // variance of the mean of independent measurements
+  }
+  report_.merged_duplicates = n - keep.size();
+  points_ = std::move(pts);
+  raw_ = std::move(raw);
+  values_ = std::move(vals);
+  meas_ = std::move(meas);
+  original_index_ = std::move(keep);
+  tree_ = std::make_unique<PointTree>(points_);
+}
+
+void KrigingEngine::build_drift() {
+  const int d = dimension_;
+  switch (options_.kind) {
+    case KrigingKind::Simple: drift_terms_ = 0; break;
+    case KrigingKind::Ordinary: drift_terms_ = 1; break;
+    case KrigingKind::Universal:
+      drift_terms_ = 1 + (options_.drift_order >= 1 ? d : 0) + (options_.drift_order >= 2 ? d * (d + 1) / 2 : 0) +
+                     static_cast<int>(options_.drift_functions.size());
+      break;
+  }
+  // Polynomial terms in centred, scaled coordinates: same span as the raw monomials (so the same
+  // predictions), far better conditioned for coordinates in the thousands of mm.
+  drift_center_ = Eigen::VectorXd::Zero(d);
+  drift_scale_ = Eigen::VectorXd::Ones(d);
+  if (raw_.cols() > 0) {
+    drift_center_ = raw_.rowwise().mean();
+    for (int k = 0; k < d; ++k) {
+      const double s = (raw_.row(k).array() - drift_center_[k]).abs().maxCoeff();
+      drift_scale_[k] = s > 0.0 ? s : 1.0;
+    }
+  }
+  f_ = drift_matrix(raw_).transpose();
+}
+
+void KrigingEngine::drift_row(const double* raw_point, double* out) const {
+  if (drift_terms_ == 0) return;
+  int t = 0;
+  out[t++] = 1.0;
+  if (options_.kind != KrigingKind::Universal) return;
+  const int d = dimension_;
+  if (options_.drift_order >= 1)
+    for (int k = 0; k < d; ++k) out[t++] = (raw_point[k] - drift_center_[k]) / drift_scale_[k];
+  if (options_.drift_order >= 2)
+    for (int k = 0; k < d; ++k)
+      for (int l = k; l < d; ++l)
+        out[t++] = (raw_point[k] - drift_center_[k]) / drift_scale_[k] * (raw_point[l] - drift_center_[l]) /
+                   drift_scale_[l];
+  for (const auto& f : options_.drift_functions)
+    out[t++] = f(std::span<const double>(raw_point, static_cast<std::size_t>(d)));
+}
+
+Eigen::MatrixXd KrigingEngine::drift_matrix(const Eigen::MatrixXd& raw) const {
+  Eigen::MatrixXd f(drift_terms_, raw.cols());
+  for (Eigen::Index j = 0; j < raw.cols(); ++j) {
+    drift_row(raw.col(j).data(), f.col(j).data());
+    for (int t = 0; t < drift_terms_; ++t)
+      if (!std::isfinite(f(t, j)))
+        throw InputError("kriging: drift term " + std::to_string(t) + " at point " + std::to_string(j) +
+                         " is " + format_number(f(t, j)) + "; drift functions must return finite values");
+  }
+  return f;
+}
+
+bool KrigingEngine::check_condition(double rcond) {
+  report_.condition_number = rcond > 0.0 ? 1.0 / rcond : std::numeric_limits<double>::infinity();
+  if (report_.condition_number > options_.max_condition_number) {
+    report_.status = KrigingStatus::IllConditioned;
+    report_.message = "covariance matrix condition number ~" + format_number(report_.condition_number) +
+                      " exceeds max_condition_number " + format_number(options_.max_condition_number) +
+                      " (near-duplicate samples, or a range far larger than the sample spacing with a "
+                      "smooth model); predictions are returned but may be inaccurate";
+    return false;
+  }
+  return true;
+}
+
+KrigingOutput KrigingEngine::unusable_output() const {
+  KrigingOutput out;
+  out.status = report_.status;
+  out.message = report_.message;
+  return out;
+}
+
+void KrigingEngine::add_simple_mean(Eigen::MatrixXd& mean) const {
+  if (options_.kind == KrigingKind::Simple) mean.rowwise() += simple_mean_.transpose();
+}
+
+KrigingOutput KrigingEngine::predict(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) const {
+  if (embedded.rows() != dimension_)
+    throw ArgumentError("kriging: targets have " + std::to_string(embedded.rows()) + " coordinates; samples have " +
+                        std::to_string(dimension_));
+  if (!report_.usable()) return unusable_output();
+  switch (options_.backend) {
+    case KrigingBackend::Dense: return predict_dense(embedded, raw);
+    case KrigingBackend::Local: return predict_local(embedded, raw, false);
+    case KrigingBackend::Sparse: return predict_sparse(embedded, raw);
+  }
+  return unusable_output();
+}
+
+KrigingOutput KrigingEngine::leave_one_out() const {
+  if (!report_.usable()) return unusable_output();
+  if (points_.cols() < 2) {
+    KrigingOutput out;
+    out.status = KrigingStatus::TooFewSamples;
+    out.message = "leave-one-out needs at least 2 samples";
+    return out;
+  }
+  switch (options_.backend) {
+    case KrigingBackend::Dense: return loo_dense();
+    case KrigingBackend::Local: return predict_local(points_, raw_, true);
+    case KrigingBackend::Sparse:
+      throw ArgumentError("kriging: leave-one-out is not offered by the sparse back end (it would refactor "
+                          "N times); use k_fold, or the dense or local back end");
+  }
+  return unusable_output();
+}
+
+KrigingOutput KrigingEngine::k_fold(int folds, std::uint64_t seed) const {
+  const auto n = static_cast<std::size_t>(points_.cols());
+  if (folds < 2 || static_cast<std::size_t>(folds) > n)
+    throw ArgumentError("kriging: k_fold folds = " + std::to_string(folds) + "; expected 2 <= folds <= " +
+                        std::to_string(n) + " (the number of samples)");
+  // Deterministic Fisher-Yates with a fixed generator, so folds do not depend on the library.
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::mt19937_64 rng(seed);
+  for (std::size_t i = n - 1; i > 0; --i) std::swap(order[i], order[rng() % (i + 1)]);
+  std::vector<int> fold(n);
+  for (std::size_t r = 0; r < n; ++r) fold[order[r]] = static_cast<int>(r % static_cast<std::size_t>(folds));
+
+  KrigingOutput out;
+  out.mean = Eigen::MatrixXd::Constant(static_cast<Eigen::Index>(n), components_, std::nan(""));
+  out.residual = out.mean;
+  out.variance = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(n), std::nan(""));
+  KrigingOptions sub = options_;
+  sub.duplicates = DuplicatePolicy::Error;
+  sub.duplicate_distance = 0.0;
+  sub.keep_weights = false;
+  for (int f = 0; f < folds; ++f) {
+    std::vector<Eigen::Index> train, test;
+    for (std::size_t i = 0; i < n; ++i) (fold[i] == f ? test : train).push_back(static_cast<Eigen::Index>(i));
+    auto pick_cols = [](const Eigen::MatrixXd& m, const std::vector<Eigen::Index>& idx) {
+      Eigen::MatrixXd r(m.rows(), static_cast<Eigen::Index>(idx.size()));
+      for (std::size_t k = 0; k < idx.size(); ++k) r.col(static_cast<Eigen::Index>(k)) = m.col(idx[k]);
+      return r;
+    };
+    Eigen::MatrixXd vals(static_cast<Eigen::Index>(train.size()), components_);
+    Eigen::VectorXd meas(static_cast<Eigen::Index>(train.size()));
+    for (std::size_t k = 0; k < train.size(); ++k) {
+      vals.row(static_cast<Eigen::Index>(k)) = observed_.row(train[k]);
+      meas[static_cast<Eigen::Index>(k)] = meas_[train[k]];
+    }
+    KrigingEngine engine(pick_cols(points_, train), pick_cols(raw_, train), std::move(vals), std::move(meas), model_,
+                         sub);
+    if (!engine.report().usable()) {
+      out.status = engine.report().status;
+      out.message = "fold " + std::to_string(f) + ": " + engine.report().message;
+      return out;
+    }
+    KrigingOutput p = engine.predict(pick_cols(points_, test), pick_cols(raw_, test));
+    if (p.status != KrigingStatus::Ok && out.status == KrigingStatus::Ok) {
+      out.status = p.status;
+      out.message = "fold " + std::to_string(f) + ": " + p.message;
+    }
+    for (std::size_t k = 0; k < test.size(); ++k) {
+      const Eigen::Index i = test[k], r = static_cast<Eigen::Index>(k);
+      out.mean.row(i) = p.mean.row(r);
+      out.residual.row(i) = observed_.row(i) - p.mean.row(r);
+      if (p.variance.size() > 0) {
+        // residual of the observation: add what the prediction of the signal leaves out
+        const double extra = meas_[i] + (options_.nugget == NuggetTreatment::MeasurementError ? kernel_.nugget() : 0.0);
+        out.variance[i] = p.variance[r] + extra;
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace detail
+
+// ---- glue for the template front end ----
+
+namespace detail {
+std::shared_ptr<const KrigingEngine> make_kriging_engine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw,
+                                                         Eigen::MatrixXd values, Eigen::VectorXd measurement_variance,
+                                                         const VariogramModel& model, const KrigingOptions& options) {
+  return std::make_shared<const KrigingEngine>(std::move(embedded), std::move(raw), std::move(values),
+                                               std::move(measurement_variance), model, options);
+}
+const KrigingReport& engine_report(const KrigingEngine& engine) { return engine.report(); }
+KrigingOutput engine_predict(const KrigingEngine& engine, const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) {
+  return engine.predict(embedded, raw);
+}
+KrigingOutput engine_leave_one_out(const KrigingEngine& engine) { return engine.leave_one_out(); }
+KrigingOutput engine_k_fold(const KrigingEngine& engine, int folds, std::uint64_t seed) {
+  return engine.k_fold(folds, seed);
+}
+}  // namespace detail
+
+}  // namespace errfield

@@ -1,0 +1,97 @@
+#pragma once
+// The non-template core behind errfield::Kriging: data in Eigen matrices, one class, three back
+// ends in their own files (dense.cpp, local.cpp, sparse.cpp). Formulas: docs/kriging.md.
+//
+// Notation used in every back end (N samples, p drift terms, C value components):
+//   K  (N x N) covariance of the observations: C(h_ij), diagonal C(0) + measurement variance
+//   F  (N x p) drift at the samples, f0 (p) at a target; c0 (N) target-sample covariances
+//   K = L L';  Q = L^-1 F;  G = Q'Q = F'K^-1F = Lg Lg';  y = L^-1 z
+//   beta = G^-1 Q'y;  alpha = K^-1 (z - F beta) = L^-T (y - Q beta)
+//   w = L^-1 c0;  r = f0 - Q'w
+//   mean = f0'beta + c0'alpha (= f0'beta + w'(y - Q beta))
+//   var  = c00 - w'w + r'G^-1 r = c00 - |w|^2 + |Lg^-1 r|^2
+//   weights = L^-T (w + Q G^-1 r)
+// Simple kriging is the case p = 0 on values with the known mean subtracted.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+
+#include "covariance_kernel.hpp"
+#include "errfield/kriging.hpp"
+#include "kriging/kd_tree.hpp"
+
+namespace errfield::detail {
+
+class CholmodFactor;
+
+class KrigingEngine {
+ public:
+  KrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, Eigen::MatrixXd values,
+                Eigen::VectorXd measurement_variance, const VariogramModel& model,
+                const KrigingOptions& options);
+  ~KrigingEngine();
+  KrigingEngine(const KrigingEngine&) = delete;
+  KrigingEngine& operator=(const KrigingEngine&) = delete;
+
+  const KrigingReport& report() const { return report_; }
+  KrigingOutput predict(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) const;
+  KrigingOutput leave_one_out() const;
+  KrigingOutput k_fold(int folds, std::uint64_t seed) const;
+
+ private:
+  // set-up
+  void merge_duplicates();
+  void build_drift();
+  void setup_dense();
+  void setup_sparse();
+  bool check_condition(double rcond);
+  // drift row of one point (raw coordinates, D doubles) into out (p doubles)
+  void drift_row(const double* raw_point, double* out) const;
+  Eigen::MatrixXd drift_matrix(const Eigen::MatrixXd& raw) const;  // p x M
+  // C(0) on the target side: the total sill (micro-scale nugget) or without nugget (signal)
+  double target_variance() const;
+  double target_zero_covariance() const { return target_variance(); }
+  // back ends
+  KrigingOutput predict_dense(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) const;
+  KrigingOutput predict_local(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
+                              bool leave_one_out) const;
+  KrigingOutput predict_sparse(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) const;
+  KrigingOutput loo_dense() const;
+  KrigingOutput unusable_output() const;
+  void add_simple_mean(Eigen::MatrixXd& mean) const;
+  int thread_count() const;
+
+  KrigingOptions options_;
+  VariogramModel model_;
+  kernels::CovarianceKernel kernel_;
+  Eigen::MatrixXd points_;     // D x N embedded coordinates
+  Eigen::MatrixXd raw_;        // D x N original coordinates (drift)
+  Eigen::MatrixXd values_;     // N x C, simple kriging: mean subtracted
+  Eigen::MatrixXd observed_;   // N x C as given (after merging), for cross-validation
+  Eigen::VectorXd meas_;       // N (zeros when none given)
+  std::vector<std::size_t> original_index_;  // merged sample -> index given by the caller
+  Eigen::VectorXd simple_mean_;               // C
+  int dimension_ = 0;
+  int components_ = 0;
+  int drift_terms_ = 0;
+  Eigen::VectorXd drift_center_, drift_scale_;
+  Eigen::MatrixXd f_;  // N x p
+  std::unique_ptr<PointTree> tree_;
+  KrigingReport report_;
+
+  // dense and sparse: global solution
+  Eigen::LLT<Eigen::MatrixXd> llt_;  // dense factor
+  Eigen::MatrixXd q_;                // L^-1 F (dense: N x p; sparse: L^-1 P F)
+  Eigen::LLT<Eigen::MatrixXd> g_llt_;
+  Eigen::MatrixXd beta_;             // p x C
+  Eigen::MatrixXd alpha_;            // N x C
+  Eigen::MatrixXd kinv_f_;           // sparse: K^-1 F (N x p)
+  std::unique_ptr<CholmodFactor> sparse_;
+};
+
+}  // namespace errfield::detail

@@ -1,0 +1,238 @@
+// Local back end: per target, the k nearest samples (or those within a radius) from a kd-tree and a
+// small dense kriging system solved in place. OpenMP over targets, one workspace per thread that
+// only ever grows (no allocation per target once warm).
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+#include <omp.h>
+
+#include "errfield/csv_table.hpp"
+#include "kriging/kriging_engine.hpp"
+
+namespace errfield::detail {
+namespace {
+
+struct LocalWorkspace {
+  std::vector<std::size_t> index;
+  std::vector<double> d2;
+  std::vector<std::pair<std::size_t, double>> hits;
+  std::vector<std::size_t> chosen;
+  Eigen::MatrixXd k, q, y, g, beta;
+  Eigen::VectorXd c0, w, r, s, lambda;
+  Eigen::RowVectorXd mean;
+
+  void reserve(Eigen::Index n, Eigen::Index p, Eigen::Index comps) {
+    if (k.rows() >= n && q.cols() >= p) return;
+    const Eigen::Index cap = std::max<Eigen::Index>(n, k.rows() * 2);
+    k.resize(cap, cap);
+    q.resize(cap, p);
+    y.resize(cap, comps);
+    c0.resize(cap);
+    w.resize(cap);
+    lambda.resize(cap);
+    g.resize(p, p);
+    beta.resize(p, comps);
+    r.resize(p);
+    s.resize(p);
+    mean.resize(comps);
+  }
+};
+
+enum class TargetOutcome : std::uint8_t { Ok, TooFew, NotPositiveDefinite, SingularDrift };
+
+}  // namespace
+
+KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
+                                           bool leave_one_out) const {
+  const Eigen::Index m = embedded.cols(), p = drift_terms_, comps = components_;
+  const bool want_var = options_.compute_variance || leave_one_out;
+  const bool want_w = options_.keep_weights && !leave_one_out;
+  const double c00 = target_variance();
+  const double r2 = std::isfinite(options_.radius) ? options_.radius * options_.radius
+                                                   : std::numeric_limits<double>::infinity();
+  const std::size_t k_max = options_.neighbors;
+  const std::size_t n_samples = static_cast<std::size_t>(points_.cols());
+  const Eigen::MatrixXd f0_all = drift_matrix(raw);  // validated before the parallel region
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+
+  KrigingOutput out;
+  out.mean.resize(m, comps);
+  if (want_var) out.variance.resize(m);
+  if (leave_one_out) out.residual.resize(m, comps);
+  std::vector<TargetOutcome> outcome(static_cast<std::size_t>(m), TargetOutcome::Ok);
+  // weights: per target at most k (or all within the radius); gathered per target then packed
+  std::vector<std::vector<std::pair<std::size_t, double>>> target_weights;
+  if (want_w) target_weights.resize(static_cast<std::size_t>(m));
+
+#pragma omp parallel num_threads(thread_count())
+  {
+    LocalWorkspace ws;
+    const std::size_t k_query = k_max > 0 ? std::min(k_max + (leave_one_out ? 1 : 0), n_samples) : 0;
+    ws.index.resize(k_query);
+    ws.d2.resize(k_query);
+    ws.reserve(static_cast<Eigen::Index>(std::max<std::size_t>(k_query, 1)), p, comps);
+#pragma omp for schedule(dynamic, 64)
+    for (Eigen::Index t = 0; t < m; ++t) {
+      const double* target = embedded.col(t).data();
+      const std::size_t self = leave_one_out ? static_cast<std::size_t>(t) : n_samples;
+      ws.chosen.clear();
+      if (k_max > 0) {
+        const std::size_t found = tree_->nearest(target, k_query, ws.index.data(), ws.d2.data());
+        for (std::size_t a = 0; a < found && ws.chosen.size() < k_max; ++a)
+          if (ws.index[a] != self && ws.d2[a] < r2) ws.chosen.push_back(ws.index[a]);
+      } else {
+        tree_->within(target, r2, ws.hits);
+        for (const auto& h : ws.hits)
+          if (h.first != self) ws.chosen.push_back(h.first);
+      }
+      const auto nn = static_cast<Eigen::Index>(ws.chosen.size());
+      auto fail = [&](TargetOutcome o) {
+        outcome[static_cast<std::size_t>(t)] = o;
+        out.mean.row(t).setConstant(nan);
+        if (want_var) out.variance[t] = nan;
+        if (leave_one_out) out.residual.row(t).setConstant(nan);
+      };
+      if (nn == 0 || nn < p) {
+        fail(TargetOutcome::TooFew);
+        continue;
+      }
+      ws.reserve(nn, p, comps);
+      auto kb = ws.k.topLeftCorner(nn, nn);
+      auto build = [&](double jitter) {
+        for (Eigen::Index j = 0; j < nn; ++j) {
+          const double* pj = points_.col(static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(j)])).data();
+          for (Eigen::Index i = j; i < nn; ++i) {
+            const double* pi = points_.col(static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(i)])).data();
+            kb(i, j) = i == j ? kernel_.sill() + meas_[static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(i)])] + jitter
+                              : kernel_.at_positive_lag(kernels::column_distance(pi, pj, dimension_));
+          }
+        }
+      };
+      double jitter = 0.0;
+      bool factored = false;
+      for (int attempt = 0; attempt <= options_.max_jitter_retries; ++attempt) {
+        build(jitter);
+        Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(kb);
+        if (llt.info() == Eigen::Success) {
+          factored = true;
+          break;
+        }
+        jitter = attempt == 0 ? options_.initial_jitter * kernel_.sill() : jitter * options_.jitter_growth;
+      }
+      if (!factored) {
+        fail(TargetOutcome::NotPositiveDefinite);
+        continue;
+      }
+      const auto lower = kb.triangularView<Eigen::Lower>();
+      auto c0 = ws.c0.head(nn);
+      auto y = ws.y.topRows(nn);
+      for (Eigen::Index i = 0; i < nn; ++i) {
+        const auto s = static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(i)]);
+        c0[i] = kernel_(kernels::column_distance(points_.col(s).data(), target, dimension_), c00);
+        y.row(i) = values_.row(s);
+      }
+      lower.solveInPlace(c0);  // w
+      lower.solveInPlace(y);
+      double var = c00 - c0.squaredNorm();
+      if (p > 0) {
+        auto q = ws.q.topRows(nn);
+        for (Eigen::Index i = 0; i < nn; ++i) q.row(i) = f_.row(static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(i)]));
+        lower.solveInPlace(q);
+        ws.g.noalias() = q.transpose() * q;
+        Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> g_llt(ws.g);
+        if (g_llt.info() != Eigen::Success || !(g_llt.rcond() > 1e-14)) {
+          fail(TargetOutcome::SingularDrift);
+          continue;
+        }
+        ws.beta.noalias() = q.transpose() * y;
+        g_llt.solveInPlace(ws.beta);
+        y.noalias() -= q * ws.beta;  // L^-1 (z - F beta)
+        const auto f0 = f0_all.col(t);
+        ws.mean.noalias() = f0.transpose() * ws.beta;
+        ws.mean.noalias() += c0.transpose() * y;
+        ws.r.noalias() = f0 - q.transpose() * c0;
+        ws.s = ws.r;
+        g_llt.matrixL().solveInPlace(ws.s);
+        var += ws.s.squaredNorm();
+        if (want_w) {
+          g_llt.solveInPlace(ws.r);  // G^-1 r
+          ws.lambda.head(nn).noalias() = q * ws.r;
+          ws.lambda.head(nn) += c0;
+        }
+      } else {
+        ws.mean.noalias() = c0.transpose() * y;
+        if (want_w) ws.lambda.head(nn) = c0;
+      }
+      if (want_w) {
+        auto lam = ws.lambda.head(nn);
+        kb.triangularView<Eigen::Lower>().transpose().solveInPlace(lam);
+        auto& tw = target_weights[static_cast<std::size_t>(t)];
+        tw.resize(static_cast<std::size_t>(nn));
+        for (Eigen::Index i = 0; i < nn; ++i)
+          tw[static_cast<std::size_t>(i)] = {original_index_[ws.chosen[static_cast<std::size_t>(i)]], lam[i]};
+      }
+      if (options_.kind == KrigingKind::Simple) ws.mean += simple_mean_.transpose();
+      out.mean.row(t) = ws.mean;
+      var = std::max(var, 0.0);
+      if (leave_one_out) {
+        const double extra = meas_[t] + (options_.nugget == NuggetTreatment::MeasurementError ? kernel_.nugget() : 0.0);
+        out.variance[t] = var + extra;
+        out.residual.row(t) = observed_.row(t) - ws.mean;
+      } else if (want_var) {
+        out.variance[t] = var;
+      }
+    }
+  }
+
+  // Summarize failures (validated statuses, never a silent NaN).
+  std::size_t failed = 0, first = 0;
+  TargetOutcome first_outcome = TargetOutcome::Ok;
+  for (std::size_t t = 0; t < outcome.size(); ++t)
+    if (outcome[t] != TargetOutcome::Ok) {
+      if (failed++ == 0) {
+        first = t;
+        first_outcome = outcome[t];
+      }
+    }
+  out.failed_targets = failed;
+  out.status = report_.status;
+  out.message = report_.message;
+  if (failed > 0) {
+    const char* why = "";
+    switch (first_outcome) {
+      case TargetOutcome::TooFew:
+        out.status = KrigingStatus::TooFewSamples;
+        why = "fewer neighbours than drift terms (or none) within the search radius";
+        break;
+      case TargetOutcome::NotPositiveDefinite:
+        out.status = KrigingStatus::NotPositiveDefinite;
+        why = "local covariance matrix not positive definite after the jitter retries";
+        break;
+      case TargetOutcome::SingularDrift:
+        out.status = KrigingStatus::SingularDrift;
+        why = "drift terms linearly dependent over the neighbours";
+        break;
+      case TargetOutcome::Ok: break;
+    }
+    out.message = std::to_string(failed) + " of " + std::to_string(m) + (leave_one_out ? " samples" : " targets") +
+                  " could not be kriged (mean and variance NaN); first: " + (leave_one_out ? "sample " : "target ") +
+                  std::to_string(first) + ": " + why;
+  }
+  if (!want_var || (!options_.compute_variance && !leave_one_out)) out.variance.resize(0);
+  if (want_w) {
+    auto& wt = out.weights;
+    wt.offset.assign(1, 0);
+    for (const auto& tw : target_weights) {
+      for (const auto& [s, v] : tw) {
+        wt.sample.push_back(s);
+        wt.weight.push_back(v);
+      }
+      wt.offset.push_back(wt.sample.size());
+    }
+  }
+  return out;
+}
+
+}  // namespace errfield::detail
