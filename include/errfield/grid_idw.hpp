@@ -192,7 +192,7 @@ V GridIdw<V>::operator()(const Eigen::Vector3d& target) const {
   double out[kComponents];
   const double pos[3] = {target.x(), target.y(), target.z()};
   const auto s = kernels::grid_idw_single<kComponents>(geometry_, params_, nodes_.data(), pos, out);
-  if (s == kernels::kGridOutside) throw_outside(target, 0, RowLabels{{}, {}, "target"});
+  if (s == kernels::kGridOutside) throw OutsideGridError(describe_outside_target(target, "target", grid_));
   return detail::value_from<V>(out);
 }
 
