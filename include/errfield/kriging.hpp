@@ -43,6 +43,7 @@
 #include <Eigen/Core>
 
 #include "errfield/concepts.hpp"
+#include "errfield/cross_validation.hpp"
 #include "errfield/error.hpp"
 #include "errfield/metrics.hpp"
 #include "errfield/variogram_model.hpp"
@@ -395,6 +396,41 @@ class Kriging {
   std::vector<double> scales_;
   int dimension_ = 0;
   std::shared_ptr<const detail::KrigingEngine> engine_;
+};
+
+/// Kriging as a HoldOutEstimator for cross_validate (cross_validation.hpp), so that kriging and
+/// IDW are validated on the same folds. fit_predict factors the training samples and predicts at
+/// the held-out locations; the variance is that of the residual of a new observation there: the
+/// kriging variance, plus the nugget when the nugget is measurement error. Targets that cannot be
+/// predicted (unusable factorization, failed local solve) get NaN, which cross_validate counts.
+/// For leave-one-out with the dense back end prefer Kriging::leave_one_out (closed form, one
+/// factorization instead of N).
+template <Location L, Value V, class M = EuclideanMetric>
+  requires Metric<M, L> && EmbeddableMetric<M>
+struct KrigingEstimator {
+  VariogramModel model;
+  KrigingOptions options;
+  M metric{};
+
+  HoldOutPrediction<V> fit_predict(std::span<const L> locations, std::span<const V> values,
+                                   std::span<const L> query) const {
+    const Kriging<L, V, M> kriging(locations, values, model, options, metric);
+    KrigingPrediction<V> p = kriging.predict(query);
+    HoldOutPrediction<V> out;
+    if (!p.usable() && p.mean.size() != query.size()) {
+      V nan_value = ValueTraits<V>::zero();
+      double& (*writable)(V&, int) = &ValueTraits<V>::component;
+      for (int c = 0; c < ValueTraits<V>::kComponents; ++c) writable(nan_value, c) = std::numeric_limits<double>::quiet_NaN();
+      out.value.assign(query.size(), nan_value);
+      if (options.compute_variance) out.variance.assign(query.size(), std::numeric_limits<double>::quiet_NaN());
+      return out;
+    }
+    out.value = std::move(p.mean);
+    out.variance = std::move(p.variance);
+    if (options.nugget == NuggetTreatment::MeasurementError)
+      for (double& v : out.variance) v += model.nugget();
+    return out;
+  }
 };
 
 }  // namespace errfield

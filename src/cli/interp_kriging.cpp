@@ -1,0 +1,264 @@
+// `errfield interpolate --method kriging` and `errfield cv --method kriging`: simple, ordinary and
+// universal kriging (errfield/kriging.hpp) with the dense, local or sparse back end, and a model
+// given as text or fitted automatically (--model auto).
+
+#include <cmath>
+#include <iostream>
+#include <limits>
+
+#include "cli/interpolation_methods.hpp"
+#include "errfield/cross_validation.hpp"
+#include "errfield/empirical_variogram.hpp"
+#include "errfield/error.hpp"
+#include "errfield/kriging.hpp"
+#include "errfield/variogram_fit.hpp"
+
+namespace errfield::cli {
+namespace {
+
+struct KrigingCliOptions {
+  std::string model;
+  std::string kind = "ordinary";
+  double mean = std::numeric_limits<double>::quiet_NaN();  // NaN = not given
+  std::string backend;
+  std::string nugget_as = "micro";
+  std::string measurement_variance;
+};
+KrigingCliOptions cli_options;
+
+void add_kriging_options(CLI::App& cmd) {
+  auto& o = cli_options;
+  const char* group = "kriging (--method kriging)";
+  cmd.add_option("--model", o.model,
+                 "Variogram model in gstat's vgm terms, e.g. \"sph(sill=0.3,range=400)+nug(0.002)\" (models: nug, sph, "
+                 "exp, gau, mat, wen; 'sill' is the partial sill of that component). NOTE: 'range' of exp and gau is "
+                 "the scale parameter a, not the practical range (practical range ~3a for exp, ~1.73a for gau), as in "
+                 "gstat. 'auto' computes the empirical variogram (gstat's default cutoff and 15 bins), fits sph and exp "
+                 "(with --backend sparse: sph only) with a free nugget and uses the better fit (printed)")
+      ->group(group);
+  cmd.add_option("--kind", o.kind, "simple | ordinary (default) | universal1 | universal2 (linear / quadratic drift in the coordinates)")
+      ->group(group);
+  cmd.add_option("--mean", o.mean, "Known mean for --kind simple")->group(group);
+  cmd.add_option("--backend", o.backend,
+                 "dense (one Cholesky of all samples; default unless --neighbors/--radius) | local (the --neighbors K "
+                 "nearest and/or those within --radius per target; large N) | sparse (CHOLMOD; compact models sph/wen only)")
+      ->group(group);
+  cmd.add_option("--nugget-as", o.nugget_as,
+                 "micro (default, gstat's krige: exact at the samples) | error (the nugget is measurement error, like "
+                 "gstat's Err: predictions of the error-free signal, smoothing)")
+      ->group(group);
+  cmd.add_option("--measurement-variance", o.measurement_variance,
+                 "Column of the samples file with each sample's measurement variance (value unit^2)")
+      ->group(group);
+}
+
+template <class V>
+std::vector<V> rows_as_values(const Eigen::MatrixXd& m) {
+  std::vector<V> v(static_cast<std::size_t>(m.rows()));
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    if constexpr (std::is_same_v<V, double>) v[static_cast<std::size_t>(i)] = m(i, 0);
+    else v[static_cast<std::size_t>(i)] = m.row(i).transpose();
+  }
+  return v;
+}
+
+template <class V>
+Eigen::MatrixXd values_as_rows(const std::vector<V>& v) {
+  constexpr int C = ValueTraits<V>::kComponents;
+  Eigen::MatrixXd m(static_cast<Eigen::Index>(v.size()), C);
+  for (std::size_t i = 0; i < v.size(); ++i)
+    for (int c = 0; c < C; ++c) m(static_cast<Eigen::Index>(i), c) = ValueTraits<V>::component(std::as_const(v[i]), c);
+  return m;
+}
+
+std::vector<Eigen::VectorXd> rows_as_points(const Eigen::MatrixXd& m) {
+  std::vector<Eigen::VectorXd> p(static_cast<std::size_t>(m.rows()));
+  for (Eigen::Index i = 0; i < m.rows(); ++i) p[static_cast<std::size_t>(i)] = m.row(i).transpose();
+  return p;
+}
+
+// gstat's defaults for variogram(): cutoff one third of the bounding-box diagonal, 15 bins.
+VariogramModel auto_model(const Eigen::MatrixXd& coords, const Eigen::MatrixXd& values, bool compact_only,
+                          std::vector<std::string>& notes) {
+  const double diagonal = (coords.colwise().maxCoeff() - coords.colwise().minCoeff()).norm();
+  if (!(diagonal > 0.0)) throw InputError("--model auto: all samples are at one location; cannot estimate a variogram");
+  const double cutoff = diagonal / 3.0;
+  EmpiricalVariogramOptions vo;
+  vo.convention = BinConvention::Gstat;
+  const EmpiricalVariogram ev = empirical_variogram(coords, values, LagBins::uniform(0.0, cutoff, cutoff / 15.0), vo);
+  // One model for every component (intrinsic coregionalization): fit the mean per-component gamma.
+  std::vector<double> lag, gamma;
+  std::vector<std::uint64_t> pairs;
+  for (const auto& b : ev.bins) {
+    if (b.pairs == 0) continue;
+    lag.push_back(b.lag_mean);
+    gamma.push_back(b.gamma / static_cast<double>(values.cols()));
+    pairs.push_back(b.pairs);
+  }
+  // gau is left out: fitted without a nugget it makes the kriging system numerically singular
+  // (condition numbers ~1e18 are common); give it explicitly with a nugget if it is wanted.
+  std::vector<ModelKind> kinds{ModelKind::Spherical};
+  if (!compact_only) kinds.push_back(ModelKind::Exponential);
+  VariogramFitOptions fo;
+  bool have = false;
+  VariogramFitResult best;
+  for (ModelKind k : kinds) {
+    ModelComponent c;
+    c.kind = k;
+    const VariogramFitResult r = fit_variogram(lag, gamma, pairs, {c}, fo);
+    if (r.status == FitStatus::Failed || !r.model.bounded()) continue;
+    if (!have || r.weighted_sse < best.weighted_sse) {
+      best = r;
+      have = true;
+    }
+  }
+  if (!have) throw InputError("--model auto: no variogram model could be fitted to the samples' empirical variogram");
+  notes.push_back("--model auto: empirical variogram (" + std::to_string(lag.size()) + " non-empty bins up to lag " +
+                  format_number(cutoff) + ", gstat's default cutoff), best fit of " +
+                  (compact_only ? std::string("sph") : std::string("sph and exp")) + " with free nugget (weights nj_h2): " +
+                  best.model.to_string() + " (weighted SSE " + format_number(best.weighted_sse) + ")");
+  return best.model;
+}
+
+struct Setup {
+  VariogramModel model;
+  KrigingOptions options;
+  Eigen::VectorXd measurement_variance;
+};
+
+Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const Eigen::MatrixXd& values,
+                 const SharedInterpolationOptions& shared, std::vector<std::string>& notes) {
+  const auto& o = cli_options;
+  Setup s;
+  auto& opt = s.options;
+  if (o.kind == "simple") opt.kind = KrigingKind::Simple;
+  else if (o.kind == "ordinary") opt.kind = KrigingKind::Ordinary;
+  else if (o.kind == "universal1" || o.kind == "universal2") {
+    opt.kind = KrigingKind::Universal;
+    opt.drift_order = o.kind == "universal1" ? 1 : 2;
+  } else {
+    throw ArgumentError("--kind is '" + o.kind + "'; expected simple, ordinary, universal1 or universal2");
+  }
+  if (opt.kind == KrigingKind::Simple) {
+    if (std::isnan(o.mean)) throw ArgumentError("--kind simple needs the known mean: --mean M");
+    if (!std::isfinite(o.mean)) throw ArgumentError("--mean is " + format_number(o.mean) + "; expected a finite number");
+    opt.simple_mean = {o.mean};
+  } else if (!std::isnan(o.mean)) {
+    throw ArgumentError("--mean applies to --kind simple only (ordinary and universal kriging estimate the mean)");
+  }
+  if (o.backend.empty()) opt.backend = (shared.neighbors || shared.radius) ? KrigingBackend::Local : KrigingBackend::Dense;
+  else opt.backend = kriging_backend_from_name(o.backend);
+  if (opt.backend != KrigingBackend::Local && (shared.neighbors || shared.radius))
+    throw ArgumentError("--neighbors/--radius select the neighbourhood of --backend local, not --backend " + o.backend);
+  if (opt.backend == KrigingBackend::Local) {
+    opt.neighbors = shared.neighbors.value_or(0);
+    if (shared.radius) opt.radius = *shared.radius;
+    if (!shared.neighbors && !shared.radius)
+      throw ArgumentError("--backend local needs --neighbors K and/or --radius R");
+  }
+  if (o.nugget_as == "micro") opt.nugget = NuggetTreatment::MicroScale;
+  else if (o.nugget_as == "error") opt.nugget = NuggetTreatment::MeasurementError;
+  else throw ArgumentError("--nugget-as is '" + o.nugget_as + "'; expected micro or error");
+
+  if (o.model.empty()) throw ArgumentError("--method kriging needs --model, e.g. --model \"sph(sill=0.3,range=400)+nug(0.002)\" or --model auto");
+  s.model = o.model == "auto" ? auto_model(coords, values, opt.backend == KrigingBackend::Sparse, notes)
+                              : VariogramModel::parse(o.model);
+  if (!o.measurement_variance.empty()) s.measurement_variance = samples.numeric_columns({o.measurement_variance}).col(0);
+  return s;
+}
+
+const char* status_word(KrigingStatus s) { return kriging_status_name(s).data(); }
+
+InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
+  InterpolationResult result;
+  const Setup s = make_setup(*r.samples, r.sample_coords, r.sample_values, r.shared, result.notes);
+  const auto points = rows_as_points(r.sample_coords);
+  const auto targets = rows_as_points(r.target_coords);
+  const std::size_t c = r.value_columns.size();
+  std::vector<std::string> var_names;
+  for (const auto& v : r.value_columns) var_names.push_back(c == 1 ? "var" : "var_" + v);
+  for (const auto& name : var_names)
+    if (r.targets->has_column(name))
+      throw InputError(r.targets->source() + ": already has a column '" + name + "', which the output would repeat; rename it",
+                       r.targets->source(), 1, name);
+  with_value_type(c, [&]<class V>() {
+    const auto values = rows_as_values<V>(r.sample_values);
+    std::span<const double> meas(s.measurement_variance.data(), static_cast<std::size_t>(s.measurement_variance.size()));
+    const Kriging<Eigen::VectorXd, V> kriging(points, values, s.model, s.options, {}, meas);
+    const auto& rep = kriging.report();
+    if (!rep.usable())
+      throw Error("kriging failed: " + std::string(status_word(rep.status)) + ": " + rep.message);
+    if (!rep.message.empty()) result.notes.push_back(std::string(status_word(rep.status)) + ": " + rep.message);
+    if (rep.merged_duplicates) result.notes.push_back(std::to_string(rep.merged_duplicates) + " duplicate samples merged");
+    const auto pred = kriging.predict(targets);
+    result.pred = values_as_rows(pred.mean);
+    if (pred.failed_targets) {
+      Eigen::Index first = 0;
+      while (first < result.pred.rows() && !std::isnan(result.pred(first, 0))) ++first;
+      result.notes.push_back(std::to_string(pred.failed_targets) + " of " + std::to_string(targets.size()) +
+                             " targets could not be kriged (" + status_word(pred.status) + "; first: " +
+                             r.target_labels(static_cast<std::size_t>(first)) + "); their cells are empty");
+    }
+    for (const auto& name : var_names) result.extra_columns.emplace_back(name, pred.variance);
+    result.notes.push_back("kriging: " + std::string(kriging_kind_name(s.options.kind)) +
+                           (s.options.kind == KrigingKind::Universal ? " (drift order " + std::to_string(s.options.drift_order) + ")" : std::string()) +
+                           ", model " + s.model.to_string() + ", " + std::string(kriging_backend_name(s.options.backend)) +
+                           " back end" +
+                           (std::isfinite(rep.condition_number) ? ", condition number ~" + format_number(rep.condition_number) : std::string()));
+  });
+  return result;
+}
+
+CrossValidationOutput cross_validate_kriging(const CrossValidationRequest& r) {
+  CrossValidationOutput out;
+  const Setup s = make_setup(*r.samples, r.sample_coords, r.sample_values, r.shared, out.notes);
+  if (s.measurement_variance.size() > 0 && r.folds > 0)
+    out.notes.push_back("k-fold z-scores use the kriging variance without the held-out samples' measurement variance");
+  const auto points = rows_as_points(r.sample_coords);
+  with_value_type(r.value_columns.size(), [&]<class V>() {
+    const auto values = rows_as_values<V>(r.sample_values);
+    if (r.folds == 0 && s.options.backend != KrigingBackend::Sparse) {
+      // Leave-one-out: closed form (dense) or one local solve per sample, from one set-up.
+      std::span<const double> meas(s.measurement_variance.data(), static_cast<std::size_t>(s.measurement_variance.size()));
+      auto options = s.options;
+      const Kriging<Eigen::VectorXd, V> kriging(points, values, s.model, options, {}, meas);
+      if (kriging.report().merged_duplicates)
+        throw InputError("cv --method kriging: duplicate samples; remove them first");
+      const auto cv = kriging.leave_one_out();
+      if (cv.prediction.size() != values.size())
+        throw Error("kriging failed: " + std::string(status_word(cv.status)) + ": " + cv.message);
+      if (!cv.message.empty()) out.notes.push_back(cv.message);
+      out.fold.resize(values.size());
+      for (std::size_t i = 0; i < values.size(); ++i) out.fold[i] = i;
+      out.pred = values_as_rows(cv.prediction);
+      out.variance = cv.variance;
+      out.notes.push_back(s.options.backend == KrigingBackend::Dense
+                              ? "leave-one-out in closed form (Dubrule 1983) from one factorization"
+                              : "leave-one-out: each sample kriged from its neighbours without itself");
+      return;
+    }
+    KrigingEstimator<Eigen::VectorXd, V> estimator{s.model, s.options, {}};
+    CrossValidationOptions cvo;
+    cvo.folds = r.folds;
+    cvo.seed = r.seed;
+    const auto result = cross_validate(estimator, std::span<const Eigen::VectorXd>(points), std::span<const V>(values), cvo);
+    out.fold = result.fold;
+    out.pred = values_as_rows(result.predicted);
+    out.variance = result.variance;
+  });
+  return out;
+}
+
+InterpolationMethodRegistration kriging_method{{
+    "kriging",
+    "simple / ordinary / universal kriging with a variogram --model (gstat vgm terms; 'range' of exp/gau is "
+    "the scale a, not the practical range) or --model auto; writes pred and the kriging variance var "
+    "(var_<col> for vectors); --backend dense|local|sparse, --neighbors K / --radius R for local",
+    {"--neighbors", "--radius"},
+    &add_kriging_options,
+    &interpolate_kriging,
+    &cross_validate_kriging,
+}};
+
+}  // namespace
+}  // namespace errfield::cli
