@@ -1,5 +1,6 @@
 #include "errfield/variogram_model.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <limits>
@@ -11,6 +12,8 @@
 
 namespace errfield {
 namespace {
+
+constexpr double kMaxMaternNu = 100.0;
 
 constexpr ModelKind kAllKinds[] = {ModelKind::Nugget,   ModelKind::Spherical, ModelKind::Exponential,
                                    ModelKind::Gaussian, ModelKind::Matern,    ModelKind::Wendland,
@@ -34,7 +37,9 @@ void validate(const ModelComponent& c, std::size_t index) {
       if (!(c.range > 0.0 && c.range < 2.0)) fail("exponent", c.range, "0 < exponent < 2");
       break;
     case ModelKind::Matern:
-      if (!(c.nu > 0.0) || !std::isfinite(c.nu)) fail("nu", c.nu, "a finite value > 0");
+      // Beyond nu = 100 Gamma(nu) and K_nu(r) leave double range for ordinary lags (and libstdc++'s
+      // K_nu throws for huge nu); such a model is flat at every practical lag anyway.
+      if (!(c.nu > 0.0 && c.nu <= kMaxMaternNu)) fail("nu", c.nu, "0 < nu <= 100");
       [[fallthrough]];
     default:
       if (!(c.range > 0.0) || !std::isfinite(c.range)) fail("range", c.range, "a finite value > 0");
@@ -162,15 +167,39 @@ double ModelComponent::gamma(double h) const {
       const double r = h / range;
       // K_nu underflows far out; the correlation is then 0 to double precision.
       if (r > 700.0) return sill;
-      const double corr = std::pow(2.0, 1.0 - nu) / std::tgamma(nu) * std::pow(r, nu) *
-                          std::cyl_bessel_k(nu, r);
-      return sill * (1.0 - corr);
+      if (r < 1e-300) {
+        // libstdc++'s K_nu throws for subnormal arguments. Leading term of the series:
+        // 1 - rho = Gamma(1-nu)/Gamma(1+nu) (r/2)^(2 nu) for nu < 1 (still ~1e-6 at nu = 0.01);
+        // for nu >= 1 it is O(r^2 log r), below 1e-590.
+        return nu < 1.0 ? sill * std::tgamma(1.0 - nu) / std::tgamma(1.0 + nu) * std::pow(r / 2.0, 2.0 * nu)
+                        : 0.0;
+      }
+      const double k = std::cyl_bessel_k(nu, r);
+      if (!std::isfinite(k)) {
+        // Near r = 0, K_nu(r) overflows while r^nu underflows (their product is finite). Use the
+        // series of K_nu: 1 - rho = r^2/(4(nu-1)) - r^4/(32(nu-1)(nu-2)) + O(r^6, r^(2 nu)). The
+        // overflow needs r < ~0.06 at nu = 100, r < 1e-14 at nu = 20, r < 1e-150 at nu <= 2 and
+        // r < 1e-300 (handled above) at nu <= 1, so the terms kept are exact to double precision.
+        if (nu <= 1.0) return 0.0;
+        const double r2 = r * r;
+        const double lead = r2 / (4.0 * (nu - 1.0));
+        return sill * (nu > 2.0 ? lead - r2 * r2 / (32.0 * (nu - 1.0) * (nu - 2.0)) : lead);
+      }
+      // The direct product is the most accurate (absolute error a few ulps of 1); nu <= 100 keeps
+      // 2^(1-nu)/Gamma(nu) in range. If r^nu or the product leaves double range, fall back to logs.
+      const double coef = std::pow(2.0, 1.0 - nu) / std::tgamma(nu);
+      const double p = std::pow(r, nu);
+      double corr = coef * k * p;
+      if (!(p > 0.0) || !std::isfinite(corr))
+        corr = k > 0.0 ? std::exp(std::log(coef) + std::log(k) + nu * std::log(r)) : 0.0;
+      return sill * std::clamp(1.0 - corr, 0.0, 1.0);
     }
     case ModelKind::Wendland: {
       if (h >= range) return sill;
+      // 1 - (1-r)^4 (4r+1) expanded: r^2 (10 - 20r + 15r^2 - 4r^3), which is > 0 on (0, 1) in
+      // floating point too (the unexpanded form rounds to -1 ulp near r = 0; found by fuzzing).
       const double r = h / range;
-      const double t = 1.0 - r;
-      return sill * (1.0 - t * t * t * t * (4.0 * r + 1.0));
+      return sill * r * r * (10.0 + r * (-20.0 + r * (15.0 - 4.0 * r)));
     }
     case ModelKind::Power:
       return sill * std::pow(h, range);

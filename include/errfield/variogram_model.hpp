@@ -39,7 +39,7 @@ struct ModelComponent {
   ModelKind kind = ModelKind::Spherical;
   double sill = 0.0;   ///< partial sill (value unit^2); for lin the slope (value unit^2 per lag unit)
   double range = 0.0;  ///< scale a (lag unit); for pow the exponent
-  double nu = 0.5;     ///< Matérn smoothness
+  double nu = 0.5;     ///< Matérn smoothness, 0 < nu <= 100
 
   /// gamma of this component alone at lag h >= 0.
   double gamma(double h) const;
@@ -55,7 +55,7 @@ class VariogramModel {
  public:
   VariogramModel() = default;
   /// Throws ArgumentError naming the component and parameter when a parameter is out of domain
-  /// (negative sill, range <= 0, nu <= 0, power exponent outside (0, 2)).
+  /// (negative sill, range <= 0, nu outside (0, 100], power exponent outside (0, 2)).
   explicit VariogramModel(std::vector<ModelComponent> components);
 
   /// Parses the text form described above; throws ArgumentError pointing at the offending text.

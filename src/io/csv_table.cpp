@@ -19,10 +19,13 @@ std::string trim(std::string_view s) {
 }
 
 // "x [mm]" and "x (mm)" are looked up as "x": tracker exports put units in headers.
-std::string strip_unit(const std::string& name) {
-  const auto pos = name.find_first_of("[(");
-  if (pos == std::string::npos || pos == 0) return name;
-  return trim(std::string_view(name).substr(0, pos));
+// Surrounding blanks never count (a quoted header cell may keep them), so a name is found however
+// the file spaced it. A name that is all unit ("[mm]") is kept whole.
+std::string strip_unit(std::string_view name) {
+  const std::string trimmed = trim(name);
+  const auto pos = trimmed.find_first_of("[(");
+  if (pos == std::string::npos || pos == 0) return trimmed;
+  return trim(std::string_view(trimmed).substr(0, pos));
 }
 
 std::vector<std::string> split_line(std::string_view line, char delimiter, const std::string& source,

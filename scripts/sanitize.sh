@@ -1,0 +1,26 @@
+#!/usr/bin/env bash
+# The test suite built with AddressSanitizer + UndefinedBehaviorSanitizer (-DERRFIELD_SANITIZE=ON,
+# RelWithDebInfo at -O1) in ./build-asan (or $ERRFIELD_ASAN_BUILD_DIR), then run with ctest. Any
+# sanitizer report fails the test that triggered it (halt_on_error / abort_on_error).
+#
+# Subset: every test runs, except those whose name matches $ERRFIELD_ASAN_EXCLUDE (a ctest -E
+# regex; the default below lists the slow peer cross-checks and benchmarks-sized cases, which
+# exercise no code path the other tests do not, at 2-5x the cost under ASan).
+#
+# OpenMP: the library uses GCC's libgomp here; libgomp is not ASan-instrumented but that only
+# matters for TSan (see scripts/tsan.sh), ASan+UBSan are quiet with it. Tests run with
+# OMP_NUM_THREADS=2 so the parallel paths are exercised.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD_DIR=${ERRFIELD_ASAN_BUILD_DIR:-build-asan}
+EXCLUDE=${ERRFIELD_ASAN_EXCLUDE:-'Gstat|Peer|Scipy|Kdl|Slow'}
+
+cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DERRFIELD_SANITIZE=ON \
+  -DERRFIELD_BUILD_BENCHMARKS=OFF -DERRFIELD_BUILD_EXAMPLES=OFF "$@" >/dev/null
+cmake --build "$BUILD_DIR" -j "$(nproc)"
+
+export ASAN_OPTIONS=${ASAN_OPTIONS:-abort_on_error=1:halt_on_error=1:detect_leaks=1:detect_stack_use_after_return=1:check_initialization_order=1:strict_init_order=1}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+export OMP_NUM_THREADS=${OMP_NUM_THREADS:-2}
+ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$(nproc)" -E "$EXCLUDE"

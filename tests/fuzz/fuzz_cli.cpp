@@ -1,0 +1,49 @@
+// libFuzzer target: the CLI's argument handling, run_cli(argc, argv), with every subcommand
+// compiled in. Input format and safety rules: split_cli_args in fuzz_checks.hpp (commands run in a
+// fresh scratch directory and can only name files there).
+// Contract checked: any argument list ends in an exit code — never an uncaught exception, exit(),
+// a crash or a sanitizer report — and never in the "internal error" code 70.
+
+#include <unistd.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <string_view>
+#include <vector>
+
+#include "cli/run_cli.hpp"
+#include "fuzz/fuzz_checks.hpp"
+
+namespace {
+
+std::filesystem::path g_scratch;
+
+void remove_scratch() {
+  std::error_code ec;
+  std::filesystem::remove_all(g_scratch, ec);
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  char tmpl[] = "/tmp/errfield-fuzz-cli-XXXXXX";
+  if (!::mkdtemp(tmpl)) std::abort();
+  g_scratch = tmpl;
+  std::filesystem::current_path(g_scratch);
+  std::atexit(remove_scratch);
+  errfield::fuzz::write_cli_scratch(g_scratch);
+  return 0;
+}
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const auto args =
+      errfield::fuzz::split_cli_args(std::string_view(reinterpret_cast<const char*>(data), size));
+  if (!args) return 0;
+  std::vector<const char*> argv;
+  for (const auto& a : *args) argv.push_back(a.c_str());
+  const int code = errfield::cli::run_cli(static_cast<int>(argv.size()), argv.data());
+  ERRFIELD_FUZZ_CHECK(code != errfield::fuzz::kCliInternalError);
+  return 0;
+}
