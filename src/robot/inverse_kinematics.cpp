@@ -167,9 +167,9 @@ IkResult inverse_kinematics_multistart(const MdhModel& model, const Eigen::Isome
   // Seeds: the waist turned towards the target, the shoulder/elbow/wrist in a few postures.
   const Eigen::Vector3d p_base = model.base().inverse() * target.translation();
   const double q1 = std::atan2(p_base.y(), p_base.x()) / kDeg;
-  const double q2s[] = {0.0, -30.0, 30.0, -60.0};
-  const double q3s[] = {0.0, 60.0, -45.0};
-  const double q5s[] = {45.0, -45.0};
+  const double q2s[] = {-90.0, -45.0, 0.0, 30.0};
+  const double q3s[] = {0.0, 45.0, -45.0};
+  const double q5s[] = {-45.0, 45.0};
   IkResult best;
   best.position_residual_mm = std::numeric_limits<double>::infinity();
   for (double q2 : q2s)

@@ -9,6 +9,7 @@
 
 #include "errfield/atomic_file.hpp"
 #include "errfield/error.hpp"
+#include "robot/json_fields.hpp"
 
 namespace errfield::robot {
 
@@ -43,56 +44,13 @@ MdhLinkConstants make_constants(const MdhLink& l) {
   return c;
 }
 
-// ---- JSON reading with field paths in messages -------------------------------------------------
+using detail::json_check_keys;
+using detail::json_number;
+using detail::json_pose;
+using detail::pose_json;
 
 [[noreturn]] void fail(const std::string& source, const std::string& field, const std::string& what) {
-  throw InputError(source + ": " + field + ": " + what, source, 0, field);
-}
-
-double number_at(const nlohmann::json& obj, const std::string& key, const std::string& path,
-                 const std::string& source, const double* fallback) {
-  const auto it = obj.find(key);
-  if (it == obj.end()) {
-    if (fallback) return *fallback;
-    fail(source, path + key, "missing (expected a number)");
-  }
-  if (!it->is_number()) fail(source, path + key, "expected a number, got " + it->dump());
-  const double v = it->get<double>();
-  if (!std::isfinite(v)) fail(source, path + key, "expected a finite number, got " + it->dump());
-  return v;
-}
-
-void check_keys(const nlohmann::json& obj, std::initializer_list<const char*> allowed, const std::string& path,
-                const std::string& source) {
-  for (auto it = obj.begin(); it != obj.end(); ++it) {
-    bool ok = false;
-    for (const char* a : allowed) ok = ok || it.key() == a;
-    if (!ok) {
-      std::string list;
-      for (const char* a : allowed) list += (list.empty() ? "" : ", ") + std::string(a);
-      fail(source, path + it.key(), "unknown field (expected one of: " + list + ")");
-    }
-  }
-}
-
-Eigen::Isometry3d pose_from_json(const nlohmann::json& j, const std::string& path, const std::string& source) {
-  if (!j.is_object()) fail(source, path, "expected an object {x_mm, y_mm, z_mm, rx_deg, ry_deg, rz_deg}, got " + j.dump());
-  check_keys(j, {"x_mm", "y_mm", "z_mm", "rx_deg", "ry_deg", "rz_deg"}, path + ".", source);
-  const double zero = 0.0;
-  PoseXyzRpy p;
-  p.x_mm = number_at(j, "x_mm", path + ".", source, &zero);
-  p.y_mm = number_at(j, "y_mm", path + ".", source, &zero);
-  p.z_mm = number_at(j, "z_mm", path + ".", source, &zero);
-  p.rx_deg = number_at(j, "rx_deg", path + ".", source, &zero);
-  p.ry_deg = number_at(j, "ry_deg", path + ".", source, &zero);
-  p.rz_deg = number_at(j, "rz_deg", path + ".", source, &zero);
-  return to_isometry(p);
-}
-
-nlohmann::json pose_to_json(const Eigen::Isometry3d& t) {
-  const PoseXyzRpy p = to_xyz_rpy(t);
-  return {{"x_mm", p.x_mm}, {"y_mm", p.y_mm}, {"z_mm", p.z_mm},
-          {"rx_deg", p.rx_deg}, {"ry_deg", p.ry_deg}, {"rz_deg", p.rz_deg}};
+  detail::json_fail(source, field, what);
 }
 
 }  // namespace
@@ -133,7 +91,7 @@ MdhModel MdhModel::er20_c10() {
 
 MdhModel MdhModel::from_json(const nlohmann::json& j, const std::string& source) {
   if (!j.is_object()) fail(source, "(top level)", "expected a JSON object, got " + j.dump().substr(0, 60));
-  check_keys(j, {"name", "units", "links", "base", "tool", "comment"}, "", source);
+  json_check_keys(j, {"name", "units", "links", "base", "tool", "comment"}, "", source);
   std::string name = "robot";
   if (const auto it = j.find("name"); it != j.end()) {
     if (!it->is_string()) fail(source, "name", "expected a string, got " + it->dump());
@@ -158,21 +116,21 @@ MdhModel MdhModel::from_json(const nlohmann::json& j, const std::string& source)
     const auto& l = (*links_it)[static_cast<std::size_t>(i)];
     const std::string path = "links[" + std::to_string(i) + "].";
     if (!l.is_object()) fail(source, path.substr(0, path.size() - 1), "expected an object, got " + l.dump());
-    check_keys(l, {"alpha_deg", "a_mm", "theta0_deg", "d_mm", "beta_deg", "q_min_deg", "q_max_deg"}, path, source);
+    json_check_keys(l, {"alpha_deg", "a_mm", "theta0_deg", "d_mm", "beta_deg", "q_min_deg", "q_max_deg"}, path, source);
     MdhLink& m = links[static_cast<std::size_t>(i)];
-    m.alpha_deg = number_at(l, "alpha_deg", path, source, nullptr);
-    m.a_mm = number_at(l, "a_mm", path, source, nullptr);
-    m.theta0_deg = number_at(l, "theta0_deg", path, source, nullptr);
-    m.d_mm = number_at(l, "d_mm", path, source, nullptr);
-    m.beta_deg = number_at(l, "beta_deg", path, source, &zero);
-    m.q_min_deg = number_at(l, "q_min_deg", path, source, &lo);
-    m.q_max_deg = number_at(l, "q_max_deg", path, source, &hi);
+    m.alpha_deg = json_number(l, "alpha_deg", path, source, nullptr);
+    m.a_mm = json_number(l, "a_mm", path, source, nullptr);
+    m.theta0_deg = json_number(l, "theta0_deg", path, source, nullptr);
+    m.d_mm = json_number(l, "d_mm", path, source, nullptr);
+    m.beta_deg = json_number(l, "beta_deg", path, source, &zero);
+    m.q_min_deg = json_number(l, "q_min_deg", path, source, &lo);
+    m.q_max_deg = json_number(l, "q_max_deg", path, source, &hi);
     if (!(m.q_min_deg < m.q_max_deg))
       fail(source, path + "q_min_deg", "must be < q_max_deg (" + fmt(m.q_min_deg) + " >= " + fmt(m.q_max_deg) + ")");
   }
   Eigen::Isometry3d base = Eigen::Isometry3d::Identity(), tool = Eigen::Isometry3d::Identity();
-  if (const auto it = j.find("base"); it != j.end()) base = pose_from_json(*it, "base", source);
-  if (const auto it = j.find("tool"); it != j.end()) tool = pose_from_json(*it, "tool", source);
+  if (const auto it = j.find("base"); it != j.end()) base = json_pose(*it, "base", source);
+  if (const auto it = j.find("tool"); it != j.end()) tool = json_pose(*it, "tool", source);
   return MdhModel(std::move(name), links, base, tool);
 }
 
@@ -196,8 +154,8 @@ nlohmann::json MdhModel::to_json() const {
   return {{"name", name_},
           {"units", {{"length", "mm"}, {"angle", "deg"}}},
           {"links", links},
-          {"base", pose_to_json(base_)},
-          {"tool", pose_to_json(tool_)}};
+          {"base", pose_json(base_)},
+          {"tool", pose_json(tool_)}};
 }
 
 void MdhModel::save(const std::filesystem::path& path) const { write_file_atomically(path, to_json().dump(2) + "\n"); }
