@@ -46,6 +46,7 @@
 #include "errfield/cross_validation.hpp"
 #include "errfield/error.hpp"
 #include "errfield/metrics.hpp"
+#include "errfield/row_labels.hpp"
 #include "errfield/variogram_model.hpp"
 
 namespace errfield {
@@ -120,6 +121,10 @@ struct KrigingOptions {
   /// Not available with the sparse back end.
   bool keep_weights = false;
 
+  /// Names of the samples for error messages ("S.csv line 7"), e.g. from the CSV they were read
+  /// from; used only when it labels exactly as many rows as there are samples (a subset, as in
+  /// k-fold cross-validation, falls back to "sample i", 0-based).
+  RowLabels sample_labels;
   /// Samples at lag <= duplicate_distance are duplicates (0 = only exactly equal locations).
   double duplicate_distance = 0.0;
   DuplicatePolicy duplicates = DuplicatePolicy::Error;

@@ -4,7 +4,9 @@
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
+#include "cli/interpolation_methods.hpp"
 #include "cli/robot_cli.hpp"
+#include "errfield/robot/input_checks.hpp"
 #include "errfield/robot/kinematics.hpp"
 
 namespace errfield::cli {
@@ -20,6 +22,8 @@ void run_fk(const FkArgs& a) {
   const CsvTable table = CsvTable::read(a.input);
   const auto joints = read_joint_columns(table);
   const std::size_t n = joints.size();
+  if (const auto warning = robot::joints_outside_limits(joints, model, row_labels_of(table, "row")))
+    std::cerr << "errfield fk: warning: " << *warning << "\n";
   std::vector<double> x(n), y(n), z(n);
   std::vector<std::vector<double>> r(9, std::vector<double>(n));
   for (std::size_t i = 0; i < n; ++i) {

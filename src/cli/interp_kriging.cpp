@@ -28,6 +28,9 @@ KrigingCliOptions cli_options;
 
 void add_kriging_options(CLI::App& cmd) {
   auto& o = cli_options;
+  // run_cli() may run more than once in a process (the CLI fuzzer): start from the defaults, not
+  // from the previous run's values.
+  o = KrigingCliOptions{};
   const char* group = "kriging (--method kriging)";
   cmd.add_option("--model", o.model,
                  "Variogram model in gstat's vgm terms, e.g. \"sph(sill=0.3,range=400)+nug(0.002)\" (models: nug, sph, "
@@ -159,6 +162,7 @@ Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const E
   if (o.nugget_as == "micro") opt.nugget = NuggetTreatment::MicroScale;
   else if (o.nugget_as == "error") opt.nugget = NuggetTreatment::MeasurementError;
   else throw ArgumentError("--nugget-as is '" + o.nugget_as + "'; expected micro or error");
+  opt.sample_labels = row_labels_of(samples, "sample");
 
   if (o.model.empty()) throw ArgumentError("--method kriging needs --model, e.g. --model \"sph(sill=0.3,range=400)+nug(0.002)\" or --model auto");
   s.model = o.model == "auto" ? auto_model(coords, values, opt.backend == KrigingBackend::Sparse, notes)

@@ -20,6 +20,7 @@
 
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/mdh_model.hpp"
 #include "errfield/variogram_model.hpp"
 
 namespace errfield::fuzz {
@@ -118,6 +119,32 @@ inline void check_model_json(std::string_view text) {
   check_model_values(model);
 }
 
+/// The robot JSON reader (MdhModel::from_json): text that is not JSON is the caller's parse error
+/// (MdhModel::load turns it into an InputError); JSON that is not a robot only raises InputError or
+/// ArgumentError; a robot that loads saves to JSON that loads back to the same MD-H table.
+inline void check_robot_json(std::string_view text) {
+  const auto j = nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/false);
+  if (j.is_discarded()) return;
+  std::optional<robot::MdhModel> model;
+  try {
+    model.emplace(robot::MdhModel::from_json(j, "fuzz.json"));
+  } catch (const InputError& e) {
+    ERRFIELD_FUZZ_CHECK(std::string_view(e.what()).find("fuzz.json") != std::string_view::npos);
+    return;
+  } catch (const ArgumentError&) {
+    return;
+  }
+  const auto again = robot::MdhModel::from_json(model->to_json(), "again.json");
+  for (int i = 0; i < robot::kJointCount; ++i) {
+    const auto& a = model->link(i);
+    const auto& b = again.link(i);
+    ERRFIELD_FUZZ_CHECK(a.alpha_deg == b.alpha_deg && a.a_mm == b.a_mm && a.theta0_deg == b.theta0_deg &&
+                        a.d_mm == b.d_mm && a.beta_deg == b.beta_deg && a.q_min_deg == b.q_min_deg &&
+                        a.q_max_deg == b.q_max_deg);
+  }
+  ERRFIELD_FUZZ_CHECK(again.name() == model->name());
+}
+
 /// The CLI fuzzer's input format: arguments separated by '\n' (argv[0] "errfield" is added).
 /// Returns nothing for inputs the fuzzer skips: too long, more than 24 arguments, or an argument
 /// with '/', ".." or a NUL byte, so that commands only ever touch the scratch directory.
@@ -154,6 +181,9 @@ inline void write_cli_scratch(const std::filesystem::path& dir) {
         "lag_lo,lag_hi,lag_mean,gamma,pairs\n0,0.5,0.3,0.1,10\n0.5,1,0.8,0.4,20\n1,1.5,1.2,0.6,25\n");
   write("m.json", R"({"components":[{"kind":"sph","sill":1,"range":2},{"kind":"nug","sill":0.1}]})");
   write("bad.csv", "x,y\n1,nan\n");
+  write("r.json", robot::MdhModel::er20_c10().to_json().dump().c_str());
+  write("q.csv", "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n10,-20,30,-40,50,-60\n");
+  write("p.csv", "x,y,z,rx,ry,rz\n1200,100,900,180,0,0\n5000,0,0,0,0,0\n");
 }
 
 /// Exit code run_cli returns for an exception that is not an errfield::Error: always a bug.

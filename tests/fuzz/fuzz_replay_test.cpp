@@ -57,6 +57,7 @@ TEST(FuzzReplay, VariogramModel) {
   replay("variogram_model", [](const std::string& s) { check_variogram_model(s); });
 }
 TEST(FuzzReplay, ModelJson) { replay("model_json", [](const std::string& s) { check_model_json(s); }); }
+TEST(FuzzReplay, RobotJson) { replay("robot_json", [](const std::string& s) { check_robot_json(s); }); }
 
 // Runs the CLI with `args` in `dir`, output discarded; returns the wait status.
 int run_cli_in(const fs::path& dir, const std::vector<std::string>& args) {

@@ -1,0 +1,35 @@
+#pragma once
+/// Plausibility checks on robot data read from files, for warnings (not errors): measured
+/// positions that look like metres where millimetres are expected, and joint angles outside the
+/// model's limits (often radians where degrees are expected, or a wrong joint order). Use them
+/// where a command or pipeline reads positions or joint angles; print the returned text to the
+/// user and carry on, since the data may be right after all.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "errfield/robot/mdh_model.hpp"
+#include "errfield/row_labels.hpp"
+
+namespace errfield::robot {
+
+/// Reach scale of a model: sum over links of |a| + |d| (mm). 2478 mm for the ER20-C10.
+double reach_scale_mm(const MdhModel& model);
+
+/// A warning when every position (rows of `positions_mm`, columns x, y, z in the model's world
+/// frame) lies within reach_scale_mm(model) / 100 of both the world origin and the robot base
+/// (25 mm for the ER20-C10): no real robot measures all its poses there, while metres read as
+/// millimetres land exactly there. Returns nothing when the data look like millimetres, when
+/// there are no rows, or when the model's reach is below 100 mm. `what` names the data (file).
+std::optional<std::string> metres_instead_of_mm(const Eigen::MatrixXd& positions_mm, const MdhModel& model,
+                                                const std::string& what);
+
+/// A warning naming the first row (via `labels`), joint and value outside the model's joint
+/// limits, and how many rows are; nothing when all are within. `slack_deg` widens the limits.
+std::optional<std::string> joints_outside_limits(const std::vector<JointVector>& q_deg, const MdhModel& model,
+                                                 const RowLabels& labels, double slack_deg = 1e-9);
+
+}  // namespace errfield::robot

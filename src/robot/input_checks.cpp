@@ -1,0 +1,59 @@
+#include "errfield/robot/input_checks.hpp"
+
+#include <cmath>
+
+#include "errfield/csv_table.hpp"
+
+namespace errfield::robot {
+
+double reach_scale_mm(const MdhModel& model) {
+  double s = 0.0;
+  for (const auto& l : model.links()) s += std::abs(l.a_mm) + std::abs(l.d_mm);
+  return s;
+}
+
+std::optional<std::string> metres_instead_of_mm(const Eigen::MatrixXd& positions_mm, const MdhModel& model,
+                                                const std::string& what) {
+  const double reach = reach_scale_mm(model);
+  if (positions_mm.rows() == 0 || positions_mm.cols() != 3 || reach < 100.0) return std::nullopt;
+  const double limit = reach / 100.0;
+  const Eigen::Vector3d base = model.base().translation();
+  double max_world = 0.0, max_base = 0.0;
+  for (Eigen::Index i = 0; i < positions_mm.rows(); ++i) {
+    const Eigen::Vector3d p = positions_mm.row(i).transpose();
+    max_world = std::max(max_world, p.norm());
+    max_base = std::max(max_base, (p - base).norm());
+  }
+  if (max_world >= limit && max_base >= limit) return std::nullopt;
+  return what + ": every position is within " + format_number(std::round(limit * 10) / 10) + " mm of the " +
+         (max_world < limit ? "origin" : "robot base") + " (largest distance " +
+         format_number(std::min(max_world, max_base)) + ") for a robot of reach ~" + format_number(std::round(reach)) +
+         " mm: are these metres? errfield expects millimetres (multiply by 1000)";
+}
+
+std::optional<std::string> joints_outside_limits(const std::vector<JointVector>& q_deg, const MdhModel& model,
+                                                 const RowLabels& labels, double slack_deg) {
+  const JointVector lo = model.q_min_deg(), hi = model.q_max_deg();
+  std::size_t count = 0, first = 0;
+  int first_joint = 0;
+  for (std::size_t i = 0; i < q_deg.size(); ++i) {
+    for (int j = 0; j < kJointCount; ++j) {
+      if (q_deg[i][j] < lo[j] - slack_deg || q_deg[i][j] > hi[j] + slack_deg) {
+        if (count == 0) {
+          first = i;
+          first_joint = j;
+        }
+        ++count;
+        break;
+      }
+    }
+  }
+  if (count == 0) return std::nullopt;
+  const double v = q_deg[first][first_joint];
+  return labels(first) + ": q" + std::to_string(first_joint + 1) + " = " + format_number(v) +
+         " deg is outside the joint limits [" + format_number(lo[first_joint]) + ", " + format_number(hi[first_joint]) +
+         "] of " + model.name() + (count > 1 ? " (" + std::to_string(count) + " rows are outside in all)" : "") +
+         "; check units (degrees) and joint order";
+}
+
+}  // namespace errfield::robot

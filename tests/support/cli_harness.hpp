@@ -1,0 +1,133 @@
+#pragma once
+// Running the built `errfield` executable from tests (bad-input catalogue, atomic outputs,
+// determinism, resource bounds): a scratch directory per test and a runner that keeps stdout,
+// stderr, the exit code and any terminating signal apart.
+
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+namespace errfield::testing {
+
+namespace fs = std::filesystem;
+
+/// A fresh directory named after the running test, removed at the end.
+class ScratchDir {
+ public:
+  ScratchDir() {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    path_ = fs::temp_directory_path() / ("errfield_" + std::string(info->test_suite_name()) + "_" +
+                                         info->name() + "_" + std::to_string(::getpid()));
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~ScratchDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+
+  const fs::path& path() const { return path_; }
+  std::string operator/(const std::string& name) const { return (path_ / name).string(); }
+  /// Writes `text` to `name` in the directory (binary: CRLF and BOM stay as given).
+  std::string write(const std::string& name, const std::string& text) const {
+    std::ofstream(path_ / name, std::ios::binary) << text;
+    return (path_ / name).string();
+  }
+  std::string read(const std::string& name) const { return slurp(path_ / name); }
+  /// Every entry in the directory (names only), sorted.
+  std::vector<std::string> entries() const {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(path_)) names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+  static std::string slurp(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+  }
+
+ private:
+  fs::path path_;
+};
+
+struct CliResult {
+  int exit_code = -1;  ///< -1 when killed by a signal
+  int signal = 0;      ///< terminating signal, 0 if it exited
+  std::string out;
+  std::string err;
+};
+
+/// A started `errfield` process (for tests that signal it while it runs).
+struct CliProcess {
+  pid_t pid = -1;
+  fs::path out_file, err_file;
+};
+
+/// Starts `errfield args...` in `cwd` with extra environment entries ("NAME=value"); stdout and
+/// stderr go to files in `cwd` (.stdout/.stderr, hidden so tests listing outputs can skip them).
+inline CliProcess start_errfield(const std::vector<std::string>& args, const fs::path& cwd,
+                                 const std::vector<std::string>& env = {}) {
+  CliProcess p;
+  p.out_file = cwd / ".stdout";
+  p.err_file = cwd / ".stderr";
+  p.pid = ::fork();
+  if (p.pid == 0) {
+    if (::chdir(cwd.c_str()) != 0) ::_exit(127);
+    const int out = ::open(p.out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int err = ::open(p.err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(out, 1);
+    ::dup2(err, 2);
+    for (const auto& e : env) ::putenv(const_cast<char*>(e.c_str()));
+    std::vector<char*> argv{const_cast<char*>(ERRFIELD_CLI_PATH)};
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(ERRFIELD_CLI_PATH, argv.data());
+    ::_exit(127);
+  }
+  return p;
+}
+
+inline CliResult wait_errfield(const CliProcess& p) {
+  int status = 0;
+  ::waitpid(p.pid, &status, 0);
+  CliResult r;
+  if (WIFEXITED(status)) r.exit_code = WEXITSTATUS(status);
+  if (WIFSIGNALED(status)) r.signal = WTERMSIG(status);
+  r.out = ScratchDir::slurp(p.out_file);
+  r.err = ScratchDir::slurp(p.err_file);
+  std::error_code ec;
+  fs::remove(p.out_file, ec);
+  fs::remove(p.err_file, ec);
+  return r;
+}
+
+/// Runs `errfield args...` in `cwd` to completion.
+inline CliResult run_errfield(const std::vector<std::string>& args, const fs::path& cwd,
+                              const std::vector<std::string>& env = {}) {
+  return wait_errfield(start_errfield(args, cwd, env));
+}
+
+/// "errfield a b c" for failure messages.
+inline std::string command_line(const std::vector<std::string>& args) {
+  std::string s = "errfield";
+  for (const auto& a : args) s += " " + a;
+  return s;
+}
+
+}  // namespace errfield::testing
