@@ -9,12 +9,14 @@
 
 #include "errfield/csv_table.hpp"
 #include "kriging/kriging_engine.hpp"
+#include "lower_triangular_solve.hpp"
 
 namespace errfield::detail {
 
 void KrigingEngine::setup_dense() {
   const auto n = static_cast<std::size_t>(points_.cols());
-  // K and its factor live side by side while factoring; leave-one-out needs one more N x N.
+  // K and its factor live side by side while factoring; then the factor and its packed copy for
+  // the variance kernel (~N^2/2). Leave-one-out needs one more N x N, checked when asked.
   const double bytes = 2.0 * static_cast<double>(n) * static_cast<double>(n) * sizeof(double);
   if (bytes > static_cast<double>(options_.dense_memory_budget_bytes))
     throw ResourceError("kriging: the dense back end needs ~" + format_number(std::round(bytes / (1 << 20))) +
@@ -56,6 +58,8 @@ void KrigingEngine::setup_dense() {
     report_.message = "added jitter " + format_number(jitter) + " to the diagonal to factor the covariance";
   k.resize(0, 0);
   check_condition(llt_.rcond());
+  if (options_.compute_variance && kernels::lower_solve_fast_available())
+    packed_l_ = kernels::pack_lower(llt_.matrixLLT().data(), n, n);
 
   const auto& l = llt_.matrixL();
   Eigen::MatrixXd y = values_;
@@ -95,7 +99,6 @@ KrigingOutput KrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, cons
   Eigen::MatrixXd weights;
   if (want_w) weights.resize(n, m);
   const Eigen::Index batches = (m + batch - 1) / batch;
-  const auto& l = llt_.matrixL();
 
 #pragma omp parallel num_threads(thread_count())
   {
@@ -112,7 +115,12 @@ KrigingOutput KrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, cons
       out.mean.middleRows(start, cnt).noalias() = c.transpose() * alpha_;
       if (p > 0) out.mean.middleRows(start, cnt).noalias() += f0.transpose() * beta_;
       if (!want_var && !want_w) continue;
-      l.solveInPlace(c);  // c := W = L^-1 c0
+      // c := W = L^-1 c0, the O(N^2) per target part: the AVX2/FMA kernel where the CPU has it
+      // (Eigen's solve is SSE2-only in the default x86-64 build), else Eigen.
+      if (packed_l_.n == static_cast<std::size_t>(n))
+        kernels::lower_solve(packed_l_, c.data(), static_cast<std::size_t>(n), static_cast<std::size_t>(cnt));
+      else
+        llt_.matrixL().solveInPlace(c);
       if (want_var) out.variance.segment(start, cnt) = (c00 - c.colwise().squaredNorm().array()).transpose();
       if (p > 0) {
         r.noalias() = f0 - q_.transpose() * c;  // p x cnt

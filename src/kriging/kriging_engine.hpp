@@ -24,6 +24,7 @@
 #include "covariance_kernel.hpp"
 #include "errfield/kriging.hpp"
 #include "kriging/kd_tree.hpp"
+#include "lower_triangular_solve.hpp"
 
 namespace errfield::detail {
 
@@ -86,6 +87,7 @@ class KrigingEngine {
 
   // dense and sparse: global solution
   Eigen::LLT<Eigen::MatrixXd> llt_;  // dense factor
+  kernels::PackedLower packed_l_;    // dense: L packed for the variance kernel (refers to llt_)
   Eigen::MatrixXd q_;                // L^-1 F (dense: N x p; sparse: L^-1 P F)
   Eigen::LLT<Eigen::MatrixXd> g_llt_;
   Eigen::MatrixXd beta_;             // p x C

@@ -1,0 +1,113 @@
+// Kriging back ends (docs/benchmarks.md, section "Kriging"). Simulated data: N samples uniform in a
+// 1000 mm cube, smooth field + noise; targets uniform in the same cube. Each case is one run of
+// set-up (factorization) + prediction; the counters say what was computed.
+//
+//   dense  : ordinary kriging, N = 500 / 2,000 / 5,000 samples, 100,000 targets with variance
+//   local  : ordinary kriging, N = 100,000, k = 32, 100,000 targets with variance
+//   sparse : ordinary kriging, N = 100,000, sph range 45 mm (~30 samples per support ball);
+//            means at 100,000 targets; with variances at 1,000 targets
+// Arguments: {N, targets, threads, variance 0/1}. Peak RSS of the process is reported as max_rss_MiB.
+
+#include <sys/resource.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+
+#include "errfield/kriging.hpp"
+
+namespace {
+
+using P3 = Eigen::Vector3d;
+
+struct Data {
+  std::vector<P3> points;
+  std::vector<double> values;
+};
+
+Data simulate(std::size_t n, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1000.0);
+  std::normal_distribution<double> e(0.0, 0.01);
+  Data d;
+  d.points.reserve(n);
+  d.values.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const P3 p(u(rng), u(rng), u(rng));
+    d.points.push_back(p);
+    d.values.push_back(std::sin(p.x() / 150.0) * std::cos(p.y() / 200.0) + 0.0005 * p.z() + e(rng));
+  }
+  return d;
+}
+
+std::vector<P3> simulate_targets(std::size_t m, unsigned seed) { return simulate(m, seed).points; }
+
+double max_rss_mib() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return static_cast<double>(u.ru_maxrss) / 1024.0;
+}
+
+void run(benchmark::State& state, errfield::KrigingOptions opt, const char* model_text) {
+  const auto n = static_cast<std::size_t>(state.range(0));
+  const auto m = static_cast<std::size_t>(state.range(1));
+  opt.threads = static_cast<int>(state.range(2));
+  opt.compute_variance = state.range(3) != 0;
+  const Data d = simulate(n, 1);
+  const auto targets = simulate_targets(m, 2);
+  const auto model = errfield::VariogramModel::parse(model_text);
+  for (auto _ : state) {
+    errfield::Kriging<P3, double> k(d.points, d.values, model, opt);
+    if (!k.report().usable()) state.SkipWithError(k.report().message.c_str());
+    auto p = k.predict(targets);
+    benchmark::DoNotOptimize(p.mean.data());
+  }
+  state.counters["samples"] = static_cast<double>(n);
+  state.counters["targets"] = static_cast<double>(m);
+  state.counters["targets_per_s"] = benchmark::Counter(static_cast<double>(m), benchmark::Counter::kIsRate);
+  state.counters["max_rss_MiB"] = max_rss_mib();
+}
+
+void BM_KrigingDense(benchmark::State& state) {
+  errfield::KrigingOptions opt;  // ordinary, dense, with variance
+  run(state, opt, "sph(sill=1,range=300)+nug(0.01)");
+}
+BENCHMARK(BM_KrigingDense)
+    ->ArgNames({"N", "targets", "threads", "variance"})
+    ->Args({500, 100000, 2, 1})
+    ->Args({2000, 100000, 2, 1})
+    ->Args({2000, 100000, 1, 1})
+    ->Args({5000, 100000, 2, 1})
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+
+void BM_KrigingLocal(benchmark::State& state) {
+  errfield::KrigingOptions opt;
+  opt.backend = errfield::KrigingBackend::Local;
+  opt.neighbors = 32;
+  run(state, opt, "sph(sill=1,range=300)+nug(0.01)");
+}
+BENCHMARK(BM_KrigingLocal)
+    ->ArgNames({"N", "targets", "threads", "variance"})
+    ->Args({100000, 100000, 2, 1})
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+
+void BM_KrigingSparse(benchmark::State& state) {
+  errfield::KrigingOptions opt;
+  opt.backend = errfield::KrigingBackend::Sparse;
+  run(state, opt, "sph(sill=1,range=45)+nug(0.01)");
+}
+BENCHMARK(BM_KrigingSparse)
+    ->ArgNames({"N", "targets", "threads", "variance"})
+    ->Args({100000, 100000, 2, 0})
+    ->Args({100000, 1000, 2, 1})
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+
+}  // namespace
