@@ -123,7 +123,7 @@ struct KrigingOptions {
 
   /// Names of the samples for error messages ("S.csv line 7"), e.g. from the CSV they were read
   /// from; used only when it labels exactly as many rows as there are samples (a subset, as in
-  /// k-fold cross-validation, falls back to "sample i", 0-based).
+  /// k-fold cross-validation, falls back to "samples i and j", 0-based).
   RowLabels sample_labels;
   /// Samples at lag <= duplicate_distance are duplicates (0 = only exactly equal locations).
   double duplicate_distance = 0.0;
