@@ -70,19 +70,19 @@ SimulatorConfig SimulatorConfig::paper_default() {
   // Geometric deviations (docs/robot.md "Simulator"): a few tenths of a mm and hundredths of a
   // degree per parameter, the size an uncalibrated arm of this class shows after assembly.
   c.geometry.link = {{
-      {0.036, 0.720, 0.054, 0.900, 0.000},
-      {-0.054, -0.900, 0.072, 0.540, 0.000},
-      {0.045, 1.440, -0.063, -0.720, 0.036},
-      {-0.072, -0.540, 0.054, 1.260, 0.000},
-      {0.063, 0.450, -0.081, -0.360, 0.000},
-      {-0.054, 0.360, 0.072, 0.540, 0.000},
+      {0.038, 0.756, 0.057, 0.945, 0.000},
+      {-0.057, -0.945, 0.076, 0.567, 0.000},
+      {0.047, 1.512, -0.066, -0.756, 0.038},
+      {-0.076, -0.567, 0.057, 1.323, 0.000},
+      {0.066, 0.472, -0.085, -0.378, 0.000},
+      {-0.057, 0.378, 0.076, 0.567, 0.000},
   }};
   c.geometry.tool = {0.05, -0.04, 0.08, 0.0, 0.0, 0.0};
   c.absorb_rigid_part = true;
-  c.compliance.stiffness_nm_per_rad = {3.0e6, 1.6e6, 1.2e6, 3.0e5, 2.5e5, 1.5e5};
+  c.compliance.stiffness_nm_per_rad = {3.0e6, 3.0e6, 2.4e6, 6.0e5, 5.0e5, 3.0e5};
   c.compliance.link_mass_kg = {60.0, 45.0, 35.0, 18.0, 6.0, 2.0};
   c.compliance.payload_kg = 10.0;
-  c.transmission.amplitude_deg = {0.012, 0.015, 0.015, 0.018, 0.018, 0.018};
+  c.transmission.amplitude_deg = {0.0084, 0.0105, 0.0105, 0.0126, 0.0126, 0.0126};
   c.transmission.harmonic = {8.0, 12.0, 10.0, 6.0, 7.0, 5.0};
   c.transmission.phase_deg = {10.0, 70.0, 140.0, 200.0, 260.0, 320.0};
   c.repeatability_sigma_mm = 0.02;

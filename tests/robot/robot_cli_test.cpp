@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "errfield/csv_table.hpp"
 #include "errfield/robot/kinematics.hpp"
@@ -127,6 +128,56 @@ TEST_F(RobotCli, BadInputNamesFileRowAndColumn) {
   r = run("fk --input " + path("j.csv") + " --frame elbow --out " + path("o.csv"));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.err.find("elbow"), std::string::npos) << r.err;
+}
+
+TEST_F(RobotCli, SimulateThenCalibrateBothModels) {
+  auto r = run("simulate --sample grid --step 125 --out " + path("grid.csv") + " --truth-out " + path("truth.json") +
+               " --config-out " + path("sim.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  {
+    std::ifstream in(path("grid.csv"));
+    std::string first;
+    std::getline(in, first);
+    EXPECT_NE(first.find("SIMULATED"), std::string::npos) << first;  // the file says what it is
+  }
+  const CsvTable grid = CsvTable::read(path("grid.csv"));
+  EXPECT_EQ(grid.row_count(), 126u);  // 1 base point + 125 grid points
+  for (const char* c : {"point", "kind", "q1", "q6", "x", "y", "z", "mx", "my", "mz", "dist_b0"})
+    EXPECT_TRUE(grid.has_column(c)) << c;
+  EXPECT_EQ(grid.row(0)[grid.column_index("kind")], "base");
+  EXPECT_NO_THROW(MdhModel::load(path("truth.json")));
+  // The nominal robot of the simulation (ER20-C10 with the Table 7 ball as tool).
+  const auto sim = nlohmann::json::parse(std::ifstream(path("sim.json")));
+  MdhModel::from_json(sim["robot"]).save(path("robot.json"));
+  for (const std::string model : {"distance", "position"}) {
+    r = run("calibrate --robot " + path("robot.json") + " --data " + path("grid.csv") + " --model " + model + " --out " +
+            path("cal_" + model + ".json") + " --report " + path("report.txt") + " > " + path("stdout.txt"));
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::ifstream in(path("report.txt"));
+    std::stringstream report;
+    report << in.rdbuf();
+    // Before/after residuals are printed; calibration removes most of the (simulated) error.
+    const std::string text = report.str();
+    // The last before/after pair is the calibration (the position model reports registration first).
+    const auto before = text.rfind("residuals before: rms "), after = text.rfind("residuals after:  rms ");
+    ASSERT_NE(before, std::string::npos) << text;
+    ASSERT_NE(after, std::string::npos) << text;
+    const double rms_before = std::stod(text.substr(before + 22)), rms_after = std::stod(text.substr(after + 22));
+    EXPECT_LT(rms_after, rms_before / 2.5) << model << "\n" << text;
+    EXPECT_NE(text.find("removed candidates"), std::string::npos);
+    const MdhModel calibrated = MdhModel::load(path("cal_" + model + ".json"));
+    EXPECT_NE(calibrated.name().find("calibrated"), std::string::npos);
+  }
+}
+
+TEST_F(RobotCli, CalibrateRejectsDataWithoutBasePoints) {
+  write("m.csv", "q1,q2,q3,q4,q5,q6,dist_b0\n0,-90,0,0,-60,0,100\n");
+  auto r = run("calibrate --data " + path("m.csv") + " --out " + path("o.json"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.err.find("kind"), std::string::npos) << r.err;
+  r = run("calibrate --data " + path("m.csv") + " --model joint --out " + path("o.json"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_FALSE(fs::exists(path("o.json")));
 }
 
 }  // namespace

@@ -1,0 +1,139 @@
+#pragma once
+/// Kinematic calibration: identify errors of the MD-H table (and base/tool) from laser-tracker
+/// measurements. Use `register_tracker` first when you have positions (it finds the
+/// tracker ← robot transform and the reflector offset, 9 parameters), then `calibrate_positions`
+/// or, frame-free, `calibrate_distances` (the paper's baseline: distances between robot
+/// positions, e.g. to a base point).
+///
+/// Method (docs/robot.md "Calibration"): Levenberg–Marquardt on the identification Jacobian with
+/// column scaling; identifiability by the column-scaled Jacobian — parameters with no effect or
+/// that are (numerically) combinations of others are removed automatically, with the reason;
+/// condition number and standard errors of the rest; IGG3 robust reweighting (SPEC note) against
+/// outliers. Where consecutive axes are parallel (|alpha_{i-1}| < 1e-6 deg) the Hayati beta of
+/// that link is a candidate, as plain MD-H is singular there.
+/// Pure functions; the result carries the identified model and a report.
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "errfield/robot/inverse_kinematics.hpp"
+#include "errfield/robot/kinematics.hpp"
+
+namespace errfield::robot {
+
+/// A tracker reading of the model's tool point at commanded joints, in the measurement frame
+/// (the frame the model's base maps into).
+struct PositionMeasurement {
+  JointVector q_deg;
+  Eigen::Vector3d measured_mm;
+};
+
+/// A measured distance between the tool points at two joint vectors (a base point is a pair's
+/// second joint vector). Frame-free.
+struct DistanceMeasurement {
+  JointVector q_a_deg;
+  JointVector q_b_deg;
+  double distance_mm = 0.0;
+};
+
+/// IGG3 robust weights (Yang): u = |v| / sigma0 with sigma0 = 1.4826 · MAD (distances) or
+/// median(|r|) / 1.5382 (3-D position residuals, the Maxwell median); weight 1 for u <= k0,
+/// (k0/u)·((k1 − u)/(k1 − k0))² for k0 < u <= k1, 0 beyond.
+struct RobustOptions {
+  bool enabled = true;
+  double k0 = 1.5;
+  double k1 = 3.0;
+  int max_rounds = 20;  ///< Reweighting rounds (each a full LM solve).
+};
+
+struct CalibrationOptions {
+  /// Candidate parameters (indices of the `param` layout). Empty: the default set for the model
+  /// (see default_candidates).
+  std::vector<int> candidates;
+  /// A candidate is redundant when its scaled Jacobian column, projected off the columns kept
+  /// before it, retains less than this fraction of its norm.
+  double redundancy_tolerance = 1e-6;
+  /// Then, while the condition number of the column-normalized Jacobian of the kept parameters
+  /// exceeds this, the parameter dominating its weakest direction is removed ("weakly
+  /// identifiable"). 1e4 keeps everything a well-spread set of poses identifies; measurements at
+  /// one constant orientation (the paper's cube) leave fewer parameters.
+  double max_condition_number = 1e3;
+  int max_iterations = 100;       ///< LM iterations per round.
+  double cost_tolerance = 1e-14;  ///< Stop when the relative cost decrease is below this.
+  RobustOptions robust;
+  /// Throws ArgumentError naming the field.
+  void validate() const;
+};
+
+/// Identification candidates for a model. Order matters (earlier candidates are kept when a later
+/// one is redundant with them): base (if `with_base`), tool translation, then per link alpha, a,
+/// theta0, d, and beta where |alpha_{i-1}| < 1e-6 deg (parallel axes).
+std::vector<int> default_candidates(const MdhModel& model, bool with_base);
+
+struct ParameterEstimate {
+  int index = 0;
+  std::string name;
+  std::string unit;          ///< "deg" or "mm" (report units).
+  double nominal = 0.0;      ///< Value in the initial model (deg / mm; base/tool increments start at 0).
+  double increment = 0.0;    ///< Identified change (deg / mm).
+  double standard_error = 0.0;  ///< 1-sigma, same unit.
+};
+
+struct RemovedParameter {
+  int index = 0;
+  std::string name;
+  std::string reason;  ///< "no effect on the measured quantity" or "redundant with ..."
+};
+
+struct ResidualSummary {
+  double rms_mm = 0, mean_abs_mm = 0, max_abs_mm = 0;
+  std::size_t count = 0;
+};
+
+struct CalibrationResult {
+  MdhModel model = MdhModel::er20_c10();  ///< The identified model.
+  std::vector<ParameterEstimate> parameters;  ///< Identified (kept) parameters.
+  std::vector<RemovedParameter> removed;      ///< Candidates removed, with the reason.
+  double condition_number = 0.0;  ///< Of the column-scaled Jacobian of the kept parameters.
+  ResidualSummary before, after;  ///< Per measurement: distance residual or 3-D residual norm.
+  std::vector<double> weights;    ///< Final IGG3 weight per measurement (1 without robust).
+  std::size_t rejected = 0;       ///< Measurements with weight 0.
+  int iterations = 0;             ///< LM iterations over all rounds.
+  int rounds = 0;
+  bool converged = false;
+  std::string message;
+  /// Multi-line human-readable report (parameters, removed ones and why, residuals).
+  std::string report() const;
+};
+
+/// Tracker registration: base (tracker ← robot base, 6) and tool translation (reflector offset in
+/// the flange, 3) of `model` fitted to positions, MD-H table fixed. Starts from a closed-form rigid
+/// fit (Horn/Kabsch) of the nominal positions, so any initial base is fine.
+CalibrationResult register_tracker(const MdhModel& model, const std::vector<PositionMeasurement>& data,
+                                   const CalibrationOptions& options = {});
+
+/// Identification from positions in the measurement frame: MD-H + base + tool. The model's base
+/// should already map into the measurement frame (register_tracker does that).
+CalibrationResult calibrate_positions(const MdhModel& model, const std::vector<PositionMeasurement>& data,
+                                      const CalibrationOptions& options = {});
+
+/// Identification from distances (pairs of robot positions): MD-H + tool; the base is
+/// unobservable from distances and never a candidate.
+CalibrationResult calibrate_distances(const MdhModel& model, const std::vector<DistanceMeasurement>& data,
+                                      const CalibrationOptions& options = {});
+
+/// Joints for commanding `target` (world frame) on the real robot using an identified model:
+/// the target position is corrected by the identified model's predicted error and the pose solved
+/// with the nominal model, iterated until the identified model's tool is at the target position
+/// (`position_residual_mm` of the result is that remaining gap). Use this rather than IK of the
+/// identified model itself: position or distance data leave orientation parameters weakly
+/// determined, and full-pose IK of the identified model would follow them.
+IkResult compensated_joints(const MdhModel& nominal, const MdhModel& identified, const Eigen::Isometry3d& target,
+                            const JointVector& seed_deg, int iterations = 6);
+
+/// IGG3 weight of a standardized residual u >= 0.
+double igg3_weight(double u, double k0, double k1);
+
+}  // namespace errfield::robot

@@ -1,0 +1,130 @@
+// `errfield calibrate`: kinematic calibration from tracker measurements (the columns
+// `errfield simulate` writes), identified model as robot JSON plus a report.
+
+#include <algorithm>
+#include <iostream>
+#include <sstream>
+
+#include "cli/cli_support.hpp"
+#include "cli/command_registry.hpp"
+#include "cli/robot_cli.hpp"
+#include "errfield/error.hpp"
+#include "errfield/robot/calibration.hpp"
+
+namespace errfield::cli {
+namespace {
+
+struct CalibrateArgs {
+  std::string robot, data, model = "distance", out, report;
+  double k0 = 1.5, k1 = 3.0, max_condition = 1e3;
+  bool no_robust = false;
+};
+
+void run_calibrate(const CalibrateArgs& a) {
+  using namespace robot;
+  const MdhModel nominal = load_robot_or_default(a.robot);
+  CalibrationOptions options;
+  options.robust.enabled = !a.no_robust;
+  options.robust.k0 = a.k0;
+  options.robust.k1 = a.k1;
+  options.max_condition_number = a.max_condition;
+  options.validate();
+  const CsvTable table = CsvTable::read(a.data);
+  const auto q = read_joint_columns(table);
+  for (std::size_t i = 0; i < q.size(); ++i)
+    if (!nominal.within_limits(q[i], 1e-6))
+      throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": joints outside the limits of robot '" +
+                           nominal.name() + "'",
+                       a.data, table.line_of_row(i), "q1");
+  std::ostringstream text;
+  CalibrationResult result;
+  MdhModel identified = nominal;
+  if (a.model == "position") {
+    const Eigen::MatrixXd m = table.numeric_columns({"mx", "my", "mz"});
+    std::vector<PositionMeasurement> data;
+    for (std::size_t i = 0; i < q.size(); ++i) data.push_back({q[i], m.row(static_cast<Eigen::Index>(i)).transpose()});
+    // Registration first (tracker <- robot base and reflector offset), then the full model in the
+    // tracker frame; the output is expressed back in the registered robot frame.
+    const CalibrationResult reg = register_tracker(nominal, data, options);
+    text << "== registration (tracker <- robot base, reflector offset) ==\n" << reg.report();
+    const PoseXyzRpy t = to_xyz_rpy(reg.model.base());
+    text << "tracker <- robot base: x " << t.x_mm << " y " << t.y_mm << " z " << t.z_mm << " mm, rx " << t.rx_deg
+         << " ry " << t.ry_deg << " rz " << t.rz_deg << " deg\n\n";
+    result = calibrate_positions(reg.model, data, options);
+    identified = result.model.with_base(reg.model.base().inverse() * result.model.base());
+  } else if (a.model == "distance") {
+    if (!table.has_column("kind"))
+      throw InputError(a.data + ": the distance model needs a 'kind' column (base|target) to find the base points",
+                       a.data, 1, "kind");
+    const std::size_t kind_col = table.column_index("kind");
+    std::vector<std::size_t> base_rows;
+    for (std::size_t i = 0; i < table.row_count(); ++i) {
+      const std::string& k = table.row(i)[kind_col];
+      if (k == "base") base_rows.push_back(i);
+      else if (k != "target")
+        throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": kind must be 'base' or 'target', got '" + k + "'",
+                         a.data, table.line_of_row(i), "kind");
+    }
+    if (base_rows.empty()) throw InputError(a.data + ": no row with kind 'base'", a.data, 0, "kind");
+    std::vector<DistanceMeasurement> data;
+    std::size_t skipped = 0;
+    for (std::size_t k = 0; k < base_rows.size(); ++k) {
+      const std::string col = "dist_b" + std::to_string(k);
+      const std::vector<double> d = table.numeric_column(col);
+      for (std::size_t i = 0; i < table.row_count(); ++i) {
+        const auto it = std::find(base_rows.begin(), base_rows.end(), i);
+        if (it != base_rows.end() && static_cast<std::size_t>(it - base_rows.begin()) <= k) continue;  // each base pair once
+        // A pair at (nominally) the same place carries no distance information, only noise along
+        // an undefined direction: skip it (e.g. the grid point that is the base point itself).
+        if ((forward_position(nominal, q[i]) - forward_position(nominal, q[base_rows[k]])).norm() < 1.0) {
+          ++skipped;
+          continue;
+        }
+        if (d[i] <= 0)
+          throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": " + col + " must be > 0 for a point other than the base",
+                           a.data, table.line_of_row(i), col);
+        data.push_back({q[i], q[base_rows[k]], d[i]});
+      }
+    }
+    if (skipped) text << skipped << " pair(s) less than 1 mm apart (a point at its base point) skipped\n";
+    result = calibrate_distances(nominal, data, options);
+    identified = result.model;
+  } else {
+    throw ArgumentError("--model: expected 'distance' or 'position', got '" + a.model + "'");
+  }
+  text << "== kinematic calibration (" << a.model << " model, " << result.before.count << " measurements) ==\n"
+       << result.report();
+  std::cout << text.str();
+  identified.with_name(nominal.name() + " (calibrated, " + a.model + " model)").save(a.out);
+  if (!a.report.empty()) write_file_atomically(a.report, text.str());
+  std::cerr << "calibrate: identified model written to " << a.out << "\n";
+}
+
+void add_calibrate_command(CLI::App& app) {
+  auto args = std::make_shared<CalibrateArgs>();
+  auto* cmd = app.add_subcommand(
+      "calibrate",
+      "Kinematic calibration (Levenberg-Marquardt, IGG3 robust weights, automatic removal of\n"
+      "unidentifiable parameters) from tracker measurements in the columns 'errfield simulate' writes:\n"
+      "q1..q6 (deg) and either mx,my,mz (--model position: tracker frame, mm; registration first) or\n"
+      "kind (base|target) + dist_b0,dist_b1,... (--model distance: distances to the base points, mm).\n"
+      "Prints the identified parameters and the before/after residuals; writes the identified robot JSON.\n"
+      "Example: errfield calibrate --robot robot.json --data grid.csv --model distance --out calibrated.json");
+  cmd->add_option("--robot", args->robot, "nominal robot JSON; default: built-in ER20-C10 (no tool)");
+  cmd->add_option("--data", args->data, "measurement CSV")->required();
+  cmd->add_option("--model", args->model, "distance (default) or position");
+  cmd->add_option("--k0", args->k0, "IGG3 k0 (default 1.5)");
+  cmd->add_option("--k1", args->k1, "IGG3 k1 (default 3.0)");
+  cmd->add_flag("--no-robust", args->no_robust, "plain least squares (no IGG3 reweighting)");
+  cmd->add_option("--max-condition", args->max_condition,
+                  "remove weakly identifiable parameters until the scaled Jacobian's condition number is below this "
+                  "(default 1000)");
+  cmd->add_option("--report", args->report, "also write the report to this text file");
+  cmd->add_option("--out", args->out, "identified robot JSON (written atomically)")->required();
+  cmd->callback([args] { run_calibrate(*args); });
+}
+
+Registration reg{"calibrate", 63, &add_calibrate_command};
+
+}  // namespace
+}  // namespace errfield::cli

@@ -1,0 +1,539 @@
+#include "errfield/robot/calibration.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include <Eigen/Dense>
+
+#include "errfield/error.hpp"
+
+namespace errfield::robot {
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// A measurement model: residuals (measured − predicted), `dim` rows per measurement, and the
+// Jacobian of the predictions with respect to the candidate parameters (columns = `active`).
+class Problem {
+ public:
+  virtual ~Problem() = default;
+  virtual int dim() const = 0;
+  virtual std::size_t count() const = 0;
+  virtual void evaluate(const MdhModel& m, const std::vector<int>& active, Eigen::VectorXd& r,
+                        Eigen::MatrixXd* jac) const = 0;
+};
+
+class PositionProblem final : public Problem {
+ public:
+  explicit PositionProblem(const std::vector<PositionMeasurement>& d) : data_(d) {}
+  int dim() const override { return 3; }
+  std::size_t count() const override { return data_.size(); }
+  void evaluate(const MdhModel& m, const std::vector<int>& active, Eigen::VectorXd& r,
+                Eigen::MatrixXd* jac) const override {
+    const auto n = static_cast<Eigen::Index>(data_.size());
+    r.resize(3 * n);
+    if (jac) jac->resize(3 * n, static_cast<Eigen::Index>(active.size()));
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const auto& d = data_[static_cast<std::size_t>(i)];
+      r.segment<3>(3 * i) = d.measured_mm - forward_position(m, d.q_deg);
+      if (jac) {
+        const IdentificationJacobian j = identification_jacobian(m, d.q_deg);
+        for (std::size_t c = 0; c < active.size(); ++c)
+          jac->block<3, 1>(3 * i, static_cast<Eigen::Index>(c)) = j.col(active[c]);
+      }
+    }
+  }
+
+ private:
+  const std::vector<PositionMeasurement>& data_;
+};
+
+class DistanceProblem final : public Problem {
+ public:
+  explicit DistanceProblem(const std::vector<DistanceMeasurement>& d) : data_(d) {}
+  int dim() const override { return 1; }
+  std::size_t count() const override { return data_.size(); }
+  void evaluate(const MdhModel& m, const std::vector<int>& active, Eigen::VectorXd& r,
+                Eigen::MatrixXd* jac) const override {
+    const auto n = static_cast<Eigen::Index>(data_.size());
+    r.resize(n);
+    if (jac) jac->resize(n, static_cast<Eigen::Index>(active.size()));
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const auto& d = data_[static_cast<std::size_t>(i)];
+      const Eigen::Vector3d pa = forward_position(m, d.q_a_deg), pb = forward_position(m, d.q_b_deg);
+      const Eigen::Vector3d diff = pa - pb;
+      const double len = diff.norm();
+      r[i] = d.distance_mm - len;
+      if (jac) {
+        const Eigen::Vector3d u = len > 0 ? Eigen::Vector3d(diff / len) : Eigen::Vector3d::Zero();
+        const IdentificationJacobian ja = identification_jacobian(m, d.q_a_deg);
+        const IdentificationJacobian jb = identification_jacobian(m, d.q_b_deg);
+        for (std::size_t c = 0; c < active.size(); ++c)
+          (*jac)(i, static_cast<Eigen::Index>(c)) = u.dot(ja.col(active[c]) - jb.col(active[c]));
+      }
+    }
+  }
+
+ private:
+  const std::vector<DistanceMeasurement>& data_;
+};
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  double m = *mid;
+  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), mid));
+  return m;
+}
+
+// Per-measurement residual size: |v| (distance) or the 3-D norm (position).
+std::vector<double> residual_sizes(const Eigen::VectorXd& r, int dim) {
+  std::vector<double> s(static_cast<std::size_t>(r.size() / dim));
+  for (std::size_t i = 0; i < s.size(); ++i) s[i] = r.segment(static_cast<Eigen::Index>(i) * dim, dim).norm();
+  return s;
+}
+
+ResidualSummary summarize(const std::vector<double>& sizes) {
+  ResidualSummary s;
+  s.count = sizes.size();
+  if (sizes.empty()) return s;
+  double sq = 0;
+  for (double v : sizes) {
+    sq += v * v;
+    s.mean_abs_mm += v;
+    s.max_abs_mm = std::max(s.max_abs_mm, v);
+  }
+  s.mean_abs_mm /= static_cast<double>(sizes.size());
+  s.rms_mm = std::sqrt(sq / static_cast<double>(sizes.size()));
+  return s;
+}
+
+std::vector<double> igg3_weights(const std::vector<double>& sizes, int dim, const RobustOptions& o) {
+  constexpr double kSigmaFloorMm = 1e-6;  // 1 nm: below any tracker's resolution
+  double sigma0;
+  double scale;  // turns a residual size into u
+  if (dim == 1) {
+    sigma0 = std::max(1.4826 * median(sizes), kSigmaFloorMm);
+    scale = sigma0;
+  } else {
+    // |r| of a 3-D Gaussian residual with per-axis sigma has median 1.5382 sigma (chi, 3 dof);
+    // u = |r| / (sqrt(3) sigma) has RMS 1 like a standardized scalar.
+    sigma0 = std::max(median(sizes) / 1.5382, kSigmaFloorMm);
+    scale = std::sqrt(3.0) * sigma0;
+  }
+  std::vector<double> w(sizes.size());
+  for (std::size_t i = 0; i < sizes.size(); ++i) w[i] = igg3_weight(sizes[i] / scale, o.k0, o.k1);
+  return w;
+}
+
+struct Selection {
+  std::vector<int> kept;
+  std::vector<RemovedParameter> removed;
+};
+
+// Greedy identifiability in candidate order on the column-normalized Jacobian: a candidate whose
+// normalized column keeps less than `tol` of its norm after projection on the kept ones is a
+// combination of them (reported with its largest coefficients).
+Selection select_parameters(const Eigen::MatrixXd& jac, const std::vector<int>& candidates, double tol) {
+  Selection s;
+  const Eigen::Index rows = jac.rows();
+  Eigen::MatrixXd basis(rows, 0);
+  Eigen::MatrixXd kept_cols(rows, 0);
+  double typical = 0;
+  for (Eigen::Index c = 0; c < jac.cols(); ++c) typical = std::max(typical, jac.col(c).norm());
+  for (std::size_t c = 0; c < candidates.size(); ++c) {
+    const Eigen::VectorXd col = jac.col(static_cast<Eigen::Index>(c));
+    const double norm = col.norm();
+    // Angular columns are mm/rad (~1e3), lengths mm/mm (~1): "no effect" relative to 1 mm/unit.
+    if (norm < 1e-9 * std::max(1.0, typical / 1e3)) {
+      s.removed.push_back({candidates[c], parameter_name(candidates[c]),
+                           "no effect on the measured quantity at these configurations"});
+      continue;
+    }
+    const Eigen::VectorXd u = col / norm;
+    Eigen::VectorXd w = u;
+    if (basis.cols() > 0) {
+      w -= basis * (basis.transpose() * w);
+      w -= basis * (basis.transpose() * w);  // second pass: re-orthogonalization
+    }
+    const double left = w.norm();
+    if (left < tol) {
+      std::ostringstream why;
+      why << "redundant: its column is a combination of ";
+      const Eigen::VectorXd coef = kept_cols.colPivHouseholderQr().solve(u);
+      std::vector<std::pair<double, int>> order;
+      for (Eigen::Index k = 0; k < coef.size(); ++k) order.emplace_back(-std::abs(coef[k]), static_cast<int>(k));
+      std::sort(order.begin(), order.end());
+      for (std::size_t k = 0; k < std::min<std::size_t>(3, order.size()); ++k)
+        why << (k ? ", " : "") << parameter_name(s.kept[static_cast<std::size_t>(order[k].second)]);
+      why << " (residual " << left << " of its norm)";
+      s.removed.push_back({candidates[c], parameter_name(candidates[c]), why.str()});
+      continue;
+    }
+    basis.conservativeResize(rows, basis.cols() + 1);
+    basis.col(basis.cols() - 1) = w / left;
+    kept_cols.conservativeResize(rows, kept_cols.cols() + 1);
+    kept_cols.col(kept_cols.cols() - 1) = u;
+    s.kept.push_back(candidates[c]);
+  }
+  return s;
+}
+
+double weighted_cost(const Eigen::VectorXd& r, const std::vector<double>& w, int dim) {
+  double c = 0;
+  for (std::size_t i = 0; i < w.size(); ++i)
+    c += w[i] * r.segment(static_cast<Eigen::Index>(i) * dim, dim).squaredNorm();
+  return c;
+}
+
+ParameterVector embed(const std::vector<int>& active, const Eigen::VectorXd& delta) {
+  ParameterVector full = ParameterVector::Zero();
+  for (std::size_t c = 0; c < active.size(); ++c) full[active[c]] = delta[static_cast<Eigen::Index>(c)];
+  return full;
+}
+
+// Value of parameter `index` in report units (deg / mm) relative to `reference` (for base
+// rotation: the rotation vector of R · R_ref^T in deg; base/tool translations: the difference).
+double report_value(const MdhModel& m, const MdhModel& reference, int index) {
+  if (index < param::kBaseTranslation) {
+    const MdhLink& l = m.link(index / param::kPerLink);
+    switch (index % param::kPerLink) {
+      case param::kAlpha: return l.alpha_deg;
+      case param::kA: return l.a_mm;
+      case param::kTheta0: return l.theta0_deg;
+      case param::kD: return l.d_mm;
+      default: return l.beta_deg;
+    }
+  }
+  if (index < param::kBaseRotation)
+    return m.base().translation()[index - param::kBaseTranslation] -
+           reference.base().translation()[index - param::kBaseTranslation];
+  if (index < param::kToolTranslation)
+    return rotation_log(m.base().linear() * reference.base().linear().transpose())[index - param::kBaseRotation] / kDeg;
+  return m.tool().translation()[index - param::kToolTranslation] -
+         reference.tool().translation()[index - param::kToolTranslation];
+}
+
+// Best rigid motion T minimizing sum |T a_k - b_k|^2 (Horn / Kabsch via SVD of the
+// cross-covariance).
+Eigen::Isometry3d fit_rigid(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
+  Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ca += a[i];
+    cb += b[i];
+  }
+  ca /= static_cast<double>(a.size());
+  cb /= static_cast<double>(b.size());
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < a.size(); ++i) h += (a[i] - ca) * (b[i] - cb).transpose();
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = svd.matrixV() * d * svd.matrixU().transpose();
+  t.translation() = cb - t.linear() * ca;
+  return t;
+}
+
+CalibrationResult solve(const Problem& problem, const MdhModel& initial, std::vector<int> candidates,
+                        const CalibrationOptions& o) {
+  o.validate();
+  CalibrationResult out;
+  out.model = initial;
+  const int dim = problem.dim();
+  const std::size_t n = problem.count();
+  if (n == 0) throw ArgumentError("calibration: no measurements");
+
+  Eigen::VectorXd r;
+  Eigen::MatrixXd jac;
+  problem.evaluate(initial, candidates, r, &jac);
+  if (!r.allFinite() || !jac.allFinite()) throw ArgumentError("calibration: non-finite residual or Jacobian at the initial model");
+  out.before = summarize(residual_sizes(r, dim));
+
+  Selection sel = select_parameters(jac, candidates, o.redundancy_tolerance);
+  // Weakly identifiable directions: while the column-normalized Jacobian of the kept parameters is
+  // worse conditioned than allowed, drop the parameter that dominates its weakest direction (the
+  // right singular vector of the smallest singular value). Noise would move such a parameter far
+  // with no benefit inside the measured region and wild values outside it.
+  while (sel.kept.size() > 1) {
+    Eigen::MatrixXd kept(jac.rows(), static_cast<Eigen::Index>(sel.kept.size()));
+    for (std::size_t c = 0; c < sel.kept.size(); ++c) {
+      const auto pos = std::find(candidates.begin(), candidates.end(), sel.kept[c]) - candidates.begin();
+      kept.col(static_cast<Eigen::Index>(c)) = jac.col(pos).normalized();
+    }
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(kept, Eigen::ComputeThinV);
+    const Eigen::VectorXd sv = svd.singularValues();
+    const double cond = sv[sv.size() - 1] > 0 ? sv[0] / sv[sv.size() - 1] : std::numeric_limits<double>::infinity();
+    if (cond <= o.max_condition_number) break;
+    Eigen::Index worst = 0;
+    svd.matrixV().col(sv.size() - 1).cwiseAbs().maxCoeff(&worst);
+    std::ostringstream why;
+    why << "weakly identifiable: dominates the weakest direction of the scaled Jacobian (condition number "
+        << cond << " > " << o.max_condition_number << ")";
+    sel.removed.push_back({sel.kept[static_cast<std::size_t>(worst)], parameter_name(sel.kept[static_cast<std::size_t>(worst)]),
+                           why.str()});
+    sel.kept.erase(sel.kept.begin() + worst);
+  }
+  out.removed = sel.removed;
+  const std::vector<int>& active = sel.kept;
+  const auto p = static_cast<Eigen::Index>(active.size());
+  if (static_cast<std::size_t>(p) >= n * static_cast<std::size_t>(dim))
+    throw ArgumentError("calibration: " + std::to_string(p) + " identifiable parameters but only " +
+                        std::to_string(n * static_cast<std::size_t>(dim)) + " equations; measure more points");
+
+  MdhModel model = initial;
+  std::vector<double> w(n, 1.0);
+  problem.evaluate(model, active, r, &jac);
+  // Column scaling, fixed at the start: every parameter moves in units of its column norm.
+  Eigen::VectorXd scale(p);
+  for (Eigen::Index c = 0; c < p; ++c) scale[c] = jac.col(c).norm();
+  double cost = weighted_cost(r, w, dim);
+  double lambda = 1e-6;
+  const int rounds = o.robust.enabled ? o.robust.max_rounds : 1;
+  bool converged_lm = false;
+  for (int round = 0; round < rounds; ++round) {
+    ++out.rounds;
+    converged_lm = false;
+    for (int it = 0; it < o.max_iterations; ++it) {
+      ++out.iterations;
+      Eigen::MatrixXd js = jac * scale.cwiseInverse().asDiagonal();
+      Eigen::MatrixXd a = Eigen::MatrixXd::Zero(p, p);
+      Eigen::VectorXd g = Eigen::VectorXd::Zero(p);
+      for (std::size_t i = 0; i < n; ++i) {
+        if (w[i] == 0) continue;
+        const auto rows = js.middleRows(static_cast<Eigen::Index>(i) * dim, dim);
+        a.noalias() += w[i] * rows.transpose() * rows;
+        g.noalias() += w[i] * rows.transpose() * r.segment(static_cast<Eigen::Index>(i) * dim, dim);
+      }
+      bool accepted = false;
+      double new_cost = cost;
+      for (int tries = 0; tries < 20 && !accepted; ++tries) {
+        Eigen::MatrixXd damped = a;
+        damped.diagonal().array() += lambda * std::max(a.diagonal().maxCoeff(), 1e-300);
+        const Eigen::VectorXd step = damped.ldlt().solve(g).cwiseQuotient(scale);
+        if (!step.allFinite()) {
+          lambda *= 10;
+          continue;
+        }
+        const MdhModel trial = apply_parameter_increment(model, embed(active, step));
+        Eigen::VectorXd r_trial;
+        problem.evaluate(trial, active, r_trial, nullptr);
+        new_cost = weighted_cost(r_trial, w, dim);
+        if (new_cost <= cost) {
+          model = trial;
+          accepted = true;
+          lambda = std::max(lambda / 10, 1e-12);
+        } else {
+          lambda *= 10;
+        }
+      }
+      if (!accepted) {
+        converged_lm = true;  // no decrease possible: at a minimum to working precision
+        break;
+      }
+      const double decrease = cost - new_cost;
+      cost = new_cost;
+      problem.evaluate(model, active, r, &jac);
+      if (decrease <= o.cost_tolerance * std::max(cost, 1e-300) || cost < 1e-24) {
+        converged_lm = true;
+        break;
+      }
+    }
+    if (!o.robust.enabled) break;
+    const std::vector<double> nw = igg3_weights(residual_sizes(r, dim), dim, o.robust);
+    double change = 0;
+    for (std::size_t i = 0; i < n; ++i) change = std::max(change, std::abs(nw[i] - w[i]));
+    w = nw;
+    cost = weighted_cost(r, w, dim);
+    if (change < 1e-3) break;
+  }
+  out.converged = converged_lm;
+  out.message = converged_lm ? "converged" : "LM iteration limit reached";
+  out.model = model;
+  out.weights = w;
+  out.rejected = static_cast<std::size_t>(std::count(w.begin(), w.end(), 0.0));
+  out.after = summarize(residual_sizes(r, dim));
+
+  // Conditioning and standard errors at the solution (weighted, column-scaled).
+  Eigen::MatrixXd js = jac * scale.cwiseInverse().asDiagonal();
+  for (std::size_t i = 0; i < n; ++i) js.middleRows(static_cast<Eigen::Index>(i) * dim, dim) *= std::sqrt(w[i]);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(js, Eigen::ComputeThinV);
+  const Eigen::VectorXd sv = svd.singularValues();
+  out.condition_number = sv[sv.size() - 1] > 0 ? sv[0] / sv[sv.size() - 1] : std::numeric_limits<double>::infinity();
+  double used = 0;
+  for (double wi : w) used += wi > 0 ? 1.0 : 0.0;
+  const double dof = used * dim - static_cast<double>(p);
+  const double sigma2 = dof > 0 ? cost / dof : 0.0;
+  // Cov(scaled) = sigma² V S⁻² Vᵀ; unscale by the column norms.
+  const Eigen::MatrixXd v = svd.matrixV();
+  const Eigen::VectorXd inv_s2 = sv.array().square().inverse();
+  for (Eigen::Index c = 0; c < p; ++c) {
+    ParameterEstimate e;
+    e.index = active[static_cast<std::size_t>(c)];
+    e.name = parameter_name(e.index);
+    const bool angle = parameter_is_angle(e.index);
+    e.unit = angle ? "deg" : "mm";
+    const bool relative = e.index >= param::kBaseTranslation;
+    e.nominal = relative ? 0.0 : report_value(initial, initial, e.index);
+    e.increment = report_value(model, initial, e.index) - e.nominal;
+    const double var_scaled = (v.row(c).array().square() * inv_s2.transpose().array()).sum();
+    e.standard_error = std::sqrt(sigma2 * var_scaled) / scale[c] / (angle ? kDeg : 1.0);
+    out.parameters.push_back(e);
+  }
+  return out;
+}
+
+}  // namespace
+
+IkResult compensated_joints(const MdhModel& nominal, const MdhModel& identified, const Eigen::Isometry3d& target,
+                            const JointVector& seed_deg, int iterations) {
+  Eigen::Isometry3d command = target;
+  IkResult r = inverse_kinematics(nominal, command, seed_deg);
+  for (int it = 0; it < iterations && r.ok(); ++it) {
+    const Eigen::Vector3d gap = forward_position(identified, r.q_deg) - target.translation();
+    if (gap.norm() < 1e-7) break;
+    command.translation() -= gap;
+    r = inverse_kinematics(nominal, command, r.q_deg);
+  }
+  if (r.ok()) {
+    r.position_residual_mm = (forward_position(identified, r.q_deg) - target.translation()).norm();
+    if (r.position_residual_mm > 1e-4) r.status = IkStatus::max_iterations;
+  }
+  return r;
+}
+
+double igg3_weight(double u, double k0, double k1) {
+  if (u <= k0) return 1.0;
+  if (u > k1) return 0.0;
+  const double t = (k1 - u) / (k1 - k0);
+  return (k0 / u) * t * t;
+}
+
+void CalibrationOptions::validate() const {
+  if (!(redundancy_tolerance > 0 && redundancy_tolerance < 1))
+    throw ArgumentError("CalibrationOptions::redundancy_tolerance = " + std::to_string(redundancy_tolerance) +
+                        ", expected in (0, 1)");
+  if (!(max_condition_number > 1))
+    throw ArgumentError("CalibrationOptions::max_condition_number = " + std::to_string(max_condition_number) +
+                        ", expected > 1");
+  if (max_iterations < 1) throw ArgumentError("CalibrationOptions::max_iterations must be >= 1");
+  if (!(cost_tolerance >= 0)) throw ArgumentError("CalibrationOptions::cost_tolerance must be >= 0");
+  if (robust.enabled) {
+    if (!(robust.k0 > 0 && robust.k1 > robust.k0))
+      throw ArgumentError("CalibrationOptions::robust: need 0 < k0 < k1, got k0 = " + std::to_string(robust.k0) +
+                          ", k1 = " + std::to_string(robust.k1));
+    if (robust.max_rounds < 1) throw ArgumentError("CalibrationOptions::robust.max_rounds must be >= 1");
+  }
+  for (int c : candidates)
+    if (c < 0 || c >= param::kCount)
+      throw ArgumentError("CalibrationOptions::candidates: index " + std::to_string(c) + " outside [0, " +
+                          std::to_string(param::kCount) + ")");
+}
+
+std::vector<int> default_candidates(const MdhModel& model, bool with_base) {
+  std::vector<int> c;
+  if (with_base)
+    for (int k = 0; k < 6; ++k) c.push_back(param::kBaseTranslation + k);
+  for (int k = 0; k < 3; ++k) c.push_back(param::kToolTranslation + k);
+  for (int i = 0; i < kJointCount; ++i) {
+    c.push_back(param::link_index(i, param::kAlpha));
+    c.push_back(param::link_index(i, param::kA));
+    c.push_back(param::link_index(i, param::kTheta0));
+    c.push_back(param::link_index(i, param::kD));
+    if (i > 0 && std::abs(model.link(i).alpha_deg) < 1e-6) c.push_back(param::link_index(i, param::kBeta));
+  }
+  return c;
+}
+
+CalibrationResult register_tracker(const MdhModel& model, const std::vector<PositionMeasurement>& data,
+                                   const CalibrationOptions& options) {
+  if (data.size() < 3) throw ArgumentError("register_tracker: need at least 3 measured positions, got " + std::to_string(data.size()));
+  // Closed-form start: the rigid motion taking nominal robot-frame positions onto the measured ones.
+  const MdhModel robot_frame = model.with_base(Eigen::Isometry3d::Identity());
+  std::vector<Eigen::Vector3d> a(data.size()), b(data.size());
+  for (std::size_t i = 0; i < data.size(); ++i) {
+    a[i] = forward_position(robot_frame, data[i].q_deg);
+    b[i] = data[i].measured_mm;
+  }
+  const Eigen::Isometry3d base = fit_rigid(a, b);
+  const MdhModel start = model.with_base(base);
+  std::vector<int> candidates;
+  for (int k = 0; k < 6; ++k) candidates.push_back(param::kBaseTranslation + k);
+  for (int k = 0; k < 3; ++k) candidates.push_back(param::kToolTranslation + k);
+  PositionProblem problem(data);
+  CalibrationResult r = solve(problem, start, candidates, options);
+  // Report the base relative to the closed-form start? Users want the absolute transform; it is
+  // in r.model.base(). The increments listed are relative to the closed-form start.
+  return r;
+}
+
+CalibrationResult calibrate_positions(const MdhModel& model, const std::vector<PositionMeasurement>& data,
+                                      const CalibrationOptions& options) {
+  PositionProblem problem(data);
+  return solve(problem, model, options.candidates.empty() ? default_candidates(model, true) : options.candidates,
+               options);
+}
+
+CalibrationResult calibrate_distances(const MdhModel& model, const std::vector<DistanceMeasurement>& data,
+                                      const CalibrationOptions& options) {
+  std::vector<int> candidates = options.candidates.empty() ? default_candidates(model, false) : options.candidates;
+  // The base is invisible to distances: drop it even if asked for, and say so.
+  std::vector<int> kept;
+  std::vector<RemovedParameter> dropped;
+  for (int c : candidates) {
+    if (c >= param::kBaseTranslation && c < param::kToolTranslation)
+      dropped.push_back({c, parameter_name(c), "base frame: distances are invariant under it"});
+    else
+      kept.push_back(c);
+  }
+  DistanceProblem problem(data);
+  CalibrationResult r = solve(problem, model, kept, options);
+  // Gauge: distances fix the model only up to a rigid motion of its world frame. Choose the one
+  // that best aligns the identified model's positions with the initial model's at the measured
+  // configurations, so the identified model keeps the robot's frame (compensation commands
+  // targets in it).
+  std::vector<Eigen::Vector3d> ident, init;
+  for (const auto& d : data)
+    for (const JointVector* q : {&d.q_a_deg, &d.q_b_deg}) {
+      ident.push_back(forward_position(r.model, *q));
+      init.push_back(forward_position(model, *q));
+    }
+  r.model = r.model.with_base(fit_rigid(ident, init) * r.model.base());
+  r.removed.insert(r.removed.begin(), dropped.begin(), dropped.end());
+  return r;
+}
+
+std::string CalibrationResult::report() const {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(4);
+  s << "identified parameters (" << parameters.size() << "), increment +- 1-sigma standard error:\n";
+  for (const auto& p : parameters) {
+    s << "  " << p.name;
+    for (std::size_t k = p.name.size(); k < 14; ++k) s << ' ';
+    s << (p.increment >= 0 ? " +" : " ") << p.increment << " " << p.unit << "  +- " << p.standard_error << " "
+      << p.unit;
+    if (p.index < param::kBaseTranslation) s << "   (" << p.nominal << " -> " << p.nominal + p.increment << ")";
+    s << "\n";
+  }
+  if (!removed.empty()) {
+    s << "removed candidates (" << removed.size() << "):\n";
+    for (const auto& r : removed) s << "  " << r.name << ": " << r.reason << "\n";
+  }
+  s.precision(1);
+  s << "condition number of the scaled identification Jacobian: " << condition_number << "\n";
+  s.precision(4);
+  s << "residuals before: rms " << before.rms_mm << " mm, mean " << before.mean_abs_mm << " mm, max "
+    << before.max_abs_mm << " mm (" << before.count << " measurements)\n";
+  s << "residuals after:  rms " << after.rms_mm << " mm, mean " << after.mean_abs_mm << " mm, max " << after.max_abs_mm
+    << " mm; " << rejected << " rejected by IGG3\n";
+  s << "status: " << message << " (" << iterations << " LM iterations, " << rounds << " weighting rounds)\n";
+  return s.str();
+}
+
+}  // namespace errfield::robot

@@ -1,0 +1,185 @@
+#include "errfield/robot/calibration.hpp"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "errfield/error.hpp"
+#include "errfield/robot/random.hpp"
+#include "errfield/robot/simulator.hpp"
+
+namespace errfield::robot {
+namespace {
+
+// A "true" robot: the ER20-C10 with the paper ball as tool, every MD-H parameter, the tool and
+// the base perturbed (purely geometric, so a perfect calibration exists).
+MdhModel true_model(const MdhModel& nominal, std::uint64_t seed, double scale = 1.0) {
+  SimulationRng rng(seed);
+  auto links = nominal.links();
+  for (std::size_t i = 0; i < links.size(); ++i) {
+    links[i].alpha_deg += scale * rng.normal(0, 0.05);
+    links[i].a_mm += scale * rng.normal(0, 0.8);
+    links[i].theta0_deg += scale * rng.normal(0, 0.05);
+    links[i].d_mm += scale * rng.normal(0, 0.8);
+    if (i == 2) links[i].beta_deg += scale * rng.normal(0, 0.03);  // joints 2-3 parallel: Hayati tilt
+  }
+  Eigen::Isometry3d tool = nominal.tool();
+  tool.translation() += scale * Eigen::Vector3d(rng.normal(0, 0.3), rng.normal(0, 0.3), rng.normal(0, 0.3));
+  return MdhModel("truth", links, nominal.base(), tool);
+}
+
+std::vector<JointVector> random_configurations(const MdhModel& m, std::size_t n, std::uint64_t seed) {
+  SimulationRng rng(seed);
+  std::vector<JointVector> q(n);
+  for (auto& v : q) {
+    v << rng.uniform(-60, 60), rng.uniform(-140, -60), rng.uniform(-60, 30), rng.uniform(-90, 90),
+        rng.uniform(-100, -20), rng.uniform(-90, 90);
+    EXPECT_TRUE(m.within_limits(v));
+  }
+  return q;
+}
+
+MdhModel nominal_model() { return MdhModel::er20_c10().with_tool(paper_ball()); }
+
+TEST(Igg3, WeightFunction) {
+  EXPECT_EQ(igg3_weight(0.0, 1.5, 3.0), 1.0);
+  EXPECT_EQ(igg3_weight(1.5, 1.5, 3.0), 1.0);
+  EXPECT_NEAR(igg3_weight(2.0, 1.5, 3.0), (1.5 / 2.0) * std::pow(1.0 / 1.5, 2), 1e-15);
+  EXPECT_EQ(igg3_weight(3.0001, 1.5, 3.0), 0.0);
+  // Continuous at k0 and k1.
+  EXPECT_NEAR(igg3_weight(1.5 + 1e-9, 1.5, 3.0), 1.0, 1e-8);
+  EXPECT_NEAR(igg3_weight(3.0 - 1e-9, 1.5, 3.0), 0.0, 1e-8);
+}
+
+TEST(Calibration, PositionsNoiseFreeRecoverTheTruth) {
+  const MdhModel nominal = nominal_model();
+  const MdhModel truth = true_model(nominal, 1).with_base(to_isometry({1.2, -0.8, 0.5, 0.02, -0.03, 0.05}));
+  std::vector<PositionMeasurement> data;
+  for (const auto& q : random_configurations(nominal, 60, 2)) data.push_back({q, forward_position(truth, q)});
+  CalibrationOptions o;
+  o.robust.enabled = false;
+  const CalibrationResult r = calibrate_positions(nominal, data, o);
+  ASSERT_TRUE(r.converged) << r.report();
+  EXPECT_GT(r.before.rms_mm, 1.0);
+  EXPECT_LT(r.after.rms_mm, 1e-8);
+  // The identifiable combinations are recovered: the identified model predicts the true tool
+  // position at configurations not used for identification to 1e-6 mm.
+  for (const auto& q : random_configurations(nominal, 40, 3))
+    EXPECT_LT((forward_position(r.model, q) - forward_position(truth, q)).norm(), 1e-6);
+  // The structural redundancies of a 6R arm with parallel axes 2-3 are found and explained.
+  bool d3_removed = false;
+  for (const auto& rm : r.removed) d3_removed = d3_removed || rm.name == "link3.d" || rm.name == "link2.d";
+  EXPECT_TRUE(d3_removed) << r.report();
+  EXPECT_TRUE(std::isfinite(r.condition_number));
+}
+
+TEST(Calibration, DistancesNoiseFreeRecoverTheTruthUpToRigidMotion) {
+  const MdhModel nominal = nominal_model();
+  const MdhModel truth = true_model(nominal, 4);
+  const auto bases = random_configurations(nominal, 4, 5);
+  std::vector<DistanceMeasurement> data;
+  for (const auto& q : random_configurations(nominal, 80, 6))
+    for (const auto& b : bases) data.push_back({q, b, (forward_position(truth, q) - forward_position(truth, b)).norm()});
+  CalibrationOptions o;
+  o.robust.enabled = false;
+  const CalibrationResult r = calibrate_distances(nominal, data, o);
+  ASSERT_TRUE(r.converged) << r.report();
+  EXPECT_LT(r.after.rms_mm, 1e-8) << r.report();
+  // Distances are all that is identifiable: predicted distances between new configurations agree.
+  const auto test = random_configurations(nominal, 30, 7);
+  for (std::size_t i = 0; i + 1 < test.size(); ++i) {
+    const double want = (forward_position(truth, test[i]) - forward_position(truth, test[i + 1])).norm();
+    const double got = (forward_position(r.model, test[i]) - forward_position(r.model, test[i + 1])).norm();
+    EXPECT_NEAR(got, want, 1e-6);
+  }
+  bool base_removed = false;
+  for (const auto& rm : r.removed) base_removed = base_removed || rm.name.rfind("base.", 0) == 0;
+  EXPECT_FALSE(base_removed);  // never a candidate by default
+}
+
+TEST(Calibration, RegistrationFindsTrackerFrameAndReflector) {
+  const MdhModel nominal = nominal_model();
+  const Eigen::Isometry3d tracker_from_robot = to_isometry({2500, -300, 200, 0.5, -0.3, 178});
+  Eigen::Isometry3d reflector = nominal.tool();
+  reflector.translation() += Eigen::Vector3d(0.4, -0.2, 0.7);
+  const MdhModel truth = nominal.with_tool(reflector).with_base(tracker_from_robot);
+  std::vector<PositionMeasurement> data;
+  for (const auto& q : random_configurations(nominal, 20, 8)) data.push_back({q, forward_position(truth, q)});
+  const CalibrationResult r = register_tracker(nominal, data);  // nominal base = identity: far start
+  ASSERT_TRUE(r.converged) << r.report();
+  EXPECT_EQ(r.parameters.size(), 9u) << r.report();
+  EXPECT_LT((r.model.base().matrix() - tracker_from_robot.matrix()).cwiseAbs().maxCoeff(), 1e-8);
+  EXPECT_LT((r.model.tool().translation() - reflector.translation()).norm(), 1e-8);
+  EXPECT_LT(r.after.max_abs_mm, 1e-8);
+}
+
+// With tracker-like noise and 5% gross outliers, IGG3 reweighting recovers the robot better than
+// plain least squares (prediction error against the truth at new configurations).
+TEST(Calibration, Igg3BeatsPlainLeastSquaresWithOutliers) {
+  const MdhModel nominal = nominal_model();
+  const MdhModel truth = true_model(nominal, 9);
+  const auto bases = random_configurations(nominal, 3, 10);
+  SimulationRng rng(11);
+  std::vector<DistanceMeasurement> data;
+  std::size_t outliers = 0;
+  for (const auto& q : random_configurations(nominal, 100, 12))
+    for (const auto& b : bases) {
+      double d = (forward_position(truth, q) - forward_position(truth, b)).norm() + rng.normal(0, 0.01);
+      if (rng.uniform01() < 0.05) {
+        d += (rng.uniform01() < 0.5 ? -1 : 1) * rng.uniform(0.5, 2.0);  // a gross error (wrong target, beam break)
+        ++outliers;
+      }
+      data.push_back({q, b, d});
+    }
+  ASSERT_GT(outliers, 5u);
+  CalibrationOptions plain;
+  plain.robust.enabled = false;
+  const CalibrationResult ls = calibrate_distances(nominal, data, plain);
+  const CalibrationResult robust = calibrate_distances(nominal, data, CalibrationOptions{});
+  auto prediction_rms = [&](const MdhModel& m) {
+    const auto test = random_configurations(nominal, 60, 13);
+    double s = 0;
+    for (std::size_t i = 0; i + 1 < test.size(); ++i) {
+      const double want = (forward_position(truth, test[i]) - forward_position(truth, test[i + 1])).norm();
+      const double got = (forward_position(m, test[i]) - forward_position(m, test[i + 1])).norm();
+      s += (got - want) * (got - want);
+    }
+    return std::sqrt(s / static_cast<double>(test.size() - 1));
+  };
+  const double e_ls = prediction_rms(ls.model), e_robust = prediction_rms(robust.model);
+  EXPECT_LT(e_robust, 0.5 * e_ls) << "IGG3 " << e_robust << " mm vs LS " << e_ls << " mm\n" << robust.report();
+  EXPECT_LT(e_robust, 0.02);  // near the 0.01 mm noise level
+  EXPECT_GE(robust.rejected, outliers * 8 / 10);
+}
+
+TEST(Calibration, CompensatedJointsPutTheIdentifiedToolOnTarget) {
+  const MdhModel nominal = nominal_model();
+  const MdhModel identified = true_model(nominal, 14);
+  const MeasurementCube cube = paper_cube();
+  const IkResult seed = cube_seed(nominal, cube);
+  ASSERT_TRUE(seed.ok());
+  SimulationRng rng(15);
+  for (const auto& p : cube.random_per_cell(250, rng)) {
+    const IkResult r = compensated_joints(nominal, identified, cube.pose(p), seed.q_deg);
+    ASSERT_TRUE(r.ok()) << to_string(r.status);
+    EXPECT_LT((forward_position(identified, r.q_deg) - p).norm(), 1e-6);
+    // Orientation as the controller (nominal model) knows it is the target's.
+    EXPECT_LT(rotation_log(forward_kinematics(nominal, r.q_deg).linear() * cube.orientation.transpose()).norm(), 1e-9);
+  }
+}
+
+TEST(Calibration, BadOptionsAndTooFewData) {
+  CalibrationOptions o;
+  o.robust.k1 = 1.0;
+  EXPECT_THROW(o.validate(), ArgumentError);
+  o = {};
+  o.candidates = {99};
+  EXPECT_THROW(o.validate(), ArgumentError);
+  const MdhModel nominal = nominal_model();
+  std::vector<PositionMeasurement> few{{JointVector::Zero(), Eigen::Vector3d::Zero()}};
+  EXPECT_THROW(calibrate_positions(nominal, few), ArgumentError);
+  EXPECT_THROW(register_tracker(nominal, few), ArgumentError);
+}
+
+}  // namespace
+}  // namespace errfield::robot
