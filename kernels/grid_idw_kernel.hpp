@@ -118,11 +118,13 @@ void grid_idw_loop(const GridIdwGeometry& g, const GridIdwParams& p, const doubl
     const std::uint8_t s = grid_idw_one<C, Mode>(g, p, nodes, pos, out + t * C);
     if (status) status[t] = s;
   };
+  // Batches below ~a few microseconds of work run serially (a parallel region costs more).
+  const bool parallel = n >= 2048;
   if (p.threads > 0) {
-#pragma omp parallel for schedule(static) num_threads(p.threads)
+#pragma omp parallel for schedule(static) num_threads(p.threads) if (parallel)
     for (std::ptrdiff_t t = 0; t < n; ++t) body(t);
   } else {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (parallel)
     for (std::ptrdiff_t t = 0; t < n; ++t) body(t);
   }
 }

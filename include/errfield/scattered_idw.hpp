@@ -314,15 +314,18 @@ void ScatteredIdw<L, V, M>::predict_with_status(std::span<const L> targets, std:
     const auto i = static_cast<std::size_t>(t);
     status[i] = predict_one(targets[i], ws, out[i]);
   };
+  // Small batches (a cross-validation fold, a single target) run serially: starting a parallel
+  // region costs more than they do.
+  const bool parallel = n >= 256;
   if (options_.threads > 0) {
-#pragma omp parallel num_threads(options_.threads)
+#pragma omp parallel num_threads(options_.threads) if (parallel)
     {
       Workspace ws = make_workspace();
 #pragma omp for schedule(dynamic, 64)
       for (std::ptrdiff_t t = 0; t < n; ++t) work(ws, t);
     }
   } else {
-#pragma omp parallel
+#pragma omp parallel if (parallel)
     {
       Workspace ws = make_workspace();
 #pragma omp for schedule(dynamic, 64)
