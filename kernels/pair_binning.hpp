@@ -272,6 +272,31 @@ void bin_pair_rows_euclidean(const double* coordinates, std::size_t n, int dimen
   }
 }
 
+/// Second pass of Dowd's estimator: writes |z_i[c] - z_j[c]| of every binned pair of rows
+/// [row_begin, row_end) to `out + cursor[k] * K + c` and advances cursor[k] (k = the pair's bin).
+/// The caller sizes the regions from a first counting pass over the same rows; the pairs and
+/// bins are those of bin_pair_rows (same subsampling, same lags, exact edge rule).
+template <bool Subsample, class L, class M>
+void store_pair_differences(const L* locations, const double* values, int components,
+                            const M& metric, const BinLayout& bins, std::uint64_t seed,
+                            std::uint64_t keep_below, std::size_t row_begin, std::size_t row_end,
+                            std::uint64_t* cursor, double* out) noexcept {
+  const std::size_t K = static_cast<std::size_t>(components);
+  for (std::size_t i = row_begin; i < row_end; ++i) {
+    const double* zi = values + i * K;
+    for (std::size_t j = 0; j < i; ++j) {
+      if constexpr (Subsample) {
+        if (pair_hash(seed, i, j) >= keep_below) continue;
+      }
+      const std::ptrdiff_t k = find_bin(metric(locations[i], locations[j]), bins);
+      if (k < 0) continue;
+      const double* zj = values + j * K;
+      double* o = out + cursor[k]++ * K;
+      for (std::size_t c = 0; c < K; ++c) o[c] = std::fabs(zi[c] - zj[c]);
+    }
+  }
+}
+
 /// Naive reference for bin_pair_rows over all rows: the same pairs, bins found by a linear scan
 /// over the edges with the comparison rule written out, sums in pair order (i, j < i).
 template <class L, class M>

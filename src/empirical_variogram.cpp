@@ -1,5 +1,6 @@
 #include "errfield/empirical_variogram.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -12,6 +13,7 @@ std::string_view estimator_name(VariogramEstimator e) {
   switch (e) {
     case VariogramEstimator::Matheron: return "matheron";
     case VariogramEstimator::CressieHawkins: return "cressie";
+    case VariogramEstimator::Dowd: return "dowd";
   }
   return "?";
 }
@@ -19,8 +21,9 @@ std::string_view estimator_name(VariogramEstimator e) {
 VariogramEstimator estimator_from_name(std::string_view name) {
   if (name == "matheron") return VariogramEstimator::Matheron;
   if (name == "cressie" || name == "cressie-hawkins") return VariogramEstimator::CressieHawkins;
+  if (name == "dowd") return VariogramEstimator::Dowd;
   throw ArgumentError("estimator: unknown name '" + std::string(name) +
-                      "'; known: matheron, cressie");
+                      "'; known: matheron, cressie, dowd");
 }
 
 std::string_view convention_name(BinConvention c) {
@@ -161,6 +164,62 @@ std::uint64_t variogram_keep_below(double fraction) {
   const long double x = std::ceil(static_cast<long double>(fraction) * 18446744073709551616.0L);
   if (x >= 18446744073709551615.0L) return std::numeric_limits<std::uint64_t>::max();
   return static_cast<std::uint64_t>(x);
+}
+
+std::vector<std::uint64_t> dowd_offsets(const std::vector<std::uint64_t>& count, std::size_t chunks,
+                                        std::size_t bins, int components,
+                                        const EmpiricalVariogramOptions& o) {
+  const std::size_t B = bins + 1;
+  std::uint64_t total = 0;
+  for (std::size_t c = 0; c < chunks; ++c)
+    for (std::size_t b = 0; b < bins; ++b) total += count[c * B + b];
+  const long double values = static_cast<long double>(total) * components;
+  if (values > static_cast<long double>(o.max_stored_differences)) {
+    const double fraction = std::min(1.0, o.pair_fraction * static_cast<double>(o.max_stored_differences) /
+                                              static_cast<double>(values));
+    throw ResourceError("empirical variogram (Dowd): " + std::to_string(total) + " binned pairs x " +
+                        std::to_string(components) + " component(s) = " +
+                        format_number(static_cast<double>(values)) +
+                        " stored differences (" + format_number(std::ceil(static_cast<double>(values) * 8e-6)) +
+                        " MB) exceed max_stored_differences = " +
+                        std::to_string(o.max_stored_differences) +
+                        "; use pair_fraction <= " + format_number(fraction) +
+                        " (--subsample), a smaller max lag, or the Cressie-Hawkins estimator");
+  }
+  std::vector<std::uint64_t> offsets(chunks * B + 1, 0);
+  std::uint64_t next = 0;
+  for (std::size_t b = 0; b < bins; ++b)
+    for (std::size_t c = 0; c < chunks; ++c) {
+      offsets[c * B + b] = next;
+      next += count[c * B + b];
+    }
+  offsets.back() = next;
+  return offsets;
+}
+
+void finalize_dowd(EmpiricalVariogram& v, std::vector<double>& stored,
+                   const std::vector<std::uint64_t>& offsets, std::size_t) {
+  const std::size_t K = static_cast<std::size_t>(v.components());
+  std::vector<double> tmp;
+  for (std::size_t b = 0; b < v.bins.size(); ++b) {
+    const std::uint64_t n = v.bins[b].pairs;
+    if (n == 0) continue;
+    const std::uint64_t base = offsets[b];  // chunk 0's first slot of bin b
+    double total = 0.0;
+    for (std::size_t c = 0; c < K; ++c) {
+      tmp.resize(n);
+      for (std::uint64_t p = 0; p < n; ++p) tmp[p] = stored[(base + p) * K + c];
+      const std::size_t mid = n / 2;
+      std::nth_element(tmp.begin(), tmp.begin() + static_cast<std::ptrdiff_t>(mid), tmp.end());
+      double median = tmp[mid];
+      if (n % 2 == 0)  // mean of the two middle values
+        median = 0.5 * (median + *std::max_element(tmp.begin(), tmp.begin() + static_cast<std::ptrdiff_t>(mid)));
+      const double g = 0.5 * 2.198 * median * median;
+      v.component_gamma(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(c)) = g;
+      total += g;
+    }
+    v.bins[b].gamma = total;
+  }
 }
 
 EmpiricalVariogram finalize_variogram(const LagBins& bins, const EmpiricalVariogramOptions& o,

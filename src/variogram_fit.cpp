@@ -314,6 +314,11 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
   result.status = best_r == NLOPT_MAXEVAL_REACHED ? FitStatus::MaxEvaluations
                   : (best_r > 0 || best_r == NLOPT_ROUNDOFF_LIMITED) ? FitStatus::Converged
                                                                       : FitStatus::Failed;
+  // A parameter stuck at an upper bound usually means the structure does not fit the data (e.g. a
+  // bounded model on a variogram that keeps rising): say so.
+  for (std::size_t p = 0; p < dim; ++p)
+    if (ub[p] > lb[p] && best[p] >= ub[p] * (1 - 1e-9))
+      result.message += "; parameter " + std::to_string(p + 1) + " at its upper bound";
   // Back to the data's units.
   std::vector<ModelComponent> comps = pr.components(best.data());
   for (auto& c : comps) {

@@ -1,5 +1,6 @@
 #include "errfield/empirical_variogram.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -318,6 +319,70 @@ TEST(EmpiricalVariogram, RejectsBadBinsOptionsAndData) {
                InputError);
   EXPECT_THROW(estimator_from_name("dowd2"), ArgumentError);
   EXPECT_THROW(convention_from_name("left"), ArgumentError);
+}
+
+TEST(EmpiricalVariogram, DowdMatchesMediansOfBruteForceDifferences) {
+  const auto loc = integer_points(250, 20, 31);
+  const Eigen::MatrixXd values = random_values(loc.size(), 2, 12);
+  const auto bins = LagBins::from_edges({0.0, 3.0, 6.0, 10.0, 15.0, 25.0, 40.0});
+  for (auto conv : {BinConvention::HalfOpen, BinConvention::Gstat})
+    for (double fraction : {1.0, 0.5}) {
+      EmpiricalVariogramOptions o;
+      o.estimator = VariogramEstimator::Dowd;
+      o.convention = conv;
+      o.pair_fraction = fraction;
+      o.seed = 5;
+      o.threads = 2;
+      const auto v = empirical_variogram<Vec3, EuclideanMetric>(std::span<const Vec3>(loc), values,
+                                                                EuclideanMetric{}, bins, o);
+      o.threads = 1;
+      const auto v1 = empirical_variogram<Vec3, EuclideanMetric>(std::span<const Vec3>(loc), values,
+                                                                 EuclideanMetric{}, bins, o);
+      const auto& e = bins.edges();
+      for (std::size_t b = 0; b < bins.size(); ++b) {
+        double total = 0.0;
+        std::uint64_t n = 0;
+        for (int c = 0; c < 2; ++c) {
+          std::vector<double> d;
+          for (std::size_t i = 1; i < loc.size(); ++i)
+            for (std::size_t j = 0; j < i; ++j) {
+              if (fraction < 1.0 && static_cast<long double>(kernels::pair_hash(5, i, j)) >=
+                                        static_cast<long double>(fraction) * 18446744073709551616.0L)
+                continue;
+              const double h = (loc[i] - loc[j]).norm();
+              const bool in = conv == BinConvention::Gstat
+                                  ? (b == 0 ? h >= e[0] && h <= e[1] : h > e[b] && h <= e[b + 1])
+                                  : h >= e[b] && h < e[b + 1];
+              if (in) d.push_back(std::fabs(values(static_cast<Eigen::Index>(i), c) -
+                                            values(static_cast<Eigen::Index>(j), c)));
+            }
+          n = d.size();
+          std::sort(d.begin(), d.end());
+          const double med = d.size() % 2 ? d[d.size() / 2] : 0.5 * (d[d.size() / 2 - 1] + d[d.size() / 2]);
+          const double g = 1.099 * med * med;
+          EXPECT_NEAR(v.component_gamma(static_cast<Eigen::Index>(b), c), g, 1e-15 * g);
+          total += g;
+        }
+        ASSERT_EQ(v.bins[b].pairs, n);
+        EXPECT_NEAR(v.bins[b].gamma, total, 1e-14 * total);
+        EXPECT_EQ(v.bins[b].gamma, v1.bins[b].gamma);  // thread count does not matter
+      }
+    }
+}
+
+TEST(EmpiricalVariogram, DowdRespectsItsMemoryBudget) {
+  const auto loc = integer_points(300, 20, 1);
+  const Eigen::MatrixXd values = random_values(loc.size(), 1, 2);
+  EmpiricalVariogramOptions o;
+  o.estimator = VariogramEstimator::Dowd;
+  o.max_stored_differences = 1000;  // far fewer than the ~45,000 binned pairs
+  try {
+    empirical_variogram<Vec3, EuclideanMetric>(std::span<const Vec3>(loc), values, EuclideanMetric{},
+                                               LagBins::uniform(0.0, 40.0, 5.0), o);
+    FAIL() << "expected ResourceError";
+  } catch (const ResourceError& e) {
+    EXPECT_NE(std::string(e.what()).find("pair_fraction"), std::string::npos) << e.what();
+  }
 }
 
 TEST(PairBinningKernel, FindBinFollowsTheTieRules) {

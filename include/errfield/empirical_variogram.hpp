@@ -7,6 +7,7 @@
 /// For the pairs (i, j) whose lag h_ij = metric(x_i, x_j) falls in bin k (N_k pairs):
 ///   Matheron         gamma_k = 1/(2 N_k) sum (z_i - z_j)^2
 ///   Cressie-Hawkins  gamma_k = 0.5 [ (1/N_k) sum |z_i - z_j|^(1/2) ]^4 / (0.457 + 0.494/N_k)
+///   Dowd             gamma_k = 0.5 * 2.198 [ median |z_i - z_j| ]^2
 /// Vector values (e.g. a 3-D position error): each component c has its own variogram
 /// gamma_k[c], and the reported gamma_k is their sum. For Matheron that is exactly half the mean
 /// squared norm of the difference, 1/(2 N_k) sum |z_i - z_j|^2. Units: value unit^2 (mm^2);
@@ -17,7 +18,9 @@
 /// e_1..e_n when e_0 = 0. Pairs outside [e_0, e_n] are ignored.
 ///
 /// Cost: one pass over the N(N-1)/2 pairs, each lag computed once; memory O(N K + bins K C)
-/// with C = kChunks fixed row chunks (never an N x N matrix). Parallel with OpenMP; the chunks
+/// with C = kVariogramChunks fixed row chunks (never an N x N matrix). Dowd's estimator needs
+/// medians, hence a second pass and storage of every binned difference, bounded by
+/// EmpiricalVariogramOptions::max_stored_differences. Parallel with OpenMP; the chunks
 /// and the order in which their sums are merged do not depend on the number of threads, so the
 /// result is bit-identical for any thread count.
 
@@ -38,6 +41,7 @@ namespace errfield {
 enum class VariogramEstimator {
   Matheron,        ///< method of moments, mean of squared differences
   CressieHawkins,  ///< robust: fourth power of the mean root absolute difference, bias-corrected
+  Dowd,            ///< robust: 1.099 median(|z_i - z_j|)^2; stores the binned differences (see options)
 };
 
 /// Which side of an edge a lag equal to the edge belongs to.
@@ -46,7 +50,7 @@ enum class BinConvention {
   Gstat,     ///< [e_0, e_1], then (e_k, e_{k+1}] (R gstat's `boundaries=`)
 };
 
-/// "matheron" / "cressie"; "paper" (HalfOpen) / "gstat". The parsers throw ArgumentError listing
+/// "matheron" / "cressie" / "dowd"; "paper" (HalfOpen) / "gstat". The parsers throw ArgumentError listing
 /// the known names.
 std::string_view estimator_name(VariogramEstimator e);
 VariogramEstimator estimator_from_name(std::string_view name);
@@ -86,6 +90,10 @@ struct EmpiricalVariogramOptions {
   std::uint64_t seed = 0;
   /// OpenMP threads; 0 = the OpenMP default. Does not change the result.
   int threads = 0;
+  /// Dowd only: it keeps |z_i - z_j| of every binned pair (and component) to take medians, in a
+  /// second pass. Above this many stored values (8 bytes each) empirical_variogram throws
+  /// ResourceError before allocating; lower pair_fraction or raise the budget.
+  std::uint64_t max_stored_differences = 25'000'000;
   /// Throws ArgumentError naming the offending field.
   void validate() const;
 };
@@ -113,7 +121,8 @@ struct EmpiricalVariogram {
 
 /// Empirical variogram of values (N x K, one row per location, K >= 1 components) at
 /// `locations` (N >= 2) under `metric`. Throws ArgumentError for invalid options or mismatched
-/// sizes, InputError (naming the row and column) for a non-finite coordinate or value.
+/// sizes, InputError (naming the row and column) for a non-finite coordinate or value,
+/// ResourceError when Dowd's storage would exceed options.max_stored_differences.
 /// Thread-safe (no shared state). Instantiated in the library for Eigen 1-, 2-, 3-, 6-D and
 /// dynamic-size locations with EuclideanMetric, JointSpaceMetric and WeightedEuclideanMetric.
 template <Location L, Metric<L> M>

@@ -67,7 +67,7 @@ struct VariogramFitResult {
   VariogramModel model;        ///< fitted model (structure components first, then the nugget)
   double weighted_sse = 0.0;   ///< SSE(theta) above, in the data's units
   FitStatus status = FitStatus::Failed;
-  std::string message;         ///< NLopt's outcome in words
+  std::string message;         ///< NLopt's outcome in words, and any parameter left at an upper bound
   int evaluations = 0;         ///< objective evaluations over all starts
   std::size_t bins_used = 0;   ///< non-empty bins that entered the fit
 };

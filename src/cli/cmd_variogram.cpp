@@ -19,6 +19,7 @@ struct VariogramArgs {
   double subsample = 1.0;
   std::uint64_t seed = 0;
   int threads = 0;
+  std::uint64_t max_stored = 25'000'000;
 };
 
 double parse_bins_number(std::string_view text, std::string_view spec) {
@@ -68,6 +69,7 @@ void run_variogram(const VariogramArgs& a) {
   options.pair_fraction = a.subsample;
   options.seed = a.seed;
   options.threads = a.threads;
+  options.max_stored_differences = a.max_stored;
   options.validate();
 
   const CsvTable table = CsvTable::read(a.input);
@@ -133,7 +135,11 @@ void add_variogram_command(CLI::App& app) {
                   "lo:max:width for bins [lo,lo+w), ... up to max (e.g. 0:2200:200), or explicit "
                   "increasing edges e0,e1,... (e.g. 0,10,20,50)")
       ->required();
-  cmd->add_option("--estimator", args->estimator, "matheron (default) or cressie (Cressie-Hawkins)");
+  cmd->add_option("--estimator", args->estimator,
+                  "matheron (default), cressie (Cressie-Hawkins) or dowd (median-based; stores the "
+                  "binned differences, at most --max-stored of them)");
+  cmd->add_option("--max-stored", args->max_stored,
+                  "dowd only: budget of stored differences (8 bytes each; default 25000000)");
   cmd->add_option("--convention", args->convention,
                   "paper (default): bins [lo,hi); gstat: [e0,e1], then (lo,hi] as R gstat's boundaries=");
   cmd->add_flag("--per-component", args->per_component,

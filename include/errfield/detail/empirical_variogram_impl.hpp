@@ -21,6 +21,15 @@ void check_variogram_values(const Eigen::MatrixXd& values, std::size_t n_locatio
 kernels::BinLayout variogram_bin_layout(const LagBins& bins, const EmpiricalVariogramOptions& o);
 /// ceil(fraction * 2^64) for fraction < 1.
 std::uint64_t variogram_keep_below(double fraction);
+/// Dowd: checks the storage budget (throws ResourceError) and returns, per chunk and bin, the
+/// first slot (in pairs) of the chunk's differences in bin-major storage: C x (bins + 1) entries
+/// (the discard slot's unused) and, last, the total number of stored pairs.
+std::vector<std::uint64_t> dowd_offsets(const std::vector<std::uint64_t>& count, std::size_t chunks,
+                                        std::size_t bins, int components,
+                                        const EmpiricalVariogramOptions& o);
+/// Dowd: replaces gamma by 1.099 median^2 per bin and component, from the stored differences.
+void finalize_dowd(EmpiricalVariogram& v, std::vector<double>& stored,
+                   const std::vector<std::uint64_t>& offsets, std::size_t chunks);
 /// Merges the per-chunk sums in chunk order and turns them into gamma per bin and component.
 EmpiricalVariogram finalize_variogram(const LagBins& bins, const EmpiricalVariogramOptions& o,
                                       int components, std::size_t chunks,
@@ -126,9 +135,10 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
   std::vector<double> lag(C * B, 0.0);
   std::vector<double> stat(C * B * Ks, 0.0);
   const kernels::BinLayout layout = detail::variogram_bin_layout(bins, options);
-  const kernels::PairStatistic statistic = options.estimator == VariogramEstimator::Matheron
-                                               ? kernels::PairStatistic::SquaredDifference
-                                               : kernels::PairStatistic::RootAbsDifference;
+  // Dowd's first pass counts pairs (and sums lags); its medians come from the second pass.
+  const kernels::PairStatistic statistic = options.estimator == VariogramEstimator::CressieHawkins
+                                               ? kernels::PairStatistic::RootAbsDifference
+                                               : kernels::PairStatistic::SquaredDifference;
   const bool subsample = options.pair_fraction < 1.0;
   const std::uint64_t keep_below = subsample ? detail::variogram_keep_below(options.pair_fraction) : 0;
   std::vector<double> soa;
@@ -156,7 +166,34 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
 #pragma omp parallel for schedule(dynamic, 1)
     for (std::ptrdiff_t c = 0; c < chunks; ++c) run(c);
   }
-  return detail::finalize_variogram(bins, options, K, C, count, lag, stat);
+  EmpiricalVariogram result = detail::finalize_variogram(bins, options, K, C, count, lag, stat);
+  if (options.estimator == VariogramEstimator::Dowd) {
+    // Second pass: every binned difference goes to its bin's region; chunk c writes after the
+    // chunks before it, so the stored multiset (and its median) does not depend on threads.
+    std::vector<std::uint64_t> cursor = detail::dowd_offsets(count, C, bins.size(), K, options);
+    std::vector<double> stored(cursor.back() * Ks);  // last entry: number of stored pairs
+    const std::vector<std::uint64_t> offsets = cursor;
+    auto store = [&](std::ptrdiff_t c) {
+      const std::size_t cu = static_cast<std::size_t>(c);
+      if (subsample)
+        kernels::store_pair_differences<true>(locations.data(), z.data(), K, metric, layout,
+                                              options.seed, keep_below, rows[cu], rows[cu + 1],
+                                              cursor.data() + cu * B, stored.data());
+      else
+        kernels::store_pair_differences<false>(locations.data(), z.data(), K, metric, layout,
+                                               options.seed, keep_below, rows[cu], rows[cu + 1],
+                                               cursor.data() + cu * B, stored.data());
+    };
+    if (options.threads > 0) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(options.threads)
+      for (std::ptrdiff_t c = 0; c < chunks; ++c) store(c);
+    } else {
+#pragma omp parallel for schedule(dynamic, 1)
+      for (std::ptrdiff_t c = 0; c < chunks; ++c) store(c);
+    }
+    detail::finalize_dowd(result, stored, offsets, C);
+  }
+  return result;
 }
 
 // Compiled once in the library (src/empirical_variogram.cpp).
