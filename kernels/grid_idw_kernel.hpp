@@ -12,6 +12,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace errfield::kernels {
 
@@ -81,27 +84,46 @@ inline std::uint8_t grid_idw_one(const GridIdwGeometry& g, const GridIdwParams& 
   const std::ptrdiff_t nx = g.count[0];
   const std::ptrdiff_t nxy = nx * g.count[1];
   const std::ptrdiff_t base = cell[0] + nx * cell[1] + nxy * cell[2];
-  double d2[8];
-  std::ptrdiff_t node[8];
-  for (int v = 0; v < 8; ++v) {
-    const int ix = v & 1, iy = (v >> 1) & 1, iz = v >> 2;
-    d2[v] = dd[0][ix] + dd[1][iy] + dd[2][iz];
-    node[v] = base + ix + iy * nx + iz * nxy;
-  }
-  int nearest = 0;
-  for (int v = 1; v < 8; ++v)
-    if (d2[v] < d2[nearest]) nearest = v;
-  if (d2[nearest] <= p.vertex_tolerance_sq) {
-    for (int c = 0; c < C; ++c) out[c] = nodes[node[nearest] * C + c];
+  // Nearest vertex: the nearer plane on each axis.
+  const int near_x = dd[0][1] < dd[0][0], near_y = dd[1][1] < dd[1][0], near_z = dd[2][1] < dd[2][0];
+  if (dd[0][near_x] + dd[1][near_y] + dd[2][near_z] <= p.vertex_tolerance_sq) {
+    const std::ptrdiff_t node = base + near_x + near_y * nx + near_z * nxy;
+    for (int c = 0; c < C; ++c) out[c] = nodes[node * C + c];
     return status;
   }
+#if defined(__SSE2__)
+  if constexpr (Mode == kPowerOne || Mode == kPowerTwo) {
+    // Vertices come in pairs along x (same y, z): squared distances (dx0^2, dx1^2) + (dy^2 + dz^2).
+    const __m128d dx = _mm_set_pd(dd[0][1], dd[0][0]);
+    const __m128d one = _mm_set1_pd(1.0);
+    __m128d wsum = _mm_setzero_pd();
+    __m128d acc[C];
+    for (int c = 0; c < C; ++c) acc[c] = _mm_setzero_pd();
+    for (int iz = 0; iz < 2; ++iz)
+      for (int iy = 0; iy < 2; ++iy) {
+        const __m128d d2 = _mm_add_pd(dx, _mm_set1_pd(dd[1][iy] + dd[2][iz]));
+        const __m128d w = _mm_div_pd(one, Mode == kPowerOne ? _mm_sqrt_pd(d2) : d2);
+        wsum = _mm_add_pd(wsum, w);
+        const double* v0 = nodes + (base + iy * nx + iz * nxy) * C;
+        if constexpr (C == 1) {
+          acc[0] = _mm_add_pd(acc[0], _mm_mul_pd(w, _mm_loadu_pd(v0)));
+        } else {
+          for (int c = 0; c < C; ++c) acc[c] = _mm_add_pd(acc[c], _mm_mul_pd(w, _mm_set_pd(v0[C + c], v0[c])));
+        }
+      }
+    const double ws = _mm_cvtsd_f64(wsum) + _mm_cvtsd_f64(_mm_unpackhi_pd(wsum, wsum));
+    for (int c = 0; c < C; ++c) out[c] = (_mm_cvtsd_f64(acc[c]) + _mm_cvtsd_f64(_mm_unpackhi_pd(acc[c], acc[c]))) / ws;
+    return status;
+  }
+#endif
   double acc[C];
   for (int c = 0; c < C; ++c) acc[c] = 0.0;
   double wsum = 0.0;
   for (int v = 0; v < 8; ++v) {
-    const double w = idw_weight<Mode>(d2[v], p.power);
+    const int ix = v & 1, iy = (v >> 1) & 1, iz = v >> 2;
+    const double w = idw_weight<Mode>(dd[0][ix] + dd[1][iy] + dd[2][iz], p.power);
     wsum += w;
-    const double* value = nodes + node[v] * C;
+    const double* value = nodes + (base + ix + iy * nx + iz * nxy) * C;
     for (int c = 0; c < C; ++c) acc[c] += w * value[c];
   }
   for (int c = 0; c < C; ++c) out[c] = acc[c] / wsum;
