@@ -9,6 +9,8 @@
 #include <fstream>
 #include <string>
 #include <string_view>
+#include <utility>
+#include <vector>
 
 namespace errfield {
 
@@ -21,6 +23,9 @@ class AtomicFileWriter {
   ~AtomicFileWriter();
 
   std::ostream& stream() { return out_; }
+  /// Flushes and closes the temporary file without renaming it (commit() then only renames).
+  /// Throws Error on an I/O failure (disk full); the target is then unchanged. Optional.
+  void finish_writing();
   /// Flushes, closes and renames onto the target. Throws Error on any I/O failure (the target is
   /// then unchanged).
   void commit();
@@ -31,10 +36,29 @@ class AtomicFileWriter {
   std::filesystem::path temporary_;
   std::ofstream out_;
   bool committed_ = false;
+  bool finished_ = false;
   int slot_ = -1;  // entry in the signal-cleanup table
 };
 
 /// Writes `content` to `target` atomically (see AtomicFileWriter).
 void write_file_atomically(const std::filesystem::path& target, std::string_view content);
+
+/// The several output files of one command, replaced all or none: commit() writes every file to
+/// its temporary first (an unwritable directory or a full disk throws before any target is
+/// touched), then renames them one after the other. Use it instead of consecutive
+/// write_file_atomically calls, which leave a mix of new and old files when a later one fails.
+/// (The renames themselves can still fail individually, e.g. if a target became a directory;
+/// the files renamed before stay replaced.)
+class AtomicFileSet {
+ public:
+  /// Queues `content` for `target`; nothing is written until commit().
+  void add(std::filesystem::path target, std::string content);
+  /// Writes all temporaries, then renames them in the order added. Throws Error naming the file.
+  void commit();
+  std::size_t size() const noexcept { return files_.size(); }
+
+ private:
+  std::vector<std::pair<std::filesystem::path, std::string>> files_;
+};
 
 }  // namespace errfield

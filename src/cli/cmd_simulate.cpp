@@ -167,9 +167,13 @@ void run_simulate(const SimulateArgs& a) {
   if (want_distances) text << "; dist_bK measured distance to base point bK (mm)";
   if (a.truth_columns) text << "; true_x.. true position (robot base frame, mm; simulation only)";
   text << "\n" << out.to_csv();
-  write_file_atomically(a.out, text.str());
-  if (!a.truth_out.empty()) robot.true_geometry().with_name("SIMULATED true geometry").save(a.truth_out);
-  if (!a.config_out.empty()) write_file_atomically(a.config_out, config.to_json().dump(2) + "\n");
+  // All outputs or none (a bad --config-out must not leave a new --out next to an old --truth-out).
+  AtomicFileSet outputs;
+  outputs.add(a.out, text.str());
+  if (!a.truth_out.empty())
+    outputs.add(a.truth_out, robot.true_geometry().with_name("SIMULATED true geometry").to_json().dump(2) + "\n");
+  if (!a.config_out.empty()) outputs.add(a.config_out, config.to_json().dump(2) + "\n");
+  outputs.commit();
   std::cerr << "simulate: " << n << " SIMULATED measurements (" << base_nominal.size() << " base point(s)) written to "
             << a.out << "\n";
 }

@@ -1,6 +1,7 @@
 #include "errfield/atomic_file.hpp"
 
 #include <csignal>
+#include <memory>
 #include <cstdio>
 #include <mutex>
 #include <random>
@@ -61,11 +62,16 @@ AtomicFileWriter::AtomicFileWriter(std::filesystem::path target) : target_(std::
   name.push_back('_');
   name.append(std::to_string(rd() % 1000000));
   temporary_ = dir / name;
+  // Registered before the file exists: a SIGINT between creating and registering it would
+  // otherwise leave the temporary behind (found by tests/reliability/atomic_output_test.cpp).
+  slot_ = register_pending(temporary_.string());
   out_.open(temporary_, std::ios::binary | std::ios::trunc);
-  if (!out_)
+  if (!out_) {
+    unregister_pending(slot_);
+    slot_ = -1;
     throw Error(target_.string() + ": cannot create output file (temporary " + temporary_.string() +
                 ")");
-  slot_ = register_pending(temporary_.string());
+  }
 }
 
 AtomicFileWriter::~AtomicFileWriter() {
@@ -77,11 +83,17 @@ AtomicFileWriter::~AtomicFileWriter() {
   unregister_pending(slot_);
 }
 
-void AtomicFileWriter::commit() {
+void AtomicFileWriter::finish_writing() {
+  if (finished_) return;
   out_.flush();
   const bool ok = static_cast<bool>(out_);
   out_.close();
   if (!ok || out_.fail()) throw Error(target_.string() + ": write failed (disk full?)");
+  finished_ = true;
+}
+
+void AtomicFileWriter::commit() {
+  finish_writing();
   std::error_code ec;
   std::filesystem::rename(temporary_, target_, ec);
   if (ec) throw Error(target_.string() + ": cannot replace file: " + ec.message());
@@ -92,6 +104,22 @@ void write_file_atomically(const std::filesystem::path& target, std::string_view
   AtomicFileWriter writer(target);
   writer.stream().write(content.data(), static_cast<std::streamsize>(content.size()));
   writer.commit();
+}
+
+void AtomicFileSet::add(std::filesystem::path target, std::string content) {
+  files_.emplace_back(std::move(target), std::move(content));
+}
+
+void AtomicFileSet::commit() {
+  std::vector<std::unique_ptr<AtomicFileWriter>> writers;
+  writers.reserve(files_.size());
+  for (const auto& [target, content] : files_) {
+    writers.push_back(std::make_unique<AtomicFileWriter>(target));
+    writers.back()->stream().write(content.data(), static_cast<std::streamsize>(content.size()));
+    writers.back()->finish_writing();
+  }
+  for (auto& w : writers) w->commit();
+  files_.clear();
 }
 
 }  // namespace errfield

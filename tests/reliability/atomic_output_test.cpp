@@ -1,0 +1,242 @@
+// Atomic outputs: a command that fails — bad input found after it started, an unwritable output,
+// SIGINT or SIGTERM during the run or while the output is being written — leaves any previous
+// output file byte-for-byte untouched and no temporary file behind. First the AtomicFileWriter /
+// AtomicFileSet contract in-process (signals in a forked child), then the real CLI.
+
+#include <signal.h>
+#include <sys/inotify.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <poll.h>
+#include <random>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "errfield/atomic_file.hpp"
+#include "errfield/error.hpp"
+#include "support/cli_harness.hpp"
+
+namespace errfield {
+namespace {
+
+using ::testing::ElementsAre;
+using ::testing::HasSubstr;
+using testing::ScratchDir;
+
+constexpr const char* kOld = "previous output\n";
+
+TEST(AtomicFileWriter, DestroyedWithoutCommitLeavesTargetAndNoTemporary) {
+  ScratchDir dir;
+  dir.write("out.csv", kOld);
+  {
+    AtomicFileWriter w(dir.path() / "out.csv");
+    w.stream() << "half a new file";
+    EXPECT_EQ(dir.entries().size(), 2u);  // the target and the temporary
+  }
+  EXPECT_EQ(dir.read("out.csv"), kOld);
+  EXPECT_THAT(dir.entries(), ElementsAre("out.csv"));
+}
+
+TEST(AtomicFileWriter, CommitReplacesAndUnwritableDirectoryThrowsNamingTheFile) {
+  ScratchDir dir;
+  dir.write("out.csv", kOld);
+  write_file_atomically(dir.path() / "out.csv", "new\n");
+  EXPECT_EQ(dir.read("out.csv"), "new\n");
+  EXPECT_THAT(dir.entries(), ElementsAre("out.csv"));
+  try {
+    write_file_atomically(dir.path() / "no_such_dir" / "x.csv", "x");
+    FAIL() << "expected Error";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("no_such_dir/x.csv"));
+  }
+}
+
+// In a child: open a writer on out.csv, write, then raise `sig`. The handler must remove the
+// temporary and let the signal kill the process.
+void signal_while_writing(int sig) {
+  ScratchDir dir;
+  dir.write("out.csv", kOld);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    AtomicFileWriter w(dir.path() / "out.csv");
+    w.stream() << std::string(1 << 20, 'x');
+    w.stream().flush();
+    ::raise(sig);
+    ::_exit(0);  // not reached: the signal's default action ends the process
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFSIGNALED(status)) << "child exited normally";
+  EXPECT_EQ(WTERMSIG(status), sig);
+  EXPECT_EQ(dir.read("out.csv"), kOld);
+  EXPECT_THAT(dir.entries(), ElementsAre("out.csv"));
+}
+
+TEST(AtomicFileWriter, SigintWhileWritingRemovesTheTemporary) { signal_while_writing(SIGINT); }
+TEST(AtomicFileWriter, SigtermWhileWritingRemovesTheTemporary) { signal_while_writing(SIGTERM); }
+
+TEST(AtomicFileSet, AllOrNone) {
+  ScratchDir dir;
+  dir.write("a.csv", kOld);
+  dir.write("b.json", kOld);
+  AtomicFileSet set;
+  set.add(dir.path() / "a.csv", "new a\n");
+  set.add(dir.path() / "b.json", "new b\n");
+  set.add(dir.path() / "missing_dir" / "c.json", "new c\n");
+  EXPECT_THROW(set.commit(), Error);
+  EXPECT_EQ(dir.read("a.csv"), kOld);
+  EXPECT_EQ(dir.read("b.json"), kOld);
+  EXPECT_THAT(dir.entries(), ElementsAre("a.csv", "b.json"));
+  AtomicFileSet ok;
+  ok.add(dir.path() / "a.csv", "new a\n");
+  ok.add(dir.path() / "b.json", "new b\n");
+  ok.commit();
+  EXPECT_EQ(dir.read("a.csv"), "new a\n");
+  EXPECT_EQ(dir.read("b.json"), "new b\n");
+}
+
+// ---- the CLI -----------------------------------------------------------------
+
+constexpr const char* kGrid =
+    "x,y,z,v\n0,0,0,1\n1,0,0,2\n0,1,0,3\n1,1,0,4\n0,0,1,5\n1,0,1,6\n0,1,1,7\n1,1,1,8\n";
+
+// Files in the directory other than the ones the test wrote (temporaries, half outputs).
+std::vector<std::string> unexpected_entries(const ScratchDir& dir, std::vector<std::string> expected) {
+  std::vector<std::string> extra;
+  for (const auto& e : dir.entries())
+    if (std::find(expected.begin(), expected.end(), e) == expected.end()) extra.push_back(e);
+  return extra;
+}
+
+TEST(AtomicCliOutput, BadInputFoundAfterStartLeavesPreviousOutput) {
+  ScratchDir dir;
+  dir.write("g.csv", kGrid);
+  // Many good targets, then one outside the grid on the last line.
+  std::string targets = "x,y,z\n";
+  for (int i = 0; i < 1000; ++i) targets += "0.5,0.5," + std::to_string(i / 1000.0) + "\n";
+  dir.write("t.csv", targets + "2,0,0\n");
+  dir.write("o.csv", kOld);
+  const auto r = testing::run_errfield({"interpolate", "--method", "idw-grid", "--samples", "g.csv", "--targets",
+                                        "t.csv", "--coords", "x,y,z", "--value", "v", "--out", "o.csv"},
+                                       dir.path());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("t.csv line 1002"));
+  EXPECT_EQ(dir.read("o.csv"), kOld);
+  EXPECT_TRUE(unexpected_entries(dir, {"g.csv", "t.csv", "o.csv"}).empty());
+}
+
+TEST(AtomicCliOutput, UnwritableOutputIsAnErrorNamingIt) {
+  ScratchDir dir;
+  dir.write("g.csv", kGrid);
+  const auto r = testing::run_errfield(
+      {"variogram", "--input", "g.csv", "--coords", "x,y,z", "--value", "v", "--bins", "0:2:1", "--out", "nodir/o.csv"},
+      dir.path());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("nodir/o.csv"));
+  EXPECT_TRUE(unexpected_entries(dir, {"g.csv"}).empty());
+}
+
+TEST(AtomicCliOutput, SimulateWritesAllOutputsOrNone) {
+  ScratchDir dir;
+  dir.write("o.csv", kOld);
+  dir.write("truth.json", kOld);
+  auto r = testing::run_errfield({"simulate", "--seed", "3", "--step", "500", "--out", "o.csv", "--truth-out",
+                                  "truth.json", "--config-out", "nodir/config.json"},
+                                 dir.path());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("nodir/config.json"));
+  EXPECT_EQ(dir.read("o.csv"), kOld);
+  EXPECT_EQ(dir.read("truth.json"), kOld);
+  EXPECT_TRUE(unexpected_entries(dir, {"o.csv", "truth.json"}).empty());
+  r = testing::run_errfield({"simulate", "--seed", "3", "--step", "500", "--out", "o.csv", "--truth-out",
+                             "truth.json", "--config-out", "config.json"},
+                            dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(dir.read("o.csv"), kOld);
+  EXPECT_NE(dir.read("truth.json"), kOld);
+}
+
+// Random 3-D samples, `n` rows, seeded (simulated data).
+std::string random_samples(std::size_t n, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1000.0);
+  std::string s = "x,y,z,v\n";
+  s.reserve(n * 48);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = u(rng), y = u(rng), z = u(rng);
+    s += std::to_string(x) + "," + std::to_string(y) + "," + std::to_string(z) + "," +
+         std::to_string(std::sin(x / 200) + 0.001 * y) + "\n";
+  }
+  return s;
+}
+
+TEST(AtomicCliOutput, SigintDuringALongRunLeavesPreviousOutput) {
+  ScratchDir dir;
+  // 60,000 points: 1.8e9 pairs, seconds of work even on 2 threads; interrupted after 300 ms.
+  dir.write("s.csv", random_samples(60000, 1));
+  dir.write("o.csv", kOld);
+  const auto p = testing::start_errfield(
+      {"variogram", "--input", "s.csv", "--coords", "x,y,z", "--value", "v", "--bins", "0:1700:100", "--out", "o.csv"},
+      dir.path());
+  ::usleep(300000);
+  ::kill(p.pid, SIGINT);
+  const auto r = testing::wait_errfield(p);
+  ASSERT_EQ(r.signal, SIGINT) << "finished before the signal (exit " << r.exit_code << "): make the job larger";
+  EXPECT_EQ(dir.read("o.csv"), kOld);
+  EXPECT_TRUE(unexpected_entries(dir, {"s.csv", "o.csv"}).empty());
+}
+
+TEST(AtomicCliOutput, SigintWhileTheOutputIsBeingWrittenRemovesTheTemporary) {
+  ScratchDir dir;
+  // 300,000 targets in a 2x2x2 grid: a ~15 MB output. inotify reports the temporary file's
+  // creation and the test interrupts the process right then, while it writes.
+  dir.write("g.csv", kGrid);
+  std::string targets = "x,y,z\n";
+  for (int i = 0; i < 300000; ++i) {
+    const double t = (i % 1000) / 1000.0;
+    targets += "0.25,0.5," + std::to_string(t) + "\n";
+  }
+  dir.write("t.csv", targets);
+  dir.write("o.csv", kOld);
+  const int fd = ::inotify_init1(IN_NONBLOCK);
+  ASSERT_GE(fd, 0);
+  ASSERT_GE(::inotify_add_watch(fd, dir.path().c_str(), IN_CREATE), 0);
+  const auto p = testing::start_errfield({"interpolate", "--method", "idw-grid", "--samples", "g.csv", "--targets",
+                                          "t.csv", "--coords", "x,y,z", "--value", "v", "--out", "o.csv"},
+                                         dir.path());
+  bool signalled = false;
+  alignas(inotify_event) char buf[4096];
+  for (int waited_ms = 0; waited_ms < 60000 && !signalled;) {
+    pollfd pfd{fd, POLLIN, 0};
+    if (::poll(&pfd, 1, 10) <= 0) {
+      waited_ms += 10;
+      siginfo_t info{};
+      if (::waitid(P_PID, static_cast<id_t>(p.pid), &info, WEXITED | WNOHANG | WNOWAIT) == 0 && info.si_pid != 0)
+        break;  // ended already (WNOWAIT: not reaped, wait_errfield still gets its status)
+      continue;
+    }
+    const ssize_t len = ::read(fd, buf, sizeof buf);
+    for (ssize_t off = 0; off < len;) {
+      const auto* ev = reinterpret_cast<const inotify_event*>(buf + off);
+      if (ev->len && std::string(ev->name).rfind(".o.csv.tmp", 0) == 0) {
+        ::kill(p.pid, SIGINT);
+        signalled = true;
+        break;
+      }
+      off += static_cast<ssize_t>(sizeof(inotify_event) + ev->len);
+    }
+  }
+  ::close(fd);
+  const auto r = testing::wait_errfield(p);
+  ASSERT_TRUE(signalled) << "no temporary output file appeared";
+  if (r.signal == 0) GTEST_SKIP() << "the output was complete before SIGINT arrived (exit " << r.exit_code << ")";
+  EXPECT_EQ(r.signal, SIGINT);
+  EXPECT_EQ(dir.read("o.csv"), kOld);
+  EXPECT_TRUE(unexpected_entries(dir, {"g.csv", "t.csv", "o.csv"}).empty()) << ::testing::PrintToString(dir.entries());
+}
+
+}  // namespace
+}  // namespace errfield
