@@ -1,6 +1,7 @@
 // `errfield simulate`: measurement files from the simulated robot and laser tracker, in the
 // columns `errfield calibrate` (and the pipeline's `fit`) read. Every file says it is SIMULATED.
 
+#include <cmath>
 #include <iostream>
 #include <sstream>
 
@@ -23,6 +24,17 @@ struct SimulateArgs {
   std::string measure = "both";
   bool truth_columns = false;
 };
+
+double parse_number(const std::string& text, const std::string& what) {
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used != text.size() || !std::isfinite(v)) throw std::invalid_argument("trailing");
+    return v;
+  } catch (const std::exception&) {
+    throw ArgumentError(what + ": '" + text + "' is not a number");
+  }
+}
 
 Eigen::Vector3d parse_vec3(const std::string& text, const std::string& what) {
   const auto items = split_list(text, what);
@@ -56,7 +68,7 @@ void run_simulate(const SimulateArgs& a) {
     const auto items = split_list(a.cube, "--cube");
     if (items.size() != 4) throw ArgumentError("--cube: expected X0,Y0,Z0,SIZE (mm), got '" + a.cube + "'");
     cube.min_corner_mm = parse_vec3(items[0] + "," + items[1] + "," + items[2], "--cube");
-    cube.size_mm = std::stod(items[3]);
+    cube.size_mm = parse_number(items[3], "--cube SIZE");
     if (!(cube.size_mm > 0)) throw ArgumentError("--cube: SIZE must be > 0, got '" + items[3] + "'");
   }
   const Eigen::Vector3d rpy = parse_vec3(a.orientation, "--orientation");
@@ -104,8 +116,9 @@ void run_simulate(const SimulateArgs& a) {
     } else if (a.sample == "cells") {
       pts = cube.random_per_cell(a.step, rng);
     } else if (a.sample.rfind("random:", 0) == 0) {
-      const int n = std::stoi(a.sample.substr(7));
-      if (n < 1) throw ArgumentError("--sample random:N needs N >= 1, got '" + a.sample + "'");
+      const double nd = parse_number(a.sample.substr(7), "--sample random:N");
+      const int n = static_cast<int>(nd);
+      if (n < 1 || n != nd || nd > 1e7) throw ArgumentError("--sample random:N needs N >= 1, got '" + a.sample + "'");
       for (int i = 0; i < n; ++i)
         pts.push_back(cube.min_corner_mm + cube.size_mm * Eigen::Vector3d(rng.uniform01(), rng.uniform01(), rng.uniform01()));
     } else {

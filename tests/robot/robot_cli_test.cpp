@@ -170,6 +170,18 @@ TEST_F(RobotCli, SimulateThenCalibrateBothModels) {
   }
 }
 
+TEST_F(RobotCli, SimulateBadOptionsAreNamed) {
+  for (const std::string& args : {std::string("--cube 1,2,3,x"), std::string("--sample random:abc"),
+                                  std::string("--step 120"), std::string("--measure angles"),
+                                  std::string("--base 5000,0,0")}) {
+    const auto r = run("simulate " + args + " --out " + path("o.csv"));
+    EXPECT_EQ(r.code, 2) << args << ": " << r.err;
+    EXPECT_FALSE(fs::exists(path("o.csv"))) << args;
+  }
+  const auto r = run("simulate --base 5000,0,0 --out " + path("o.csv"));
+  EXPECT_NE(r.err.find("not reachable"), std::string::npos) << r.err;
+}
+
 TEST_F(RobotCli, CalibrateRejectsDataWithoutBasePoints) {
   write("m.csv", "q1,q2,q3,q4,q5,q6,dist_b0\n0,-90,0,0,-60,0,100\n");
   auto r = run("calibrate --data " + path("m.csv") + " --out " + path("o.json"));
