@@ -213,6 +213,22 @@ TEST(GridIdw, FromShuffledSamplesEqualsDirectConstruction) {
   for (std::size_t i = 0; i < pa.size(); ++i) EXPECT_EQ(pc[i], pb[i]);
 }
 
+TEST(GridIdw, IdenticalPredictionsForAnyThreadCount) {
+  std::mt19937_64 rng(8);
+  std::normal_distribution<double> nd(0, 1);
+  std::vector<Eigen::Vector3d> v(kPaperGrid.node_count());
+  for (auto& x : v) x = Eigen::Vector3d(nd(rng), nd(rng), nd(rng));
+  const Eigen::MatrixXd t = random_targets(kPaperGrid, 10000, 9);  // above the serial threshold
+  std::vector<std::vector<Eigen::Vector3d>> results;
+  for (int threads : {1, 2, 3}) {
+    GridIdwOptions o;
+    o.threads = threads;
+    results.push_back(GridIdw<Eigen::Vector3d>(kPaperGrid, v, o).predict(t));
+  }
+  EXPECT_EQ(results[1], results[0]);
+  EXPECT_EQ(results[2], results[0]);
+}
+
 TEST(GridIdw, RejectsBadOptionsAndValues) {
   GridIdwOptions o;
   o.power = -1;
