@@ -1,0 +1,158 @@
+// Determinism: every command's output files are byte-identical for the same input and seed, with
+// OMP_NUM_THREADS=1 and 2, run after run (three runs: 1 thread, 2 threads, 2 threads again).
+// Inputs are generated here (simulated data, seeded), small enough to keep the suite fast but
+// large enough that the parallel loops split the work.
+
+#include <cmath>
+#include <functional>
+#include <random>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include "support/cli_harness.hpp"
+
+namespace errfield {
+namespace {
+
+using testing::ScratchDir;
+
+// Random 3-D samples with a smooth field plus noise (simulated), seeded.
+std::string samples_csv(std::size_t n, unsigned seed, double extent = 1000.0) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, extent);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::string s = "x,y,z,v,w\n";
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = u(rng), y = u(rng), z = u(rng);
+    const double v = std::sin(x / 150) * std::cos(y / 210) + 0.0004 * z + noise(rng);
+    const double w = std::cos(z / 170) + noise(rng);
+    s += std::to_string(x) + "," + std::to_string(y) + "," + std::to_string(z) + "," + std::to_string(v) + "," +
+         std::to_string(w) + "\n";
+  }
+  return s;
+}
+
+std::string targets_csv(std::size_t n, unsigned seed, double extent = 1000.0) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, extent);
+  std::string s = "x,y,z\n";
+  for (std::size_t i = 0; i < n; ++i)
+    s += std::to_string(u(rng)) + "," + std::to_string(u(rng)) + "," + std::to_string(u(rng)) + "\n";
+  return s;
+}
+
+std::string grid_csv(int nodes_per_axis, double step) {
+  std::string s = "x,y,z,v\n";
+  for (int i = 0; i < nodes_per_axis; ++i)
+    for (int j = 0; j < nodes_per_axis; ++j)
+      for (int k = 0; k < nodes_per_axis; ++k) {
+        const double x = i * step, y = j * step, z = k * step;
+        s += std::to_string(x) + "," + std::to_string(y) + "," + std::to_string(z) + "," +
+             std::to_string(std::sin(x / 300) + std::cos(y / 400) * z / 1000) + "\n";
+      }
+  return s;
+}
+
+struct Case {
+  std::string name;
+  std::function<void(const ScratchDir&)> setup;  // writes the inputs
+  std::vector<std::string> args;                 // the command; outputs named below
+  std::vector<std::string> outputs;
+};
+
+void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
+
+class Determinism : public ::testing::TestWithParam<Case> {};
+
+TEST_P(Determinism, SameBytesForOneAndTwoThreadsRunAfterRun) {
+  const Case& c = GetParam();
+  ScratchDir dir;
+  c.setup(dir);
+  std::vector<std::vector<std::string>> runs;
+  for (const char* threads : {"OMP_NUM_THREADS=1", "OMP_NUM_THREADS=2", "OMP_NUM_THREADS=2"}) {
+    const auto r = testing::run_errfield(c.args, dir.path(), {threads});
+    ASSERT_EQ(r.exit_code, 0) << testing::command_line(c.args) << " with " << threads << ":\n" << r.err;
+    std::vector<std::string> files;
+    for (const auto& o : c.outputs) {
+      files.push_back(dir.read(o));
+      ASSERT_FALSE(files.back().empty()) << o;
+      std::filesystem::remove(dir.path() / o);  // the next run must write it again
+    }
+    runs.push_back(std::move(files));
+  }
+  for (std::size_t k = 0; k < c.outputs.size(); ++k) {
+    EXPECT_TRUE(runs[0][k] == runs[1][k]) << c.outputs[k] << " differs between 1 and 2 threads";
+    EXPECT_TRUE(runs[1][k] == runs[2][k]) << c.outputs[k] << " differs between two runs with 2 threads";
+  }
+}
+
+std::vector<Case> cases() {
+  auto scattered = [](std::size_t n) {
+    return [n](const ScratchDir& d) {
+      d.write("s.csv", samples_csv(n, 11));
+      d.write("t.csv", targets_csv(400, 12));
+    };
+  };
+  const std::vector<std::string> interp{"interpolate", "--samples", "s.csv", "--targets", "t.csv",
+                                        "--coords",    "x,y,z",     "--value", "v", "--out", "p.csv"};
+  auto with = [](std::vector<std::string> base, std::vector<std::string> extra) {
+    base.insert(base.end(), extra.begin(), extra.end());
+    return base;
+  };
+  return {
+      {"variogram", scattered(4000),
+       {"variogram", "--input", "s.csv", "--coords", "x,y,z", "--value", "v", "--bins", "0:1000:50", "--out", "g.csv"},
+       {"g.csv"}},
+      {"variogram_vector_cressie", scattered(3000),
+       {"variogram", "--input", "s.csv", "--coords", "x,y,z", "--value", "v,w", "--bins", "0:1000:100", "--estimator",
+        "cressie", "--per-component", "--out", "g.csv"},
+       {"g.csv"}},
+      {"variogram_subsample", scattered(4000),
+       {"variogram", "--input", "s.csv", "--coords", "x,y", "--value", "v", "--bins", "0:1000:100", "--subsample",
+        "0.3", "--seed", "5", "--out", "g.csv"},
+       {"g.csv"}},
+      {"interpolate_idw_grid",
+       [](const ScratchDir& d) {
+         d.write("s.csv", grid_csv(6, 200));
+         d.write("t.csv", targets_csv(5000, 3, 1000));
+       },
+       with(interp, {"--method", "idw-grid"}),
+       {"p.csv"}},
+      {"interpolate_idw", scattered(3000), with(interp, {"--method", "idw", "--neighbors", "12"}), {"p.csv"}},
+      {"interpolate_kriging_dense", scattered(600),
+       with(interp, {"--method", "kriging", "--model", "sph(sill=0.5,range=400)+nug(0.0001)"}),
+       {"p.csv"}},
+      {"interpolate_kriging_universal", scattered(600),
+       with(interp, {"--method", "kriging", "--kind", "universal1", "--model", "exp(sill=0.5,range=200)+nug(0.0001)"}),
+       {"p.csv"}},
+      {"interpolate_kriging_local", scattered(3000),
+       with(interp, {"--method", "kriging", "--backend", "local", "--neighbors", "24", "--model",
+                     "sph(sill=0.5,range=400)+nug(0.0001)"}),
+       {"p.csv"}},
+      {"interpolate_kriging_sparse", scattered(2000),
+       with(interp, {"--method", "kriging", "--backend", "sparse", "--model", "wen(sill=0.5,range=150)+nug(0.0001)"}),
+       {"p.csv"}},
+      {"interpolate_kriging_auto", scattered(800), with(interp, {"--method", "kriging", "--model", "auto"}), {"p.csv"}},
+      {"cv_kfold_kriging", scattered(500),
+       {"cv", "--method", "kriging", "--samples", "s.csv", "--coords", "x,y,z", "--value", "v", "--folds", "5",
+        "--seed", "7", "--model", "sph(sill=0.5,range=400)+nug(0.0001)", "--out", "cv.csv"},
+       {"cv.csv"}},
+      {"simulate", [](const ScratchDir&) {},
+       {"simulate", "--seed", "42", "--step", "250", "--out", "m.csv", "--truth-out", "truth.json"},
+       {"m.csv", "truth.json"}},
+      {"calibrate",
+       [](const ScratchDir& d) {
+         const auto r = testing::run_errfield({"simulate", "--seed", "42", "--step", "250", "--out", "data.csv"}, d.path());
+         ASSERT_EQ(r.exit_code, 0) << r.err;
+       },
+       {"calibrate", "--data", "data.csv", "--out", "cal.json", "--report", "cal.txt"},
+       {"cal.json", "cal.txt"}},
+  };
+}
+
+INSTANTIATE_TEST_SUITE_P(Commands, Determinism, ::testing::ValuesIn(cases()),
+                         [](const auto& info) { return info.param.name; });
+
+}  // namespace
+}  // namespace errfield
