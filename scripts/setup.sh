@@ -11,7 +11,7 @@ PACKAGES=(
   # independent peers for cross-checks: R gstat, Orocos KDL, scipy
   r-cran-gstat liborocos-kdl-dev python3-numpy python3-scipy
   # report rendering check, fuzzing and sanitizers
-  chromium clang libclang-rt-14-dev
+  chromium clang libclang-rt-14-dev libomp-14-dev
 )
 
 missing=()
