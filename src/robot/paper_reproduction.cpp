@@ -17,6 +17,7 @@
 #include "errfield/grid_idw.hpp"
 #include "errfield/metrics.hpp"
 #include "errfield/regular_grid.hpp"
+#include "errfield/variogram_fit.hpp"
 #include "errfield/robot/compensation.hpp"
 #include "errfield/robot/distance_error.hpp"
 #include "errfield/robot/error_fields.hpp"
@@ -142,9 +143,27 @@ VariogramComparison compare_variogram(const EmpiricalVariogram& ev, std::span<co
     r.gamma_mm2 = ev.bins[k].gamma;
     r.pairs = ev.bins[k].pairs;
     r.paper_gamma_mm2 = k < paper_rows.size() ? paper_rows[k].gamma_mm2 : NAN;
-    r.model_gamma_mm2 = NAN;
     out.rows.push_back(r);
   }
+  // The best of the usual structures (each with a free nugget) by weighted SSE with N_j weights, the
+  // same weights for every candidate so the residuals compare.
+  VariogramFitOptions fo;
+  fo.weighting = FitWeighting::Nj;
+  bool have = false;
+  for (ModelKind kind : {ModelKind::Spherical, ModelKind::Exponential, ModelKind::Gaussian, ModelKind::Power}) {
+    ModelComponent c;
+    c.kind = kind;
+    const VariogramFitResult fit = fit_variogram(ev, {c}, fo);
+    if (fit.status == FitStatus::Failed) continue;
+    if (!have || fit.weighted_sse < out.fit_weighted_residual) {
+      out.fitted = fit.model;
+      out.fit_weighted_residual = fit.weighted_sse;
+      have = true;
+    }
+  }
+  out.fit_weights = "nj";
+  for (auto& r : out.rows)
+    r.model_gamma_mm2 = have ? out.fitted.gamma(r.pairs > 0 ? r.lag_mean : 0.5 * (r.lag_lo + r.lag_hi)) : NAN;
   return out;
 }
 

@@ -48,6 +48,26 @@ Spread spread_of(std::vector<double> v) {
 
 namespace {
 
+/// "pow(sill=1.26e-04, exponent=2) + nug(0.0292)": the fitted model with 3 significant digits.
+std::string short_model_text(const VariogramModel& m) {
+  std::string out;
+  char buf[160];
+  for (const auto& c : m.components()) {
+    if (!out.empty()) out += " + ";
+    const std::string kind(model_kind_name(c.kind));
+    if (c.kind == ModelKind::Nugget)
+      std::snprintf(buf, sizeof buf, "nug(%.3g)", c.sill);
+    else if (c.kind == ModelKind::Power)
+      std::snprintf(buf, sizeof buf, "pow(sill=%.3g, exponent=%.3g)", c.sill, c.range);
+    else if (c.kind == ModelKind::Linear)
+      std::snprintf(buf, sizeof buf, "lin(slope=%.3g)", c.sill);
+    else
+      std::snprintf(buf, sizeof buf, "%s(sill=%.3g, range=%.3g)", kind.c_str(), c.sill, c.range);
+    out += buf;
+  }
+  return out.empty() ? "(none)" : out;
+}
+
 std::string spread_text(const Spread& s, int decimals, bool with_range) {
   if (!with_range) return fixed(s.median, decimals);
   return fixed(s.median, decimals) + " [" + fixed(s.q25, decimals) + "–" + fixed(s.q75, decimals) + "]";
@@ -135,7 +155,7 @@ std::string reproduction_summary(const ReproductionResult& r) {
          " random configurations in the Table 2 ranges\n";
   for (const auto* v : {&r.joint_variogram, &r.task_variogram}) {
     out += "\n" + std::string(v == &r.joint_variogram ? "Table 3 (joint space)" : "Table 4 (task space)") +
-           ", fitted " + v->fitted.to_string() + "\n";
+           ", fitted " + short_model_text(v->fitted) + " [mm², lag in " + v->lag_unit + "]\n";
     out += variogram_table(*v).to_text();
   }
   out += "\nFig. 5: grid-step sweep, 500 mm cube, distance-error IDW at " + std::to_string(r.options.heldout_points) +
@@ -247,7 +267,7 @@ std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& 
   html.add_heading("Tables 3 and 4: spatial similarity of the distance error");
   for (const auto* v : {&r.joint_variogram, &r.task_variogram}) {
     html.add_figure(variogram_plot(*v), "Empirical variogram of the simulated distance error (points), the fitted model " +
-                                            v->fitted.to_string() + " (dashed) and the paper's values (grey).");
+                                            short_model_text(v->fitted) + " (dashed) and the paper's values (grey).");
     html.add_table(variogram_table(*v), v->space == "joint" ? "Table 3 (joint space)" : "Table 4 (task space)");
   }
   html.add_heading("Fig. 5: choice of the grid step");
