@@ -62,16 +62,15 @@ class DistanceIdwField final : public ErrorField {
   DistanceIdwField(const RegularGrid3& grid, std::vector<double> values, const Eigen::Vector3d& base,
                    const GridIdwOptions& options)
       : grid_(grid), values_(std::move(values)), base_(base), options_(options),
-        idw_(grid_, std::span<const double>(values_), options_) {
-    if (grid_.contains(base_, 0.0))
-      throw ArgumentError("distance-idw field: the base point (" + std::to_string(base_.x()) + ", " +
-                          std::to_string(base_.y()) + ", " + std::to_string(base_.z()) +
-                          ") mm lies inside the grid " + grid_.describe() +
-                          "; the radial direction is undefined near it, put the base point outside the region");
-  }
+        idw_(grid_, std::span<const double>(values_), options_) {}
   ErrorPrediction predict(const Eigen::Vector3d& p, const JointVector&) const override {
     ErrorPrediction out;
     if (!grid_.contains(p, 1e-9 * grid_.step().minCoeff())) {
+      out.inside_region = false;
+      return out;
+    }
+    // Within 1 mm of the base point the direction m of eq. 22 is undefined: refuse.
+    if ((p - base_).norm() < 1.0) {
       out.inside_region = false;
       return out;
     }

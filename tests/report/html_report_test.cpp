@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "errfield/error.hpp"
+#include "support/chromium_render.hpp"
 
 namespace errfield::report {
 namespace {
@@ -74,57 +75,27 @@ TEST(HtmlReport, SelfContainedWithBannerAndEscapedText) {
   EXPECT_THROW(HtmlReport("x", false).add_heading("h", 1), ArgumentError);
 }
 
-std::string run(const std::string& cmd) {
-  std::string out;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  if (!p) return out;
-  char buf[4096];
-  for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
-  ::pclose(p);
-  return out;
-}
-
 // The report renders in a real browser: headless Chromium lays it out (--dump-dom shows the SVG
 // elements in the live DOM) and its screenshot contains the plot colours in quantity, which only
 // happens if the SVG curves and bars were drawn.
 TEST(HtmlReport, RendersInHeadlessChromium) {
-  const char* chromium = "/usr/bin/chromium";
-  if (!fs::exists(chromium)) GTEST_SKIP() << "chromium not installed (scripts/setup.sh installs it); render check skipped";
-  if (!fs::exists("/usr/bin/python3")) GTEST_SKIP() << "/usr/bin/python3 missing; render check skipped";
+  if (const std::string why = test::chromium_unavailable_reason(); !why.empty()) GTEST_SKIP() << why << "; render check skipped";
   const fs::path dir = fs::temp_directory_path() / ("errfield_report_" + std::to_string(::getpid()));
   fs::create_directories(dir);
   const fs::path html = dir / "report.html";
   sample_report().write(html);
-  const std::string flags = std::string(chromium) +
-                            " --headless --no-sandbox --disable-gpu --disable-quic --no-first-run"
-                            " --disable-background-networking --disable-component-update --disable-sync"
-                            " --user-data-dir=" + (dir / "profile").string();
-  const std::string dom = run("timeout 90 " + flags + " --dump-dom file://" + html.string() + " 2>/dev/null");
-  ASSERT_FALSE(dom.empty()) << "chromium --dump-dom printed nothing";
-  EXPECT_EQ(count(dom, "<svg "), 2u);
-  EXPECT_GE(count(dom, "<polyline"), 2u);
-  EXPECT_GE(count(dom, "<rect"), 30u);  // 30 bars at least
-
-  const fs::path png = dir / "shot.png";
-  run("timeout 90 " + flags + " --screenshot=" + png.string() + " --window-size=1100,1400 file://" + html.string() +
-      " >/dev/null 2>&1");
-  ASSERT_TRUE(fs::exists(png)) << "no screenshot written";
-  const std::string census = run("/usr/bin/python3 " ERRFIELD_SOURCE_DIR "/tests/peers/png_color_census.py " +
-                                 png.string() + " '#1f77b4' '#d62728' '#ff7f0e' '#2ca02c' '#fff3cd'");
-  std::istringstream in(census);
-  int w = 0, h = 0, distinct = 0;
-  in >> w >> h >> distinct;
-  ASSERT_EQ(w, 1100) << census;
-  std::map<std::string, long> pixels;
-  std::string color;
-  long n = 0;
-  while (in >> color >> n) pixels[color] = n;
-  EXPECT_GT(distinct, 50) << "the page looks blank";
-  EXPECT_GT(pixels["#1f77b4"], 300) << census;  // the blue curve and its markers
-  EXPECT_GT(pixels["#d62728"], 300) << census;  // the red curve
-  EXPECT_GT(pixels["#ff7f0e"], 2000) << census;  // 15 "before" bars
-  EXPECT_GT(pixels["#2ca02c"], 100) << census;  // 15 small "after" bars
-  EXPECT_GT(pixels["#fff3cd"], 5000) << census;  // the SIMULATED banner
+  const auto r = test::render_in_chromium(html, {"#1f77b4", "#d62728", "#ff7f0e", "#2ca02c", "#fff3cd"});
+  ASSERT_FALSE(r.dom.empty()) << "chromium --dump-dom printed nothing";
+  EXPECT_EQ(count(r.dom, "<svg "), 2u);
+  EXPECT_GE(count(r.dom, "<polyline"), 2u);
+  EXPECT_GE(count(r.dom, "<rect"), 30u);  // 30 bars at least
+  ASSERT_EQ(r.width, 1100) << "no screenshot decoded";
+  EXPECT_GT(r.distinct_colors, 50) << "the page looks blank";
+  EXPECT_GT(r.pixels.at("#1f77b4"), 300);   // the blue curve and its markers
+  EXPECT_GT(r.pixels.at("#d62728"), 300);   // the red curve
+  EXPECT_GT(r.pixels.at("#ff7f0e"), 2000);  // 15 "before" bars
+  EXPECT_GT(r.pixels.at("#2ca02c"), 100);   // 15 small "after" bars
+  EXPECT_GT(r.pixels.at("#fff3cd"), 5000);  // the SIMULATED banner
   fs::remove_all(dir);
 }
 

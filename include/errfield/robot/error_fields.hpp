@@ -20,7 +20,8 @@ namespace errfield::robot {
 
 /// The paper's field (SPEC eqs. 19–23): distance errors dL_j of the grid nodes to a base point P0,
 /// interpolated by 8-vertex IDW (power p, 1 in the paper) to the target's nominal position, then
-/// projected along m = (P − P0)/|P − P0|. Only the radial component is predicted.
+/// projected along m = (P − P0)/|P − P0|. Only the radial component is predicted. Targets within
+/// 1 mm of P0 (direction undefined) are refused like targets outside the grid.
 /// `node_distance_error_mm` is in the grid's node order (RegularGrid3::node_index).
 std::shared_ptr<const ErrorField> make_distance_idw_field(const RegularGrid3& grid,
                                                           std::vector<double> node_distance_error_mm,
