@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "errfield/error.hpp"
+#include "errfield/robot/kriging_fields.hpp"
 
 namespace errfield::robot {
 
@@ -145,6 +146,7 @@ std::shared_ptr<const ErrorField> error_field_from_json(const nlohmann::json& j,
   const auto& kind = member(j, source, "kind");
   if (!kind.is_string()) bad(source, "member \"field.kind\": expected a string");
   const std::string k = kind.get<std::string>();
+  if (auto kriged = kriging_field_from_json(j, source)) return kriged;
   const auto& power = member(j, source, "power");
   if (!power.is_number()) bad(source, "member \"field.power\": expected a number");
   const RegularGrid3 grid = grid_from_json(member(j, source, "grid"), source);
@@ -174,7 +176,7 @@ std::shared_ptr<const ErrorField> error_field_from_json(const nlohmann::json& j,
   } catch (const ArgumentError& e) {
     bad(source, std::string("member \"field\": ") + e.what());
   }
-  bad(source, "member \"field.kind\": unknown kind '" + k + "' (expected distance-idw or position-idw)");
+  bad(source, "member \"field.kind\": unknown kind '" + k + "' (expected distance-idw, position-idw, distance-kriging or vector-kriging)");
 }
 
 }  // namespace errfield::robot
