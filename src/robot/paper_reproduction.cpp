@@ -23,6 +23,7 @@
 #include "errfield/robot/error_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/kriging_fields.hpp"
+#include "errfield/robot/model_fitting.hpp"
 #include "errfield/report/text_table.hpp"
 #include "errfield/robot/paper_reference.hpp"
 #include "errfield/robot/pose.hpp"
@@ -270,24 +271,6 @@ void run_grid_steps(const Setup& s, const ReproductionOptions& o, ReproductionRe
 
 // ---- Table 6 ----------------------------------------------------------------------------------
 
-/// Rigid transform b ≈ T a by least squares (Horn/Kabsch): the tracker-to-robot registration a user
-/// fits from measured grid points.
-Eigen::Isometry3d fit_rigid_transform(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
-  Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
-  for (std::size_t i = 0; i < a.size(); ++i) ca += a[i], cb += b[i];
-  ca /= static_cast<double>(a.size());
-  cb /= static_cast<double>(b.size());
-  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
-  for (std::size_t i = 0; i < a.size(); ++i) h += (a[i] - ca) * (b[i] - cb).transpose();
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
-  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() = svd.matrixV() * d * svd.matrixU().transpose();
-  t.translation() = cb - t.linear() * ca;
-  return t;
-}
-
 struct MethodRun {
   CompensationMethod method;
   std::vector<double> distance;  ///< to the tracker (fixed P0), signed
@@ -324,7 +307,7 @@ Fitted measure_and_fit(const Setup& s, const SimulatedRobot& sim, SimulationRng&
   // robot's own error at the grid enter, as for a real user). It places the paper's base point,
   // the tracker origin P0(0,0,0), in the robot frame (needed for nominal distances |P - P0|), the
   // nests, and the measured positions of the position methods.
-  f.robot_from_tracker = fit_rigid_transform(grid_measured, s.grid_p);
+  f.robot_from_tracker = fit_registration(grid_measured, s.grid_p).robot_from_tracker;
   const Eigen::Isometry3d& robot_from_tracker = f.robot_from_tracker;
   f.p0 = robot_from_tracker.translation();
   const Eigen::Vector3d p0 = f.p0;
