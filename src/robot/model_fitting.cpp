@@ -119,6 +119,9 @@ struct KrigingHoldOut {
   HoldOutPrediction<V> fit_predict(std::span<const L> loc, std::span<const V> val, std::span<const L> query) const {
     const Kriging<L, V, M> k(loc, val, model, options);
     auto p = k.predict(query);
+    // The held-out observation carries the measurement noise the nugget stands for: its residual
+    // variance is the signal's prediction variance plus the nugget.
+    for (double& v : p.variance) v += model.nugget();
     return {std::move(p.mean), std::move(p.variance)};
   }
 };
@@ -201,7 +204,9 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       for (std::size_t n = 0; n < order.size(); ++n) node[n] = dl[order[n]];
       FitResult out{CompensationModel(method, robot, make_distance_idw_field(grid, node, d.base_nominal_mm[o.base], idw)),
                     std::nullopt, idw_cv(d.nominal_mm, dl, o.idw_power), {}};
-      out.notes.push_back("grid " + grid.describe() + "; base point b" + std::to_string(o.base));
+      out.notes.push_back("base point b" + std::to_string(o.base) + " at (" + std::to_string(d.base_nominal_mm[o.base].x()) +
+                          ", " + std::to_string(d.base_nominal_mm[o.base].y()) + ", " +
+                          std::to_string(d.base_nominal_mm[o.base].z()) + ") mm");
       return out;
     }
     case CompensationMethod::position_idw: {
@@ -213,7 +218,6 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       for (std::size_t n = 0; n < order.size(); ++n) node[n] = dp[order[n]];
       out.model = CompensationModel(method, robot, make_position_idw_field(grid, node, idw));
       out.cross_validation = idw_cv(d.nominal_mm, dp, o.idw_power);
-      out.notes.push_back("grid " + grid.describe());
       return out;
     }
     case CompensationMethod::distance_kriging: {

@@ -1,0 +1,29 @@
+#include "cli/pipeline_cli.hpp"
+
+#include <cmath>
+
+#include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
+
+namespace errfield::cli {
+
+std::vector<double> parse_numbers(const std::string& text, std::size_t count, const std::string& what) {
+  const auto items = split_list(text, what);
+  if (items.size() != count)
+    throw ArgumentError(what + ": expected " + std::to_string(count) + " comma-separated numbers, got '" + text + "'");
+  std::vector<double> v;
+  for (const auto& item : items) {
+    std::size_t used = 0;
+    double x = NAN;
+    try {
+      x = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != item.size() || !std::isfinite(x)) throw ArgumentError(what + ": '" + item + "' is not a finite number");
+    v.push_back(x);
+  }
+  return v;
+}
+
+}  // namespace errfield::cli
