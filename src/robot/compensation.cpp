@@ -4,6 +4,7 @@
 
 #include "errfield/error.hpp"
 #include "errfield/robot/error_fields.hpp"
+#include "errfield/robot/calibration.hpp"
 #include "errfield/robot/kinematics.hpp"
 
 namespace errfield::robot {
@@ -95,7 +96,12 @@ CompensatedTarget CompensationModel::compensate_joints(const MdhModel& nominal_m
   out.command_position_mm = p_nominal - out.prediction.position_error_mm;
   if (method_ == CompensationMethod::none) return out;
   pose.translation() = out.command_position_mm;
-  const IkResult cmd = inverse_kinematics(command_model_, pose, q_nominal_deg, ik);
+  // A calibrated model is used through compensated_joints (its orientation parameters are weakly
+  // determined by position/distance data, so full-pose IK of it would follow them).
+  const bool calibrated =
+      method_ == CompensationMethod::kinematic || method_ == CompensationMethod::kinematic_kriging;
+  const IkResult cmd = calibrated ? compensated_joints(nominal_model, command_model_, pose, q_nominal_deg)
+                                  : inverse_kinematics(command_model_, pose, q_nominal_deg, ik);
   out.ik_status = cmd.status;
   out.ik_residual_mm = cmd.position_residual_mm;
   if (cmd.ok()) out.q_command_deg = cmd.q_deg;

@@ -8,6 +8,7 @@
 #include "errfield/kriging.hpp"
 #include "errfield/metrics.hpp"
 #include "errfield/regular_grid.hpp"
+#include "errfield/robot/calibration.hpp"
 #include "errfield/robot/distance_error.hpp"
 #include "errfield/robot/error_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
@@ -39,6 +40,7 @@ MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& rob
     const std::string kind = has_kind ? t.row(r)[kind_col] : "target";
     if (kind == "base") {
       m.base_nominal_mm.push_back(p);
+      m.base_q_deg.push_back(qr);
       continue;
     }
     if (kind != "target")
@@ -264,9 +266,43 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       return out;
     }
     case CompensationMethod::kinematic:
-    case CompensationMethod::kinematic_kriging:
-      throw ArgumentError("fit: method '" + std::string(method_name(method)) +
-                          "' needs the kinematic calibration of the robot adapter, which this build does not have yet");
+    case CompensationMethod::kinematic_kriging: {
+      need_base();
+      if (o.base >= d.base_q_deg.size() || o.base >= d.distance_mm.size())
+        throw InputError(d.source + ": kinematic calibration needs distances dist_b" + std::to_string(o.base) +
+                             " to a base point that is a robot position (a kind=base row with its joints)",
+                         d.source, 0, "dist_b" + std::to_string(o.base));
+      std::vector<DistanceMeasurement> dm;
+      for (std::size_t i = 0; i < d.q_deg.size(); ++i)
+        if ((d.nominal_mm[i] - d.base_nominal_mm[o.base]).norm() > 1.0)
+          dm.push_back({d.base_q_deg[o.base], d.q_deg[i], d.distance_mm[o.base][i]});
+      const CalibrationResult cal = calibrate_distances(robot, dm);
+      FitResult out{CompensationModel(CompensationMethod::kinematic, cal.model, nullptr), std::nullopt, std::nullopt, {}};
+      out.notes.push_back("calibration on " + std::to_string(dm.size()) + " distances: residual RMS " +
+                          std::to_string(cal.before.rms_mm) + " -> " + std::to_string(cal.after.rms_mm) + " mm, " +
+                          std::to_string(cal.parameters.size()) + " parameters identified, " +
+                          std::to_string(cal.removed.size()) + " removed, condition number " +
+                          std::to_string(cal.condition_number));
+      if (method == CompensationMethod::kinematic) return out;
+      if (d.measured_mm.empty())
+        throw InputError(d.source + ": kinematic+kriging needs measured positions (mx,my,mz) for the residuals",
+                         d.source, 0, "mx");
+      std::vector<Eigen::Vector3d> identified(d.q_deg.size());
+      for (std::size_t i = 0; i < identified.size(); ++i) identified[i] = forward_position(cal.model, d.q_deg[i]);
+      const Registration reg = fit_registration(d.measured_mm, identified);
+      std::vector<Eigen::Vector3d> residual(identified.size());
+      for (std::size_t i = 0; i < residual.size(); ++i)
+        residual[i] = reg.robot_from_tracker * d.measured_mm[i] - identified[i];
+      KrigingFieldOptions ko;
+      ko.space = o.space;
+      Eigen::MatrixXd flat(static_cast<Eigen::Index>(residual.size()), 3);
+      for (std::size_t i = 0; i < residual.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = residual[i].transpose();
+      ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
+      out.model = CompensationModel(method, cal.model, make_vector_kriging_field(samples, residual, ko));
+      out.cross_validation = kriging_cv(samples, residual, *ko.model, o.space);
+      out.notes.push_back("residuals after calibration kriged with " + ko.model->to_string());
+      return out;
+    }
   }
   throw ArgumentError("fit: unknown method");
 }

@@ -28,6 +28,7 @@ struct MeasurementSet {
   std::vector<Eigen::Vector3d> nominal_mm;  ///< nominal positions (robot frame)
   std::vector<Eigen::Vector3d> measured_mm; ///< tracker readings (tracker frame); empty if none
   std::vector<Eigen::Vector3d> base_nominal_mm;  ///< base points bK (robot frame)
+  std::vector<JointVector> base_q_deg;  ///< joints of base rows (robot-position bases); empty for fixed bases
   /// distance[k][i]: measured distance from base point k to target i (mm); empty if none.
   std::vector<std::vector<double>> distance_mm;
 
@@ -78,8 +79,9 @@ struct FitResult {
 };
 
 /// Builds the model. Throws InputError when the data lack what the method needs (names the
-/// columns), ArgumentError for a method this build cannot fit (kinematic calibration needs the
-/// robot adapter's calibration module).
+/// columns). kinematic: calibrate_distances on the distances to base point `base` (a robot
+/// position, i.e. a base row with joints); kinematic+kriging: that, then vector kriging of the 3-D
+/// residuals (measured positions registered to the identified model).
 FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& data, const FitOptions& options);
 
 }  // namespace errfield::robot
