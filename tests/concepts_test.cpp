@@ -58,3 +58,20 @@ TEST(ValueTraits, ComponentsAndNorms) {
 
 }  // namespace
 }  // namespace errfield
+
+namespace errfield {
+namespace {
+
+TEST(ValueTraits, ComponentAccessOnMutableAndConstScalars) {
+  // Both overloads must be callable on a plain variable without ambiguity.
+  double v = 1.5;
+  ValueTraits<double>::component(v, 0) = 2.5;
+  const double c = v;
+  EXPECT_EQ(ValueTraits<double>::component(c, 0), 2.5);
+  Eigen::Vector3d x(1, 2, 3);
+  ValueTraits<Eigen::Vector3d>::component(x, 1) = 7.0;
+  EXPECT_EQ(x[1], 7.0);
+}
+
+}  // namespace
+}  // namespace errfield

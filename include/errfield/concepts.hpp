@@ -73,7 +73,7 @@ template <>
 struct ValueTraits<double> {
   static constexpr int kComponents = 1;
   static double zero() { return 0.0; }
-  static double component(double v, int) { return v; }
+  static double component(const double& v, int) { return v; }
   static double& component(double& v, int) { return v; }
   static double squared_norm(double v) { return v * v; }
 };
