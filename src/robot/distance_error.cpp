@@ -62,7 +62,8 @@ PositionErrorRecovery recover_position_error(std::span<const Eigen::Vector3d> ba
     n.row(i) = d.transpose() / nominal_len[i];
     dl[i] = distance_errors_mm[static_cast<std::size_t>(i)];
   }
-  Eigen::JacobiSVD<Eigen::MatrixX3d> svd(n, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  // Dynamic column type: Eigen asserts on thin U/V for a fixed number of columns (MatrixX3d).
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(n), Eigen::ComputeThinU | Eigen::ComputeThinV);
   const Eigen::Vector3d s = svd.singularValues();
   out.condition_number = s[2] > 1e-12 * s[0] ? s[0] / s[2] : std::numeric_limits<double>::infinity();
   if (!std::isfinite(out.condition_number)) {
