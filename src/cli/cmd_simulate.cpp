@@ -17,7 +17,8 @@ namespace errfield::cli {
 namespace {
 
 struct SimulateArgs {
-  std::string config, robot, joints, cube, orientation = "180,0,0", sample = "grid", out, truth_out, config_out;
+  std::string config, robot, joints, cube, orientation = "180,0,0", sample = "grid", out, truth_out, config_out,
+      robot_out;
   std::vector<std::string> bases;
   double step = 125.0;
   long long seed = -1;
@@ -186,6 +187,8 @@ void run_simulate(const SimulateArgs& a) {
   if (!a.truth_out.empty())
     outputs.add(a.truth_out, robot.true_geometry().with_name("SIMULATED true geometry").to_json().dump(2) + "\n");
   if (!a.config_out.empty()) outputs.add(a.config_out, config.to_json().dump(2) + "\n");
+  // The nominal robot (with the tool that is measured) is what plan/fit/compensate take as --robot.
+  if (!a.robot_out.empty()) outputs.add(a.robot_out, config.nominal.to_json().dump(2) + "\n");
   outputs.commit();
   std::cerr << "simulate: " << n << " SIMULATED measurements (" << base_nominal.size() << " base point(s)) written to "
             << a.out << "\n";
@@ -214,6 +217,9 @@ void add_simulate_command(CLI::App& app) {
   cmd->add_flag("--truth-columns", args->truth_columns, "add true_x,true_y,true_z (the simulator's truth)");
   cmd->add_option("--truth-out", args->truth_out, "write the simulated true geometry as a robot JSON");
   cmd->add_option("--config-out", args->config_out, "write the full simulation configuration used as JSON");
+  cmd->add_option("--robot-out", args->robot_out,
+                  "write the nominal robot (with its measured tool point) as a robot JSON, the --robot of "
+                  "plan/fit/compensate");
   cmd->add_option("--out", args->out, "output CSV (written atomically)")->required();
   cmd->callback([args] { run_simulate(*args); });
 }

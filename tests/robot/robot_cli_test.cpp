@@ -130,6 +130,18 @@ TEST_F(RobotCli, BadInputNamesFileRowAndColumn) {
   EXPECT_NE(r.err.find("elbow"), std::string::npos) << r.err;
 }
 
+TEST_F(RobotCli, SimulateRobotOutWritesTheNominalRobotOfTheConfig) {
+  const auto r = run("simulate --sample grid --step 250 --out " + path("g.csv") + " --config-out " + path("sim.json") +
+                     " --robot-out " + path("nominal.json"));
+  ASSERT_EQ(r.code, 0) << r.err;
+  const auto sim = nlohmann::json::parse(std::ifstream(path("sim.json")));
+  const MdhModel from_config = MdhModel::from_json(sim["robot"]);
+  const MdhModel written = MdhModel::load(path("nominal.json"));
+  EXPECT_EQ(written.to_json(), from_config.to_json());
+  // The measured point is the Table 7 ball, so the tool is not the identity.
+  EXPECT_NE(written.to_json(), MdhModel::er20_c10().to_json());
+}
+
 TEST_F(RobotCli, SimulateThenCalibrateBothModels) {
   auto r = run("simulate --sample grid --step 125 --out " + path("grid.csv") + " --truth-out " + path("truth.json") +
                " --config-out " + path("sim.json"));
