@@ -128,7 +128,11 @@ TEST(ReproduceCli, OneRunWritesEveryTableAndARenderableReport) {
   const std::string out = run_cli("reproduce --runs 1 --seed 3 --out " + dir.string(), &status);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ASSERT_EQ(status, 0) << out;
+#ifndef __SANITIZE_ADDRESS__  // the time budget is for the Release build, not for the ASan job (scripts/sanitize.sh)
   EXPECT_LT(seconds, 10.0) << "errfield reproduce --runs 1 must finish in under 10 s";
+#else
+  (void)seconds;
+#endif
   EXPECT_NE(out.find("SIMULATED"), std::string::npos);
   EXPECT_NE(out.find("Table 6"), std::string::npos);
   for (const char* f : {"table3.csv", "table4.csv", "fig5.csv", "table6.csv", "table6_spread.csv",
