@@ -1,6 +1,5 @@
 // End-to-end tests of `errfield cv` and `errfield interpolate --method idw` (the built CLI).
 
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
@@ -14,79 +13,44 @@
 #include <gtest/gtest.h>
 
 #include "errfield/csv_table.hpp"
+#include "support/cli_harness.hpp"
 
 namespace errfield {
 namespace {
 
-namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-struct CliRun {
-  int status = -1;
-  std::string output;
-};
+class ScatteredCli : public testing::CliTest {};
 
-CliRun run_cli(const std::string& args) {
-  CliRun r;
-  const std::string command = std::string(ERRFIELD_CLI_PATH) + " " + args + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
-  const int raw = pclose(pipe);
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  return r;
-}
-
-class ScatteredCli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("errfield_cv_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  void write(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
-  static std::string read_text(const std::string& p) {
-    std::ifstream in(p);
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
-  fs::path dir_;
-};
 
 TEST_F(ScatteredCli, IdwInTwoCoordinatesMatchesClosedForm) {
   // Samples (0,0) -> 1 and (4,3) -> 6; target (0,3): distances 3 and 4, p = 2 (default):
   // (1/9 * 1 + 1/16 * 6) / (1/9 + 1/16); the second target sits on a sample.
   write("s.csv", "u,v,val [mm]\n0,0,1\n4,3,6\n");
   write("t.csv", "name,u,v\nA,0,3\nB,4,3\n");
-  const auto r = run_cli("interpolate --method idw --samples " + path("s.csv") + " --targets " + path("t.csv") +
+  const auto r = run("interpolate --method idw --samples " + path("s.csv") + " --targets " + path("t.csv") +
                          " --coords u,v --value val --out " + path("p.csv"));
-  ASSERT_EQ(r.status, 0) << r.output;
+  ASSERT_EQ(r.exit_code, 0) << r.output();
   const auto out = CsvTable::read(path("p.csv"));
   EXPECT_EQ(out.header(), (std::vector<std::string>{"name", "u", "v", "pred"}));
   const auto pred = out.numeric_column("pred");
   EXPECT_NEAR(pred[0], (1.0 / 9 + 6.0 / 16) / (1.0 / 9 + 1.0 / 16), 1e-15);
   EXPECT_EQ(pred[1], 6.0);
   // p = 1 and only the nearest neighbour.
-  const auto r1 = run_cli("interpolate --method idw --samples " + path("s.csv") + " --targets " + path("t.csv") +
+  const auto r1 = run("interpolate --method idw --samples " + path("s.csv") + " --targets " + path("t.csv") +
                           " --coords u,v --value val --power 1 --neighbors 1 --out " + path("p1.csv"));
-  ASSERT_EQ(r1.status, 0) << r1.output;
+  ASSERT_EQ(r1.exit_code, 0) << r1.output();
   EXPECT_EQ(CsvTable::read(path("p1.csv")).numeric_column("pred")[0], 1.0);
 }
 
 TEST_F(ScatteredCli, RadiusLeavesEmptyCellsAndSaysSo) {
   write("s.csv", "x,y,z,v\n0,0,0,1\n1,0,0,2\n");
   write("t.csv", "x,y,z\n0.5,0,0\n9,9,9\n");
-  const auto r = run_cli("interpolate --method idw --samples " + path("s.csv") + " --targets " + path("t.csv") +
+  const auto r = run("interpolate --method idw --samples " + path("s.csv") + " --targets " + path("t.csv") +
                          " --coords x,y,z --value v --radius 2 --out " + path("p.csv"));
-  ASSERT_EQ(r.status, 0) << r.output;
-  EXPECT_THAT(r.output, HasSubstr("1 of 2 targets have no sample within --radius 2 (first: "));
-  EXPECT_THAT(r.output, HasSubstr("t.csv line 3"));
+  ASSERT_EQ(r.exit_code, 0) << r.output();
+  EXPECT_THAT(r.output(), HasSubstr("1 of 2 targets have no sample within --radius 2 (first: "));
+  EXPECT_THAT(r.output(), HasSubstr("t.csv line 3"));
   const auto out = CsvTable::read(path("p.csv"));
   EXPECT_EQ(out.row(0)[3], "1.5");
   EXPECT_EQ(out.row(1)[3], "");
@@ -98,27 +62,27 @@ TEST_F(ScatteredCli, LeaveOneOutOnThreeCollinearSamplesMatchesHandComputation) {
   //   sample 1 from (0, 3) at distances 1, 2: (0 + 3/4) / (1 + 1/4) = 0.6       -> residual  0.4
   //   sample 2 from (0, 1) at distances 3, 2: (1/4) / (1/9 + 1/4) = 9/13        -> residual  3 - 9/13
   write("s.csv", "x,y,dL [mm]\n0,0,0\n1,0,1\n3,0,3\n");
-  const auto r = run_cli("cv --method idw --samples " + path("s.csv") + " --coords x,y --value dL --out " + path("cv.csv"));
-  ASSERT_EQ(r.status, 0) << r.output;
+  const auto r = run("cv --method idw --samples " + path("s.csv") + " --coords x,y --value dL --out " + path("cv.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output();
   const double e[3] = {-1.2, 0.4, 3.0 - 9.0 / 13.0};
   const auto out = CsvTable::read(path("cv.csv"));
   EXPECT_EQ(out.header(), (std::vector<std::string>{"x", "y", "dL [mm]", "fold", "pred", "residual", "abs_residual"}));
   const auto res = out.numeric_column("residual");
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(res[static_cast<std::size_t>(i)], e[i], 1e-15);
   EXPECT_EQ(out.numeric_column("fold"), (std::vector<double>{0, 1, 2}));
-  EXPECT_THAT(r.output, HasSubstr("leave-one-out"));
+  EXPECT_THAT(r.output(), HasSubstr("leave-one-out"));
   const double mean = (e[0] + e[1] + e[2]) / 3, mean_abs = (1.2 + 0.4 + e[2]) / 3;
   const double rms = std::sqrt((e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) / 3);
   char line[128];
   std::snprintf(line, sizeof line, "mean error       %.6g mm", mean);
-  EXPECT_THAT(r.output, HasSubstr(line));
+  EXPECT_THAT(r.output(), HasSubstr(line));
   std::snprintf(line, sizeof line, "mean |error|     %.6g mm", mean_abs);
-  EXPECT_THAT(r.output, HasSubstr(line));
+  EXPECT_THAT(r.output(), HasSubstr(line));
   std::snprintf(line, sizeof line, "max |error|      %.6g mm   at ", e[2]);
-  EXPECT_THAT(r.output, HasSubstr(line));
-  EXPECT_THAT(r.output, HasSubstr("s.csv line 4"));
+  EXPECT_THAT(r.output(), HasSubstr(line));
+  EXPECT_THAT(r.output(), HasSubstr("s.csv line 4"));
   std::snprintf(line, sizeof line, "RMS error        %.6g mm", rms);
-  EXPECT_THAT(r.output, HasSubstr(line));
+  EXPECT_THAT(r.output(), HasSubstr(line));
 }
 
 TEST_F(ScatteredCli, KFoldIsDeterministicForASeedAndVectorColumnsAreNamed) {
@@ -129,9 +93,9 @@ TEST_F(ScatteredCli, KFoldIsDeterministicForASeedAndVectorColumnsAreNamed) {
   write("s.csv", s.str());
   const std::string base =
       "cv --method idw --samples " + path("s.csv") + " --coords x,y,z --value dx,dy,dz --folds 4 --neighbors 6 ";
-  ASSERT_EQ(run_cli(base + "--seed 9 --out " + path("a.csv")).status, 0);
-  ASSERT_EQ(run_cli(base + "--seed 9 --out " + path("b.csv")).status, 0);
-  ASSERT_EQ(run_cli(base + "--seed 10 --out " + path("c.csv")).status, 0);
+  ASSERT_EQ(run(base + "--seed 9 --out " + path("a.csv")).exit_code, 0);
+  ASSERT_EQ(run(base + "--seed 9 --out " + path("b.csv")).exit_code, 0);
+  ASSERT_EQ(run(base + "--seed 10 --out " + path("c.csv")).exit_code, 0);
   EXPECT_EQ(read_text(path("a.csv")), read_text(path("b.csv")));
   EXPECT_NE(read_text(path("a.csv")), read_text(path("c.csv")));
   const auto out = CsvTable::read(path("a.csv"));
@@ -146,32 +110,32 @@ TEST_F(ScatteredCli, KFoldIsDeterministicForASeedAndVectorColumnsAreNamed) {
 TEST_F(ScatteredCli, CvRejectsBadArguments) {
   write("s.csv", "x,v\n0,1\n1,2\n2,4\n");
   const std::string base = "cv --method idw --samples " + path("s.csv") + " --coords x --value v ";
-  auto r = run_cli(base + "--folds 1");
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("--folds is '1'"));
-  r = run_cli(base + "--folds abc");
-  EXPECT_EQ(r.status, 2);
-  r = run_cli(base + "--folds 4");
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("--folds 4 for 3 samples"));
-  r = run_cli(base + "--seed 3");
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("--seed applies to k-fold"));
-  r = run_cli("cv --method idw-grid --samples " + path("s.csv") + " --coords x --value v");
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("unknown method 'idw-grid'"));
+  auto r = run(base + "--folds 1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("--folds is '1'"));
+  r = run(base + "--folds abc");
+  EXPECT_EQ(r.exit_code, 2);
+  r = run(base + "--folds 4");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("--folds 4 for 3 samples"));
+  r = run(base + "--seed 3");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("--seed applies to k-fold"));
+  r = run("cv --method idw-grid --samples " + path("s.csv") + " --coords x --value v");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("unknown method 'idw-grid'"));
   write("one.csv", "x,v\n0,1\n");
-  r = run_cli("cv --method idw --samples " + path("one.csv") + " --coords x --value v");
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("cross-validation needs at least 2"));
+  r = run("cv --method idw --samples " + path("one.csv") + " --coords x --value v");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("cross-validation needs at least 2"));
   write("bad.csv", "x,v\n0,1\n1,NaN\n");
-  r = run_cli("cv --method idw --samples " + path("bad.csv") + " --coords x --value v");
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("bad.csv:3: column 'v'"));
-  r = run_cli("interpolate --method idw --samples " + path("s.csv") + " --targets " + path("s.csv") +
+  r = run("cv --method idw --samples " + path("bad.csv") + " --coords x --value v");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("bad.csv:3: column 'v'"));
+  r = run("interpolate --method idw --samples " + path("s.csv") + " --targets " + path("s.csv") +
               " --coords x --value v --clamp --out " + path("p.csv"));
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("--clamp does not apply to --method idw"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("--clamp does not apply to --method idw"));
 }
 
 }  // namespace

@@ -1,6 +1,5 @@
 // End-to-end tests of `errfield interpolate` (the built CLI, via ERRFIELD_CLI_PATH).
 
-#include <sys/wait.h>
 
 #include <array>
 #include <cmath>
@@ -14,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "errfield/csv_table.hpp"
+#include "support/cli_harness.hpp"
 
 namespace errfield {
 namespace {
@@ -21,36 +21,9 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-struct CliRun {
-  int status = -1;
-  std::string output;  // stdout and stderr together
-};
+class InterpolateCli : public testing::CliTest {
 
-CliRun run_cli(const std::string& args) {
-  CliRun r;
-  const std::string command = std::string(ERRFIELD_CLI_PATH) + " " + args + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
-  const int raw = pclose(pipe);
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  return r;
-}
-
-class InterpolateCli : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("errfield_interp_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  void write(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
 
   // The paper's 5 x 5 x 5 grid with a linear field f = 0.001 x - 0.0005 y + 0.0002 z + 0.01 (mm),
   // rows shuffled; `skip` drops one node, `extra` appends rows verbatim.
@@ -72,8 +45,6 @@ class InterpolateCli : public ::testing::Test {
     s << extra;
     write(name, s.str());
   }
-
-  fs::path dir_;
 };
 
 TEST_F(InterpolateCli, GridMethodIsExactAtNodesAndCellCentresOfALinearField) {
@@ -85,9 +56,9 @@ TEST_F(InterpolateCli, GridMethodIsExactAtNodesAndCellCentresOfALinearField) {
         "b,312.5,187.5,437.5\n"
         "c,250,375,0\n"
         "d,500,500,500\n");
-  const auto r = run_cli("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " +
+  const auto r = run("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " +
                          path("targets.csv") + " --coords x,y,z --value dL --out " + path("pred.csv"));
-  ASSERT_EQ(r.status, 0) << r.output;
+  ASSERT_EQ(r.exit_code, 0) << r.output();
   const auto out = CsvTable::read(path("pred.csv"));
   EXPECT_EQ(out.header(), (std::vector<std::string>{"id", "x", "y", "z", "pred"}));
   EXPECT_EQ(out.row(1)[0], "b");
@@ -100,9 +71,9 @@ TEST_F(InterpolateCli, GridMethodIsExactAtNodesAndCellCentresOfALinearField) {
 TEST_F(InterpolateCli, VectorValuesGetOnePredictionColumnEach) {
   write_grid("grid.csv");
   write("targets.csv", "x,y,z\n62.5,62.5,62.5\n");
-  const auto r = run_cli("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " +
+  const auto r = run("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " +
                          path("targets.csv") + " --coords x,y,z --value dx,dy,dz --power 2 --out " + path("pred.csv"));
-  ASSERT_EQ(r.status, 0) << r.output;
+  ASSERT_EQ(r.exit_code, 0) << r.output();
   const auto out = CsvTable::read(path("pred.csv"));
   EXPECT_EQ(out.header(), (std::vector<std::string>{"x", "y", "z", "pred_dx", "pred_dy", "pred_dz"}));
   const double f = field(62.5, 62.5, 62.5);
@@ -115,12 +86,12 @@ TEST_F(InterpolateCli, MissingNodeIsNamedAndNoOutputIsWritten) {
   write_grid("grid.csv", 40);
   write("targets.csv", "x,y,z\n1,1,1\n");
   write("pred.csv", "old content\n");
-  const auto r = run_cli("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " +
+  const auto r = run("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " +
                          path("targets.csv") + " --coords x,y,z --value dL --out " + path("pred.csv"));
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("grid.csv: incomplete grid"));
-  EXPECT_THAT(r.output, HasSubstr("has no sample"));
-  EXPECT_THAT(r.output, HasSubstr("124 samples"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("grid.csv: incomplete grid"));
+  EXPECT_THAT(r.output(), HasSubstr("has no sample"));
+  EXPECT_THAT(r.output(), HasSubstr("124 samples"));
   std::ifstream in(path("pred.csv"));
   std::string line;
   std::getline(in, line);
@@ -130,11 +101,11 @@ TEST_F(InterpolateCli, MissingNodeIsNamedAndNoOutputIsWritten) {
 TEST_F(InterpolateCli, DuplicateNodeNamesBothLines) {
   write_grid("grid.csv", -1, "250,250,250,0,0,0,0\n");
   write("targets.csv", "x,y,z\n1,1,1\n");
-  const auto r = run_cli("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " +
+  const auto r = run("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " +
                          path("targets.csv") + " --coords x,y,z --value dL --out " + path("pred.csv"));
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("duplicate grid node (2, 2, 2) at (250, 250, 250)"));
-  EXPECT_THAT(r.output, HasSubstr("grid.csv line 127"));  // header is line 1, 125 nodes, then the copy
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("duplicate grid node (2, 2, 2) at (250, 250, 250)"));
+  EXPECT_THAT(r.output(), HasSubstr("grid.csv line 127"));  // header is line 1, 125 nodes, then the copy
   EXPECT_FALSE(fs::exists(path("pred.csv")));
 }
 
@@ -143,13 +114,13 @@ TEST_F(InterpolateCli, OutsideTargetFailsUnlessClamped) {
   write("targets.csv", "x,y,z\n10,10,10\n-20,250,250\n");
   const std::string base = "interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " +
                            path("targets.csv") + " --coords x,y,z --value dL --out " + path("pred.csv");
-  const auto strict = run_cli(base);
-  EXPECT_EQ(strict.status, 2);
-  EXPECT_THAT(strict.output, HasSubstr("targets.csv line 3 (-20, 250, 250) is outside the grid [0, 500] x [0, 500] x [0, 500]"));
+  const auto strict = run(base);
+  EXPECT_EQ(strict.exit_code, 2);
+  EXPECT_THAT(strict.output(), HasSubstr("targets.csv line 3 (-20, 250, 250) is outside the grid [0, 500] x [0, 500] x [0, 500]"));
   EXPECT_FALSE(fs::exists(path("pred.csv")));
-  const auto clamped = run_cli(base + " --clamp");
-  ASSERT_EQ(clamped.status, 0) << clamped.output;
-  EXPECT_THAT(clamped.output, HasSubstr("1 of 2 targets are outside the grid"));
+  const auto clamped = run(base + " --clamp");
+  ASSERT_EQ(clamped.exit_code, 0) << clamped.output();
+  EXPECT_THAT(clamped.output(), HasSubstr("1 of 2 targets are outside the grid"));
   // The target (-20, 250, 250) is clamped to cell (0, 2, 2) (a target on a face belongs to the cell
   // above it); IDW (p = 1) over that cell's vertices with the target's true distances:
   const double p[3] = {-20, 250, 250};
@@ -168,46 +139,46 @@ TEST_F(InterpolateCli, BadInputNamesFileLineAndColumn) {
   write_grid("grid.csv", -1, "");
   write("targets.csv", "x,y,z\n1,1,1\n2,abc,2\n");
   const std::string tail = " --coords x,y,z --value dL --out " + path("pred.csv");
-  auto r = run_cli("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " + path("targets.csv") + tail);
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("targets.csv:3: column 'y': 'abc' is not a number"));
+  auto r = run("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " + path("targets.csv") + tail);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("targets.csv:3: column 'y': 'abc' is not a number"));
 
-  r = run_cli("interpolate --method idw-grid --samples " + path("nope.csv") + " --targets " + path("targets.csv") + tail);
-  EXPECT_NE(r.status, 0);
-  EXPECT_THAT(r.output, HasSubstr("nope.csv"));
+  r = run("interpolate --method idw-grid --samples " + path("nope.csv") + " --targets " + path("targets.csv") + tail);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("nope.csv"));
 
   write("t2.csv", "x,y\n1,1\n");
-  r = run_cli("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " + path("t2.csv") + tail);
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("no column 'z'"));
+  r = run("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " + path("t2.csv") + tail);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("no column 'z'"));
 
   write("good.csv", "x,y,z\n1,1,1\n");
-  r = run_cli("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " + path("good.csv") +
+  r = run("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " + path("good.csv") +
               " --coords x,y --value dL --out " + path("pred.csv"));
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("needs exactly 3 coordinate columns"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("needs exactly 3 coordinate columns"));
 
-  r = run_cli("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " + path("targets.csv") + tail +
+  r = run("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " + path("targets.csv") + tail +
               " --neighbors 4");
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("--neighbors does not apply to --method idw-grid"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("--neighbors does not apply to --method idw-grid"));
 
-  r = run_cli("interpolate --method magic --samples " + path("grid.csv") + " --targets " + path("targets.csv") + tail);
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("unknown method 'magic'"));
+  r = run("interpolate --method magic --samples " + path("grid.csv") + " --targets " + path("targets.csv") + tail);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("unknown method 'magic'"));
 
   write("t3.csv", "x,y,z,pred\n1,1,1,0\n");
-  r = run_cli("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " + path("t3.csv") + tail);
-  EXPECT_EQ(r.status, 2);
-  EXPECT_THAT(r.output, HasSubstr("already has a column 'pred'"));
+  r = run("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " + path("t3.csv") + tail);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.output(), HasSubstr("already has a column 'pred'"));
   EXPECT_FALSE(fs::exists(path("pred.csv")));
 }
 
 TEST_F(InterpolateCli, HelpShowsMethodsAndAnExample) {
-  const auto r = run_cli("interpolate --help");
-  EXPECT_EQ(r.status, 0);
-  EXPECT_THAT(r.output, HasSubstr("idw-grid"));
-  EXPECT_THAT(r.output, HasSubstr("Example"));
+  const auto r = run("interpolate --help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("idw-grid"));
+  EXPECT_THAT(r.output(), HasSubstr("Example"));
 }
 
 }  // namespace

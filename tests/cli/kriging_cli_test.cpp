@@ -3,7 +3,6 @@
 // checked against gstat and closed forms in kriging_test / gstat_krige_test), with the documented
 // columns, and reject bad input with a message.
 
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <array>
@@ -19,6 +18,7 @@
 
 #include "errfield/csv_table.hpp"
 #include "errfield/kriging.hpp"
+#include "support/cli_harness.hpp"
 
 namespace errfield {
 namespace {
@@ -27,31 +27,10 @@ namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 using P3 = Eigen::Vector3d;
 
-struct CliRun {
-  int status = -1;
-  std::string output;
-};
+class KrigingCli : public testing::CliTest {
 
-CliRun run_cli(const std::string& args) {
-  CliRun r;
-  const std::string command = std::string(ERRFIELD_CLI_PATH) + " " + args + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  std::size_t n;
-  while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) r.output.append(buf.data(), n);
-  const int raw = pclose(pipe);
-  r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-  return r;
-}
-
-class KrigingCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("errfield_kriging_cli_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
     // Simulated samples and targets in a 1000 mm cube.
     std::mt19937 rng(12);
     std::uniform_real_distribution<double> u(0.0, 1000.0);
@@ -74,9 +53,6 @@ class KrigingCli : public ::testing::Test {
       t << i << ',' << targets_.back().x() << ',' << targets_.back().y() << ',' << targets_.back().z() << '\n';
     }
   }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
   std::vector<P3> pts_, targets_;
   std::vector<double> vals_;
   std::vector<Eigen::Vector3d> vecs_;
@@ -86,9 +62,9 @@ const char* kModel = "sph(sill=0.5,range=400)+nug(0.001)";
 
 TEST_F(KrigingCli, InterpolateWritesTheLibrarysPredictionsAndVariances) {
   for (const std::string extra : {"", " --kind universal1 --neighbors 25", " --kind simple --mean 0.2 --backend sparse"}) {
-    const auto r = run_cli("interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("T.csv") +
+    const auto r = run("interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("T.csv") +
                            " --coords x,y,z --value v --model \"" + kModel + "\"" + extra + " --out " + path("P.csv"));
-    ASSERT_EQ(r.status, 0) << r.output;
+    ASSERT_EQ(r.exit_code, 0) << r.output();
     const CsvTable out = CsvTable::read(path("P.csv"));
     EXPECT_EQ(out.header(), (std::vector<std::string>{"id", "x", "y", "z", "pred", "var"}));
     KrigingOptions opt;
@@ -112,9 +88,9 @@ TEST_F(KrigingCli, InterpolateWritesTheLibrarysPredictionsAndVariances) {
 }
 
 TEST_F(KrigingCli, VectorValuesGetOneColumnPerComponent) {
-  const auto r = run_cli("interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("T.csv") +
+  const auto r = run("interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("T.csv") +
                          " --coords x,y,z --value dx,dy,dz --model \"" + kModel + "\" --out " + path("P.csv"));
-  ASSERT_EQ(r.status, 0) << r.output;
+  ASSERT_EQ(r.exit_code, 0) << r.output();
   const CsvTable out = CsvTable::read(path("P.csv"));
   EXPECT_EQ(out.header(), (std::vector<std::string>{"id", "x", "y", "z", "pred_dx", "pred_dy", "pred_dz", "var_dx", "var_dy",
                                                     "var_dz"}));
@@ -129,60 +105,60 @@ TEST_F(KrigingCli, VectorValuesGetOneColumnPerComponent) {
 }
 
 TEST_F(KrigingCli, ModelAutoPrintsTheFittedModel) {
-  const auto r = run_cli("interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("T.csv") +
+  const auto r = run("interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("T.csv") +
                          " --coords x,y,z --value v --model auto --out " + path("P.csv"));
-  ASSERT_EQ(r.status, 0) << r.output;
-  EXPECT_THAT(r.output, HasSubstr("--model auto"));
-  EXPECT_THAT(r.output, ::testing::AnyOf(HasSubstr("sph(sill="), HasSubstr("exp(sill=")));
+  ASSERT_EQ(r.exit_code, 0) << r.output();
+  EXPECT_THAT(r.output(), HasSubstr("--model auto"));
+  EXPECT_THAT(r.output(), ::testing::AnyOf(HasSubstr("sph(sill="), HasSubstr("exp(sill=")));
 }
 
 TEST_F(KrigingCli, CvLeaveOneOutMatchesTheLibrary) {
-  const auto r = run_cli("cv --method kriging --samples " + path("S.csv") + " --coords x,y,z --value v --model \"" + kModel +
+  const auto r = run("cv --method kriging --samples " + path("S.csv") + " --coords x,y,z --value v --model \"" + kModel +
                          "\" --out " + path("CV.csv"));
-  ASSERT_EQ(r.status, 0) << r.output;
-  EXPECT_THAT(r.output, HasSubstr("closed form"));
+  ASSERT_EQ(r.exit_code, 0) << r.output();
+  EXPECT_THAT(r.output(), HasSubstr("closed form"));
   const auto loo = Kriging<P3, double>(pts_, vals_, VariogramModel::parse(kModel)).leave_one_out();
   const Eigen::MatrixXd got = CsvTable::read(path("CV.csv")).numeric_columns({"pred", "var"});
   for (std::size_t i = 0; i < pts_.size(); ++i) {
     EXPECT_DOUBLE_EQ(got(static_cast<Eigen::Index>(i), 0), loo.prediction[i]);
     EXPECT_DOUBLE_EQ(got(static_cast<Eigen::Index>(i), 1), loo.variance[i]);
   }
-  const auto k = run_cli("cv --method kriging --samples " + path("S.csv") + " --coords x,y,z --value v --model \"" +
+  const auto k = run("cv --method kriging --samples " + path("S.csv") + " --coords x,y,z --value v --model \"" +
                          kModel + "\" --folds 5 --neighbors 20");
-  ASSERT_EQ(k.status, 0) << k.output;
-  EXPECT_THAT(k.output, HasSubstr("5-fold"));
-  EXPECT_THAT(k.output, HasSubstr("mean z^2"));
+  ASSERT_EQ(k.exit_code, 0) << k.output();
+  EXPECT_THAT(k.output(), HasSubstr("5-fold"));
+  EXPECT_THAT(k.output(), HasSubstr("mean z^2"));
 }
 
 TEST_F(KrigingCli, BadInputIsRejectedWithAMessage) {
   const std::string base = "interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("T.csv") +
                            " --coords x,y,z --value v --out " + path("P.csv");
-  auto r = run_cli(base + " --model \"" + kModel + "\" --kind simple");
-  EXPECT_NE(r.status, 0);
-  EXPECT_THAT(r.output, HasSubstr("--mean"));
-  r = run_cli(base + " --model \"exp(sill=1,range=100)\" --backend sparse");
-  EXPECT_NE(r.status, 0);
-  EXPECT_THAT(r.output, HasSubstr("compactly supported"));
-  r = run_cli(base + " --model \"sph(sill=1)\"");
-  EXPECT_NE(r.status, 0);
-  EXPECT_THAT(r.output, HasSubstr("has no range"));
-  r = run_cli(base);
-  EXPECT_NE(r.status, 0);
-  EXPECT_THAT(r.output, HasSubstr("--model"));
-  r = run_cli(base + " --model \"" + kModel + "\" --kind kriging");
-  EXPECT_NE(r.status, 0);
-  EXPECT_THAT(r.output, HasSubstr("--kind"));
+  auto r = run(base + " --model \"" + kModel + "\" --kind simple");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("--mean"));
+  r = run(base + " --model \"exp(sill=1,range=100)\" --backend sparse");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("compactly supported"));
+  r = run(base + " --model \"sph(sill=1)\"");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("has no range"));
+  r = run(base);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("--model"));
+  r = run(base + " --model \"" + kModel + "\" --kind kriging");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("--kind"));
   EXPECT_FALSE(fs::exists(path("P.csv")));
-  r = run_cli("interpolate --method idw --samples " + path("S.csv") + " --targets " + path("T.csv") +
+  r = run("interpolate --method idw --samples " + path("S.csv") + " --targets " + path("T.csv") +
               " --coords x,y,z --value v --model auto --out " + path("P.csv"));
-  EXPECT_NE(r.status, 0);
-  EXPECT_THAT(r.output, HasSubstr("--model applies to --method kriging"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("--model applies to --method kriging"));
 }
 
 TEST_F(KrigingCli, HelpExplainsTheRangeConvention) {
-  const auto r = run_cli("interpolate --help");
-  EXPECT_EQ(r.status, 0);
-  EXPECT_THAT(r.output, HasSubstr("scale parameter a, not the practical range"));
+  const auto r = run("interpolate --help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("scale parameter a, not the practical range"));
 }
 
 }  // namespace

@@ -12,37 +12,18 @@
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/model_fitting.hpp"
 #include "errfield/robot/simulator.hpp"
+#include "support/cli_harness.hpp"
 
 namespace errfield::robot {
 namespace {
 
 namespace fs = std::filesystem;
+using errfield::testing::CliResult;
 
-struct Cli {
-  int status = 0;
-  std::string out;
-};
+CliResult run(const std::string& line) { return errfield::testing::run_errfield_line(line); }
 
-Cli run(const std::string& args) {
-  Cli c;
-  FILE* p = ::popen((std::string(ERRFIELD_CLI_PATH) + " " + args + " 2>&1").c_str(), "r");
-  char buf[4096];
-  for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) c.out.append(buf, n);
-  c.status = ::pclose(p);
-  return c;
-}
+class PipelineCli : public errfield::testing::CliTest {};
 
-class PipelineCli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("errfield_pipeline_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
-};
 
 /// "q3" without GCC 12's false -Wrestrict on "q" + std::to_string(k).
 std::string column(const std::string& prefix, int k) {
@@ -85,8 +66,8 @@ Outcome execute(const SimulatedRobot& sim, const MdhModel& nominal, const CsvTab
 
 void pipeline_reduces_errors(const std::string& robot_json, const MdhModel& nominal, const std::string& d) {
   // measure: the 125-point grid and 64 validation targets (one per cell), SIMULATED
-  ASSERT_EQ(run("simulate --robot " + robot_json + " --sample grid --step 125 --out " + d + "/grid.csv").status, 0);
-  ASSERT_EQ(run("simulate --robot " + robot_json + " --sample cells --step 125 --seed 9 --out " + d + "/cells.csv").status, 0);
+  ASSERT_EQ(run("simulate --robot " + robot_json + " --sample grid --step 125 --out " + d + "/grid.csv").exit_code, 0);
+  ASSERT_EQ(run("simulate --robot " + robot_json + " --sample cells --step 125 --seed 9 --out " + d + "/cells.csv").exit_code, 0);
   SimulatorConfig cfg = SimulatorConfig::paper_default();
   cfg.nominal = nominal;
   const SimulatedRobot sim(cfg);
@@ -103,13 +84,13 @@ void pipeline_reduces_errors(const std::string& robot_json, const MdhModel& nomi
   for (const std::string method : {"distance-idw", "position-idw", "distance-kriging", "vector-kriging", "kinematic",
                                    "kinematic+kriging"}) {
     SCOPED_TRACE(method);
-    const Cli fit = run("fit --robot " + robot_json + " --data " + d + "/grid.csv --method " + method + " --out " + d +
+    const CliResult fit = run("fit --robot " + robot_json + " --data " + d + "/grid.csv --method " + method + " --out " + d +
                         "/" + method + ".json");
-    ASSERT_EQ(fit.status, 0) << fit.out;
-    EXPECT_NE(fit.out.find(method == "kinematic" ? "calibration on" : "cross-validation"), std::string::npos) << fit.out;
-    const Cli comp = run("compensate --robot " + robot_json + " --model " + d + "/" + method + ".json --targets " + d +
+    ASSERT_EQ(fit.exit_code, 0) << fit.output();
+    EXPECT_NE(fit.output().find(method == "kinematic" ? "calibration on" : "cross-validation"), std::string::npos) << fit.output();
+    const CliResult comp = run("compensate --robot " + robot_json + " --model " + d + "/" + method + ".json --targets " + d +
                          "/cells.csv --out " + d + "/joints.csv");
-    ASSERT_EQ(comp.status, 0) << comp.out;
+    ASSERT_EQ(comp.exit_code, 0) << comp.output();
     const CsvTable joints = CsvTable::read(d + "/joints.csv");
     const Outcome after = execute(sim, nominal, joints, "cq", reg, q_base, base_nominal);
     EXPECT_EQ(after.ok, 64u) << "every validation target is inside the grid";
@@ -132,7 +113,7 @@ void pipeline_reduces_errors(const std::string& robot_json, const MdhModel& nomi
 TEST_F(PipelineCli, SimulateFitCompensateReducesTheErrorOnTheBuiltInRobot) {
   const MdhModel nominal = SimulatorConfig::paper_default().nominal;
   nominal.save(path("robot.json"));
-  pipeline_reduces_errors(path("robot.json"), nominal, dir_.string());
+  pipeline_reduces_errors(path("robot.json"), nominal, dir().string());
 }
 
 TEST_F(PipelineCli, WorksOnAnotherRobotJson) {
@@ -143,9 +124,9 @@ TEST_F(PipelineCli, WorksOnAnotherRobotJson) {
   const MdhModel other = SimulatorConfig::paper_default().nominal.with_links(links).with_name("another 6R arm");
   other.save(path("other.json"));
   // plan on it first: the grid must be reachable and its joints must be the other robot's
-  const Cli plan = run("plan --robot " + path("other.json") + " --cube 750,-250,350,500 --step 125 --out " +
+  const CliResult plan = run("plan --robot " + path("other.json") + " --cube 750,-250,350,500 --step 125 --out " +
                        path("plan.csv") + " --samples-out " + path("samples.csv"));
-  ASSERT_EQ(plan.status, 0) << plan.out;
+  ASSERT_EQ(plan.exit_code, 0) << plan.output();
   const CsvTable p = CsvTable::read(path("plan.csv"));
   ASSERT_EQ(p.row_count(), 125u);
   for (std::size_t r = 0; r < p.row_count(); r += 31) {
@@ -155,17 +136,17 @@ TEST_F(PipelineCli, WorksOnAnotherRobotJson) {
                               std::stod(p.row(r)[p.column_index("z")]));
     EXPECT_LT((forward_position(other, q) - xyz).norm(), 1e-6);
   }
-  pipeline_reduces_errors(path("other.json"), other, dir_.string());
+  pipeline_reduces_errors(path("other.json"), other, dir().string());
 }
 
 TEST_F(PipelineCli, BadInputGetsClearErrors) {
-  auto expect_error = [](const Cli& c, const std::string& needle) {
-    EXPECT_NE(c.status, 0) << c.out;
-    EXPECT_NE(c.out.find(needle), std::string::npos) << c.out;
+  auto expect_error = [](const CliResult& c, const std::string& needle) {
+    EXPECT_NE(c.exit_code, 0) << c.output();
+    EXPECT_NE(c.output().find(needle), std::string::npos) << c.output();
   };
   expect_error(run("fit --data " + path("missing.csv") + " --out " + path("m.json")), "missing.csv");
-  ASSERT_EQ(run("simulate --sample cells --out " + path("cells.csv")).status, 0);
-  ASSERT_EQ(run("simulate --sample grid --measure distances --out " + path("dist.csv")).status, 0);
+  ASSERT_EQ(run("simulate --sample cells --out " + path("cells.csv")).exit_code, 0);
+  ASSERT_EQ(run("simulate --sample grid --measure distances --out " + path("dist.csv")).exit_code, 0);
   expect_error(run("fit --data " + path("cells.csv") + " --method distance-idw --out " + path("m.json")), "cells.csv");
   expect_error(run("fit --data " + path("dist.csv") + " --method position-idw --out " + path("m.json")), "mx");
   expect_error(run("fit --data " + path("dist.csv") + " --method magic --out " + path("m.json")), "distance-idw");

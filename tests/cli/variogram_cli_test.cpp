@@ -1,6 +1,5 @@
 // End-to-end tests of `errfield variogram` and `errfield fit-variogram` through the executable.
 
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -15,6 +14,7 @@
 #include "errfield/csv_table.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/variogram_fit.hpp"
+#include "support/cli_harness.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -23,37 +23,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int code;
-  std::string out;
-  std::string err;
-};
+class VariogramCli : public testing::CliTest {};
 
-class VariogramCli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("errfield_vario_cli_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  void write(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
-  std::string read(const std::string& name) const {
-    std::ifstream in(path(name));
-    std::stringstream s;
-    s << in.rdbuf();
-    return s.str();
-  }
-  CliRun run(const std::string& args) const {
-    const int rc = std::system((std::string(ERRFIELD_CLI_PATH) + " " + args + " >" + path("stdout.txt") +
-                                " 2>" + path("stderr.txt"))
-                                   .c_str());
-    return {WEXITSTATUS(rc), read("stdout.txt"), read("stderr.txt")};
-  }
-  fs::path dir_;
-};
 
 // Simulated data: 3-D points and a smooth scalar plus a 3-vector value.
 std::string simulated_csv(int n, std::uint64_t seed, Eigen::MatrixXd* x, Eigen::MatrixXd* z) {
@@ -80,7 +51,7 @@ TEST_F(VariogramCli, WritesExactColumnsAndAgreesWithTheLibrary) {
   write("in.csv", simulated_csv(300, 1, &x, &z));
   const auto r = run("variogram --input " + path("in.csv") +
                      " --coords x,y,z --value dL --bins 0:2000:100 --out " + path("v.csv"));
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;
   const CsvTable t = CsvTable::read(path("v.csv"));
   ASSERT_EQ(t.header(), (std::vector<std::string>{"lag_lo", "lag_hi", "lag_mean", "gamma", "pairs"}));
   const auto lib = empirical_variogram(x, z.col(0), LagBins::uniform(0.0, 2000.0, 100.0));
@@ -107,7 +78,7 @@ TEST_F(VariogramCli, VectorValueExplicitEdgesStdoutAndPerComponent) {
   const auto r = run("variogram --input " + path("in.csv") +
                      " --coords x,y,z --value dx,dy,dz --bins 0,50,100,300,700 --convention gstat "
                      "--estimator cressie --per-component");
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;
   const CsvTable t = CsvTable::parse(r.out, "stdout");
   ASSERT_EQ(t.header(), (std::vector<std::string>{"lag_lo", "lag_hi", "lag_mean", "gamma", "pairs",
                                                   "gamma_dx", "gamma_dy", "gamma_dz"}));
@@ -127,7 +98,7 @@ TEST_F(VariogramCli, BadInputExitsNonZeroNamingWhereAndWritesNothing) {
   write("bad.csv", "x,y,v\n0,0,1\n1,0,abc\n2,0,3\n");
   auto r = run("variogram --input " + path("bad.csv") + " --coords x,y --value v --bins 0:5:1 --out " +
                path("o.csv"));
-  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("bad.csv"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find(":3"), std::string::npos) << r.err;  // line 3 holds 'abc'
   EXPECT_NE(r.err.find("'v'"), std::string::npos) << r.err;
@@ -135,33 +106,33 @@ TEST_F(VariogramCli, BadInputExitsNonZeroNamingWhereAndWritesNothing) {
 
   write("ok.csv", "x,y,v\n0,0,1\n1,0,2\n2,0,3\n");
   r = run("variogram --input " + path("ok.csv") + " --coords x,w --value v --bins 0:5:1");
-  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("'w'"), std::string::npos) << r.err;
   r = run("variogram --input " + path("ok.csv") + " --coords x,y --value v --bins 0:5:0");
-  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("width"), std::string::npos) << r.err;
   r = run("variogram --input " + path("ok.csv") + " --coords x,y --value v --bins 0,2,1");
-  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("edges[2]"), std::string::npos) << r.err;
   r = run("variogram --input " + path("ok.csv") + " --coords x,y --value v --bins 0:5");
-  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("--bins"), std::string::npos) << r.err;
   r = run("variogram --input " + path("ok.csv") + " --coords x,y --value v --bins 0:5:1 --estimator dowd2");
-  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("matheron"), std::string::npos) << r.err;
   r = run("variogram --input " + path("missing.csv") + " --coords x,y --value v --bins 0:5:1");
-  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("missing.csv"), std::string::npos) << r.err;
   write("one.csv", "x,y,v\n0,0,1\n");
   r = run("variogram --input " + path("one.csv") + " --coords x,y --value v --bins 0:5:1");
-  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("at least 2"), std::string::npos) << r.err;
   write("nan.csv", "x,y,v\n0,0,1\n1,0,nan\n");
   r = run("variogram --input " + path("nan.csv") + " --coords x,y --value v --bins 0:5:1");
-  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("nan.csv"), std::string::npos) << r.err;
   r = run("variogram --help");
-  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.out.find("Example"), std::string::npos);
 }
 
@@ -170,11 +141,11 @@ TEST_F(VariogramCli, FitVariogramPrintsAndWritesALoadableModel) {
   write("in.csv", simulated_csv(300, 3, &x, &z));
   ASSERT_EQ(run("variogram --input " + path("in.csv") + " --coords x,y,z --value dL --bins 0:2000:100 --out " +
                 path("v.csv"))
-                .code,
+                .exit_code,
             0);
   const auto r = run("fit-variogram --input " + path("v.csv") +
                      " --model gau --nugget free --weights cressie --out " + path("m.json"));
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("gau(sill="), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("weighted SSE (cressie)"), std::string::npos) << r.out;
   const auto j = nlohmann::json::parse(read("m.json"));
@@ -188,21 +159,21 @@ TEST_F(VariogramCli, FitVariogramPrintsAndWritesALoadableModel) {
   EXPECT_NEAR(j["fit"]["weighted_sse"].get<double>(), lib.weighted_sse, 1e-12 * lib.weighted_sse);
 
   auto bad = run("fit-variogram --input " + path("v.csv") + " --model mat");
-  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.err.find("--nu"), std::string::npos) << bad.err;
   bad = run("fit-variogram --input " + path("v.csv") + " --model sph --nugget fixed=abc");
-  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.err.find("--nugget"), std::string::npos) << bad.err;
   bad = run("fit-variogram --input " + path("v.csv") + " --model sph --weights ols");
-  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.err.find("nj_h2"), std::string::npos) << bad.err;
   write("bad.csv", "lag_lo,lag_hi,lag_mean,gamma,pairs\n0,1,0.5,0.1,3\n1,2,1.5,x,4\n2,3,2.5,0.3,5\n");
   bad = run("fit-variogram --input " + path("bad.csv") + " --model sph --out " + path("bad.json"));
-  EXPECT_NE(bad.code, 0);
+  EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.err.find("bad.csv:3"), std::string::npos) << bad.err;
   EXPECT_NE(bad.err.find("'gamma'"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(path("bad.json")));
-  EXPECT_EQ(run("fit-variogram --help").code, 0);
+  EXPECT_EQ(run("fit-variogram --help").exit_code, 0);
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
 #include "support/chromium_render.hpp"
+#include "support/cli_harness.hpp"
 
 namespace errfield::robot {
 namespace {
@@ -109,14 +110,11 @@ TEST(Reproduction, ResultsAreSane) {
   std::cout << "[ ordering ] distance metric, median mean error (mm): " << order.str() << "\n";
 }
 
+// stdout and stderr of `errfield <args>`; `status` gets the exit code.
 std::string run_cli(const std::string& args, int* status) {
-  const std::string cmd = std::string(ERRFIELD_CLI_PATH) + " " + args + " 2>&1";
-  std::string out;
-  FILE* p = ::popen(cmd.c_str(), "r");
-  char buf[4096];
-  for (std::size_t n; (n = std::fread(buf, 1, sizeof buf, p)) > 0;) out.append(buf, n);
-  *status = ::pclose(p);
-  return out;
+  const auto r = errfield::testing::run_errfield_line(args);
+  *status = r.exit_code;
+  return r.output();
 }
 
 // The README's main command with --runs 1: under 10 s, the CSV contract of table6.csv, every

@@ -11,37 +11,14 @@
 
 #include "errfield/csv_table.hpp"
 #include "errfield/robot/kinematics.hpp"
+#include "support/cli_harness.hpp"
 
 namespace errfield::robot {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int code;
-  std::string err;
-};
-
-class RobotCli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("errfield_robot_cli_" + std::to_string(::getpid()) + "_" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  void write(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
-  CliRun run(const std::string& args) const {
-    const std::string err = path("stderr.txt");
-    const int rc = std::system((std::string(ERRFIELD_CLI_PATH) + " " + args + " 2>" + err).c_str());
-    std::ifstream in(err);
-    std::stringstream s;
-    s << in.rdbuf();
-    return {WEXITSTATUS(rc), s.str()};
-  }
-  fs::path dir_;
-};
+class RobotCli : public errfield::testing::CliTest {};
 
 TEST_F(RobotCli, FkThenIkRoundTripsWithUserRobotJson) {
   // A user robot: the ER20 table with a tool and a base, saved as JSON.
@@ -62,7 +39,7 @@ TEST_F(RobotCli, FkThenIkRoundTripsWithUserRobotJson) {
   }
   write("joints.csv", csv);
   auto r = run("fk --input " + path("joints.csv") + " --robot " + path("robot.json") + " --out " + path("poses.csv"));
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;
   const CsvTable poses = CsvTable::read(path("poses.csv"));
   ASSERT_EQ(poses.row_count(), 20u);
   EXPECT_EQ(poses.row(3)[0], "p3");  // input columns kept
@@ -80,7 +57,7 @@ TEST_F(RobotCli, FkThenIkRoundTripsWithUserRobotJson) {
   }
   write("targets.csv", targets);
   r = run("ik --input " + path("targets.csv") + " --robot " + path("robot.json") + " --out " + path("ik.csv"));
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;
   const CsvTable ik = CsvTable::read(path("ik.csv"));
   const auto q = [&] {
     std::vector<JointVector> out(ik.row_count());
@@ -101,7 +78,7 @@ TEST_F(RobotCli, FkThenIkRoundTripsWithUserRobotJson) {
 TEST_F(RobotCli, IkAcceptsEulerAnglesAndReportsUnreachable) {
   write("t.csv", "x,y,z,rx,ry,rz\n1000,0,600,180,0,0\n6000,0,600,180,0,0\n");
   const auto r = run("ik --input " + path("t.csv") + " --out " + path("o.csv"));
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("1 of 2 targets solved"), std::string::npos) << r.err;
   const CsvTable o = CsvTable::read(path("o.csv"));
   EXPECT_EQ(o.row(0)[o.column_index("status")], "converged");
@@ -116,24 +93,24 @@ TEST_F(RobotCli, IkAcceptsEulerAnglesAndReportsUnreachable) {
 TEST_F(RobotCli, BadInputNamesFileRowAndColumn) {
   write("j.csv", "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n0,abc,0,0,0,0\n");
   auto r = run("fk --input " + path("j.csv") + " --out " + path("o.csv"));
-  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("j.csv"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("q2"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("abc"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(path("o.csv")));
   write("bad.json", "{\"links\": 3}");
   r = run("fk --input " + path("j.csv") + " --robot " + path("bad.json") + " --out " + path("o.csv"));
-  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("links"), std::string::npos) << r.err;
   r = run("fk --input " + path("j.csv") + " --frame elbow --out " + path("o.csv"));
-  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("elbow"), std::string::npos) << r.err;
 }
 
 TEST_F(RobotCli, SimulateRobotOutWritesTheNominalRobotOfTheConfig) {
   const auto r = run("simulate --sample grid --step 250 --out " + path("g.csv") + " --config-out " + path("sim.json") +
                      " --robot-out " + path("nominal.json"));
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto sim = nlohmann::json::parse(std::ifstream(path("sim.json")));
   const MdhModel from_config = MdhModel::from_json(sim["robot"]);
   const MdhModel written = MdhModel::load(path("nominal.json"));
@@ -145,7 +122,7 @@ TEST_F(RobotCli, SimulateRobotOutWritesTheNominalRobotOfTheConfig) {
 TEST_F(RobotCli, SimulateThenCalibrateBothModels) {
   auto r = run("simulate --sample grid --step 125 --out " + path("grid.csv") + " --truth-out " + path("truth.json") +
                " --config-out " + path("sim.json"));
-  ASSERT_EQ(r.code, 0) << r.err;
+  ASSERT_EQ(r.exit_code, 0) << r.err;
   {
     std::ifstream in(path("grid.csv"));
     std::string first;
@@ -163,8 +140,8 @@ TEST_F(RobotCli, SimulateThenCalibrateBothModels) {
   MdhModel::from_json(sim["robot"]).save(path("robot.json"));
   for (const std::string model : {"distance", "position"}) {
     r = run("calibrate --robot " + path("robot.json") + " --data " + path("grid.csv") + " --model " + model + " --out " +
-            path("cal_" + model + ".json") + " --report " + path("report.txt") + " > " + path("stdout.txt"));
-    ASSERT_EQ(r.code, 0) << r.err;
+            path("cal_" + model + ".json") + " --report " + path("report.txt"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
     std::ifstream in(path("report.txt"));
     std::stringstream report;
     report << in.rdbuf();
@@ -187,7 +164,7 @@ TEST_F(RobotCli, SimulateBadOptionsAreNamed) {
                                   std::string("--step 120"), std::string("--measure angles"),
                                   std::string("--base 5000,0,0")}) {
     const auto r = run("simulate " + args + " --out " + path("o.csv"));
-    EXPECT_EQ(r.code, 2) << args << ": " << r.err;
+    EXPECT_EQ(r.exit_code, 2) << args << ": " << r.err;
     EXPECT_FALSE(fs::exists(path("o.csv"))) << args;
   }
   const auto r = run("simulate --base 5000,0,0 --out " + path("o.csv"));
@@ -197,10 +174,10 @@ TEST_F(RobotCli, SimulateBadOptionsAreNamed) {
 TEST_F(RobotCli, CalibrateRejectsDataWithoutBasePoints) {
   write("m.csv", "q1,q2,q3,q4,q5,q6,dist_b0\n0,-90,0,0,-60,0,100\n");
   auto r = run("calibrate --data " + path("m.csv") + " --out " + path("o.json"));
-  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("kind"), std::string::npos) << r.err;
   r = run("calibrate --data " + path("m.csv") + " --model joint --out " + path("o.json"));
-  EXPECT_EQ(r.code, 2);
+  EXPECT_EQ(r.exit_code, 2);
   EXPECT_FALSE(fs::exists(path("o.json")));
 }
 

@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -28,8 +29,10 @@ class ScratchDir {
  public:
   ScratchDir() {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() / ("errfield_" + std::string(info->test_suite_name()) + "_" +
-                                         info->name() + "_" + std::to_string(::getpid()));
+    std::string name = "errfield_" + std::string(info->test_suite_name()) + "_" + info->name() + "_" +
+                       std::to_string(::getpid());
+    std::replace(name.begin(), name.end(), '/', '_');  // parameterised tests: "Inst/Suite", "Name/0"
+    path_ = fs::temp_directory_path() / name;
     fs::remove_all(path_);
     fs::create_directories(path_);
   }
@@ -71,6 +74,8 @@ struct CliResult {
   int signal = 0;      ///< terminating signal, 0 if it exited
   std::string out;
   std::string err;
+  /// stdout then stderr (for "the message mentions X" checks that don't care which stream).
+  std::string output() const { return out + err; }
 };
 
 /// A started `errfield` process (for tests that signal it while it runs).
@@ -80,12 +85,15 @@ struct CliProcess {
 };
 
 /// Starts `errfield args...` in `cwd` with extra environment entries ("NAME=value"); stdout and
-/// stderr go to files in `cwd` (.stdout/.stderr, hidden so tests listing outputs can skip them).
+/// stderr go to files of their own in the temporary directory (not in `cwd`, so tests listing
+/// their outputs see only what the command wrote, and parallel runs sharing a `cwd` don't mix).
 inline CliProcess start_errfield(const std::vector<std::string>& args, const fs::path& cwd,
                                  const std::vector<std::string>& env = {}) {
+  static int counter = 0;
+  const std::string stem = "errfield_cli_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
   CliProcess p;
-  p.out_file = cwd / ".stdout";
-  p.err_file = cwd / ".stderr";
+  p.out_file = fs::temp_directory_path() / (stem + ".stdout");
+  p.err_file = fs::temp_directory_path() / (stem + ".stderr");
   p.pid = ::fork();
   if (p.pid == 0) {
     if (::chdir(cwd.c_str()) != 0) ::_exit(127);
@@ -122,6 +130,56 @@ inline CliResult run_errfield(const std::vector<std::string>& args, const fs::pa
                               const std::vector<std::string>& env = {}) {
   return wait_errfield(start_errfield(args, cwd, env));
 }
+
+/// Splits a command line the way a POSIX shell would for plain words, "double" and 'single'
+/// quotes (no variables, globs or escapes beyond \" inside double quotes), so tests can write
+/// `run_errfield_line("fit --data " + path("d.csv") + " --model \"sph(sill=1,range=2)\"")`.
+inline std::vector<std::string> split_command_line(const std::string& line) {
+  std::vector<std::string> words;
+  std::string word;
+  bool in_word = false;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (c == ' ' || c == '\t' || c == '\n') {
+      if (in_word) words.push_back(word);
+      word.clear();
+      in_word = false;
+    } else if (c == '"' || c == '\'') {
+      in_word = true;
+      for (++i; i < line.size() && line[i] != c; ++i) {
+        if (c == '"' && line[i] == '\\' && i + 1 < line.size() && line[i + 1] == '"') ++i;
+        word += line[i];
+      }
+    } else {
+      word += c;
+      in_word = true;
+    }
+  }
+  if (in_word) words.push_back(word);
+  return words;
+}
+
+/// Runs `errfield <line>` (split by split_command_line) in `cwd` to completion.
+inline CliResult run_errfield_line(const std::string& line, const fs::path& cwd = fs::current_path(),
+                                   const std::vector<std::string>& env = {}) {
+  return run_errfield(split_command_line(line), cwd, env);
+}
+
+/// Base fixture for CLI tests: a ScratchDir per test and shortcuts to files in it; `run` executes
+/// the CLI with the scratch directory as working directory.
+class CliTest : public ::testing::Test {
+ protected:
+  std::string path(const std::string& name) const { return scratch_ / name; }
+  std::string write(const std::string& name, const std::string& text) const { return scratch_.write(name, text); }
+  std::string read(const std::string& name) const { return scratch_.read(name); }
+  static std::string read_text(const std::string& file) { return ScratchDir::slurp(file); }
+  CliResult run(const std::string& line, const std::vector<std::string>& env = {}) const {
+    return run_errfield_line(line, scratch_.path(), env);
+  }
+  const fs::path& dir() const { return scratch_.path(); }
+
+  ScratchDir scratch_;
+};
 
 /// "errfield a b c" for failure messages.
 inline std::string command_line(const std::vector<std::string>& args) {
