@@ -95,6 +95,7 @@ void run_calibrate(const CalibrateArgs& a) {
   text << "== kinematic calibration (" << a.model << " model, " << result.before.count << " measurements) ==\n"
        << result.report();
   std::cout << text.str();
+  if (!result.converged) std::cerr << "calibrate: warning: " << result.message << "\n";
   identified.with_name(nominal.name() + " (calibrated, " + a.model + " model)").save(a.out);
   if (!a.report.empty()) write_file_atomically(a.report, text.str());
   std::cerr << "calibrate: identified model written to " << a.out << "\n";

@@ -16,6 +16,8 @@ namespace errfield::robot {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
+/// IGG3 weights are considered settled when no weight moves by more than this in a round.
+constexpr double kWeightsSettled = 1e-3;
 
 // A measurement model: residuals (measured − predicted), `dim` rows per measurement, and the
 // Jacobian of the predictions with respect to the candidate parameters (columns = `active`).
@@ -277,6 +279,10 @@ CalibrationResult solve(const Problem& problem, const MdhModel& initial, std::ve
   double lambda = 1e-6;
   const int rounds = o.robust.enabled ? o.robust.max_rounds : 1;
   bool converged_lm = false;
+  // IGG3 re-estimates sigma0 every round, so the weights can keep moving (points near k0/k1 flip,
+  // or the rejection creeps as the fit tightens). Such a solution is the last round's, not a fixed
+  // point, and is reported as not converged.
+  bool weights_settled = !o.robust.enabled;
   for (int round = 0; round < rounds; ++round) {
     ++out.rounds;
     converged_lm = false;
@@ -331,10 +337,24 @@ CalibrationResult solve(const Problem& problem, const MdhModel& initial, std::ve
     for (std::size_t i = 0; i < n; ++i) change = std::max(change, std::abs(nw[i] - w[i]));
     w = nw;
     cost = weighted_cost(r, w, dim);
-    if (change < 1e-3) break;
+    out.weight_change = change;
+    if (change < kWeightsSettled) {
+      weights_settled = true;
+      break;
+    }
   }
-  out.converged = converged_lm;
-  out.message = converged_lm ? "converged" : "LM iteration limit reached";
+  out.converged = converged_lm && weights_settled;
+  if (!converged_lm) {
+    out.message = "LM iteration limit reached";
+  } else if (!weights_settled) {
+    std::ostringstream m;
+    m << "not converged: IGG3 weights still changing after " << out.rounds
+      << " weighting rounds (largest weight change in the last round " << out.weight_change << ", settled below "
+      << kWeightsSettled << "); the model is the last round's";
+    out.message = m.str();
+  } else {
+    out.message = "converged";
+  }
   out.model = model;
   out.weights = w;
   out.rejected = static_cast<std::size_t>(std::count(w.begin(), w.end(), 0.0));

@@ -282,7 +282,7 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
                           std::to_string(cal.before.rms_mm) + " -> " + std::to_string(cal.after.rms_mm) + " mm, " +
                           std::to_string(cal.parameters.size()) + " parameters identified, " +
                           std::to_string(cal.removed.size()) + " removed, condition number " +
-                          std::to_string(cal.condition_number));
+                          std::to_string(cal.condition_number) + "; " + cal.message);
       if (method == CompensationMethod::kinematic) return out;
       if (d.measured_mm.empty())
         throw InputError(d.source + ": kinematic+kriging needs measured positions (mx,my,mz) for the residuals",

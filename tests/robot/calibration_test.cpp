@@ -150,6 +150,20 @@ TEST(Calibration, Igg3BeatsPlainLeastSquaresWithOutliers) {
   EXPECT_LT(e_robust, 0.5 * e_ls) << "IGG3 " << e_robust << " mm vs LS " << e_ls << " mm\n" << robust.report();
   EXPECT_LT(e_robust, 0.02);  // near the 0.01 mm noise level
   EXPECT_GE(robust.rejected, outliers * 8 / 10);
+  EXPECT_TRUE(robust.converged) << robust.report();
+  EXPECT_LT(robust.weight_change, 1e-3);
+
+  // One reweighting round cannot settle weights that must first find the outliers: the result is
+  // reported as not converged, with the reason, instead of "converged".
+  CalibrationOptions one_round;
+  one_round.robust.max_rounds = 1;
+  const CalibrationResult cut = calibrate_distances(nominal, data, one_round);
+  EXPECT_FALSE(cut.converged);
+  EXPECT_EQ(cut.rounds, 1);
+  EXPECT_GE(cut.weight_change, 1e-3);
+  EXPECT_NE(cut.message.find("IGG3 weights still changing after 1 weighting rounds"), std::string::npos)
+      << cut.message;
+  EXPECT_NE(cut.report().find(cut.message), std::string::npos);
 }
 
 TEST(Calibration, CompensatedJointsPutTheIdentifiedToolOnTarget) {

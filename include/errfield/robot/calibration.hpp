@@ -102,6 +102,10 @@ struct CalibrationResult {
   std::size_t rejected = 0;       ///< Measurements with weight 0.
   int iterations = 0;             ///< LM iterations over all rounds.
   int rounds = 0;
+  /// Largest change of an IGG3 weight in the last reweighting round (0 without robust weights).
+  double weight_change = 0.0;
+  /// LM converged in the last round and, with robust weights, the weights settled (changed by
+  /// less than 1e-3) within RobustOptions::max_rounds.
   bool converged = false;
   std::string message;
   /// Multi-line human-readable report (parameters, removed ones and why, residuals).
