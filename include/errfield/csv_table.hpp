@@ -56,4 +56,8 @@ std::string format_number(double value);
 /// `what` (the option being parsed).
 std::vector<std::string> split_list(std::string_view text, std::string_view what);
 
+/// split_list for a list of column names: a name given twice ("x,y,x") is also an ArgumentError
+/// naming `what` and the column, since it would silently weigh that column twice.
+std::vector<std::string> split_column_list(std::string_view text, std::string_view what);
+
 }  // namespace errfield

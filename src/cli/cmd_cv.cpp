@@ -63,8 +63,8 @@ void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& ow
   owners.check(method.name, method.accepts, {h.power, h.neighbors, h.radius});
 
   CrossValidationRequest r;
-  r.coord_columns = split_list(a.coords, "--coords");
-  r.value_columns = split_list(a.value, "--value");
+  r.coord_columns = split_column_list(a.coords, "--coords");
+  r.value_columns = split_column_list(a.value, "--value");
   r.folds = parse_folds(a.folds);
   r.seed = a.seed;
   if (r.folds == 0 && h.seed->count())

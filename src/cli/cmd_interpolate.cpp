@@ -70,8 +70,8 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
   owners.check(method.name, method.accepts, h.all());
 
   InterpolationRequest r;
-  r.coord_columns = split_list(a.coords, "--coords");
-  r.value_columns = split_list(a.value, "--value");
+  r.coord_columns = split_column_list(a.coords, "--coords");
+  r.value_columns = split_column_list(a.value, "--value");
   r.shared = read_shared(a, h);
   with_value_type(r.value_columns.size(), []<class V>() {});  // reject unsupported counts early
 

@@ -60,8 +60,8 @@ LagBins parse_bins_option(const std::string& spec) {
 std::string cell(double v) { return std::isnan(v) ? std::string() : format_number(v); }
 
 void run_variogram(const VariogramArgs& a) {
-  const auto coord_names = split_list(a.coords, "--coords");
-  const auto value_names = split_list(a.value, "--value");
+  const auto coord_names = split_column_list(a.coords, "--coords");
+  const auto value_names = split_column_list(a.value, "--value");
   const LagBins bins = parse_bins_option(a.bins);
   EmpiricalVariogramOptions options;
   options.estimator = estimator_from_name(a.estimator);

@@ -19,6 +19,11 @@ int run_cli(int argc, const char* const* argv) {
       "error compensation.\n"
       "Run 'errfield <command> --help' for a command's options and an example."};
   app.require_subcommand(1);
+  app.footer(
+      "Exit status: 0 success; 1 the job failed (a singular system, an unreachable target, an output\n"
+      "that cannot be written); 2 bad input or usage (the message names the file:line, column or\n"
+      "option); 3 the job would exceed a resource budget (the message names the option or back end to\n"
+      "change); 70 internal error (a bug: please report it with the command line).");
   app.set_version_flag("--version", "errfield 0.1.0");
   auto& entries = command_registry();
   std::sort(entries.begin(), entries.end(),
@@ -27,22 +32,24 @@ int run_cli(int argc, const char* const* argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // CLI11 has a code per kind of parse error (105, 106, 109, ...); scripts get one: --help and
+    // --version succeed, every other command-line mistake is a usage error like a bad value.
+    return app.exit(e) == 0 ? 0 : kExitUsage;
   } catch (const InputError& e) {
     std::cerr << "errfield: input error: " << e.what() << "\n";
-    return 2;
+    return kExitUsage;
   } catch (const ArgumentError& e) {
     std::cerr << "errfield: invalid argument: " << e.what() << "\n";
-    return 2;
+    return kExitUsage;
   } catch (const ResourceError& e) {
     std::cerr << "errfield: resource limit: " << e.what() << "\n";
-    return 3;
+    return kExitResource;
   } catch (const Error& e) {
     std::cerr << "errfield: error: " << e.what() << "\n";
-    return 1;
+    return kExitFailure;
   } catch (const std::exception& e) {
     std::cerr << "errfield: internal error: " << e.what() << "\n";
-    return 70;
+    return kExitInternal;
   }
   return 0;
 }

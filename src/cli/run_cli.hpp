@@ -4,11 +4,16 @@
 
 namespace errfield::cli {
 
+/// Exit statuses of the tool (also printed by `errfield --help`).
+inline constexpr int kExitSuccess = 0;
+inline constexpr int kExitFailure = 1;   ///< any other errfield::Error: the job itself failed
+inline constexpr int kExitUsage = 2;     ///< InputError, ArgumentError, or a command-line parse error
+inline constexpr int kExitResource = 3;  ///< ResourceError: over a memory/size budget
+inline constexpr int kExitInternal = 70; ///< anything else: a bug
+
 /// Builds the CLI11 app from the registered subcommands, parses `argv` and runs the chosen
-/// command. Every exception becomes a one-line message on stderr and an exit code: 0 success,
-/// 1 other errfield error, 2 bad input or argument (InputError/ArgumentError), 3 resource limit
-/// (ResourceError), 70 internal error; CLI11's own codes for usage errors (--help prints and
-/// returns 0). Never calls exit().
+/// command. Every exception becomes a one-line message on stderr and one of the statuses above
+/// (--help and --version print and return 0). Never calls exit().
 int run_cli(int argc, const char* const* argv);
 
 }  // namespace errfield::cli

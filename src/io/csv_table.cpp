@@ -209,4 +209,14 @@ std::vector<std::string> split_list(std::string_view text, std::string_view what
   return items;
 }
 
+std::vector<std::string> split_column_list(std::string_view text, std::string_view what) {
+  std::vector<std::string> names = split_list(text, what);
+  for (std::size_t i = 0; i < names.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (names[i] == names[j])
+        throw ArgumentError(std::string(what) + ": column '" + names[i] + "' is named twice in '" + std::string(text) +
+                            "' (items " + std::to_string(j + 1) + " and " + std::to_string(i + 1) + ")");
+  return names;
+}
+
 }  // namespace errfield

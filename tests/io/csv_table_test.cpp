@@ -53,5 +53,25 @@ TEST(FormatNumber, RoundTripsExactly) {
   }
 }
 
+TEST(SplitList, TrimsAndRejectsEmptyItemsNamingTheOption) {
+  EXPECT_EQ(split_list(" x, y ,z", "--coords"), (std::vector<std::string>{"x", "y", "z"}));
+  try {
+    split_list("x,,z", "--coords");
+    FAIL() << "expected ArgumentError";
+  } catch (const ArgumentError& e) {
+    EXPECT_NE(std::string(e.what()).find("--coords: empty item in 'x,,z'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SplitColumnList, ANameGivenTwiceIsAnErrorNamingTheOptionAndTheColumn) {
+  EXPECT_EQ(split_column_list("q1,q2", "--coords"), (std::vector<std::string>{"q1", "q2"}));
+  try {
+    split_column_list("x, y, x", "--coords");
+    FAIL() << "expected ArgumentError";
+  } catch (const ArgumentError& e) {
+    EXPECT_STREQ(e.what(), "--coords: column 'x' is named twice in 'x, y, x' (items 1 and 3)");
+  }
+}
+
 }  // namespace
 }  // namespace errfield
