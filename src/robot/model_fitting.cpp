@@ -13,6 +13,7 @@
 #include "errfield/robot/error_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/scattered_idw.hpp"
+#include "robot/rigid_fit.hpp"
 
 namespace errfield::robot {
 
@@ -76,18 +77,8 @@ std::vector<double> MeasurementSet::distance_errors(std::size_t k) const {
 Registration fit_registration(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
   if (a.size() != b.size() || a.size() < 3)
     throw InputError("registration: need at least 3 point pairs, got " + std::to_string(std::min(a.size(), b.size())));
-  Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
-  for (std::size_t i = 0; i < a.size(); ++i) ca += a[i], cb += b[i];
-  ca /= static_cast<double>(a.size());
-  cb /= static_cast<double>(b.size());
-  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
-  for (std::size_t i = 0; i < a.size(); ++i) h += (a[i] - ca) * (b[i] - cb).transpose();
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
-  d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
   Registration r;
-  r.robot_from_tracker.linear() = svd.matrixV() * d * svd.matrixU().transpose();
-  r.robot_from_tracker.translation() = cb - r.robot_from_tracker.linear() * ca;
+  r.robot_from_tracker = fit_rigid(a, b);
   double ss = 0.0;
   for (std::size_t i = 0; i < a.size(); ++i) ss += (r.robot_from_tracker * a[i] - b[i]).squaredNorm();
   r.residual_rms_mm = std::sqrt(ss / static_cast<double>(a.size()));

@@ -1,6 +1,7 @@
 #pragma once
 // Internal: the best rigid motion between two point sets, shared by the simulator (absorbing the
-// rigid part of the geometric error) and calibration (initial base frame).
+// rigid part of the geometric error), calibration (initial base frame) and the pipeline's tracker
+// registration (fit_registration).
 
 #include <vector>
 
