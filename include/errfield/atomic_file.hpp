@@ -47,8 +47,10 @@ void write_file_atomically(const std::filesystem::path& target, std::string_view
 /// its temporary first (an unwritable directory or a full disk throws before any target is
 /// touched), then renames them one after the other. Use it instead of consecutive
 /// write_file_atomically calls, which leave a mix of new and old files when a later one fails.
-/// (The renames themselves can still fail individually, e.g. if a target became a directory;
-/// the files renamed before stay replaced.)
+/// Before writing, commit() refuses a target that is a directory and the same file named twice.
+/// SIGINT/SIGTERM are held back during the renames (and act right after), so a signal never
+/// leaves new and old files mixed. (A rename can still fail individually, e.g. on a target that
+/// became a directory after the check; the files renamed before stay replaced.)
 class AtomicFileSet {
  public:
   /// Queues `content` for `target`; nothing is written until commit().

@@ -5,6 +5,8 @@
 #include <iostream>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
 #include "cli/robot_cli.hpp"
@@ -96,8 +98,12 @@ void run_calibrate(const CalibrateArgs& a) {
        << result.report();
   std::cout << text.str();
   if (!result.converged) std::cerr << "calibrate: warning: " << result.message << "\n";
-  identified.with_name(nominal.name() + " (calibrated, " + a.model + " model)").save(a.out);
-  if (!a.report.empty()) write_file_atomically(a.report, text.str());
+  // --out and --report all or none: an unwritable --report must not leave a new model next to an
+  // old report (or the reverse).
+  AtomicFileSet outputs;
+  outputs.add(a.out, identified.with_name(nominal.name() + " (calibrated, " + a.model + " model)").to_json().dump(2) + "\n");
+  if (!a.report.empty()) outputs.add(a.report, text.str());
+  outputs.commit();
   std::cerr << "calibrate: identified model written to " << a.out << "\n";
 }
 
@@ -120,7 +126,7 @@ void add_calibrate_command(CLI::App& app) {
   cmd->add_option("--max-condition", args->max_condition,
                   "remove weakly identifiable parameters until the scaled Jacobian's condition number is below this "
                   "(default 1000)");
-  cmd->add_option("--report", args->report, "also write the report to this text file");
+  cmd->add_option("--report", args->report, "also write the report to this text file (with --out, all or none)");
   cmd->add_option("--out", args->out, "identified robot JSON (written atomically)")->required();
   cmd->callback([args] { run_calibrate(*args); });
 }

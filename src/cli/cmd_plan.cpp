@@ -7,6 +7,7 @@
 #include "cli/robot_cli.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/cube_budget.hpp"
 #include "errfield/robot/measurement_plan.hpp"
 #include "errfield/robot/pose.hpp"
 #include "errfield/variogram_fit.hpp"
@@ -74,8 +75,9 @@ void run_plan(const PlanArgs& a) {
   } else {
     o.step_mm = parse_numbers(a.step, 1, "--step")[0];
   }
+  check_cube_budget(o.size_mm, o.step_mm, o.sample_per_cell, "--step");
   const auto points = plan_measurements(robot, o);
-  auto write = [&](const std::string& path, const std::vector<const PlannedPoint*>& rows) {
+  auto table = [&](const std::vector<const PlannedPoint*>& rows) {
     OutputTable t;
     std::vector<std::string> id, kind;
     std::vector<std::vector<double>> v(12);
@@ -90,12 +92,14 @@ void run_plan(const PlanArgs& a) {
     t.add_column("kind", kind);
     const char* names[] = {"x", "y", "z", "rx", "ry", "rz", "q1", "q2", "q3", "q4", "q5", "q6"};
     for (std::size_t c = 0; c < 12; ++c) t.add_numeric_column(names[c], v[c]);
-    t.write(path);
+    return t.to_csv();
   };
   std::vector<const PlannedPoint*> main_rows, sample_rows;
   for (const auto& p : points) (p.kind == "sample" ? sample_rows : main_rows).push_back(&p);
-  write(a.out, main_rows);
-  if (!a.samples_out.empty()) write(a.samples_out, sample_rows);
+  AtomicFileSet outputs;  // --out and --samples-out all or none
+  outputs.add(a.out, table(main_rows));
+  if (!a.samples_out.empty()) outputs.add(a.samples_out, table(sample_rows));
+  outputs.commit();
   std::size_t grid = 0, bases = 0;
   for (const auto* p : main_rows) (p->kind == "grid" ? grid : bases)++;
   std::cout << "plan: " << grid << " grid points (step " << o.step_mm << " mm) and " << bases

@@ -1,9 +1,11 @@
 // `errfield reproduce`: the paper's experiments on the built-in simulated robot and tracker.
 #include <chrono>
+#include <filesystem>
 #include <iostream>
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
+#include "errfield/error.hpp"
 #include "errfield/robot/paper_reproduction.hpp"
 
 namespace errfield::cli {
@@ -27,6 +29,18 @@ void add_reproduce_command(CLI::App& app) {
   cmd->add_option("--runs", args->runs, "independent simulated robots for Table 6 (>= 1)")->capture_default_str();
   cmd->add_option("--threads", args->threads, "OpenMP threads (0 = default)")->capture_default_str();
   cmd->callback([args] {
+    // An --out that can never become a directory fails now, not after minutes of work. (Nothing is
+    // created yet: an interrupted run leaves no empty directory behind.)
+    for (std::filesystem::path p = std::filesystem::absolute(args->out); !p.empty(); p = p.parent_path()) {
+      std::error_code ec;
+      const auto st = std::filesystem::status(p, ec);
+      if (std::filesystem::exists(st)) {
+        if (!std::filesystem::is_directory(st))
+          throw ArgumentError("--out '" + args->out + "': '" + p.string() + "' exists and is not a directory");
+        break;
+      }
+      if (p == p.parent_path()) break;
+    }
     robot::ReproductionOptions options;
     options.seed = args->seed;
     options.runs = args->runs;

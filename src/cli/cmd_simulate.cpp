@@ -11,6 +11,7 @@
 #include "cli/command_registry.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/cube_budget.hpp"
 #include "errfield/robot/simulator.hpp"
 
 namespace errfield::cli {
@@ -112,14 +113,16 @@ void run_simulate(const SimulateArgs& a) {
     }
   } else {
     std::vector<Eigen::Vector3d> pts;
+    if (a.sample == "grid" || a.sample == "cells") check_cube_budget(cube.size_mm, a.step, false, "--step");
     if (a.sample == "grid") {
       pts = cube.grid(a.step);
     } else if (a.sample == "cells") {
       pts = cube.random_per_cell(a.step, rng);
     } else if (a.sample.rfind("random:", 0) == 0) {
       const double nd = parse_number(a.sample.substr(7), "--sample random:N");
+      check_point_budget(nd, "--sample " + a.sample);  // before the cast: 1e12 must not wrap
       const int n = static_cast<int>(nd);
-      if (n < 1 || n != nd || nd > 1e7) throw ArgumentError("--sample random:N needs N >= 1, got '" + a.sample + "'");
+      if (n < 1 || n != nd) throw ArgumentError("--sample random:N needs N >= 1, got '" + a.sample + "'");
       for (int i = 0; i < n; ++i)
         pts.push_back(cube.min_corner_mm + cube.size_mm * Eigen::Vector3d(rng.uniform01(), rng.uniform01(), rng.uniform01()));
     } else {

@@ -1,5 +1,8 @@
 #include "errfield/atomic_file.hpp"
 
+#include <pthread.h>
+#include <signal.h>
+
 #include <csignal>
 #include <memory>
 #include <cstdio>
@@ -111,6 +114,20 @@ void AtomicFileSet::add(std::filesystem::path target, std::string content) {
 }
 
 void AtomicFileSet::commit() {
+  // Checks that would otherwise fail half-way through the renames: the same file named twice
+  // (the second would silently replace the first) and a target that is a directory.
+  for (std::size_t i = 0; i < files_.size(); ++i) {
+    std::error_code ec;
+    const auto canonical = std::filesystem::weakly_canonical(files_[i].first, ec);
+    for (std::size_t j = 0; j < i && !ec; ++j) {
+      std::error_code ec2;
+      if (std::filesystem::weakly_canonical(files_[j].first, ec2) == canonical && !ec2)
+        throw Error(files_[i].first.string() + ": the same output file is given twice (also as " +
+                    files_[j].first.string() + ")");
+    }
+    if (std::filesystem::is_directory(files_[i].first, ec))
+      throw Error(files_[i].first.string() + ": cannot replace file: it is a directory");
+  }
   std::vector<std::unique_ptr<AtomicFileWriter>> writers;
   writers.reserve(files_.size());
   for (const auto& [target, content] : files_) {
@@ -118,7 +135,20 @@ void AtomicFileSet::commit() {
     writers.back()->stream().write(content.data(), static_cast<std::streamsize>(content.size()));
     writers.back()->finish_writing();
   }
-  for (auto& w : writers) w->commit();
+  // SIGINT/SIGTERM wait until every rename is done: a signal between two renames would leave new
+  // and old files mixed. They are delivered (and end the process) right after.
+  sigset_t block, previous;
+  sigemptyset(&block);
+  sigaddset(&block, SIGINT);
+  sigaddset(&block, SIGTERM);
+  ::pthread_sigmask(SIG_BLOCK, &block, &previous);
+  try {
+    for (auto& w : writers) w->commit();
+  } catch (...) {
+    ::pthread_sigmask(SIG_SETMASK, &previous, nullptr);
+    throw;
+  }
+  ::pthread_sigmask(SIG_SETMASK, &previous, nullptr);
   files_.clear();
 }
 

@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "errfield/error.hpp"
+#include "errfield/robot/cube_budget.hpp"
 #include "errfield/robot/inverse_kinematics.hpp"
 #include "errfield/robot/random.hpp"
 
@@ -22,10 +23,11 @@ void PlanOptions::validate() const {
   if (!(size_mm > 0) || !std::isfinite(size_mm))
     throw ArgumentError("plan: cube size " + std::to_string(size_mm) + " mm; expected > 0");
   const double k = size_mm / step_mm;
-  if (!(step_mm > 0) || std::abs(k - std::round(k)) > 1e-9 || k > 400)
+  if (!(step_mm > 0) || std::abs(k - std::round(k)) > 1e-9)
     throw ArgumentError("plan: step " + std::to_string(step_mm) + " mm must divide the cube side " +
-                        std::to_string(size_mm) + " mm (at most 400 cells per side)");
+                        std::to_string(size_mm) + " mm");
   if (!min_corner_mm.allFinite()) throw ArgumentError("plan: cube corner is not finite");
+  check_cube_budget(size_mm, step_mm, sample_per_cell, "plan: step");
 }
 
 std::vector<PlannedPoint> plan_measurements(const MdhModel& robot, const PlanOptions& o) {

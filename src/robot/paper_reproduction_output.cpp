@@ -206,12 +206,12 @@ report::LinePlot variogram_plot(const VariogramComparison& v) {
 }  // namespace
 
 std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& r, const std::filesystem::path& dir) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw Error("cannot create output directory '" + dir.string() + "': " + ec.message());
+  // Every file is assembled in memory first and then replaced all or none (AtomicFileSet): a
+  // failure or a signal never leaves this run's tables next to an older run's report.
+  AtomicFileSet outputs;
   std::vector<std::filesystem::path> written;
-  auto put = [&](const std::string& name, const std::string& content) {
-    write_file_atomically(dir / name, content);
+  auto put = [&](const std::string& name, std::string content) {
+    outputs.add(dir / name, std::move(content));
     written.push_back(dir / name);
   };
   auto n = [](double v) { return std::isfinite(v) ? format_number(v) : std::string(); };
@@ -325,11 +325,25 @@ std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& 
     for (const auto& a : r.assembly) c.series.push_back({a.stage, a.per_hole_mm, ""});
     html.add_figure(c, "Deviation of the simulated tool tip from each hole before and after compensation.");
   }
+  // The command that reproduces the page; no run time or date: the same seed gives the same bytes
+  // (the time is printed on the console only).
   html.add_heading("Run");
   html.add_preformatted("errfield reproduce --seed " + std::to_string(r.options.seed) + " --runs " +
-                        std::to_string(r.options.runs) + "\n(" + fixed(r.seconds, 1) + " s)");
-  html.write(dir / "report.html");
-  written.push_back(dir / "report.html");
+                        std::to_string(r.options.runs));
+  put("report.html", html.to_html());
+
+  std::error_code ec;
+  const bool existed = std::filesystem::is_directory(dir, ec);
+  if (!existed) {
+    std::filesystem::create_directories(dir, ec);
+    if (ec) throw Error("cannot create output directory '" + dir.string() + "': " + ec.message());
+  }
+  try {
+    outputs.commit();
+  } catch (...) {
+    if (!existed) std::filesystem::remove(dir, ec);  // only if still empty
+    throw;
+  }
   return written;
 }
 

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "errfield/error.hpp"
+#include "errfield/robot/cube_budget.hpp"
 #include "errfield/robot/paper_reference.hpp"
 #include "robot/json_fields.hpp"
 
@@ -300,8 +301,9 @@ std::vector<Eigen::Vector3d> MeasurementCube::grid(double step_mm) const {
   if (!(step_mm > 0) || n < 1 || std::abs(cells - n) > 1e-9)
     throw ArgumentError("MeasurementCube::grid: step " + std::to_string(step_mm) + " mm does not divide the cube size " +
                         std::to_string(size_mm) + " mm");
+  check_cube_budget(size_mm, step_mm, false, "MeasurementCube::grid: step");
   std::vector<Eigen::Vector3d> out;
-  out.reserve(static_cast<std::size_t>((n + 1) * (n + 1) * (n + 1)));
+  out.reserve(static_cast<std::size_t>(n + 1) * static_cast<std::size_t>(n + 1) * static_cast<std::size_t>(n + 1));
   for (int k = 0; k <= n; ++k)
     for (int j = 0; j <= n; ++j)
       for (int i = 0; i <= n; ++i) out.push_back(min_corner_mm + step_mm * Eigen::Vector3d(i, j, k));
@@ -313,6 +315,7 @@ std::vector<Eigen::Vector3d> MeasurementCube::random_per_cell(double step_mm, Si
   if (!(step_mm > 0) || n < 1 || std::abs(size_mm / step_mm - n) > 1e-9)
     throw ArgumentError("MeasurementCube::random_per_cell: step " + std::to_string(step_mm) +
                         " mm does not divide the cube size " + std::to_string(size_mm) + " mm");
+  check_cube_budget(size_mm, step_mm, false, "MeasurementCube::random_per_cell: step");
   std::vector<Eigen::Vector3d> out;
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)

@@ -22,6 +22,7 @@
 namespace errfield {
 namespace {
 
+using ::testing::AllOf;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 using testing::ScratchDir;
@@ -236,6 +237,200 @@ TEST(AtomicCliOutput, SigintWhileTheOutputIsBeingWrittenRemovesTheTemporary) {
   EXPECT_EQ(r.signal, SIGINT);
   EXPECT_EQ(dir.read("o.csv"), kOld);
   EXPECT_TRUE(unexpected_entries(dir, {"g.csv", "t.csv", "o.csv"}).empty()) << ::testing::PrintToString(dir.entries());
+}
+
+// ---- plan, fit, compensate, calibrate, reproduce ------------------------------------------------
+
+// Interrupts `args` after `delay_ms` (while it computes) and checks that it died of SIGINT and that
+// the directory holds exactly `expected` afterwards, the files in `previous` still with kOld.
+void expect_sigint_keeps_previous(const ScratchDir& dir, const std::vector<std::string>& args,
+                                  const std::vector<std::string>& expected, const std::vector<std::string>& previous,
+                                  int delay_ms = 300) {
+  const auto p = testing::start_errfield(args, dir.path());
+  ::usleep(static_cast<useconds_t>(delay_ms) * 1000);
+  ::kill(p.pid, SIGINT);
+  const auto r = testing::wait_errfield(p);
+  ASSERT_EQ(r.signal, SIGINT) << testing::command_line(args) << " finished before the signal (exit " << r.exit_code
+                              << "): make the job larger\n"
+                              << r.err;
+  for (const auto& f : previous) EXPECT_EQ(dir.read(f), kOld) << f;
+  EXPECT_TRUE(unexpected_entries(dir, expected).empty()) << ::testing::PrintToString(dir.entries());
+}
+
+// `errfield simulate` output as the measurement data of fit/calibrate (SIMULATED).
+void simulate_into(const ScratchDir& dir, const std::string& step, const std::string& out) {
+  const auto r = testing::run_errfield({"simulate", "--seed", "5", "--step", step, "--out", out, "--robot-out",
+                                        "robot.json"},
+                                       dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+}
+
+const std::vector<std::string> kReproductionFiles{"fig5.csv",          "report.html",       "table3.csv",
+                                                  "table4.csv",        "table6.csv",        "table6_points.csv",
+                                                  "table6_spread.csv", "table8.csv"};
+
+TEST(AtomicCliOutput, ReproduceReplacesItsFilesAllOrNone) {
+  ScratchDir dir;
+  std::filesystem::create_directories(dir.path() / "out" / "report.html");  // cannot be replaced
+  for (const auto& f : kReproductionFiles)
+    if (f != "report.html") dir.write("out/" + f, kOld);
+  auto r = testing::run_errfield({"reproduce", "--runs", "1", "--out", "out"}, dir.path());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("report.html"));
+  std::vector<std::string> left;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path() / "out")) left.push_back(e.path().filename());
+  std::sort(left.begin(), left.end());
+  EXPECT_EQ(left, kReproductionFiles) << "no temporary file, no file missing";
+  for (const auto& f : kReproductionFiles) {
+    if (f != "report.html") {
+      EXPECT_EQ(dir.read("out/" + f), kOld) << f << " was replaced although the run failed";
+    }
+  }
+  // An --out directory that cannot be created is an error naming it.
+  dir.write("file", "x");
+  r = testing::run_errfield({"reproduce", "--runs", "1", "--out", "file/sub"}, dir.path());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("file/sub"));
+}
+
+TEST(AtomicCliOutput, SigintDuringReproduceLeavesPreviousFilesAndNoDirectory) {
+  ScratchDir dir;
+  std::filesystem::create_directories(dir.path() / "out");
+  for (const auto& f : kReproductionFiles) dir.write("out/" + f, kOld);
+  // --runs 1000 takes minutes; interrupted after 0.5 s, in the middle of the experiments.
+  const auto p = testing::start_errfield({"reproduce", "--runs", "1000", "--out", "out"}, dir.path());
+  const auto q = testing::start_errfield({"reproduce", "--runs", "1000", "--out", "fresh"}, dir.path());
+  ::usleep(500000);
+  ::kill(p.pid, SIGINT);
+  ::kill(q.pid, SIGINT);
+  const auto r = testing::wait_errfield(p);
+  const auto r2 = testing::wait_errfield(q);
+  ASSERT_EQ(r.signal, SIGINT) << r.err;
+  ASSERT_EQ(r2.signal, SIGINT) << r2.err;
+  for (const auto& f : kReproductionFiles) EXPECT_EQ(dir.read("out/" + f), kOld) << f;
+  std::size_t n = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir.path() / "out")) ++n;
+  EXPECT_EQ(n, kReproductionFiles.size()) << "a temporary file was left in out/";
+  EXPECT_THAT(dir.entries(), ElementsAre("out")) << "the interrupted run into 'fresh' created something";
+}
+
+TEST(AtomicCliOutput, PlanWritesOutAndSamplesOutAllOrNone) {
+  ScratchDir dir;
+  dir.write("p.csv", kOld);
+  dir.write("s.csv", kOld);
+  const std::vector<std::string> base{"plan", "--cube", "750,-250,350,250", "--step", "125", "--out", "p.csv"};
+  auto with = [&](std::vector<std::string> extra) {
+    auto a = base;
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  };
+  auto r = testing::run_errfield(with({"--samples-out", "nodir/s.csv"}), dir.path());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("nodir/s.csv"));
+  EXPECT_EQ(dir.read("p.csv"), kOld) << "--out replaced although --samples-out failed";
+  r = testing::run_errfield(with({"--samples-out", "./p.csv"}), dir.path());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("given twice"));
+  EXPECT_EQ(dir.read("p.csv"), kOld);
+  EXPECT_TRUE(unexpected_entries(dir, {"p.csv", "s.csv"}).empty());
+  r = testing::run_errfield(with({"--samples-out", "s.csv"}), dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(dir.read("p.csv"), kOld);
+  EXPECT_NE(dir.read("s.csv"), kOld);
+}
+
+TEST(AtomicCliOutput, SigintDuringPlanLeavesPreviousOutputs) {
+  ScratchDir dir;
+  dir.write("p.csv", kOld);
+  dir.write("s.csv", kOld);
+  // 132,651 grid points and 125,000 samples, one IK each: about 1.5 s.
+  expect_sigint_keeps_previous(dir,
+                               {"plan", "--cube", "750,-250,350,250", "--step", "5", "--samples-out", "s.csv", "--out",
+                                "p.csv"},
+                               {"p.csv", "s.csv"}, {"p.csv", "s.csv"});
+}
+
+TEST(AtomicCliOutput, FitFailureAndSigintLeavePreviousModel) {
+  ScratchDir dir;
+  simulate_into(dir, "25", "g.csv");  // 9,261 grid points: fitting takes seconds
+  const auto r0 = testing::run_errfield({"simulate", "--seed", "5", "--step", "125", "--measure", "distances", "--out",
+                                         "d.csv"},
+                                        dir.path());
+  ASSERT_EQ(r0.exit_code, 0) << r0.err;
+  dir.write("m.json", kOld);
+  const auto r = testing::run_errfield({"fit", "--robot", "robot.json", "--data", "d.csv", "--method", "position-idw",
+                                        "--out", "m.json"},
+                                       dir.path());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("mx"));
+  EXPECT_EQ(dir.read("m.json"), kOld);
+  expect_sigint_keeps_previous(
+      dir, {"fit", "--robot", "robot.json", "--data", "g.csv", "--method", "distance-idw", "--out", "m.json"},
+      {"g.csv", "d.csv", "robot.json", "m.json"}, {"m.json"});
+}
+
+// The plan of the paper cube (125 grid points with joints, for the robot.json of simulate_into)
+// as compensation targets, `copies` times.
+std::string plan_targets(const ScratchDir& dir, int copies) {
+  const auto r = testing::run_errfield(
+      {"plan", "--robot", "robot.json", "--cube", "750,-250,350,500", "--step", "125", "--out", "plan.csv"}, dir.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  const std::string plan = dir.read("plan.csv");
+  const std::size_t header_end = plan.find('\n') + 1;
+  std::string out = plan.substr(0, header_end);
+  for (int i = 0; i < copies; ++i) out += plan.substr(header_end);
+  std::filesystem::remove(dir.path() / "plan.csv");
+  return out;
+}
+
+TEST(AtomicCliOutput, CompensateFailureAndSigintLeavePreviousOutput) {
+  ScratchDir dir;
+  simulate_into(dir, "125", "g.csv");
+  ASSERT_EQ(testing::run_errfield({"fit", "--robot", "robot.json", "--data", "g.csv", "--method", "position-idw",
+                                   "--out", "m.json"},
+                                  dir.path())
+                .exit_code,
+            0);
+  // A bad cell on the last of 126 rows: found after the work started.
+  dir.write("bad.csv", plan_targets(dir, 1) + "g125,grid,750,-250,350,180,0,0,abc,0,0,0,0,0\n");
+  dir.write("j.csv", kOld);
+  const auto r = testing::run_errfield({"compensate", "--robot", "robot.json", "--model", "m.json", "--targets",
+                                        "bad.csv", "--out", "j.csv"},
+                                       dir.path());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("bad.csv"), HasSubstr("q1")));
+  EXPECT_EQ(dir.read("j.csv"), kOld);
+  // 200,000 targets: seconds of work.
+  dir.write("t.csv", plan_targets(dir, 1600));
+  expect_sigint_keeps_previous(
+      dir, {"compensate", "--robot", "robot.json", "--model", "m.json", "--targets", "t.csv", "--out", "j.csv"},
+      {"g.csv", "robot.json", "m.json", "bad.csv", "t.csv", "j.csv"}, {"j.csv"});
+}
+
+TEST(AtomicCliOutput, CalibrateWritesOutAndReportAllOrNone) {
+  ScratchDir dir;
+  simulate_into(dir, "125", "g.csv");
+  dir.write("cal.json", kOld);
+  dir.write("cal.txt", kOld);
+  auto r = testing::run_errfield({"calibrate", "--data", "g.csv", "--out", "cal.json", "--report", "nodir/cal.txt"},
+                                 dir.path());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("nodir/cal.txt"));
+  EXPECT_EQ(dir.read("cal.json"), kOld) << "the model was replaced although the report could not be written";
+  EXPECT_TRUE(unexpected_entries(dir, {"g.csv", "robot.json", "cal.json", "cal.txt"}).empty());
+  r = testing::run_errfield({"calibrate", "--data", "g.csv", "--out", "cal.json", "--report", "cal.txt"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(dir.read("cal.json"), kOld);
+  EXPECT_NE(dir.read("cal.txt"), kOld);
+}
+
+TEST(AtomicCliOutput, SigintDuringCalibrateLeavesPreviousOutputs) {
+  ScratchDir dir;
+  simulate_into(dir, "25", "g.csv");  // 9,262 measurements: seconds of Levenberg-Marquardt
+  dir.write("cal.json", kOld);
+  dir.write("cal.txt", kOld);
+  expect_sigint_keeps_previous(dir, {"calibrate", "--data", "g.csv", "--out", "cal.json", "--report", "cal.txt"},
+                               {"g.csv", "robot.json", "cal.json", "cal.txt"}, {"cal.json", "cal.txt"});
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // Inputs are generated here (simulated data, seeded), small enough to keep the suite fast but
 // large enough that the parallel loops split the work.
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <random>
@@ -59,6 +60,7 @@ struct Case {
   std::function<void(const ScratchDir&)> setup;  // writes the inputs
   std::vector<std::string> args;                 // the command; outputs named below
   std::vector<std::string> outputs;
+  bool same_stdout = false;  // also compare what it prints (not for commands that print a run time)
 };
 
 void PrintTo(const Case& c, std::ostream* os) { *os << c.name; }
@@ -74,6 +76,7 @@ TEST_P(Determinism, SameBytesForOneAndTwoThreadsRunAfterRun) {
     const auto r = testing::run_errfield(c.args, dir.path(), {threads});
     ASSERT_EQ(r.exit_code, 0) << testing::command_line(c.args) << " with " << threads << ":\n" << r.err;
     std::vector<std::string> files;
+    if (c.same_stdout) files.push_back(r.out);
     for (const auto& o : c.outputs) {
       files.push_back(dir.read(o));
       ASSERT_FALSE(files.back().empty()) << o;
@@ -81,9 +84,11 @@ TEST_P(Determinism, SameBytesForOneAndTwoThreadsRunAfterRun) {
     }
     runs.push_back(std::move(files));
   }
-  for (std::size_t k = 0; k < c.outputs.size(); ++k) {
-    EXPECT_TRUE(runs[0][k] == runs[1][k]) << c.outputs[k] << " differs between 1 and 2 threads";
-    EXPECT_TRUE(runs[1][k] == runs[2][k]) << c.outputs[k] << " differs between two runs with 2 threads";
+  std::vector<std::string> names = c.outputs;
+  if (c.same_stdout) names.insert(names.begin(), "stdout");
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    EXPECT_TRUE(runs[0][k] == runs[1][k]) << names[k] << " differs between 1 and 2 threads";
+    EXPECT_TRUE(runs[1][k] == runs[2][k]) << names[k] << " differs between two runs with 2 threads";
   }
 }
 
@@ -100,7 +105,7 @@ std::vector<Case> cases() {
     base.insert(base.end(), extra.begin(), extra.end());
     return base;
   };
-  return {
+  std::vector<Case> cs{
       {"variogram", scattered(4000),
        {"variogram", "--input", "s.csv", "--coords", "x,y,z", "--value", "v", "--bins", "0:1000:50", "--out", "g.csv"},
        {"g.csv"}},
@@ -149,6 +154,51 @@ std::vector<Case> cases() {
        {"calibrate", "--data", "data.csv", "--out", "cal.json", "--report", "cal.txt"},
        {"cal.json", "cal.txt"}},
   };
+  // The pipeline: plan, then fit (every method) and compensate on simulated measurements.
+  cs.push_back({"plan", [](const ScratchDir&) {},
+                {"plan", "--cube", "750,-250,350,250", "--step", "25", "--samples-out", "s.csv", "--seed", "4", "--out",
+                 "p.csv"},
+                {"p.csv", "s.csv"},
+                true});
+  auto measured = [](const ScratchDir& d) {
+    for (const std::vector<std::string>& a :
+         {std::vector<std::string>{"simulate", "--seed", "42", "--step", "125", "--out", "g.csv", "--robot-out", "robot.json"},
+          std::vector<std::string>{"simulate", "--seed", "43", "--sample", "cells", "--step", "125", "--out", "t.csv"}}) {
+      const auto r = testing::run_errfield(a, d.path());
+      ASSERT_EQ(r.exit_code, 0) << r.err;
+    }
+  };
+  for (const std::string method :
+       {"distance-idw", "position-idw", "distance-kriging", "vector-kriging", "kinematic", "kinematic+kriging"}) {
+    std::string name = "fit_" + method;
+    std::replace(name.begin(), name.end(), '-', '_');
+    std::replace(name.begin(), name.end(), '+', '_');
+    cs.push_back({name, measured, {"fit", "--robot", "robot.json", "--data", "g.csv", "--method", method, "--out", "m.json"},
+                  {"m.json"}, true});
+  }
+  for (const std::string method : {"vector-kriging", "kinematic+kriging"}) {
+    std::string name = "compensate_" + method;
+    std::replace(name.begin(), name.end(), '-', '_');
+    std::replace(name.begin(), name.end(), '+', '_');
+    cs.push_back({name,
+                  [measured, method](const ScratchDir& d) {
+                    measured(d);
+                    const auto r = testing::run_errfield(
+                        {"fit", "--robot", "robot.json", "--data", "g.csv", "--method", method, "--out", "m.json"}, d.path());
+                    ASSERT_EQ(r.exit_code, 0) << r.err;
+                  },
+                  {"compensate", "--robot", "robot.json", "--model", "m.json", "--targets", "t.csv", "--out", "j.csv"},
+                  {"j.csv"},
+                  true});
+  }
+  // Every file of reproduce, report.html included (it carries no date, run time or thread count);
+  // --runs 2 so that the parallel loop over runs splits. Its console summary ends with the run time.
+  cs.push_back({"reproduce", [](const ScratchDir&) {},
+                {"reproduce", "--runs", "2", "--seed", "5", "--out", "rep"},
+                {"rep/table3.csv", "rep/table4.csv", "rep/fig5.csv", "rep/table6.csv", "rep/table6_spread.csv",
+                 "rep/table6_points.csv", "rep/table8.csv", "rep/report.html"},
+                false});
+  return cs;
 }
 
 INSTANTIATE_TEST_SUITE_P(Commands, Determinism, ::testing::ValuesIn(cases()),

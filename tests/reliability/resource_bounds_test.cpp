@@ -8,6 +8,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "errfield/error.hpp"
+#include "errfield/robot/cube_budget.hpp"
+#include "errfield/robot/measurement_plan.hpp"
+#include "errfield/robot/simulator.hpp"
 #include "support/cli_harness.hpp"
 
 namespace errfield {
@@ -53,6 +57,76 @@ TEST(ResourceBounds, DenseKrigingOf200000SamplesIsRefusedNamingLocalAndSparse) {
   local.insert(local.end() - 2, {"--backend", "local", "--neighbors", "32"});
   const auto ok = testing::run_errfield(local, dir.path());
   EXPECT_EQ(ok.exit_code, 0) << ok.err;
+}
+
+// Jobs whose size follows an option (plan and simulate: (SIZE/--step + 1)^3 cube points, each an
+// IK solve and ~2 KB of memory): refused up front with exit code 3, naming the option, the number
+// of points and the step that fits, before any allocation, and leaving the previous output.
+TEST(ResourceBounds, SimulateWithATinyStepIsRefusedNamingTheStepAndTheSize) {
+  ScratchDir dir;
+  dir.write("o.csv", "previous\n");
+  struct Job {
+    std::vector<std::string> args;
+    std::vector<std::string> says;
+  };
+  const std::vector<Job> jobs{
+      // 500 mm / 0.01 mm = 50,000 cells per side: 50,001^3 = 1.25e14 grid points.
+      {{"simulate", "--step", "0.01", "--out", "o.csv"}, {"--step 0.01", "50000 cells per side", "1.25e+14 grid points",
+                                                          "1000000 points", "--step >= 5.051 mm"}},
+      {{"simulate", "--sample", "cells", "--step", "0.01", "--out", "o.csv"}, {"--step 0.01", "1.25e+14"}},
+      {{"simulate", "--sample", "random:50000000", "--out", "o.csv"}, {"--sample random:50000000", "5e+07 points"}},
+      {{"simulate", "--sample", "random:1e15", "--out", "o.csv"}, {"--sample random:1e15", "1e+15 points"}},
+  };
+  for (const auto& job : jobs) {
+    const auto start = std::chrono::steady_clock::now();
+    const auto r = testing::run_errfield(job.args, dir.path());
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_EQ(r.signal, 0) << testing::command_line(job.args);
+    EXPECT_EQ(r.exit_code, 3) << testing::command_line(job.args) << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr("resource limit")) << testing::command_line(job.args);
+    for (const auto& s : job.says) EXPECT_THAT(r.err, HasSubstr(s)) << testing::command_line(job.args);
+    EXPECT_LT(seconds, 20.0) << "refused before the work, not after";
+    EXPECT_EQ(dir.read("o.csv"), "previous\n");
+  }
+}
+
+TEST(ResourceBounds, PlanWithATinyStepIsRefusedCountingTheCellSamples) {
+  ScratchDir dir;
+  // 250 cells per side: 251^3 = 15,813,251 grid points.
+  auto r = testing::run_errfield({"plan", "--cube", "750,-250,350,500", "--step", "2", "--out", "p.csv"}, dir.path());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("--step 2"), HasSubstr("250 cells per side"), HasSubstr("1.58e+07 grid points")));
+  // 80 cells per side: 81^3 = 531,441 grid points fit, but with one sample per cell (80^3 = 512,000)
+  // the job is 1,043,441 points; at most 78 cells per side fit (79^3 + 78^3 = 967,591).
+  r = testing::run_errfield(
+      {"plan", "--cube", "750,-250,350,500", "--step", "6.25", "--samples-out", "s.csv", "--out", "p.csv"}, dir.path());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("1043441 grid points and cell samples"), HasSubstr("at most 78 cells per side")));
+  EXPECT_TRUE(dir.entries().empty()) << ::testing::PrintToString(dir.entries());
+}
+
+TEST(ResourceBounds, LibraryChecksTheCubeBudgetAtTheBoundary) {
+  using robot::check_cube_budget;
+  using robot::kMaxCubePoints;
+  ASSERT_EQ(kMaxCubePoints, 1000000u);
+  // 99 cells per side: 100^3 = 10^6 points, the limit itself; 100 cells: 101^3 = 1,030,301.
+  EXPECT_NO_THROW(check_cube_budget(99.0, 1.0, false, "step"));
+  EXPECT_THROW(check_cube_budget(100.0, 1.0, false, "step"), ResourceError);
+  // With cell samples: 79^3 + 78^3 = 967,591 fits, 80^3 + 79^3 = 1,005,039 does not.
+  EXPECT_NO_THROW(check_cube_budget(78.0, 1.0, true, "step"));
+  EXPECT_THROW(check_cube_budget(79.0, 1.0, true, "step"), ResourceError);
+  // The library entry points check it too, before allocating.
+  const robot::MeasurementCube cube = robot::paper_cube();
+  EXPECT_THROW(cube.grid(0.01), ResourceError);
+  robot::SimulationRng rng(1);
+  EXPECT_THROW(cube.random_per_cell(0.01, rng), ResourceError);
+  EXPECT_EQ(cube.grid(125.0).size(), 125u);
+  robot::PlanOptions o;
+  o.size_mm = 500;
+  o.step_mm = 2;
+  EXPECT_THROW(o.validate(), ResourceError);
+  o.step_mm = 0.3;  // does not divide 500: an argument error, not a resource one
+  EXPECT_THROW(o.validate(), ArgumentError);
 }
 
 }  // namespace

@@ -125,7 +125,9 @@ std::string reproduction_summary(const ReproductionResult& result);
 
 /// Writes table3.csv, table4.csv, fig5.csv, table6.csv (method,metric,max_mm,mean_mm,std_mm:
 /// medians over the runs), table6_spread.csv, table6_points.csv, table8.csv and report.html into
-/// `dir` (created if missing), each atomically. Returns the paths written.
+/// `dir` (created if missing), all or none (AtomicFileSet: on an error or SIGINT the previous
+/// files stay as they were). The files depend only on the options (seed, runs), not on the thread
+/// count or the run time. Returns the paths written.
 std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& result,
                                                       const std::filesystem::path& dir);
 
