@@ -29,8 +29,13 @@ void add_reproduce_command(CLI::App& app) {
   cmd->add_option("--runs", args->runs, "independent simulated robots for Table 6 (>= 1)")->capture_default_str();
   cmd->add_option("--threads", args->threads, "OpenMP threads (0 = default)")->capture_default_str();
   cmd->callback([args] {
-    // An --out that can never become a directory fails now, not after minutes of work. (Nothing is
-    // created yet: an interrupted run leaves no empty directory behind.)
+    robot::ReproductionOptions options;
+    options.seed = args->seed;
+    options.runs = args->runs;
+    options.threads = args->threads;
+    options.validate();
+    // Options first, then an --out that can never become a directory: both fail now, not after
+    // minutes of work. (Nothing is created yet: an interrupted run leaves no empty directory.)
     for (std::filesystem::path p = std::filesystem::absolute(args->out); !p.empty(); p = p.parent_path()) {
       std::error_code ec;
       const auto st = std::filesystem::status(p, ec);
@@ -41,10 +46,6 @@ void add_reproduce_command(CLI::App& app) {
       }
       if (p == p.parent_path()) break;
     }
-    robot::ReproductionOptions options;
-    options.seed = args->seed;
-    options.runs = args->runs;
-    options.threads = args->threads;
     std::unique_ptr<Progress> progress;
     std::string stage;
     options.progress = [&](std::string_view s, std::size_t done, std::size_t total) {

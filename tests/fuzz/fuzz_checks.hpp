@@ -6,6 +6,7 @@
 // A violated contract prints what went wrong and aborts: libFuzzer then saves the input, and in
 // the replay test the process dies, which fails that test.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -145,9 +146,39 @@ inline void check_robot_json(std::string_view text) {
   ERRFIELD_FUZZ_CHECK(again.name() == model->name());
 }
 
+/// Names of the files write_cli_scratch and kCliScratchCommands put in the scratch directory.
+inline const std::vector<std::string> kCliScratchFiles{"s.csv", "t.csv", "v.csv", "m.json", "bad.csv", "r.json",
+                                                       "q.csv", "p.csv", "g.csv", "gr.json", "c.csv", "cm.json"};
+
+/// `reproduce` runs the whole paper (seconds per run even in Release, far more under the fuzzer's
+/// sanitizers), so the fuzzer only takes `reproduce` inputs that stop before the experiments: every
+/// `--out` (at least one) must name an existing scratch file, which the command refuses after
+/// parsing and validating all options (or the input asks for --help). Its argument handling is fuzzed; the run itself is not
+/// (tests/reliability covers it).
+inline bool reproduce_stops_early(const std::vector<std::string>& args) {
+  bool has_out = false;
+  for (std::size_t i = 1; i < args.size(); ++i) {
+    if (args[i] == "--help" || args[i] == "-h") return true;  // help is printed during parsing
+    std::string value;
+    if (args[i] == "--out") {
+      if (i + 1 >= args.size()) return true;  // "--out" without a value: a usage error
+      value = args[i + 1];
+    } else if (args[i].rfind("--out=", 0) == 0) {
+      value = args[i].substr(6);
+    } else {
+      continue;
+    }
+    if (std::find(kCliScratchFiles.begin(), kCliScratchFiles.end(), value) == kCliScratchFiles.end()) return false;
+    has_out = true;
+  }
+  return has_out;
+}
+
 /// The CLI fuzzer's input format: arguments separated by '\n' (argv[0] "errfield" is added).
-/// Returns nothing for inputs the fuzzer skips: too long, more than 24 arguments, or an argument
-/// with '/', ".." or a NUL byte, so that commands only ever touch the scratch directory.
+/// Returns nothing for inputs the fuzzer skips: too long, more than 24 arguments, an argument
+/// with '/', ".." or a NUL byte (so that commands only ever touch the scratch directory), or a
+/// `reproduce` that would run (reproduce_stops_early). Cube sizes (plan/simulate --step) are
+/// bounded by ERRFIELD_MAX_CUBE_POINTS = kCliFuzzMaxCubePoints, set by both CLI harnesses.
 inline std::optional<std::vector<std::string>> split_cli_args(std::string_view data) {
   if (data.size() > 2048) return std::nullopt;
   std::vector<std::string> args{"errfield"};
@@ -166,8 +197,23 @@ inline std::optional<std::vector<std::string>> split_cli_args(std::string_view d
     if (a.find('/') != std::string::npos || a.find("..") != std::string::npos ||
         a.find('\0') != std::string::npos)
       return std::nullopt;
+  if (std::find(args.begin(), args.end(), "reproduce") != args.end() && !reproduce_stops_early(args))
+    return std::nullopt;
   return args;
 }
+
+/// The cube-point budget (robot::max_cube_points) under the CLI fuzzer: plan and simulate stay
+/// at milliseconds per input instead of up to 10^6 IK solves.
+inline constexpr const char* kCliFuzzMaxCubePoints = "ERRFIELD_MAX_CUBE_POINTS=2000";
+
+/// Commands run once in the scratch directory after write_cli_scratch, making the measurement
+/// files fit/calibrate/compensate seeds point at (SIMULATED): g.csv (27-point grid + base point),
+/// gr.json (its nominal robot), c.csv (8 validation points) and cm.json (a distance-idw model).
+inline const std::vector<std::vector<std::string>> kCliScratchCommands{
+    {"errfield", "simulate", "--seed", "3", "--step", "250", "--out", "g.csv", "--robot-out", "gr.json"},
+    {"errfield", "simulate", "--seed", "4", "--sample", "cells", "--step", "250", "--out", "c.csv"},
+    {"errfield", "fit", "--robot", "gr.json", "--data", "g.csv", "--method", "distance-idw", "--out", "cm.json"},
+};
 
 /// Small valid inputs the CLI fuzzer's commands can be pointed at by name, written into `dir`.
 inline void write_cli_scratch(const std::filesystem::path& dir) {

@@ -1,6 +1,7 @@
 // libFuzzer target: the CLI's argument handling, run_cli(argc, argv), with every subcommand
 // compiled in. Input format and safety rules: split_cli_args in fuzz_checks.hpp (commands run in a
-// fresh scratch directory and can only name files there).
+// fresh scratch directory and can only name files there; plan/simulate sizes are capped by
+// ERRFIELD_MAX_CUBE_POINTS; `reproduce` only with inputs that stop before the experiments).
 // Contract checked: any argument list ends in an exit code — never an uncaught exception, exit(),
 // a crash or a sanitizer report — and never in the "internal error" code 70.
 
@@ -34,6 +35,12 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   std::filesystem::current_path(g_scratch);
   std::atexit(remove_scratch);
   errfield::fuzz::write_cli_scratch(g_scratch);
+  ::putenv(const_cast<char*>(errfield::fuzz::kCliFuzzMaxCubePoints));
+  for (const auto& command : errfield::fuzz::kCliScratchCommands) {
+    std::vector<const char*> argv;
+    for (const auto& a : command) argv.push_back(a.c_str());
+    if (errfield::cli::run_cli(static_cast<int>(argv.size()), argv.data()) != 0) std::abort();
+  }
   return 0;
 }
 

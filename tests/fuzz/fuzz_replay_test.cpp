@@ -82,6 +82,11 @@ TEST(FuzzReplay, Cli) {
   const fs::path dir = fs::temp_directory_path() / ("errfield-replay-cli-" + std::to_string(::getpid()));
   fs::create_directories(dir);
   write_cli_scratch(dir);
+  ::putenv(const_cast<char*>(kCliFuzzMaxCubePoints));  // as the fuzzer runs them
+  for (const auto& command : kCliScratchCommands) {
+    const int status = run_cli_in(dir, command);
+    ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "scratch set-up failed: " << command[1];
+  }
   const auto files = inputs("cli");
   ASSERT_FALSE(files.empty());
   for (const auto& f : files) {
