@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -102,6 +103,21 @@ void EmpiricalVariogramOptions::validate() const {
 }
 
 namespace detail {
+
+void check_variogram_accumulators(std::size_t bins, int components, const EmpiricalVariogramOptions& options) {
+  const long double bytes = static_cast<long double>(kVariogramChunks) * static_cast<long double>(bins + 1) *
+                            (2.0L + static_cast<long double>(components)) * 8.0L;
+  if (bytes <= static_cast<long double>(options.max_accumulator_bytes)) return;
+  const long double per_bin = static_cast<long double>(kVariogramChunks) * (2.0L + components) * 8.0L;
+  const auto max_bins = static_cast<std::uint64_t>(static_cast<long double>(options.max_accumulator_bytes) / per_bin) - 1;
+  char size[64];
+  std::snprintf(size, sizeof size, "%.3g GB", static_cast<double>(bytes / 1e9L));
+  throw ResourceError("empirical variogram: " + std::to_string(bins) + " lag bins x " + std::to_string(components) +
+                      " component(s) need " + size + " of per-chunk sums, over the budget of " +
+                      std::to_string(options.max_accumulator_bytes) +
+                      " bytes (max_accumulator_bytes); use at most " + std::to_string(max_bins) +
+                      " bins (a larger bin width, e.g. in --bins lo:max:width)");
+}
 
 std::vector<std::size_t> variogram_chunk_rows(std::size_t n) {
   std::vector<std::size_t> rows{1};

@@ -94,6 +94,11 @@ struct EmpiricalVariogramOptions {
   /// second pass. Above this many stored values (8 bytes each) empirical_variogram throws
   /// ResourceError before allocating; lower pair_fraction or raise the budget.
   std::uint64_t max_stored_differences = 25'000'000;
+  /// The per-chunk sums (kVariogramChunks x (bins + 1) x (2 + components) doubles, fixed so the
+  /// result does not depend on threads) grow with the number of bins: above this many bytes
+  /// empirical_variogram throws ResourceError before allocating, naming the bin count (use fewer
+  /// bins). 1 GiB allows ~700,000 bins for one component (`--bins 0:1e7:1` asked for 15 GB).
+  std::uint64_t max_accumulator_bytes = std::uint64_t{1} << 30;
   /// Throws ArgumentError naming the offending field.
   void validate() const;
 };

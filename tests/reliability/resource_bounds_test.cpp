@@ -8,6 +8,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/cube_budget.hpp"
 #include "errfield/robot/measurement_plan.hpp"
@@ -127,6 +128,37 @@ TEST(ResourceBounds, LibraryChecksTheCubeBudgetAtTheBoundary) {
   EXPECT_THROW(o.validate(), ResourceError);
   o.step_mm = 0.3;  // does not divide 500: an argument error, not a resource one
   EXPECT_THROW(o.validate(), ArgumentError);
+}
+
+// variogram --bins: the per-chunk sums are kVariogramChunks x (bins + 1) x (2 + components)
+// doubles; `--bins 0:10000000:1` asked for 15.4 GB (measured peak RSS 15.5 GB, 56 s, before the
+// budget) and is now refused at once.
+TEST(ResourceBounds, VariogramWithTenMillionBinsIsRefusedNamingTheBinCount) {
+  ScratchDir dir;
+  dir.write("s.csv", "x,y,z,v\n0,0,0,1\n1,0,0,2\n0,1,0,3\n5,5,5,4\n");
+  const auto r = testing::run_errfield(
+      {"variogram", "--input", "s.csv", "--coords", "x,y,z", "--value", "v", "--bins", "0:10000000:1", "--out", "o.csv"},
+      dir.path());
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  // 2^30 bytes / (64 chunks x 3 sums x 8 bytes) = 699,050 slots, one of them the discard slot.
+  EXPECT_THAT(r.err, AllOf(HasSubstr("10000000 lag bins"), HasSubstr("15.4 GB"), HasSubstr("at most 699049 bins"),
+                           HasSubstr("--bins")));
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "o.csv"));
+}
+
+TEST(ResourceBounds, VariogramAccumulatorBudgetAtTheBoundary) {
+  const Eigen::MatrixXd x = (Eigen::MatrixXd(3, 1) << 0.0, 1.0, 2.5).finished();
+  const Eigen::MatrixXd z = (Eigen::MatrixXd(3, 1) << 1.0, 2.0, 4.0).finished();
+  EmpiricalVariogramOptions o;
+  // 10 bins + the discard slot, 64 chunks, 3 sums of 8 bytes: exactly 16,896 bytes.
+  o.max_accumulator_bytes = 16896;
+  EXPECT_NO_THROW(empirical_variogram(x, z, LagBins::uniform(0, 10, 1), o));
+  EXPECT_THROW(empirical_variogram(x, z, LagBins::uniform(0, 11, 1), o), ResourceError);
+  // Three components: 5 sums per slot.
+  const Eigen::MatrixXd z3 = Eigen::MatrixXd::Ones(3, 3);
+  o.max_accumulator_bytes = 64 * 5 * 8 * 11;
+  EXPECT_NO_THROW(empirical_variogram(x, z3, LagBins::uniform(0, 10, 1), o));
+  EXPECT_THROW(empirical_variogram(x, z3, LagBins::uniform(0, 11, 1), o), ResourceError);
 }
 
 }  // namespace

@@ -18,6 +18,9 @@ std::vector<std::size_t> variogram_chunk_rows(std::size_t n);
 /// Throws unless values is n x K with K >= 1 and every entry finite (InputError naming row and
 /// column, 0-based).
 void check_variogram_values(const Eigen::MatrixXd& values, std::size_t n_locations);
+/// Throws ResourceError when the per-chunk sums for `bins` bins and `components` exceed
+/// options.max_accumulator_bytes.
+void check_variogram_accumulators(std::size_t bins, int components, const EmpiricalVariogramOptions& options);
 kernels::BinLayout variogram_bin_layout(const LagBins& bins, const EmpiricalVariogramOptions& o);
 /// ceil(fraction * 2^64) for fraction < 1.
 std::uint64_t variogram_keep_below(double fraction);
@@ -128,6 +131,7 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
   for (std::size_t i = 0; i < n; ++i)
     for (int c = 0; c < K; ++c) z[i * Ks + static_cast<std::size_t>(c)] = values(static_cast<Eigen::Index>(i), c);
 
+  detail::check_variogram_accumulators(bins.size(), K, options);
   const std::vector<std::size_t> rows = detail::variogram_chunk_rows(n);
   const std::size_t C = rows.size() - 1;
   const std::size_t B = bins.size() + 1;  // + a discard slot for lags outside every bin
