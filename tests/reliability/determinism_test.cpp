@@ -154,6 +154,25 @@ std::vector<Case> cases() {
        {"calibrate", "--data", "data.csv", "--out", "cal.json", "--report", "cal.txt"},
        {"cal.json", "cal.txt"}},
   };
+  // fit-variogram on the variogram of simulated samples; fk and ik on the plan's joints and poses.
+  cs.push_back({"fit_variogram",
+                [](const ScratchDir& d) {
+                  d.write("s.csv", samples_csv(1500, 21));
+                  const auto r = testing::run_errfield({"variogram", "--input", "s.csv", "--coords", "x,y,z", "--value",
+                                                        "v", "--bins", "0:1000:50", "--out", "g.csv"},
+                                                       d.path());
+                  ASSERT_EQ(r.exit_code, 0) << r.err;
+                },
+                {"fit-variogram", "--input", "g.csv", "--model", "sph", "--nugget", "free", "--out", "fit.json"},
+                {"fit.json"},
+                true});
+  auto planned = [](const ScratchDir& d) {
+    const auto r = testing::run_errfield(
+        {"plan", "--cube", "750,-250,350,250", "--step", "25", "--out", "p.csv"}, d.path());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  };
+  cs.push_back({"fk", planned, {"fk", "--input", "p.csv", "--out", "fk.csv"}, {"fk.csv"}, true});
+  cs.push_back({"ik", planned, {"ik", "--input", "p.csv", "--out", "ik.csv"}, {"ik.csv"}, true});
   // The pipeline: plan, then fit (every method) and compensate on simulated measurements.
   cs.push_back({"plan", [](const ScratchDir&) {},
                 {"plan", "--cube", "750,-250,350,250", "--step", "25", "--samples-out", "s.csv", "--seed", "4", "--out",
