@@ -38,6 +38,7 @@ void run_calibrate(const CalibrateArgs& a) {
       throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": joints outside the limits of robot '" +
                            nominal.name() + "'",
                        a.data, table.line_of_row(i), "q1");
+  warn_if_metres(table, nominal, "calibrate", a.model == "position" ? kMeasuredXyz : kDistances);
   std::ostringstream text;
   CalibrationResult result;
   MdhModel identified = nominal;
@@ -47,12 +48,12 @@ void run_calibrate(const CalibrateArgs& a) {
     for (std::size_t i = 0; i < q.size(); ++i) data.push_back({q[i], m.row(static_cast<Eigen::Index>(i)).transpose()});
     // Registration first (tracker <- robot base and reflector offset), then the full model in the
     // tracker frame; the output is expressed back in the registered robot frame.
-    const CalibrationResult reg = register_tracker(nominal, data, options);
+    const CalibrationResult reg = with_source(a.data, [&] { return register_tracker(nominal, data, options); });
     text << "== registration (tracker <- robot base, reflector offset) ==\n" << reg.report();
     const PoseXyzRpy t = to_xyz_rpy(reg.model.base());
     text << "tracker <- robot base: x " << t.x_mm << " y " << t.y_mm << " z " << t.z_mm << " mm, rx " << t.rx_deg
          << " ry " << t.ry_deg << " rz " << t.rz_deg << " deg\n\n";
-    result = calibrate_positions(reg.model, data, options);
+    result = with_source(a.data, [&] { return calibrate_positions(reg.model, data, options); });
     identified = result.model.with_base(reg.model.base().inverse() * result.model.base());
   } else if (a.model == "distance") {
     if (!table.has_column("kind"))
@@ -89,7 +90,7 @@ void run_calibrate(const CalibrateArgs& a) {
       }
     }
     if (skipped) text << skipped << " pair(s) less than 1 mm apart (a point at its base point) skipped\n";
-    result = calibrate_distances(nominal, data, options);
+    result = with_source(a.data, [&] { return calibrate_distances(nominal, data, options); });
     identified = result.model;
   } else {
     throw ArgumentError("--model: expected 'distance' or 'position', got '" + a.model + "'");

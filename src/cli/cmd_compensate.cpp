@@ -54,6 +54,7 @@ void run_compensate(const CompensateArgs& a) {
     qn = read_joint_columns(t);
   } else {
     const Eigen::MatrixXd p = t.numeric_columns(pose_cols);
+    warn_if_metres(t, nominal, "compensate", kNominalXyz);
     for (std::size_t i = 0; i < n; ++i) {
       const auto r = p.row(static_cast<Eigen::Index>(i));
       const IkResult ik = inverse_kinematics_multistart(nominal, to_isometry({r[0], r[1], r[2], r[3], r[4], r[5]}));

@@ -35,8 +35,10 @@ void run_fit(const FitArgs& a) {
     const auto v = parse_numbers(b, 3, "--base-point");
     fixed.emplace_back(v[0], v[1], v[2]);
   }
-  const MeasurementSet data = MeasurementSet::from_table(CsvTable::read(a.data), model, fixed);
-  const FitResult r = fit_compensation_model(model, data, o);
+  const CsvTable table = CsvTable::read(a.data);
+  const MeasurementSet data = MeasurementSet::from_table(table, model, fixed);
+  warn_if_metres(table, model, "fit");
+  const FitResult r = with_source(a.data, [&] { return fit_compensation_model(model, data, o); });
   write_file_atomically(a.out, r.model.to_json().dump(1) + "\n");
   std::cout << "fit: method " << a.method << " on " << data.q_deg.size() << " points of " << a.data << "\n";
   if (r.model.field()) std::cout << "  field: " << r.model.field()->describe() << "\n";

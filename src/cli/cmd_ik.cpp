@@ -6,7 +6,6 @@
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
 #include "cli/robot_cli.hpp"
-#include "errfield/robot/input_checks.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/inverse_kinematics.hpp"
 
@@ -29,8 +28,7 @@ void run_ik(const IkArgs& a) {
   const CsvTable table = CsvTable::read(a.input);
   const Eigen::MatrixXd xyz = table.numeric_columns({"x", "y", "z"});
   const std::size_t n = static_cast<std::size_t>(xyz.rows());
-  if (const auto warning = robot::metres_instead_of_mm(xyz, model, a.input))
-    std::cerr << "errfield ik: warning: " << *warning << "\n";
+  warn_if_metres(table, model, "ik", kNominalXyz);
 
   const bool has_matrix = table.has_column("r11");
   const bool has_euler = table.has_column("rx");

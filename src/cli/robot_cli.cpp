@@ -1,5 +1,9 @@
 #include "cli/robot_cli.hpp"
 
+#include <iostream>
+
+#include "errfield/robot/input_checks.hpp"
+
 namespace errfield::cli {
 
 robot::MdhModel load_robot_or_default(const std::string& path) {
@@ -23,6 +27,23 @@ std::vector<robot::JointVector> read_joint_columns(const CsvTable& table, const 
   std::vector<robot::JointVector> q(static_cast<std::size_t>(m.rows()));
   for (Eigen::Index r = 0; r < m.rows(); ++r) q[static_cast<std::size_t>(r)] = m.row(r).transpose();
   return q;
+}
+
+void warn_if_metres(const CsvTable& table, const robot::MdhModel& model, const std::string& command,
+                    unsigned groups) {
+  for (const std::string prefix : {"", "m"}) {
+    if (!(groups & (prefix.empty() ? kNominalXyz : kMeasuredXyz))) continue;
+    const std::vector<std::string> cols{prefix + "x", prefix + "y", prefix + "z"};
+    if (!table.has_column(cols[0]) || !table.has_column(cols[1]) || !table.has_column(cols[2])) continue;
+    if (const auto w = robot::metres_instead_of_mm(table.numeric_columns(cols), model,
+                                                   table.source() + " columns " + cols[0] + "," + cols[1] + "," + cols[2]))
+      std::cerr << "errfield " << command << ": warning: " << *w << "\n";
+  }
+  for (std::size_t k = 0; (groups & kDistances) && table.has_column("dist_b" + std::to_string(k)); ++k) {
+    const std::string col = "dist_b" + std::to_string(k);
+    if (const auto w = robot::distances_in_metres(table.numeric_column(col), model, table.source() + " column " + col))
+      std::cerr << "errfield " << command << ": warning: " << *w << "\n";
+  }
 }
 
 const std::vector<std::string>& rotation_column_names() {

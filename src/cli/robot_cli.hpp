@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
 #include "errfield/robot/mdh_model.hpp"
 
 namespace errfield::cli {
@@ -22,6 +23,27 @@ bool has_joint_columns(const CsvTable& table, const std::string& prefix = "q");
 
 /// Names "q1".."q6" with a prefix.
 std::vector<std::string> joint_column_names(const std::string& prefix = "q");
+
+/// Warnings (to stderr, prefixed "errfield <command>: warning: ") when the position triples
+/// x,y,z and mx,my,mz or the distance columns dist_b0, dist_b1, ... that `table` has look like
+/// metres where millimetres are expected (robot/input_checks.hpp). Each names the file and the
+/// columns. Reads only columns that are present; call it after the command has parsed them.
+/// `groups` selects what to check (bits of MetresCheck).
+enum MetresCheck : unsigned { kNominalXyz = 1, kMeasuredXyz = 2, kDistances = 4, kAllUnits = 7 };
+void warn_if_metres(const CsvTable& table, const robot::MdhModel& model, const std::string& command,
+                    unsigned groups = kAllUnits);
+
+/// Runs `f()` (a library step on the data of `file`); an InputError that names no file (e.g.
+/// "calibration: 3 measured positions ...") is re-thrown with "file: " in front and file() set.
+template <class F>
+auto with_source(const std::string& file, F f) {
+  try {
+    return f();
+  } catch (const InputError& e) {
+    if (!e.file().empty()) throw;
+    throw InputError(file + ": " + e.what(), file, e.row(), e.column());
+  }
+}
 
 /// Rotation-matrix column names r11, r12, ..., r33 (row-major).
 const std::vector<std::string>& rotation_column_names();

@@ -71,9 +71,7 @@ void KrigingEngine::setup_dense() {
     const double g_rcond = g_llt_.info() == Eigen::Success ? g_llt_.rcond() : 0.0;
     if (!(g_rcond > 1e-14)) {
       report_.status = KrigingStatus::SingularDrift;
-      report_.message = "the " + std::to_string(drift_terms_) +
-                        " drift terms are (nearly) linearly dependent at the samples (reciprocal condition " +
-                        format_number(g_rcond) + "), e.g. all samples on a plane with a drift in all coordinates";
+      report_.message = singular_drift_message(g_rcond);
       return;
     }
     beta_ = g_llt_.solve(q_.transpose() * y);

@@ -5,6 +5,7 @@
 #include <numeric>
 #include <random>
 
+#include <Eigen/SVD>
 #include <omp.h>
 
 #include "errfield/csv_table.hpp"
@@ -131,8 +132,9 @@ KrigingEngine::KrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, Eige
                         std::to_string(std::max(drift_terms_, 1)));
   if (points_.cols() < std::max(drift_terms_, 1)) {
     report_.status = KrigingStatus::TooFewSamples;
-    report_.message = std::to_string(points_.cols()) + " samples for " + std::to_string(drift_terms_) +
-                      " drift terms; need at least as many samples as drift terms";
+    report_.message = std::to_string(points_.cols()) + " samples for the " + std::to_string(drift_terms_) +
+                      " drift terms of the " + drift_description() +
+                      "; need at least as many samples as drift terms (use a lower drift order)";
     return;
   }
   if (options_.backend == KrigingBackend::Dense) setup_dense();
@@ -253,6 +255,51 @@ void KrigingEngine::build_drift() {
     }
   }
   f_ = drift_matrix(raw_).transpose();
+}
+
+std::string KrigingEngine::drift_description() const {
+  const int d = dimension_;
+  std::string s;
+  if (options_.kind != KrigingKind::Universal) s = "constant mean (1 term)";
+  else if (options_.drift_order == 0) s = "constant drift (order 0, 1 term)";
+  else if (options_.drift_order == 1) s = "linear drift (order 1: 1 + " + std::to_string(d) + " coordinate terms)";
+  else
+    s = "quadratic drift (order 2: 1 + " + std::to_string(d) + " linear + " + std::to_string(d * (d + 1) / 2) +
+        " quadratic terms)";
+  if (!options_.drift_functions.empty())
+    s += " plus " + std::to_string(options_.drift_functions.size()) + " drift function(s)";
+  return s;
+}
+
+std::string KrigingEngine::singular_drift_message(double rcond) const {
+  // The geometry behind it: how many coordinate directions the samples span (singular values of
+  // the centred, scaled coordinates, relative to the largest).
+  const Eigen::Index d = raw_.rows(), n = raw_.cols();
+  int spanned = 0;
+  if (n > 1) {
+    Eigen::MatrixXd c(d, n);
+    for (Eigen::Index k = 0; k < d; ++k)
+      c.row(k) = (raw_.row(k).array() - drift_center_[k]) / drift_scale_[k];
+    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(c).singularValues();
+    for (Eigen::Index k = 0; k < sv.size(); ++k) spanned += sv[k] > 1e-7 * sv[0] ? 1 : 0;
+  }
+  std::string geometry;
+  if (spanned == 0) geometry = "all samples are at one location";
+  else if (spanned == 1) geometry = "the samples are collinear (all on one line)";
+  else if (spanned == 2 && d == 3) geometry = "the samples are coplanar (all on one plane)";
+  else if (spanned < d)
+    geometry = "the samples span only " + std::to_string(spanned) + " of the " + std::to_string(d) + " coordinate directions";
+  else if (options_.kind == KrigingKind::Universal && options_.drift_order == 2)
+    geometry = "the samples spread in all " + std::to_string(d) +
+               " coordinate directions but lie on a quadric surface (e.g. a sphere, a cylinder or two planes)";
+  else if (!options_.drift_functions.empty())
+    geometry = "the drift functions are (nearly) combinations of the polynomial terms at the samples";
+  else
+    geometry = "the samples are (nearly) degenerate for this drift";
+  return "the " + std::to_string(drift_terms_) + " drift terms of the " + drift_description() +
+         " are (nearly) linearly dependent at the " + std::to_string(n) + " samples (reciprocal condition " +
+         format_number(rcond) + "): " + geometry + "; use a lower drift order (or ordinary kriging), or samples " +
+         "that span the drift's coordinates";
 }
 
 void KrigingEngine::drift_row(const double* raw_point, double* out) const {

@@ -53,6 +53,10 @@ class KrigingEngine {
   bool check_condition(double rcond);
   // drift row of one point (raw coordinates, D doubles) into out (p doubles)
   void drift_row(const double* raw_point, double* out) const;
+  // "linear drift (order 1: 1 + 3 coordinate terms)" etc., for messages.
+  std::string drift_description() const;
+  // SingularDrift report message: the drift order and the sample geometry that makes it singular.
+  std::string singular_drift_message(double rcond) const;
   Eigen::MatrixXd drift_matrix(const Eigen::MatrixXd& raw) const;  // p x M
   // C(0) on the target side: the total sill (micro-scale nugget) or without nugget (signal)
   double target_variance() const;

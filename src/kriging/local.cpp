@@ -200,7 +200,7 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
   out.status = report_.status;
   out.message = report_.message;
   if (failed > 0) {
-    const char* why = "";
+    std::string why;
     switch (first_outcome) {
       case TargetOutcome::TooFew:
         out.status = KrigingStatus::TooFewSamples;
@@ -212,7 +212,9 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
         break;
       case TargetOutcome::SingularDrift:
         out.status = KrigingStatus::SingularDrift;
-        why = "drift terms linearly dependent over the neighbours";
+        why = "the " + std::to_string(drift_terms_) + " drift terms of the " + drift_description() +
+              " are linearly dependent over its neighbours (e.g. neighbours on one line or plane); use a lower "
+              "drift order or more neighbours";
         break;
       case TargetOutcome::Ok: break;
     }

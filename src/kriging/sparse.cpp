@@ -81,9 +81,7 @@ void KrigingEngine::setup_sparse() {
     const double g_rcond = g_llt_.info() == Eigen::Success ? g_llt_.rcond() : 0.0;
     if (!(g_rcond > 1e-14)) {
       report_.status = KrigingStatus::SingularDrift;
-      report_.message = "the " + std::to_string(drift_terms_) +
-                        " drift terms are (nearly) linearly dependent at the samples (reciprocal condition " +
-                        format_number(g_rcond) + ")";
+      report_.message = singular_drift_message(g_rcond);
       return;
     }
     beta_ = g_llt_.solve(f_.transpose() * x);

@@ -19,6 +19,15 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 /// IGG3 weights are considered settled when no weight moves by more than this in a round.
 constexpr double kWeightsSettled = 1e-3;
 
+template <class Vector>
+std::size_t count_distinct(std::vector<Vector> v) {
+  const auto less = [](const Vector& a, const Vector& b) {
+    return std::lexicographical_compare(a.begin(), a.end(), b.begin(), b.end());
+  };
+  std::sort(v.begin(), v.end(), less);
+  return static_cast<std::size_t>(std::unique(v.begin(), v.end()) - v.begin());
+}
+
 // A measurement model: residuals (measured − predicted), `dim` rows per measurement, and the
 // Jacobian of the predictions with respect to the candidate parameters (columns = `active`).
 class Problem {
@@ -26,6 +35,8 @@ class Problem {
   virtual ~Problem() = default;
   virtual int dim() const = 0;
   virtual std::size_t count() const = 0;
+  // Measurements at distinct configurations (a repeated pose or pair adds no equation).
+  virtual std::size_t distinct() const = 0;
   virtual void evaluate(const MdhModel& m, const std::vector<int>& active, Eigen::VectorXd& r,
                         Eigen::MatrixXd* jac) const = 0;
 };
@@ -35,6 +46,11 @@ class PositionProblem final : public Problem {
   explicit PositionProblem(const std::vector<PositionMeasurement>& d) : data_(d) {}
   int dim() const override { return 3; }
   std::size_t count() const override { return data_.size(); }
+  std::size_t distinct() const override {
+    std::vector<JointVector> q;
+    for (const auto& d : data_) q.push_back(d.q_deg);
+    return count_distinct(std::move(q));
+  }
   void evaluate(const MdhModel& m, const std::vector<int>& active, Eigen::VectorXd& r,
                 Eigen::MatrixXd* jac) const override {
     const auto n = static_cast<Eigen::Index>(data_.size());
@@ -60,6 +76,15 @@ class DistanceProblem final : public Problem {
   explicit DistanceProblem(const std::vector<DistanceMeasurement>& d) : data_(d) {}
   int dim() const override { return 1; }
   std::size_t count() const override { return data_.size(); }
+  std::size_t distinct() const override {
+    std::vector<Eigen::Matrix<double, 2 * kJointCount, 1>> pairs;
+    for (const auto& d : data_) {
+      const bool swap = std::lexicographical_compare(d.q_b_deg.begin(), d.q_b_deg.end(), d.q_a_deg.begin(), d.q_a_deg.end());
+      pairs.emplace_back();
+      pairs.back() << (swap ? d.q_b_deg : d.q_a_deg), (swap ? d.q_a_deg : d.q_b_deg);
+    }
+    return count_distinct(std::move(pairs));
+  }
   void evaluate(const MdhModel& m, const std::vector<int>& active, Eigen::VectorXd& r,
                 Eigen::MatrixXd* jac) const override {
     const auto n = static_cast<Eigen::Index>(data_.size());
@@ -223,6 +248,38 @@ double report_value(const MdhModel& m, const MdhModel& reference, int index) {
 }
 
 
+// How many of `candidates` measurements of this kind identify at all on this robot: the
+// redundancy selection on a generic, well-spread set (joints on a Kronecker sequence over the
+// limits; positions, or distances between consecutive poses). Data with no more equations than
+// that cannot identify the model, however they are placed.
+std::size_t generically_identifiable(const MdhModel& m, const std::vector<int>& candidates, int dim, double tol) {
+  constexpr int kPoses = 64;
+  const JointVector lo = m.q_min_deg(), hi = m.q_max_deg();
+  const double step[kJointCount] = {0.6180339887, 0.4142135624, 0.7320508076, 0.2360679775, 0.6457513111, 0.1622776602};
+  std::vector<JointVector> q(kPoses + 1);
+  for (int k = 0; k <= kPoses; ++k)
+    for (int j = 0; j < kJointCount; ++j) {
+      const double u = std::fmod(0.5 + (k + 1) * step[j], 1.0);
+      q[static_cast<std::size_t>(k)][j] = lo[j] + (0.05 + 0.9 * u) * (hi[j] - lo[j]);
+    }
+  Eigen::VectorXd r;
+  Eigen::MatrixXd jac;
+  if (dim == 3) {
+    std::vector<PositionMeasurement> d;
+    for (int k = 0; k < kPoses; ++k) d.push_back({q[static_cast<std::size_t>(k)], forward_position(m, q[static_cast<std::size_t>(k)])});
+    PositionProblem(d).evaluate(m, candidates, r, &jac);
+  } else {
+    std::vector<DistanceMeasurement> d;
+    for (int k = 0; k < kPoses; ++k) {
+      const JointVector& a = q[static_cast<std::size_t>(k)];
+      const JointVector& b = q[static_cast<std::size_t>(k + 1)];
+      d.push_back({a, b, (forward_position(m, a) - forward_position(m, b)).norm()});
+    }
+    DistanceProblem(d).evaluate(m, candidates, r, &jac);
+  }
+  return select_parameters(jac, candidates, tol).kept.size();
+}
+
 CalibrationResult solve(const Problem& problem, const MdhModel& initial, std::vector<int> candidates,
                         const CalibrationOptions& o) {
   o.validate();
@@ -230,7 +287,25 @@ CalibrationResult solve(const Problem& problem, const MdhModel& initial, std::ve
   out.model = initial;
   const int dim = problem.dim();
   const std::size_t n = problem.count();
-  if (n == 0) throw ArgumentError("calibration: no measurements");
+  // Too few poses: fail here, naming the count needed, rather than fit the few parameters these
+  // data happen to move and claim convergence.
+  const std::size_t identifiable = generically_identifiable(initial, candidates, dim, o.redundancy_tolerance);
+  const std::size_t needed = identifiable / static_cast<std::size_t>(dim) + 1;  // more equations than unknowns
+  const std::size_t distinct = problem.distinct();
+  if (distinct < needed) {
+    const std::string kind = dim == 3 ? "position" : "distance";
+    const std::string repeats =
+        distinct < n ? " at " + std::to_string(distinct) + " distinct " + (dim == 3 ? "pose(s)" : "pose pair(s)") +
+                           " (the others repeat one)"
+                     : std::string();
+    throw InputError("calibration: " + std::to_string(n) + " measured " + kind + "(s)" + repeats + " give " +
+                     std::to_string(distinct * static_cast<std::size_t>(dim)) + " equation(s), but " + kind +
+                     " measurements identify " + std::to_string(identifiable) + " parameters of robot '" +
+                     initial.name() + "' (of " + std::to_string(candidates.size()) + " candidates); need at least " +
+                     std::to_string(needed) + " measured " + kind +
+                     "s at distinct poses (more equations than parameters), in practice several times as many, "
+                     "spread over the workspace");
+  }
 
   Eigen::VectorXd r;
   Eigen::MatrixXd jac;
@@ -453,7 +528,9 @@ std::vector<int> default_candidates(const MdhModel& model, bool with_base) {
 
 CalibrationResult register_tracker(const MdhModel& model, const std::vector<PositionMeasurement>& data,
                                    const CalibrationOptions& options) {
-  if (data.size() < 3) throw ArgumentError("register_tracker: need at least 3 measured positions, got " + std::to_string(data.size()));
+  if (data.size() < 3)
+    throw InputError("register_tracker: " + std::to_string(data.size()) +
+                     " measured positions; need at least 4 (9 parameters: base 6, reflector offset 3)");
   // Closed-form start: the rigid motion taking nominal robot-frame positions onto the measured ones.
   const MdhModel robot_frame = model.with_base(Eigen::Isometry3d::Identity());
   std::vector<Eigen::Vector3d> a(data.size()), b(data.size());

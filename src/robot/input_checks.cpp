@@ -1,5 +1,6 @@
 #include "errfield/robot/input_checks.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "errfield/csv_table.hpp"
@@ -27,7 +28,20 @@ std::optional<std::string> metres_instead_of_mm(const Eigen::MatrixXd& positions
   if (max_world >= limit && max_base >= limit) return std::nullopt;
   return what + ": every position is within " + format_number(std::round(limit * 10) / 10) + " mm of the " +
          (max_world < limit ? "origin" : "robot base") + " (largest distance " +
-         format_number(std::min(max_world, max_base)) + ") for a robot of reach ~" + format_number(std::round(reach)) +
+         format_number(std::round(std::min(max_world, max_base) * 1000) / 1000) + ") for a robot of reach ~" + format_number(std::round(reach)) +
+         " mm: are these metres? errfield expects millimetres (multiply by 1000)";
+}
+
+std::optional<std::string> distances_in_metres(const std::vector<double>& distances_mm, const MdhModel& model,
+                                               const std::string& what) {
+  const double reach = reach_scale_mm(model);
+  if (distances_mm.empty() || reach < 100.0) return std::nullopt;
+  const double limit = reach / 100.0;
+  double largest = 0.0;
+  for (double d : distances_mm) largest = std::max(largest, std::abs(d));
+  if (largest >= limit || largest == 0.0) return std::nullopt;
+  return what + ": every distance is below " + format_number(std::round(limit * 10) / 10) + " mm (largest " +
+         format_number(std::round(largest * 1000) / 1000) + ") for a robot of reach ~" + format_number(std::round(reach)) +
          " mm: are these metres? errfield expects millimetres (multiply by 1000)";
 }
 

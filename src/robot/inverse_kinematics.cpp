@@ -43,10 +43,28 @@ Residual residual(const KinematicFrames& f, const Eigen::Isometry3d& target, con
   return r;
 }
 
-JointVector clamp(const MdhModel& m, const JointVector& q) {
-  JointVector c;
-  for (int i = 0; i < kJointCount; ++i) c[i] = std::clamp(q[i], m.link(i).q_min_deg, m.link(i).q_max_deg);
-  return c;
+// Joint ranges the solver works in: the model's limits, or none (to tell a target that needs a
+// joint beyond its limit from one no joint values reach).
+struct Limits {
+  JointVector lo, hi;
+  static Limits of(const MdhModel& m) { return {m.q_min_deg(), m.q_max_deg()}; }
+  static Limits none() {
+    return {JointVector::Constant(-std::numeric_limits<double>::infinity()),
+            JointVector::Constant(std::numeric_limits<double>::infinity())};
+  }
+};
+
+JointVector clamp(const Limits& l, const JointVector& q) { return q.cwiseMax(l.lo).cwiseMin(l.hi); }
+
+// An upper bound on the distance from the base origin to the end frame over all joint values:
+// each link moves the origin by a along one axis and d along a perpendicular one (sqrt(a^2 + d^2));
+// with a Hayati beta the axes need not be perpendicular, so |a| + |d| there.
+double reach_bound_mm(const MdhModel& m, EndFrame frame) {
+  double s = 0.0;
+  for (const auto& l : m.links())
+    s += l.beta_deg == 0.0 ? std::hypot(l.a_mm, l.d_mm) : std::abs(l.a_mm) + std::abs(l.d_mm);
+  if (frame == EndFrame::tool) s += m.tool().translation().norm();
+  return s;
 }
 
 bool converged(const Residual& r, const IkOptions& o) {
@@ -78,10 +96,19 @@ const char* to_string(IkStatus s) {
   return "?";
 }
 
-IkResult inverse_kinematics(const MdhModel& model, const Eigen::Isometry3d& target, const JointVector& seed_deg,
-                            const IkOptions& o) {
-  IkResult out;
-  JointVector q = clamp(model, seed_deg);
+namespace {
+
+struct Solve {
+  JointVector q;
+  Residual r;
+  int iterations = 0;
+  bool stalled = false;
+};
+
+// Damped least squares within `lim` (see the header).
+Solve solve(const MdhModel& model, const Eigen::Isometry3d& target, const JointVector& seed_deg, const IkOptions& o,
+            const Limits& lim) {
+  JointVector q = clamp(lim, seed_deg);
   KinematicFrames f;
   forward_kinematics_all(model, q, f);
   Residual r = residual(f, target, o);
@@ -117,16 +144,15 @@ IkResult inverse_kinematics(const MdhModel& model, const Eigen::Isometry3d& targ
         dq_rad = damped.ldlt().solve(rhs);
         bool changed = false;
         for (int i = 0; i < kJointCount; ++i) {
-          const MdhLink& l = model.link(i);
-          if (!frozen[static_cast<std::size_t>(i)] && ((q[i] <= l.q_min_deg && dq_rad[i] < 0) ||
-                                                       (q[i] >= l.q_max_deg && dq_rad[i] > 0))) {
+          if (!frozen[static_cast<std::size_t>(i)] && ((q[i] <= lim.lo[i] && dq_rad[i] < 0) ||
+                                                       (q[i] >= lim.hi[i] && dq_rad[i] > 0))) {
             frozen[static_cast<std::size_t>(i)] = true;
             changed = true;
           }
         }
         if (!changed) break;
       }
-      const JointVector q_new = clamp(model, q + dq_rad / kDeg);
+      const JointVector q_new = clamp(lim, q + dq_rad / kDeg);
       if ((q_new - q).cwiseAbs().maxCoeff() < 1e-13) break;  // the limits or the step size stop us
       KinematicFrames f_new;
       forward_kinematics_all(model, q_new, f_new);
@@ -146,17 +172,33 @@ IkResult inverse_kinematics(const MdhModel& model, const Eigen::Isometry3d& targ
       break;
     }
   }
-  out.q_deg = q;
-  out.position_residual_mm = r.position_mm;
-  out.orientation_residual_rad = r.orientation_rad;
-  out.iterations = it;
-  if (converged(r, o)) {
+  return {q, r, it, stalled};
+}
+
+}  // namespace
+
+IkResult inverse_kinematics(const MdhModel& model, const Eigen::Isometry3d& target, const JointVector& seed_deg,
+                            const IkOptions& o) {
+  const Solve s = solve(model, target, seed_deg, o, Limits::of(model));
+  IkResult out;
+  out.q_deg = s.q;
+  out.position_residual_mm = s.r.position_mm;
+  out.orientation_residual_rad = s.r.orientation_rad;
+  out.iterations = s.iterations;
+  if (converged(s.r, o)) {
     out.status = IkStatus::converged;
-  } else if (stalled) {
+  } else if (s.stalled) {
+    // Outside the sphere no joint values reach: unreachable. Inside, stalled at a limit: the
+    // target is a joint-limit failure only if the same solver without limits, continued from
+    // here, reaches it; otherwise it is out of the workspace (or at a singularity) all the same.
+    const double distance = (target.translation() - model.base().translation()).norm();
     bool at_limit = false;
     for (int i = 0; i < kJointCount; ++i)
-      at_limit = at_limit || q[i] <= model.link(i).q_min_deg + 1e-9 || q[i] >= model.link(i).q_max_deg - 1e-9;
-    out.status = at_limit ? IkStatus::joint_limits : IkStatus::unreachable;
+      at_limit = at_limit || s.q[i] <= model.link(i).q_min_deg + 1e-9 || s.q[i] >= model.link(i).q_max_deg - 1e-9;
+    out.status = IkStatus::unreachable;
+    if (at_limit && distance <= reach_bound_mm(model, o.frame) &&
+        converged(solve(model, target, s.q, o, Limits::none()).r, o))
+      out.status = IkStatus::joint_limits;
   } else {
     out.status = IkStatus::max_iterations;
   }

@@ -191,8 +191,8 @@ TEST(Calibration, BadOptionsAndTooFewData) {
   EXPECT_THROW(o.validate(), ArgumentError);
   const MdhModel nominal = nominal_model();
   std::vector<PositionMeasurement> few{{JointVector::Zero(), Eigen::Vector3d::Zero()}};
-  EXPECT_THROW(calibrate_positions(nominal, few), ArgumentError);
-  EXPECT_THROW(register_tracker(nominal, few), ArgumentError);
+  EXPECT_THROW(calibrate_positions(nominal, few), InputError);
+  EXPECT_THROW(register_tracker(nominal, few), InputError);
 }
 
 }  // namespace

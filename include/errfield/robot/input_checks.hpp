@@ -23,9 +23,17 @@ double reach_scale_mm(const MdhModel& model);
 /// frame) lies within reach_scale_mm(model) / 100 of both the world origin and the robot base
 /// (25 mm for the ER20-C10): no real robot measures all its poses there, while metres read as
 /// millimetres land exactly there. Returns nothing when the data look like millimetres, when
-/// there are no rows, or when the model's reach is below 100 mm. `what` names the data (file).
+/// there are no rows, or when the model's reach is below 100 mm. `what` names the data (file and
+/// columns).
 std::optional<std::string> metres_instead_of_mm(const Eigen::MatrixXd& positions_mm, const MdhModel& model,
                                                 const std::string& what);
+
+/// A warning when every distance (mm) is below reach_scale_mm(model) / 100 in magnitude (25 mm for
+/// the ER20-C10) while some is not 0: distances between robot positions across a workspace in
+/// metres read as millimetres. Nothing for no distances or a reach below 100 mm. `what` names
+/// the data (file and column).
+std::optional<std::string> distances_in_metres(const std::vector<double>& distances_mm, const MdhModel& model,
+                                               const std::string& what);
 
 /// A warning naming the first row (via `labels`), joint and value outside the model's joint
 /// limits, and how many rows are; nothing when all are within. `slack_deg` widens the limits.

@@ -32,9 +32,12 @@ struct IkOptions {
 
 enum class IkStatus {
   converged,       ///< Residual within tolerance, joints within limits.
-  joint_limits,    ///< The best pose reachable within the joint limits misses the target.
-  unreachable,     ///< Stalled away from the target with no joint at a limit (outside the workspace
-                   ///< or a singular configuration).
+  joint_limits,    ///< The best pose within the joint limits misses the target, and the solver
+                   ///< without limits, continued from there, reaches it: a joint would have to go
+                   ///< beyond its range.
+  unreachable,     ///< Stalled away from the target and no joint values reach it from there: outside
+                   ///< the reach sphere (sum of the links' lengths, plus the tool's), or out of the
+                   ///< workspace or at a singular configuration even without limits.
   max_iterations,  ///< Still improving when the iteration budget ran out.
 };
 
