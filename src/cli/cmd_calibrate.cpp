@@ -34,10 +34,16 @@ void run_calibrate(const CalibrateArgs& a) {
   const CsvTable table = CsvTable::read(a.data);
   const auto q = read_joint_columns(table);
   for (std::size_t i = 0; i < q.size(); ++i)
-    if (!nominal.within_limits(q[i], 1e-6))
-      throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": joints outside the limits of robot '" +
-                           nominal.name() + "'",
-                       a.data, table.line_of_row(i), "q1");
+    for (int j = 0; j < kJointCount; ++j) {
+      const MdhLink& l = nominal.link(j);
+      if (q[i][j] >= l.q_min_deg - 1e-6 && q[i][j] <= l.q_max_deg + 1e-6) continue;
+      const std::string col = "q" + std::to_string(j + 1);
+      throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": column '" + col + "': " +
+                           format_number(q[i][j]) + " deg is outside the joint limits [" + format_number(l.q_min_deg) +
+                           ", " + format_number(l.q_max_deg) + "] of robot '" + nominal.name() +
+                           "'; check units (degrees) and joint order",
+                       a.data, table.line_of_row(i), col);
+    }
   warn_if_metres(table, nominal, "calibrate", a.model == "position" ? kMeasuredXyz : kDistances);
   std::ostringstream text;
   CalibrationResult result;
@@ -65,7 +71,8 @@ void run_calibrate(const CalibrateArgs& a) {
       const std::string& k = table.row(i)[kind_col];
       if (k == "base") base_rows.push_back(i);
       else if (k != "target")
-        throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": kind must be 'base' or 'target', got '" + k + "'",
+        throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": column 'kind': '" + k +
+                             "'; expected base or target",
                          a.data, table.line_of_row(i), "kind");
     }
     if (base_rows.empty()) throw InputError(a.data + ": no row with kind 'base'", a.data, 0, "kind");
@@ -84,7 +91,8 @@ void run_calibrate(const CalibrateArgs& a) {
           continue;
         }
         if (d[i] <= 0)
-          throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": " + col + " must be > 0 for a point other than the base",
+          throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": column '" + col + "': " +
+                               format_number(d[i]) + "; expected a distance > 0 for a point other than the base",
                            a.data, table.line_of_row(i), col);
         data.push_back({q[i], q[base_rows[k]], d[i]});
       }

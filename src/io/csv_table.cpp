@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 
@@ -168,8 +169,15 @@ std::vector<double> CsvTable::numeric_column(std::string_view name) const {
     const char* last = cell.data() + cell.size();
     if (*first == '+') ++first;
     const auto res = std::from_chars(first, last, v);
-    if (res.ec != std::errc() || res.ptr != last)
+    if (res.ec == std::errc::result_out_of_range && res.ptr == last) {
+      // Overflow is an error (below); underflow reads as the nearest double (0 or subnormal).
+      v = std::strtod(std::string(first, last).c_str(), nullptr);
+      if (std::isinf(v))
+        throw InputError(where + ": '" + cell + "' is not a finite number (beyond the range of a double)", source_,
+                         lines_[r], header_[c]);
+    } else if (res.ec != std::errc() || res.ptr != last) {
       throw InputError(where + ": '" + cell + "' is not a number", source_, lines_[r], header_[c]);
+    }
     if (!std::isfinite(v))
       throw InputError(where + ": '" + cell + "' is not a finite number", source_, lines_[r], header_[c]);
     out[r] = v;

@@ -45,7 +45,7 @@ MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& rob
       continue;
     }
     if (kind != "target")
-      throw InputError(t.source() + ":" + std::to_string(t.line_of_row(r)) + ": column 'kind' is '" + kind +
+      throw InputError(t.source() + ":" + std::to_string(t.line_of_row(r)) + ": column 'kind': '" + kind +
                            "'; expected base or target",
                        t.source(), t.line_of_row(r), "kind");
     m.id.push_back(has_point ? t.row(r)[point_col] : "row" + std::to_string(t.line_of_row(r)));

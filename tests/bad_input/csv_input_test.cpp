@@ -71,7 +71,15 @@ TEST(CsvBadInput, NonNumericEmptyNanAndInfCells) {
   EXPECT_THAT(expect_input_error(only(4), "c.csv", 2, "v"), HasSubstr("empty"));
   EXPECT_THAT(expect_input_error(only(5), "c.csv", 2, "v"), HasSubstr("'nan' is not a finite number"));
   EXPECT_THAT(expect_input_error(only(6), "c.csv", 2, "v"), HasSubstr("'-inf' is not a finite number"));
-  EXPECT_THAT(expect_input_error(only(7), "c.csv", 2, "v"), HasSubstr("'1e999'"));  // overflows to inf
+  EXPECT_THAT(expect_input_error(only(7), "c.csv", 2, "v"),
+              HasSubstr("'1e999' is not a finite number (beyond the range of a double)"));  // overflows
+}
+
+TEST(CsvBadInput, UnderflowReadsAsTheNearestDouble) {
+  const auto t = CsvTable::parse("x,v\n1,1e-400\n2,-4e-320\n", "u.csv");
+  const auto v = t.numeric_column("v");
+  EXPECT_EQ(v[0], 0.0);
+  EXPECT_EQ(v[1], -4e-320);  // subnormal, exactly as strtod reads it
 }
 
 TEST(CsvBadInput, BomAndCrlfAreReadAndLinesStayRight) {

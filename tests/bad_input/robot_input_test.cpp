@@ -1,6 +1,10 @@
 // Bad-input catalogue for robot data: robot JSON with a missing or wrongly-sized MD-H table,
-// joint angles outside the limits, unreachable IK targets, and positions in metres where
-// millimetres are expected (a warning, robot/input_checks.hpp).
+// joint angles outside the limits, unreachable IK targets versus targets only beyond the joint
+// limits, singular calibration (too few or repeated poses), and positions or distances in metres
+// where millimetres are expected (a warning, robot/input_checks.hpp). Robot data are SIMULATED.
+
+#include <random>
+#include <regex>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -8,7 +12,9 @@
 
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/calibration.hpp"
 #include "errfield/robot/input_checks.hpp"
+#include "errfield/robot/inverse_kinematics.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/mdh_model.hpp"
 #include "support/cli_harness.hpp"
@@ -99,7 +105,9 @@ TEST(RobotBadInput, UnreachableIkTargetIsReportedPerRowNotAsACrash) {
   EXPECT_THAT(r.err, HasSubstr("1 of 2 targets solved"));
   const auto out = CsvTable::parse(dir.read("o.csv"), "o.csv");
   const auto status = out.column_index("status");
-  EXPECT_NE(out.row(0)[status], "converged");
+  // Outside the reach sphere: unreachable, although the best pose within the limits has q2 at
+  // its limit (this used to say joint_limits).
+  EXPECT_EQ(out.row(0)[status], "unreachable");
   EXPECT_GT(out.numeric_column("residual_mm")[0], 2000.0);  // at least 5000 - reach away
   EXPECT_EQ(out.row(1)[status], "converged");
 }
@@ -134,6 +142,281 @@ TEST(RobotBadInput, MetresCheckUsesReachAndBase) {
   mm_moved.rowwise() += Eigen::RowVector3d(3000, -2000, 500);
   EXPECT_TRUE(robot::metres_instead_of_mm(metres_moved, moved, "m.csv").has_value());
   EXPECT_FALSE(robot::metres_instead_of_mm(mm_moved, moved, "m.csv").has_value());
+}
+
+TEST(RobotBadInput, IkTargetOnlyBeyondTheJointLimitsIsJointLimits) {
+  // A robot whose joints may only move +-10 deg from home: a target FK'd at q1 = 40 deg is inside
+  // the reach sphere and reachable, but only with q1 beyond its limit.
+  ScratchDir dir;
+  auto j = er20_json();
+  for (auto& l : j["links"]) {
+    l["q_min_deg"] = -10.0;
+    l["q_max_deg"] = 10.0;
+  }
+  dir.write("r.json", j.dump());
+  const robot::MdhModel narrow = robot::MdhModel::load(dir / "r.json");
+  const Eigen::Vector3d beyond = robot::forward_position(narrow, (robot::JointVector() << 40, 5, 5, 0, 5, 0).finished());
+  const Eigen::Vector3d within = robot::forward_position(narrow, (robot::JointVector() << 5, 5, -5, 0, 5, 0).finished());
+  dir.write("p.csv", "x,y,z\n" + format_number(beyond.x()) + "," + format_number(beyond.y()) + "," +
+                         format_number(beyond.z()) + "\n" + format_number(within.x()) + "," +
+                         format_number(within.y()) + "," + format_number(within.z()) + "\n2200,0,504\n");
+  const auto r =
+      run_errfield({"ik", "--input", "p.csv", "--robot", "r.json", "--position-only", "--out", "o.csv"}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto out = CsvTable::parse(dir.read("o.csv"), "o.csv");
+  const auto status = out.column_index("status");
+  EXPECT_EQ(out.row(0)[status], "joint_limits");
+  EXPECT_EQ(out.row(1)[status], "converged");
+  // 2.2 m out along x at shoulder height: inside the reach sphere (sum of link lengths ~2.35 m)
+  // but ~2.03 m from the shoulder, beyond the arm (782 + 774 mm + wrist 125 mm): unreachable,
+  // though the best pose within the limits has joints at their limits.
+  EXPECT_EQ(out.row(2)[status], "unreachable");
+}
+
+TEST(RobotBadInput, IkStatusLibraryLevel) {
+  const auto er20 = robot::MdhModel::er20_c10();
+  robot::IkOptions o;
+  o.position_only = true;
+  const robot::JointVector seed = (robot::JointVector() << 0, -90, 0, 0, -45, 0).finished();
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  // Beyond the arm inside the sphere, and outside the sphere.
+  for (const double x : {2200.0, 5000.0}) {
+    t.translation() << x, 0, 504;
+    const auto r = robot::inverse_kinematics(er20, t, seed, o);
+    EXPECT_EQ(r.status, robot::IkStatus::unreachable) << x;
+    EXPECT_TRUE(er20.within_limits(r.q_deg));
+  }
+}
+
+// --- singular calibration: too few poses ---------------------------------------------------
+
+// SIMULATED noise-free data: a perturbed ER20-C10 ("true") measured at `n` joint vectors drawn
+// within the limits (fixed seed).
+struct CalibrationData {
+  robot::MdhModel nominal = robot::MdhModel::er20_c10();
+  robot::MdhModel truth = robot::MdhModel::er20_c10();
+  std::vector<robot::JointVector> q;
+  explicit CalibrationData(std::size_t n) {
+    auto links = nominal.links();
+    links[1].a_mm += 0.4;
+    links[2].alpha_deg += 0.02;
+    links[3].d_mm -= 0.3;
+    truth = nominal.with_links(links);
+    std::mt19937 rng(7);
+    for (std::size_t i = 0; i < n; ++i) {
+      robot::JointVector v;
+      for (int j = 0; j < robot::kJointCount; ++j) {
+        const double lo = nominal.link(j).q_min_deg, hi = nominal.link(j).q_max_deg;
+        v[j] = std::uniform_real_distribution<double>(lo + 0.1 * (hi - lo), hi - 0.1 * (hi - lo))(rng);
+      }
+      q.push_back(v);
+    }
+  }
+  std::vector<robot::PositionMeasurement> positions(std::size_t n) const {
+    std::vector<robot::PositionMeasurement> d;
+    for (std::size_t i = 0; i < n; ++i) d.push_back({q[i], robot::forward_position(truth, q[i])});
+    return d;
+  }
+  // Distances from pose 0 (the base point) to poses 1..n.
+  std::vector<robot::DistanceMeasurement> distances(std::size_t n) const {
+    std::vector<robot::DistanceMeasurement> d;
+    for (std::size_t i = 1; i <= n; ++i)
+      d.push_back({q[i], q[0], (robot::forward_position(truth, q[i]) - robot::forward_position(truth, q[0])).norm()});
+    return d;
+  }
+};
+
+// The "need at least N" of a too-few-poses message, checking the message names the counts.
+std::size_t needed_of(const std::string& message, std::size_t given, const std::string& kind) {
+  EXPECT_THAT(message, AllOf(HasSubstr(std::to_string(given) + " measured " + kind), HasSubstr("equation"),
+                             HasSubstr("robot 'ER20-C10'"), HasSubstr("need at least")));
+  std::smatch m;
+  EXPECT_TRUE(std::regex_search(message, m, std::regex("need at least ([0-9]+) measured " + kind))) << message;
+  return m.empty() ? 0 : std::stoul(m[1]);
+}
+
+TEST(RobotBadInput, CalibrationWithTooFewPosesNamesTheCountNeeded) {
+  const CalibrationData data(80);
+  robot::CalibrationOptions o;
+  o.robust.enabled = false;
+  // Distances: 3 measurements. The message names the count needed; one fewer distinct pose than
+  // that still fails, that many is accepted (and, noise-free, fits to ~0).
+  std::size_t needed = 0;
+  try {
+    robot::calibrate_distances(data.nominal, data.distances(3), o);
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    needed = needed_of(e.what(), 3, "distance");
+  }
+  ASSERT_GT(needed, 10u);  // an MD-H table has far more than 10 identifiable parameters
+  ASSERT_LT(needed, 60u);
+  EXPECT_THROW(robot::calibrate_distances(data.nominal, data.distances(needed - 1), o), InputError);
+  const auto ok = robot::calibrate_distances(data.nominal, data.distances(needed), o);
+  EXPECT_LT(ok.after.max_abs_mm, 1e-6);
+
+  // Positions: registration needs 4 (9 parameters, 3 equations each); calibration more.
+  try {
+    robot::register_tracker(data.nominal, data.positions(3), o);
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(needed_of(e.what(), 3, "position"), 4u);
+  }
+  try {
+    robot::calibrate_positions(data.nominal, data.positions(5), o);
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    needed = needed_of(e.what(), 5, "position");
+  }
+  EXPECT_GT(needed, 5u);
+  EXPECT_THROW(robot::calibrate_positions(data.nominal, data.positions(needed - 1), o), InputError);
+  EXPECT_NO_THROW(robot::calibrate_positions(data.nominal, data.positions(needed), o));
+}
+
+TEST(RobotBadInput, CalibrationAtOneRepeatedPoseIsRefused) {
+  const CalibrationData data(2);
+  // 60 readings of the same pose pair: one equation, however many rows.
+  std::vector<robot::DistanceMeasurement> same(60, data.distances(1)[0]);
+  try {
+    robot::calibrate_distances(data.nominal, same);
+    ADD_FAILURE() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), AllOf(HasSubstr("60 measured distance(s) at 1 distinct pose pair(s)"),
+                                HasSubstr("1 equation(s)")));
+  }
+}
+
+// Runs `errfield simulate` (SIMULATED measurements on the paper's cube) into `file`.
+void simulate(const ScratchDir& dir, const std::string& file) {
+  const auto r = run_errfield({"simulate", "--sample", "grid", "--step", "125", "--out", file}, dir.path());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+}
+
+// The first `rows` data rows (after comments and header) of a CSV file's text.
+std::string first_rows(const std::string& text, std::size_t rows) {
+  std::string out;
+  std::size_t data = 0;
+  bool header = false;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) {
+    if (!l.empty() && l[0] != '#') {
+      if (header && data++ >= rows) break;
+      header = true;
+    }
+    out += l + "\n";
+  }
+  return out;
+}
+
+TEST(RobotBadInput, CalibrateCliWithTooFewPosesFailsNamingFileAndCount) {
+  ScratchDir dir;
+  simulate(dir, "grid.csv");
+  dir.write("few.csv", first_rows(dir.read("grid.csv"), 3));  // base + 2 targets (one at the base)
+  for (const std::string model : {"distance", "position"}) {
+    const auto r = run_errfield({"calibrate", "--data", "few.csv", "--model", model, "--out", "c.json"}, dir.path());
+    EXPECT_EQ(r.exit_code, 2) << model;
+    EXPECT_THAT(r.err, AllOf(HasSubstr("input error: few.csv: "), HasSubstr("need at least"),
+                             HasSubstr("measured " + model), Not(HasSubstr("converged"))))
+        << model;
+    EXPECT_THAT(r.out, Not(HasSubstr("converged"))) << model;
+    EXPECT_FALSE(std::filesystem::exists(dir / "c.json")) << model;
+  }
+  // The whole grid calibrates.
+  const auto r = run_errfield({"calibrate", "--data", "grid.csv", "--out", "c.json"}, dir.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("status: converged"));
+  // fit --method kinematic calibrates too: the same refusal, naming the file.
+  const auto f = run_errfield({"fit", "--data", "few.csv", "--method", "kinematic", "--out", "m.json"}, dir.path());
+  EXPECT_EQ(f.exit_code, 2);
+  EXPECT_THAT(f.err, AllOf(HasSubstr("few.csv: calibration: "), HasSubstr("need at least")));
+}
+
+TEST(RobotBadInput, CalibrateCliJointsOutsideTheLimitsNameRowColumnAndValue) {
+  ScratchDir dir;
+  dir.write("q.csv", "point,kind,q1,q2,q3,q4,q5,q6,mx,my,mz\np0,target,0,0,0,0,0,0,1,2,3\n"
+                     "p1,target,0,-20,30,0,150,0,1,2,3\n");
+  const auto r = run_errfield({"calibrate", "--data", "q.csv", "--model", "position", "--out", "c.json"}, dir.path());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, AllOf(HasSubstr("q.csv:3: column 'q5': 150 deg"), HasSubstr("[-135, 135]")));
+}
+
+// --- metres where millimetres are expected ----------------------------------------------------
+
+// `text` (a CSV with comments) with the columns `cols` divided by 1000.
+std::string to_metres(const std::string& text, const std::vector<std::string>& cols) {
+  std::string out;
+  std::vector<std::size_t> idx;
+  bool header = false;
+  std::istringstream in(text);
+  for (std::string l; std::getline(in, l);) {
+    if (l.empty() || l[0] == '#') {
+      out += l + "\n";
+      continue;
+    }
+    std::vector<std::string> cells;
+    std::istringstream cs(l);
+    for (std::string c; std::getline(cs, c, ',');) cells.push_back(c);
+    if (!header) {
+      for (const auto& c : cols) idx.push_back(static_cast<std::size_t>(std::find(cells.begin(), cells.end(), c) - cells.begin()));
+      header = true;
+    } else {
+      for (const auto i : idx) cells[i] = format_number(std::stod(cells[i]) / 1000.0);
+    }
+    for (std::size_t i = 0; i < cells.size(); ++i) out += (i ? "," : "") + cells[i];
+    out += "\n";
+  }
+  return out;
+}
+
+TEST(RobotBadInput, MeasurementsInMetresWarnNamingFileAndColumnsAndStillRun) {
+  ScratchDir dir;
+  simulate(dir, "grid.csv");
+  const std::string grid = dir.read("grid.csv");
+  dir.write("m.csv", to_metres(grid, {"mx", "my", "mz", "dist_b0"}));
+  struct Case {
+    std::vector<std::string> args;
+    std::string words;
+  } cases[] = {
+      {{"calibrate", "--data", "m.csv", "--model", "position", "--out", "c.json"}, "m.csv columns mx,my,mz"},
+      {{"calibrate", "--data", "m.csv", "--model", "distance", "--out", "c.json"}, "m.csv column dist_b0"},
+      {{"fit", "--data", "m.csv", "--method", "position-idw", "--out", "f.json"}, "m.csv columns mx,my,mz"},
+      {{"fit", "--data", "m.csv", "--method", "distance-idw", "--out", "f.json"}, "m.csv column dist_b0"},
+  };
+  for (const auto& c : cases) {
+    const auto r = run_errfield(c.args, dir.path());
+    EXPECT_EQ(r.exit_code, 0) << testing::command_line(c.args) << r.err;  // a warning, not an error
+    EXPECT_THAT(r.err, AllOf(HasSubstr("errfield " + c.args[0] + ": warning: " + c.words), HasSubstr("metres"),
+                             HasSubstr("millimetres")))
+        << testing::command_line(c.args);
+  }
+  // The same commands on millimetres: no warning.
+  for (const auto& c : cases) {
+    auto args = c.args;
+    std::replace(args.begin(), args.end(), std::string("m.csv"), std::string("grid.csv"));
+    const auto r = run_errfield(args, dir.path());
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_THAT(r.err, Not(HasSubstr("metres"))) << testing::command_line(args);
+  }
+  // compensate: targets as poses in metres.
+  ASSERT_EQ(run_errfield({"fit", "--data", "grid.csv", "--method", "position-idw", "--out", "f.json"}, dir.path()).exit_code, 0);
+  dir.write("t.csv", "x,y,z,rx,ry,rz\n1.0,-0.1,0.5,180,0,0\n1.1,0,0.6,180,0,0\n");
+  auto r = run_errfield({"compensate", "--model", "f.json", "--targets", "t.csv", "--out", "j.csv"}, dir.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("errfield compensate: warning: t.csv columns x,y,z"), HasSubstr("metres")));
+  dir.write("t.csv", "x,y,z,rx,ry,rz\n1000,-100,500,180,0,0\n1100,0,600,180,0,0\n");
+  r = run_errfield({"compensate", "--model", "f.json", "--targets", "t.csv", "--out", "j.csv"}, dir.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.err, Not(HasSubstr("metres")));
+}
+
+TEST(RobotBadInput, DistancesInMetresCheck) {
+  const auto er20 = robot::MdhModel::er20_c10();
+  // Distances between robot positions across a workspace, in metres: all below 25 mm.
+  const auto w = robot::distances_in_metres({0.0, 0.125, 0.25, 0.866}, er20, "d.csv column dist_b0");
+  ASSERT_TRUE(w.has_value());
+  EXPECT_THAT(*w, AllOf(HasSubstr("d.csv column dist_b0"), HasSubstr("0.866"), HasSubstr("metres")));
+  EXPECT_FALSE(robot::distances_in_metres({0.0, 125, 250, 866}, er20, "d").has_value());
+  EXPECT_FALSE(robot::distances_in_metres({}, er20, "d").has_value());
+  EXPECT_FALSE(robot::distances_in_metres({0.0, 0.0}, er20, "d").has_value());  // nothing to judge
 }
 
 }  // namespace
