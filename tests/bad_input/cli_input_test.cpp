@@ -116,6 +116,15 @@ TEST_F(CliBadInput, SingleRow) {
   r = run({"cv", "--method", "idw", "--samples", "one.csv", "--coords", "x,y,z", "--value", "v"});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, AllOf(HasSubstr("one.csv"), HasSubstr("at least 2")));
+  // A grid needs 2 x 2 x 2 nodes.
+  dir.write("t.csv", "x,y,z\n0,0,0\n");
+  r = interpolate("idw-grid", "one.csv", "t.csv");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, AllOf(HasSubstr("one.csv"), HasSubstr("1 samples"), HasSubstr("at least 8")));
+  // Kriging from one sample is defined (ordinary kriging returns that value): not an error.
+  r = interpolate("kriging", "one.csv", "t.csv", {"--model", "sph(1,3)"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(CsvTable::parse(dir.read("o.csv"), "o.csv").numeric_column("pred"), std::vector<double>{1.0});
 }
 
 TEST_F(CliBadInput, AllPointsIdentical) {
@@ -146,6 +155,10 @@ TEST_F(CliBadInput, DuplicateAndNearDuplicateLocations) {
   r = interpolate("kriging", "near.csv", "t.csv", {"--model", "sph(1,3)"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.err, AllOf(HasSubstr("ill-conditioned"), HasSubstr("near-duplicate")));
+  // Cross-validation of kriging names them the same way.
+  r = run({"cv", "--method", "kriging", "--model", "sph(1,3)", "--samples", "dup.csv", "--coords", "x,y,z", "--value", "v"});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, AllOf(HasSubstr("dup.csv line 3"), HasSubstr("dup.csv line 5"), HasSubstr("duplicates")));
   // IDW does not mind duplicates: it averages them.
   r = interpolate("idw", "dup.csv", "t.csv");
   EXPECT_EQ(r.exit_code, 0) << r.err;

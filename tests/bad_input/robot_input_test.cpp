@@ -323,7 +323,7 @@ TEST(RobotBadInput, CalibrateCliWithTooFewPosesFailsNamingFileAndCount) {
   // The whole grid calibrates.
   const auto r = run_errfield({"calibrate", "--data", "grid.csv", "--out", "c.json"}, dir.path());
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_THAT(r.out, HasSubstr("status: converged"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "c.json"));
   // fit --method kinematic calibrates too: the same refusal, naming the file.
   const auto f = run_errfield({"fit", "--data", "few.csv", "--method", "kinematic", "--out", "m.json"}, dir.path());
   EXPECT_EQ(f.exit_code, 2);
