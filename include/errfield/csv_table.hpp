@@ -37,6 +37,9 @@ class CsvTable {
   std::size_t column_index(std::string_view name) const;
   /// A column as numbers; throws InputError naming file, line and column for a bad cell.
   std::vector<double> numeric_column(std::string_view name) const;
+  /// One cell (data row `row`, column index `column`) as a finite number; throws InputError
+  /// naming file, line, column and the cell, as numeric_column does.
+  double numeric_cell(std::size_t row, std::size_t column) const;
   /// Several columns as a rows x names.size() matrix (row-major semantics: row i is data row i).
   Eigen::MatrixXd numeric_columns(const std::vector<std::string>& names) const;
 

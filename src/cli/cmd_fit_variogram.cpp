@@ -23,14 +23,7 @@ struct FitArgs {
 };
 
 double parse_cell(const CsvTable& t, std::size_t r, std::size_t c) {
-  const std::string& cell = t.row(r)[c];
-  double v = 0.0;
-  const auto res = std::from_chars(cell.data(), cell.data() + cell.size(), v);
-  if (cell.empty() || res.ec != std::errc() || res.ptr != cell.data() + cell.size() || !std::isfinite(v))
-    throw InputError(t.source() + ":" + std::to_string(t.line_of_row(r)) + ": column '" +
-                         t.header()[c] + "': '" + cell + "' is not a finite number",
-                     t.source(), t.line_of_row(r), t.header()[c]);
-  return v;
+  return t.numeric_cell(r, c);
 }
 
 std::size_t find_column(const CsvTable& t, const char* ours, const char* gstat) {

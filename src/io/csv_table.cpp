@@ -159,30 +159,31 @@ std::size_t CsvTable::column_index(std::string_view name) const {
 std::vector<double> CsvTable::numeric_column(std::string_view name) const {
   const std::size_t c = column_index(name);
   std::vector<double> out(rows_.size());
-  for (std::size_t r = 0; r < rows_.size(); ++r) {
-    const std::string& cell = rows_[r][c];
-    const std::string where = source_ + ":" + std::to_string(lines_[r]) + ": column '" +
-                              header_[c] + "'";
-    if (cell.empty()) throw InputError(where + " is empty; expected a number", source_, lines_[r], header_[c]);
-    double v = 0.0;
-    const char* first = cell.data();
-    const char* last = cell.data() + cell.size();
-    if (*first == '+') ++first;
-    const auto res = std::from_chars(first, last, v);
-    if (res.ec == std::errc::result_out_of_range && res.ptr == last) {
-      // Overflow is an error (below); underflow reads as the nearest double (0 or subnormal).
-      v = std::strtod(std::string(first, last).c_str(), nullptr);
-      if (std::isinf(v))
-        throw InputError(where + ": '" + cell + "' is not a finite number (beyond the range of a double)", source_,
-                         lines_[r], header_[c]);
-    } else if (res.ec != std::errc() || res.ptr != last) {
-      throw InputError(where + ": '" + cell + "' is not a number", source_, lines_[r], header_[c]);
-    }
-    if (!std::isfinite(v))
-      throw InputError(where + ": '" + cell + "' is not a finite number", source_, lines_[r], header_[c]);
-    out[r] = v;
-  }
+  for (std::size_t r = 0; r < rows_.size(); ++r) out[r] = numeric_cell(r, c);
   return out;
+}
+
+double CsvTable::numeric_cell(std::size_t r, std::size_t c) const {
+  const std::string& cell = rows_.at(r).at(c);
+  const auto fail = [&](const std::string& what) {
+    throw InputError(source_ + ":" + std::to_string(lines_[r]) + ": column '" + header_[c] + "'" + what, source_,
+                     lines_[r], header_[c]);
+  };
+  if (cell.empty()) fail(" is empty; expected a number");
+  double v = 0.0;
+  const char* first = cell.data();
+  const char* last = cell.data() + cell.size();
+  if (*first == '+') ++first;
+  const auto res = std::from_chars(first, last, v);
+  if (res.ec == std::errc::result_out_of_range && res.ptr == last) {
+    // Overflow is an error (below); underflow reads as the nearest double (0 or subnormal).
+    v = std::strtod(std::string(first, last).c_str(), nullptr);
+    if (std::isinf(v)) fail(": '" + cell + "' is not a finite number (beyond the range of a double)");
+  } else if (res.ec != std::errc() || res.ptr != last) {
+    fail(": '" + cell + "' is not a number");
+  }
+  if (!std::isfinite(v)) fail(": '" + cell + "' is not a finite number");
+  return v;
 }
 
 Eigen::MatrixXd CsvTable::numeric_columns(const std::vector<std::string>& names) const {

@@ -108,6 +108,8 @@ class CommandCsvBadInput : public ::testing::Test {
     write("s.csv", kGrid);
     write("t.csv", kTargets);
     write("q.csv", "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n10,-20,30,-40,50,-60\n-5,-60,20,10,-30,90\n5,-45,10,0,40,0\n");
+    write("v.csv", "lag_lo,lag_hi,lag_mean,gamma,pairs\n0,0.5,,,0\n0.5,1,0.8,1.2,10\n1,1.5,1.25,2.5,31\n"
+                   "1.5,2,1.73,3.1,6\n2,2.5,2.23,3,8\n2.5,3,2.7,3.05,12\n");
     write("p.csv", "x,y,z\n1200,100,900\n1100,-200,800\n1000,0,1000\n900,300,950\n");
     EXPECT_EQ(run({"simulate", "--sample", "grid", "--step", "125", "--out", "grid.csv"}).exit_code, 0);
     valid["grid.csv"] = dir.read("grid.csv");
@@ -140,6 +142,8 @@ class CommandCsvBadInput : public ::testing::Test {
         {"cv", "s.csv", "z",
          {"cv", "--method", "kriging", "--model", "sph(1,3)", "--samples", "s.csv", "--coords", "x,y,z", "--value", "v"},
          "", {}},
+        {"fit-variogram", "v.csv", "gamma", {"fit-variogram", "--input", "v.csv", "--model", "sph", "--out", "o.json"},
+         "", {"o.json"}},
         {"fk", "q.csv", "q2", {"fk", "--input", "q.csv", "--out", "o.csv"}, "", {"o.csv"}},
         {"ik", "p.csv", "y", {"ik", "--input", "p.csv", "--position-only", "--out", "o.csv"}, "", {"o.csv"}},
         {"simulate --joints", "q.csv", "q5", {"simulate", "--joints", "q.csv", "--out", "o.csv"}, "", {"o.csv"}},
