@@ -37,7 +37,7 @@ void run_compensate(const CompensateArgs& a) {
                          model.method() == CompensationMethod::kinematic_kriging;
   if (kinematic && a.robot.empty())
     throw ArgumentError("--robot: a kinematic model's command model is the calibrated robot; give the nominal robot JSON");
-  const MdhModel nominal = a.robot.empty() ? model.command_model() : MdhModel::load(a.robot);
+  const MdhModel nominal = a.robot.empty() ? model.command_model() : load_robot_or_default(a.robot);
 
   const CsvTable t = CsvTable::read(a.targets);
   const bool joints = has_joint_columns(t);

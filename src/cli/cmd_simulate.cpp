@@ -57,7 +57,7 @@ Eigen::Vector3d parse_vec3(const std::string& text, const std::string& what) {
 void run_simulate(const SimulateArgs& a) {
   using namespace robot;
   SimulatorConfig config = a.config.empty() ? SimulatorConfig::paper_default() : SimulatorConfig::load(a.config);
-  if (!a.robot.empty()) config.nominal = MdhModel::load(a.robot);
+  if (!a.robot.empty()) config.nominal = load_robot_or_default(a.robot);
   if (a.seed >= 0) config.seed = static_cast<std::uint64_t>(a.seed);
   if (a.measure != "positions" && a.measure != "distances" && a.measure != "both")
     throw ArgumentError("--measure: expected positions, distances or both, got '" + a.measure + "'");

@@ -7,7 +7,10 @@
 namespace errfield::cli {
 
 robot::MdhModel load_robot_or_default(const std::string& path) {
-  return path.empty() ? robot::MdhModel::er20_c10() : robot::MdhModel::load(path);
+  if (path.empty()) return robot::MdhModel::er20_c10();
+  robot::MdhModel m = robot::MdhModel::load(path);
+  if (const auto w = robot::lengths_in_metres(m, path)) std::cerr << "errfield: warning: " << *w << "\n";
+  return m;
 }
 
 std::vector<std::string> joint_column_names(const std::string& prefix) {

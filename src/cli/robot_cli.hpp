@@ -13,6 +13,7 @@
 namespace errfield::cli {
 
 /// The robot of `--robot PATH`, or the built-in nominal ER20-C10 (no tool) when the path is empty.
+/// Warns on stderr when the file's lengths look like metres (robot/input_checks.hpp).
 robot::MdhModel load_robot_or_default(const std::string& path);
 
 /// Columns q1..q6 (degrees) of a table, one JointVector per row.

@@ -32,6 +32,13 @@ std::optional<std::string> metres_instead_of_mm(const Eigen::MatrixXd& positions
          " mm: are these metres? errfield expects millimetres (multiply by 1000)";
 }
 
+std::optional<std::string> lengths_in_metres(const MdhModel& model, const std::string& what) {
+  const double reach = reach_scale_mm(model);
+  if (!(reach > 0.0) || reach >= 100.0) return std::nullopt;
+  return what + ": the links' lengths add up to " + format_number(std::round(reach * 1000) / 1000) +
+         " mm (sum of |a_mm| + |d_mm|): are they in metres? errfield expects millimetres (multiply by 1000)";
+}
+
 std::optional<std::string> distances_in_metres(const std::vector<double>& distances_mm, const MdhModel& model,
                                                const std::string& what) {
   const double reach = reach_scale_mm(model);

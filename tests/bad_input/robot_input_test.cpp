@@ -419,5 +419,26 @@ TEST(RobotBadInput, DistancesInMetresCheck) {
   EXPECT_FALSE(robot::distances_in_metres({0.0, 0.0}, er20, "d").has_value());  // nothing to judge
 }
 
+TEST(RobotBadInput, RobotJsonLengthsInMetresWarn) {
+  ScratchDir dir;
+  auto j = er20_json();
+  for (auto& l : j["links"]) {
+    l["a_mm"] = l["a_mm"].get<double>() / 1000.0;
+    l["d_mm"] = l["d_mm"].get<double>() / 1000.0;
+  }
+  dir.write("r.json", j.dump());
+  dir.write("q.csv", "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n");
+  auto r = run_errfield({"fk", "--input", "q.csv", "--robot", "r.json", "--out", "o.csv"}, dir.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;  // a warning, not an error
+  EXPECT_THAT(r.err, AllOf(HasSubstr("warning: r.json"), HasSubstr("add up to 2.478 mm"), HasSubstr("metres")));
+  // The library check, and the real robot in millimetres: no warning.
+  EXPECT_TRUE(robot::lengths_in_metres(robot::MdhModel::load(dir / "r.json"), "r.json").has_value());
+  EXPECT_FALSE(robot::lengths_in_metres(robot::MdhModel::er20_c10(), "er20").has_value());
+  dir.write("r.json", er20_json().dump());
+  r = run_errfield({"fk", "--input", "q.csv", "--robot", "r.json", "--out", "o.csv"}, dir.path());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.err, Not(HasSubstr("metres")));
+}
+
 }  // namespace
 }  // namespace errfield

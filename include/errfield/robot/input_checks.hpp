@@ -28,6 +28,10 @@ double reach_scale_mm(const MdhModel& model);
 std::optional<std::string> metres_instead_of_mm(const Eigen::MatrixXd& positions_mm, const MdhModel& model,
                                                 const std::string& what);
 
+/// A warning when the model's reach scale is above 0 but below 100 mm: MD-H lengths (a_mm,
+/// d_mm) given in metres. `what` names the source (robot JSON file).
+std::optional<std::string> lengths_in_metres(const MdhModel& model, const std::string& what);
+
 /// A warning when every distance (mm) is below reach_scale_mm(model) / 100 in magnitude (25 mm for
 /// the ER20-C10) while some is not 0: distances between robot positions across a workspace in
 /// metres read as millimetres. Nothing for no distances or a reach below 100 mm. `what` names
