@@ -8,12 +8,15 @@
 //                               compensation; the counter `iterations` is the mean LM iterations.
 // BM_CalibrateDistances/125   : distance-model calibration (IGG3) on 125 simulated cube grid points.
 // BM_CalibratePositions/125   : registration + position-model calibration on the same points.
+// BM_ReproduceOneRun          : reproduce_paper with runs = 1 (what `errfield reproduce --runs 1`
+//                               computes, without writing files); target < 10 s, on 2 threads.
 // Run: build/benchmarks/bm_robot
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
 #include "errfield/robot/calibration.hpp"
+#include "errfield/robot/paper_reproduction.hpp"
 #include "errfield/robot/simulator.hpp"
 
 namespace {
@@ -137,5 +140,16 @@ void BM_CalibratePositions(benchmark::State& state) {
   state.counters["points"] = static_cast<double>(d.positions.size());
 }
 BENCHMARK(BM_CalibratePositions)->Arg(125)->Unit(benchmark::kMillisecond);
+
+void BM_ReproduceOneRun(benchmark::State& state) {
+  ReproductionOptions options;
+  options.seed = 3;
+  options.runs = 1;
+  for (auto _ : state) {
+    const ReproductionResult r = reproduce_paper(options);
+    benchmark::DoNotOptimize(&r);
+  }
+}
+BENCHMARK(BM_ReproduceOneRun)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
 
 }  // namespace

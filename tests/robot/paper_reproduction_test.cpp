@@ -2,7 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -117,20 +116,13 @@ std::string run_cli(const std::string& args, int* status) {
   return r.output();
 }
 
-// The README's main command with --runs 1: under 10 s, the CSV contract of table6.csv, every
-// table's CSV, and a report that a browser draws.
+// The README's main command with --runs 1: the CSV contract of table6.csv, every table's CSV, and
+// a report that a browser draws. (Its speed, < 10 s, is a benchmark: BM_ReproduceOneRun.)
 TEST(ReproduceCli, OneRunWritesEveryTableAndARenderableReport) {
   const fs::path dir = fs::temp_directory_path() / ("errfield_reproduce_" + std::to_string(::getpid()));
   int status = 0;
-  const auto t0 = std::chrono::steady_clock::now();
   const std::string out = run_cli("reproduce --runs 1 --seed 3 --out " + dir.string(), &status);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ASSERT_EQ(status, 0) << out;
-#ifndef __SANITIZE_ADDRESS__  // the time budget is for the Release build, not for the ASan job (scripts/sanitize.sh)
-  EXPECT_LT(seconds, 10.0) << "errfield reproduce --runs 1 must finish in under 10 s";
-#else
-  (void)seconds;
-#endif
   EXPECT_NE(out.find("SIMULATED"), std::string::npos);
   EXPECT_NE(out.find("Table 6"), std::string::npos);
   for (const char* f : {"table3.csv", "table4.csv", "fig5.csv", "table6.csv", "table6_spread.csv",
