@@ -171,8 +171,11 @@ double ModelComponent::gamma(double h) const {
         // libstdc++'s K_nu throws for subnormal arguments. Leading term of the series:
         // 1 - rho = Gamma(1-nu)/Gamma(1+nu) (r/2)^(2 nu) for nu < 1 (still ~1e-6 at nu = 0.01);
         // for nu >= 1 it is O(r^2 log r), below 1e-590.
-        return nu < 1.0 ? sill * std::tgamma(1.0 - nu) / std::tgamma(1.0 + nu) * std::pow(r / 2.0, 2.0 * nu)
-                        : 0.0;
+        // The fraction is formed before the sill multiplies it: sill * Gamma(1-nu) alone overflows
+        // for sills near DBL_MAX, and inf * 0 (r underflowed to 0) would be NaN (found by fuzzing).
+        if (nu >= 1.0) return 0.0;
+        const double fraction = std::tgamma(1.0 - nu) / std::tgamma(1.0 + nu) * std::pow(r / 2.0, 2.0 * nu);
+        return sill * std::min(fraction, 1.0);
       }
       const double k = std::cyl_bessel_k(nu, r);
       if (!std::isfinite(k)) {

@@ -64,6 +64,21 @@ TEST(MaternModel, NeverNaNAndWithinZeroAndSillOverTheDomain) {
     }
 }
 
+TEST(MaternModel, HugeSillsStayWithinZeroAndSillAtTinyLags) {
+  // Found by fuzzing: mat(sill=1e308, range=4.1e302, nu=0.5) at h = 1e-300 gave NaN, because
+  // sill * Gamma(1-nu) overflowed before (r/2)^(2 nu) = 0 multiplied it.
+  const VariogramModel model({{ModelKind::Matern, 1e308, 4.1e302, 0.5}});
+  for (double h : {1e-300, 1e-9, 1.0, 1e300}) {
+    const double g = model.gamma(h);
+    EXPECT_FALSE(std::isnan(g)) << h;
+    EXPECT_GE(g, 0.0) << h;
+    EXPECT_LE(g, 1e308) << h;
+  }
+  // At nu = 1/2 the model is exponential: gamma = sill (1 - e^(-h/range)) ~ sill h / range.
+  // r = h / range is subnormal here (~39 significant bits), hence the 1e-9 relative tolerance.
+  EXPECT_NEAR(model.gamma(1e-9) / (1e308 * 1e-9 / 4.1e302), 1.0, 1e-9);
+}
+
 TEST(MaternModel, TinyLagsWithSmallNuAreNotZero) {
   // For nu < 1, gamma ~ Gamma(1-nu)/Gamma(1+nu) (r/2)^(2 nu) stays visible at tiny lags (1.4e-6
   // at nu = 0.01, r = 1e-290), on both sides of the switch to the series at r = 1e-300 (K_nu
