@@ -1,14 +1,14 @@
 #include "errfield/variogram_fit.hpp"
 
-#include <nlopt.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
+#include "optim/bobyqa.hpp"
 
 namespace errfield {
 
@@ -99,29 +99,7 @@ struct Problem {
   }
 };
 
-double objective(unsigned, const double* x, double*, void* data) {
-  return static_cast<Problem*>(data)->sse(x);
-}
-
-struct NloptDeleter {
-  void operator()(nlopt_opt o) const { nlopt_destroy(o); }
-};
-
-std::string describe(nlopt_result r) {
-  switch (r) {
-    case NLOPT_SUCCESS: return "converged";
-    case NLOPT_STOPVAL_REACHED: return "converged (stop value reached)";
-    case NLOPT_FTOL_REACHED: return "converged (relative change of the SSE below tolerance)";
-    case NLOPT_XTOL_REACHED: return "converged (relative change of the parameters below tolerance)";
-    case NLOPT_MAXEVAL_REACHED: return "stopped at the evaluation limit";
-    case NLOPT_MAXTIME_REACHED: return "stopped at the time limit";
-    case NLOPT_ROUNDOFF_LIMITED: return "converged (limited by rounding)";
-    case NLOPT_INVALID_ARGS: return "NLopt: invalid arguments";
-    case NLOPT_OUT_OF_MEMORY: return "NLopt: out of memory";
-    case NLOPT_FORCED_STOP: return "NLopt: forced stop";
-    default: return "NLopt: failure";
-  }
-}
+double objective(const double* x, void* data) { return static_cast<Problem*>(data)->sse(x); }
 
 }  // namespace
 
@@ -261,59 +239,47 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
   for (auto& x : starts)
     for (std::size_t p = 0; p < dim; ++p) x[p] = std::clamp(x[p], lb[p], ub[p]);
 
-  std::unique_ptr<nlopt_opt_s, NloptDeleter> opt(nlopt_create(NLOPT_LN_BOBYQA, static_cast<unsigned>(dim)));
-  if (!opt) throw Error("fit_variogram: NLopt could not create a BOBYQA optimizer");
-  nlopt_set_lower_bounds(opt.get(), lb.data());
-  nlopt_set_upper_bounds(opt.get(), ub.data());
-  nlopt_set_min_objective(opt.get(), &objective, &pr);
-  nlopt_set_ftol_rel(opt.get(), options.relative_tolerance);
-  nlopt_set_xtol_rel(opt.get(), options.relative_tolerance);
-  nlopt_set_maxeval(opt.get(), options.max_evaluations);
-
-  auto local = [&](std::vector<double>& x, double& f) {
-    // Initial steps: a tenth of the distance to the nearer bound side, at least a small absolute one.
+  detail::Bobyqa bobyqa(lb, ub, options.relative_tolerance, options.max_evaluations, "fit_variogram");
+  auto local = [&](std::vector<double>& x) {
+    // Initial steps: a tenth of the parameter's size, at least a small absolute one.
     std::vector<double> step(dim);
     for (std::size_t p = 0; p < dim; ++p)
       step[p] = std::max(0.1 * std::max(std::fabs(x[p]), 0.1), 1e-4);
-    nlopt_set_initial_step(opt.get(), step.data());
-    return nlopt_optimize(opt.get(), x.data(), &f);
+    return bobyqa.minimize(&objective, &pr, x, step);
   };
 
   std::vector<double> best = starts.front();
-  double best_f = std::numeric_limits<double>::infinity();
-  nlopt_result best_r = NLOPT_FAILURE;
+  std::optional<detail::BobyqaOutcome> best_run;   // the best converged run
+  std::optional<detail::BobyqaOutcome> first_failure;
   for (auto x : starts) {
-    double f = 0.0;
-    const nlopt_result r = local(x, f);
-    if (r > 0 || r == NLOPT_ROUNDOFF_LIMITED) {
-      if (f < best_f) {
-        best_f = f;
+    const auto run = local(x);
+    if (run.converged) {
+      if (!best_run || run.objective < best_run->objective) {
+        best_run = run;
         best = x;
-        best_r = r;
       }
-    } else if (best_r == NLOPT_FAILURE) {
-      best_r = r;
+    } else if (!first_failure) {
+      first_failure = run;
     }
   }
-  if (std::isfinite(best_f)) {
+  if (best_run) {
     // A restart from the best point: BOBYQA's trust region often shrinks early on flat valleys.
     std::vector<double> x = best;
-    double f = 0.0;
-    const nlopt_result r = local(x, f);
-    if ((r > 0 || r == NLOPT_ROUNDOFF_LIMITED) && f <= best_f) {
-      best_f = f;
+    const auto run = local(x);
+    if (run.converged && run.objective <= best_run->objective) {
+      best_run = run;
       best = x;
-      best_r = r;
     }
   }
+  const detail::BobyqaOutcome outcome = best_run ? *best_run : *first_failure;
 
   VariogramFitResult result;
   result.evaluations = pr.evaluations;
   result.bins_used = pr.h.size();
-  result.message = describe(best_r);
-  result.status = best_r == NLOPT_MAXEVAL_REACHED ? FitStatus::MaxEvaluations
-                  : (best_r > 0 || best_r == NLOPT_ROUNDOFF_LIMITED) ? FitStatus::Converged
-                                                                      : FitStatus::Failed;
+  result.message = bobyqa.describe(outcome, "SSE");
+  result.status = outcome.converged              ? FitStatus::Converged
+                  : outcome.hit_evaluation_limit ? FitStatus::MaxEvaluations
+                                                 : FitStatus::Failed;
   // A parameter stuck at an upper bound usually means the structure does not fit the data (e.g. a
   // bounded model on a variogram that keeps rising): say so.
   for (std::size_t p = 0; p < dim; ++p)

@@ -6,11 +6,11 @@
 #include <numbers>
 
 #include <Eigen/Cholesky>
-#include <nlopt.h>
 
 #include "covariance_kernel.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
+#include "optim/bobyqa.hpp"
 
 namespace errfield {
 namespace {
@@ -107,16 +107,12 @@ struct Problem {
   }
 };
 
-double objective(unsigned, const double* theta, double*, void* data) {
+double objective(const double* theta, void* data) {
   auto& p = *static_cast<Problem*>(data);
   ++p.evaluations;
   const double v = nll(*p.x, *p.z, *p.f, p.model_of(theta), p.restricted);
   return std::isfinite(v) ? v : 1e300;
 }
-
-struct NloptDeleter {
-  void operator()(nlopt_opt o) const { nlopt_destroy(o); }
-};
 
 }  // namespace
 
@@ -181,28 +177,14 @@ LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eig
     ub.push_back(std::log(var * 10.0));
   }
   for (std::size_t i = 0; i < x0.size(); ++i) x0[i] = std::min(std::max(x0[i], lb[i]), ub[i]);
-  std::unique_ptr<nlopt_opt_s, NloptDeleter> opt(nlopt_create(NLOPT_LN_BOBYQA, static_cast<unsigned>(x0.size())));
-  nlopt_set_lower_bounds(opt.get(), lb.data());
-  nlopt_set_upper_bounds(opt.get(), ub.data());
-  nlopt_set_min_objective(opt.get(), &objective, &pr);
-  nlopt_set_ftol_rel(opt.get(), options.relative_tolerance);
-  nlopt_set_xtol_rel(opt.get(), options.relative_tolerance);
-  nlopt_set_maxeval(opt.get(), options.max_evaluations);
-  double fmin = 0.0;
-  const nlopt_result r = nlopt_optimize(opt.get(), x0.data(), &fmin);
+  detail::Bobyqa bobyqa(lb, ub, options.relative_tolerance, options.max_evaluations, "fit_likelihood");
+  const detail::BobyqaOutcome outcome = bobyqa.minimize(&objective, &pr, x0);
   LikelihoodFitResult res;
   res.model = pr.model_of(x0.data());
   res.negative_log_likelihood = nll(coordinates, z, f, res.model, options.restricted);
   res.evaluations = pr.evaluations;
-  res.converged = r == NLOPT_SUCCESS || r == NLOPT_FTOL_REACHED || r == NLOPT_XTOL_REACHED || r == NLOPT_STOPVAL_REACHED;
-  switch (r) {
-    case NLOPT_SUCCESS: res.message = "converged"; break;
-    case NLOPT_FTOL_REACHED: res.message = "converged (relative change of the likelihood below tolerance)"; break;
-    case NLOPT_XTOL_REACHED: res.message = "converged (relative change of the parameters below tolerance)"; break;
-    case NLOPT_MAXEVAL_REACHED: res.message = "stopped at max_evaluations = " + std::to_string(options.max_evaluations); break;
-    case NLOPT_ROUNDOFF_LIMITED: res.message = "stopped: roundoff limited"; break;
-    default: res.message = "NLopt failed with code " + std::to_string(static_cast<int>(r)); break;
-  }
+  res.converged = outcome.converged;
+  res.message = bobyqa.describe(outcome, "likelihood");
   return res;
 }
 
