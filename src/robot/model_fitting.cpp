@@ -92,15 +92,14 @@ void FitOptions::validate() const {
 
 namespace {
 
-template <class V>
-CrossValidationReport summarize(const CrossValidationResult<V>& r, std::string how) {
+CrossValidationReport report(const CrossValidationSummary& s, std::string how) {
   CrossValidationReport c;
   c.method = std::move(how);
-  c.samples = r.summary.predicted;
-  c.mean_abs_mm = r.summary.mean_abs_error;
-  c.rms_mm = r.summary.rms_error;
-  c.max_abs_mm = r.summary.max_abs_error;
-  c.mean_squared_z = r.summary.mean_squared_z;
+  c.samples = s.predicted;
+  c.mean_abs_mm = s.mean_abs_error;
+  c.rms_mm = s.rms_error;
+  c.max_abs_mm = s.max_abs_error;
+  c.mean_squared_z = s.mean_squared_z;
   return c;
 }
 
@@ -123,9 +122,7 @@ CrossValidationReport kriging_loo(std::span<const L> locations, const std::vecto
   for (std::size_t i = 0; i < values.size(); ++i)
     for (int c = 0; c < C; ++c)
       residual(static_cast<Eigen::Index>(i), c) = ValueTraits<V>::component(cv.residual[i], c);
-  CrossValidationResult<V> r;
-  r.summary = summarize_residuals(residual, cv.variance);
-  return summarize(r, std::move(how));
+  return report(summarize_residuals(residual, cv.variance), std::move(how));
 }
 
 template <class V>
@@ -144,9 +141,10 @@ CrossValidationReport idw_cv(const std::vector<Eigen::Vector3d>& p, const std::v
   est.options.power = power;
   est.options.neighbors = 8;
   est.options.threads = 1;
-  return summarize(cross_validate<Eigen::Vector3d, V>(est, std::span<const Eigen::Vector3d>(p), std::span<const V>(values)),
-                   "leave-one-out with 8-nearest-neighbour IDW (grid IDW needs every node, so its own LOO is "
-                   "not defined)");
+  return report(cross_validate<Eigen::Vector3d, V>(est, std::span<const Eigen::Vector3d>(p), std::span<const V>(values))
+                    .summary,
+                "leave-one-out with 8-nearest-neighbour IDW (grid IDW needs every node, so its own LOO is "
+                "not defined)");
 }
 
 RegularGrid3 detect_grid(const MeasurementSet& d, std::vector<std::size_t>& sample_of_node) {
