@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "errfield/cross_validation.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
 #include "errfield/kriging.hpp"
@@ -159,6 +160,21 @@ class KrigingField final : public ErrorField {
     return j;
   }
 
+  /// Closed-form leave-one-out over the field's (merged) samples, from its factorization.
+  CrossValidationSummary leave_one_out() const {
+    const KrigingCrossValidation<V> cv = kriging_.leave_one_out();
+    if (cv.status != KrigingStatus::Ok)
+      throw Error(kind_ + " field: leave-one-out failed: " + cv.message);
+    constexpr int C = ValueTraits<V>::kComponents;
+    Eigen::MatrixXd residual(static_cast<Eigen::Index>(cv.residual.size()), C);
+    for (std::size_t i = 0; i < cv.residual.size(); ++i)
+      for (int c = 0; c < C; ++c)
+        residual(static_cast<Eigen::Index>(i), c) = ValueTraits<V>::component(cv.residual[i], c);
+    return summarize_residuals(residual, cv.variance);
+  }
+
+  std::size_t merged_duplicates() const { return kriging_.report().merged_duplicates; }
+
   std::string describe() const override {
     return kind_ + " (" + std::string(field_space_name(options_.space)) + " space, " + std::to_string(values_.size()) +
            " samples, model " + model_.to_string() + ")";
@@ -185,17 +201,48 @@ class KrigingField final : public ErrorField {
   Kriging<L, V, M> kriging_;
 };
 
+template <class L, class V, class M>
+KrigingFieldFit fit_field(std::shared_ptr<const KrigingField<L, V, M>> field, bool with_leave_one_out) {
+  KrigingFieldFit fit;
+  if (with_leave_one_out) fit.leave_one_out = field->leave_one_out();
+  fit.merged_duplicates = field->merged_duplicates();
+  fit.field = std::move(field);
+  return fit;
+}
+
 template <class V>
-std::shared_ptr<const ErrorField> make_field(std::string kind, const FieldSamples& samples, std::vector<V> values,
-                                             const Eigen::MatrixXd& flat, const KrigingFieldOptions& options,
-                                             std::optional<Eigen::Vector3d> base) {
+KrigingFieldFit make_field(std::string kind, const FieldSamples& samples, std::vector<V> values,
+                           const Eigen::MatrixXd& flat, const KrigingFieldOptions& options,
+                           std::optional<Eigen::Vector3d> base, bool with_leave_one_out) {
   options.validate();
   const VariogramModel model = options.model ? *options.model : estimate_field_variogram(samples, flat, options.space);
   if (options.space == FieldSpace::task)
-    return std::make_shared<KrigingField<Eigen::Vector3d, V, EuclideanMetric>>(
-        std::move(kind), samples, samples.position_mm, std::move(values), model, options, base);
-  return std::make_shared<KrigingField<JointVector, V, JointSpaceMetric>>(std::move(kind), samples, samples.joints_deg,
-                                                                          std::move(values), model, options, base);
+    return fit_field(std::make_shared<const KrigingField<Eigen::Vector3d, V, EuclideanMetric>>(
+                         std::move(kind), samples, samples.position_mm, std::move(values), model, options, base),
+                     with_leave_one_out);
+  return fit_field(std::make_shared<const KrigingField<JointVector, V, JointSpaceMetric>>(
+                       std::move(kind), samples, samples.joints_deg, std::move(values), model, options, base),
+                   with_leave_one_out);
+}
+
+KrigingFieldFit distance_field(const FieldSamples& samples, std::vector<double> distance_error_mm,
+                               const Eigen::Vector3d& base_point_mm, const KrigingFieldOptions& options,
+                               bool with_leave_one_out) {
+  check_samples(samples, distance_error_mm.size(), "distance-kriging field");
+  const Eigen::MatrixXd flat = Eigen::Map<const Eigen::VectorXd>(distance_error_mm.data(),
+                                                                 static_cast<Eigen::Index>(distance_error_mm.size()));
+  return make_field<double>("distance-kriging", samples, std::move(distance_error_mm), flat, options, base_point_mm,
+                            with_leave_one_out);
+}
+
+KrigingFieldFit vector_field(const FieldSamples& samples, std::vector<Eigen::Vector3d> position_error_mm,
+                             const KrigingFieldOptions& options, bool with_leave_one_out) {
+  check_samples(samples, position_error_mm.size(), "vector-kriging field");
+  Eigen::MatrixXd flat(static_cast<Eigen::Index>(position_error_mm.size()), 3);
+  for (std::size_t i = 0; i < position_error_mm.size(); ++i)
+    flat.row(static_cast<Eigen::Index>(i)) = position_error_mm[i].transpose();
+  return make_field<Eigen::Vector3d>("vector-kriging", samples, std::move(position_error_mm), flat, options,
+                                     std::nullopt, with_leave_one_out);
 }
 
 }  // namespace
@@ -209,20 +256,23 @@ std::shared_ptr<const ErrorField> make_distance_kriging_field(const FieldSamples
                                                               std::vector<double> distance_error_mm,
                                                               const Eigen::Vector3d& base_point_mm,
                                                               const KrigingFieldOptions& options) {
-  check_samples(samples, distance_error_mm.size(), "distance-kriging field");
-  const Eigen::MatrixXd flat = Eigen::Map<const Eigen::VectorXd>(distance_error_mm.data(),
-                                                                 static_cast<Eigen::Index>(distance_error_mm.size()));
-  return make_field<double>("distance-kriging", samples, std::move(distance_error_mm), flat, options, base_point_mm);
+  return distance_field(samples, std::move(distance_error_mm), base_point_mm, options, false).field;
 }
 
 std::shared_ptr<const ErrorField> make_vector_kriging_field(const FieldSamples& samples,
                                                             std::vector<Eigen::Vector3d> position_error_mm,
                                                             const KrigingFieldOptions& options) {
-  check_samples(samples, position_error_mm.size(), "vector-kriging field");
-  Eigen::MatrixXd flat(static_cast<Eigen::Index>(position_error_mm.size()), 3);
-  for (std::size_t i = 0; i < position_error_mm.size(); ++i)
-    flat.row(static_cast<Eigen::Index>(i)) = position_error_mm[i].transpose();
-  return make_field<Eigen::Vector3d>("vector-kriging", samples, std::move(position_error_mm), flat, options, std::nullopt);
+  return vector_field(samples, std::move(position_error_mm), options, false).field;
+}
+
+KrigingFieldFit fit_distance_kriging_field(const FieldSamples& samples, std::vector<double> distance_error_mm,
+                                           const Eigen::Vector3d& base_point_mm, const KrigingFieldOptions& options) {
+  return distance_field(samples, std::move(distance_error_mm), base_point_mm, options, true);
+}
+
+KrigingFieldFit fit_vector_kriging_field(const FieldSamples& samples, std::vector<Eigen::Vector3d> position_error_mm,
+                                         const KrigingFieldOptions& options) {
+  return vector_field(samples, std::move(position_error_mm), options, true);
 }
 
 namespace {

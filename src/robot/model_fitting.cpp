@@ -103,36 +103,13 @@ CrossValidationReport report(const CrossValidationSummary& s, std::string how) {
   return c;
 }
 
-/// Leave-one-out of ordinary kriging with the fitted model, in closed form from the one dense
-/// factorization (Kriging::leave_one_out, Dubrule 1983): O(N^3) instead of N refits, O(N^4), which
-/// made `errfield fit --method distance-kriging` on 9,261 points run for minutes. The residual
-/// variance is that of a new observation (kriging variance plus the nugget as measurement error).
-template <class L, class M, class V>
-CrossValidationReport kriging_loo(std::span<const L> locations, const std::vector<V>& values,
-                                  const VariogramModel& model, std::string how) {
-  KrigingOptions ko;
-  ko.nugget = NuggetTreatment::MeasurementError;
-  const Kriging<L, V, M> k(locations, std::span<const V>(values), model, ko);
-  const KrigingCrossValidation<V> cv = k.leave_one_out();
-  if (cv.residual.size() != values.size())
-    throw Error("fit: kriging leave-one-out returned " + std::to_string(cv.residual.size()) + " residuals for " +
-                std::to_string(values.size()) + " samples (" + cv.message + ")");
-  constexpr int C = ValueTraits<V>::kComponents;
-  Eigen::MatrixXd residual(static_cast<Eigen::Index>(values.size()), C);
-  for (std::size_t i = 0; i < values.size(); ++i)
-    for (int c = 0; c < C; ++c)
-      residual(static_cast<Eigen::Index>(i), c) = ValueTraits<V>::component(cv.residual[i], c);
-  return report(summarize_residuals(residual, cv.variance), std::move(how));
-}
-
-template <class V>
-CrossValidationReport kriging_cv(const FieldSamples& s, const std::vector<V>& values, const VariogramModel& model,
-                                 FieldSpace space) {
-  if (space == FieldSpace::task)
-    return kriging_loo<Eigen::Vector3d, EuclideanMetric>(std::span<const Eigen::Vector3d>(s.position_mm), values,
-                                                         model, "leave-one-out, ordinary kriging in task space");
-  return kriging_loo<JointVector, JointSpaceMetric>(std::span<const JointVector>(s.joints_deg), values, model,
-                                                    "leave-one-out, ordinary kriging in joint space");
+/// The kriging field's own leave-one-out (closed form from its factorization; KrigingFieldFit).
+CrossValidationReport kriging_report(const KrigingFieldFit& fit, FieldSpace space) {
+  std::string how = "leave-one-out, ordinary kriging in " + std::string(field_space_name(space)) + " space";
+  if (fit.merged_duplicates > 0)
+    how += "; " + std::to_string(fit.merged_duplicates) +
+           " repeated measurements averaged into their location, so one location is left out at a time";
+  return report(fit.leave_one_out, std::move(how));
 }
 
 template <class V>
@@ -219,8 +196,8 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       ko.space = o.space;
       const Eigen::MatrixXd flat = Eigen::Map<const Eigen::VectorXd>(dl.data(), static_cast<Eigen::Index>(dl.size()));
       ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
-      FitResult out{CompensationModel(method, robot, make_distance_kriging_field(samples, dl, d.base_nominal_mm[o.base], ko)),
-                    std::nullopt, kriging_cv(samples, dl, *ko.model, o.space), {}};
+      const KrigingFieldFit fit = fit_distance_kriging_field(samples, dl, d.base_nominal_mm[o.base], ko);
+      FitResult out{CompensationModel(method, robot, fit.field), std::nullopt, kriging_report(fit, o.space), {}};
       out.notes.push_back("variogram model " + ko.model->to_string() + "; base point b" + std::to_string(o.base));
       return out;
     }
@@ -250,8 +227,9 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(dp.size()), 3);
       for (std::size_t i = 0; i < dp.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = dp[i].transpose();
       ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
-      out.model = CompensationModel(method, robot, make_vector_kriging_field(samples, dp, ko));
-      out.cross_validation = kriging_cv(samples, dp, *ko.model, o.space);
+      const KrigingFieldFit fit = fit_vector_kriging_field(samples, dp, ko);
+      out.model = CompensationModel(method, robot, fit.field);
+      out.cross_validation = kriging_report(fit, o.space);
       out.notes.push_back("variogram model " + ko.model->to_string() + " (shared by the 3 components)");
       return out;
     }
@@ -288,8 +266,9 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(residual.size()), 3);
       for (std::size_t i = 0; i < residual.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = residual[i].transpose();
       ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
-      out.model = CompensationModel(method, cal.model, make_vector_kriging_field(samples, residual, ko));
-      out.cross_validation = kriging_cv(samples, residual, *ko.model, o.space);
+      const KrigingFieldFit fit = fit_vector_kriging_field(samples, residual, ko);
+      out.model = CompensationModel(method, cal.model, fit.field);
+      out.cross_validation = kriging_report(fit, o.space);
       out.notes.push_back("residuals after calibration kriged with " + ko.model->to_string());
       return out;
     }

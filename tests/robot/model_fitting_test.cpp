@@ -102,5 +102,64 @@ TEST(FitCompensationModel, KrigingLeaveOneOutEqualsRefittingWithoutEachSample) {
   }
 }
 
+TEST(FitCompensationModel, RepeatedMeasurementsOfAPoseAreAveragedNotRejected) {
+  // A pose measured twice used to make fit's leave-one-out refuse the data as duplicates (its own
+  // kriging rejected them while the field averaged them). Now field and leave-one-out share one
+  // factorization. Ground truth: an exact repeat averages to the same value, so the result must
+  // equal the fit without it (checked above against refitting), over the 27 distinct locations.
+  const SimulatedRobot sim(SimulatorConfig::paper_default());
+  const MeasurementSet data = simulated_grid(sim);
+  MeasurementSet repeated = data;
+  for (std::size_t i : {std::size_t{3}, std::size_t{11}}) {
+    repeated.id.push_back(data.id[i] + "-again");
+    repeated.q_deg.push_back(data.q_deg[i]);
+    repeated.nominal_mm.push_back(data.nominal_mm[i]);
+    repeated.measured_mm.push_back(data.measured_mm[i]);
+    repeated.distance_mm[0].push_back(data.distance_mm[0][i]);
+  }
+  FitOptions o;
+  o.method = CompensationMethod::distance_kriging;
+  o.model = VariogramModel::parse("sph(sill=0.02,range=700)+nug(0.001)");
+  const FitResult once = fit_compensation_model(sim.nominal(), data, o);
+  const FitResult twice = fit_compensation_model(sim.nominal(), repeated, o);
+  ASSERT_TRUE(once.cross_validation && twice.cross_validation);
+  const CrossValidationReport& a = *once.cross_validation;
+  const CrossValidationReport& b = *twice.cross_validation;
+  EXPECT_EQ(b.samples, data.id.size());
+  EXPECT_NEAR(b.rms_mm, a.rms_mm, 1e-12);
+  EXPECT_NEAR(b.max_abs_mm, a.max_abs_mm, 1e-12);
+  EXPECT_NE(b.method.find("2 repeated measurements averaged"), std::string::npos) << b.method;
+  EXPECT_EQ(a.method.find("repeated"), std::string::npos) << a.method;
+}
+
+TEST(KrigingFieldFit, VectorFieldAveragesRepeatedSamples) {
+  // (fit --method vector-kriging registers the positions first, and a repeated pose weighs twice in
+  // the registration, so the field is compared here on given error vectors.)
+  const SimulatedRobot sim(SimulatorConfig::paper_default());
+  const MeasurementSet data = simulated_grid(sim);
+  FieldSamples samples{data.nominal_mm, data.q_deg};
+  std::vector<Eigen::Vector3d> dp;
+  for (std::size_t i = 0; i < data.id.size(); ++i) dp.push_back(data.measured_mm[i] - data.nominal_mm[i]);
+  FieldSamples samples_repeated = samples;
+  std::vector<Eigen::Vector3d> dp_repeated = dp;
+  samples_repeated.position_mm.push_back(samples.position_mm[7]);
+  samples_repeated.joints_deg.push_back(samples.joints_deg[7]);
+  dp_repeated.push_back(dp[7]);
+  KrigingFieldOptions o;
+  o.model = VariogramModel::parse("sph(sill=0.02,range=700)+nug(0.001)");
+  const KrigingFieldFit once = fit_vector_kriging_field(samples, dp, o);
+  const KrigingFieldFit twice = fit_vector_kriging_field(samples_repeated, dp_repeated, o);
+  EXPECT_EQ(once.merged_duplicates, 0u);
+  EXPECT_EQ(twice.merged_duplicates, 1u);
+  EXPECT_EQ(twice.leave_one_out.predicted, dp.size());
+  EXPECT_NEAR(twice.leave_one_out.rms_error, once.leave_one_out.rms_error, 1e-12);
+  EXPECT_GT(once.leave_one_out.rms_error, 0.0);
+  const Eigen::Vector3d target = samples.position_mm[7] + Eigen::Vector3d(30.0, -20.0, 10.0);
+  const ErrorPrediction p1 = once.field->predict(target, samples.joints_deg[7]);
+  const ErrorPrediction p2 = twice.field->predict(target, samples.joints_deg[7]);
+  ASSERT_TRUE(p1.inside_region && p2.inside_region);
+  EXPECT_LT((p1.position_error_mm - p2.position_error_mm).norm(), 1e-12);
+}
+
 }  // namespace
 }  // namespace errfield::robot

@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 
+#include "errfield/cross_validation.hpp"
 #include "errfield/robot/compensation.hpp"
 #include "errfield/variogram_model.hpp"
 
@@ -60,6 +61,26 @@ std::shared_ptr<const ErrorField> make_distance_kriging_field(const FieldSamples
 std::shared_ptr<const ErrorField> make_vector_kriging_field(const FieldSamples& samples,
                                                             std::vector<Eigen::Vector3d> position_error_mm,
                                                             const KrigingFieldOptions& options = {});
+
+/// A kriging field and its leave-one-out cross-validation, both from the one factorization (the
+/// closed form of Dubrule 1983: O(N^3), not N refits). Samples at the same location (repeated
+/// measurements of one pose) are averaged into one, so leave-one-out leaves out a location and
+/// `leave_one_out.predicted` counts locations. Residual variances are those of a new observation
+/// (kriging variance plus the measurement-error nugget), so mean_squared_z ~ 1 when calibrated.
+struct KrigingFieldFit {
+  std::shared_ptr<const ErrorField> field;
+  CrossValidationSummary leave_one_out;
+  std::size_t merged_duplicates = 0;  ///< samples folded into another at the same location
+};
+
+/// make_distance_kriging_field plus its leave-one-out summary (mm).
+KrigingFieldFit fit_distance_kriging_field(const FieldSamples& samples, std::vector<double> distance_error_mm,
+                                           const Eigen::Vector3d& base_point_mm,
+                                           const KrigingFieldOptions& options = {});
+
+/// make_vector_kriging_field plus its leave-one-out summary (norm of the 3-D residual, mm).
+KrigingFieldFit fit_vector_kriging_field(const FieldSamples& samples, std::vector<Eigen::Vector3d> position_error_mm,
+                                         const KrigingFieldOptions& options = {});
 
 /// The variogram model the fields estimate when none is given: empirical variogram of the values
 /// over the samples' lags (10 bins up to 60% of the largest lag) and the best-fitting of sph/exp/gau
