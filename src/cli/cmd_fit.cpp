@@ -52,6 +52,7 @@ void run_fit(const FitArgs& a) {
     std::cout << "\n";
   }
   std::cout << "  model written to " << a.out << "\n";
+  for (const auto& w : r.warnings) std::cerr << "errfield fit: warning: " << w << "\n";
 }
 
 void add_fit_command(CLI::App& app) {

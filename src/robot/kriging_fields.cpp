@@ -163,7 +163,8 @@ class KrigingField final : public ErrorField {
   /// Closed-form leave-one-out over the field's (merged) samples, from its factorization.
   CrossValidationSummary leave_one_out() const {
     const KrigingCrossValidation<V> cv = kriging_.leave_one_out();
-    if (cv.status != KrigingStatus::Ok)
+    // IllConditioned still predicts (fit warns about it from the factorization's report).
+    if (cv.status != KrigingStatus::Ok && cv.status != KrigingStatus::IllConditioned)
       throw Error(kind_ + " field: leave-one-out failed: " + cv.message);
     constexpr int C = ValueTraits<V>::kComponents;
     Eigen::MatrixXd residual(static_cast<Eigen::Index>(cv.residual.size()), C);
@@ -173,7 +174,7 @@ class KrigingField final : public ErrorField {
     return summarize_residuals(residual, cv.variance);
   }
 
-  std::size_t merged_duplicates() const { return kriging_.report().merged_duplicates; }
+  const KrigingReport& factorization() const { return kriging_.report(); }
 
   std::string describe() const override {
     return kind_ + " (" + std::string(field_space_name(options_.space)) + " space, " + std::to_string(values_.size()) +
@@ -205,7 +206,8 @@ template <class L, class V, class M>
 KrigingFieldFit fit_field(std::shared_ptr<const KrigingField<L, V, M>> field, bool with_leave_one_out) {
   KrigingFieldFit fit;
   if (with_leave_one_out) fit.leave_one_out = field->leave_one_out();
-  fit.merged_duplicates = field->merged_duplicates();
+  fit.factorization = field->factorization();
+  fit.merged_duplicates = fit.factorization.merged_duplicates;
   fit.field = std::move(field);
   return fit;
 }

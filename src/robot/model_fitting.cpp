@@ -112,6 +112,23 @@ CrossValidationReport kriging_report(const KrigingFieldFit& fit, FieldSpace spac
   return report(fit.leave_one_out, std::move(how));
 }
 
+/// The kriging system's conditioning, as a note, and as a warning when it costs precision: a model
+/// without nugget (Gaussian above all) on dense samples makes K nearly singular, and predictions
+/// and the leave-one-out summary are then dominated by rounding.
+void note_factorization(FitResult& out, const KrigingFieldFit& fit, const VariogramModel& model) {
+  const KrigingReport& f = fit.factorization;
+  std::string note = "kriging system: " + std::to_string(f.samples_used) + " samples";
+  if (std::isfinite(f.condition_number)) note += ", condition number " + format_number(f.condition_number);
+  if (f.jitter > 0.0) note += ", jitter " + format_number(f.jitter) + " added to the diagonal";
+  out.notes.push_back(std::move(note));
+  if (f.status == KrigingStatus::IllConditioned || f.jitter > 0.0)
+    out.warnings.push_back("the kriging system is ill-conditioned: " +
+                           (f.message.empty() ? "jitter " + format_number(f.jitter) + " was needed" : f.message) +
+                           ". Predictions and the leave-one-out summary lose precision; give the variogram model " +
+                           (model.nugget() > 0.0 ? "a larger nugget" : "a nugget") + " (model " + model.to_string() +
+                           "), e.g. --model \"...+nug(" + format_number(1e-3 * model.sill()) + ")\"");
+}
+
 template <class V>
 CrossValidationReport idw_cv(const std::vector<Eigen::Vector3d>& p, const std::vector<V>& values, double power) {
   ScatteredIdwEstimator<Eigen::Vector3d, V> est;
@@ -163,7 +180,7 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
   };
   switch (method) {
     case CompensationMethod::none:
-      return {CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {"no correction"}};
+      return {CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {"no correction"}, {}};
     case CompensationMethod::distance_idw: {
       need_base();
       const std::vector<double> dl = d.distance_errors(o.base);
@@ -172,14 +189,14 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       std::vector<double> node(order.size());
       for (std::size_t n = 0; n < order.size(); ++n) node[n] = dl[order[n]];
       FitResult out{CompensationModel(method, robot, make_distance_idw_field(grid, node, d.base_nominal_mm[o.base], idw)),
-                    std::nullopt, idw_cv(d.nominal_mm, dl, o.idw_power), {}};
+                    std::nullopt, idw_cv(d.nominal_mm, dl, o.idw_power), {}, {}};
       out.notes.push_back("base point b" + std::to_string(o.base) + " at (" + std::to_string(d.base_nominal_mm[o.base].x()) +
                           ", " + std::to_string(d.base_nominal_mm[o.base].y()) + ", " +
                           std::to_string(d.base_nominal_mm[o.base].z()) + ") mm");
       return out;
     }
     case CompensationMethod::position_idw: {
-      FitResult out{CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {}};
+      FitResult out{CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {}, {}};
       const auto dp = registered_errors(out);
       std::vector<std::size_t> order;
       const RegularGrid3 grid = detect_grid(d, order);
@@ -197,12 +214,13 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       const Eigen::MatrixXd flat = Eigen::Map<const Eigen::VectorXd>(dl.data(), static_cast<Eigen::Index>(dl.size()));
       ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
       const KrigingFieldFit fit = fit_distance_kriging_field(samples, dl, d.base_nominal_mm[o.base], ko);
-      FitResult out{CompensationModel(method, robot, fit.field), std::nullopt, kriging_report(fit, o.space), {}};
+      FitResult out{CompensationModel(method, robot, fit.field), std::nullopt, kriging_report(fit, o.space), {}, {}};
+      note_factorization(out, fit, *ko.model);
       out.notes.push_back("variogram model " + ko.model->to_string() + "; base point b" + std::to_string(o.base));
       return out;
     }
     case CompensationMethod::vector_kriging: {
-      FitResult out{CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {}};
+      FitResult out{CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {}, {}};
       std::vector<Eigen::Vector3d> dp;
       if (d.distance_mm.size() >= 3) {
         // registration-free: the full error vector from distances to >= 3 base points
@@ -231,6 +249,7 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       out.model = CompensationModel(method, robot, fit.field);
       out.cross_validation = kriging_report(fit, o.space);
       out.notes.push_back("variogram model " + ko.model->to_string() + " (shared by the 3 components)");
+      note_factorization(out, fit, *ko.model);
       return out;
     }
     case CompensationMethod::kinematic:
@@ -245,12 +264,13 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
         if ((d.nominal_mm[i] - d.base_nominal_mm[o.base]).norm() > 1.0)
           dm.push_back({d.base_q_deg[o.base], d.q_deg[i], d.distance_mm[o.base][i]});
       const CalibrationResult cal = calibrate_distances(robot, dm);
-      FitResult out{CompensationModel(CompensationMethod::kinematic, cal.model, nullptr), std::nullopt, std::nullopt, {}};
+      FitResult out{CompensationModel(CompensationMethod::kinematic, cal.model, nullptr), std::nullopt, std::nullopt, {}, {}};
       out.notes.push_back("calibration on " + std::to_string(dm.size()) + " distances: residual RMS " +
                           std::to_string(cal.before.rms_mm) + " -> " + std::to_string(cal.after.rms_mm) + " mm, " +
                           std::to_string(cal.parameters.size()) + " parameters identified, " +
                           std::to_string(cal.removed.size()) + " removed, condition number " +
                           std::to_string(cal.condition_number) + "; " + cal.message);
+      if (!cal.converged) out.warnings.push_back("the kinematic calibration did not converge: " + cal.message);
       if (method == CompensationMethod::kinematic) return out;
       if (d.measured_mm.empty())
         throw InputError(d.source + ": kinematic+kriging needs measured positions (mx,my,mz) for the residuals",
@@ -270,6 +290,7 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       out.model = CompensationModel(method, cal.model, fit.field);
       out.cross_validation = kriging_report(fit, o.space);
       out.notes.push_back("residuals after calibration kriged with " + ko.model->to_string());
+      note_factorization(out, fit, *ko.model);
       return out;
     }
   }

@@ -132,6 +132,24 @@ TEST(FitCompensationModel, RepeatedMeasurementsOfAPoseAreAveragedNotRejected) {
   EXPECT_EQ(a.method.find("repeated"), std::string::npos) << a.method;
 }
 
+TEST(FitCompensationModel, IllConditionedKrigingIsAWarningNotAFailure) {
+  // A smooth model without nugget and a range far beyond the 250 mm spacing: the system is nearly
+  // singular, but the field still predicts; fit says so and suggests a nugget.
+  const SimulatedRobot sim(SimulatorConfig::paper_default());
+  const MeasurementSet data = simulated_grid(sim);
+  FitOptions o;
+  o.method = CompensationMethod::distance_kriging;
+  o.model = VariogramModel::parse("gau(sill=0.5,range=5000)");
+  const FitResult bad = fit_compensation_model(sim.nominal(), data, o);
+  ASSERT_EQ(bad.warnings.size(), 1u);
+  EXPECT_NE(bad.warnings[0].find("ill-conditioned"), std::string::npos) << bad.warnings[0];
+  EXPECT_NE(bad.warnings[0].find("nug("), std::string::npos) << bad.warnings[0];
+  ASSERT_TRUE(bad.cross_validation.has_value());
+  EXPECT_EQ(bad.cross_validation->samples, data.id.size());
+  o.model = VariogramModel::parse("gau(sill=0.5,range=5000)+nug(0.001)");
+  EXPECT_TRUE(fit_compensation_model(sim.nominal(), data, o).warnings.empty());
+}
+
 TEST(KrigingFieldFit, VectorFieldAveragesRepeatedSamples) {
   // (fit --method vector-kriging registers the positions first, and a repeated pose weighs twice in
   // the registration, so the field is compared here on given error vectors.)

@@ -21,6 +21,7 @@
 #include <Eigen/Core>
 
 #include "errfield/cross_validation.hpp"
+#include "errfield/kriging.hpp"
 #include "errfield/robot/compensation.hpp"
 #include "errfield/variogram_model.hpp"
 
@@ -71,6 +72,8 @@ struct KrigingFieldFit {
   std::shared_ptr<const ErrorField> field;
   CrossValidationSummary leave_one_out;
   std::size_t merged_duplicates = 0;  ///< samples folded into another at the same location
+  /// How the covariance was factored: condition number, jitter, IllConditioned status.
+  KrigingReport factorization;
 };
 
 /// make_distance_kriging_field plus its leave-one-out summary (mm).

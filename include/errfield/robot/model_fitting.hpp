@@ -76,6 +76,9 @@ struct FitResult {
   std::optional<Registration> registration;  ///< when measured positions were used
   std::optional<CrossValidationReport> cross_validation;
   std::vector<std::string> notes;  ///< what was used and why
+  /// What the user should act on: an ill-conditioned kriging system, a calibration whose robust
+  /// weights did not settle. The model is still written; the CLI prints these to stderr.
+  std::vector<std::string> warnings;
 };
 
 /// Builds the model. Throws InputError when the data lack what the method needs (names the
