@@ -460,6 +460,128 @@ TEST(Kriging, DuplicatesAreNamedOrMerged) {
   EXPECT_THROW((Kriging<P3, double>(n2.points, n2.values, model, tol)), InputError);
 }
 
+// Independent ground truth for merged duplicates: ordinary kriging written as generalized least
+// squares (not the bordered system), each observation a separate sample. K_ij = Cs(h_ij) +
+// delta_ij noise_i with Cs the covariance of the predicted signal, Cs(0) = c00;
+// m = (1'K^-1 z) / (1'K^-1 1), mean = m + c0'K^-1 (z - 1 m),
+// var = c00 - c0'K^-1 c0 + (1 - 1'K^-1 c0)^2 / (1'K^-1 1).
+struct GlsPrediction {
+  Eigen::RowVectorXd mean;
+  double variance;
+};
+GlsPrediction ordinary_kriging_gls(const std::vector<P3>& points, const Eigen::MatrixXd& z,
+                                   const std::vector<double>& noise, const P3& target, const VariogramModel& model,
+                                   double c00) {
+  const auto n = static_cast<Eigen::Index>(points.size());
+  auto cs = [&](double h) { return h == 0.0 ? c00 : model.covariance(h); };
+  Eigen::MatrixXd k(n, n);
+  Eigen::VectorXd c0(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (Eigen::Index j = 0; j < n; ++j) k(i, j) = cs((points[i] - points[j]).norm()) + (i == j ? noise[i] : 0.0);
+    c0[i] = cs((points[i] - target).norm());
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(k);
+  const Eigen::VectorXd one = Eigen::VectorXd::Ones(n);
+  const Eigen::VectorXd kinv_one = ldlt.solve(one), kinv_c = ldlt.solve(c0);
+  const double s = one.dot(kinv_one);
+  const Eigen::RowVectorXd m = kinv_one.transpose() * z / s;
+  GlsPrediction r;
+  r.mean = m + kinv_c.transpose() * (z - one * m);
+  r.variance = c00 - c0.dot(kinv_c) + std::pow(1.0 - one.dot(kinv_c), 2) / s;
+  return r;
+}
+
+// Repeats at one location merged by DuplicatePolicy::Average must predict exactly as ordinary
+// kriging with every repeat kept (the GLS above): measurement error nugget -> nugget/k on the
+// merged sample, micro-scale nugget -> kept whole (only measurement variances are divided).
+// Scalar and 3-vector values, every back end; leave-one-out and k-fold of a merged sample.
+template <class V>
+void expect_merged_equals_repeats(NuggetTreatment treatment, V (*make_value)(const P3&, double)) {
+  const Data base = make_data(25, 91);
+  const auto model = VariogramModel::parse("sph(sill=0.5,range=60)+nug(0.05)");  // compact: sparse too
+  const bool micro = treatment == NuggetTreatment::MicroScale;
+  std::vector<P3> points = base.points;
+  std::vector<double> raw = base.values, meas;
+  for (std::size_t i = 0; i < base.points.size(); ++i) meas.push_back(0.002 * static_cast<double>(1 + i % 3));
+  // simulated repeats: location 3 three times in all, location 10 twice, other values
+  const std::vector<std::pair<std::size_t, double>> repeats = {{3, 0.07}, {3, -0.11}, {10, 0.05}};
+  for (const auto& [at, offset] : repeats) {
+    points.push_back(base.points[at]);
+    raw.push_back(base.values[at] + offset);
+    meas.push_back(meas[at]);  // equal within a group: the plain mean is then the optimal one
+  }
+  std::vector<V> values;
+  for (std::size_t i = 0; i < points.size(); ++i) values.push_back(make_value(points[i], raw[i]));
+  constexpr int kC = ValueTraits<V>::kComponents;
+  auto rows = [&](const std::vector<std::size_t>& idx) {
+    Eigen::MatrixXd z(static_cast<Eigen::Index>(idx.size()), kC);
+    for (std::size_t r = 0; r < idx.size(); ++r)
+      for (int c = 0; c < kC; ++c) z(static_cast<Eigen::Index>(r), c) = ValueTraits<V>::component(values[idx[r]], c);
+    return z;
+  };
+  const double nug = model.nugget();
+  const double c00 = micro ? model.sill() : model.sill() - nug;
+  auto noise_of = [&](std::size_t i) { return meas[i] + (micro ? 0.0 : nug); };  // one observation
+  // ground truth on all observations except those at `skip` (a location index, or none)
+  auto truth = [&](const P3& target, std::size_t skip) {
+    std::vector<std::size_t> idx;
+    std::vector<P3> pts;
+    std::vector<double> noise;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (skip < points.size() && points[i] == base.points[skip]) continue;
+      idx.push_back(i);
+      pts.push_back(points[i]);
+      noise.push_back(noise_of(i));
+    }
+    return ordinary_kriging_gls(pts, rows(idx), noise, target, model, c00);
+  };
+  std::vector<P3> targets = make_targets(6, 12);
+  targets.push_back(base.points[3]);
+  targets.push_back(base.points[10]);
+  for (auto backend : {KrigingBackend::Dense, KrigingBackend::Local, KrigingBackend::Sparse}) {
+    SCOPED_TRACE(std::string(kriging_backend_name(backend)) + (micro ? " micro-scale" : " measurement error"));
+    KrigingOptions opt;
+    opt.nugget = treatment;
+    opt.backend = backend;
+    opt.neighbors = points.size();
+    opt.duplicates = DuplicatePolicy::Average;
+    opt.threads = 1;  // 27 samples: threads would cost more than they save
+    const Kriging<P3, V> k(points, values, model, opt, {}, meas);
+    ASSERT_EQ(k.report().merged_duplicates, 3u);
+    const auto pred = k.predict(targets);
+    ASSERT_EQ(pred.status, KrigingStatus::Ok) << pred.message;
+    for (std::size_t t = 0; t < targets.size(); ++t) {
+      const GlsPrediction ref = truth(targets[t], points.size());
+      for (int c = 0; c < kC; ++c) EXPECT_NEAR(ValueTraits<V>::component(pred.mean[t], c), ref.mean[c], 1e-10) << t;
+      EXPECT_NEAR(pred.variance[t], ref.variance, 1e-10) << t;
+    }
+    // Cross-validation of merged sample 3 (3 repeats): predicted from every other location, its
+    // residual variance carries the merged sample's own noise, noise/3.
+    const GlsPrediction ref = truth(base.points[3], 3);
+    const double merged_noise = (meas[3] + (micro ? 0.0 : nug)) / 3.0;
+    std::vector<KrigingCrossValidation<V>> cvs = {k.k_fold(static_cast<int>(base.points.size()), 5)};
+    if (backend != KrigingBackend::Sparse) cvs.push_back(k.leave_one_out());
+    for (const auto& cv : cvs) {
+      ASSERT_EQ(cv.prediction.size(), base.points.size());
+      for (int c = 0; c < kC; ++c) {
+        const double observed = (rows({3, 25, 26}).col(c).mean());
+        EXPECT_NEAR(ValueTraits<V>::component(cv.prediction[3], c), ref.mean[c], 1e-10);
+        EXPECT_NEAR(ValueTraits<V>::component(cv.residual[3], c), observed - ref.mean[c], 1e-10);
+      }
+      EXPECT_NEAR(cv.variance[3], ref.variance + merged_noise, 1e-10);
+    }
+  }
+}
+
+TEST(Kriging, AveragedDuplicatesEqualKeepingEveryRepeat) {
+  auto scalar = [](const P3&, double v) { return v; };
+  auto vector = [](const P3& p, double v) { return Eigen::Vector3d(v, 2.0 * v + 0.01 * p.y(), std::cos(p.z() / 10.0) + v); };
+  for (auto treatment : {NuggetTreatment::MeasurementError, NuggetTreatment::MicroScale}) {
+    expect_merged_equals_repeats<double>(treatment, +scalar);
+    expect_merged_equals_repeats<Eigen::Vector3d>(treatment, +vector);
+  }
+}
+
 TEST(Kriging, NumericalOutcomesAreStatusesNotNaN) {
   const auto model = VariogramModel::parse("sph(sill=0.5,range=60)");
   // Fewer samples than drift terms: 3 samples, quadratic drift in 3-D has 10 terms.

@@ -72,9 +72,24 @@ enum class NuggetTreatment {
 };
 
 /// What to do with samples closer than KrigingOptions::duplicate_distance.
+///
+/// Average merges each group of k samples into one at its first sample's location, with the mean
+/// value and the variance of that mean's observation error:
+///   - measurement variances e_i: sum(e_i) / k^2 (the mean of independent measurements);
+///   - NuggetTreatment::MeasurementError: the nugget is independent noise on every observation,
+///     so the merged sample carries nugget / k (plus the above);
+///   - NuggetTreatment::MicroScale: the nugget is real variation of the field at a scale below the
+///     sample spacing; repeats at one location see the same micro-scale value, so averaging does
+///     not reduce it: the merged sample keeps the full nugget in C(0) and only the measurement
+///     variance is divided.
+/// With identical locations and equal measurement variance within a group, predictions and
+/// variances then equal those of kriging with every repeat kept as a separate sample (tested);
+/// with unequal variances the merged value is the plain mean (unbiased, with its exact variance,
+/// not the inverse-variance-weighted one). Cross-validation predicts merged samples, and the
+/// residual variances use the merged sample's own noise.
 enum class DuplicatePolicy {
   Error,    ///< throw InputError naming the two sample indices and their lag
-  Average,  ///< merge each group into its first sample: mean value, variance of the mean
+  Average,  ///< merge each group into its first sample: mean value, variance of the mean (above)
 };
 
 /// Outcome of a factorization or a prediction. Ok and IllConditioned come with predictions.

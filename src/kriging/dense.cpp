@@ -33,7 +33,7 @@ void KrigingEngine::setup_dense() {
     kernels::covariance_block(kernel_, points_.col(j).data(), static_cast<std::size_t>(ni - j), points_.col(j).data(), 1,
                               dimension_, zero, &k(j, j), static_cast<std::size_t>(ni));
   }
-  k.diagonal() += meas_;
+  k.diagonal() = obs_var_;
 
   double jitter = 0.0;
   for (int attempt = 0;; ++attempt) {

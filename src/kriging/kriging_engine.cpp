@@ -82,19 +82,21 @@ namespace detail {
 
 KrigingEngine::KrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, Eigen::MatrixXd values,
                              Eigen::VectorXd measurement_variance, const VariogramModel& model,
-                             const KrigingOptions& options)
+                             const KrigingOptions& options, Eigen::VectorXd replicates)
     : options_(options),
       model_(model),
       kernel_(model),
       points_(std::move(embedded)),
       raw_(std::move(raw)),
       values_(std::move(values)),
-      meas_(std::move(measurement_variance)) {
+      meas_(std::move(measurement_variance)),
+      replicates_(std::move(replicates)) {
   options_.validate();
   dimension_ = static_cast<int>(points_.rows());
   components_ = static_cast<int>(values_.cols());
   const auto n = static_cast<std::size_t>(points_.cols());
   if (meas_.size() == 0) meas_ = Eigen::VectorXd::Zero(points_.cols());
+  if (replicates_.size() == 0) replicates_ = Eigen::VectorXd::Ones(points_.cols());
   for (Eigen::Index i = 0; i < meas_.size(); ++i)
     if (!(meas_[i] >= 0.0) || !std::isfinite(meas_[i]))
       throw InputError("kriging: measurement variance of sample " + std::to_string(i) + " is " +
@@ -118,6 +120,7 @@ KrigingEngine::KrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, Eige
   std::iota(original_index_.begin(), original_index_.end(), std::size_t{0});
   tree_ = std::make_unique<PointTree>(points_);
   merge_duplicates();
+  set_observation_noise();
   observed_ = values_;
   if (options_.kind == KrigingKind::Simple) values_.rowwise() -= simple_mean_.transpose();
 
@@ -209,7 +212,7 @@ void KrigingEngine::merge_duplicates() {
   if (keep.size() == n) return;
   const auto m = static_cast<Eigen::Index>(keep.size());
   Eigen::MatrixXd pts(dimension_, m), raw(dimension_, m), vals = Eigen::MatrixXd::Zero(m, components_);
-  Eigen::VectorXd meas = Eigen::VectorXd::Zero(m);
+  Eigen::VectorXd meas = Eigen::VectorXd::Zero(m), reps = Eigen::VectorXd::Zero(m);
   for (Eigen::Index g = 0; g < m; ++g) {
     pts.col(g) = points_.col(static_cast<Eigen::Index>(keep[static_cast<std::size_t>(g)]));
     raw.col(g) = raw_.col(static_cast<Eigen::Index>(keep[static_cast<std::size_t>(g)]));
@@ -218,6 +221,7 @@ void KrigingEngine::merge_duplicates() {
     const auto g = static_cast<Eigen::Index>(group_of[i]);
     vals.row(g) += values_.row(static_cast<Eigen::Index>(i));
     meas[g] += meas_[static_cast<Eigen::Index>(i)];
+    reps[g] += replicates_[static_cast<Eigen::Index>(i)];
   }
   for (Eigen::Index g = 0; g < m; ++g) {
     const double c = static_cast<double>(count[static_cast<std::size_t>(g)]);
@@ -229,8 +233,25 @@ void KrigingEngine::merge_duplicates() {
   raw_ = std::move(raw);
   values_ = std::move(vals);
   meas_ = std::move(meas);
+  replicates_ = std::move(reps);
   original_index_ = std::move(keep);
   tree_ = std::make_unique<PointTree>(points_);
+}
+
+void KrigingEngine::set_observation_noise() {
+  // Measurement-error nugget: independent noise on every observation, so the mean of r repeats
+  // carries nugget/r. Micro-scale nugget: part of the field itself, the same for every repeat at
+  // one location, so averaging leaves it whole (it stays in C(0) of the signal, sill). Written so
+  // that an unmerged sample's diagonal is exactly sill + measurement variance.
+  const bool noise_nugget = options_.nugget == NuggetTreatment::MeasurementError;
+  const double nugget = kernel_.nugget();
+  noise_.resize(meas_.size());
+  obs_var_.resize(meas_.size());
+  for (Eigen::Index i = 0; i < meas_.size(); ++i) {
+    const double r = replicates_[i];
+    noise_[i] = meas_[i] + (noise_nugget ? nugget / r : 0.0);
+    obs_var_[i] = kernel_.sill() + meas_[i] - (noise_nugget && r != 1.0 ? nugget * (1.0 - 1.0 / r) : 0.0);
+  }
 }
 
 void KrigingEngine::build_drift() {
@@ -416,13 +437,15 @@ KrigingOutput KrigingEngine::k_fold(int folds, std::uint64_t seed) const {
       return r;
     };
     Eigen::MatrixXd vals(static_cast<Eigen::Index>(train.size()), components_);
-    Eigen::VectorXd meas(static_cast<Eigen::Index>(train.size()));
+    Eigen::VectorXd meas(static_cast<Eigen::Index>(train.size())), reps(meas.size());
     for (std::size_t k = 0; k < train.size(); ++k) {
       vals.row(static_cast<Eigen::Index>(k)) = observed_.row(train[k]);
       meas[static_cast<Eigen::Index>(k)] = meas_[train[k]];
+      reps[static_cast<Eigen::Index>(k)] = replicates_[train[k]];
     }
+    // merged samples keep their own noise in the folds (replicates)
     KrigingEngine engine(pick_cols(points_, train), pick_cols(raw_, train), std::move(vals), std::move(meas), model_,
-                         sub);
+                         sub, std::move(reps));
     if (!engine.report().usable()) {
       out.status = engine.report().status;
       out.message = "fold " + std::to_string(f) + ": " + engine.report().message;
@@ -438,9 +461,9 @@ KrigingOutput KrigingEngine::k_fold(int folds, std::uint64_t seed) const {
       out.mean.row(i) = p.mean.row(r);
       out.residual.row(i) = observed_.row(i) - p.mean.row(r);
       if (p.variance.size() > 0) {
-        // residual of the observation: add what the prediction of the signal leaves out
-        const double extra = meas_[i] + (options_.nugget == NuggetTreatment::MeasurementError ? kernel_.nugget() : 0.0);
-        out.variance[i] = p.variance[r] + extra;
+        // residual of the observation: add the observation's own noise, which the prediction of
+        // the signal leaves out
+        out.variance[i] = p.variance[r] + noise_[i];
       }
     }
   }

@@ -3,7 +3,9 @@
 // ends in their own files (dense.cpp, local.cpp, sparse.cpp). Formulas: docs/kriging.md.
 //
 // Notation used in every back end (N samples, p drift terms, C value components):
-//   K  (N x N) covariance of the observations: C(h_ij), diagonal C(0) + measurement variance
+//   K  (N x N) covariance of the observations: C(h_ij), diagonal obs_var_ (C(0) of the signal plus
+//      the noise of the sample's observation: measurement variance, and nugget/replicates when the
+//      nugget is measurement error)
 //   F  (N x p) drift at the samples, f0 (p) at a target; c0 (N) target-sample covariances
 //   K = L L';  Q = L^-1 F;  G = Q'Q = F'K^-1F = Lg Lg';  y = L^-1 z
 //   beta = G^-1 Q'y;  alpha = K^-1 (z - F beta) = L^-T (y - Q beta)
@@ -34,7 +36,7 @@ class KrigingEngine {
  public:
   KrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, Eigen::MatrixXd values,
                 Eigen::VectorXd measurement_variance, const VariogramModel& model,
-                const KrigingOptions& options);
+                const KrigingOptions& options, Eigen::VectorXd replicates = {});
   ~KrigingEngine();
   KrigingEngine(const KrigingEngine&) = delete;
   KrigingEngine& operator=(const KrigingEngine&) = delete;
@@ -47,6 +49,7 @@ class KrigingEngine {
  private:
   // set-up
   void merge_duplicates();
+  void set_observation_noise();
   void build_drift();
   void setup_dense();
   void setup_sparse();
@@ -78,7 +81,10 @@ class KrigingEngine {
   Eigen::MatrixXd raw_;        // D x N original coordinates (drift)
   Eigen::MatrixXd values_;     // N x C, simple kriging: mean subtracted
   Eigen::MatrixXd observed_;   // N x C as given (after merging), for cross-validation
-  Eigen::VectorXd meas_;       // N (zeros when none given)
+  Eigen::VectorXd meas_;       // N (zeros when none given; after merging: variance of the mean)
+  Eigen::VectorXd replicates_; // N: observations averaged into each sample (1 unless merged)
+  Eigen::VectorXd noise_;      // N: variance of the sample's observation error (see set_observation_noise)
+  Eigen::VectorXd obs_var_;    // N: diagonal of K, C(0) of the signal + noise_
   std::vector<std::size_t> original_index_;  // merged sample -> index given by the caller
   Eigen::VectorXd simple_mean_;               // C
   int dimension_ = 0;

@@ -105,7 +105,7 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
           const double* pj = points_.col(static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(j)])).data();
           for (Eigen::Index i = j; i < nn; ++i) {
             const double* pi = points_.col(static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(i)])).data();
-            kb(i, j) = i == j ? kernel_.sill() + meas_[static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(i)])] + jitter
+            kb(i, j) = i == j ? obs_var_[static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(i)])] + jitter
                               : kernel_.at_positive_lag(kernels::column_distance(pi, pj, dimension_));
           }
         }
@@ -177,8 +177,7 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
       out.mean.row(t) = ws.mean;
       var = std::max(var, 0.0);
       if (leave_one_out) {
-        const double extra = meas_[t] + (options_.nugget == NuggetTreatment::MeasurementError ? kernel_.nugget() : 0.0);
-        out.variance[t] = var + extra;
+        out.variance[t] = var + noise_[t];  // the observation's own noise
         out.residual.row(t) = observed_.row(t) - ws.mean;
       } else if (want_var) {
         out.variance[t] = var;

@@ -32,7 +32,7 @@ void KrigingEngine::setup_sparse() {
       col.reserve(hits.size());
       for (const auto& [i, d2] : hits) {
         if (static_cast<Eigen::Index>(i) < j) continue;
-        const double v = static_cast<Eigen::Index>(i) == j ? kernel_.sill() + meas_[j]
+        const double v = static_cast<Eigen::Index>(i) == j ? obs_var_[j]
                                                            : kernel_.at_positive_lag(std::sqrt(d2));
         if (v != 0.0 || static_cast<Eigen::Index>(i) == j) col.emplace_back(static_cast<int>(i), v);
       }

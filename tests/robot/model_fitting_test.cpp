@@ -105,8 +105,11 @@ TEST(FitCompensationModel, KrigingLeaveOneOutEqualsRefittingWithoutEachSample) {
 TEST(FitCompensationModel, RepeatedMeasurementsOfAPoseAreAveragedNotRejected) {
   // A pose measured twice used to make fit's leave-one-out refuse the data as duplicates (its own
   // kriging rejected them while the field averaged them). Now field and leave-one-out share one
-  // factorization. Ground truth: an exact repeat averages to the same value, so the result must
-  // equal the fit without it (checked above against refitting), over the 27 distinct locations.
+  // factorization. Ground truth: an exact repeat averages to the same value, so without a nugget
+  // the result must equal the fit without it (checked above against refitting), over the 27
+  // distinct locations. (fit's nugget is measurement error: two measurements of a pose then carry
+  // nugget/2, which legitimately changes the field; kriging_test checks that against kriging with
+  // both repeats kept.)
   const SimulatedRobot sim(SimulatorConfig::paper_default());
   const MeasurementSet data = simulated_grid(sim);
   MeasurementSet repeated = data;
@@ -119,7 +122,7 @@ TEST(FitCompensationModel, RepeatedMeasurementsOfAPoseAreAveragedNotRejected) {
   }
   FitOptions o;
   o.method = CompensationMethod::distance_kriging;
-  o.model = VariogramModel::parse("sph(sill=0.02,range=700)+nug(0.001)");
+  o.model = VariogramModel::parse("sph(sill=0.02,range=700)");
   const FitResult once = fit_compensation_model(sim.nominal(), data, o);
   const FitResult twice = fit_compensation_model(sim.nominal(), repeated, o);
   ASSERT_TRUE(once.cross_validation && twice.cross_validation);
@@ -158,6 +161,7 @@ TEST(KrigingFieldFit, VectorFieldAveragesRepeatedSamples) {
   FieldSamples samples{data.nominal_mm, data.q_deg};
   std::vector<Eigen::Vector3d> dp;
   for (std::size_t i = 0; i < data.id.size(); ++i) dp.push_back(data.measured_mm[i] - data.nominal_mm[i]);
+  // Micro-scale nugget: repeats of a pose share it, so an exact repeat changes nothing.
   FieldSamples samples_repeated = samples;
   std::vector<Eigen::Vector3d> dp_repeated = dp;
   samples_repeated.position_mm.push_back(samples.position_mm[7]);
@@ -165,6 +169,7 @@ TEST(KrigingFieldFit, VectorFieldAveragesRepeatedSamples) {
   dp_repeated.push_back(dp[7]);
   KrigingFieldOptions o;
   o.model = VariogramModel::parse("sph(sill=0.02,range=700)+nug(0.001)");
+  o.nugget_is_measurement_error = false;
   const KrigingFieldFit once = fit_vector_kriging_field(samples, dp, o);
   const KrigingFieldFit twice = fit_vector_kriging_field(samples_repeated, dp_repeated, o);
   EXPECT_EQ(once.merged_duplicates, 0u);
@@ -177,6 +182,16 @@ TEST(KrigingFieldFit, VectorFieldAveragesRepeatedSamples) {
   const ErrorPrediction p2 = twice.field->predict(target, samples.joints_deg[7]);
   ASSERT_TRUE(p1.inside_region && p2.inside_region);
   EXPECT_LT((p1.position_error_mm - p2.position_error_mm).norm(), 1e-12);
+  // Measurement-error nugget: the averaged pose carries nugget/2, so the smoothed field at it moves
+  // toward the observation: z - mu = s / (s + v) (z - mu_without_it) with s its noise variance and
+  // v (> 0) the signal variance left by the other samples, a ratio that shrinks with s.
+  o.nugget_is_measurement_error = true;
+  const KrigingFieldFit noisy_once = fit_vector_kriging_field(samples, dp, o);
+  const KrigingFieldFit noisy_twice = fit_vector_kriging_field(samples_repeated, dp_repeated, o);
+  const ErrorPrediction q1 = noisy_once.field->predict(samples.position_mm[7], samples.joints_deg[7]);
+  const ErrorPrediction q2 = noisy_twice.field->predict(samples.position_mm[7], samples.joints_deg[7]);
+  ASSERT_TRUE(q1.inside_region && q2.inside_region);
+  EXPECT_LT((q2.position_error_mm - dp[7]).norm(), 0.99 * (q1.position_error_mm - dp[7]).norm());
 }
 
 }  // namespace
