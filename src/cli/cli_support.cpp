@@ -27,4 +27,16 @@ void Progress::finish() {
   printed_ = false;
 }
 
+StageLog::StageLog(std::string label, bool long_job)
+    : label_(std::move(label)),
+      enabled_(long_job && ::isatty(STDERR_FILENO) != 0),
+      start_(std::chrono::steady_clock::now()) {}
+
+void StageLog::operator()(const std::string& stage) const {
+  if (!enabled_) return;
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  std::fprintf(stderr, "%s: %s (%.1f s)\n", label_.c_str(), stage.c_str(), s);
+  std::fflush(stderr);
+}
+
 }  // namespace errfield::cli

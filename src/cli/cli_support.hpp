@@ -72,4 +72,17 @@ class Progress {
   std::chrono::steady_clock::time_point last_;
 };
 
+/// Prints "label: stage (12.3 s)" lines to stderr as a long job enters each stage, only when
+/// stderr is a terminal and `long_job` (logs and tests see nothing).
+class StageLog {
+ public:
+  StageLog(std::string label, bool long_job);
+  void operator()(const std::string& stage) const;
+
+ private:
+  std::string label_;
+  bool enabled_;
+  std::chrono::steady_clock::time_point start_;
+};
+
 }  // namespace errfield::cli

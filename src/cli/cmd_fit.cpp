@@ -38,6 +38,8 @@ void run_fit(const FitArgs& a) {
   const CsvTable table = CsvTable::read(a.data);
   const MeasurementSet data = MeasurementSet::from_table(table, model, fixed);
   warn_if_metres(table, model, "fit");
+  // Dense kriging of a few thousand points takes tens of seconds: say which stage is running.
+  o.on_stage = StageLog("fit", data.q_deg.size() >= 1000);
   const FitResult r = with_source(a.data, [&] { return fit_compensation_model(model, data, o); });
   write_file_atomically(a.out, r.model.to_json().dump(1) + "\n");
   std::cout << "fit: method " << a.method << " on " << data.q_deg.size() << " points of " << a.data << "\n";

@@ -203,9 +203,13 @@ class KrigingField final : public ErrorField {
 };
 
 template <class L, class V, class M>
-KrigingFieldFit fit_field(std::shared_ptr<const KrigingField<L, V, M>> field, bool with_leave_one_out) {
+KrigingFieldFit fit_field(std::shared_ptr<const KrigingField<L, V, M>> field, bool with_leave_one_out,
+                          const KrigingFieldOptions& options) {
   KrigingFieldFit fit;
-  if (with_leave_one_out) fit.leave_one_out = field->leave_one_out();
+  if (with_leave_one_out) {
+    if (options.on_stage) options.on_stage("leave-one-out from the factorization");
+    fit.leave_one_out = field->leave_one_out();
+  }
   fit.factorization = field->factorization();
   fit.merged_duplicates = fit.factorization.merged_duplicates;
   fit.field = std::move(field);
@@ -217,14 +221,18 @@ KrigingFieldFit make_field(std::string kind, const FieldSamples& samples, std::v
                            const Eigen::MatrixXd& flat, const KrigingFieldOptions& options,
                            std::optional<Eigen::Vector3d> base, bool with_leave_one_out) {
   options.validate();
+  if (!options.model && options.on_stage) options.on_stage("estimating the variogram");
   const VariogramModel model = options.model ? *options.model : estimate_field_variogram(samples, flat, options.space);
+  if (options.on_stage)
+    options.on_stage("factoring the " + std::to_string(values.size()) + " x " + std::to_string(values.size()) +
+                     " covariance matrix (dense Cholesky, O(N^3))");
   if (options.space == FieldSpace::task)
     return fit_field(std::make_shared<const KrigingField<Eigen::Vector3d, V, EuclideanMetric>>(
                          std::move(kind), samples, samples.position_mm, std::move(values), model, options, base),
-                     with_leave_one_out);
+                     with_leave_one_out, options);
   return fit_field(std::make_shared<const KrigingField<JointVector, V, JointSpaceMetric>>(
                        std::move(kind), samples, samples.joints_deg, std::move(values), model, options, base),
-                   with_leave_one_out);
+                   with_leave_one_out, options);
 }
 
 KrigingFieldFit distance_field(const FieldSamples& samples, std::vector<double> distance_error_mm,

@@ -210,8 +210,10 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       need_base();
       const std::vector<double> dl = d.distance_errors(o.base);
       KrigingFieldOptions ko;
+      ko.on_stage = o.on_stage;
       ko.space = o.space;
       const Eigen::MatrixXd flat = Eigen::Map<const Eigen::VectorXd>(dl.data(), static_cast<Eigen::Index>(dl.size()));
+      if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
       ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
       const KrigingFieldFit fit = fit_distance_kriging_field(samples, dl, d.base_nominal_mm[o.base], ko);
       FitResult out{CompensationModel(method, robot, fit.field), std::nullopt, kriging_report(fit, o.space), {}, {}};
@@ -241,9 +243,11 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
         dp = registered_errors(out);
       }
       KrigingFieldOptions ko;
+      ko.on_stage = o.on_stage;
       ko.space = o.space;
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(dp.size()), 3);
       for (std::size_t i = 0; i < dp.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = dp[i].transpose();
+      if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
       ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
       const KrigingFieldFit fit = fit_vector_kriging_field(samples, dp, ko);
       out.model = CompensationModel(method, robot, fit.field);
@@ -263,6 +267,7 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       for (std::size_t i = 0; i < d.q_deg.size(); ++i)
         if ((d.nominal_mm[i] - d.base_nominal_mm[o.base]).norm() > 1.0)
           dm.push_back({d.base_q_deg[o.base], d.q_deg[i], d.distance_mm[o.base][i]});
+      if (o.on_stage) o.on_stage("kinematic calibration on " + std::to_string(dm.size()) + " distances");
       const CalibrationResult cal = calibrate_distances(robot, dm);
       FitResult out{CompensationModel(CompensationMethod::kinematic, cal.model, nullptr), std::nullopt, std::nullopt, {}, {}};
       out.notes.push_back("calibration on " + std::to_string(dm.size()) + " distances: residual RMS " +
@@ -282,9 +287,11 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       for (std::size_t i = 0; i < residual.size(); ++i)
         residual[i] = reg.robot_from_tracker * d.measured_mm[i] - identified[i];
       KrigingFieldOptions ko;
+      ko.on_stage = o.on_stage;
       ko.space = o.space;
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(residual.size()), 3);
       for (std::size_t i = 0; i < residual.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = residual[i].transpose();
+      if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
       ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
       const KrigingFieldFit fit = fit_vector_kriging_field(samples, residual, ko);
       out.model = CompensationModel(method, cal.model, fit.field);

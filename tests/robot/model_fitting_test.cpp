@@ -153,6 +153,24 @@ TEST(FitCompensationModel, IllConditionedKrigingIsAWarningNotAFailure) {
   EXPECT_TRUE(fit_compensation_model(sim.nominal(), data, o).warnings.empty());
 }
 
+TEST(FitCompensationModel, AnnouncesEachLongStageInOrder) {
+  const SimulatedRobot sim(SimulatorConfig::paper_default());
+  const MeasurementSet data = simulated_grid(sim);
+  std::vector<std::string> stages;
+  FitOptions o;
+  o.method = CompensationMethod::vector_kriging;
+  o.on_stage = [&](const std::string& s) { stages.push_back(s); };
+  fit_compensation_model(sim.nominal(), data, o);
+  ASSERT_EQ(stages.size(), 3u);
+  EXPECT_EQ(stages[0], "estimating the variogram");
+  EXPECT_EQ(stages[1].rfind("factoring the 27 x 27 covariance matrix", 0), 0u) << stages[1];
+  EXPECT_EQ(stages[2], "leave-one-out from the factorization");
+  stages.clear();
+  o.model = VariogramModel::parse("sph(sill=0.02,range=700)+nug(0.001)");  // given: nothing to estimate
+  fit_compensation_model(sim.nominal(), data, o);
+  EXPECT_EQ(stages.size(), 2u);
+}
+
 TEST(KrigingFieldFit, VectorFieldAveragesRepeatedSamples) {
   // (fit --method vector-kriging registers the positions first, and a repeated pose weighs twice in
   // the registration, so the field is compared here on given error vectors.)

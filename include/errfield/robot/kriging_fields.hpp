@@ -14,7 +14,9 @@
 /// The region a field answers for is the box of its samples' nominal positions (task space) widened
 /// by `region_margin_mm`; targets outside are refused, never extrapolated.
 
+#include <functional>
 #include <memory>
+#include <string>
 #include <optional>
 #include <vector>
 
@@ -41,6 +43,9 @@ struct KrigingFieldOptions {
   /// variation: predictions are of the noise-free error. Default true (tracker + repeatability).
   bool nugget_is_measurement_error = true;
   double region_margin_mm = 1e-6;
+  /// Called before each long stage (factoring the N x N covariance, the leave-one-out) with what it
+  /// is about to do, for progress output; empty = silent. Not called from parallel regions.
+  std::function<void(const std::string& stage)> on_stage;
   /// Throws ArgumentError naming the field.
   void validate() const;
 };

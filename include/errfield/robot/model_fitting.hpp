@@ -7,6 +7,7 @@
 /// Frames: nominal positions in the robot base frame; measured positions in the tracker frame
 /// (a rigid registration fitted here maps them to the robot frame); distances are frame-free.
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -60,6 +61,9 @@ struct FitOptions {
   double idw_power = 1.0;               ///< IDW methods (the paper: 1)
   std::optional<VariogramModel> model;  ///< kriging; empty = estimated
   std::size_t base = 0;                 ///< which base point the distance methods use
+  /// Called before each long stage (variogram, factorization, leave-one-out, calibration) with what
+  /// it is about to do, for progress output; empty = silent.
+  std::function<void(const std::string& stage)> on_stage;
   void validate() const;
 };
 
