@@ -15,7 +15,8 @@ void add_reproduce_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "reproduce",
       "Run the paper's experiments (Tables 3, 4, 6, 8 and Fig. 5) on the built-in SIMULATED ER20-C10 and laser\n"
-      "tracker; print the tables beside the paper's values and write CSVs and report.html.\n"
+      "tracker; print the tables beside the paper's values and write CSVs and report.html. Beyond the paper:\n"
+      "compensation with varying tool orientation, task vs joint space (beyond_orientation.csv).\n"
       "Example: errfield reproduce --out errfield-out --seed 1 --runs 20");
   struct Args {
     std::string out = "errfield-out";

@@ -42,6 +42,11 @@ void ReproductionOptions::validate() const {
     throw ArgumentError("reproduce: heldout_points = " + std::to_string(heldout_points) + "; expected >= 1");
   if (!(tolerance_mm > 0.0))
     throw ArgumentError("reproduce: tolerance_mm = " + std::to_string(tolerance_mm) + "; expected > 0");
+  OrientationExperimentOptions oo;
+  oo.training_poses = orientation_training_poses;
+  oo.validation_poses = orientation_validation_poses;
+  oo.orientation_spread_deg = orientation_spread_deg;
+  oo.validate();
   for (double s : grid_steps_mm) {
     const double k = paper::kCubeSideMm / s;
     if (!(s > 0.0) || std::abs(k - std::round(k)) > 1e-9)
@@ -72,6 +77,7 @@ enum Stream : std::uint64_t {
   kRunMeasure = 20000,  // + run
   kRunEval = 30000,     // + 16 * run + method
   kAssembly = 90000,
+  kBeyondOrientation = 95000,
 };
 
 RegularGrid3 cube_grid(const MeasurementCube& cube, double step) {
@@ -554,6 +560,18 @@ ReproductionResult reproduce_paper(const ReproductionOptions& options) {
   run_table6(setup, options, result);
   if (options.progress) options.progress("Table 8 assembly", 0, 1);
   run_assembly(setup, options, result);
+  if (options.progress) options.progress("Beyond the paper: varying orientation", 0, 1);
+  {
+    // Run 0's robot (the one of Tables 3/4, Fig. 5 and Table 8), once per reproduction.
+    SimulatorConfig cfg = setup.config;
+    cfg.seed = derive_seed(options.seed, kRunRobot);
+    OrientationExperimentOptions oo;
+    oo.seed = derive_seed(options.seed, kBeyondOrientation);
+    oo.training_poses = options.orientation_training_poses;
+    oo.validation_poses = options.orientation_validation_poses;
+    oo.orientation_spread_deg = options.orientation_spread_deg;
+    result.beyond_orientation = run_orientation_experiment(cfg, oo);
+  }
   result.table6.notes.push_back(
       "Metric 'distance' (the paper's): |P'_n − P0| − |P_n − P̂0|, the tracker's range to the ball minus the nominal "
       "distance from the registered tracker position P̂0. Metric 'position': |P'_n − P_n| in the registered frame (the "

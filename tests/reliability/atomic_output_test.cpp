@@ -277,7 +277,7 @@ void simulate_into(const ScratchDir& dir, const std::string& step, const std::st
   ASSERT_EQ(r.exit_code, 0) << r.err;
 }
 
-const std::vector<std::string> kReproductionFiles{"fig5.csv",          "report.html",       "table3.csv",
+const std::vector<std::string> kReproductionFiles{"beyond_orientation.csv", "fig5.csv", "report.html", "table3.csv",
                                                   "table4.csv",        "table6.csv",        "table6_points.csv",
                                                   "table6_spread.csv", "table8.csv"};
 

@@ -215,7 +215,7 @@ std::vector<Case> cases() {
   cs.push_back({"reproduce", [](const ScratchDir&) {},
                 {"reproduce", "--runs", "2", "--seed", "5", "--out", "rep"},
                 {"rep/table3.csv", "rep/table4.csv", "rep/fig5.csv", "rep/table6.csv", "rep/table6_spread.csv",
-                 "rep/table6_points.csv", "rep/table8.csv", "rep/report.html"},
+                 "rep/table6_points.csv", "rep/table8.csv", "rep/beyond_orientation.csv", "rep/report.html"},
                 false});
   return cs;
 }

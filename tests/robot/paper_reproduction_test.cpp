@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "errfield/robot/orientation_experiment.hpp"
+
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -55,7 +57,16 @@ ReproductionOptions small_options(int threads) {
   o.threads = threads;
   o.grid_steps_mm = {50, 125, 250};
   o.heldout_points = 100;
+  o.orientation_training_poses = 150;
+  o.orientation_validation_poses = 80;
   return o;
+}
+
+const OrientationExperimentRow& orientation_row(const OrientationExperiment& e, const std::string& orientation,
+                                                const std::string& space) {
+  for (const auto& r : e.rows)
+    if (r.orientation == orientation && r.space == space) return r;
+  throw std::runtime_error("orientation experiment: row missing: " + orientation + " " + space);
 }
 
 // Same seed, same numbers, on any thread count.
@@ -73,6 +84,11 @@ TEST(Reproduction, DeterministicAndThreadInvariant) {
     EXPECT_EQ(a.grid_steps[i].rms_error_mm, b.grid_steps[i].rms_error_mm);
   for (std::size_t i = 0; i < a.joint_variogram.rows.size(); ++i)
     EXPECT_EQ(a.joint_variogram.rows[i].gamma_mm2, b.joint_variogram.rows[i].gamma_mm2);
+  ASSERT_EQ(a.beyond_orientation.rows.size(), 6u);
+  for (std::size_t i = 0; i < a.beyond_orientation.rows.size(); ++i) {
+    EXPECT_EQ(a.beyond_orientation.rows[i].mean_mm, b.beyond_orientation.rows[i].mean_mm);
+    EXPECT_EQ(a.beyond_orientation.rows[i].max_mm, b.beyond_orientation.rows[i].max_mm);
+  }
   ReproductionOptions other = small_options(1);
   other.seed = 8;
   EXPECT_NE(reproduce_paper(other).table6.rows[0].mean_mm.median, a.table6.rows[0].mean_mm.median);
@@ -103,10 +119,85 @@ TEST(Reproduction, ResultsAreSane) {
     EXPECT_LT(v->rows.front().gamma_mm2, v->rows.back().gamma_mm2);
     EXPECT_FALSE(v->fitted.components().empty());
   }
+  // Beyond the paper: at constant orientation a position fixes the joints, so kriging in either
+  // space must remove most of the error and the two spaces must agree (SPEC section 3); with the
+  // orientation varying, the uncompensated error is larger (the wrist's errors add up differently).
+  const auto& e = r.beyond_orientation;
+  const double none_constant = orientation_row(e, "constant", "-").mean_mm;
+  const double task_constant = orientation_row(e, "constant", "task").mean_mm;
+  const double joint_constant = orientation_row(e, "constant", "joint").mean_mm;
+  EXPECT_LT(task_constant, 0.3 * none_constant);
+  EXPECT_LT(joint_constant, 0.3 * none_constant);
+  EXPECT_LT(std::max(task_constant, joint_constant), 1.5 * std::min(task_constant, joint_constant));
+  EXPECT_GT(orientation_row(e, "varying", "-").mean_mm, none_constant);
+  EXPECT_GT(e.orientation_effect_mean_mm, 0.0);
+  std::cout << "[ orientation ] mean residual (mm): varying none/task/joint = "
+            << orientation_row(e, "varying", "-").mean_mm << "/" << orientation_row(e, "varying", "task").mean_mm << "/"
+            << orientation_row(e, "varying", "joint").mean_mm << ", constant = " << none_constant << "/"
+            << task_constant << "/" << joint_constant << "\n";
   std::ostringstream order;
   for (const auto& x : r.table6.rows)
     if (x.metric == "distance") order << x.method << "=" << x.mean_mm.median << " ";
   std::cout << "[ ordering ] distance metric, median mean error (mm): " << order.str() << "\n";
+}
+
+TEST(OrientationExperiment, RejectsBadOptions) {
+  const SimulatorConfig cfg = SimulatorConfig::paper_default();
+  OrientationExperimentOptions o;
+  o.training_poses = 7;
+  EXPECT_THROW(run_orientation_experiment(cfg, o), ArgumentError);
+  o = {};
+  o.orientation_spread_deg = 0.0;
+  EXPECT_THROW(run_orientation_experiment(cfg, o), ArgumentError);
+  o = {};
+  o.region_margin_mm = -1.0;
+  EXPECT_THROW(run_orientation_experiment(cfg, o), ArgumentError);
+  ReproductionOptions r;
+  r.orientation_validation_poses = 0;
+  EXPECT_THROW(r.validate(), ArgumentError);
+}
+
+// Independent ground truth: a robot whose only error is an offset d of its tool point, in the tool
+// frame. Its position error is R_tool(q) d: a function of the tool orientation alone. At constant
+// orientation it is one constant vector, which the registration absorbs exactly (a translation),
+// so every method leaves only the tracker noise. With the orientation varying, the error at a
+// position depends on the orientation the position is reached at: a task-space field cannot
+// predict it (its samples near a target carry unrelated orientations), while it is a smooth
+// function of the joints, which a joint-space field interpolates.
+TEST(OrientationExperiment, ToolOffsetErrorIsSeenInJointSpaceOnly) {
+  SimulatorConfig cfg = SimulatorConfig::paper_default();
+  cfg.geometry = {};
+  cfg.geometry.tool = {0.6, -0.5, 0.4, 0.0, 0.0, 0.0};  // |d| = 0.88 mm
+  cfg.absorb_rigid_part = false;
+  cfg.compliance.stiffness_nm_per_rad.fill(0.0);      // rigid joints
+  cfg.transmission.amplitude_deg.fill(0.0);
+  cfg.repeatability_sigma_mm = 0.0;
+  cfg.tracker.sigma_constant_mm = 0.002;  // a little noise: the fields' variograms need some nugget
+  cfg.tracker.sigma_per_m_mm = 0.0;
+  OrientationExperimentOptions o;
+  o.seed = 11;
+  o.training_poses = 150;
+  o.validation_poses = 80;
+  const OrientationExperiment e = run_orientation_experiment(cfg, o);
+  ASSERT_EQ(e.rows.size(), 6u);
+  // Constant orientation: nothing left but noise (a few tracker sigmas), with or without a field.
+  for (const char* space : {"-", "task", "joint"}) {
+    EXPECT_LT(orientation_row(e, "constant", space).max_mm, 0.02) << space;
+    EXPECT_EQ(orientation_row(e, "constant", space).refused, 0u) << space;
+  }
+  // Varying orientation: ±30° turns d by up to ~0.5 rad, a few tenths of a mm.
+  const double none = orientation_row(e, "varying", "-").mean_mm;
+  EXPECT_GT(none, 0.1);
+  EXPECT_GT(orientation_row(e, "varying", "task").mean_mm, 0.7 * none);
+  EXPECT_LT(orientation_row(e, "varying", "joint").mean_mm, 0.25 * none);
+  // The orientation effect at one position is exactly |(R_drawn − R_down) d| <= 2 |d| sin(angle/2),
+  // where R_drawn R_down^T = Rz(c) Ry(b) Rx(a) turns by at most |a| + |b| + |c| <= 90°.
+  const double d = std::sqrt(0.6 * 0.6 + 0.5 * 0.5 + 0.4 * 0.4);
+  EXPECT_GT(e.orientation_effect_mean_mm, 0.05);
+  EXPECT_LE(e.orientation_effect_max_mm, 2.0 * d * std::sin(0.5 * 3.0 * 30.0 * M_PI / 180.0) + 1e-6);
+  std::cout << "[ tool offset ] varying mean (mm): none " << none << ", task "
+            << orientation_row(e, "varying", "task").mean_mm << ", joint "
+            << orientation_row(e, "varying", "joint").mean_mm << "\n";
 }
 
 // stdout and stderr of `errfield <args>`; `status` gets the exit code.
@@ -126,8 +217,33 @@ TEST(ReproduceCli, OneRunWritesEveryTableAndARenderableReport) {
   EXPECT_NE(out.find("SIMULATED"), std::string::npos);
   EXPECT_NE(out.find("Table 6"), std::string::npos);
   for (const char* f : {"table3.csv", "table4.csv", "fig5.csv", "table6.csv", "table6_spread.csv",
-                        "table6_points.csv", "table8.csv", "report.html"})
+                        "table6_points.csv", "table8.csv", "beyond_orientation.csv", "report.html"})
     EXPECT_TRUE(fs::exists(dir / f)) << f;
+  EXPECT_NE(out.find("Beyond the paper (SIMULATED)"), std::string::npos);
+  {
+    const CsvTable b = CsvTable::read((dir / "beyond_orientation.csv").string());
+    std::ifstream bin(dir / "beyond_orientation.csv");
+    std::string bheader;
+    std::getline(bin, bheader);
+    EXPECT_EQ(bheader,
+              "orientation,orientation_spread_deg,method,space,training_poses,validation_poses,max_mm,mean_mm,std_mm,"
+              "refused_targets");
+    ASSERT_EQ(b.row_count(), 6u);
+    std::set<std::pair<std::string, std::string>> cases;
+    const auto bmax = b.numeric_column("max_mm"), bmean = b.numeric_column("mean_mm");
+    for (std::size_t i = 0; i < b.row_count(); ++i) {
+      cases.insert({b.row(i)[0], b.row(i)[3]});
+      EXPECT_GE(bmax[i], bmean[i]);
+      EXPECT_GT(bmean[i], 0.0);
+    }
+    for (const char* orientation : {"varying", "constant"})
+      for (const char* space : {"-", "task", "joint"}) EXPECT_TRUE(cases.count({orientation, space})) << orientation << space;
+  }
+  {
+    std::ifstream h(dir / "report.html");
+    const std::string html(std::istreambuf_iterator<char>(h), {});
+    EXPECT_NE(html.find("Beyond the paper: compensation with varying tool orientation (SIMULATED)"), std::string::npos);
+  }
 
   std::ifstream in(dir / "table6.csv");
   std::string header;
@@ -156,7 +272,7 @@ TEST(ReproduceCli, OneRunWritesEveryTableAndARenderableReport) {
     std::ifstream f(p);
     return std::string(std::istreambuf_iterator<char>(f), {});
   };
-  for (const char* f : {"table3.csv", "table4.csv", "fig5.csv", "table6.csv", "table8.csv"})
+  for (const char* f : {"table3.csv", "table4.csv", "fig5.csv", "table6.csv", "table8.csv", "beyond_orientation.csv"})
     EXPECT_EQ(slurp(dir / f), slurp(dir2 / f)) << f;
 
   if (const std::string why = test::chromium_unavailable_reason(); !why.empty()) {

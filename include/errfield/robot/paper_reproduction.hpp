@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 
+#include "errfield/robot/orientation_experiment.hpp"
 #include "errfield/variogram_model.hpp"
 
 namespace errfield::robot {
@@ -30,6 +31,11 @@ struct ReproductionOptions {
   std::vector<double> grid_steps_mm = {10, 20, 25, 50, 100, 125, 250, 500};  ///< Fig. 5 (must divide 500)
   int heldout_points = 500;            ///< Fig. 5 evaluation points in the cube
   double tolerance_mm = 0.25;          ///< assembly tolerance for the P(inside) figures
+  /// Beyond the paper: the varying-orientation experiment (orientation_experiment.hpp), run once
+  /// per reproduction on run 0's robot; its seed is derived from `seed`.
+  int orientation_training_poses = 300;
+  int orientation_validation_poses = 200;
+  double orientation_spread_deg = 30.0;
   /// Called with a stage name and progress (done of total); may be empty. Called from one thread.
   std::function<void(std::string_view stage, std::size_t done, std::size_t total)> progress;
   /// Throws ArgumentError naming the field when out of domain.
@@ -112,6 +118,7 @@ struct ReproductionResult {
   std::vector<GridStepRow> grid_steps;  ///< Fig. 5
   Table6 table6;
   std::vector<AssemblyRow> assembly;    ///< Table 8
+  OrientationExperiment beyond_orientation;  ///< beyond the paper: varying tool orientation
   std::vector<std::string> setup;       ///< the simulated set-up, one statement per line
   double seconds = 0;
 };
@@ -124,7 +131,8 @@ ReproductionResult reproduce_paper(const ReproductionOptions& options);
 std::string reproduction_summary(const ReproductionResult& result);
 
 /// Writes table3.csv, table4.csv, fig5.csv, table6.csv (method,metric,max_mm,mean_mm,std_mm:
-/// medians over the runs), table6_spread.csv, table6_points.csv, table8.csv and report.html into
+/// medians over the runs), table6_spread.csv, table6_points.csv, table8.csv, beyond_orientation.csv
+/// (the varying-orientation experiment, one row per orientation case and method) and report.html into
 /// `dir` (created if missing), all or none (AtomicFileSet: on an error or SIGINT the previous
 /// files stay as they were). The files depend only on the options (seed, runs), not on the thread
 /// count or the run time. Returns the paths written.
