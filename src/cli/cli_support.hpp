@@ -11,6 +11,7 @@
 
 #include "errfield/atomic_file.hpp"
 #include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
 
 namespace errfield::cli {
 
@@ -71,6 +72,18 @@ class Progress {
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point last_;
 };
+
+/// Runs `f()` (a library step on the data of `file`); an InputError that names no file (e.g.
+/// "calibration: 3 measured positions ...") is re-thrown with "file: " in front and file() set.
+template <class F>
+auto with_source(const std::string& file, F f) {
+  try {
+    return f();
+  } catch (const InputError& e) {
+    if (!e.file().empty()) throw;
+    throw InputError(file + ": " + e.what(), file, e.row(), e.column());
+  }
+}
 
 /// Prints "label: stage (12.3 s)" lines to stderr as a long job enters each stage, only when
 /// stderr is a terminal and `long_job` (logs and tests see nothing).

@@ -1,4 +1,5 @@
-// `errfield fit-variogram`: fits a variogram model to the CSV that `errfield variogram` writes.
+// `errfield fit-variogram`: fits a variogram model to the CSV that `errfield variogram` writes
+// (weighted least squares), or by maximum likelihood (ML/REML) to the samples themselves.
 
 #include <charconv>
 #include <cmath>
@@ -10,6 +11,7 @@
 #include "cli/command_registry.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/error.hpp"
+#include "errfield/kriging_likelihood.hpp"
 #include "errfield/variogram_fit.hpp"
 
 namespace errfield::cli {
@@ -17,6 +19,8 @@ namespace {
 
 struct FitArgs {
   std::string input, model, nugget = "free", weights = "nj_h2", out;
+  std::string method = "wls", coords, value;
+  bool weights_given = false, range_max_given = false;
   double nu = 0.5;
   bool nu_given = false;
   double range_max = 0.0;
@@ -31,7 +35,94 @@ std::size_t find_column(const CsvTable& t, const char* ours, const char* gstat) 
   return t.column_index(gstat);
 }
 
+ModelComponent structure_from(const FitArgs& a) {
+  ModelComponent structure;
+  structure.kind = model_kind_from_name(a.model);
+  if (structure.kind == ModelKind::Nugget)
+    throw ArgumentError("--model: 'nug' alone has nothing to fit; use --nugget for the nugget");
+  if (structure.kind == ModelKind::Matern && !a.nu_given)
+    throw ArgumentError("--model mat needs --nu (the Matérn smoothness, e.g. 0.5, 1.5, 2.5)");
+  if (!(a.nu > 0.0)) throw ArgumentError("--nu: " + format_number(a.nu) + "; expected > 0");
+  structure.nu = a.nu;
+  return structure;
+}
+
+void print_components(const VariogramModel& model) {
+  std::cout << model.to_string() << "\n";
+  for (const auto& c : model.components()) {
+    std::cout << "  " << model_kind_name(c.kind) << ": "
+              << (c.kind == ModelKind::Linear ? "slope" : "sill") << " = " << format_number(c.sill);
+    if (c.kind == ModelKind::Power) std::cout << ", exponent = " << format_number(c.range);
+    else if (c.kind != ModelKind::Nugget && c.kind != ModelKind::Linear)
+      std::cout << ", range = " << format_number(c.range);
+    if (c.kind == ModelKind::Matern) std::cout << ", nu = " << format_number(c.nu);
+    std::cout << "\n";
+  }
+}
+
+// The likelihood is O(N^3) per evaluation and BOBYQA needs hundreds: beyond this the fit would
+// run for hours, so it is refused up front (exit 3) with the alternative named.
+constexpr std::size_t kMaxLikelihoodSamples = 3000;
+
+/// ML/REML on the samples (kriging_likelihood.hpp): ordinary kriging's likelihood, the mean
+/// profiled out, nugget free or none.
+void run_likelihood_fit(const FitArgs& a) {
+  const bool restricted = a.method == "reml";
+  if (a.coords.empty() || a.value.empty())
+    throw ArgumentError("--method " + a.method + " fits the samples themselves: give --coords and --value "
+                        "(the columns of --input), e.g. --coords x,y,z --value dL");
+  if (a.weights_given) throw ArgumentError("--weights applies to --method wls only");
+  if (a.range_max_given) throw ArgumentError("--range-max applies to --method wls only");
+  LikelihoodFitOptions o;
+  o.restricted = restricted;
+  if (a.nugget == "free") o.fit_nugget = true;
+  else if (a.nugget == "none") o.fit_nugget = false;
+  else throw ArgumentError("--nugget: '" + a.nugget + "'; with --method " + a.method + " expected free or none");
+  o.validate();
+  const ModelComponent structure = structure_from(a);
+  if (structure.kind == ModelKind::Power || structure.kind == ModelKind::Linear)
+    throw ArgumentError("--model " + a.model + ": the likelihood needs a covariance, i.e. a bounded model "
+                        "(sph, exp, gau, mat, wen)");
+  const auto coord_names = split_column_list(a.coords, "--coords");
+  const auto value_names = split_column_list(a.value, "--value");
+  if (value_names.size() != 1)
+    throw ArgumentError("--value: " + std::to_string(value_names.size()) + " columns; --method " + a.method +
+                        " fits one scalar value column");
+  const CsvTable t = CsvTable::read(a.input);
+  if (t.row_count() > kMaxLikelihoodSamples)
+    throw ResourceError(a.input + ": " + std::to_string(t.row_count()) + " samples; --method " + a.method +
+                        " costs O(N^3) per evaluation and is limited to " + std::to_string(kMaxLikelihoodSamples) +
+                        ": use --method wls on the empirical variogram ('errfield variogram'), or a subsample");
+  if (t.row_count() < 4)
+    throw InputError(a.input + ": " + std::to_string(t.row_count()) + " data row(s); the likelihood fit needs "
+                     "at least 4 samples", a.input);
+  const Eigen::MatrixXd x = t.numeric_columns(coord_names);
+  const Eigen::VectorXd z = t.numeric_columns(value_names).col(0);
+  const LikelihoodFitResult r = with_source(a.input, [&] { return fit_likelihood(x, z, {structure}, o); });
+  print_components(r.model);
+  std::cout << (restricted ? "REML" : "ML") << " negative log-likelihood = " << format_number(r.negative_log_likelihood)
+            << ", " << t.row_count() << " samples, " << r.evaluations << " evaluations, status "
+            << (r.converged ? "converged" : "not converged") << " (" << r.message << ")\n";
+  if (!a.out.empty()) {
+    nlohmann::json j = r.model;
+    j["fit"] = {{"method", a.method},
+                {"nugget", a.nugget},
+                {"negative_log_likelihood", r.negative_log_likelihood},
+                {"samples", t.row_count()},
+                {"evaluations", r.evaluations},
+                {"status", r.converged ? "converged" : "not_converged"},
+                {"message", r.message},
+                {"input", a.input}};
+    write_file_atomically(a.out, j.dump(2) + "\n");
+  }
+  if (!r.converged) std::cerr << "errfield fit-variogram: warning: " << r.message << "\n";
+}
+
 void run_fit(const FitArgs& a) {
+  if (a.method == "ml" || a.method == "reml") return run_likelihood_fit(a);
+  if (a.method != "wls") throw ArgumentError("--method: '" + a.method + "'; expected wls, ml or reml");
+  if (!a.coords.empty() || !a.value.empty())
+    throw ArgumentError("--coords/--value belong to --method ml or reml; --method wls reads an empirical variogram");
   VariogramFitOptions o;
   o.weighting = weighting_from_name(a.weights);
   if (a.nugget == "free") {
@@ -50,14 +141,7 @@ void run_fit(const FitArgs& a) {
   }
   o.range_max = a.range_max;
   o.validate();
-  ModelComponent structure;
-  structure.kind = model_kind_from_name(a.model);
-  if (structure.kind == ModelKind::Nugget)
-    throw ArgumentError("--model: 'nug' alone has nothing to fit; use --nugget for the nugget");
-  if (structure.kind == ModelKind::Matern && !a.nu_given)
-    throw ArgumentError("--model mat needs --nu (the Matérn smoothness, e.g. 0.5, 1.5, 2.5)");
-  if (!(a.nu > 0.0)) throw ArgumentError("--nu: " + format_number(a.nu) + "; expected > 0");
-  structure.nu = a.nu;
+  const ModelComponent structure = structure_from(a);
 
   // Columns of `errfield variogram` (lag_mean, gamma, pairs), or gstat's (dist, gamma, np).
   const CsvTable t = CsvTable::read(a.input);
@@ -90,16 +174,7 @@ void run_fit(const FitArgs& a) {
   const char* status = r.status == FitStatus::Converged        ? "converged"
                        : r.status == FitStatus::MaxEvaluations ? "max_evaluations"
                                                                : "failed";
-  std::cout << r.model.to_string() << "\n";
-  for (const auto& c : r.model.components()) {
-    std::cout << "  " << model_kind_name(c.kind) << ": "
-              << (c.kind == ModelKind::Linear ? "slope" : "sill") << " = " << format_number(c.sill);
-    if (c.kind == ModelKind::Power) std::cout << ", exponent = " << format_number(c.range);
-    else if (c.kind != ModelKind::Nugget && c.kind != ModelKind::Linear)
-      std::cout << ", range = " << format_number(c.range);
-    if (c.kind == ModelKind::Matern) std::cout << ", nu = " << format_number(c.nu);
-    std::cout << "\n";
-  }
+  print_components(r.model);
   std::cout << "weighted SSE (" << weighting_name(o.weighting) << ") = " << format_number(r.weighted_sse)
             << ", " << r.bins_used << " bins, status " << status << " (" << r.message << ")\n";
 
@@ -126,22 +201,33 @@ void add_fit_variogram_command(CLI::App& app) {
       "fit.variogram): minimizes sum_j w_j (gamma_j - model(h_j))^2 over the non-empty bins.\n"
       "Input: the CSV of 'errfield variogram' (lag_mean,gamma,pairs; gstat's dist,gamma,np also\n"
       "work). Prints the fitted model, e.g. sph(sill=0.3,range=400)+nug(sill=0.002), its\n"
-      "parameters and the weighted SSE; --out writes it as JSON (readable as a model).");
-  cmd->add_option("--input", args->input, "empirical variogram CSV")->required();
+      "parameters and the weighted SSE; --out writes it as JSON (readable as a model).\n"
+      "--method ml|reml instead maximizes the (restricted) Gaussian likelihood of the samples\n"
+      "themselves (--input with --coords and --value; no binning; O(N^3) per evaluation, so up to\n"
+      "3,000 samples): the model ordinary kriging with that data finds most probable.");
+  cmd->add_option("--input", args->input, "empirical variogram CSV (wls), or the samples CSV (ml, reml)")->required();
+  cmd->add_option("--method", args->method,
+                  "wls (default: weighted least squares on the empirical variogram), ml or reml (likelihood of the "
+                  "samples; REML removes the bias of estimating the mean)");
+  cmd->add_option("--coords", args->coords, "ml/reml: coordinate columns of --input, e.g. x,y,z (any unit)");
+  cmd->add_option("--value", args->value, "ml/reml: the value column, e.g. dL (value unit)");
   cmd->add_option("--model", args->model, "sph, exp, gau, mat (needs --nu), wen, pow or lin")->required();
   cmd->add_option("--nu", args->nu, "Matérn smoothness nu (gstat's kappa), fixed during the fit")
       ->each([args](const std::string&) { args->nu_given = true; });
   cmd->add_option("--nugget", args->nugget, "free (default), fixed=V (value unit^2) or none");
   cmd->add_option("--weights", args->weights,
-                  "nj (N_j, gstat fit.method 1), nj_h2 (N_j/h_j^2, method 7, default), cressie "
-                  "(N_j/model(h_j)^2, method 2)");
+                  "wls: nj (N_j, gstat fit.method 1), nj_h2 (N_j/h_j^2, method 7, default), cressie "
+                  "(N_j/model(h_j)^2, method 2)")
+      ->each([args](const std::string&) { args->weights_given = true; });
   cmd->add_option("--range-max", args->range_max,
-                  "upper bound of the range (lag unit); default 100 x the largest lag");
+                  "wls: upper bound of the range (lag unit); default 100 x the largest lag")
+      ->each([args](const std::string&) { args->range_max_given = true; });
   cmd->add_option("--out", args->out, "output JSON (written atomically)");
   cmd->footer(
       "Example:\n"
       "  errfield variogram --input errors.csv --coords x,y,z --value dL --bins 0:2200:200 --out vario.csv\n"
-      "  errfield fit-variogram --input vario.csv --model sph --nugget free --weights nj_h2 --out model.json");
+      "  errfield fit-variogram --input vario.csv --model sph --nugget free --weights nj_h2 --out model.json\n"
+      "  errfield fit-variogram --method reml --input errors.csv --coords x,y,z --value dL --model exp --out model.json");
   cmd->callback([args] { run_fit(*args); });
 }
 

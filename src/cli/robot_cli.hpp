@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "cli/cli_support.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/mdh_model.hpp"
@@ -33,18 +34,6 @@ std::vector<std::string> joint_column_names(const std::string& prefix = "q");
 enum MetresCheck : unsigned { kNominalXyz = 1, kMeasuredXyz = 2, kDistances = 4, kAllUnits = 7 };
 void warn_if_metres(const CsvTable& table, const robot::MdhModel& model, const std::string& command,
                     unsigned groups = kAllUnits);
-
-/// Runs `f()` (a library step on the data of `file`); an InputError that names no file (e.g.
-/// "calibration: 3 measured positions ...") is re-thrown with "file: " in front and file() set.
-template <class F>
-auto with_source(const std::string& file, F f) {
-  try {
-    return f();
-  } catch (const InputError& e) {
-    if (!e.file().empty()) throw;
-    throw InputError(file + ": " + e.what(), file, e.row(), e.column());
-  }
-}
 
 /// Rotation-matrix column names r11, r12, ..., r33 (row-major).
 const std::vector<std::string>& rotation_column_names();

@@ -13,6 +13,7 @@
 
 #include "errfield/csv_table.hpp"
 #include "errfield/empirical_variogram.hpp"
+#include "errfield/kriging_likelihood.hpp"
 #include "errfield/variogram_fit.hpp"
 #include "support/cli_harness.hpp"
 
@@ -174,6 +175,46 @@ TEST_F(VariogramCli, FitVariogramPrintsAndWritesALoadableModel) {
   EXPECT_NE(bad.err.find("'gamma'"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(path("bad.json")));
   EXPECT_EQ(run("fit-variogram --help").exit_code, 0);
+}
+
+TEST_F(VariogramCli, FitVariogramByLikelihoodMatchesTheLibraryAndRefusesWhatDoesNotApply) {
+  // (The optimum itself is checked against scipy in tests/peers/scipy_likelihood_test.cpp.)
+  Eigen::MatrixXd x, z;
+  write("in.csv", simulated_csv(60, 5, &x, &z));
+  const auto r = run("fit-variogram --method reml --input " + path("in.csv") +
+                     " --coords \"x [mm],y,z\" --value dL --model exp --out " + path("m.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("REML negative log-likelihood = "), std::string::npos) << r.out;
+  const auto j = nlohmann::json::parse(read("m.json"));
+  EXPECT_EQ(j["fit"]["method"], "reml");
+  const auto lib = fit_likelihood(x, z.col(0), {{ModelKind::Exponential, 0, 0, 0.5}});
+  EXPECT_EQ(j.get<VariogramModel>().to_string(), lib.model.to_string());
+  EXPECT_EQ(j["fit"]["negative_log_likelihood"].get<double>(), lib.negative_log_likelihood);
+
+  auto bad = run("fit-variogram --method reml --input " + path("in.csv") + " --model exp");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--coords"), std::string::npos) << bad.err;
+  bad = run("fit-variogram --method ml --input " + path("in.csv") + " --coords x,y,z --value dL --model exp "
+            "--weights nj");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--weights applies to --method wls"), std::string::npos) << bad.err;
+  bad = run("fit-variogram --method ml --input " + path("in.csv") + " --coords x,y,z --value dx,dy --model exp");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("one scalar value column"), std::string::npos) << bad.err;
+  bad = run("fit-variogram --method reml --input " + path("in.csv") + " --coords x,y,z --value dL --model lin");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("bounded model"), std::string::npos) << bad.err;
+  bad = run("fit-variogram --method mle --input " + path("in.csv") + " --model exp");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("wls, ml or reml"), std::string::npos) << bad.err;
+  std::string big = "x,y,z,dL\n";
+  for (int i = 0; i < 3001; ++i) big += std::to_string(i) + ",0,0,1\n";
+  write("big.csv", big);
+  bad = run("fit-variogram --method reml --input " + path("big.csv") + " --coords x,y,z --value dL --model exp --out " +
+            path("big.json"));
+  EXPECT_EQ(bad.exit_code, 3);
+  EXPECT_NE(bad.err.find("--method wls"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(path("big.json")));
 }
 
 }  // namespace
