@@ -177,8 +177,35 @@ Solve solve(const MdhModel& model, const Eigen::Isometry3d& target, const JointV
 
 }  // namespace
 
+namespace {
+
+// Farther from the base than every link (and the tool) laid end to end: no joint values reach it,
+// so there is nothing to iterate (a plan of an out-of-reach cube used to run the full solver from
+// 24 seeds per point; found by fuzzing).
+bool beyond_reach(const MdhModel& model, const Eigen::Isometry3d& target, const IkOptions& o) {
+  const double distance = (target.translation() - model.base().translation()).norm();
+  return distance > reach_bound_mm(model, o.frame) + o.position_tolerance_mm;
+}
+
+IkResult unreachable_at_seed(const MdhModel& model, const Eigen::Isometry3d& target, const JointVector& seed_deg,
+                             const IkOptions& o) {
+  IkResult out;
+  out.q_deg = clamp(Limits::of(model), seed_deg);
+  KinematicFrames f;
+  forward_kinematics_all(model, out.q_deg, f);
+  const Residual r = residual(f, target, o);
+  out.position_residual_mm = r.position_mm;
+  out.orientation_residual_rad = r.orientation_rad;
+  out.iterations = 0;
+  out.status = IkStatus::unreachable;
+  return out;
+}
+
+}  // namespace
+
 IkResult inverse_kinematics(const MdhModel& model, const Eigen::Isometry3d& target, const JointVector& seed_deg,
                             const IkOptions& o) {
+  if (beyond_reach(model, target, o)) return unreachable_at_seed(model, target, seed_deg, o);
   const Solve s = solve(model, target, seed_deg, o, Limits::of(model));
   IkResult out;
   out.q_deg = s.q;
@@ -209,6 +236,11 @@ IkResult inverse_kinematics_multistart(const MdhModel& model, const Eigen::Isome
   // Seeds: the waist turned towards the target, the shoulder/elbow/wrist in a few postures.
   const Eigen::Vector3d p_base = model.base().inverse() * target.translation();
   const double q1 = std::atan2(p_base.y(), p_base.x()) / kDeg;
+  if (beyond_reach(model, target, o)) {
+    JointVector seed;
+    seed << q1, 0.0, 0.0, 0.0, 0.0, 0.0;
+    return unreachable_at_seed(model, target, seed, o);
+  }
   const double q2s[] = {-90.0, -45.0, 0.0, 30.0};
   const double q3s[] = {0.0, 45.0, -45.0};
   const double q5s[] = {-45.0, 45.0};

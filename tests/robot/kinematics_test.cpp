@@ -266,6 +266,14 @@ TEST(InverseKinematics, UnreachableAndLimitedTargetsReportStatusAndResidual) {
   EXPECT_EQ(r.status, IkStatus::unreachable) << to_string(r.status);
   EXPECT_GT(r.position_residual_mm, 2000.0);  // reach is ~1.9 m
   EXPECT_TRUE(m.within_limits(r.q_deg));
+  // Beyond the sphere there is nothing to iterate (a plan of a cube out of reach once took minutes):
+  // answered at the seed, with the residual of the seed's pose, by both solvers.
+  EXPECT_EQ(r.iterations, 0);
+  EXPECT_NEAR(r.position_residual_mm, (forward_position(m, seed) - far.translation()).norm(), 1e-9);
+  const IkResult rm = inverse_kinematics_multistart(m, far);
+  EXPECT_EQ(rm.status, IkStatus::unreachable);
+  EXPECT_EQ(rm.iterations, 0);
+  EXPECT_NEAR(rm.position_residual_mm, (forward_position(m, rm.q_deg) - far.translation()).norm(), 1e-9);
 
   // Reachable geometrically but only with J1 beyond its limit (J1 limits narrowed to [-10, 10]).
   auto links = m.links();
