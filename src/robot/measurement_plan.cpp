@@ -56,14 +56,19 @@ std::vector<PlannedPoint> plan_measurements(const MdhModel& robot, const PlanOpt
                             o.min_corner_mm + o.step_mm * (Eigen::Vector3d(i, j, k) + u), JointVector::Zero()});
         }
   }
+  // Stops at the 10th unreachable point: each costs up to 24 full IK solves, and a cube that is
+  // mostly out of reach would otherwise take minutes to be refused (found by fuzzing).
+  constexpr std::size_t kReported = 10;
   std::string unreachable;
-  std::size_t bad = 0;
+  std::size_t bad = 0, checked = 0;
   for (auto& p : points) {
+    if (bad == kReported) break;
+    ++checked;
     pose.translation() = p.position_mm;
     const IkResult r = centre.ok() ? inverse_kinematics(robot, pose, centre.q_deg) : inverse_kinematics_multistart(robot, pose);
     p.q_deg = r.q_deg;
     if (!r.ok()) {
-      if (++bad <= 10) {
+      if (++bad <= kReported) {
         char buf[200];
         std::snprintf(buf, sizeof buf, "\n  %s (%.1f, %.1f, %.1f) mm: %s, residual %.3g mm", p.id.c_str(), p.position_mm.x(),
                       p.position_mm.y(), p.position_mm.z(), to_string(r.status), r.position_residual_mm);
@@ -72,9 +77,10 @@ std::vector<PlannedPoint> plan_measurements(const MdhModel& robot, const PlanOpt
     }
   }
   if (bad)
-    throw InputError("plan: " + std::to_string(bad) + " of " + std::to_string(points.size()) +
-                     " points are unreachable at the requested orientation (first " + std::to_string(std::min<std::size_t>(bad, 10)) +
-                     "):" + unreachable + "\nMove or shrink the cube, or change the orientation.");
+    throw InputError("plan: " + std::to_string(bad) + " of the first " + std::to_string(checked) + " of " +
+                     std::to_string(points.size()) + " points are unreachable at the requested orientation" +
+                     (bad == kReported ? " (stopped at " + std::to_string(kReported) + ")" : std::string()) + ":" +
+                     unreachable + "\nMove or shrink the cube, or change the orientation.");
   return points;
 }
 

@@ -159,6 +159,12 @@ TEST_F(PipelineCli, BadInputGetsClearErrors) {
                "command_model");
   expect_error(run("plan --cube 750,-250,350,500 --step 30 --out " + path("p.csv")), "divide");
   expect_error(run("plan --cube 750,-250,350 --out " + path("p.csv")), "--cube");
+  // A cube 7.5 m away (found by fuzzing: it used to take minutes): refused at once, naming the first
+  // points, after checking only as many as it reports.
+  const CliResult far = run("plan --cube 7500,-250,350,250 --step 25 --out " + path("p.csv"));
+  expect_error(far, "10 of the first 10 of 1331 points are unreachable");
+  EXPECT_NE(far.err.find("g0 (7500.0, -250.0, 350.0) mm: unreachable"), std::string::npos) << far.err;
+  EXPECT_FALSE(fs::exists(path("p.csv")));
 }
 
 }  // namespace
