@@ -12,6 +12,7 @@
 #include "errfield/robot/model_fitting.hpp"
 #include "errfield/robot/paper_reproduction.hpp"
 #include "errfield/robot/pose.hpp"
+#include "robot/seed_streams.hpp"
 
 namespace errfield::robot {
 
@@ -33,14 +34,6 @@ void OrientationExperimentOptions::validate() const {
 }
 
 namespace {
-
-std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t stream) {
-  // splitmix64 of the pair (as the reproduction's streams): decorrelated, platform-independent.
-  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * (stream + 1);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
 
 enum Stream : std::uint64_t {
   kTrainingPositions = 1,
@@ -109,8 +102,8 @@ CaseResult run_case(const SimulatedRobot& sim, const MeasurementCube& cube, cons
   const std::string name = varying ? "varying" : "constant";
   const MdhModel& nominal = sim.nominal();
   // The same orientation streams in both cases; the constant case draws nothing from them.
-  SimulationRng train_rng(stream_seed(o.seed, kTrainingOrientations));
-  SimulationRng val_rng(stream_seed(o.seed, kValidationOrientations));
+  SimulationRng train_rng(detail::stream_seed(o.seed, kTrainingOrientations));
+  SimulationRng val_rng(detail::stream_seed(o.seed, kValidationOrientations));
   CaseResult out;
   out.training = reach(nominal, cube, seed_q, training_positions, spread, train_rng, o.max_orientation_draws, rejected,
                        "training pose");
@@ -118,7 +111,7 @@ CaseResult run_case(const SimulatedRobot& sim, const MeasurementCube& cube, cons
                          rejected, "validation pose");
 
   // Measurement: one move and one tracker reading per training pose; registration on them.
-  SimulationRng mrng(stream_seed(o.seed, kMeasure + case_index));
+  SimulationRng mrng(detail::stream_seed(o.seed, kMeasure + case_index));
   const std::size_t n = out.training.position_mm.size();
   std::vector<Eigen::Vector3d> measured(n);
   for (std::size_t i = 0; i < n; ++i) measured[i] = sim.measure(sim.move(out.training.joints_deg[i], mrng), mrng);
@@ -156,7 +149,7 @@ CaseResult run_case(const SimulatedRobot& sim, const MeasurementCube& cube, cons
   // Evaluation: the true robot with fresh repeatability noise, in the registered frame.
   const Eigen::Isometry3d registered_from_world = reg.robot_from_tracker * sim.config().tracker.tracker_from_world;
   for (std::size_t m = 0; m < methods.size(); ++m) {
-    SimulationRng erng(stream_seed(o.seed, kEvaluate + 4 * case_index + m));
+    SimulationRng erng(detail::stream_seed(o.seed, kEvaluate + 4 * case_index + m));
     OrientationExperimentRow row;
     row.orientation = name;
     row.method = m == 0 ? "none" : "vector-kriging";
@@ -189,8 +182,8 @@ OrientationExperiment run_orientation_experiment(const SimulatorConfig& config,
   const IkResult seed = cube_seed(sim.nominal(), cube);
   if (!seed.ok()) throw Error("orientation experiment: no IK solution at the cube centre for the nominal robot");
 
-  SimulationRng train_pos(stream_seed(options.seed, kTrainingPositions));
-  SimulationRng val_pos(stream_seed(options.seed, kValidationPositions));
+  SimulationRng train_pos(detail::stream_seed(options.seed, kTrainingPositions));
+  SimulationRng val_pos(detail::stream_seed(options.seed, kValidationPositions));
   const auto training_positions = cube_positions(cube, options.training_poses, train_pos);
   const auto validation_positions = cube_positions(cube, options.validation_poses, val_pos);
 

@@ -29,6 +29,7 @@
 #include "errfield/robot/paper_reference.hpp"
 #include "errfield/robot/pose.hpp"
 #include "errfield/robot/simulator.hpp"
+#include "robot/seed_streams.hpp"
 
 namespace errfield::robot {
 
@@ -56,14 +57,6 @@ void ReproductionOptions::validate() const {
 }
 
 namespace {
-
-std::uint64_t derive_seed(std::uint64_t seed, std::uint64_t stream) {
-  // splitmix64 of the pair: streams of one master seed are decorrelated and platform-independent.
-  std::uint64_t z = seed + 0x9E3779B97F4A7C15ull * (stream + 1);
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-  return z ^ (z >> 31);
-}
 
 
 // Random-stream identifiers (one stream per purpose, so changing one experiment leaves the others).
@@ -179,10 +172,10 @@ VariogramComparison compare_variogram(const EmpiricalVariogram& ev, std::span<co
 
 void run_variograms(const Setup& s, const ReproductionOptions& o, ReproductionResult& result) {
   const auto ranges = paper::table2_joint_ranges_deg();
-  SimulationRng qrng(derive_seed(o.seed, kVariogramConfigs));
-  SimulationRng mrng(derive_seed(o.seed, kVariogramMoves));
+  SimulationRng qrng(detail::stream_seed(o.seed, kVariogramConfigs));
+  SimulationRng mrng(detail::stream_seed(o.seed, kVariogramMoves));
   SimulatorConfig cfg = s.config;
-  cfg.seed = derive_seed(o.seed, kRunRobot);
+  cfg.seed = detail::stream_seed(o.seed, kRunRobot);
   const SimulatedRobot sim(cfg);
   std::vector<JointVector> q(static_cast<std::size_t>(o.variogram_configurations));
   std::vector<Eigen::Vector3d> p(q.size());
@@ -210,9 +203,9 @@ void run_variograms(const Setup& s, const ReproductionOptions& o, ReproductionRe
 
 void run_grid_steps(const Setup& s, const ReproductionOptions& o, ReproductionResult& result) {
   SimulatorConfig cfg = s.config;
-  cfg.seed = derive_seed(o.seed, kRunRobot);
+  cfg.seed = detail::stream_seed(o.seed, kRunRobot);
   const SimulatedRobot sim(cfg);
-  SimulationRng hrng(derive_seed(o.seed, kGridStepHeldout));
+  SimulationRng hrng(detail::stream_seed(o.seed, kGridStepHeldout));
   // Base point: the tracker (the paper's P0, a fixed point); the tracker measures its range to
   // the ball. Held-out truth is the true distance error, without repeatability or tracker noise.
   const Eigen::Vector3d base = s.tracker_origin_world;
@@ -235,7 +228,7 @@ void run_grid_steps(const Setup& s, const ReproductionOptions& o, ReproductionRe
     std::atomic<int> failures{0};
 #pragma omp parallel for schedule(dynamic, 1) num_threads(o.threads > 0 ? o.threads : omp_get_max_threads())
     for (std::ptrdiff_t b = 0; b < blocks; ++b) {
-      SimulationRng rng(derive_seed(derive_seed(o.seed, kGridStepMoves), static_cast<std::uint64_t>(step * 1000) * 100000 +
+      SimulationRng rng(detail::stream_seed(detail::stream_seed(o.seed, kGridStepMoves), static_cast<std::uint64_t>(step * 1000) * 100000 +
                                                                              static_cast<std::uint64_t>(b)));
       JointVector seed = s.seed_q;
       for (std::ptrdiff_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
@@ -378,10 +371,10 @@ Fitted measure_and_fit(const Setup& s, const SimulatedRobot& sim, SimulationRng&
 
 RunResult run_table6_once(const Setup& s, const ReproductionOptions& o, int run) {
   SimulatorConfig cfg = s.config;
-  cfg.seed = derive_seed(o.seed, kRunRobot + static_cast<std::uint64_t>(run));
+  cfg.seed = detail::stream_seed(o.seed, kRunRobot + static_cast<std::uint64_t>(run));
   const SimulatedRobot sim(cfg);
-  SimulationRng srng(derive_seed(o.seed, kRunSamples + static_cast<std::uint64_t>(run)));
-  SimulationRng mrng(derive_seed(o.seed, kRunMeasure + static_cast<std::uint64_t>(run)));
+  SimulationRng srng(detail::stream_seed(o.seed, kRunSamples + static_cast<std::uint64_t>(run)));
+  SimulationRng mrng(detail::stream_seed(o.seed, kRunMeasure + static_cast<std::uint64_t>(run)));
 
   // Samples: one random point per 125 mm cell (64), nominal joints.
   const std::vector<Eigen::Vector3d> samples = s.cube.random_per_cell(paper::kChosenGridStepMm, srng);
@@ -398,7 +391,7 @@ RunResult run_table6_once(const Setup& s, const ReproductionOptions& o, int run)
   RunResult out;
   for (std::size_t m = 0; m < models.size(); ++m) {
     const CompensationModel& model = models[m];
-    SimulationRng erng(derive_seed(o.seed, kRunEval + 16 * static_cast<std::uint64_t>(run) +
+    SimulationRng erng(detail::stream_seed(o.seed, kRunEval + 16 * static_cast<std::uint64_t>(run) +
                                                static_cast<std::uint64_t>(model.method())));
     MethodRun mr;
     mr.method = model.method();
@@ -481,14 +474,14 @@ void run_assembly(const Setup& s, const ReproductionOptions& o, ReproductionResu
   // frame puts the plate there (tracker_from_world = plate_tracker · plate_world⁻¹), and the user
   // maps it back through the registration fitted on the grid, as the paper does.
   SimulatorConfig cfg = s.config;
-  cfg.seed = derive_seed(o.seed, kRunRobot);
+  cfg.seed = detail::stream_seed(o.seed, kRunRobot);
   Eigen::Isometry3d plate_world = Eigen::Isometry3d::Identity();
   plate_world.translation() = s.cube.center();
   const auto& pf = paper::kPlateFrameTracker;
   const Eigen::Isometry3d plate_tracker = to_isometry({pf[0], pf[1], pf[2], pf[3], pf[4], pf[5]});
   cfg.tracker.tracker_from_world = plate_tracker * plate_world.inverse();
   const SimulatedRobot sim(cfg);
-  SimulationRng mrng(derive_seed(o.seed, kAssembly));
+  SimulationRng mrng(detail::stream_seed(o.seed, kAssembly));
   const Fitted f = measure_and_fit(s, sim, mrng);
 
   // 15 holes, 5 x 3 at 100 mm pitch, in the plate frame; tool axis into the hole (tool-down).
@@ -507,7 +500,7 @@ void run_assembly(const Setup& s, const ReproductionOptions& o, ReproductionResu
     }
   const double sigma = cfg.repeatability_sigma_mm;
   auto deviations = [&](const CompensationModel* model, std::uint64_t stream) {
-    SimulationRng erng(derive_seed(o.seed, kAssembly + stream));
+    SimulationRng erng(detail::stream_seed(o.seed, kAssembly + stream));
     std::vector<double> dev;
     for (std::size_t h = 0; h < hole_true.size(); ++h) {
       JointVector q = q_nominal[h];
@@ -564,9 +557,9 @@ ReproductionResult reproduce_paper(const ReproductionOptions& options) {
   {
     // Run 0's robot (the one of Tables 3/4, Fig. 5 and Table 8), once per reproduction.
     SimulatorConfig cfg = setup.config;
-    cfg.seed = derive_seed(options.seed, kRunRobot);
+    cfg.seed = detail::stream_seed(options.seed, kRunRobot);
     OrientationExperimentOptions oo;
-    oo.seed = derive_seed(options.seed, kBeyondOrientation);
+    oo.seed = detail::stream_seed(options.seed, kBeyondOrientation);
     oo.training_poses = options.orientation_training_poses;
     oo.validation_poses = options.orientation_validation_poses;
     oo.orientation_spread_deg = options.orientation_spread_deg;
