@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "pair_binning.hpp"
+#include "pair_binning_avx2.hpp"
 
 namespace errfield {
 namespace {
@@ -400,6 +401,115 @@ TEST(PairBinningKernel, FindBinFollowsTheTieRules) {
   EXPECT_EQ(kernels::find_bin(4.0000001, gs), -1);
   EXPECT_EQ(kernels::find_bin(-0.5, gs), -1);
   EXPECT_EQ(kernels::find_bin(std::numeric_limits<double>::quiet_NaN(), half), -1);
+}
+
+// The Euclidean kernel through bin_pair_rows_euclidean_isa: the AVX2 path (when this CPU has
+// AVX2) must give the baseline kernel's sums bit for bit, and both the naive reference's counts
+// exactly and its sums to rounding. Integer coordinates put many lags exactly on bin edges (the
+// near-edge branch); max lags below the diameter put pairs outside every bin; odd row lengths
+// exercise the scalar tail; e_0 > 0 and both conventions and statistics are covered.
+template <int D>
+void check_isa_paths(std::size_t n, const std::vector<double>& edges, bool gstat,
+                     kernels::PairStatistic stat, int dynamic_dimension = 0) {
+  using kernels::KernelIsa;
+  constexpr int kD = D > 0 ? D : 4;
+  const int dim = D > 0 ? D : dynamic_dimension;
+  std::mt19937_64 rng(100 + n + edges.size() + (gstat ? 1 : 0));
+  std::uniform_int_distribution<int> coord(0, 9);
+  std::normal_distribution<double> g(0.0, 1.0);
+  using P = Eigen::Matrix<double, kD, 1>;
+  std::vector<P> loc(n);
+  std::vector<double> soa(n * kD), z(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (int a = 0; a < dim; ++a) soa[a * n + i] = loc[i][a] = coord(rng);
+    z[i] = g(rng);
+  }
+  const auto bins = LagBins::from_edges(edges);
+  ASSERT_TRUE(bins.is_uniform());
+  EmpiricalVariogramOptions o;
+  o.convention = gstat ? BinConvention::Gstat : BinConvention::HalfOpen;
+  const kernels::BinLayout layout = detail::variogram_bin_layout(bins, o);
+  const std::size_t B = bins.size() + 1;
+  struct Sums {
+    std::vector<std::uint64_t> count;
+    std::vector<double> lag, stat;
+    explicit Sums(std::size_t b) : count(b, 0), lag(b, 0.0), stat(b, 0.0) {}
+    kernels::PairSums view() { return {count.data(), lag.data(), stat.data()}; }
+  };
+  auto run = [&](KernelIsa isa, std::size_t r0, std::size_t r1) {
+    Sums s(B);
+    if (stat == kernels::PairStatistic::SquaredDifference)
+      kernels::bin_pair_rows_euclidean_isa<kernels::PairStatistic::SquaredDifference, false, 1, D>(
+          isa, soa.data(), n, dim, z.data(), 1, layout, 0, 0, r0, r1, s.view());
+    else
+      kernels::bin_pair_rows_euclidean_isa<kernels::PairStatistic::RootAbsDifference, false, 1, D>(
+          isa, soa.data(), n, dim, z.data(), 1, layout, 0, 0, r0, r1, s.view());
+    return s;
+  };
+  Sums ref(B);
+  kernels::bin_pairs_reference(loc.data(), z.data(), n, 1, EuclideanMetric{}, edges.data(),
+                               bins.size(), gstat, stat, 1.0, 0, ref.view());
+  const Sums base = run(KernelIsa::Baseline, 1, n);
+  for (std::size_t b = 0; b + 1 < B; ++b) {
+    SCOPED_TRACE("bin " + std::to_string(b));
+    EXPECT_EQ(base.count[b], ref.count[b]);
+    EXPECT_NEAR(base.lag[b], ref.lag[b], kSumTolerance * ref.lag[b]);
+    EXPECT_NEAR(base.stat[b], ref.stat[b], kSumTolerance * ref.stat[b]);
+  }
+  if (kernels::best_kernel_isa() != KernelIsa::Avx2) {
+    GTEST_SKIP() << "this CPU has no AVX2: only the baseline kernel was checked";
+  }
+  for (auto [r0, r1] : {std::pair<std::size_t, std::size_t>{1, n}, {n / 3, n - 5}}) {
+    const Sums a = run(KernelIsa::Avx2, r0, r1);
+    const Sums b = run(KernelIsa::Baseline, r0, r1);
+    EXPECT_EQ(a.count, b.count);
+    EXPECT_EQ(std::memcmp(a.lag.data(), b.lag.data(), B * sizeof(double)), 0);
+    EXPECT_EQ(std::memcmp(a.stat.data(), b.stat.data(), B * sizeof(double)), 0);
+  }
+}
+
+TEST(PairBinningKernel, Avx2PathIsBitIdenticalToBaselineAndBothMatchTheReference) {
+  using kernels::PairStatistic;
+  const std::vector<double> from0 = LagBins::uniform(0.0, 9.0, 1.5).edges();   // many ties
+  const std::vector<double> shifted = {2.0, 3.0, 4.0, 5.0, 6.0, 7.0};          // e_0 > 0
+  for (bool gstat : {false, true})
+    for (auto st : {PairStatistic::SquaredDifference, PairStatistic::RootAbsDifference}) {
+      SCOPED_TRACE(std::string(gstat ? "gstat " : "half-open ") +
+                   (st == PairStatistic::SquaredDifference ? "squared" : "root-abs"));
+      check_isa_paths<3>(203, from0, gstat, st);
+      check_isa_paths<3>(150, shifted, gstat, st);
+      check_isa_paths<2>(121, from0, gstat, st);
+      check_isa_paths<6>(98, from0, gstat, st);
+      check_isa_paths<0>(77, shifted, gstat, st, 4);
+    }
+}
+
+TEST(PairBinningKernel, IsaDispatchFallsBackOutsideTheAvx2Cases) {
+  // Non-uniform bins, more than kAvx2MaxBins bins: the dispatcher must take the baseline path
+  // (and thus still give the reference's counts).
+  using kernels::KernelIsa;
+  const std::size_t n = 60;
+  std::vector<double> soa(n), z(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    soa[i] = static_cast<double>(i * i % 17);
+    z[i] = static_cast<double>(i % 5);
+  }
+  std::vector<double> many(kernels::kAvx2MaxBins + 2);
+  for (std::size_t k = 0; k < many.size(); ++k) many[k] = 0.01 * static_cast<double>(k);
+  for (const auto& edges : {std::vector<double>{0.0, 1.0, 3.0, 4.0, 7.5, 17.0}, many}) {
+    const auto bins = LagBins::from_edges(edges);
+    const kernels::BinLayout layout = detail::variogram_bin_layout(bins, {});
+    const std::size_t B = bins.size() + 1;
+    std::vector<std::uint64_t> c(B, 0), rc(B, 0);
+    std::vector<double> l(B, 0.0), s(B, 0.0), rl(B, 0.0), rs(B, 0.0);
+    kernels::bin_pair_rows_euclidean_isa<kernels::PairStatistic::SquaredDifference, false, 1, 1>(
+        kernels::best_kernel_isa(), soa.data(), n, 1, z.data(), 1, layout, 0, 0, 1, n,
+        kernels::PairSums{c.data(), l.data(), s.data()});
+    kernels::bin_pairs_reference(soa.data(), z.data(), n, 1, EuclideanMetric{}, edges.data(),
+                                 bins.size(), false, kernels::PairStatistic::SquaredDifference, 1.0,
+                                 0, kernels::PairSums{rc.data(), rl.data(), rs.data()});
+    for (std::size_t b = 0; b + 1 < B; ++b) EXPECT_EQ(c[b], rc[b]) << "bin " << b;
+  }
 }
 
 static_assert(Location<Vec3> && Location<Vec6> && Location<Eigen::VectorXd> && Location<double>);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "pair_binning.hpp"
+#include "pair_binning_avx2.hpp"
 
 namespace errfield {
 namespace detail {
@@ -56,6 +57,7 @@ struct VariogramJob {
   kernels::BinLayout layout;
   std::uint64_t seed;
   std::uint64_t keep_below;
+  kernels::KernelIsa isa;  ///< instruction set of the Euclidean fast path (same result either way)
 };
 
 template <kernels::PairStatistic S, bool Sub, int K, class L, class M>
@@ -67,9 +69,9 @@ void run_variogram_chunk_k(const VariogramJob<L, M>& job, std::size_t r0, std::s
     return;
   }
   auto euclid = [&]<int D>() {
-    kernels::bin_pair_rows_euclidean<S, Sub, K, D>(job.soa, job.n, job.dimension, job.values,
-                                                   job.components, job.layout, job.seed,
-                                                   job.keep_below, r0, r1, out);
+    kernels::bin_pair_rows_euclidean_isa<S, Sub, K, D>(job.isa, job.soa, job.n, job.dimension,
+                                                       job.values, job.components, job.layout,
+                                                       job.seed, job.keep_below, r0, r1, out);
   };
   switch (job.dimension) {
     case 1: euclid.template operator()<1>(); break;
@@ -155,7 +157,8 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
     }
   }
   const detail::VariogramJob<L, M> job{locations.data(), &metric, soa.empty() ? nullptr : soa.data(),
-                                       n, dim, z.data(), K, layout, options.seed, keep_below};
+                                       n, dim, z.data(), K, layout, options.seed, keep_below,
+                                       kernels::best_kernel_isa()};
   const std::ptrdiff_t chunks = static_cast<std::ptrdiff_t>(C);
   auto run = [&](std::ptrdiff_t c) {
     const std::size_t cu = static_cast<std::size_t>(c);

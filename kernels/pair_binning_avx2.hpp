@@ -1,0 +1,216 @@
+#pragma once
+/// AVX2 variant of the empirical variogram's Euclidean pair loop (pair_binning.hpp) for its most
+/// common case: one value component, equally spaced bins, every pair (no subsampling). Chosen at
+/// run time (KernelIsa, best_kernel_isa) so the library still runs on any x86-64; compiled with a
+/// GCC/Clang `target("avx2")` attribute, never with FMA, so every rounding is the same as in the
+/// baseline kernel.
+///
+/// Same result, bit for bit, as bin_pair_rows_euclidean's baseline path: the squared lag is
+/// summed in axis order without fused multiply-adds, vsqrtpd is correctly rounded like
+/// std::sqrt, the bin is decided by the same exact rule (the vector guess defers lags within
+/// kNearEdge of an inner edge to find_bin), and each bin's sums receive the pairs in the same
+/// order (i ascending, then j ascending). What differs is the bookkeeping: four pairs per step
+/// and one 32-byte slot per bin, (lag sum, statistic sum, count, unused), updated with a single
+/// 256-bit add of (h, w, 1, 0) per pair instead of three separate read-modify-writes; the slots
+/// live on the stack (at most kAvx2MaxBins bins) and are copied to the caller's sums at the end.
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "pair_binning.hpp"
+
+#if (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#define ERRFIELD_KERNELS_HAVE_AVX2 1
+#include <immintrin.h>
+#else
+#define ERRFIELD_KERNELS_HAVE_AVX2 0
+#endif
+
+namespace errfield::kernels {
+
+/// Instruction set a kernel runs with. Baseline: the build's own target (SSE2 on x86-64).
+enum class KernelIsa { Baseline, Avx2 };
+
+/// The best KernelIsa this CPU runs (checked once per call; cheap).
+inline KernelIsa best_kernel_isa() noexcept {
+#if ERRFIELD_KERNELS_HAVE_AVX2
+  if (__builtin_cpu_supports("avx2")) return KernelIsa::Avx2;
+#endif
+  return KernelIsa::Baseline;
+}
+
+/// Most bins the AVX2 path handles (its per-bin slots live on the stack: 32 bytes each).
+inline constexpr std::size_t kAvx2MaxBins = 1024;
+
+/// Most points the AVX2 path takes: it counts pairs in doubles, exact below 2^53 pairs.
+inline constexpr std::size_t kAvx2MaxPoints = std::size_t{1} << 26;
+
+#if ERRFIELD_KERNELS_HAVE_AVX2
+
+namespace detail {
+
+/// slots[4 k .. 4 k + 3] += p: bin k's (lag sum, statistic sum, count, unused) += (h, w, 1, 0).
+__attribute__((target("avx2"), always_inline)) inline void add_to_slot(double* slots,
+                                                                        std::size_t k,
+                                                                        __m256d p) noexcept {
+  double* q = slots + 4 * k;
+  _mm256_store_pd(q, _mm256_add_pd(_mm256_load_pd(q), p));
+}
+
+}  // namespace detail
+
+namespace detail {
+
+template <PairStatistic S, bool Gstat, int D_FIXED>
+__attribute__((target("avx2"))) void bin_pair_rows_euclidean_avx2(
+    const double* coordinates, std::size_t n, int dimension, const double* values,
+    const BinLayout& bins, std::size_t row_begin, std::size_t row_end, PairSums out) noexcept {
+  const std::size_t D = static_cast<std::size_t>(D_FIXED > 0 ? D_FIXED : dimension);
+  const std::size_t B = bins.bins + 1;  // + the discard slot
+  // Per bin (lag sum, statistic sum, count, unused): one 256-bit add per pair. Counts are
+  // exact in doubles (fewer than 2^53 pairs, see kAvx2MaxPoints).
+  alignas(32) double slots[4 * (kAvx2MaxBins + 1)];
+  for (std::size_t k = 0; k < 4 * B; ++k) slots[k] = 0.0;
+
+  const double e0 = bins.edges[0];
+  const double en = bins.edges[bins.bins];
+  const __m256d ve0 = _mm256_set1_pd(e0), ven = _mm256_set1_pd(en);
+  const __m256d vinv = _mm256_set1_pd(bins.inv_width);
+  const __m256d vlo = _mm256_set1_pd(detail::kNearEdge);
+  const __m256d vhi = _mm256_set1_pd(1.0 - detail::kNearEdge);
+  const __m256d vminus = _mm256_set1_pd(-1.0);
+  const __m256d voutside = _mm256_set1_pd(static_cast<double>(bins.bins));
+  const __m256d vabs = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7FFFFFFFFFFFFFFFll));
+  const std::int32_t outside = static_cast<std::int32_t>(bins.bins);
+  const __m256d vone_zero = _mm256_set_pd(0.0, 1.0, 0.0, 0.0);  // lanes 2, 3 = (1, 0)
+
+  double xi[D_FIXED > 0 ? D_FIXED : 64];
+  __m256d vxi[D_FIXED > 0 ? D_FIXED : 64];
+  for (std::size_t i = row_begin; i < row_end; ++i) {
+    for (std::size_t a = 0; a < D; ++a) {
+      xi[a] = coordinates[a * n + i];
+      vxi[a] = _mm256_set1_pd(xi[a]);
+    }
+    const double zi = values[i];
+    const __m256d vzi = _mm256_set1_pd(zi);
+    std::size_t j = 0;
+    for (; j + 4 <= i; j += 4) {
+      __m256d d = _mm256_sub_pd(vxi[0], _mm256_loadu_pd(coordinates + j));
+      __m256d h = _mm256_mul_pd(d, d);
+      for (std::size_t a = 1; a < D; ++a) {
+        d = _mm256_sub_pd(vxi[a], _mm256_loadu_pd(coordinates + a * n + j));
+        h = _mm256_add_pd(h, _mm256_mul_pd(d, d));
+      }
+      h = _mm256_sqrt_pd(h);
+      const __m256d dz = _mm256_sub_pd(vzi, _mm256_loadu_pd(values + j));
+      __m256d w;
+      if constexpr (S == PairStatistic::SquaredDifference) w = _mm256_mul_pd(dz, dz);
+      else w = _mm256_sqrt_pd(_mm256_and_pd(dz, vabs));
+      // Bin codes as in detail::bin_codes, formed in doubles and converted once.
+      const __m256d in = _mm256_and_pd(
+          _mm256_cmp_pd(h, ve0, _CMP_GE_OQ),
+          Gstat ? _mm256_cmp_pd(h, ven, _CMP_LE_OQ) : _mm256_cmp_pd(h, ven, _CMP_LT_OQ));
+      // No clamping needed: lanes outside [e_0, e_n] take `outside` whatever their guess, and an
+      // in-range guess lies in [0, n] (a guess that rounds to n sits at an edge: near).
+      const __m256d g = _mm256_mul_pd(_mm256_sub_pd(h, ve0), vinv);
+      const __m256d k = _mm256_round_pd(g, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
+      const __m256d frac = _mm256_sub_pd(g, k);
+      const __m256d near = _mm256_or_pd(_mm256_cmp_pd(frac, vlo, _CMP_LT_OQ),
+                                        _mm256_cmp_pd(frac, vhi, _CMP_GT_OQ));
+      const __m256d code_d = _mm256_blendv_pd(voutside, _mm256_blendv_pd(k, vminus, near), in);
+      const __m128i code = _mm256_cvttpd_epi32(code_d);
+      std::uint64_t c01 = static_cast<std::uint64_t>(_mm_cvtsi128_si64(code));
+      std::uint64_t c23 = static_cast<std::uint64_t>(_mm_extract_epi64(code, 1));
+      if (_mm256_movemask_pd(_mm256_and_pd(near, in)) != 0) {  // rare: decide on the stored edges
+        alignas(32) double hs[4];
+        alignas(16) std::int32_t c[4];
+        _mm256_store_pd(hs, h);
+        _mm_store_si128(reinterpret_cast<__m128i*>(c), code);
+        for (int t = 0; t < 4; ++t) {
+          if (c[t] >= 0) continue;
+          const std::ptrdiff_t kb = find_bin(hs[t], bins);
+          c[t] = kb < 0 ? outside : static_cast<std::int32_t>(kb);
+        }
+        const __m128i fixed = _mm_load_si128(reinterpret_cast<const __m128i*>(c));
+        c01 = static_cast<std::uint64_t>(_mm_cvtsi128_si64(fixed));
+        c23 = static_cast<std::uint64_t>(_mm_extract_epi64(fixed, 1));
+      }
+      // (h_t, w_t, 1, 0) per pair t, added in pair order.
+      const __m256d lo = _mm256_unpacklo_pd(h, w);  // (h0, w0, h2, w2)
+      const __m256d hi = _mm256_unpackhi_pd(h, w);  // (h1, w1, h3, w3)
+      detail::add_to_slot(slots, c01 & 0xFFFFFFFFu, _mm256_blend_pd(vone_zero, lo, 0x3));
+      detail::add_to_slot(slots, c01 >> 32, _mm256_blend_pd(vone_zero, hi, 0x3));
+      detail::add_to_slot(slots, c23 & 0xFFFFFFFFu, _mm256_permute2f128_pd(lo, vone_zero, 0x31));
+      detail::add_to_slot(slots, c23 >> 32, _mm256_permute2f128_pd(hi, vone_zero, 0x31));
+    }
+    for (; j < i; ++j) {  // the last < 4 pairs of the row, one at a time
+      double d = xi[0] - coordinates[j];
+      double h2 = d * d;
+      for (std::size_t a = 1; a < D; ++a) {
+        d = xi[a] - coordinates[a * n + j];
+        h2 += d * d;
+      }
+      const double h = std::sqrt(h2);
+      const double w = detail::pair_statistic<S>(zi - values[j]);
+      const std::ptrdiff_t kb = find_bin(h, bins);
+      detail::add_to_slot(slots, kb < 0 ? bins.bins : static_cast<std::size_t>(kb),
+                          _mm256_set_pd(0.0, 1.0, w, h));
+    }
+  }
+  for (std::size_t k = 0; k < B; ++k) {
+    out.lag[k] += slots[4 * k];
+    out.stat[k] += slots[4 * k + 1];
+    out.count[k] += static_cast<std::uint64_t>(slots[4 * k + 2]);
+  }
+}
+
+}  // namespace detail
+
+/// Rows [row_begin, row_end) of bin_pair_rows_euclidean for K = 1, a uniform layout with
+/// bins.bins <= kAvx2MaxBins, no subsampling; adds into `out` (zeroed by the caller) exactly what
+/// bin_pair_rows_euclidean<S, false, 1, D_FIXED> adds. Call only when best_kernel_isa() ==
+/// KernelIsa::Avx2 (the caller checks). D_FIXED > 0 fixes the number of axes, otherwise
+/// `dimension` (<= 64) is used.
+template <PairStatistic S, int D_FIXED>
+void bin_pair_rows_euclidean_avx2(const double* coordinates, std::size_t n, int dimension,
+                                  const double* values, const BinLayout& bins,
+                                  std::size_t row_begin, std::size_t row_end,
+                                  PairSums out) noexcept {
+  if (bins.gstat)
+    detail::bin_pair_rows_euclidean_avx2<S, true, D_FIXED>(coordinates, n, dimension, values, bins,
+                                                            row_begin, row_end, out);
+  else
+    detail::bin_pair_rows_euclidean_avx2<S, false, D_FIXED>(coordinates, n, dimension, values,
+                                                             bins, row_begin, row_end, out);
+}
+
+#endif  // ERRFIELD_KERNELS_HAVE_AVX2
+
+/// bin_pair_rows_euclidean with the instruction set `isa`: the AVX2 path when isa is Avx2 and the
+/// case is one it covers (K = 1, no subsampling, uniform bins, at most kAvx2MaxBins), the
+/// baseline kernel otherwise. Same sums either way, bit for bit.
+template <PairStatistic S, bool Subsample, int K_FIXED, int D_FIXED>
+void bin_pair_rows_euclidean_isa(KernelIsa isa, const double* coordinates, std::size_t n,
+                                 int dimension, const double* values, int components,
+                                 const BinLayout& bins, std::uint64_t seed,
+                                 std::uint64_t keep_below, std::size_t row_begin,
+                                 std::size_t row_end, PairSums out) noexcept {
+#if ERRFIELD_KERNELS_HAVE_AVX2
+  if constexpr (!Subsample && K_FIXED == 1) {
+    if (isa == KernelIsa::Avx2 && bins.uniform && bins.bins <= kAvx2MaxBins &&
+        n <= kAvx2MaxPoints) {
+      bin_pair_rows_euclidean_avx2<S, D_FIXED>(coordinates, n, dimension, values, bins, row_begin,
+                                               row_end, out);
+      return;
+    }
+  }
+#else
+  (void)isa;
+#endif
+  bin_pair_rows_euclidean<S, Subsample, K_FIXED, D_FIXED>(coordinates, n, dimension, values,
+                                                          components, bins, seed, keep_below,
+                                                          row_begin, row_end, out);
+}
+
+}  // namespace errfield::kernels
