@@ -2,7 +2,12 @@
 // and 6-D (joint space, degrees), 20 bins, 1 or 2 threads. Simulated data: uniform random
 // locations, a smooth field plus noise as value. Counter `pairs_per_s` = N(N-1)/2 / wall time.
 //
-//   build/benchmarks/bm_variogram --benchmark_filter='BM_Variogram3d/20000/2'
+//   build/benchmarks/bm_variogram --benchmark_filter='BM_Variogram3d/N:20000/threads:2'
+//
+// BM_VariogramKernel3d runs the pair kernel alone (one thread, all rows as one chunk, N = 20,000,
+// 3-D, 20 bins) with each instruction set this CPU has, for a same-process A/B comparison:
+//
+//   build/benchmarks/bm_variogram --benchmark_filter=BM_VariogramKernel3d
 
 #include <cmath>
 #include <random>
@@ -11,6 +16,7 @@
 #include <benchmark/benchmark.h>
 
 #include "errfield/empirical_variogram.hpp"
+#include "pair_binning_simd.hpp"
 
 namespace {
 
@@ -53,7 +59,46 @@ void sizes(benchmark::internal::Benchmark* b) {
   b->ArgNames({"N", "threads"})->Unit(benchmark::kMillisecond)->UseRealTime();
 }
 
+// isa: 0 = baseline, 1 = AVX2, 2 = AVX-512 (skipped when this CPU lacks it).
+void BM_VariogramKernel3d(benchmark::State& state) {
+  namespace k = errfield::kernels;
+  const auto isa = static_cast<k::KernelIsa>(state.range(0));
+  if (!k::kernel_isa_supported(isa)) {
+    state.SkipWithError("this CPU lacks the instruction set");
+    return;
+  }
+  const std::size_t n = 20000;
+  const double extent = 2000.0;
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<double> u(0.0, extent);
+  std::vector<double> soa(3 * n), val(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t a = 0; a < 3; ++a) soa[a * n + i] = u(rng);
+    val[i] = std::sin(soa[i] / extent * 3.0) + std::cos(soa[2 * n + i] / extent * 2.0);
+  }
+  const double max_lag = extent * std::sqrt(3.0) / 1.1;
+  const auto bins = errfield::LagBins::uniform(0.0, max_lag, max_lag / 20.0);
+  const k::BinLayout layout{bins.edges().data(), bins.size(), false, true,
+                            1.0 / (bins.edges()[1] - bins.edges()[0])};
+  std::vector<std::uint64_t> count(bins.size() + 1);
+  std::vector<double> lag(bins.size() + 1), stat(bins.size() + 1);
+  for (auto _ : state) {
+    std::fill(count.begin(), count.end(), 0);
+    std::fill(lag.begin(), lag.end(), 0.0);
+    std::fill(stat.begin(), stat.end(), 0.0);
+    k::bin_pair_rows_euclidean_isa<k::PairStatistic::SquaredDifference, false, 1, 3>(
+        isa, soa.data(), n, 3, val.data(), 1, layout, 0, 0, 1, n,
+        k::PairSums{count.data(), lag.data(), stat.data()});
+    benchmark::DoNotOptimize(lag.data());
+  }
+  const double pairs = 0.5 * static_cast<double>(n) * static_cast<double>(n - 1);
+  // Per CPU second of the (single) calling thread: robust on a busy machine.
+  state.counters["pairs_per_cpu_s"] =
+      benchmark::Counter(pairs, benchmark::Counter::kIsIterationInvariantRate);
+}
+
 }  // namespace
 
+BENCHMARK(BM_VariogramKernel3d)->Arg(0)->Arg(1)->Arg(2)->ArgName("isa")->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Variogram3d)->Apply(sizes);
 BENCHMARK(BM_Variogram6d)->Apply(sizes);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <random>
@@ -10,7 +11,7 @@
 #include <gtest/gtest.h>
 
 #include "pair_binning.hpp"
-#include "pair_binning_avx2.hpp"
+#include "pair_binning_simd.hpp"
 
 namespace errfield {
 namespace {
@@ -403,8 +404,8 @@ TEST(PairBinningKernel, FindBinFollowsTheTieRules) {
   EXPECT_EQ(kernels::find_bin(std::numeric_limits<double>::quiet_NaN(), half), -1);
 }
 
-// The Euclidean kernel through bin_pair_rows_euclidean_isa: the AVX2 path (when this CPU has
-// AVX2) must give the baseline kernel's sums bit for bit, and both the naive reference's counts
+// The Euclidean kernel through bin_pair_rows_euclidean_isa: the AVX2 and AVX-512 paths (those this
+// CPU has) must give the baseline kernel's sums bit for bit, and both the naive reference's counts
 // exactly and its sums to rounding. Integer coordinates put many lags exactly on bin edges (the
 // near-edge branch); max lags below the diameter put pairs outside every bin; odd row lengths
 // exercise the scalar tail; e_0 > 0 and both conventions and statistics are covered.
@@ -456,20 +457,25 @@ void check_isa_paths(std::size_t n, const std::vector<double>& edges, bool gstat
     EXPECT_NEAR(base.lag[b], ref.lag[b], kSumTolerance * ref.lag[b]);
     EXPECT_NEAR(base.stat[b], ref.stat[b], kSumTolerance * ref.stat[b]);
   }
-  if (kernels::best_kernel_isa() != KernelIsa::Avx2) {
-    GTEST_SKIP() << "this CPU has no AVX2: only the baseline kernel was checked";
-  }
-  for (auto [r0, r1] : {std::pair<std::size_t, std::size_t>{1, n}, {n / 3, n - 5}}) {
-    const Sums a = run(KernelIsa::Avx2, r0, r1);
-    const Sums b = run(KernelIsa::Baseline, r0, r1);
-    EXPECT_EQ(a.count, b.count);
-    EXPECT_EQ(std::memcmp(a.lag.data(), b.lag.data(), B * sizeof(double)), 0);
-    EXPECT_EQ(std::memcmp(a.stat.data(), b.stat.data(), B * sizeof(double)), 0);
+  for (KernelIsa isa : {KernelIsa::Avx2, KernelIsa::Avx512}) {
+    if (!kernels::kernel_isa_supported(isa)) continue;  // reported by the test below
+    SCOPED_TRACE(isa == KernelIsa::Avx2 ? "AVX2" : "AVX-512");
+    for (auto [r0, r1] : {std::pair<std::size_t, std::size_t>{1, n}, {n / 3, n - 5}}) {
+      const Sums a = run(isa, r0, r1);
+      const Sums b = run(KernelIsa::Baseline, r0, r1);
+      EXPECT_EQ(a.count, b.count);
+      EXPECT_EQ(std::memcmp(a.lag.data(), b.lag.data(), B * sizeof(double)), 0);
+      EXPECT_EQ(std::memcmp(a.stat.data(), b.stat.data(), B * sizeof(double)), 0);
+    }
   }
 }
 
-TEST(PairBinningKernel, Avx2PathIsBitIdenticalToBaselineAndBothMatchTheReference) {
+TEST(PairBinningKernel, SimdPathsAreBitIdenticalToBaselineAndAllMatchTheReference) {
   using kernels::PairStatistic;
+  if (!kernels::kernel_isa_supported(kernels::KernelIsa::Avx2))
+    std::printf("note: this CPU has no AVX2; only the baseline kernel is checked here\n");
+  else if (!kernels::kernel_isa_supported(kernels::KernelIsa::Avx512))
+    std::printf("note: this CPU has no AVX-512; its kernel is not checked here\n");
   const std::vector<double> from0 = LagBins::uniform(0.0, 9.0, 1.5).edges();   // many ties
   const std::vector<double> shifted = {2.0, 3.0, 4.0, 5.0, 6.0, 7.0};          // e_0 > 0
   for (bool gstat : {false, true})
@@ -485,8 +491,8 @@ TEST(PairBinningKernel, Avx2PathIsBitIdenticalToBaselineAndBothMatchTheReference
 }
 
 TEST(PairBinningKernel, IsaDispatchFallsBackOutsideTheAvx2Cases) {
-  // Non-uniform bins, more than kAvx2MaxBins bins: the dispatcher must take the baseline path
-  // (and thus still give the reference's counts).
+  // Non-uniform bins, more than kSimdMaxBins bins: the dispatcher must take the baseline path
+  // (and thus still give the reference's counts) whatever ISA it is given.
   using kernels::KernelIsa;
   const std::size_t n = 60;
   std::vector<double> soa(n), z(n);
@@ -494,7 +500,7 @@ TEST(PairBinningKernel, IsaDispatchFallsBackOutsideTheAvx2Cases) {
     soa[i] = static_cast<double>(i * i % 17);
     z[i] = static_cast<double>(i % 5);
   }
-  std::vector<double> many(kernels::kAvx2MaxBins + 2);
+  std::vector<double> many(kernels::kSimdMaxBins + 2);
   for (std::size_t k = 0; k < many.size(); ++k) many[k] = 0.01 * static_cast<double>(k);
   for (const auto& edges : {std::vector<double>{0.0, 1.0, 3.0, 4.0, 7.5, 17.0}, many}) {
     const auto bins = LagBins::from_edges(edges);
@@ -505,6 +511,7 @@ TEST(PairBinningKernel, IsaDispatchFallsBackOutsideTheAvx2Cases) {
     kernels::bin_pair_rows_euclidean_isa<kernels::PairStatistic::SquaredDifference, false, 1, 1>(
         kernels::best_kernel_isa(), soa.data(), n, 1, z.data(), 1, layout, 0, 0, 1, n,
         kernels::PairSums{c.data(), l.data(), s.data()});
+    EXPECT_FALSE(bins.is_uniform() && bins.size() <= kernels::kSimdMaxBins);
     kernels::bin_pairs_reference(soa.data(), z.data(), n, 1, EuclideanMetric{}, edges.data(),
                                  bins.size(), false, kernels::PairStatistic::SquaredDifference, 1.0,
                                  0, kernels::PairSums{rc.data(), rl.data(), rs.data()});

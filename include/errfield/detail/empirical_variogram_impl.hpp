@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "pair_binning.hpp"
-#include "pair_binning_avx2.hpp"
+#include "pair_binning_simd.hpp"
 
 namespace errfield {
 namespace detail {
