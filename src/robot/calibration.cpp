@@ -28,6 +28,20 @@ std::size_t count_distinct(std::vector<Vector> v) {
   return static_cast<std::size_t>(std::unique(v.begin(), v.end()) - v.begin());
 }
 
+// What is identified: the robot model and extra parameters (the fixed base points' coordinates,
+// 3 per point, mm). Candidate indices below param::kCount are model parameters, index
+// param::kCount + e is extra[e].
+struct State {
+  MdhModel model;
+  Eigen::VectorXd extra;
+};
+
+std::string candidate_name(int index) {
+  if (index < param::kCount) return parameter_name(index);
+  const int e = index - param::kCount;
+  return "base point " + std::to_string(e / 3) + " " + "xyz"[e % 3];
+}
+
 // A measurement model: residuals (measured − predicted), `dim` rows per measurement, and the
 // Jacobian of the predictions with respect to the candidate parameters (columns = `active`).
 class Problem {
@@ -37,8 +51,12 @@ class Problem {
   virtual std::size_t count() const = 0;
   // Measurements at distinct configurations (a repeated pose or pair adds no equation).
   virtual std::size_t distinct() const = 0;
-  virtual void evaluate(const MdhModel& m, const std::vector<int>& active, Eigen::VectorXd& r,
+  virtual void evaluate(const State& s, const std::vector<int>& active, Eigen::VectorXd& r,
                         Eigen::MatrixXd* jac) const = 0;
+  // The Jacobian of measurements of the same kind (same base points) at generic configurations
+  // `q` (several hundred equations), for the "too few poses" guard.
+  virtual Eigen::MatrixXd generic_jacobian(const State& s, const std::vector<int>& candidates,
+                                           const std::vector<JointVector>& q) const = 0;
 };
 
 class PositionProblem final : public Problem {
@@ -51,8 +69,9 @@ class PositionProblem final : public Problem {
     for (const auto& d : data_) q.push_back(d.q_deg);
     return count_distinct(std::move(q));
   }
-  void evaluate(const MdhModel& m, const std::vector<int>& active, Eigen::VectorXd& r,
+  void evaluate(const State& s, const std::vector<int>& active, Eigen::VectorXd& r,
                 Eigen::MatrixXd* jac) const override {
+    const MdhModel& m = s.model;
     const auto n = static_cast<Eigen::Index>(data_.size());
     r.resize(3 * n);
     if (jac) jac->resize(3 * n, static_cast<Eigen::Index>(active.size()));
@@ -66,6 +85,15 @@ class PositionProblem final : public Problem {
       }
     }
   }
+  Eigen::MatrixXd generic_jacobian(const State& s, const std::vector<int>& candidates,
+                                   const std::vector<JointVector>& q) const override {
+    std::vector<PositionMeasurement> d;
+    for (const auto& qk : q) d.push_back({qk, forward_position(s.model, qk)});
+    Eigen::VectorXd r;
+    Eigen::MatrixXd jac;
+    PositionProblem(d).evaluate(s, candidates, r, &jac);
+    return jac;
+  }
 
  private:
   const std::vector<PositionMeasurement>& data_;
@@ -73,41 +101,76 @@ class PositionProblem final : public Problem {
 
 class DistanceProblem final : public Problem {
  public:
-  explicit DistanceProblem(const std::vector<DistanceMeasurement>& d) : data_(d) {}
+  // `fixed_count` fixed base points; their coordinates are State::extra.
+  DistanceProblem(const std::vector<DistanceMeasurement>& d, int fixed_count) : data_(d), fixed_count_(fixed_count) {}
   int dim() const override { return 1; }
   std::size_t count() const override { return data_.size(); }
   std::size_t distinct() const override {
     std::vector<Eigen::Matrix<double, 2 * kJointCount, 1>> pairs;
     for (const auto& d : data_) {
-      const bool swap = std::lexicographical_compare(d.q_b_deg.begin(), d.q_b_deg.end(), d.q_a_deg.begin(), d.q_a_deg.end());
       pairs.emplace_back();
+      if (d.fixed_base >= 0) {  // (pose, point k): the point as a joint vector no robot reaches
+        pairs.back() << d.q_a_deg, JointVector::Constant(1e9 + d.fixed_base);
+        continue;
+      }
+      const bool swap = std::lexicographical_compare(d.q_b_deg.begin(), d.q_b_deg.end(), d.q_a_deg.begin(), d.q_a_deg.end());
       pairs.back() << (swap ? d.q_b_deg : d.q_a_deg), (swap ? d.q_a_deg : d.q_b_deg);
     }
     return count_distinct(std::move(pairs));
   }
-  void evaluate(const MdhModel& m, const std::vector<int>& active, Eigen::VectorXd& r,
+  void evaluate(const State& s, const std::vector<int>& active, Eigen::VectorXd& r,
                 Eigen::MatrixXd* jac) const override {
+    const MdhModel& m = s.model;
     const auto n = static_cast<Eigen::Index>(data_.size());
     r.resize(n);
     if (jac) jac->resize(n, static_cast<Eigen::Index>(active.size()));
     for (Eigen::Index i = 0; i < n; ++i) {
       const auto& d = data_[static_cast<std::size_t>(i)];
-      const Eigen::Vector3d pa = forward_position(m, d.q_a_deg), pb = forward_position(m, d.q_b_deg);
+      const bool fixed = d.fixed_base >= 0;
+      const Eigen::Vector3d pa = forward_position(m, d.q_a_deg);
+      const Eigen::Vector3d pb = fixed ? Eigen::Vector3d(s.extra.segment<3>(3 * d.fixed_base)) : forward_position(m, d.q_b_deg);
       const Eigen::Vector3d diff = pa - pb;
       const double len = diff.norm();
       r[i] = d.distance_mm - len;
       if (jac) {
+        // d|Pa − Pb| = u · (dPa − dPb); a fixed point's own coordinates: dPb = dB, column −uᵀ.
         const Eigen::Vector3d u = len > 0 ? Eigen::Vector3d(diff / len) : Eigen::Vector3d::Zero();
         const IdentificationJacobian ja = identification_jacobian(m, d.q_a_deg);
-        const IdentificationJacobian jb = identification_jacobian(m, d.q_b_deg);
-        for (std::size_t c = 0; c < active.size(); ++c)
-          (*jac)(i, static_cast<Eigen::Index>(c)) = u.dot(ja.col(active[c]) - jb.col(active[c]));
+        const IdentificationJacobian jb = fixed ? IdentificationJacobian::Zero().eval() : identification_jacobian(m, d.q_b_deg);
+        for (std::size_t c = 0; c < active.size(); ++c) {
+          const int k = active[c];
+          double v;
+          if (k < param::kCount) {
+            v = u.dot(ja.col(k) - jb.col(k));
+          } else {
+            const int e = k - param::kCount;
+            v = fixed && e / 3 == d.fixed_base ? -u[e % 3] : 0.0;
+          }
+          (*jac)(i, static_cast<Eigen::Index>(c)) = v;
+        }
       }
     }
+  }
+  // Pairs of consecutive configurations if the data have robot-position pairs, and every
+  // configuration to every fixed point.
+  Eigen::MatrixXd generic_jacobian(const State& s, const std::vector<int>& candidates,
+                                   const std::vector<JointVector>& q) const override {
+    const bool pairs = std::any_of(data_.begin(), data_.end(), [](const DistanceMeasurement& d) { return d.fixed_base < 0; });
+    std::vector<DistanceMeasurement> d;
+    for (std::size_t k = 0; k + 1 < q.size(); ++k) {
+      if (pairs) d.push_back({q[k], q[k + 1], (forward_position(s.model, q[k]) - forward_position(s.model, q[k + 1])).norm()});
+      for (int b = 0; b < fixed_count_; ++b)
+        d.push_back({q[k], JointVector::Zero(), (forward_position(s.model, q[k]) - s.extra.segment<3>(3 * b)).norm(), b});
+    }
+    Eigen::VectorXd r;
+    Eigen::MatrixXd jac;
+    DistanceProblem(d, fixed_count_).evaluate(s, candidates, r, &jac);
+    return jac;
   }
 
  private:
   const std::vector<DistanceMeasurement>& data_;
+  int fixed_count_ = 0;
 };
 
 double median(std::vector<double> v) {
@@ -179,7 +242,7 @@ Selection select_parameters(const Eigen::MatrixXd& jac, const std::vector<int>& 
     const double norm = col.norm();
     // Angular columns are mm/rad (~1e3), lengths mm/mm (~1): "no effect" relative to 1 mm/unit.
     if (norm < 1e-9 * std::max(1.0, typical / 1e3)) {
-      s.removed.push_back({candidates[c], parameter_name(candidates[c]),
+      s.removed.push_back({candidates[c], candidate_name(candidates[c]),
                            "no effect on the measured quantity at these configurations"});
       continue;
     }
@@ -198,9 +261,9 @@ Selection select_parameters(const Eigen::MatrixXd& jac, const std::vector<int>& 
       for (Eigen::Index k = 0; k < coef.size(); ++k) order.emplace_back(-std::abs(coef[k]), static_cast<int>(k));
       std::sort(order.begin(), order.end());
       for (std::size_t k = 0; k < std::min<std::size_t>(3, order.size()); ++k)
-        why << (k ? ", " : "") << parameter_name(s.kept[static_cast<std::size_t>(order[k].second)]);
+        why << (k ? ", " : "") << candidate_name(s.kept[static_cast<std::size_t>(order[k].second)]);
       why << " (residual " << left << " of its norm)";
-      s.removed.push_back({candidates[c], parameter_name(candidates[c]), why.str()});
+      s.removed.push_back({candidates[c], candidate_name(candidates[c]), why.str()});
       continue;
     }
     basis.conservativeResize(rows, basis.cols() + 1);
@@ -219,10 +282,17 @@ double weighted_cost(const Eigen::VectorXd& r, const std::vector<double>& w, int
   return c;
 }
 
-ParameterVector embed(const std::vector<int>& active, const Eigen::VectorXd& delta) {
+// The state moved by `delta` (one entry per active candidate).
+State apply_step(const State& s, const std::vector<int>& active, const Eigen::VectorXd& delta) {
   ParameterVector full = ParameterVector::Zero();
-  for (std::size_t c = 0; c < active.size(); ++c) full[active[c]] = delta[static_cast<Eigen::Index>(c)];
-  return full;
+  State t{s.model, s.extra};
+  for (std::size_t c = 0; c < active.size(); ++c) {
+    const double v = delta[static_cast<Eigen::Index>(c)];
+    if (active[c] < param::kCount) full[active[c]] = v;
+    else t.extra[active[c] - param::kCount] += v;
+  }
+  t.model = apply_parameter_increment(s.model, full);
+  return t;
 }
 
 // Value of parameter `index` in report units (deg / mm) relative to `reference` (for base
@@ -250,10 +320,12 @@ double report_value(const MdhModel& m, const MdhModel& reference, int index) {
 
 // How many of `candidates` measurements of this kind identify at all on this robot: the
 // redundancy selection on a generic, well-spread set (joints on a Kronecker sequence over the
-// limits; positions, or distances between consecutive poses). Data with no more equations than
-// that cannot identify the model, however they are placed.
-std::size_t generically_identifiable(const MdhModel& m, const std::vector<int>& candidates, int dim, double tol) {
+// limits; positions, or distances between consecutive poses and to every fixed point). Data with
+// no more equations than that cannot identify the model, however they are placed.
+std::size_t generically_identifiable(const Problem& problem, const State& s, const std::vector<int>& candidates,
+                                     double tol) {
   constexpr int kPoses = 64;
+  const MdhModel& m = s.model;
   const JointVector lo = m.q_min_deg(), hi = m.q_max_deg();
   const double step[kJointCount] = {0.6180339887, 0.4142135624, 0.7320508076, 0.2360679775, 0.6457513111, 0.1622776602};
   std::vector<JointVector> q(kPoses + 1);
@@ -262,34 +334,21 @@ std::size_t generically_identifiable(const MdhModel& m, const std::vector<int>& 
       const double u = std::fmod(0.5 + (k + 1) * step[j], 1.0);
       q[static_cast<std::size_t>(k)][j] = lo[j] + (0.05 + 0.9 * u) * (hi[j] - lo[j]);
     }
-  Eigen::VectorXd r;
-  Eigen::MatrixXd jac;
-  if (dim == 3) {
-    std::vector<PositionMeasurement> d;
-    for (int k = 0; k < kPoses; ++k) d.push_back({q[static_cast<std::size_t>(k)], forward_position(m, q[static_cast<std::size_t>(k)])});
-    PositionProblem(d).evaluate(m, candidates, r, &jac);
-  } else {
-    std::vector<DistanceMeasurement> d;
-    for (int k = 0; k < kPoses; ++k) {
-      const JointVector& a = q[static_cast<std::size_t>(k)];
-      const JointVector& b = q[static_cast<std::size_t>(k + 1)];
-      d.push_back({a, b, (forward_position(m, a) - forward_position(m, b)).norm()});
-    }
-    DistanceProblem(d).evaluate(m, candidates, r, &jac);
-  }
-  return select_parameters(jac, candidates, tol).kept.size();
+  if (problem.dim() == 3) q.pop_back();  // 64 positions, as 64 distances between 65 poses
+  return select_parameters(problem.generic_jacobian(s, candidates, q), candidates, tol).kept.size();
 }
 
-CalibrationResult solve(const Problem& problem, const MdhModel& initial, std::vector<int> candidates,
+CalibrationResult solve(const Problem& problem, const State& start, std::vector<int> candidates,
                         const CalibrationOptions& o) {
   o.validate();
+  const MdhModel& initial = start.model;
   CalibrationResult out;
   out.model = initial;
   const int dim = problem.dim();
   const std::size_t n = problem.count();
   // Too few poses: fail here, naming the count needed, rather than fit the few parameters these
   // data happen to move and claim convergence.
-  const std::size_t identifiable = generically_identifiable(initial, candidates, dim, o.redundancy_tolerance);
+  const std::size_t identifiable = generically_identifiable(problem, start, candidates, o.redundancy_tolerance);
   const std::size_t needed = identifiable / static_cast<std::size_t>(dim) + 1;  // more equations than unknowns
   const std::size_t distinct = problem.distinct();
   if (distinct < needed) {
@@ -309,7 +368,7 @@ CalibrationResult solve(const Problem& problem, const MdhModel& initial, std::ve
 
   Eigen::VectorXd r;
   Eigen::MatrixXd jac;
-  problem.evaluate(initial, candidates, r, &jac);
+  problem.evaluate(start, candidates, r, &jac);
   if (!r.allFinite() || !jac.allFinite()) throw ArgumentError("calibration: non-finite residual or Jacobian at the initial model");
   out.before = summarize(residual_sizes(r, dim));
 
@@ -333,7 +392,7 @@ CalibrationResult solve(const Problem& problem, const MdhModel& initial, std::ve
     std::ostringstream why;
     why << "weakly identifiable: dominates the weakest direction of the scaled Jacobian (condition number "
         << cond << " > " << o.max_condition_number << ")";
-    sel.removed.push_back({sel.kept[static_cast<std::size_t>(worst)], parameter_name(sel.kept[static_cast<std::size_t>(worst)]),
+    sel.removed.push_back({sel.kept[static_cast<std::size_t>(worst)], candidate_name(sel.kept[static_cast<std::size_t>(worst)]),
                            why.str()});
     sel.kept.erase(sel.kept.begin() + worst);
   }
@@ -344,9 +403,9 @@ CalibrationResult solve(const Problem& problem, const MdhModel& initial, std::ve
     throw ArgumentError("calibration: " + std::to_string(p) + " identifiable parameters but only " +
                         std::to_string(n * static_cast<std::size_t>(dim)) + " equations; measure more points");
 
-  MdhModel model = initial;
+  State state = start;
   std::vector<double> w(n, 1.0);
-  problem.evaluate(model, active, r, &jac);
+  problem.evaluate(state, active, r, &jac);
   // Column scaling, fixed at the start: every parameter moves in units of its column norm.
   Eigen::VectorXd scale(p);
   for (Eigen::Index c = 0; c < p; ++c) scale[c] = jac.col(c).norm();
@@ -382,12 +441,12 @@ CalibrationResult solve(const Problem& problem, const MdhModel& initial, std::ve
           lambda *= 10;
           continue;
         }
-        const MdhModel trial = apply_parameter_increment(model, embed(active, step));
+        const State trial = apply_step(state, active, step);
         Eigen::VectorXd r_trial;
         problem.evaluate(trial, active, r_trial, nullptr);
         new_cost = weighted_cost(r_trial, w, dim);
         if (new_cost <= cost) {
-          model = trial;
+          state = trial;
           accepted = true;
           lambda = std::max(lambda / 10, 1e-12);
         } else {
@@ -400,7 +459,7 @@ CalibrationResult solve(const Problem& problem, const MdhModel& initial, std::ve
       }
       const double decrease = cost - new_cost;
       cost = new_cost;
-      problem.evaluate(model, active, r, &jac);
+      problem.evaluate(state, active, r, &jac);
       if (decrease <= o.cost_tolerance * std::max(cost, 1e-300) || cost < 1e-24) {
         converged_lm = true;
         break;
@@ -430,6 +489,7 @@ CalibrationResult solve(const Problem& problem, const MdhModel& initial, std::ve
   } else {
     out.message = "converged";
   }
+  const MdhModel& model = state.model;
   out.model = model;
   out.weights = w;
   out.rejected = static_cast<std::size_t>(std::count(w.begin(), w.end(), 0.0));
@@ -448,7 +508,20 @@ CalibrationResult solve(const Problem& problem, const MdhModel& initial, std::ve
   // Cov(scaled) = sigma² V S⁻² Vᵀ; unscale by the column norms.
   const Eigen::MatrixXd v = svd.matrixV();
   const Eigen::VectorXd inv_s2 = sv.array().square().inverse();
+  out.base_points.resize(static_cast<std::size_t>(start.extra.size() / 3));
+  for (std::size_t k = 0; k < out.base_points.size(); ++k) {
+    out.base_points[k].nominal_mm = start.extra.segment<3>(3 * static_cast<Eigen::Index>(k));
+    out.base_points[k].position_mm = state.extra.segment<3>(3 * static_cast<Eigen::Index>(k));
+  }
   for (Eigen::Index c = 0; c < p; ++c) {
+    const double var_scaled_c = (v.row(c).array().square() * inv_s2.transpose().array()).sum();
+    if (active[static_cast<std::size_t>(c)] >= param::kCount) {  // a fixed base point's coordinate (mm)
+      const int e = active[static_cast<std::size_t>(c)] - param::kCount;
+      BasePointEstimate& b = out.base_points[static_cast<std::size_t>(e / 3)];
+      b.identified[e % 3] = true;
+      b.standard_error_mm[e % 3] = std::sqrt(sigma2 * var_scaled_c) / scale[c];
+      continue;
+    }
     ParameterEstimate e;
     e.index = active[static_cast<std::size_t>(c)];
     e.name = parameter_name(e.index);
@@ -544,7 +617,7 @@ CalibrationResult register_tracker(const MdhModel& model, const std::vector<Posi
   for (int k = 0; k < 6; ++k) candidates.push_back(param::kBaseTranslation + k);
   for (int k = 0; k < 3; ++k) candidates.push_back(param::kToolTranslation + k);
   PositionProblem problem(data);
-  CalibrationResult r = solve(problem, start, candidates, options);
+  CalibrationResult r = solve(problem, State{start, Eigen::VectorXd()}, candidates, options);
   // Report the base relative to the closed-form start? Users want the absolute transform; it is
   // in r.model.base(). The increments listed are relative to the closed-form start.
   return r;
@@ -553,35 +626,77 @@ CalibrationResult register_tracker(const MdhModel& model, const std::vector<Posi
 CalibrationResult calibrate_positions(const MdhModel& model, const std::vector<PositionMeasurement>& data,
                                       const CalibrationOptions& options) {
   PositionProblem problem(data);
-  return solve(problem, model, options.candidates.empty() ? default_candidates(model, true) : options.candidates,
+  return solve(problem, State{model, Eigen::VectorXd()}, options.candidates.empty() ? default_candidates(model, true) : options.candidates,
                options);
+}
+
+Eigen::MatrixXd distance_identification_jacobian(const MdhModel& model, const std::vector<DistanceMeasurement>& data,
+                                                const std::vector<Eigen::Vector3d>& fixed_bases_mm,
+                                                const std::vector<int>& candidates) {
+  const int fixed_count = static_cast<int>(fixed_bases_mm.size());
+  for (int c : candidates)
+    if (c < 0 || c >= param::kCount + 3 * fixed_count)
+      throw ArgumentError("distance_identification_jacobian: candidate " + std::to_string(c) + " outside [0, " +
+                          std::to_string(param::kCount + 3 * fixed_count) + ")");
+  for (std::size_t i = 0; i < data.size(); ++i)
+    if (data[i].fixed_base >= fixed_count)
+      throw InputError("distance_identification_jacobian: measurement " + std::to_string(i) + " names fixed base point " +
+                       std::to_string(data[i].fixed_base) + " of " + std::to_string(fixed_count));
+  State s{model, Eigen::VectorXd(3 * fixed_count)};
+  for (int k = 0; k < fixed_count; ++k) s.extra.segment<3>(3 * k) = fixed_bases_mm[static_cast<std::size_t>(k)];
+  Eigen::VectorXd r;
+  Eigen::MatrixXd jac;
+  DistanceProblem(data, fixed_count).evaluate(s, candidates, r, &jac);
+  return jac;
 }
 
 CalibrationResult calibrate_distances(const MdhModel& model, const std::vector<DistanceMeasurement>& data,
                                       const CalibrationOptions& options) {
+  return calibrate_distances(model, data, std::vector<Eigen::Vector3d>{}, options);
+}
+
+CalibrationResult calibrate_distances(const MdhModel& model, const std::vector<DistanceMeasurement>& data,
+                                      const std::vector<Eigen::Vector3d>& fixed_bases_nominal_mm,
+                                      const CalibrationOptions& options) {
+  const int fixed_count = static_cast<int>(fixed_bases_nominal_mm.size());
+  for (int k = 0; k < fixed_count; ++k)
+    if (!fixed_bases_nominal_mm[static_cast<std::size_t>(k)].allFinite())
+      throw InputError("calibrate_distances: fixed base point " + std::to_string(k) + " is not finite");
+  for (std::size_t i = 0; i < data.size(); ++i)
+    if (data[i].fixed_base >= fixed_count)
+      throw InputError("calibrate_distances: measurement " + std::to_string(i) + " names fixed base point " +
+                       std::to_string(data[i].fixed_base) + ", but " + std::to_string(fixed_count) +
+                       " fixed base point(s) were given");
   std::vector<int> candidates = options.candidates.empty() ? default_candidates(model, false) : options.candidates;
   // The base is invisible to distances: drop it even if asked for, and say so.
   std::vector<int> kept;
   std::vector<RemovedParameter> dropped;
+  // Fixed points first: they are what the user asked to identify, so the robot parameters that
+  // duplicate them (the robot's placement in the world) are the ones reported redundant.
+  for (int e = 0; e < 3 * fixed_count; ++e) kept.push_back(param::kCount + e);
   for (int c : candidates) {
     if (c >= param::kBaseTranslation && c < param::kToolTranslation)
       dropped.push_back({c, parameter_name(c), "base frame: distances are invariant under it"});
     else
       kept.push_back(c);
   }
-  DistanceProblem problem(data);
-  CalibrationResult r = solve(problem, model, kept, options);
-  // Gauge: distances fix the model only up to a rigid motion of its world frame. Choose the one
-  // that best aligns the identified model's positions with the initial model's at the measured
-  // configurations, so the identified model keeps the robot's frame (compensation commands
-  // targets in it).
-  std::vector<Eigen::Vector3d> ident, init;
-  for (const auto& d : data)
-    for (const JointVector* q : {&d.q_a_deg, &d.q_b_deg}) {
-      ident.push_back(forward_position(r.model, *q));
-      init.push_back(forward_position(model, *q));
-    }
-  r.model = r.model.with_base(fit_rigid(ident, init) * r.model.base());
+  State start{model, Eigen::VectorXd(3 * fixed_count)};
+  for (int k = 0; k < fixed_count; ++k) start.extra.segment<3>(3 * k) = fixed_bases_nominal_mm[static_cast<std::size_t>(k)];
+  DistanceProblem problem(data, fixed_count);
+  CalibrationResult r = solve(problem, start, kept, options);
+  if (fixed_count == 0) {
+    // Gauge: distances fix the model only up to a rigid motion of its world frame. Choose the one
+    // that best aligns the identified model's positions with the initial model's at the measured
+    // configurations, so the identified model keeps the robot's frame (compensation commands
+    // targets in it). With fixed points the frame is the one the points were identified in.
+    std::vector<Eigen::Vector3d> ident, init;
+    for (const auto& d : data)
+      for (const JointVector* q : {&d.q_a_deg, &d.q_b_deg}) {
+        ident.push_back(forward_position(r.model, *q));
+        init.push_back(forward_position(model, *q));
+      }
+    r.model = r.model.with_base(fit_rigid(ident, init) * r.model.base());
+  }
   r.removed.insert(r.removed.begin(), dropped.begin(), dropped.end());
   return r;
 }
@@ -598,6 +713,16 @@ std::string CalibrationResult::report() const {
       << p.unit;
     if (p.index < param::kBaseTranslation) s << "   (" << p.nominal << " -> " << p.nominal + p.increment << ")";
     s << "\n";
+  }
+  for (std::size_t k = 0; k < base_points.size(); ++k) {
+    const BasePointEstimate& b = base_points[k];
+    s << "fixed base point " << k << " (robot frame, mm):";
+    for (int c = 0; c < 3; ++c) {
+      s << "  " << "xyz"[c] << " " << b.position_mm[c];
+      if (b.identified[c]) s << " +- " << b.standard_error_mm[c];
+      else s << " (not identified, nominal)";
+    }
+    s << "   (nominal " << b.nominal_mm.x() << ", " << b.nominal_mm.y() << ", " << b.nominal_mm.z() << ")\n";
   }
   if (!removed.empty()) {
     s << "removed candidates (" << removed.size() << "):\n";

@@ -1,6 +1,8 @@
 #include "errfield/robot/calibration.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -95,6 +97,162 @@ TEST(Calibration, DistancesNoiseFreeRecoverTheTruthUpToRigidMotion) {
   bool base_removed = false;
   for (const auto& rm : r.removed) base_removed = base_removed || rm.name.rfind("base.", 0) == 0;
   EXPECT_FALSE(base_removed);  // never a candidate by default
+}
+
+// ---- fixed base points ------------------------------------------------------------------------
+
+// The truth for fixed-point calibration: every MD-H parameter perturbed except the four that
+// place the robot in the world (link1.alpha, a, theta0, d): distances to points whose coordinates
+// are identified too cannot see those (a common rigid motion of robot and points), so they define
+// the frame and stay nominal.
+MdhModel true_model_fixed_frame(const MdhModel& nominal, std::uint64_t seed) {
+  MdhModel t = true_model(nominal, seed);
+  auto links = t.links();
+  links[0] = nominal.links()[0];
+  return MdhModel("truth", links, nominal.base(), t.tool());
+}
+
+std::vector<Eigen::Vector3d> true_fixed_points() {
+  // Nests around the paper cube (robot base frame, mm), not on the joint-1 axis.
+  return {{1500, 650, 150}, {600, -700, 250}, {1300, -500, 1100}};
+}
+
+std::vector<DistanceMeasurement> fixed_point_data(const MdhModel& truth, const std::vector<Eigen::Vector3d>& points,
+                                                  std::size_t poses, std::uint64_t seed, double noise_mm = 0.0) {
+  SimulationRng rng(seed + 1000);
+  std::vector<DistanceMeasurement> data;
+  for (const auto& q : random_configurations(truth, poses, seed))
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      const double d = (forward_position(truth, q) - points[k]).norm() + (noise_mm > 0 ? rng.normal(0, noise_mm) : 0.0);
+      data.push_back({q, JointVector::Zero(), d, static_cast<int>(k)});
+    }
+  return data;
+}
+
+std::vector<Eigen::Vector3d> perturbed(std::vector<Eigen::Vector3d> p) {
+  const Eigen::Vector3d offsets[] = {{0.8, -0.5, 1.1}, {-1.2, 0.4, 0.6}, {0.3, 0.9, -0.7}};
+  for (std::size_t k = 0; k < p.size(); ++k) p[k] += offsets[k % 3];
+  return p;
+}
+
+TEST(Calibration, FixedBaseJacobianMatchesFiniteDifferences) {
+  const MdhModel m = true_model(nominal_model(), 20);
+  const std::vector<Eigen::Vector3d> points = {{1500, 650, 150}, {600, -700, 250}};
+  const auto q = random_configurations(m, 4, 21);
+  std::vector<DistanceMeasurement> data;
+  for (const auto& qi : q) {
+    data.push_back({qi, JointVector::Zero(), 0.0, 0});
+    data.push_back({qi, JointVector::Zero(), 0.0, 1});
+  }
+  data.push_back({q[0], q[1], 0.0});  // a robot-position pair in the same data
+  std::vector<int> all;
+  for (int c = 0; c < param::kCount + 6; ++c) all.push_back(c);
+  const Eigen::MatrixXd jac = distance_identification_jacobian(m, data, points, all);
+  ASSERT_EQ(jac.rows(), static_cast<Eigen::Index>(data.size()));
+  ASSERT_EQ(jac.cols(), param::kCount + 6);
+  // Independent prediction: the distance straight from forward kinematics and the point.
+  auto predict = [&](const MdhModel& mm, const std::vector<Eigen::Vector3d>& b, const DistanceMeasurement& d) {
+    const Eigen::Vector3d pb = d.fixed_base >= 0 ? b[static_cast<std::size_t>(d.fixed_base)] : forward_position(mm, d.q_b_deg);
+    return (forward_position(mm, d.q_a_deg) - pb).norm();
+  };
+  const double h = 1e-6;
+  for (int c = 0; c < param::kCount + 6; ++c) {
+    MdhModel mp = m, mn = m;
+    std::vector<Eigen::Vector3d> bp = points, bn = points;
+    if (c < param::kCount) {
+      ParameterVector delta = ParameterVector::Zero();
+      delta[c] = h;
+      mp = apply_parameter_increment(m, delta);
+      mn = apply_parameter_increment(m, -delta);
+    } else {
+      bp[static_cast<std::size_t>((c - param::kCount) / 3)][(c - param::kCount) % 3] += h;
+      bn[static_cast<std::size_t>((c - param::kCount) / 3)][(c - param::kCount) % 3] -= h;
+    }
+    for (std::size_t i = 0; i < data.size(); ++i) {
+      const double fd = (predict(mp, bp, data[i]) - predict(mn, bn, data[i])) / (2 * h);
+      EXPECT_NEAR(jac(static_cast<Eigen::Index>(i), c), fd, 1e-4 * std::max(1.0, std::abs(fd)))
+          << "column " << c << " row " << i;
+    }
+  }
+  // The point's own columns are −nᵀ: unit length, zero for rows of other points and for pairs.
+  EXPECT_NEAR(jac.block(0, param::kCount, 1, 3).norm(), 1.0, 1e-12);
+  EXPECT_EQ(jac.block(0, param::kCount + 3, 1, 3).norm(), 0.0);
+  EXPECT_EQ(jac.block(static_cast<Eigen::Index>(data.size()) - 1, param::kCount, 1, 6).norm(), 0.0);
+}
+
+// Noise-free distances to fixed points whose nominal position is off by about 1 mm: the robot and
+// the points are recovered (one point and three points), and the robot's placement parameters are
+// removed as redundant with the point coordinates, with that reason.
+TEST(Calibration, FixedBasesNoiseFreeRecoverRobotAndPoints) {
+  const MdhModel nominal = nominal_model();
+  const MdhModel truth = true_model_fixed_frame(nominal, 22);
+  for (std::size_t count : {1u, 3u}) {
+    SCOPED_TRACE(std::to_string(count) + " fixed point(s)");
+    std::vector<Eigen::Vector3d> points = true_fixed_points();
+    points.resize(count);
+    const auto data = fixed_point_data(truth, points, 120 / count, 23);
+    CalibrationOptions o;
+    o.robust.enabled = false;
+    const CalibrationResult r = calibrate_distances(nominal, data, perturbed(points), o);
+    ASSERT_TRUE(r.converged) << r.report();
+    EXPECT_GT(r.before.rms_mm, 0.5);
+    EXPECT_LT(r.after.rms_mm, 1e-8) << r.report();
+    ASSERT_EQ(r.base_points.size(), count);
+    for (std::size_t k = 0; k < count; ++k) {
+      for (int c = 0; c < 3; ++c) EXPECT_TRUE(r.base_points[k].identified[c]) << r.report();
+      EXPECT_LT((r.base_points[k].position_mm - points[k]).norm(), 1e-6) << r.report();
+      EXPECT_EQ((r.base_points[k].nominal_mm - perturbed(points)[k]).norm(), 0.0);
+    }
+    for (const auto& q : random_configurations(nominal, 30, 24))
+      EXPECT_LT((forward_position(r.model, q) - forward_position(truth, q)).norm(), 1e-6);
+    for (const char* name : {"link1.alpha", "link1.a", "link1.theta0", "link1.d"}) {
+      const auto it = std::find_if(r.removed.begin(), r.removed.end(), [&](const RemovedParameter& p) { return p.name == name; });
+      ASSERT_NE(it, r.removed.end()) << name << "\n" << r.report();
+      EXPECT_NE(it->reason.find("redundant"), std::string::npos) << it->reason;
+      EXPECT_NE(it->reason.find("base point"), std::string::npos) << it->reason;
+    }
+    for (const auto& p : r.parameters) EXPECT_NE(p.name.rfind("link1.", 0), 0u) << p.name;
+    EXPECT_NE(r.report().find("fixed base point 0"), std::string::npos);
+    // The invariance (a common rigid motion of robot and points) does not depend on how many
+    // points there are: with well-spread poses the same candidates go, 1 point or 3.
+    std::vector<std::string> names;
+    for (const auto& p : r.removed) names.push_back(p.name);
+    EXPECT_EQ(names, (std::vector<std::string>{"link1.alpha", "link1.a", "link1.theta0", "link1.d", "link3.d",
+                                               "link6.theta0", "link6.d"}))
+        << r.report();
+  }
+}
+
+// With 0.01 mm noise the standard errors are plausible: each true coordinate within 3 sigma, and
+// the sigmas neither zero nor larger than the nominal offset.
+TEST(Calibration, FixedBasesWithNoiseHavePlausibleStandardErrors) {
+  const MdhModel nominal = nominal_model();
+  const MdhModel truth = true_model_fixed_frame(nominal, 25);
+  const auto points = true_fixed_points();
+  const auto data = fixed_point_data(truth, points, 60, 26, 0.01);
+  const CalibrationResult r = calibrate_distances(nominal, data, perturbed(points));
+  ASSERT_TRUE(r.converged) << r.report();
+  EXPECT_LT(r.after.rms_mm, 0.015) << r.report();
+  for (std::size_t k = 0; k < points.size(); ++k)
+    for (int c = 0; c < 3; ++c) {
+      const BasePointEstimate& b = r.base_points[k];
+      ASSERT_TRUE(b.identified[c]);
+      EXPECT_GT(b.standard_error_mm[c], 1e-4) << r.report();
+      EXPECT_LT(b.standard_error_mm[c], 0.2) << r.report();
+      EXPECT_LT(std::abs(b.position_mm[c] - points[k][c]), 3 * b.standard_error_mm[c])
+          << "point " << k << " coordinate " << c << "\n" << r.report();
+    }
+}
+
+TEST(Calibration, FixedBaseBadInput) {
+  const MdhModel nominal = nominal_model();
+  const auto data = fixed_point_data(nominal, {{1500, 650, 150}, {600, -700, 250}}, 30, 27);
+  // The data name point 1 but only one point is given.
+  using Points = std::vector<Eigen::Vector3d>;
+  EXPECT_THROW(calibrate_distances(nominal, data, Points{{1500, 650, 150}}), InputError);
+  EXPECT_THROW(calibrate_distances(nominal, data), InputError);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(calibrate_distances(nominal, data, Points{{1500, 650, 150}, {nan, 0, 0}}), InputError);
 }
 
 TEST(Calibration, RegistrationFindsTrackerFrameAndReflector) {

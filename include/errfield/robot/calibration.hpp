@@ -30,12 +30,15 @@ struct PositionMeasurement {
   Eigen::Vector3d measured_mm;
 };
 
-/// A measured distance between the tool points at two joint vectors (a base point is a pair's
-/// second joint vector). Frame-free.
+/// A measured distance from the tool point at `q_a_deg` to a base point: either the tool point at
+/// `q_b_deg` (a robot position, `fixed_base` < 0) or fixed point number `fixed_base` of the list
+/// passed to calibrate_distances (a point in the cell not carried by the robot, e.g. a nest the
+/// tracker measured; `q_b_deg` is then ignored). Frame-free.
 struct DistanceMeasurement {
   JointVector q_a_deg;
-  JointVector q_b_deg;
+  JointVector q_b_deg = JointVector::Zero();
   double distance_mm = 0.0;
+  int fixed_base = -1;  ///< Index into the fixed base points, or -1 for a robot-position base.
 };
 
 /// IGG3 robust weights (Yang): u = |v| / sigma0 with sigma0 = 1.4826 · MAD (distances) or
@@ -87,6 +90,16 @@ struct RemovedParameter {
   std::string reason;  ///< "no effect on the measured quantity" or "redundant with ..."
 };
 
+/// A fixed base point identified together with the robot (robot base frame, mm). Coordinates the
+/// identifiability analysis removed keep their nominal value, standard error 0, identified false
+/// (the reason is in CalibrationResult::removed as "base point K x|y|z").
+struct BasePointEstimate {
+  Eigen::Vector3d nominal_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d standard_error_mm = Eigen::Vector3d::Zero();  ///< 1-sigma per coordinate.
+  bool identified[3] = {false, false, false};
+};
+
 struct ResidualSummary {
   double rms_mm = 0, mean_abs_mm = 0, max_abs_mm = 0;
   std::size_t count = 0;
@@ -96,6 +109,8 @@ struct CalibrationResult {
   MdhModel model = MdhModel::er20_c10();  ///< The identified model.
   std::vector<ParameterEstimate> parameters;  ///< Identified (kept) parameters.
   std::vector<RemovedParameter> removed;      ///< Candidates removed, with the reason.
+  /// Fixed base points (calibrate_distances with fixed points), identified with the robot.
+  std::vector<BasePointEstimate> base_points;
   double condition_number = 0.0;  ///< Of the column-scaled Jacobian of the kept parameters.
   ResidualSummary before, after;  ///< Per measurement: distance residual or 3-D residual norm.
   std::vector<double> weights;    ///< Final IGG3 weight per measurement (1 without robust).
@@ -124,9 +139,32 @@ CalibrationResult calibrate_positions(const MdhModel& model, const std::vector<P
                                       const CalibrationOptions& options = {});
 
 /// Identification from distances (pairs of robot positions): MD-H + tool; the base is
-/// unobservable from distances and never a candidate.
+/// unobservable from distances and never a candidate. The identified model is re-aligned
+/// (a rigid motion of its base) to the initial model's positions at the measured configurations.
 CalibrationResult calibrate_distances(const MdhModel& model, const std::vector<DistanceMeasurement>& data,
                                       const CalibrationOptions& options = {});
+
+/// Identification from distances to fixed base points (and, optionally, also between robot
+/// positions): `fixed_bases_nominal_mm[k]` is the nominal position of fixed point k in the robot
+/// base frame (mm); measurements with `fixed_base = k` are |P(q) − B_k| (SPEC eq. 11, dL = n·dP
+/// for a fixed B). The coordinates of every B_k are identified with the robot (candidates first,
+/// 3 per point; Jacobian columns −nᵀ). Distances are invariant under a common rigid motion of the
+/// robot and the points, so the robot parameters that place the robot in the world (on the
+/// ER20: link1.alpha, link1.a, link1.theta0, link1.d) are removed as redundant with the point
+/// coordinates and keep their nominal values: they define the frame the points are reported in.
+/// No re-alignment afterwards (the points pin the frame). Throws InputError for a measurement
+/// naming a fixed point outside the list or a non-finite nominal point.
+CalibrationResult calibrate_distances(const MdhModel& model, const std::vector<DistanceMeasurement>& data,
+                                      const std::vector<Eigen::Vector3d>& fixed_bases_nominal_mm,
+                                      const CalibrationOptions& options = {});
+
+/// Jacobian (rows: measurements, columns: `candidates`) of the predicted distances |Pa − Pb| with
+/// respect to model parameters (indices < param::kCount; mm/rad or mm/mm, as
+/// identification_jacobian) and fixed base point coordinates (index param::kCount + 3k + c for
+/// coordinate c of point k; column −nᵀ, n the unit vector from B_k to the tool point).
+Eigen::MatrixXd distance_identification_jacobian(const MdhModel& model, const std::vector<DistanceMeasurement>& data,
+                                                const std::vector<Eigen::Vector3d>& fixed_bases_mm,
+                                                const std::vector<int>& candidates);
 
 /// Joints for commanding `target` (world frame) on the real robot using an identified model:
 /// the target position is corrected by the identified model's predicted error and the pose solved
