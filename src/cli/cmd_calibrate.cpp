@@ -9,6 +9,7 @@
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
+#include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/calibration.hpp"
@@ -18,6 +19,7 @@ namespace {
 
 struct CalibrateArgs {
   std::string robot, data, model = "distance", out, report;
+  std::vector<std::string> base_points;
   double k0 = 1.5, k1 = 3.0, max_condition = 1e3;
   bool no_robust = false;
 };
@@ -48,6 +50,8 @@ void run_calibrate(const CalibrateArgs& a) {
   std::ostringstream text;
   CalibrationResult result;
   MdhModel identified = nominal;
+  if (a.model == "position" && !a.base_points.empty())
+    throw ArgumentError("--base-point: fixed base points are for --model distance, not --model position");
   if (a.model == "position") {
     const Eigen::MatrixXd m = table.numeric_columns({"mx", "my", "mz"});
     std::vector<PositionMeasurement> data;
@@ -61,6 +65,51 @@ void run_calibrate(const CalibrateArgs& a) {
          << " ry " << t.ry_deg << " rz " << t.rz_deg << " deg\n\n";
     result = with_source(a.data, [&] { return calibrate_positions(reg.model, data, options); });
     identified = result.model.with_base(reg.model.base().inverse() * result.model.base());
+  } else if (a.model == "distance" && !a.base_points.empty()) {
+    // Fixed base points (not robot positions): identified with the robot, from their nominals.
+    std::vector<Eigen::Vector3d> fixed;
+    for (const auto& b : a.base_points) {
+      const auto v = parse_numbers(b, 3, "--base-point");
+      fixed.emplace_back(v[0], v[1], v[2]);
+    }
+    std::size_t columns = 0;
+    while (table.has_column("dist_b" + std::to_string(columns))) ++columns;
+    if (columns != fixed.size())
+      throw ArgumentError("--base-point: " + std::to_string(fixed.size()) + " given, but " + a.data + " has " +
+                          std::to_string(columns) + " distance column(s) (dist_b0, dist_b1, ...); give one --base-point "
+                          "X,Y,Z per dist_bK column, in order");
+    const bool has_kind = table.has_column("kind");
+    const std::size_t kind_col = has_kind ? table.column_index("kind") : 0;
+    std::vector<DistanceMeasurement> data;
+    std::size_t skipped = 0;
+    for (std::size_t k = 0; k < fixed.size(); ++k) {
+      const std::string col = "dist_b" + std::to_string(k);
+      const std::vector<double> d = table.numeric_column(col);
+      for (std::size_t i = 0; i < table.row_count(); ++i) {
+        const std::string kind = has_kind ? table.row(i)[kind_col] : "target";
+        if (kind == "base")
+          throw ArgumentError("--base-point: " + a.data + ":" + std::to_string(table.line_of_row(i)) +
+                              " is a base row (kind=base), a robot-position base point; give base points either as "
+                              "base rows or with --base-point (fixed points), not both");
+        if (kind != "target")
+          throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": column 'kind': '" + kind +
+                               "'; expected base or target",
+                           a.data, table.line_of_row(i), "kind");
+        if ((forward_position(nominal, q[i]) - fixed[k]).norm() < 1.0) {  // the tool at the point itself
+          ++skipped;
+          continue;
+        }
+        if (!(d[i] > 0))
+          throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": column '" + col + "': " +
+                               format_number(d[i]) + "; expected a distance > 0 to fixed base point " +
+                               std::to_string(k),
+                           a.data, table.line_of_row(i), col);
+        data.push_back({q[i], JointVector::Zero(), d[i], static_cast<int>(k)});
+      }
+    }
+    if (skipped) text << skipped << " point(s) less than 1 mm from their fixed base point skipped\n";
+    result = with_source(a.data, [&] { return calibrate_distances(nominal, data, fixed, options); });
+    identified = result.model;
   } else if (a.model == "distance") {
     if (!table.has_column("kind"))
       throw InputError(a.data + ": the distance model needs a 'kind' column (base|target) to find the base points",
@@ -124,11 +173,16 @@ void add_calibrate_command(CLI::App& app) {
       "unidentifiable parameters) from tracker measurements in the columns 'errfield simulate' writes:\n"
       "q1..q6 (deg) and either mx,my,mz (--model position: tracker frame, mm; registration first) or\n"
       "kind (base|target) + dist_b0,dist_b1,... (--model distance: distances to the base points, mm).\n"
+      "Fixed base points (not robot positions, e.g. tracker nests): no base rows, one --base-point X,Y,Z\n"
+      "(nominal, robot base frame, mm) per dist_bK column; their coordinates are identified too.\n"
       "Prints the identified parameters and the before/after residuals; writes the identified robot JSON.\n"
       "Example: errfield calibrate --robot robot.json --data grid.csv --model distance --out calibrated.json");
   cmd->add_option("--robot", args->robot, "nominal robot JSON; default: built-in ER20-C10 (no tool)");
   cmd->add_option("--data", args->data, "measurement CSV")->required();
   cmd->add_option("--model", args->model, "distance (default) or position");
+  cmd->add_option("--base-point", args->base_points,
+                  "nominal X,Y,Z (mm, robot base frame) of fixed base point bK, repeatable, one per dist_bK column, "
+                  "for data without base rows (--model distance); identified with the robot");
   cmd->add_option("--k0", args->k0, "IGG3 k0 (default 1.5)");
   cmd->add_option("--k1", args->k1, "IGG3 k1 (default 3.0)");
   cmd->add_flag("--no-robust", args->no_robust, "plain least squares (no IGG3 reweighting)");

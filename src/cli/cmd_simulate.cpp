@@ -20,7 +20,7 @@ namespace {
 struct SimulateArgs {
   std::string config, robot, joints, cube, orientation = "180,0,0", sample = "grid", out, truth_out, config_out,
       robot_out;
-  std::vector<std::string> bases;
+  std::vector<std::string> bases, fixed_bases;
   double step = 125.0;
   long long seed = -1;
   std::string measure = "both";
@@ -97,8 +97,15 @@ void run_simulate(const SimulateArgs& a) {
     }
     return r.q_deg;
   };
+  if (!a.fixed_bases.empty() && !a.bases.empty())
+    throw ArgumentError("--base and --fixed-base: give base points either as robot positions (--base) or as fixed "
+                        "points (--fixed-base), not both");
+  // Fixed base points: points in the cell (e.g. tracker nests), not carried by the robot; the
+  // tracker measures each once (one reading shared by all its distances), no base rows.
+  std::vector<Eigen::Vector3d> fixed;
+  for (const auto& b : a.fixed_bases) fixed.push_back(parse_vec3(b, "--fixed-base"));
   std::vector<Eigen::Vector3d> base_nominal;
-  if (a.bases.empty()) base_nominal.push_back(paper_base_point_nominal());
+  if (a.bases.empty() && fixed.empty()) base_nominal.push_back(paper_base_point_nominal());
   for (const auto& b : a.bases) base_nominal.push_back(parse_vec3(b, "--base"));
   for (std::size_t k = 0; k < base_nominal.size(); ++k)
     rows.push_back({"b" + std::to_string(k), "base", solve(base_nominal[k], "b" + std::to_string(k))});
@@ -141,6 +148,8 @@ void run_simulate(const SimulateArgs& a) {
     truth[i] = reached;
     measured[i] = robot.measure(reached, rng);
   }
+  std::vector<Eigen::Vector3d> fixed_measured;
+  for (const auto& f : fixed) fixed_measured.push_back(robot.measure(f, rng));
   OutputTable out;
   std::vector<std::string> ids(n), kinds(n);
   for (std::size_t i = 0; i < n; ++i) {
@@ -174,6 +183,12 @@ void run_simulate(const SimulateArgs& a) {
       for (std::size_t i = 0; i < n; ++i) d[i] = (measured[i] - measured[k]).norm();
       out.add_numeric_column("dist_b" + std::to_string(k), d);
     }
+  if (want_distances)
+    for (std::size_t k = 0; k < fixed.size(); ++k) {
+      std::vector<double> d(n);
+      for (std::size_t i = 0; i < n; ++i) d[i] = (measured[i] - fixed_measured[k]).norm();
+      out.add_numeric_column("dist_b" + std::to_string(k), d);
+    }
   if (a.truth_columns) add_xyz(truth, "true_x", "true_y", "true_z");
 
   std::ostringstream text;
@@ -182,6 +197,9 @@ void run_simulate(const SimulateArgs& a) {
        << "# q1..q6 commanded joints (deg); x,y,z nominal tool position (robot base frame, mm)";
   if (want_positions) text << "; mx,my,mz measured position (tracker frame, mm)";
   if (want_distances) text << "; dist_bK measured distance to base point bK (mm)";
+  for (std::size_t k = 0; k < fixed.size(); ++k)
+    text << "; b" << k << " is a fixed point at " << format_number(fixed[k].x()) << "," << format_number(fixed[k].y())
+         << "," << format_number(fixed[k].z()) << " (true, robot base frame, mm; no base row)";
   if (a.truth_columns) text << "; true_x.. true position (robot base frame, mm; simulation only)";
   text << "\n" << out.to_csv();
   // All outputs or none (a bad --config-out must not leave a new --out next to an old --truth-out).
@@ -193,7 +211,7 @@ void run_simulate(const SimulateArgs& a) {
   // The nominal robot (with the tool that is measured) is what plan/fit/compensate take as --robot.
   if (!a.robot_out.empty()) outputs.add(a.robot_out, config.nominal.to_json().dump(2) + "\n");
   outputs.commit();
-  std::cerr << "simulate: " << n << " SIMULATED measurements (" << base_nominal.size() << " base point(s)) written to "
+  std::cerr << "simulate: " << n << " SIMULATED measurements (" << base_nominal.size() + fixed.size() << " base point(s)) written to "
             << a.out << "\n";
 }
 
@@ -216,6 +234,10 @@ void add_simulate_command(CLI::App& app) {
   cmd->add_option("--sample", args->sample, "grid (default), cells (one random point per cell) or random:N");
   cmd->add_option("--step", args->step, "grid step (mm, must divide the cube side; default 125)");
   cmd->add_option("--base", args->bases, "nominal base point X,Y,Z (mm), repeatable; default the cube's min corner");
+  cmd->add_option("--fixed-base", args->fixed_bases,
+                  "fixed base point X,Y,Z (mm, true position in the robot base frame), repeatable: a point in the cell "
+                  "not carried by the robot (e.g. a tracker nest); dist_b0.. are distances to these, no base rows "
+                  "(calibrate: --base-point); not with --base");
   cmd->add_option("--measure", args->measure, "positions, distances or both (default)");
   cmd->add_flag("--truth-columns", args->truth_columns, "add true_x,true_y,true_z (the simulator's truth)");
   cmd->add_option("--truth-out", args->truth_out, "write the simulated true geometry as a robot JSON");

@@ -1,5 +1,6 @@
 // End-to-end tests of the robot subcommands through the real `errfield` executable.
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -157,6 +158,49 @@ TEST_F(RobotCli, SimulateThenCalibrateBothModels) {
     const MdhModel calibrated = MdhModel::load(path("cal_" + model + ".json"));
     EXPECT_NE(calibrated.name().find("calibrated"), std::string::npos);
   }
+}
+
+// Fixed base points end to end: simulate distances to two points in the cell (not robot
+// positions), calibrate from nominals off by about 1 mm; the report lists the identified points.
+TEST_F(RobotCli, SimulateAndCalibrateWithFixedBasePoints) {
+  auto r = run("simulate --seed 3 --fixed-base 1500,650,150 --fixed-base 600,-700,250 --measure distances --robot-out " +
+               path("robot.json") + " --out " + path("fixed.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CsvTable data = CsvTable::read(path("fixed.csv"));
+  EXPECT_EQ(data.row_count(), 125u);  // no base rows
+  EXPECT_TRUE(data.has_column("dist_b1"));
+  EXPECT_FALSE(data.has_column("dist_b2"));
+  for (std::size_t i = 0; i < data.row_count(); ++i) EXPECT_EQ(data.row(i)[data.column_index("kind")], "target");
+  // A distance is to the fixed point itself: |nominal position − point| within a few mm.
+  const auto x = data.numeric_column("x"), y = data.numeric_column("y"), z = data.numeric_column("z");
+  const auto d0 = data.numeric_column("dist_b0");
+  for (std::size_t i = 0; i < data.row_count(); ++i)
+    EXPECT_NEAR(d0[i], std::hypot(x[i] - 1500, y[i] - 650, z[i] - 150), 5.0);
+  r = run("calibrate --robot " + path("robot.json") + " --data " + path("fixed.csv") +
+          " --base-point 1500.8,649.5,151.1 --base-point 598.8,-699.6,250.6 --out " + path("cal.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("fixed base point 0 (robot frame, mm)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("fixed base point 1 (robot frame, mm)"), std::string::npos) << r.out;
+  const auto before = r.out.rfind("residuals before: rms "), after = r.out.rfind("residuals after:  rms ");
+  ASSERT_NE(after, std::string::npos) << r.out;
+  EXPECT_LT(std::stod(r.out.substr(after + 22)), std::stod(r.out.substr(before + 22)) / 2.5) << r.out;
+  EXPECT_NO_THROW(MdhModel::load(path("cal.json")));
+
+  // One --base-point for two dist_bK columns: a usage error naming the option, nothing written.
+  r = run("calibrate --robot " + path("robot.json") + " --data " + path("fixed.csv") +
+          " --base-point 1500,650,150 --out " + path("bad.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--base-point"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("2 distance column"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("bad.json")));
+  r = run("calibrate --robot " + path("robot.json") + " --data " + path("fixed.csv") +
+          " --base-point 1500,650 --base-point 600,-700,250 --out " + path("bad.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--base-point"), std::string::npos) << r.err;
+  r = run("simulate --base 750,-250,350 --fixed-base 1500,650,150 --out " + path("bad.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--fixed-base"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("bad.csv")));
 }
 
 TEST_F(RobotCli, SimulateBadOptionsAreNamed) {
