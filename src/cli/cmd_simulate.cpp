@@ -222,7 +222,8 @@ void add_simulate_command(CLI::App& app) {
       "Simulated robot + laser tracker measurements (SIMULATED data, labelled as such), in the columns\n"
       "'errfield calibrate' and 'errfield fit' read: point, kind (base|target), q1..q6 (deg), x,y,z\n"
       "(nominal, mm), mx,my,mz (tracker frame, mm), dist_b0.. (mm). Base points are robot positions\n"
-      "visited first. Default: the paper's set-up (ER20-C10 with the Table 7 ball, 500 mm cube at\n"
+      "visited first (--base), or fixed points in the cell (--fixed-base; no base rows). Default: the\n"
+      "paper's set-up (ER20-C10 with the Table 7 ball, 500 mm cube at\n"
       "tool-down orientation, 125 mm grid, base point at the cube corner).\n"
       "Example: errfield simulate --sample grid --step 125 --out grid.csv --truth-out true_robot.json");
   cmd->add_option("--config", args->config, "simulation JSON (docs/robot.md); default: the paper's set-up");

@@ -253,6 +253,14 @@ TEST(Calibration, FixedBaseBadInput) {
   EXPECT_THROW(calibrate_distances(nominal, data), InputError);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(calibrate_distances(nominal, data, Points{{1500, 650, 150}, {nan, 0, 0}}), InputError);
+  // Too few distinct poses for the robot and the point: the guard names the count, no fit.
+  const auto few = fixed_point_data(nominal, {{1500, 650, 150}}, 8, 28);
+  try {
+    calibrate_distances(nominal, few, Points{{1500, 650, 150}});
+    ADD_FAILURE() << "no exception";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("need at least"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Calibration, RegistrationFindsTrackerFrameAndReflector) {

@@ -3,7 +3,8 @@
 /// measurements. Use `register_tracker` first when you have positions (it finds the
 /// tracker ← robot transform and the reflector offset, 9 parameters), then `calibrate_positions`
 /// or, frame-free, `calibrate_distances` (the paper's baseline: distances between robot
-/// positions, e.g. to a base point).
+/// positions, e.g. to a base point; or distances to fixed points in the cell, whose coordinates
+/// are identified with the robot).
 ///
 /// Method (docs/robot.md "Calibration"): Levenberg–Marquardt on the identification Jacobian with
 /// column scaling; identifiability by the column-scaled Jacobian — parameters with no effect or
