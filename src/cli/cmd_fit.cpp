@@ -65,7 +65,8 @@ void add_fit_command(CLI::App& app) {
       "q1..q6, x,y,z, mx,my,mz, dist_b0..). Methods: distance-idw (the paper's: 8-vertex IDW of distance\n"
       "errors on a complete grid, radial correction), position-idw (IDW of registered 3-D position errors),\n"
       "distance-kriging, vector-kriging (3-D errors from >= 3 base points' distances, else from positions),\n"
-      "kinematic and kinematic+kriging (need the kinematic calibration module). Prints a leave-one-out\n"
+      "kinematic and kinematic+kriging (kinematic calibration on the distances to a base row, or to every\n"
+      "--base-point, whose coordinates are then identified too). Prints a leave-one-out\n"
       "summary. Kriging models follow gstat's vgm: range is the scale parameter a.\n"
       "Example: errfield fit --data grid.csv --method distance-idw --out model.json");
   cmd->add_option("--robot", a->robot, "nominal robot JSON (default: built-in ER20-C10, no tool)");

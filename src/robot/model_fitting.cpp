@@ -259,22 +259,39 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
     case CompensationMethod::kinematic:
     case CompensationMethod::kinematic_kriging: {
       need_base();
-      if (o.base >= d.base_q_deg.size() || o.base >= d.distance_mm.size())
+      const bool fixed_bases = d.base_q_deg.empty();  // --base-point: points in the cell, not robot positions
+      if (o.base >= d.distance_mm.size() || (!fixed_bases && o.base >= d.base_q_deg.size()))
         throw InputError(d.source + ": kinematic calibration needs distances dist_b" + std::to_string(o.base) +
-                             " to a base point that is a robot position (a kind=base row with its joints)",
+                             " to a base point: a robot position (a kind=base row with its joints) or fixed "
+                             "points given with --base-point",
                          d.source, 0, "dist_b" + std::to_string(o.base));
       std::vector<DistanceMeasurement> dm;
-      for (std::size_t i = 0; i < d.q_deg.size(); ++i)
-        if ((d.nominal_mm[i] - d.base_nominal_mm[o.base]).norm() > 1.0)
-          dm.push_back({d.base_q_deg[o.base], d.q_deg[i], d.distance_mm[o.base][i]});
+      if (fixed_bases) {
+        // Every fixed point's distances: their coordinates are identified with the robot.
+        for (std::size_t k = 0; k < d.distance_mm.size(); ++k)
+          for (std::size_t i = 0; i < d.q_deg.size(); ++i)
+            dm.push_back({d.q_deg[i], JointVector::Zero(), d.distance_mm[k][i], static_cast<int>(k)});
+      } else {
+        for (std::size_t i = 0; i < d.q_deg.size(); ++i)
+          if ((d.nominal_mm[i] - d.base_nominal_mm[o.base]).norm() > 1.0)
+            dm.push_back({d.base_q_deg[o.base], d.q_deg[i], d.distance_mm[o.base][i]});
+      }
       if (o.on_stage) o.on_stage("kinematic calibration on " + std::to_string(dm.size()) + " distances");
-      const CalibrationResult cal = calibrate_distances(robot, dm);
+      const CalibrationResult cal =
+          fixed_bases ? calibrate_distances(robot, dm, d.base_nominal_mm, CalibrationOptions{}) : calibrate_distances(robot, dm);
       FitResult out{CompensationModel(CompensationMethod::kinematic, cal.model, nullptr), std::nullopt, std::nullopt, {}, {}};
       out.notes.push_back("calibration on " + std::to_string(dm.size()) + " distances: residual RMS " +
                           std::to_string(cal.before.rms_mm) + " -> " + std::to_string(cal.after.rms_mm) + " mm, " +
                           std::to_string(cal.parameters.size()) + " parameters identified, " +
                           std::to_string(cal.removed.size()) + " removed, condition number " +
                           std::to_string(cal.condition_number) + "; " + cal.message);
+      for (std::size_t k = 0; k < cal.base_points.size(); ++k) {
+        const BasePointEstimate& b = cal.base_points[k];
+        out.notes.push_back("fixed base point b" + std::to_string(k) + " identified at (" + format_number(b.position_mm.x()) +
+                            ", " + format_number(b.position_mm.y()) + ", " + format_number(b.position_mm.z()) +
+                            ") mm, nominal (" + format_number(b.nominal_mm.x()) + ", " +
+                            format_number(b.nominal_mm.y()) + ", " + format_number(b.nominal_mm.z()) + ") mm");
+      }
       if (!cal.converged) out.warnings.push_back("the kinematic calibration did not converge: " + cal.message);
       if (method == CompensationMethod::kinematic) return out;
       if (d.measured_mm.empty())

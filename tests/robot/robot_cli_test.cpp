@@ -186,6 +186,17 @@ TEST_F(RobotCli, SimulateAndCalibrateWithFixedBasePoints) {
   EXPECT_LT(std::stod(r.out.substr(after + 22)), std::stod(r.out.substr(before + 22)) / 2.5) << r.out;
   EXPECT_NO_THROW(MdhModel::load(path("cal.json")));
 
+  // The same data through `fit --method kinematic` (the pipeline's calibration step).
+  r = run("fit --robot " + path("robot.json") + " --data " + path("fixed.csv") + " --method kinematic" +
+          " --base-point 1500.8,649.5,151.1 --base-point 598.8,-699.6,250.6 --out " + path("fit.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("fixed base point b1 identified at"), std::string::npos) << r.out;
+  const auto rms = r.out.find("residual RMS ");
+  ASSERT_NE(rms, std::string::npos) << r.out;
+  const double rms_before = std::stod(r.out.substr(rms + 13));
+  const double rms_after = std::stod(r.out.substr(r.out.find("-> ", rms) + 3));
+  EXPECT_LT(rms_after, rms_before / 2.5) << r.out;
+
   // One --base-point for two dist_bK columns: a usage error naming the option, nothing written.
   r = run("calibrate --robot " + path("robot.json") + " --data " + path("fixed.csv") +
           " --base-point 1500,650,150 --out " + path("bad.json"));
