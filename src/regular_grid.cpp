@@ -28,11 +28,13 @@ std::string list_values(const std::vector<double>& values, std::size_t max_items
   return s;
 }
 
-// A throw helper that fills the file/line fields from the labels when they name a file.
+// A throw helper that fills the file/line fields from the labels when they name a file, and
+// starts the message with "g.csv:10: " for a row (compiler style) or "g.csv: " for the whole file.
 [[noreturn]] void fail(const std::string& message, const RowLabels& labels, std::size_t row = SIZE_MAX) {
   const std::size_t line = row == SIZE_MAX ? 0 : labels.line(row);
-  const bool named = labels.source.empty() || message.rfind(labels.source, 0) == 0;
-  const std::string prefix = named ? "" : labels.source + ": ";
+  const std::string where = row != SIZE_MAX && labels.in_file(row) ? labels(row) : labels.source;
+  const bool named = where.empty() || message.rfind(where, 0) == 0;
+  const std::string prefix = named ? "" : where + ": ";
   throw InputError(prefix + message, labels.source, line);
 }
 

@@ -127,7 +127,7 @@ TEST(GridIdw, OutsideTargetIsAnErrorNamingTargetAndBounds) {
     idw.predict(t, RowLabels{"targets.csv", {2, 3, 4, 5, 6, 7, 8, 9, 10, 11}});
     FAIL() << "expected OutsideGridError";
   } catch (const OutsideGridError& e) {
-    EXPECT_THAT(e.what(), HasSubstr("targets.csv line 8"));
+    EXPECT_THAT(e.what(), HasSubstr("targets.csv:8: target ("));
     EXPECT_EQ(e.row(), 8u);
   }
   // Within the boundary tolerance (1e-9 of the step) a target still counts as inside.

@@ -184,7 +184,9 @@ void GridIdw<V>::run(const double* targets, std::ptrdiff_t target_stride, std::p
 
 template <Value V>
 void GridIdw<V>::throw_outside(const Eigen::Vector3d& target, std::size_t index, const RowLabels& labels) const {
-  throw OutsideGridError(describe_outside_target(target, labels(index), grid_), labels.source, labels.line(index));
+  // "T.csv:3: target (...) is outside ..." from a file, "target 2 (...) is outside ..." in memory
+  const std::string name = labels.in_file(index) ? labels(index) + ": target" : labels(index);
+  throw OutsideGridError(describe_outside_target(target, name, grid_), labels.source, labels.line(index));
 }
 
 template <Value V>

@@ -136,7 +136,7 @@ struct KrigingOptions {
   /// Not available with the sparse back end.
   bool keep_weights = false;
 
-  /// Names of the samples for error messages ("S.csv line 7"), e.g. from the CSV they were read
+  /// Names of the samples for error messages ("S.csv:7"), e.g. from the CSV they were read
   /// from; used only when it labels exactly as many rows as there are samples (a subset, as in
   /// k-fold cross-validation, falls back to "samples i and j", 0-based).
   RowLabels sample_labels;

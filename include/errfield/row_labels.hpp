@@ -1,6 +1,7 @@
 #pragma once
-/// Names of the rows of a data set, for error messages: "S.csv line 7" when the data came from a
-/// file, "sample 5" (0-based index) when it was passed in memory. Estimators that can reject a
+/// Names of the rows of a data set, for error messages: "S.csv:7" (file:line, like a compiler and
+/// like CsvTable's cell errors) when the data came from a file, "sample 5" (0-based index) when it
+/// was passed in memory. A message about one row starts with its label: "S.csv:7: ...". Estimators that can reject a
 /// particular sample or target (a duplicate grid node, a target outside the grid) take one of
 /// these so that their message points at the row the user has to fix.
 
@@ -18,9 +19,12 @@ struct RowLabels {
   /// 1-based file line of row i, or 0 when unknown.
   std::size_t line(std::size_t i) const { return i < lines.size() ? lines[i] : 0; }
 
-  /// "S.csv line 7" or "sample 5".
+  /// True when row i has a file and line, i.e. its label is "S.csv:7".
+  bool in_file(std::size_t i) const { return !source.empty() && i < lines.size(); }
+
+  /// "S.csv:7" or "sample 5".
   std::string operator()(std::size_t i) const {
-    if (!source.empty() && i < lines.size()) return source + " line " + std::to_string(lines[i]);
+    if (in_file(i)) return source + ":" + std::to_string(lines[i]);
     return noun + " " + std::to_string(i);
   }
 };

@@ -48,8 +48,8 @@ struct InterpolationRequest {
   Eigen::MatrixXd sample_coords;           ///< N x D
   Eigen::MatrixXd sample_values;           ///< N x C
   Eigen::MatrixXd target_coords;           ///< M x D
-  RowLabels sample_labels;                 ///< "S.csv line 7"
-  RowLabels target_labels;                 ///< "T.csv line 9"
+  RowLabels sample_labels;                 ///< "S.csv:7"
+  RowLabels target_labels;                 ///< "T.csv:9"
   SharedInterpolationOptions shared;
 };
 
@@ -115,7 +115,7 @@ const InterpolationMethod& find_method(const std::string& name, bool for_cv);
 /// "idw-grid|idw|..." for help texts.
 std::string method_names(bool for_cv);
 
-/// Rows of a table as labels for messages ("S.csv line 7").
+/// Rows of a table as labels for messages ("S.csv:7").
 RowLabels row_labels_of(const CsvTable& table, std::string noun);
 
 /// The unit written after a column name in a header ("dL [mm]" -> "mm"), or empty.

@@ -169,9 +169,10 @@ void KrigingEngine::merge_duplicates() {
         const std::size_t a = std::min(i, idx[k]), b = std::max(i, idx[k]);
         const RowLabels& labels = options_.sample_labels;
         const bool labelled = labels.lines.size() == n;
-        const std::string which = labelled ? labels(a) + " and " + labels(b)
-                                           : "samples " + std::to_string(a) + " and " + std::to_string(b);
-        throw InputError("kriging: " + which + " are duplicates (lag " + format_number(std::sqrt(d2[k])) +
+        // file:line of the later one first, like every row error ("S.csv:9: ... S.csv:5 ...")
+        const std::string which = labelled ? labels(b) + ": kriging: this sample and " + labels(a)
+                                           : "kriging: samples " + std::to_string(a) + " and " + std::to_string(b);
+        throw InputError(which + " are duplicates (lag " + format_number(std::sqrt(d2[k])) +
                              (tol > 0 ? " <= duplicate_distance " + format_number(tol) : std::string(", same location")) +
                              "); remove one, or set duplicates = Average to merge them",
                          labelled ? labels.source : std::string(), labelled ? labels.line(b) : 0);

@@ -68,7 +68,7 @@ TEST(GridBadInput, DuplicateNodeNamesBothLines) {
   p.push_back(p[3]);  // line 5 again as line 10
   const InputError e = grid_error(Points(p));
   EXPECT_EQ(e.file(), "g.csv");
-  EXPECT_THAT(e.what(), AllOf(HasSubstr("g.csv line 5"), HasSubstr("g.csv line 10")));
+  EXPECT_THAT(e.what(), AllOf(HasSubstr("g.csv:10: duplicate grid node"), HasSubstr("g.csv:5 (")));
 }
 
 }  // namespace

@@ -86,7 +86,7 @@ TEST(RobotBadInput, JointAnglesOutsideTheLimitsWarnWithRowJointAndValue) {
   dir.write("q.csv", "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n0,100,0,0,0,0\n0,0,0,0,200,0\n");
   const auto r = run_errfield({"fk", "--input", "q.csv", "--out", "o.csv"}, dir.path());
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_THAT(r.err, AllOf(HasSubstr("warning"), HasSubstr("q.csv line 3"), HasSubstr("q2 = 100"),
+  EXPECT_THAT(r.err, AllOf(HasSubstr("warning"), HasSubstr("q.csv:3: q2 = 100"),
                            HasSubstr("[-150, 90]"), HasSubstr("2 rows")));
   dir.write("q.csv", "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n10,-20,30,-40,50,-60\n");
   EXPECT_THAT(run_errfield({"fk", "--input", "q.csv", "--out", "o.csv"}, dir.path()).err, Not(HasSubstr("warning")));

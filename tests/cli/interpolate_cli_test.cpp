@@ -104,8 +104,8 @@ TEST_F(InterpolateCli, DuplicateNodeNamesBothLines) {
   const auto r = run("interpolate --method idw-grid --samples " + path("grid.csv") + " --targets " +
                          path("targets.csv") + " --coords x,y,z --value dL --out " + path("pred.csv"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_THAT(r.output(), HasSubstr("duplicate grid node (2, 2, 2) at (250, 250, 250)"));
-  EXPECT_THAT(r.output(), HasSubstr("grid.csv line 127"));  // header is line 1, 125 nodes, then the copy
+  // header is line 1, 125 nodes, then the copy on line 127
+  EXPECT_THAT(r.output(), HasSubstr("grid.csv:127: duplicate grid node (2, 2, 2) at (250, 250, 250)"));  // header is line 1, 125 nodes, then the copy
   EXPECT_FALSE(fs::exists(path("pred.csv")));
 }
 
@@ -116,7 +116,7 @@ TEST_F(InterpolateCli, OutsideTargetFailsUnlessClamped) {
                            path("targets.csv") + " --coords x,y,z --value dL --out " + path("pred.csv");
   const auto strict = run(base);
   EXPECT_EQ(strict.exit_code, 2);
-  EXPECT_THAT(strict.output(), HasSubstr("targets.csv line 3 (-20, 250, 250) is outside the grid [0, 500] x [0, 500] x [0, 500]"));
+  EXPECT_THAT(strict.output(), HasSubstr("targets.csv:3: target (-20, 250, 250) is outside the grid [0, 500] x [0, 500] x [0, 500]"));
   EXPECT_FALSE(fs::exists(path("pred.csv")));
   const auto clamped = run(base + " --clamp");
   ASSERT_EQ(clamped.exit_code, 0) << clamped.output();

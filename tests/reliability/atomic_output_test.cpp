@@ -124,7 +124,7 @@ TEST(AtomicCliOutput, BadInputFoundAfterStartLeavesPreviousOutput) {
                                         "t.csv", "--coords", "x,y,z", "--value", "v", "--out", "o.csv"},
                                        dir.path());
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_THAT(r.err, HasSubstr("t.csv line 1002"));
+  EXPECT_THAT(r.err, HasSubstr("t.csv:1002: target (2, 0, 0) is outside the grid"));
   EXPECT_EQ(dir.read("o.csv"), kOld);
   EXPECT_TRUE(unexpected_entries(dir, {"g.csv", "t.csv", "o.csv"}).empty());
 }
