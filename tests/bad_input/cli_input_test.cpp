@@ -10,20 +10,13 @@
 #include <gtest/gtest.h>
 
 #include "errfield/csv_table.hpp"
-#include "support/cli_harness.hpp"
+#include "support/cli_test_common.hpp"
 
 namespace errfield {
 namespace {
 
-using ::testing::AllOf;
-using ::testing::HasSubstr;
-using ::testing::Not;
-using testing::CliResult;
-using testing::run_errfield;
-using testing::ScratchDir;
+using namespace testing::cli_common;
 
-constexpr const char* kGrid =
-    "x,y,z,v\n0,0,0,1\n1,0,0,2\n0,1,0,3\n1,1,0,4\n0,0,1,5\n1,0,1,6\n0,1,1,7\n1,1,1,8\n";
 
 class CliBadInput : public ::testing::Test {
  protected:
@@ -179,14 +172,14 @@ TEST_F(CliBadInput, CollinearAndCoplanarSamplesForUniversalKriging) {
   r = interpolate("kriging", "plane.csv", "t.csv", {"--model", "sph(1,30)"});
   EXPECT_EQ(r.exit_code, 0) << r.err;
   // Too few samples for the quadratic drift.
-  dir.write("g.csv", kGrid);
+  dir.write("g.csv", kUnitCubeGrid);
   r = interpolate("kriging", "g.csv", "t.csv", {"--model", "sph(1,30)", "--kind", "universal2"});
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_THAT(r.err, AllOf(HasSubstr("8 samples"), HasSubstr("10 drift terms"), HasSubstr("quadratic drift (order 2")));
 }
 
 TEST_F(CliBadInput, ZeroNegativeAndUnorderedBins) {
-  dir.write("g.csv", kGrid);
+  dir.write("g.csv", kUnitCubeGrid);
   auto r = variogram("g.csv", "0:2:0");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, AllOf(HasSubstr("bins"), HasSubstr("width = 0")));
@@ -218,7 +211,7 @@ TEST_F(CliBadInput, GridWithUnevenSpacing) {
 }
 
 TEST_F(CliBadInput, DuplicateGridNode) {
-  dir.write("g.csv", std::string(kGrid) + "1,1,1,9\n");
+  dir.write("g.csv", std::string(kUnitCubeGrid) + "1,1,1,9\n");
   dir.write("t.csv", "x,y,z\n0.5,0.5,0.5\n");
   const auto r = interpolate("idw-grid", "g.csv", "t.csv");
   EXPECT_EQ(r.exit_code, 2);
@@ -226,7 +219,7 @@ TEST_F(CliBadInput, DuplicateGridNode) {
 }
 
 TEST_F(CliBadInput, TargetOutsideTheGrid) {
-  dir.write("g.csv", kGrid);
+  dir.write("g.csv", kUnitCubeGrid);
   dir.write("t.csv", "x,y,z\n0.5,0.5,0.5\n0.5,1.5,0.5\n");
   auto r = interpolate("idw-grid", "g.csv", "t.csv");
   EXPECT_EQ(r.exit_code, 2);
@@ -237,7 +230,7 @@ TEST_F(CliBadInput, TargetOutsideTheGrid) {
 }
 
 TEST_F(CliBadInput, BadOptionValuesNameTheOption) {
-  dir.write("g.csv", kGrid);
+  dir.write("g.csv", kUnitCubeGrid);
   dir.write("t.csv", "x,y,z\n0.5,0.5,0.5\n");
   auto r = interpolate("idw", "g.csv", "t.csv", {"--power", "-1"});
   EXPECT_NE(r.exit_code, 0);

@@ -11,20 +11,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "support/cli_harness.hpp"
+#include "support/cli_test_common.hpp"
 
 namespace errfield {
 namespace {
 
-using ::testing::AllOf;
-using ::testing::HasSubstr;
-using ::testing::Not;
-using testing::CliResult;
-using testing::run_errfield;
-using testing::ScratchDir;
+using namespace testing::cli_common;
 
-constexpr const char* kGrid =
-    "x,y,z,v\n0,0,0,1\n1,0,0,2\n0,1,0,3\n1,1,0,4\n0,0,1,5\n1,0,1,6\n0,1,1,7\n1,1,1,8\n";
 constexpr const char* kTargets = "x,y,z\n0.5,0.5,0.5\n0.25,0.5,0.75\n0.5,0.25,0.5\n0.75,0.75,0.25\n";
 
 std::vector<std::string> split_lines(const std::string& text) {
@@ -105,7 +98,7 @@ class CommandCsvBadInput : public ::testing::Test {
 
   // Valid inputs of every command; the robot ones from `errfield simulate` (SIMULATED).
   std::vector<CommandCase> prepare() {
-    write("s.csv", kGrid);
+    write("s.csv", kUnitCubeGrid);
     write("t.csv", kTargets);
     write("q.csv", "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n10,-20,30,-40,50,-60\n-5,-60,20,10,-30,90\n5,-45,10,0,40,0\n");
     write("v.csv", "lag_lo,lag_hi,lag_mean,gamma,pairs\n0,0.5,,,0\n0.5,1,0.8,1.2,10\n1,1.5,1.25,2.5,31\n"

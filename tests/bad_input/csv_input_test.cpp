@@ -7,12 +7,12 @@
 
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
+#include "support/cli_test_common.hpp"
 
 namespace errfield {
 namespace {
 
-using ::testing::HasSubstr;
-using ::testing::Not;
+using namespace testing::cli_common;
 
 // Runs `f`, expects InputError with the given location, returns its message.
 template <class F>

@@ -8,12 +8,12 @@
 
 #include "errfield/error.hpp"
 #include "errfield/regular_grid.hpp"
+#include "support/cli_test_common.hpp"
 
 namespace errfield {
 namespace {
 
-using ::testing::AllOf;
-using ::testing::HasSubstr;
+using namespace testing::cli_common;
 
 // x, y, z of a 2 x 2 x 2 unit grid plus what `extra` adds, with file lines 2, 3, ...
 struct Points {

@@ -11,12 +11,12 @@
 #include <gtest/gtest.h>
 
 #include "errfield/kriging.hpp"
+#include "support/cli_test_common.hpp"
 
 namespace errfield {
 namespace {
 
-using ::testing::AllOf;
-using ::testing::HasSubstr;
+using namespace testing::cli_common;
 using P3 = Eigen::Vector3d;
 
 const VariogramModel kModel = VariogramModel::parse("sph(sill=1,range=30)");

@@ -17,16 +17,12 @@
 #include "errfield/robot/inverse_kinematics.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/mdh_model.hpp"
-#include "support/cli_harness.hpp"
+#include "support/cli_test_common.hpp"
 
 namespace errfield {
 namespace {
 
-using ::testing::AllOf;
-using ::testing::HasSubstr;
-using ::testing::Not;
-using testing::run_errfield;
-using testing::ScratchDir;
+using namespace testing::cli_common;
 
 nlohmann::json er20_json() { return robot::MdhModel::er20_c10().to_json(); }
 

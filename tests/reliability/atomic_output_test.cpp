@@ -17,15 +17,13 @@
 
 #include "errfield/atomic_file.hpp"
 #include "errfield/error.hpp"
-#include "support/cli_harness.hpp"
+#include "support/cli_test_common.hpp"
 
 namespace errfield {
 namespace {
 
-using ::testing::AllOf;
+using namespace testing::cli_common;
 using ::testing::ElementsAre;
-using ::testing::HasSubstr;
-using testing::ScratchDir;
 
 constexpr const char* kOld = "previous output\n";
 
@@ -101,8 +99,6 @@ TEST(AtomicFileSet, AllOrNone) {
 
 // ---- the CLI -----------------------------------------------------------------
 
-constexpr const char* kGrid =
-    "x,y,z,v\n0,0,0,1\n1,0,0,2\n0,1,0,3\n1,1,0,4\n0,0,1,5\n1,0,1,6\n0,1,1,7\n1,1,1,8\n";
 
 // Files in the directory other than the ones the test wrote (temporaries, half outputs).
 std::vector<std::string> unexpected_entries(const ScratchDir& dir, std::vector<std::string> expected) {
@@ -114,7 +110,7 @@ std::vector<std::string> unexpected_entries(const ScratchDir& dir, std::vector<s
 
 TEST(AtomicCliOutput, BadInputFoundAfterStartLeavesPreviousOutput) {
   ScratchDir dir;
-  dir.write("g.csv", kGrid);
+  dir.write("g.csv", kUnitCubeGrid);
   // Many good targets, then one outside the grid on the last line.
   std::string targets = "x,y,z\n";
   for (int i = 0; i < 1000; ++i) targets += "0.5,0.5," + std::to_string(i / 1000.0) + "\n";
@@ -131,7 +127,7 @@ TEST(AtomicCliOutput, BadInputFoundAfterStartLeavesPreviousOutput) {
 
 TEST(AtomicCliOutput, UnwritableOutputIsAnErrorNamingIt) {
   ScratchDir dir;
-  dir.write("g.csv", kGrid);
+  dir.write("g.csv", kUnitCubeGrid);
   const auto r = testing::run_errfield(
       {"variogram", "--input", "g.csv", "--coords", "x,y,z", "--value", "v", "--bins", "0:2:1", "--out", "nodir/o.csv"},
       dir.path());
@@ -194,7 +190,7 @@ TEST(AtomicCliOutput, SigintWhileTheOutputIsBeingWrittenRemovesTheTemporary) {
   ScratchDir dir;
   // 300,000 targets in a 2x2x2 grid: a ~15 MB output. inotify reports the temporary file's
   // creation and the test interrupts the process right then, while it writes.
-  dir.write("g.csv", kGrid);
+  dir.write("g.csv", kUnitCubeGrid);
   std::string targets = "x,y,z\n";
   for (int i = 0; i < 300000; ++i) {
     const double t = (i % 1000) / 1000.0;
