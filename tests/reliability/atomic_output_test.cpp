@@ -8,9 +8,15 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <cmath>
 #include <poll.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <random>
+#include <sstream>
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -157,6 +163,70 @@ TEST(AtomicCliOutput, SimulateWritesAllOutputsOrNone) {
 }
 
 // Random 3-D samples, `n` rows, seeded (simulated data).
+// ---- interrupting a job at work -------------------------------------------------------------
+//
+// A fixed sleep before SIGINT assumes the job is still running then: on a faster machine it may
+// have finished, on a loaded one it may not have started. Instead the tests signal once the job
+// is at work, judged by the job's own progress (Linux /proc accounting of the child): it has read
+// its input files (what follows is computation) and used some CPU time (past start-up).
+
+// rchar (bytes read through read(2) and friends) of `pid`, or -1 when it cannot be read.
+long long bytes_read(pid_t pid) {
+  std::ifstream io("/proc/" + std::to_string(pid) + "/io");
+  for (std::string key; io >> key;) {
+    long long v = 0;
+    io >> v;
+    if (key == "rchar:") return v;
+  }
+  return -1;
+}
+
+// CPU time (user + system) `pid` has used, in ms, or -1 when it cannot be read.
+double cpu_ms(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string stat((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto close = stat.rfind(')');  // the command name may hold spaces
+  if (close == std::string::npos) return -1;
+  std::istringstream rest(stat.substr(close + 2));
+  std::string field;
+  for (int i = 3; i < 14 && rest >> field; ++i) {
+  }
+  double utime = 0, stime = 0;
+  if (!(rest >> utime >> stime)) return -1;
+  return (utime + stime) * 1000.0 / static_cast<double>(::sysconf(_SC_CLK_TCK));
+}
+
+bool has_ended(pid_t pid) {
+  siginfo_t info{};
+  // WNOWAIT: not reaped, wait_errfield still gets its status
+  return ::waitid(P_PID, static_cast<id_t>(pid), &info, WEXITED | WNOHANG | WNOWAIT) == 0 && info.si_pid != 0;
+}
+
+// Waits (polling every 2 ms, at most 20 s) until the job `p` has read `input_bytes` and used
+// 50 ms of CPU time, or has ended. On this 2-core machine that is sooner than the fixed 300 ms
+// the tests used to sleep; on a faster one it is the same point of the job.
+void wait_until_at_work(const testing::CliProcess& p, std::uintmax_t input_bytes) {
+  constexpr double kStartupCpuMs = 50.0;
+  for (int waited_ms = 0; waited_ms < 20000 && !has_ended(p.pid); waited_ms += 2) {
+    const long long read = bytes_read(p.pid);
+    if (read >= 0 && static_cast<std::uintmax_t>(read) >= input_bytes && cpu_ms(p.pid) >= kStartupCpuMs) return;
+    ::usleep(2000);
+  }
+}
+
+// Total size of the files in `dir` that `args` name, other than `outputs`: what the job reads.
+std::uintmax_t input_bytes(const ScratchDir& dir, const std::vector<std::string>& args,
+                           const std::vector<std::string>& outputs) {
+  std::uintmax_t total = 0;
+  for (const auto& a : args) {
+    std::error_code ec;
+    if (std::find(outputs.begin(), outputs.end(), a) == outputs.end() &&
+        std::filesystem::is_regular_file(dir.path() / a, ec))
+      total += std::filesystem::file_size(dir.path() / a);
+  }
+  return total;
+}
+
 std::string random_samples(std::size_t n, unsigned seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1000.0);
@@ -172,13 +242,14 @@ std::string random_samples(std::size_t n, unsigned seed) {
 
 TEST(AtomicCliOutput, SigintDuringALongRunLeavesPreviousOutput) {
   ScratchDir dir;
-  // 60,000 points: 1.8e9 pairs, seconds of work even on 2 threads; interrupted after 300 ms.
+  // 60,000 points: 1.8e9 pairs, seconds of work even on 2 threads; interrupted once it has read
+  // them, in the pair loop.
   dir.write("s.csv", random_samples(60000, 1));
   dir.write("o.csv", kOld);
-  const auto p = testing::start_errfield(
-      {"variogram", "--input", "s.csv", "--coords", "x,y,z", "--value", "v", "--bins", "0:1700:100", "--out", "o.csv"},
-      dir.path());
-  ::usleep(300000);
+  const std::vector<std::string> args{"variogram", "--input", "s.csv", "--coords", "x,y,z", "--value", "v",
+                                      "--bins",    "0:1700:100", "--out", "o.csv"};
+  const auto p = testing::start_errfield(args, dir.path());
+  wait_until_at_work(p, input_bytes(dir, args, {"o.csv"}));
   ::kill(p.pid, SIGINT);
   const auto r = testing::wait_errfield(p);
   ASSERT_EQ(r.signal, SIGINT) << "finished before the signal (exit " << r.exit_code << "): make the job larger";
@@ -210,9 +281,7 @@ TEST(AtomicCliOutput, SigintWhileTheOutputIsBeingWrittenRemovesTheTemporary) {
     pollfd pfd{fd, POLLIN, 0};
     if (::poll(&pfd, 1, 10) <= 0) {
       waited_ms += 10;
-      siginfo_t info{};
-      if (::waitid(P_PID, static_cast<id_t>(p.pid), &info, WEXITED | WNOHANG | WNOWAIT) == 0 && info.si_pid != 0)
-        break;  // ended already (WNOWAIT: not reaped, wait_errfield still gets its status)
+      if (has_ended(p.pid)) break;
       continue;
     }
     const ssize_t len = ::read(fd, buf, sizeof buf);
@@ -249,13 +318,13 @@ TEST(AtomicCliOutput, SigintWhileTheOutputIsBeingWrittenRemovesTheTemporary) {
 
 // ---- plan, fit, compensate, calibrate, reproduce ------------------------------------------------
 
-// Interrupts `args` after `delay_ms` (while it computes) and checks that it died of SIGINT and that
-// the directory holds exactly `expected` afterwards, the files in `previous` still with kOld.
+// Interrupts `args` once it is at work (wait_until_at_work: its input files read) and checks that
+// it died of SIGINT and that the directory holds exactly `expected` afterwards, the files in
+// `previous` still with kOld.
 void expect_sigint_keeps_previous(const ScratchDir& dir, const std::vector<std::string>& args,
-                                  const std::vector<std::string>& expected, const std::vector<std::string>& previous,
-                                  int delay_ms = 300) {
+                                  const std::vector<std::string>& expected, const std::vector<std::string>& previous) {
   const auto p = testing::start_errfield(args, dir.path());
-  ::usleep(static_cast<useconds_t>(delay_ms) * 1000);
+  wait_until_at_work(p, input_bytes(dir, args, previous));
   ::kill(p.pid, SIGINT);
   const auto r = testing::wait_errfield(p);
   ASSERT_EQ(r.signal, SIGINT) << testing::command_line(args) << " finished before the signal (exit " << r.exit_code
@@ -305,10 +374,11 @@ TEST(AtomicCliOutput, SigintDuringReproduceLeavesPreviousFilesAndNoDirectory) {
   ScratchDir dir;
   std::filesystem::create_directories(dir.path() / "out");
   for (const auto& f : kReproductionFiles) dir.write("out/" + f, kOld);
-  // --runs 1000 takes minutes; interrupted after 0.5 s, in the middle of the experiments.
+  // --runs 1000 takes minutes; interrupted once both are at work, in the middle of the experiments.
   const auto p = testing::start_errfield({"reproduce", "--runs", "1000", "--out", "out"}, dir.path());
   const auto q = testing::start_errfield({"reproduce", "--runs", "1000", "--out", "fresh"}, dir.path());
-  ::usleep(500000);
+  wait_until_at_work(p, 0);
+  wait_until_at_work(q, 0);
   ::kill(p.pid, SIGINT);
   ::kill(q.pid, SIGINT);
   const auto r = testing::wait_errfield(p);
