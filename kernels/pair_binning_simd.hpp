@@ -76,6 +76,36 @@ __attribute__((target("avx2"), always_inline)) inline void add_to_slot(double* s
   _mm256_store_pd(q, _mm256_add_pd(_mm256_load_pd(q), p));
 }
 
+/// Pairs (i, j) for j in [j_begin, i), one at a time: a row's tail after the vector steps. Same
+/// arithmetic (and no contraction) as the vector steps, so the sums stay bit-identical.
+template <PairStatistic S>
+ERRFIELD_KERNELS_NO_FP_CONTRACT __attribute__((target("avx2"))) inline void add_row_tail(
+    double* slots, const double* xi, double zi, const double* coordinates, std::size_t n, std::size_t D,
+    const double* values, const BinLayout& bins, std::size_t j_begin, std::size_t i) noexcept {
+  ERRFIELD_KERNELS_NO_FP_CONTRACT_BODY
+  for (std::size_t j = j_begin; j < i; ++j) {
+    double d = xi[0] - coordinates[j];
+    double h2 = d * d;
+    for (std::size_t a = 1; a < D; ++a) {
+      d = xi[a] - coordinates[a * n + j];
+      h2 += d * d;
+    }
+    const double h = std::sqrt(h2);
+    const double w = pair_statistic<S>(zi - values[j]);
+    const std::ptrdiff_t kb = find_bin(h, bins);
+    add_to_slot(slots, kb < 0 ? bins.bins : static_cast<std::size_t>(kb), _mm256_set_pd(0.0, 1.0, w, h));
+  }
+}
+
+/// Adds the B slots' (lag sum, statistic sum, count) to `out` (B includes the discard slot).
+inline void flush_slots(const double* slots, std::size_t B, PairSums out) noexcept {
+  for (std::size_t k = 0; k < B; ++k) {
+    out.lag[k] += slots[4 * k];
+    out.stat[k] += slots[4 * k + 1];
+    out.count[k] += static_cast<std::uint64_t>(slots[4 * k + 2]);
+  }
+}
+
 }  // namespace detail
 
 namespace detail {
@@ -163,25 +193,9 @@ ERRFIELD_KERNELS_NO_FP_CONTRACT __attribute__((target("avx2"))) void bin_pair_ro
       detail::add_to_slot(slots, c23 & 0xFFFFFFFFu, _mm256_permute2f128_pd(lo, vone_zero, 0x31));
       detail::add_to_slot(slots, c23 >> 32, _mm256_permute2f128_pd(hi, vone_zero, 0x31));
     }
-    for (; j < i; ++j) {  // the last < 4 pairs of the row, one at a time
-      double d = xi[0] - coordinates[j];
-      double h2 = d * d;
-      for (std::size_t a = 1; a < D; ++a) {
-        d = xi[a] - coordinates[a * n + j];
-        h2 += d * d;
-      }
-      const double h = std::sqrt(h2);
-      const double w = detail::pair_statistic<S>(zi - values[j]);
-      const std::ptrdiff_t kb = find_bin(h, bins);
-      detail::add_to_slot(slots, kb < 0 ? bins.bins : static_cast<std::size_t>(kb),
-                          _mm256_set_pd(0.0, 1.0, w, h));
-    }
+    detail::add_row_tail<S>(slots, xi, zi, coordinates, n, D, values, bins, j, i);  // the last < 4 pairs
   }
-  for (std::size_t k = 0; k < B; ++k) {
-    out.lag[k] += slots[4 * k];
-    out.stat[k] += slots[4 * k + 1];
-    out.count[k] += static_cast<std::uint64_t>(slots[4 * k + 2]);
-  }
+  detail::flush_slots(slots, B, out);
 }
 
 }  // namespace detail
@@ -274,25 +288,9 @@ bin_pair_rows_euclidean_avx512(const double* coordinates, std::size_t n, int dim
       detail::add_to_slot(slots, static_cast<std::uint32_t>(c[6]), _mm512_maskz_extractf64x4_pd(0xF, p67, 0));
       detail::add_to_slot(slots, static_cast<std::uint32_t>(c[7]), _mm512_maskz_extractf64x4_pd(0xF, p67, 1));
     }
-    for (; j < i; ++j) {  // the last < 8 pairs of the row, one at a time
-      double d = xi[0] - coordinates[j];
-      double h2 = d * d;
-      for (std::size_t a = 1; a < D; ++a) {
-        d = xi[a] - coordinates[a * n + j];
-        h2 += d * d;
-      }
-      const double h = std::sqrt(h2);
-      const double w = detail::pair_statistic<S>(zi - values[j]);
-      const std::ptrdiff_t kb = find_bin(h, bins);
-      detail::add_to_slot(slots, kb < 0 ? bins.bins : static_cast<std::size_t>(kb),
-                          _mm256_set_pd(0.0, 1.0, w, h));
-    }
+    detail::add_row_tail<S>(slots, xi, zi, coordinates, n, D, values, bins, j, i);  // the last < 8 pairs
   }
-  for (std::size_t k = 0; k < B; ++k) {
-    out.lag[k] += slots[4 * k];
-    out.stat[k] += slots[4 * k + 1];
-    out.count[k] += static_cast<std::uint64_t>(slots[4 * k + 2]);
-  }
+  detail::flush_slots(slots, B, out);
 }
 
 }  // namespace detail
