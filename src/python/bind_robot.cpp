@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include "errfield/error.hpp"
 #include "errfield/robot/inverse_kinematics.hpp"
@@ -207,7 +208,7 @@ void bind_robot(py::module_& m) {
           },
           py::arg("name") = "er20_c10", "A built-in robot: 'er20_c10' (the paper's Efort ER20-C10, no tool).")
       .def_static(
-          "load", [](const std::string& path) { return MdhModel::load(path); }, py::arg("path"),
+          "load", [](const std::filesystem::path& path) { return MdhModel::load(path); }, py::arg("path"),
           "Reads a robot JSON file (docs/robot.md); errors name the file and field.")
       .def_static("from_json", &from_json_text, py::arg("text"), py::arg("source") = "robot JSON",
                   "Parses a robot JSON description given as a string.")
@@ -215,7 +216,7 @@ void bind_robot(py::module_& m) {
           "to_json", [](const MdhModel& r) { return r.to_json().dump(2); },
           "The robot JSON description (shortest round-trip numbers).")
       .def(
-          "save", [](const MdhModel& r, const std::string& path) { r.save(path); }, py::arg("path"),
+          "save", [](const MdhModel& r, const std::filesystem::path& path) { r.save(path); }, py::arg("path"),
           "Writes the robot JSON atomically.")
       .def_property_readonly("name", &MdhModel::name)
       .def_property_readonly(

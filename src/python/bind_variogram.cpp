@@ -31,8 +31,7 @@ PyVariogram run_variogram(const py::object& coords, const py::object& values, co
                           const std::string& estimator, const std::string& convention, double pair_fraction,
                           std::uint64_t seed, int threads) {
   const MatrixArg x = matrix_arg(coords, "coords", ArraySpec{1, 2, -1, 2});
-  ArraySpec vspec{1, 2, -1, x.data.rows()};
-  const MatrixArg z = matrix_arg(values, "values", vspec);
+  const MatrixArg z = matrix_arg(values, "values", ArraySpec{1, 2, -1, 1});
   if (z.data.rows() != x.data.rows())
     throw ArgumentError("values: " + std::to_string(z.data.rows()) + " rows but coords has " +
                         std::to_string(x.data.rows()) + "; expected one value (row) per location");

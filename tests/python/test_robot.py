@@ -33,7 +33,7 @@ def test_fk_matches_cli(tmp_path):
     for frame in ("tool", "flange"):
         run_cli("fk", "--input", inp, "--robot", tmp_path / "robot.json", "--frame", frame, "--out", tmp_path / "p.csv")
         csv = read_csv(tmp_path / "p.csv")
-        t = errfield.Robot.load(str(tmp_path / "robot.json")).fk(q, frame=frame)
+        t = errfield.Robot.load(tmp_path / "robot.json").fk(q, frame=frame)
         assert t.shape == (len(q), 4, 4)
         for k, c in enumerate("xyz"):
             assert same(t[:, k, 3], numbers(csv[c]))
