@@ -63,7 +63,7 @@ def main():
     used = vario.pairs > 0
     h = np.linspace(0, edges[-1], 200)
     ax[0].plot(vario.lag_mean[used], vario.gamma[used], "o", label="empirical")
-    ax[0].plot(h, model(h), "-", label=str(model))
+    ax[0].plot(h, model(h), "-", label="fitted " + model.components[0]["kind"] + " + nugget")
     ax[0].set(xlabel="lag (mm)", ylabel="semivariance (mm²)", title="variogram (SIMULATED data)")
     ax[0].legend(fontsize=7)
     im = ax[1].pcolormesh(gx, gy, mean.reshape(gx.shape), shading="auto", cmap="coolwarm")

@@ -8,5 +8,6 @@ namespace errfield::python {
 void bind_variogram(pybind11::module_& m);       // variogram, VariogramModel, fits (bind_variogram.cpp)
 void bind_interpolation(pybind11::module_& m);   // Kriging, ScatteredIdw, GridIdw (bind_interpolation.cpp)
 void bind_robot(pybind11::module_& m);           // Robot: FK, IK, Jacobians, JSON (bind_robot.cpp)
+void bind_calibration(pybind11::module_& m);     // calibrate_positions (bind_calibration.cpp), after Robot
 
 }  // namespace errfield::python

@@ -217,3 +217,14 @@ class Robot:
         position_only: bool = False,
         max_iterations: int = 100,
     ) -> IkSolution: ...
+
+def calibrate_positions(
+    robot: Robot,
+    q: ArrayLike,
+    measured: ArrayLike,
+    *,
+    robust: bool = True,
+    k0: float = 1.5,
+    k1: float = 3.0,
+    max_condition: float = 1e3,
+) -> dict[str, Any]: ...

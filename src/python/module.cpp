@@ -87,4 +87,5 @@ PYBIND11_MODULE(errfield, m) {
   errfield::python::bind_variogram(m);
   errfield::python::bind_interpolation(m);
   errfield::python::bind_robot(m);
+  errfield::python::bind_calibration(m);
 }
