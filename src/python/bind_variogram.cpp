@@ -110,7 +110,8 @@ py::list components_list(const VariogramModel& model) {
 std::vector<ModelComponent> structure_arg(const std::string& model, std::optional<double> nu) {
   std::vector<ModelComponent> s;
   if (model.find('(') != std::string::npos) {
-    for (const auto& c : VariogramModel::parse(model).components())
+    const VariogramModel parsed = VariogramModel::parse(model);  // named: components() must outlive the loop
+    for (const auto& c : parsed.components())
       if (c.kind != ModelKind::Nugget) s.push_back(c);
     if (s.empty()) throw ArgumentError("model: '" + model + "' has no component other than a nugget to fit");
     if (nu) throw ArgumentError("nu: give the Matérn smoothness inside the model text, e.g. mat(1,100,1.5)");

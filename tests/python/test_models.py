@@ -134,3 +134,17 @@ def test_fit_errors():
         errfield.fit_variogram({"gamma": 1}, "sph")
     with pytest.raises(errfield.ArgumentError, match="values"):
         errfield.fit_likelihood(x, np.c_[z, z], "exp")
+
+
+def test_fit_from_a_model_text_improves_on_its_start():
+    x, z = sample_field()
+    v = errfield.variogram(x, z, np.linspace(0, 600, 13))
+    start = errfield.VariogramModel("sph(sill=0.2,range=300)+nug(0.01)")
+    fit = errfield.fit_variogram(v, str(start), weights="nj")
+    assert [c["kind"] for c in fit["model"].components] == ["sph", "nug"]
+    used = v.pairs > 0
+    h, g, n = v.lag_mean[used], v.gamma[used], v.pairs[used].astype(float)
+    start_sse = np.sum(n * (g - start.gamma(h)) ** 2)
+    # the given parameters are one of the starting points, so the fit is at least as good
+    assert fit["weighted_sse"] <= start_sse
+    np.testing.assert_allclose(fit["weighted_sse"], np.sum(n * (g - fit["model"].gamma(h)) ** 2), rtol=1e-9)
