@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <vector>
 
@@ -12,12 +13,43 @@ namespace {
 
 using json = nlohmann::json;
 
+// Iterator over the text that records how far the parser has read: the SAX key() event carries no
+// position, and a duplicate key's line is wanted.
+class CountingIterator {
+ public:
+  using iterator_category = std::forward_iterator_tag;
+  using value_type = char;
+  using difference_type = std::ptrdiff_t;
+  using pointer = const char*;
+  using reference = const char&;
+  CountingIterator(const char* p, const char* begin, std::size_t* consumed) : p_(p), begin_(begin), consumed_(consumed) {}
+  reference operator*() const { return *p_; }
+  CountingIterator& operator++() {
+    ++p_;
+    *consumed_ = static_cast<std::size_t>(p_ - begin_);
+    return *this;
+  }
+  CountingIterator operator++(int) {
+    CountingIterator old = *this;
+    ++*this;
+    return old;
+  }
+  bool operator==(const CountingIterator& o) const { return p_ == o.p_; }
+  bool operator!=(const CountingIterator& o) const { return p_ != o.p_; }
+
+ private:
+  const char* p_;
+  const char* begin_;
+  std::size_t* consumed_;
+};
+
 // A SAX pass that keeps the path to the current value ("links[2].a_mm") and stops at the first
 // duplicate key or parse error, remembering where.
 class StrictSax : public nlohmann::json_sax<json> {
  public:
   std::string message;    // empty: no error
   std::size_t offset = 0; // byte offset of the error
+  std::size_t consumed = 0;  // bytes the parser has read so far (CountingIterator)
 
   bool null() override { return value(); }
   bool boolean(bool) override { return value(); }
@@ -34,6 +66,7 @@ class StrictSax : public nlohmann::json_sax<json> {
     Frame& f = frames_.back();
     if (!f.keys.insert(k).second) {
       f.key = k;
+      offset = consumed > 0 ? consumed - 1 : 0;  // the key's closing quote (or one past it)
       message = "key '" + path() + "' given twice (JSON keeps only one of them; remove the other)";
       return false;
     }
@@ -103,7 +136,9 @@ std::size_t line_at(std::string_view text, std::size_t offset) {
 
 nlohmann::json parse_json_text(std::string_view text, const std::string& source) {
   StrictSax sax;
-  if (!json::sax_parse(text.begin(), text.end(), &sax) || !sax.message.empty()) {
+  const CountingIterator first(text.data(), text.data(), &sax.consumed);
+  const CountingIterator last(text.data() + text.size(), text.data(), &sax.consumed);
+  if (!json::sax_parse(first, last, &sax) || !sax.message.empty()) {
     if (sax.message.empty()) sax.message = "not valid JSON";
     const std::size_t line = line_at(text, sax.offset);
     throw InputError(source + ":" + std::to_string(line) + ": " + sax.message, source, line);
