@@ -1,4 +1,4 @@
-// libFuzzer target: the JSON input readers (fuzz_json_inputs.hpp). One target rather than three
+// libFuzzer target: the JSON input readers (check_json_inputs in fuzz_json_checks.hpp). One target rather than three
 // keeps the CI fuzz stage's time: the first byte picks the reader, the rest is the file.
 
 #include <cstddef>
