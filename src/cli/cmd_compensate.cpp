@@ -9,7 +9,7 @@
 #include "cli/command_registry.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/error.hpp"
-#include "errfield/robot/compensation.hpp"
+#include "errfield/compensation/compensation.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/pose.hpp"
 
@@ -24,6 +24,7 @@ struct CompensateArgs {
 
 void run_compensate(const CompensateArgs& a) {
   using namespace robot;
+  using namespace compensation;
   std::ifstream in(a.model);
   if (!in) throw InputError("cannot open model file '" + a.model + "'", a.model);
   nlohmann::json j;

@@ -9,8 +9,8 @@
 #include "cli/robot_cli.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/error.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 #include "errfield/robot/input_checks.hpp"
-#include "errfield/robot/model_fitting.hpp"
 
 namespace errfield::cli {
 namespace {
@@ -24,6 +24,7 @@ struct FitArgs {
 
 void run_fit(const FitArgs& a) {
   using namespace robot;
+  using namespace compensation;
   const MdhModel model = load_robot_or_default(a.robot);
   FitOptions o;
   o.method = method_from_name(a.method);

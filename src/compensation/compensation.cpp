@@ -1,13 +1,15 @@
-#include "errfield/robot/compensation.hpp"
+#include "errfield/compensation/compensation.hpp"
 
 #include <cmath>
 
 #include "errfield/error.hpp"
-#include "errfield/robot/error_fields.hpp"
+#include "errfield/compensation/error_fields.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/kinematics.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
+
+using namespace errfield::robot;
 
 namespace {
 
@@ -143,4 +145,4 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
   return CompensationModel(method, std::move(command), std::move(field));
 }
 
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

@@ -31,7 +31,7 @@
 #include "errfield/robot/inverse_kinematics.hpp"
 #include "errfield/robot/mdh_model.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
 
 /// The methods of `errfield fit` / Table 6, named as on the command line.
 enum class CompensationMethod {
@@ -71,7 +71,7 @@ class ErrorField {
  public:
   virtual ~ErrorField() = default;
   /// Prediction at a nominal target position `p_mm` reached with nominal joints `q_deg`.
-  virtual ErrorPrediction predict(const Eigen::Vector3d& p_mm, const JointVector& q_deg) const = 0;
+  virtual ErrorPrediction predict(const Eigen::Vector3d& p_mm, const robot::JointVector& q_deg) const = 0;
   /// JSON description (see docs/data-formats.md, "model JSON").
   virtual nlohmann::json to_json() const = 0;
   /// One line for people ("distance IDW on x [..] ... base point (..)").
@@ -80,26 +80,26 @@ class ErrorField {
 
 /// The result of compensating one target.
 struct CompensatedTarget {
-  JointVector q_nominal_deg = JointVector::Zero();  ///< nominal IK solution of the target
+  robot::JointVector q_nominal_deg = robot::JointVector::Zero();  ///< nominal IK solution of the target
   ErrorPrediction prediction;                        ///< the field's prediction (zero if no field)
   Eigen::Vector3d command_position_mm = Eigen::Vector3d::Zero();  ///< P_cmd = P_n − dP
-  JointVector q_command_deg = JointVector::Zero();   ///< joints to send (IK of the command model)
-  IkStatus ik_status = IkStatus::converged;          ///< of the command IK (nominal IK if that failed)
+  robot::JointVector q_command_deg = robot::JointVector::Zero();   ///< joints to send (IK of the command model)
+  robot::IkStatus ik_status = robot::IkStatus::converged;          ///< of the command IK (nominal IK if that failed)
   double ik_residual_mm = 0.0;
   /// Probability that the remaining error along the predicted quantity lies within ±tolerance,
   /// assuming a Gaussian prediction error with the kriging variance; NaN without a variance.
   double p_within_tolerance = std::numeric_limits<double>::quiet_NaN();
   /// True when the target is inside the modelled region and both IK solves converged.
-  bool ok() const { return prediction.inside_region && ik_status == IkStatus::converged; }
+  bool ok() const { return prediction.inside_region && ik_status == robot::IkStatus::converged; }
 };
 
 class CompensationModel {
  public:
   /// `command_model` is what IK runs on; `field` may be null (none, kinematic).
-  CompensationModel(CompensationMethod method, MdhModel command_model, std::shared_ptr<const ErrorField> field);
+  CompensationModel(CompensationMethod method, robot::MdhModel command_model, std::shared_ptr<const ErrorField> field);
 
   CompensationMethod method() const noexcept { return method_; }
-  const MdhModel& command_model() const noexcept { return command_model_; }
+  const robot::MdhModel& command_model() const noexcept { return command_model_; }
   const ErrorField* field() const noexcept { return field_.get(); }
 
   /// Compensates a target pose (robot frame, tool point). `nominal_model` gives the nominal joints
@@ -107,13 +107,13 @@ class CompensationModel {
   /// command_model() seeded at the nominal joints. `tolerance_mm` > 0 feeds p_within_tolerance.
   /// Never throws for numerical outcomes: a failed IK or a target outside the region shows in the
   /// result (ok() false; then q_command_deg = q_nominal_deg).
-  CompensatedTarget compensate(const MdhModel& nominal_model, const Eigen::Isometry3d& target,
-                               const JointVector& seed_deg, double tolerance_mm = 0.25,
-                               const IkOptions& ik = {}) const;
+  CompensatedTarget compensate(const robot::MdhModel& nominal_model, const Eigen::Isometry3d& target,
+                               const robot::JointVector& seed_deg, double tolerance_mm = 0.25,
+                               const robot::IkOptions& ik = {}) const;
 
   /// Same, from nominal joints already known (the target is their nominal FK).
-  CompensatedTarget compensate_joints(const MdhModel& nominal_model, const JointVector& q_nominal_deg,
-                                      double tolerance_mm = 0.25, const IkOptions& ik = {}) const;
+  CompensatedTarget compensate_joints(const robot::MdhModel& nominal_model, const robot::JointVector& q_nominal_deg,
+                                      double tolerance_mm = 0.25, const robot::IkOptions& ik = {}) const;
 
   /// JSON form: {"format":"errfield-compensation-model","version":1,"method":...,
   /// "command_model":{robot JSON},"field":{...}|null}.
@@ -123,7 +123,7 @@ class CompensationModel {
 
  private:
   CompensationMethod method_;
-  MdhModel command_model_;
+  robot::MdhModel command_model_;
   std::shared_ptr<const ErrorField> field_;
 };
 
@@ -133,4 +133,4 @@ Eigen::Vector3d radial_direction(const Eigen::Vector3d& p_mm, const Eigen::Vecto
 /// P(|e| <= tol) for e ~ N(0, variance) (both in mm / mm²); NaN for a NaN or negative variance.
 double probability_within(double tolerance_mm, double variance_mm2);
 
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

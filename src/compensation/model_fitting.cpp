@@ -1,4 +1,4 @@
-#include "errfield/robot/model_fitting.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 
 #include <cmath>
 
@@ -10,12 +10,14 @@
 #include "errfield/regular_grid.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/distance_error.hpp"
-#include "errfield/robot/error_fields.hpp"
+#include "errfield/compensation/error_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/scattered_idw.hpp"
 #include "robot/rigid_fit.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
+
+using namespace errfield::robot;
 
 MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& robot,
                                           const std::vector<Eigen::Vector3d>& fixed_bases) {
@@ -324,4 +326,4 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
   throw ArgumentError("fit: unknown method");
 }
 
-}  // namespace errfield::robot
+}  // namespace errfield::compensation
