@@ -96,6 +96,7 @@ void add_fit_command(CLI::App& app) {
   cmd->add_option("--power", a->power, "IDW power p (the paper: 1)")->capture_default_str();
   cmd->add_option("--model", a->model, "kriging variogram model, e.g. \"gau(sill=0.05,range=400)+nug(0.001)\"; default: fitted");
   cmd->add_option("--base", a->base, "index K of the base point whose distances dist_bK the distance methods use")
+      ->check(kUnsignedInteger)
       ->capture_default_str();
   cmd->add_option("--base-point", a->base_points, "X,Y,Z of base point b0, b1, ... when the data have no base rows (fixed points)");
   cmd->add_option("--max-registration-rms", a->max_registration_rms,

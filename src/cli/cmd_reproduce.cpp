@@ -26,7 +26,9 @@ void add_reproduce_command(CLI::App& app) {
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("--out", args->out, "output directory (created if missing)")->capture_default_str();
-  cmd->add_option("--seed", args->seed, "master seed; the same seed gives the same numbers")->capture_default_str();
+  cmd->add_option("--seed", args->seed, "master seed; the same seed gives the same numbers")
+      ->check(kUnsignedInteger)
+      ->capture_default_str();
   cmd->add_option("--runs", args->runs, "independent simulated robots for Table 6 (>= 1)")->capture_default_str();
   cmd->add_option("--threads", args->threads, "OpenMP threads (0 = default)")->capture_default_str();
   cmd->callback([args] {

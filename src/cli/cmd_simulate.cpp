@@ -74,6 +74,8 @@ std::pair<double, double> parse_pair(const std::string& text, const std::string&
 constexpr std::uint64_t kToolOffsetStream = 0x7001'0FF5'E7ULL, kOutlierStream = 0x0071'1E55ULL;
 
 void run_simulate(const SimulateArgs& a) {
+  refuse_same_output({{"--out", &a.out}, {"--truth-out", &a.truth_out}, {"--config-out", &a.config_out},
+                      {"--robot-out", &a.robot_out}});
   using namespace robot;
   SimulatorConfig config = a.config.empty() ? SimulatorConfig::paper_default() : SimulatorConfig::load(a.config);
   const BuiltinRobot* builtin = nullptr;
@@ -231,9 +233,10 @@ void run_simulate(const SimulateArgs& a) {
     std::vector<Eigen::Vector3d> pts;
     if (a.sample == "grid" || a.sample == "cells") check_cube_budget(cube.size_mm, a.step, false, "--step");
     if (a.sample == "grid") {
-      pts = cube.grid(a.step);
+      naming_options([&] { pts = cube.grid(a.step); }, {{"MeasurementCube::grid: step", "--step"}});
     } else if (a.sample == "cells") {
-      pts = cube.random_per_cell(a.step, rng);
+      naming_options([&] { pts = cube.random_per_cell(a.step, rng); },
+                     {{"MeasurementCube::random_per_cell: step", "--step"}});
     } else if (a.sample.rfind("random:", 0) == 0) {
       const double nd = parse_number(a.sample.substr(7), "--sample random:N");
       check_point_budget(nd, "--sample " + a.sample);  // before the cast: 1e12 must not wrap
@@ -393,7 +396,7 @@ void add_simulate_command(CLI::App& app) {
   cmd->add_option("--robot", args->robot,
                   "nominal robot: a built-in name (er20-c10, kr16, ur5e; errfield robots) or a robot JSON; overrides "
                   "the config's robot. A built-in name also sets the default --cube to one that robot reaches");
-  cmd->add_option("--seed", args->seed, "random seed (overrides the config's)");
+  cmd->add_option("--seed", args->seed, "random seed (overrides the config's)")->check(kUnsignedInteger);
   cmd->add_option("--joints", args->joints, "CSV with commanded joints q1..q6 (deg) instead of cube points");
   cmd->add_option("--cube", args->cube,
                   "X0,Y0,Z0,SIZE: cube min corner and side (mm); default the paper cube (or the --robot NAME's cube)");
@@ -410,7 +413,8 @@ void add_simulate_command(CLI::App& app) {
                   "in the cube");
   cmd->add_option("--joint-decimals", args->joint_decimals,
                   "N: write q1..q6 rounded to N decimals (0..12), as a controller records them; the robot moved at the "
-                  "unrounded joints and x,y,z are the FK of the rounded ones");
+                  "unrounded joints and x,y,z are the FK of the rounded ones")
+      ->check(CLI::Range(0, 12));
   cmd->add_option("--tool-offset", args->tool_offset,
                   "X,Y,Z (mm, nominal tool frame) or random:MM (random direction, length MM): the true tool/reflector "
                   "differs from the nominal robot's by this offset, unknown to --robot-out (written to --truth-out "

@@ -310,12 +310,23 @@ std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& 
   if (kind != "distance-kriging" && kind != "vector-kriging") return nullptr;
   try {
     KrigingFieldOptions o;
-    o.space = field_space_from_name(j.value("space", std::string("task")));
+    // Each optional member checked for its type: j.value() would throw nlohmann's type_error, an
+    // internal error to the CLI, for e.g. "nugget_is_measurement_error": "yes".
+    auto optional = [&](const char* key, bool (nlohmann::json::*is_type)() const noexcept, const char* expected) {
+      if (j.contains(key) && !(j[key].*is_type)())
+        bad(source, std::string("member \"field.") + key + "\": expected " + expected + ", got " + j[key].dump());
+      return j.contains(key);
+    };
+    if (optional("space", &nlohmann::json::is_string, "a string")) o.space = field_space_from_name(j["space"].get<std::string>());
     if (!j.contains("model") || !j["model"].is_string()) bad(source, "member \"field.model\": expected a model string");
     o.model = VariogramModel::parse(j["model"].get<std::string>());
-    o.nugget_is_measurement_error = j.value("nugget_is_measurement_error", true);
-    o.region_margin_mm = j.value("region_margin_mm", 1e-6);
+    if (optional("nugget_is_measurement_error", &nlohmann::json::is_boolean, "true or false"))
+      o.nugget_is_measurement_error = j["nugget_is_measurement_error"].get<bool>();
+    if (optional("region_margin_mm", &nlohmann::json::is_number, "a number"))
+      o.region_margin_mm = j["region_margin_mm"].get<double>();
     if (!j.contains("samples") || !j.contains("values")) bad(source, "member \"field\": needs \"samples\" and \"values\"");
+    if (!j["samples"].is_object())
+      bad(source, "member \"field.samples\": expected an object {position_mm, joints_deg}, got " + j["samples"].dump());
     const auto& pos = j["samples"].value("position_mm", nlohmann::json::array());
     const auto& joints = j["samples"].value("joints_deg", nlohmann::json::array());
     const auto& vals = j["values"];
