@@ -13,6 +13,7 @@
 #include "cli/robot_cli.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/calibration.hpp"
+#include "errfield/robot/input_checks.hpp"
 
 namespace errfield::cli {
 namespace {
@@ -20,7 +21,7 @@ namespace {
 struct CalibrateArgs {
   std::string robot, data, model = "distance", out, report;
   std::vector<std::string> base_points;
-  double k0 = 1.5, k1 = 3.0, max_condition = 1e3;
+  double k0 = 1.5, k1 = 3.0, max_condition = 1e3, max_registration_rms = robot::kRegistrationRmsLimitMm;
   bool no_robust = false;
 };
 
@@ -37,6 +38,9 @@ void run_calibrate(const CalibrateArgs& a) {
                                                {"CalibrationOptions::robust: need 0 < k0 < k1", "need 0 < --k0 < --k1"}});
   const CsvTable table = CsvTable::read(a.data);
   const auto q = read_joint_columns(table);
+  // Misuse is an error with a reason (robot/input_checks.hpp); x,y,z of another robot say more
+  // than its joints beyond this robot's limits, so first.
+  check_nominal_positions(table, nominal, !a.robot.empty());
   for (std::size_t i = 0; i < q.size(); ++i)
     for (int j = 0; j < kJointCount; ++j) {
       const MdhLink& l = nominal.link(j);
@@ -49,6 +53,7 @@ void run_calibrate(const CalibrateArgs& a) {
                        a.data, table.line_of_row(i), col);
     }
   warn_if_metres(table, nominal, "calibrate", a.model == "position" ? kMeasuredXyz : kDistances);
+  if (a.model == "distance") check_distance_columns(table);
   std::ostringstream text;
   CalibrationResult result;
   MdhModel identified = nominal;
@@ -61,6 +66,9 @@ void run_calibrate(const CalibrateArgs& a) {
     // Registration first (tracker <- robot base and reflector offset), then the full model in the
     // tracker frame; the output is expressed back in the registered robot frame.
     const CalibrationResult reg = with_source(a.data, [&] { return register_tracker(nominal, data, options); });
+    check_registration_residual(reg.after.rms_mm, data.size(), a.data,
+                                "registration tracker -> robot (with the reflector offset)", a.max_registration_rms,
+                                true);
     text << "== registration (tracker <- robot base, reflector offset) ==\n" << reg.report();
     const PoseXyzRpy t = to_xyz_rpy(reg.model.base());
     text << "tracker <- robot base: x " << t.x_mm << " y " << t.y_mm << " z " << t.z_mm << " mm, rx " << t.rx_deg
@@ -179,7 +187,9 @@ void add_calibrate_command(CLI::App& app) {
       "(nominal, robot base frame, mm) per dist_bK column; their coordinates are identified too.\n"
       "Prints the identified parameters and the before/after residuals; writes the identified robot JSON.\n"
       "Example: errfield calibrate --robot robot.json --data grid.csv --model distance --out calibrated.json");
-  cmd->add_option("--robot", args->robot, "nominal robot JSON; default: built-in ER20-C10 (no tool)");
+  cmd->add_option("--robot", args->robot,
+                  "nominal robot JSON or built-in name (er20-c10, kr16, ur5e); default: built-in ER20-C10 (no tool). "
+                  "x,y,z columns, if present, must be its FK (within 5 mm)");
   cmd->add_option("--data", args->data, "measurement CSV")->required();
   cmd->add_option("--model", args->model, "distance (default) or position");
   cmd->add_option("--base-point", args->base_points,
@@ -191,6 +201,9 @@ void add_calibrate_command(CLI::App& app) {
   cmd->add_option("--max-condition", args->max_condition,
                   "remove weakly identifiable parameters until the scaled Jacobian's condition number is below this "
                   "(default 1000)");
+  cmd->add_option("--max-registration-rms", args->max_registration_rms,
+                  "--model position: refuse (exit 2) when the registration (with reflector offset) leaves a larger RMS "
+                  "(mm; default 5): a wrong robot or mixed-up rows");
   cmd->add_option("--report", args->report, "also write the report to this text file (with --out, all or none)");
   cmd->add_option("--out", args->out, "identified robot JSON (written atomically)")->required();
   cmd->callback([args] { run_calibrate(*args); });

@@ -127,7 +127,7 @@ void add_compensate_command(CLI::App& app) {
       "kept). Targets: q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg). Targets outside the modelled\n"
       "region are refused (status outside-region, no joints), never extrapolated.\n"
       "Example: errfield compensate --model model.json --targets targets.csv --out joints.csv");
-  cmd->add_option("--robot", a->robot, "nominal robot JSON (default: the model's command model)");
+  cmd->add_option("--robot", a->robot, "nominal robot JSON or built-in name (er20-c10, kr16, ur5e; default: the model's command model)");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();
   cmd->add_option("--targets", a->targets, "targets CSV")->required();
   cmd->add_option("--tolerance", a->tolerance, "tolerance for p_inside (± mm)")->capture_default_str();

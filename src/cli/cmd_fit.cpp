@@ -10,6 +10,7 @@
 #include "errfield/atomic_file.hpp"
 #include "errfield/error.hpp"
 #include "errfield/compensation/model_fitting.hpp"
+#include "errfield/robot/input_checks.hpp"
 
 namespace errfield::cli {
 namespace {
@@ -17,7 +18,7 @@ namespace {
 struct FitArgs {
   std::string robot, data, method = "distance-idw", space = "task", out, model;
   std::vector<std::string> base_points;
-  double power = 1.0;
+  double power = 1.0, max_registration_rms = robot::kRegistrationRmsLimitMm;
   std::size_t base = 0;
 };
 
@@ -37,11 +38,26 @@ void run_fit(const FitArgs& a) {
     fixed.emplace_back(v[0], v[1], v[2]);
   }
   const CsvTable table = CsvTable::read(a.data);
+  // Misuse is an error with a reason (robot/input_checks.hpp), before any fitting.
+  check_distance_columns(table);
+  check_nominal_positions(table, model, !a.robot.empty());
   const MeasurementSet data = MeasurementSet::from_table(table, model, fixed);
   warn_if_metres(table, model, "fit");
+  const bool from_distances = o.method == CompensationMethod::vector_kriging && data.distance_mm.size() >= 3;
+  if (from_distances) check_error_vectors_from_distances(!data.base_q_deg.empty(), !data.measured_mm.empty(), a.data);
+  if ((o.method == CompensationMethod::position_idw || o.method == CompensationMethod::vector_kriging) &&
+      !data.measured_mm.empty() && data.measured_mm.size() >= 3 && (!from_distances || !data.base_q_deg.empty())) {
+    // The registration these methods fit, checked before the (possibly long) fit.
+    const auto reg = fit_registration(data.measured_mm, data.nominal_mm);
+    check_registration_residual(reg.residual_rms_mm, data.measured_mm.size(), a.data, "registration tracker -> robot",
+                                a.max_registration_rms);
+  }
   // Dense kriging of a few thousand points takes tens of seconds: say which stage is running.
   o.on_stage = StageLog("fit", data.q_deg.size() >= 1000);
   const FitResult r = with_source(a.data, [&] { return fit_compensation_model(model, data, o); });
+  if (r.registration)
+    check_registration_residual(r.registration->residual_rms_mm, data.measured_mm.size(), a.data,
+                                "registration tracker -> robot", a.max_registration_rms);
   write_file_atomically(a.out, r.model.to_json().dump(1) + "\n");
   std::cout << "fit: method " << a.method << " on " << data.q_deg.size() << " points of " << a.data << "\n";
   if (r.model.field()) std::cout << "  field: " << r.model.field()->describe() << "\n";
@@ -70,7 +86,9 @@ void add_fit_command(CLI::App& app) {
       "--base-point, whose coordinates are then identified too). Prints a leave-one-out\n"
       "summary. Kriging models follow gstat's vgm: range is the scale parameter a.\n"
       "Example: errfield fit --data grid.csv --method distance-idw --out model.json");
-  cmd->add_option("--robot", a->robot, "nominal robot JSON (default: built-in ER20-C10, no tool)");
+  cmd->add_option("--robot", a->robot,
+                  "nominal robot JSON or built-in name (er20-c10, kr16, ur5e); default: built-in ER20-C10, no tool. "
+                  "x,y,z that are not its FK (within 5 mm) are refused with the likely cause");
   cmd->add_option("--data", a->data, "measurement CSV")->required();
   cmd->add_option("--method", a->method, "distance-idw | position-idw | distance-kriging | vector-kriging | kinematic | kinematic+kriging")
       ->capture_default_str();
@@ -81,6 +99,10 @@ void add_fit_command(CLI::App& app) {
       ->check(kUnsignedInteger)
       ->capture_default_str();
   cmd->add_option("--base-point", a->base_points, "X,Y,Z of base point b0, b1, ... when the data have no base rows (fixed points)");
+  cmd->add_option("--max-registration-rms", a->max_registration_rms,
+                  "refuse (exit 2) when the tracker -> robot registration leaves a larger RMS (mm): a tool/reflector "
+                  "offset missing from --robot, a wrong robot (docs/robot.md)")
+      ->capture_default_str();
   cmd->add_option("--out", a->out, "model JSON (written atomically)")->required();
   cmd->callback([a] { run_fit(*a); });
 }

@@ -53,7 +53,8 @@ void add_fk_command(CLI::App& app) {
       "Example: errfield fk --input joints.csv --robot robot.json --frame tool --out poses.csv");
   cmd->add_option("--input", args->input, "CSV with columns q1..q6 (deg)")->required();
   cmd->add_option("--robot", args->robot,
-                  "robot description JSON (docs/robot.md); default: built-in nominal ER20-C10, no tool");
+                  "robot description JSON (docs/robot.md) or built-in name (er20-c10, kr16, ur5e; errfield robots); "
+                  "default: built-in nominal ER20-C10, no tool");
   cmd->add_option("--frame", args->frame, "flange or tool (default tool)");
   cmd->add_option("--out", args->out, "output CSV (written atomically)")->required();
   cmd->callback([args] { run_fk(*args); });

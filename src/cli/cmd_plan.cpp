@@ -124,7 +124,7 @@ void add_plan_command(CLI::App& app) {
       "dividing the cube whose cell diagonal keeps gamma <= --gamma-max (the paper's reasoning).\n"
       "Example: errfield plan --robot R.json --cube 750,-250,350,500 --step 125 --orientation 180,0,0 \\\n"
       "           --base-point 750,-250,350 --out plan.csv --samples-out samples.csv");
-  cmd->add_option("--robot", a->robot, "robot JSON (default: built-in ER20-C10, no tool)");
+  cmd->add_option("--robot", a->robot, "robot JSON or built-in name (er20-c10, kr16, ur5e; default: built-in ER20-C10, no tool)");
   cmd->add_option("--cube", a->cube, "X0,Y0,Z0,SIZE: lower corner and side (mm)")->required();
   cmd->add_option("--step", a->step, "grid step (mm, divides SIZE) or auto")->capture_default_str();
   cmd->add_option("--orientation", a->orientation, "RX,RY,RZ tool orientation (deg, fixed axes XYZ)")->capture_default_str();

@@ -2,24 +2,32 @@
 // columns `errfield calibrate` (and the pipeline's `fit`) read. Every file says it is SIMULATED.
 
 #include <cmath>
+#include <filesystem>
 #include <iostream>
+#include <optional>
 #include <sstream>
+#include <tuple>
 
 #include <nlohmann/json.hpp>
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
+#include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/builtin_robots.hpp"
 #include "errfield/robot/cube_budget.hpp"
+#include "errfield/robot/simulated_data.hpp"
 #include "errfield/robot/simulator.hpp"
 
 namespace errfield::cli {
 namespace {
 
 struct SimulateArgs {
-  std::string config, robot, joints, cube, orientation = "180,0,0", sample = "grid", out, truth_out, config_out,
-      robot_out;
+  std::string config, robot, joints, cube, orientation, sample = "grid", out, truth_out, config_out, robot_out,
+      joint_box, tool_offset, outliers;
+  double orientation_spread = 0.0;
+  int joint_decimals = -1;
   std::vector<std::string> bases, fixed_bases;
   double step = 125.0;
   long long seed = -1;
@@ -54,20 +62,64 @@ Eigen::Vector3d parse_vec3(const std::string& text, const std::string& what) {
   return v;
 }
 
+// "A:B" -> (A, B) as numbers, for --outliers FRACTION:MM.
+std::pair<double, double> parse_pair(const std::string& text, const std::string& what) {
+  const auto colon = text.find(':');
+  if (colon == std::string::npos) throw ArgumentError(what + ": expected FRACTION:MM, got '" + text + "'");
+  return {parse_number(text.substr(0, colon), what + " FRACTION"), parse_number(text.substr(colon + 1), what + " MM")};
+}
+
+// Streams of their own for the offset and the outliers, so that switching them on leaves every
+// other number of the file as it was (tests compare with and without).
+constexpr std::uint64_t kToolOffsetStream = 0x7001'0FF5'E7ULL, kOutlierStream = 0x0071'1E55ULL;
+
 void run_simulate(const SimulateArgs& a) {
   refuse_same_output({{"--out", &a.out}, {"--truth-out", &a.truth_out}, {"--config-out", &a.config_out},
                       {"--robot-out", &a.robot_out}});
   using namespace robot;
   SimulatorConfig config = a.config.empty() ? SimulatorConfig::paper_default() : SimulatorConfig::load(a.config);
-  if (!a.robot.empty()) config.nominal = load_robot_or_default(a.robot);
+  const BuiltinRobot* builtin = nullptr;
+  if (!a.robot.empty()) {
+    config.nominal = load_robot_or_default(a.robot);
+    if (!std::filesystem::exists(a.robot)) builtin = find_builtin_robot(a.robot);
+  }
   if (a.seed >= 0) config.seed = static_cast<std::uint64_t>(a.seed);
   if (a.measure != "positions" && a.measure != "distances" && a.measure != "both")
     throw ArgumentError("--measure: expected positions, distances or both, got '" + a.measure + "'");
   const bool want_positions = a.measure != "distances", want_distances = a.measure != "positions";
+  if (a.joint_decimals != -1 && (a.joint_decimals < 0 || a.joint_decimals > 12))
+    throw ArgumentError("--joint-decimals: expected 0..12, got " + std::to_string(a.joint_decimals));
+  if (!(a.orientation_spread >= 0.0 && a.orientation_spread <= 90.0))
+    throw ArgumentError("--orientation-spread: expected 0..90 deg, got " + format_number(a.orientation_spread));
+  // The unknown tool offset: the true tool point is the nominal one moved by this (nominal tool frame, mm).
+  Eigen::Vector3d tool_offset = Eigen::Vector3d::Zero();
+  if (!a.tool_offset.empty()) {
+    if (a.tool_offset.rfind("random:", 0) == 0) {
+      const double mm = parse_number(a.tool_offset.substr(7), "--tool-offset random:MM");
+      if (!(mm >= 0)) throw ArgumentError("--tool-offset random:MM needs MM >= 0, got '" + a.tool_offset + "'");
+      SimulationRng offset_rng(config.seed ^ kToolOffsetStream);
+      tool_offset = mm * random_unit_vector(offset_rng);
+    } else {
+      tool_offset = parse_vec3(a.tool_offset, "--tool-offset");
+    }
+    config.tool_offset_mm += tool_offset;
+  }
+  double outlier_fraction = 0.0, outlier_mm = 0.0;
+  if (!a.outliers.empty()) {
+    std::tie(outlier_fraction, outlier_mm) = parse_pair(a.outliers, "--outliers");
+    if (!(outlier_fraction >= 0 && outlier_fraction <= 1) || !(outlier_mm > 0))
+      throw ArgumentError("--outliers: expected FRACTION in [0, 1] and MM > 0, got '" + a.outliers + "'");
+  }
   const SimulatedRobot robot(config);
   SimulationRng rng(config.seed);
 
+  // The region: --cube, else the built-in robot's own cube, else the paper's.
   MeasurementCube cube = paper_cube();
+  if (builtin) {
+    cube.min_corner_mm = builtin->cube_min_mm;
+    cube.size_mm = builtin->cube_size_mm;
+    cube.orientation = rotation_from_rpy_deg(builtin->cube_rpy_deg.x(), builtin->cube_rpy_deg.y(), builtin->cube_rpy_deg.z());
+  }
   if (!a.cube.empty()) {
     const auto items = split_list(a.cube, "--cube");
     if (items.size() != 4) throw ArgumentError("--cube: expected X0,Y0,Z0,SIZE (mm), got '" + a.cube + "'");
@@ -75,8 +127,10 @@ void run_simulate(const SimulateArgs& a) {
     cube.size_mm = parse_number(items[3], "--cube SIZE");
     if (!(cube.size_mm > 0)) throw ArgumentError("--cube: SIZE must be > 0, got '" + items[3] + "'");
   }
-  const Eigen::Vector3d rpy = parse_vec3(a.orientation, "--orientation");
-  cube.orientation = rotation_from_rpy_deg(rpy.x(), rpy.y(), rpy.z());
+  if (!a.orientation.empty()) {
+    const Eigen::Vector3d rpy = parse_vec3(a.orientation, "--orientation");
+    cube.orientation = rotation_from_rpy_deg(rpy.x(), rpy.y(), rpy.z());
+  }
 
   // Targets: joints from a file, or cube points solved by IK on the nominal model.
   struct Row {
@@ -85,11 +139,23 @@ void run_simulate(const SimulateArgs& a) {
   };
   std::vector<Row> rows;
   IkResult seed = cube_seed(config.nominal, cube);
-  auto solve = [&](const Eigen::Vector3d& p, const std::string& id) {
+  auto check_seed = [&] {
     if (!seed.ok())
       throw ArgumentError("the cube centre " + std::to_string(cube.center().x()) + "," +
                           std::to_string(cube.center().y()) + "," + std::to_string(cube.center().z()) +
-                          " is not reachable at the requested orientation (" + to_string(seed.status) + ")");
+                          " is not reachable at the requested orientation (" + to_string(seed.status) +
+                          "); give a --cube (and --orientation) inside the reach of robot '" + config.nominal.name() +
+                          "'");
+  };
+  // Solves a pose on the seed's branch; nothing when unreachable or when IK left the branch (a
+  // joint moved by more than 120 deg from the seed: an elbow or wrist flip).
+  auto try_solve = [&](const Eigen::Isometry3d& pose) -> std::optional<JointVector> {
+    const IkResult r = inverse_kinematics(config.nominal, pose, seed.q_deg);
+    if (!r.ok() || (r.q_deg - seed.q_deg).cwiseAbs().maxCoeff() > 120.0) return std::nullopt;
+    return r.q_deg;
+  };
+  auto solve = [&](const Eigen::Vector3d& p, const std::string& id) {
+    check_seed();
     const IkResult r = solve_cube_pose(config.nominal, cube, p, seed.q_deg);
     if (!r.ok()) {
       std::ostringstream s;
@@ -102,12 +168,16 @@ void run_simulate(const SimulateArgs& a) {
   if (!a.fixed_bases.empty() && !a.bases.empty())
     throw ArgumentError("--base and --fixed-base: give base points either as robot positions (--base) or as fixed "
                         "points (--fixed-base), not both");
+  const bool scattered = a.sample.rfind("scattered:", 0) == 0;
+  if (!a.joint_box.empty() && !scattered) throw ArgumentError("--joint-box: only with --sample scattered:N");
+  if (a.orientation_spread > 0 && !a.joints.empty())
+    throw ArgumentError("--orientation-spread: not with --joints (the joints fix the orientation)");
   // Fixed base points: points in the cell (e.g. tracker nests), not carried by the robot; the
   // tracker measures each once (one reading shared by all its distances), no base rows.
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.fixed_bases) fixed.push_back(parse_vec3(b, "--fixed-base"));
   std::vector<Eigen::Vector3d> base_nominal;
-  if (a.bases.empty() && fixed.empty()) base_nominal.push_back(paper_base_point_nominal());
+  if (a.bases.empty() && fixed.empty()) base_nominal.push_back(cube.min_corner_mm);
   for (const auto& b : a.bases) base_nominal.push_back(parse_vec3(b, "--base"));
   for (std::size_t k = 0; k < base_nominal.size(); ++k)
     rows.push_back({"b" + std::to_string(k), "base", solve(base_nominal[k], "b" + std::to_string(k))});
@@ -119,6 +189,45 @@ void run_simulate(const SimulateArgs& a) {
         throw InputError(a.joints + ":" + std::to_string(table.line_of_row(i)) + ": joints outside the robot's limits",
                          a.joints, table.line_of_row(i), "q1");
       rows.push_back({"p" + std::to_string(i), "target", q[i]});
+    }
+  } else if (scattered) {
+    const double nd = parse_number(a.sample.substr(10), "--sample scattered:N");
+    check_point_budget(nd, "--sample " + a.sample);
+    const int n = static_cast<int>(nd);
+    if (n < 1 || n != nd) throw ArgumentError("--sample scattered:N needs N >= 1, got '" + a.sample + "'");
+    if (!a.joint_box.empty()) {
+      // Joints uniform in a box: poses wherever those joints put the tool, any orientation.
+      const auto v = parse_numbers(a.joint_box, 12, "--joint-box");
+      JointVector lo, hi;
+      for (int j = 0; j < kJointCount; ++j) {
+        lo[j] = v[static_cast<std::size_t>(2 * j)];
+        hi[j] = v[static_cast<std::size_t>(2 * j + 1)];
+        if (!(lo[j] <= hi[j]) || lo[j] < config.nominal.link(j).q_min_deg || hi[j] > config.nominal.link(j).q_max_deg)
+          throw ArgumentError("--joint-box: q" + std::to_string(j + 1) + " [" + format_number(lo[j]) + ", " +
+                              format_number(hi[j]) + "] must be ordered and within the joint limits [" +
+                              format_number(config.nominal.link(j).q_min_deg) + ", " +
+                              format_number(config.nominal.link(j).q_max_deg) + "] of robot '" + config.nominal.name() + "'");
+      }
+      for (int i = 0; i < n; ++i) rows.push_back({"p" + std::to_string(i), "target", random_joints_in_box(lo, hi, rng)});
+    } else {
+      // Positions uniform in the cube, orientations within the cone; poses that are unreachable
+      // (or reachable only on another branch) are drawn again.
+      check_seed();
+      long attempts = 0;
+      for (int i = 0; i < n;) {
+        if (++attempts > 20L * n + 100)
+          throw ArgumentError("--sample " + a.sample + ": too many poses in the cube are unreachable at orientation "
+                              "spread " + format_number(a.orientation_spread) + " deg (" + std::to_string(i) +
+                              " of " + std::to_string(n) + " found); use a smaller --cube or --orientation-spread");
+        Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+        pose.translation() =
+            cube.min_corner_mm + cube.size_mm * Eigen::Vector3d(rng.uniform01(), rng.uniform01(), rng.uniform01());
+        pose.linear() = random_orientation_in_cone(cube.orientation, a.orientation_spread, rng);
+        if (const auto q = try_solve(pose)) {
+          rows.push_back({"p" + std::to_string(i), "target", *q});
+          ++i;
+        }
+      }
     }
   } else {
     std::vector<Eigen::Vector3d> pts;
@@ -136,23 +245,56 @@ void run_simulate(const SimulateArgs& a) {
       for (int i = 0; i < n; ++i)
         pts.push_back(cube.min_corner_mm + cube.size_mm * Eigen::Vector3d(rng.uniform01(), rng.uniform01(), rng.uniform01()));
     } else {
-      throw ArgumentError("--sample: expected grid, cells or random:N, got '" + a.sample + "'");
+      throw ArgumentError("--sample: expected grid, cells, random:N or scattered:N, got '" + a.sample + "'");
     }
-    for (std::size_t i = 0; i < pts.size(); ++i) rows.push_back({"p" + std::to_string(i), "target", solve(pts[i], "p" + std::to_string(i))});
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const std::string id = "p" + std::to_string(i);
+      if (a.orientation_spread == 0.0) {
+        rows.push_back({id, "target", solve(pts[i], id)});
+        continue;
+      }
+      check_seed();
+      Eigen::Isometry3d pose = cube.pose(pts[i]);
+      std::optional<JointVector> q;
+      for (int tries = 0; tries < 50 && !q; ++tries) {
+        pose.linear() = random_orientation_in_cone(cube.orientation, a.orientation_spread, rng);
+        q = try_solve(pose);
+      }
+      if (!q)
+        throw ArgumentError("point " + id + " is not reachable within orientation spread " +
+                            format_number(a.orientation_spread) + " deg; use a smaller --orientation-spread");
+      rows.push_back({id, "target", *q});
+    }
   }
 
   // Visit every row once (bases first, as the paper's reference is measured before the targets):
-  // fresh repeatability noise per move, one tracker reading per visit.
+  // fresh repeatability noise per move, one tracker reading per visit. The robot moves at the
+  // commanded joints; the file records them to --joint-decimals.
   const std::size_t n = rows.size();
   std::vector<Eigen::Vector3d> nominal(n), truth(n), measured(n);
+  std::vector<JointVector> recorded(n);
   for (std::size_t i = 0; i < n; ++i) {
-    nominal[i] = forward_position(config.nominal, rows[i].q);
+    recorded[i] = a.joint_decimals >= 0 ? round_joints(rows[i].q, a.joint_decimals) : rows[i].q;
+    nominal[i] = forward_position(config.nominal, recorded[i]);
     const Eigen::Vector3d reached = robot.move(rows[i].q, rng);
     truth[i] = reached;
     measured[i] = robot.measure(reached, rng);
   }
   std::vector<Eigen::Vector3d> fixed_measured;
   for (const auto& f : fixed) fixed_measured.push_back(robot.measure(f, rng));
+  // Gross outliers: a tracker reading off by outlier_mm in a random direction (a reflector
+  // knocked, a beam break read as a valid point) on target rows only.
+  std::vector<int> is_outlier(n, 0);
+  std::size_t outlier_count = 0;
+  if (outlier_fraction > 0) {
+    SimulationRng orng(config.seed ^ kOutlierStream);
+    const std::size_t first_target = base_nominal.size();
+    for (std::size_t k : choose_outliers(n - first_target, outlier_fraction, orng)) {
+      measured[first_target + k] += outlier_mm * random_unit_vector(orng);
+      is_outlier[first_target + k] = 1;
+      ++outlier_count;
+    }
+  }
   OutputTable out;
   std::vector<std::string> ids(n), kinds(n);
   for (std::size_t i = 0; i < n; ++i) {
@@ -164,7 +306,7 @@ void run_simulate(const SimulateArgs& a) {
   const auto qn = joint_column_names();
   for (int k = 0; k < kJointCount; ++k) {
     std::vector<double> v(n);
-    for (std::size_t i = 0; i < n; ++i) v[i] = rows[i].q[k];
+    for (std::size_t i = 0; i < n; ++i) v[i] = recorded[i][k];
     out.add_numeric_column(qn[static_cast<std::size_t>(k)], v);
   }
   auto add_xyz = [&](const std::vector<Eigen::Vector3d>& p, const char* x, const char* y, const char* z) {
@@ -192,18 +334,34 @@ void run_simulate(const SimulateArgs& a) {
       for (std::size_t i = 0; i < n; ++i) d[i] = (measured[i] - fixed_measured[k]).norm();
       out.add_numeric_column("dist_b" + std::to_string(k), d);
     }
-  if (a.truth_columns) add_xyz(truth, "true_x", "true_y", "true_z");
+  if (a.truth_columns) {
+    add_xyz(truth, "true_x", "true_y", "true_z");
+    std::vector<double> flag(is_outlier.begin(), is_outlier.end());
+    out.add_numeric_column("outlier", flag);
+  }
 
   std::ostringstream text;
   text << "# SIMULATED data (errfield simulate; not a real robot): seed " << config.seed << ", robot '"
-       << config.nominal.name() << "'" << (a.config.empty() ? ", default simulation" : ", config " + a.config) << "\n"
-       << "# q1..q6 commanded joints (deg); x,y,z nominal tool position (robot base frame, mm)";
+       << config.nominal.name() << "'" << (a.config.empty() ? ", default simulation" : ", config " + a.config) << "\n";
+  if (scattered || a.orientation_spread > 0 || a.joint_decimals >= 0 || !a.tool_offset.empty() || outlier_count > 0) {
+    text << "# SIMULATED like real data:";
+    if (scattered) text << " " << a.sample << (a.joint_box.empty() ? " poses in the cube" : " poses in a joint box") << ";";
+    if (a.orientation_spread > 0) text << " tool orientation within " << format_number(a.orientation_spread) << " deg;";
+    if (a.joint_decimals >= 0)
+      text << " q1..q6 recorded to " << a.joint_decimals << " decimals (the robot moved at the unrounded joints);";
+    if (!a.tool_offset.empty()) text << " the true tool differs from the nominal robot's by an offset (--truth-out);";
+    if (outlier_count > 0)
+      text << " " << outlier_count << " gross outlier(s) of " << format_number(outlier_mm) << " mm in the tracker readings;";
+    text << "\n";
+  }
+  text << "# q1..q6 commanded joints (deg); x,y,z nominal tool position (FK of q1..q6, robot base frame, mm)";
   if (want_positions) text << "; mx,my,mz measured position (tracker frame, mm)";
   if (want_distances) text << "; dist_bK measured distance to base point bK (mm)";
   for (std::size_t k = 0; k < fixed.size(); ++k)
     text << "; b" << k << " is a fixed point at " << format_number(fixed[k].x()) << "," << format_number(fixed[k].y())
          << "," << format_number(fixed[k].z()) << " (true, robot base frame, mm; no base row)";
-  if (a.truth_columns) text << "; true_x.. true position (robot base frame, mm; simulation only)";
+  if (a.truth_columns)
+    text << "; true_x.. true position (robot base frame, mm; simulation only); outlier 1 on gross outliers";
   text << "\n" << out.to_csv();
   // All outputs or none (a bad --config-out must not leave a new --out next to an old --truth-out).
   AtomicFileSet outputs;
@@ -228,14 +386,42 @@ void add_simulate_command(CLI::App& app) {
       "visited first (--base), or fixed points in the cell (--fixed-base; no base rows). Default: the\n"
       "paper's set-up (ER20-C10 with the Table 7 ball, 500 mm cube at\n"
       "tool-down orientation, 125 mm grid, base point at the cube corner).\n"
-      "Example: errfield simulate --sample grid --step 125 --out grid.csv --truth-out true_robot.json");
+      "Data that look like real measurements (docs/robot.md): --sample scattered:N (poses anywhere in the\n"
+      "cube, or in a --joint-box), --orientation-spread DEG, --joint-decimals N, --tool-offset (a tool the\n"
+      "nominal robot does not know), --outliers FRACTION:MM and --robot NAME|R.json (e.g. kr16, ur5e).\n"
+      "Example: errfield simulate --sample grid --step 125 --out grid.csv --truth-out true_robot.json\n"
+      "Example: errfield simulate --robot ur5e --sample scattered:80 --orientation-spread 30 --joint-decimals 2\n"
+      "         --tool-offset random:20 --outliers 0.03:5 --robot-out ur5e.json --out real_like.csv");
   cmd->add_option("--config", args->config, "simulation JSON (docs/robot.md); default: the paper's set-up");
-  cmd->add_option("--robot", args->robot, "nominal robot JSON (overrides the config's robot)");
+  cmd->add_option("--robot", args->robot,
+                  "nominal robot: a built-in name (er20-c10, kr16, ur5e; errfield robots) or a robot JSON; overrides "
+                  "the config's robot. A built-in name also sets the default --cube to one that robot reaches");
   cmd->add_option("--seed", args->seed, "random seed (overrides the config's)")->check(kUnsignedInteger);
   cmd->add_option("--joints", args->joints, "CSV with commanded joints q1..q6 (deg) instead of cube points");
-  cmd->add_option("--cube", args->cube, "X0,Y0,Z0,SIZE: cube min corner and side (mm); default the paper cube");
+  cmd->add_option("--cube", args->cube,
+                  "X0,Y0,Z0,SIZE: cube min corner and side (mm); default the paper cube (or the --robot NAME's cube)");
   cmd->add_option("--orientation", args->orientation, "RX,RY,RZ tool orientation in the cube (deg; default 180,0,0)");
-  cmd->add_option("--sample", args->sample, "grid (default), cells (one random point per cell) or random:N");
+  cmd->add_option("--sample", args->sample,
+                  "grid (default), cells (one random point per cell), random:N, or scattered:N (N poses uniform in the "
+                  "cube at orientations within --orientation-spread, drawn again where unreachable; with --joint-box: "
+                  "joints uniform in the box)");
+  cmd->add_option("--orientation-spread", args->orientation_spread,
+                  "DEG: each target's tool orientation varies: its z axis uniform in a cone of this half-angle around "
+                  "--orientation, turned about itself by up to +-DEG (0..90; default 0 = constant orientation)");
+  cmd->add_option("--joint-box", args->joint_box,
+                  "LO1,HI1,...,LO6,HI6 (deg): with --sample scattered:N, joints uniform in this box instead of poses "
+                  "in the cube");
+  cmd->add_option("--joint-decimals", args->joint_decimals,
+                  "N: write q1..q6 rounded to N decimals (0..12), as a controller records them; the robot moved at the "
+                  "unrounded joints and x,y,z are the FK of the rounded ones")
+      ->check(CLI::Range(0, 12));
+  cmd->add_option("--tool-offset", args->tool_offset,
+                  "X,Y,Z (mm, nominal tool frame) or random:MM (random direction, length MM): the true tool/reflector "
+                  "differs from the nominal robot's by this offset, unknown to --robot-out (written to --truth-out "
+                  "and --config-out)");
+  cmd->add_option("--outliers", args->outliers,
+                  "FRACTION:MM: that fraction of the target rows gets a gross tracker error of MM in a random "
+                  "direction (mx,my,mz and the distances); --truth-columns marks them in column 'outlier'");
   cmd->add_option("--step", args->step, "grid step (mm, must divide the cube side; default 125)");
   cmd->add_option("--base", args->bases, "nominal base point X,Y,Z (mm), repeatable; default the cube's min corner");
   cmd->add_option("--fixed-base", args->fixed_bases,
@@ -243,7 +429,8 @@ void add_simulate_command(CLI::App& app) {
                   "not carried by the robot (e.g. a tracker nest); dist_b0.. are distances to these, no base rows "
                   "(calibrate: --base-point); not with --base");
   cmd->add_option("--measure", args->measure, "positions, distances or both (default)");
-  cmd->add_flag("--truth-columns", args->truth_columns, "add true_x,true_y,true_z (the simulator's truth)");
+  cmd->add_flag("--truth-columns", args->truth_columns,
+                "add true_x,true_y,true_z (the simulator's truth) and outlier (1 on gross outliers)");
   cmd->add_option("--truth-out", args->truth_out, "write the simulated true geometry as a robot JSON");
   cmd->add_option("--config-out", args->config_out, "write the full simulation configuration used as JSON");
   cmd->add_option("--robot-out", args->robot_out,

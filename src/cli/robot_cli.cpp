@@ -2,12 +2,25 @@
 
 #include <iostream>
 
+#include <filesystem>
+
+#include "errfield/robot/builtin_robots.hpp"
 #include "errfield/robot/input_checks.hpp"
 
 namespace errfield::cli {
 
 robot::MdhModel load_robot_or_default(const std::string& path) {
   if (path.empty()) return robot::MdhModel::er20_c10();
+  // A built-in name wins unless a file of that name exists (a file called "kr16" is the user's).
+  if (const robot::BuiltinRobot* b = robot::find_builtin_robot(path); b && !std::filesystem::exists(path))
+    return b->model;
+  if (path == "list")
+    throw ArgumentError("--robot list: the built-in robots are " + robot::builtin_robot_names() +
+                        " (errfield robots describes them)");
+  if (!std::filesystem::exists(path))
+    throw InputError("--robot '" + path + "': no such file and not a built-in robot (" + robot::builtin_robot_names() +
+                         "; errfield robots lists them)",
+                     path);
   robot::MdhModel m = robot::MdhModel::load(path);
   if (const auto w = robot::lengths_in_metres(m, path)) std::cerr << "errfield: warning: " << *w << "\n";
   return m;

@@ -13,8 +13,10 @@
 
 namespace errfield::cli {
 
-/// The robot of `--robot PATH`, or the built-in nominal ER20-C10 (no tool) when the path is empty.
-/// Warns on stderr when the file's lengths look like metres (robot/input_checks.hpp).
+/// The robot of `--robot PATH|NAME`: a built-in robot by name (robot/builtin_robots.hpp: er20-c10,
+/// kr16, ur5e) unless a file of that name exists, else a robot JSON; the built-in nominal ER20-C10
+/// (no tool) when empty. Warns on stderr when the file's lengths look like metres
+/// (robot/input_checks.hpp).
 robot::MdhModel load_robot_or_default(const std::string& path);
 
 /// Columns q1..q6 (degrees) of a table, one JointVector per row.

@@ -226,8 +226,11 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
     case CompensationMethod::vector_kriging: {
       FitResult out{CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {}, {}};
       std::vector<Eigen::Vector3d> dp;
-      if (d.distance_mm.size() >= 3) {
-        // registration-free: the full error vector from distances to >= 3 base points
+      // Robot-position bases carry the robot's own error into every distance; recovering error
+      // vectors from them as if they were exact biases every vector, so those data use positions
+      // (the CLI refuses them without positions: input_checks.hpp).
+      if (d.distance_mm.size() >= 3 && d.base_q_deg.empty()) {
+        // registration-free: the full error vector from distances to >= 3 fixed base points
         std::vector<std::vector<double>> dl;
         for (std::size_t k = 0; k < d.distance_mm.size(); ++k) dl.push_back(d.distance_errors(k));
         double worst = 0.0;

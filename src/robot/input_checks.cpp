@@ -4,6 +4,10 @@
 #include <cmath>
 
 #include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
+#include "errfield/robot/builtin_robots.hpp"
+#include "errfield/robot/kinematics.hpp"
+#include "robot/rigid_fit.hpp"
 
 namespace errfield::robot {
 
@@ -75,6 +79,147 @@ std::optional<std::string> joints_outside_limits(const std::vector<JointVector>&
          " deg is outside the joint limits [" + format_number(lo[first_joint]) + ", " + format_number(hi[first_joint]) +
          "] of " + model.name() + (count > 1 ? " (" + std::to_string(count) + " rows are outside in all)" : "") +
          "; check units (degrees) and joint order";
+}
+
+namespace {
+
+std::string mm(double v) { return format_number(std::round(v * 1000.0) / 1000.0); }
+std::string xyz_text(const Eigen::Vector3d& p) { return "(" + mm(p.x()) + ", " + mm(p.y()) + ", " + mm(p.z()) + ")"; }
+
+bool has_xyz(const CsvTable& t, const std::string& prefix) {
+  return t.has_column(prefix + "x") && t.has_column(prefix + "y") && t.has_column(prefix + "z");
+}
+
+std::vector<Eigen::Vector3d> xyz_rows(const CsvTable& t, const std::string& prefix) {
+  const Eigen::MatrixXd m = t.numeric_columns({prefix + "x", prefix + "y", prefix + "z"});
+  std::vector<Eigen::Vector3d> out(static_cast<std::size_t>(m.rows()));
+  for (Eigen::Index i = 0; i < m.rows(); ++i) out[static_cast<std::size_t>(i)] = m.row(i).transpose();
+  return out;
+}
+
+std::string line_of(const CsvTable& t, std::size_t row) { return t.source() + ":" + std::to_string(t.line_of_row(row)); }
+
+}  // namespace
+
+void check_nominal_positions(const CsvTable& t, const MdhModel& model, bool robot_given, double tolerance_mm) {
+  if (!has_xyz(t, "") || t.row_count() == 0) return;
+  const std::vector<Eigen::Vector3d> xyz = xyz_rows(t, "");
+  if (has_xyz(t, "m")) {
+    // Nominal columns that hold the measurements make every error 0: refuse whatever the FK says
+    // (a tracker registered to the robot frame agrees with the FK to a few mm).
+    const std::vector<Eigen::Vector3d> m = xyz_rows(t, "m");
+    double largest = 0.0;
+    for (std::size_t i = 0; i < xyz.size(); ++i) largest = std::max(largest, (xyz[i] - m[i]).norm());
+    if (largest <= 1e-6)
+      throw InputError(t.source() + ": columns x,y,z equal the tracker readings mx,my,mz in every row (largest "
+                           "difference " + format_number(largest) + " mm): the nominal columns must hold where the "
+                           "robot was commanded (FK of q1..q6, robot base frame), not measurements, or every error "
+                           "is 0. Drop x,y,z (errfield computes them from q1..q6 and --robot)",
+                       t.source(), 0, "x");
+  }
+  const Eigen::MatrixXd qm = t.numeric_columns({"q1", "q2", "q3", "q4", "q5", "q6"});
+  const std::size_t n = xyz.size();
+  std::vector<Eigen::Vector3d> fk(n);
+  std::vector<Eigen::Matrix3d> rot(n);
+  std::size_t worst = 0;
+  double worst_mm = -1.0, worst_metres = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Isometry3d pose = forward_kinematics(model, qm.row(static_cast<Eigen::Index>(i)).transpose());
+    fk[i] = pose.translation();
+    rot[i] = pose.linear();
+    const double e = (xyz[i] - fk[i]).norm();
+    if (!(e <= worst_mm)) {
+      worst_mm = e;
+      worst = i;
+    }
+    worst_metres = std::max(worst_metres, (1000.0 * xyz[i] - fk[i]).norm());
+  }
+  if (worst_mm <= tolerance_mm) return;
+  std::string cause;
+  // A constant offset in the tool frame: x,y,z = p_i + R_i t, least squares t = mean(R_i^T e_i).
+  Eigen::Vector3d tool = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) tool += rot[i].transpose() * (xyz[i] - fk[i]);
+  tool /= static_cast<double>(n);
+  double tool_residual = 0.0, rigid_residual = 0.0;
+  for (std::size_t i = 0; i < n; ++i) tool_residual = std::max(tool_residual, (fk[i] + rot[i] * tool - xyz[i]).norm());
+  Eigen::Isometry3d frame = Eigen::Isometry3d::Identity();
+  if (n >= 3) {
+    frame = fit_rigid(fk, xyz);
+    for (std::size_t i = 0; i < n; ++i) rigid_residual = std::max(rigid_residual, (frame * fk[i] - xyz[i]).norm());
+  }
+  if (worst_metres <= tolerance_mm) {
+    cause = "x,y,z look like metres (times 1000 they agree with the FK to " + mm(worst_metres) +
+            " mm): errfield expects millimetres";
+  } else if (tool_residual <= tolerance_mm) {
+    cause = "x,y,z are the FK plus a constant offset " + xyz_text(tool) + " mm in the tool frame (to " +
+            mm(tool_residual) + " mm): a tool or reflector that the robot description lacks (add it as \"tool\" in the "
+            "robot JSON" + (robot_given ? "" : " and give it with --robot") + ")";
+  } else if (n >= 3 && rigid_residual <= tolerance_mm) {
+    const PoseXyzRpy f = to_xyz_rpy(frame);
+    cause = "x,y,z are the FK in another frame (a rigid motion x " + mm(f.x_mm) + " y " + mm(f.y_mm) + " z " +
+            mm(f.z_mm) + " mm, rx " + mm(f.rx_deg) + " ry " + mm(f.ry_deg) + " rz " + mm(f.rz_deg) +
+            " deg fits to " + mm(rigid_residual) + " mm): the robot description's \"base\" differs";
+  } else if (!robot_given) {
+    cause = "no --robot was given, so the built-in ER20-C10 (no tool) was used: give the robot the data come "
+            "from (--robot R.json, or a built-in name: " + builtin_robot_names() + ")";
+  } else {
+    cause = "they are not the FK of robot '" + model.name() +
+            "': a wrong --robot, or joints in another convention (zero offsets, signs, order)";
+  }
+  throw InputError(line_of(t, worst) + ": columns x,y,z " + xyz_text(xyz[worst]) + " are " + mm(worst_mm) +
+                       " mm from the robot's FK " + xyz_text(fk[worst]) + " of q1..q6 (limit " +
+                       format_number(tolerance_mm) + " mm); likely cause: " + cause +
+                       ". If --robot is a calibrated model and x,y,z the controller's nominal positions, drop the "
+                       "x,y,z columns (errfield computes them from q1..q6)",
+                   t.source(), t.line_of_row(worst), "x");
+}
+
+void check_registration_residual(double rms_mm, std::size_t points, const std::string& source, const std::string& what,
+                                 double limit_mm, bool fits_reflector_offset) {
+  if (rms_mm <= limit_mm) return;
+  throw InputError(source + ": " + what + " on " + std::to_string(points) + " points leaves RMS " + mm(rms_mm) +
+                       " mm, beyond the limit " + format_number(limit_mm) +
+                       " mm: the tracker readings and the nominal positions differ by more than a rigid motion" +
+                       (fits_reflector_offset ? std::string(" and a reflector offset") : std::string()) +
+                       ". Likely causes: " +
+                       (fits_reflector_offset
+                            ? std::string("")
+                            : std::string("a tool or reflector offset missing from --robot (a rigid registration "
+                                          "cannot absorb an offset that turns with the flange; 'errfield calibrate "
+                                          "--model position' identifies it with the registration), ")) +
+                       "a wrong --robot (or none given: the built-in ER20-C10), mx,my,mz in metres, or readings not in "
+                       "the rows of their joints",
+                   source);
+}
+
+void check_distance_columns(const CsvTable& t) {
+  const bool has_kind = t.has_column("kind");
+  const std::size_t kind_col = has_kind ? t.column_index("kind") : 0;
+  std::vector<std::size_t> base_rows;
+  for (std::size_t i = 0; has_kind && i < t.row_count(); ++i)
+    if (t.row(i)[kind_col] == "base") base_rows.push_back(i);
+  for (std::size_t k = 0; t.has_column("dist_b" + std::to_string(k)); ++k) {
+    const std::string col = "dist_b" + std::to_string(k);
+    const std::vector<double> d = t.numeric_column(col);
+    for (std::size_t i = 0; i < d.size(); ++i) {
+      const bool own_base = k < base_rows.size() && base_rows[k] == i;
+      if (d[i] > 0 || (own_base && d[i] >= 0)) continue;
+      throw InputError(line_of(t, i) + ": column '" + col + "': " + format_number(d[i]) + "; expected a distance > 0 (mm) " +
+                           (own_base ? "" : "from base point b" + std::to_string(k) + " ") +
+                           "(a tracker distance is never negative, and 0 only on the base row itself)",
+                       t.source(), t.line_of_row(i), col);
+    }
+  }
+}
+
+void check_error_vectors_from_distances(bool robot_position_bases, bool has_positions, const std::string& source) {
+  if (!robot_position_bases || has_positions) return;
+  throw InputError(source + ": 3-D errors from distances need base points whose positions are known: these base "
+                       "points are robot positions (kind=base rows), whose own error enters every distance "
+                       "(dL = n.(dP - dP0)), so taking them as error-free biases every error vector. Measure tracker "
+                       "positions (mx,my,mz), or use fixed base points (no base rows, --base-point X,Y,Z), or a "
+                       "method that accounts for the base's error (distance-kriging, kinematic)",
+                   source, 0, "dist_b0");
 }
 
 }  // namespace errfield::robot

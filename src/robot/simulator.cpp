@@ -88,6 +88,7 @@ void SimulatorConfig::validate() const {
     nonneg(transmission.amplitude_deg[k], "transmission.amplitude_deg[" + std::to_string(i) + "]");
   }
   nonneg(compliance.payload_kg, "compliance.payload_kg");
+  if (!tool_offset_mm.allFinite()) throw ArgumentError("SimulatorConfig: tool_offset_mm has a non-finite entry");
   nonneg(repeatability_sigma_mm, "repeatability_sigma_mm");
   nonneg(tracker.sigma_constant_mm, "tracker.sigma_constant_mm");
   nonneg(tracker.sigma_per_m_mm, "tracker.sigma_per_m_mm");
@@ -97,8 +98,8 @@ SimulatorConfig SimulatorConfig::from_json(const nlohmann::json& j, const std::s
   using namespace detail;
   SimulatorConfig c = paper_default();
   if (!j.is_object()) json_fail(source, "(top level)", "expected a JSON object");
-  json_check_keys(j, {"comment", "seed", "robot", "geometry", "compliance", "transmission", "repeatability_sigma_mm",
-                      "tracker"},
+  json_check_keys(j, {"comment", "seed", "robot", "geometry", "tool_offset_mm", "compliance", "transmission",
+                      "repeatability_sigma_mm", "tracker"},
                   "", source);
   if (j.contains("seed")) {
     if (!j["seed"].is_number_unsigned()) json_fail(source, "seed", "expected a non-negative integer, got " + j["seed"].dump());
@@ -130,6 +131,10 @@ SimulatorConfig SimulatorConfig::from_json(const nlohmann::json& j, const std::s
       if (!g["absorb_rigid_part"].is_boolean()) json_fail(source, "geometry.absorb_rigid_part", "expected true or false");
       c.absorb_rigid_part = g["absorb_rigid_part"].get<bool>();
     }
+  }
+  if (j.contains("tool_offset_mm")) {
+    const auto a = json_array<3>(j["tool_offset_mm"], "tool_offset_mm", source);
+    c.tool_offset_mm = Eigen::Vector3d(a[0], a[1], a[2]);
   }
   if (j.contains("compliance")) {
     const auto& g = j["compliance"];
@@ -185,6 +190,7 @@ nlohmann::json SimulatorConfig::to_json() const {
       {"robot", nominal.to_json()},
       {"geometry", {{"links", links}, {"tool", detail::pose_json(to_isometry(geometry.tool))},
                     {"absorb_rigid_part", absorb_rigid_part}}},
+      {"tool_offset_mm", {tool_offset_mm.x(), tool_offset_mm.y(), tool_offset_mm.z()}},
       {"compliance",
        {{"stiffness_nm_per_rad", compliance.stiffness_nm_per_rad},
         {"link_mass_kg", compliance.link_mass_kg},
@@ -225,6 +231,8 @@ SimulatedRobot::SimulatedRobot(const SimulatorConfig& config)
     const Eigen::Isometry3d fix = fit_rigid(truth, nominal);
     true_geometry_ = true_geometry_.with_base(fix * true_geometry_.base());
   }
+  if (!config_.tool_offset_mm.isZero())
+    true_geometry_ = true_geometry_.with_tool(true_geometry_.tool() * Eigen::Translation3d(config_.tool_offset_mm));
 }
 
 JointVector SimulatedRobot::joint_deflection_deg(const JointVector& q_cmd_deg) const {

@@ -104,9 +104,13 @@ class CommandCsvBadInput : public ::testing::Test {
     write("v.csv", "lag_lo,lag_hi,lag_mean,gamma,pairs\n0,0.5,,,0\n0.5,1,0.8,1.2,10\n1,1.5,1.25,2.5,31\n"
                    "1.5,2,1.73,3.1,6\n2,2.5,2.23,3,8\n2.5,3,2.7,3.05,12\n");
     write("p.csv", "x,y,z\n1200,100,900\n1100,-200,800\n1000,0,1000\n900,300,950\n");
-    EXPECT_EQ(run({"simulate", "--sample", "grid", "--step", "125", "--out", "grid.csv"}).exit_code, 0);
+    // robot.json: the nominal robot with the ball; grid.csv's x,y,z are its FK.
+    EXPECT_EQ(run({"simulate", "--sample", "grid", "--step", "125", "--out", "grid.csv", "--robot-out", "robot.json"}).exit_code,
+              0);
     valid["grid.csv"] = dir.read("grid.csv");
-    EXPECT_EQ(run({"fit", "--data", "grid.csv", "--method", "position-idw", "--out", "model.json"}).exit_code, 0);
+    EXPECT_EQ(run({"fit", "--robot", "robot.json", "--data", "grid.csv", "--method", "position-idw", "--out", "model.json"})
+                  .exit_code,
+              0);
     // Compensation targets: nominal joints of a few grid targets.
     const CsvText grid(valid["grid.csv"]);
     std::string targets = "point,q1,q2,q3,q4,q5,q6\n";
@@ -141,10 +145,11 @@ class CommandCsvBadInput : public ::testing::Test {
         {"ik", "p.csv", "y", {"ik", "--input", "p.csv", "--position-only", "--out", "o.csv"}, "", {"o.csv"}},
         {"simulate --joints", "q.csv", "q5", {"simulate", "--joints", "q.csv", "--out", "o.csv"}, "", {"o.csv"}},
         {"calibrate (position)", "grid.csv", "mx",
-         {"calibrate", "--data", "grid.csv", "--model", "position", "--out", "o.json"}, "", {"o.json"}},
+         {"calibrate", "--robot", "robot.json", "--data", "grid.csv", "--model", "position", "--out", "o.json"}, "", {"o.json"}},
         {"calibrate (distance)", "grid.csv", "dist_b0",
-         {"calibrate", "--data", "grid.csv", "--model", "distance", "--out", "o.json"}, "", {"o.json"}},
-        {"fit", "grid.csv", "q2", {"fit", "--data", "grid.csv", "--method", "position-idw", "--out", "o.json"}, "",
+         {"calibrate", "--robot", "robot.json", "--data", "grid.csv", "--model", "distance", "--out", "o.json"}, "", {"o.json"}},
+        {"fit", "grid.csv", "q2",
+         {"fit", "--robot", "robot.json", "--data", "grid.csv", "--method", "position-idw", "--out", "o.json"}, "",
          {"o.json"}},
         {"compensate", "targets.csv", "q3",
          {"compensate", "--model", "model.json", "--targets", "targets.csv", "--out", "o.csv"},

@@ -283,7 +283,10 @@ TEST(RobotBadInput, CalibrationAtOneRepeatedPoseIsRefused) {
 
 // Runs `errfield simulate` (SIMULATED measurements on the paper's cube) into `file`.
 void simulate(const ScratchDir& dir, const std::string& file) {
-  const auto r = run_errfield({"simulate", "--sample", "grid", "--step", "125", "--out", file}, dir.path());
+  // robot.json: the nominal robot with the paper's ball, which the commands below take as --robot
+  // (its x,y,z are that robot's FK; the built-in ER20-C10 has no tool and is refused).
+  const auto r = run_errfield({"simulate", "--sample", "grid", "--step", "125", "--robot-out", "robot.json", "--out", file},
+                              dir.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
 }
 
@@ -308,7 +311,8 @@ TEST(RobotBadInput, CalibrateCliWithTooFewPosesFailsNamingFileAndCount) {
   simulate(dir, "grid.csv");
   dir.write("few.csv", first_rows(dir.read("grid.csv"), 3));  // base + 2 targets (one at the base)
   for (const std::string model : {"distance", "position"}) {
-    const auto r = run_errfield({"calibrate", "--data", "few.csv", "--model", model, "--out", "c.json"}, dir.path());
+    const auto r = run_errfield(
+        {"calibrate", "--robot", "robot.json", "--data", "few.csv", "--model", model, "--out", "c.json"}, dir.path());
     EXPECT_EQ(r.exit_code, 2) << model;
     EXPECT_THAT(r.err, AllOf(HasSubstr("input error: few.csv: "), HasSubstr("need at least"),
                              HasSubstr("measured " + model), Not(HasSubstr("converged"))))
@@ -317,11 +321,12 @@ TEST(RobotBadInput, CalibrateCliWithTooFewPosesFailsNamingFileAndCount) {
     EXPECT_FALSE(std::filesystem::exists(dir / "c.json")) << model;
   }
   // The whole grid calibrates.
-  const auto r = run_errfield({"calibrate", "--data", "grid.csv", "--out", "c.json"}, dir.path());
+  const auto r = run_errfield({"calibrate", "--robot", "robot.json", "--data", "grid.csv", "--out", "c.json"}, dir.path());
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(std::filesystem::exists(dir / "c.json"));
   // fit --method kinematic calibrates too: the same refusal, naming the file.
-  const auto f = run_errfield({"fit", "--data", "few.csv", "--method", "kinematic", "--out", "m.json"}, dir.path());
+  const auto f = run_errfield({"fit", "--robot", "robot.json", "--data", "few.csv", "--method", "kinematic", "--out", "m.json"},
+                              dir.path());
   EXPECT_EQ(f.exit_code, 2);
   EXPECT_THAT(f.err, AllOf(HasSubstr("few.csv: calibration: "), HasSubstr("need at least")));
 }
@@ -368,18 +373,27 @@ TEST(RobotBadInput, MeasurementsInMetresWarnNamingFileAndColumnsAndStillRun) {
   simulate(dir, "grid.csv");
   const std::string grid = dir.read("grid.csv");
   dir.write("m.csv", to_metres(grid, {"mx", "my", "mz", "dist_b0"}));
+  // Distances in metres are a warning (the run goes on); positions in metres cannot be registered
+  // (residual far beyond the limit: input_checks.hpp), so those runs stop with exit 2 after the
+  // warning that names the likely cause.
   struct Case {
     std::vector<std::string> args;
     std::string words;
+    int exit_code;
   } cases[] = {
-      {{"calibrate", "--data", "m.csv", "--model", "position", "--out", "c.json"}, "m.csv columns mx,my,mz"},
-      {{"calibrate", "--data", "m.csv", "--model", "distance", "--out", "c.json"}, "m.csv column dist_b0"},
-      {{"fit", "--data", "m.csv", "--method", "position-idw", "--out", "f.json"}, "m.csv columns mx,my,mz"},
-      {{"fit", "--data", "m.csv", "--method", "distance-idw", "--out", "f.json"}, "m.csv column dist_b0"},
+      {{"calibrate", "--robot", "robot.json", "--data", "m.csv", "--model", "position", "--out", "c.json"},
+       "m.csv columns mx,my,mz", 2},
+      {{"calibrate", "--robot", "robot.json", "--data", "m.csv", "--model", "distance", "--out", "c.json"},
+       "m.csv column dist_b0", 0},
+      {{"fit", "--robot", "robot.json", "--data", "m.csv", "--method", "position-idw", "--out", "f.json"},
+       "m.csv columns mx,my,mz", 2},
+      {{"fit", "--robot", "robot.json", "--data", "m.csv", "--method", "distance-idw", "--out", "f.json"},
+       "m.csv column dist_b0", 0},
   };
   for (const auto& c : cases) {
     const auto r = run_errfield(c.args, dir.path());
-    EXPECT_EQ(r.exit_code, 0) << testing::command_line(c.args) << r.err;  // a warning, not an error
+    EXPECT_EQ(r.exit_code, c.exit_code) << testing::command_line(c.args) << r.err;
+    if (c.exit_code == 2) EXPECT_THAT(r.err, HasSubstr("registration")) << testing::command_line(c.args);
     EXPECT_THAT(r.err, AllOf(HasSubstr("errfield " + c.args[0] + ": warning: " + c.words), HasSubstr("metres"),
                              HasSubstr("millimetres")))
         << testing::command_line(c.args);
@@ -393,7 +407,10 @@ TEST(RobotBadInput, MeasurementsInMetresWarnNamingFileAndColumnsAndStillRun) {
     EXPECT_THAT(r.err, Not(HasSubstr("metres"))) << testing::command_line(args);
   }
   // compensate: targets as poses in metres.
-  ASSERT_EQ(run_errfield({"fit", "--data", "grid.csv", "--method", "position-idw", "--out", "f.json"}, dir.path()).exit_code, 0);
+  ASSERT_EQ(run_errfield({"fit", "--robot", "robot.json", "--data", "grid.csv", "--method", "position-idw", "--out", "f.json"},
+                         dir.path())
+                .exit_code,
+            0);
   dir.write("t.csv", "x,y,z,rx,ry,rz\n1.0,-0.1,0.5,180,0,0\n1.1,0,0.6,180,0,0\n");
   auto r = run_errfield({"compensate", "--model", "f.json", "--targets", "t.csv", "--out", "j.csv"}, dir.path());
   EXPECT_EQ(r.exit_code, 0) << r.err;

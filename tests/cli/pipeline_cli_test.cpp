@@ -146,12 +146,16 @@ TEST_F(PipelineCli, BadInputGetsClearErrors) {
     EXPECT_NE(c.output().find(needle), std::string::npos) << c.output();
   };
   expect_error(run("fit --data " + path("missing.csv") + " --out " + path("m.json")), "missing.csv");
-  ASSERT_EQ(run("simulate --sample cells --out " + path("cells.csv")).exit_code, 0);
+  ASSERT_EQ(run("simulate --sample cells --robot-out " + path("r.json") + " --out " + path("cells.csv")).exit_code, 0);
   ASSERT_EQ(run("simulate --sample grid --measure distances --out " + path("dist.csv")).exit_code, 0);
-  expect_error(run("fit --data " + path("cells.csv") + " --method distance-idw --out " + path("m.json")), "cells.csv");
-  expect_error(run("fit --data " + path("dist.csv") + " --method position-idw --out " + path("m.json")), "mx");
-  expect_error(run("fit --data " + path("dist.csv") + " --method magic --out " + path("m.json")), "distance-idw");
-  expect_error(run("fit --data " + path("dist.csv") + " --method kinematic+kriging --out " + path("m.json")), "mx");
+  const std::string robot = " --robot " + path("r.json");
+  expect_error(run("fit" + robot + " --data " + path("cells.csv") + " --method distance-idw --out " + path("m.json")),
+               "cells.csv");
+  expect_error(run("fit" + robot + " --data " + path("dist.csv") + " --method position-idw --out " + path("m.json")), "mx");
+  expect_error(run("fit" + robot + " --data " + path("dist.csv") + " --method magic --out " + path("m.json")),
+               "distance-idw");
+  expect_error(run("fit" + robot + " --data " + path("dist.csv") + " --method kinematic+kriging --out " + path("m.json")),
+               "mx");
   EXPECT_FALSE(fs::exists(path("m.json"))) << "no model file after a failed fit";
   {
     std::ofstream(path("bad.json")) << "{\"format\":\"errfield-compensation-model\",\"version\":1,\"method\":\"none\"}";

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "errfield/robot/builtin_robots.hpp"
 #include "errfield/robot/kinematics.hpp"
 
 #ifndef ERRFIELD_NO_KDL
@@ -110,6 +111,37 @@ TEST(KdlPeer, ForwardKinematicsAndJacobianAgreeWithOrocosKdl) {
     const auto j = geometric_jacobian(m, q, EndFrame::tool);
     for (int r = 0; r < 6; ++r)
       for (int c = 0; c < kJointCount; ++c) EXPECT_NEAR(j(r, c), kj(r, c), 1e-9) << "J(" << r << "," << c << ")";
+  }
+#endif
+}
+
+TEST(KdlPeer, BuiltinUr5eAgreesWithKdlStandardDhChain) {
+#ifdef ERRFIELD_NO_KDL
+  GTEST_SKIP() << "Orocos KDL (Debian liborocos-kdl-dev) not found at configure time; KDL cross-check skipped";
+#else
+  // UR's published standard D-H table (support FAQ 45257, mm and rad) as a KDL chain of
+  // KDL::Frame::DH segments (standard convention), against errfield's modified D-H conversion.
+  const double a[6] = {0, -425, -392.2, 0, 0, 0}, d[6] = {162.5, 0, 0, 133.3, 99.7, 99.6};
+  const double alpha[6] = {std::numbers::pi / 2, 0, 0, std::numbers::pi / 2, -std::numbers::pi / 2, 0};
+  KDL::Chain chain;
+  for (int i = 0; i < kJointCount; ++i)
+    chain.addSegment(KDL::Segment(KDL::Joint(KDL::Joint::RotZ), KDL::Frame::DH(a[i], alpha[i], d[i], 0.0)));
+  KDL::ChainFkSolverPos_recursive fk(chain);
+  const MdhModel m = ur5e();
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> u(-360.0, 360.0);
+  for (int k = 0; k < 200; ++k) {
+    JointVector q;
+    KDL::JntArray jq(kJointCount);
+    for (int i = 0; i < kJointCount; ++i) {
+      q[i] = u(rng);
+      jq(i) = q[i] * kDeg;
+    }
+    KDL::Frame solved;
+    ASSERT_GE(fk.JntToCart(jq, solved), 0);
+    const Eigen::Matrix4d ours = forward_kinematics(m, q, EndFrame::flange).matrix();
+    EXPECT_LT((ours.block<3, 1>(0, 3) - to_eigen(solved).block<3, 1>(0, 3)).norm(), 1e-9) << "sample " << k;
+    EXPECT_LT((ours.block<3, 3>(0, 0) - to_eigen(solved).block<3, 3>(0, 0)).cwiseAbs().maxCoeff(), 1e-12);
   }
 #endif
 }

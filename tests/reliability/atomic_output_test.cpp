@@ -490,13 +490,14 @@ TEST(AtomicCliOutput, CalibrateWritesOutAndReportAllOrNone) {
   simulate_into(dir, "125", "g.csv");
   dir.write("cal.json", kOld);
   dir.write("cal.txt", kOld);
-  auto r = testing::run_errfield({"calibrate", "--data", "g.csv", "--out", "cal.json", "--report", "nodir/cal.txt"},
+  auto r = testing::run_errfield({"calibrate", "--robot", "robot.json", "--data", "g.csv", "--out", "cal.json", "--report", "nodir/cal.txt"},
                                  dir.path());
   EXPECT_NE(r.exit_code, 0);
   EXPECT_THAT(r.err, HasSubstr("nodir/cal.txt"));
   EXPECT_EQ(dir.read("cal.json"), kOld) << "the model was replaced although the report could not be written";
   EXPECT_TRUE(unexpected_entries(dir, {"g.csv", "robot.json", "cal.json", "cal.txt"}).empty());
-  r = testing::run_errfield({"calibrate", "--data", "g.csv", "--out", "cal.json", "--report", "cal.txt"}, dir.path());
+  r = testing::run_errfield({"calibrate", "--robot", "robot.json", "--data", "g.csv", "--out", "cal.json", "--report", "cal.txt"},
+                            dir.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(dir.read("cal.json"), kOld);
   EXPECT_NE(dir.read("cal.txt"), kOld);
@@ -507,7 +508,7 @@ TEST(AtomicCliOutput, SigintDuringCalibrateLeavesPreviousOutputs) {
   simulate_into(dir, "25", "g.csv");  // 9,262 measurements: seconds of Levenberg-Marquardt
   dir.write("cal.json", kOld);
   dir.write("cal.txt", kOld);
-  expect_sigint_keeps_previous(dir, {"calibrate", "--data", "g.csv", "--out", "cal.json", "--report", "cal.txt"},
+  expect_sigint_keeps_previous(dir, {"calibrate", "--robot", "robot.json", "--data", "g.csv", "--out", "cal.json", "--report", "cal.txt"},
                                {"g.csv", "robot.json", "cal.json", "cal.txt"}, {"cal.json", "cal.txt"});
 }
 

@@ -148,10 +148,12 @@ std::vector<Case> cases() {
        {"m.csv", "truth.json"}},
       {"calibrate",
        [](const ScratchDir& d) {
-         const auto r = testing::run_errfield({"simulate", "--seed", "42", "--step", "250", "--out", "data.csv"}, d.path());
+         // robot.json: the simulated nominal robot with its ball, whose FK the data's x,y,z are.
+         const auto r = testing::run_errfield(
+             {"simulate", "--seed", "42", "--step", "250", "--out", "data.csv", "--robot-out", "robot.json"}, d.path());
          ASSERT_EQ(r.exit_code, 0) << r.err;
        },
-       {"calibrate", "--data", "data.csv", "--out", "cal.json", "--report", "cal.txt"},
+       {"calibrate", "--robot", "robot.json", "--data", "data.csv", "--out", "cal.json", "--report", "cal.txt"},
        {"cal.json", "cal.txt"}},
   };
   // fit-variogram on the variogram of simulated samples; fk and ik on the plan's joints and poses.

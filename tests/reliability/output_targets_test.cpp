@@ -121,12 +121,16 @@ TEST(OutputNames, ALinkToACharacterDeviceIsWrittenThroughNotReplaced) {
   auto r = run_errfield(variogram_to("sink"), dir.path());
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(fs::is_symlink(dir.path() / "sink")) << "replaced by a regular file";
-  ASSERT_EQ(run_errfield({"simulate", "--seed", "5", "--step", "250", "--out", "s.csv"}, dir.path()).exit_code, 0);
-  r = run_errfield({"calibrate", "--data", "s.csv", "--out", "c.json", "--report", "sink"}, dir.path());
+  ASSERT_EQ(
+      run_errfield({"simulate", "--seed", "5", "--step", "250", "--out", "s.csv", "--robot-out", "r.json"}, dir.path())
+          .exit_code,
+      0);
+  r = run_errfield({"calibrate", "--robot", "r.json", "--data", "s.csv", "--out", "c.json", "--report", "sink"},
+                   dir.path());
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(fs::is_symlink(dir.path() / "sink"));
   EXPECT_TRUE(fs::is_character_file("/dev/null"));
-  EXPECT_THAT(dir.entries(), ElementsAre("c.json", "g.csv", "s.csv", "sink"));
+  EXPECT_THAT(dir.entries(), ElementsAre("c.json", "g.csv", "r.json", "s.csv", "sink"));
 }
 
 TEST(OutputNames, AFifoIsWrittenThroughNotReplaced) {

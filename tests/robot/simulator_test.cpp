@@ -9,6 +9,7 @@
 
 #include "errfield/error.hpp"
 #include "errfield/robot/distance_error.hpp"
+#include "errfield/robot/simulated_data.hpp"
 
 namespace errfield::robot {
 namespace {
@@ -235,6 +236,104 @@ TEST(SimulatorConfig, JsonRoundTripAndFieldErrors) {
   expect_error({{"compliance", {{"payload_kg", -1}}}}, "payload_kg");
   expect_error({{"tracker", {{"sigma_per_m", 1}}}}, "tracker.sigma_per_m");
   expect_error({{"geometry", {{"links", {{{"a_mm", "x"}}, {}, {}, {}, {}, {}}}}}}, "geometry.links[0].a_mm");
+}
+
+}  // namespace
+}  // namespace errfield::robot
+
+namespace errfield::robot {
+namespace {
+
+// ---- real-looking data (simulated_data.hpp) ----------------------------------------------------
+
+TEST(SimulatedData, OrientationsFillTheConeUniformly) {
+  SimulationRng rng(21);
+  const Eigen::Matrix3d center = rotation_from_rpy_deg(180, 0, 0);
+  const double spread = 30.0;
+  const int n = 20000;
+  double sum_cos = 0.0, largest_tilt = 0.0, largest_spin = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Matrix3d r = random_orientation_in_cone(center, spread, rng);
+    ASSERT_LT((r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-12);
+    ASSERT_NEAR(r.determinant(), 1.0, 1e-12);
+    const Eigen::Matrix3d rel = center.transpose() * r;  // tilt then spin, in the centre's frame
+    const double c = rel(2, 2);
+    sum_cos += c;
+    largest_tilt = std::max(largest_tilt, std::acos(std::min(1.0, c)) / kDeg);
+    // The spin: the rotation left after undoing the tilt that takes z to rel's z.
+    const Eigen::Matrix3d untilt =
+        Eigen::Quaterniond::FromTwoVectors(rel.col(2), Eigen::Vector3d::UnitZ()).toRotationMatrix() * rel;
+    largest_spin = std::max(largest_spin, std::abs(std::atan2(untilt(1, 0), untilt(0, 0))) / kDeg);
+  }
+  EXPECT_LE(largest_tilt, spread + 1e-9);
+  EXPECT_GT(largest_tilt, spread - 0.5);
+  EXPECT_LE(largest_spin, spread + 1e-6);
+  // Uniform over the cap's area: cos(tilt) uniform in [cos 30, 1], mean (1 + cos 30) / 2; the
+  // tolerance is 5 standard errors (sd of a uniform of width w is w / sqrt 12).
+  const double w = 1.0 - std::cos(spread * kDeg);
+  EXPECT_NEAR(sum_cos / n, (1.0 + std::cos(spread * kDeg)) / 2, 5 * w / std::sqrt(12.0 * n));
+  EXPECT_EQ(random_orientation_in_cone(center, 0.0, rng), center);
+  EXPECT_THROW(random_orientation_in_cone(center, -1.0, rng), ArgumentError);
+}
+
+TEST(SimulatedData, UnitVectorsAreUniformOnTheSphere) {
+  SimulationRng rng(22);
+  const int n = 20000;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d v = random_unit_vector(rng);
+    ASSERT_NEAR(v.norm(), 1.0, 1e-12);
+    mean += v / n;
+    second += v * v.transpose() / n;
+  }
+  // E[v] = 0, E[v v^T] = I / 3; component sd 1/sqrt(3), of v_i^2 sqrt(4/45).
+  EXPECT_LT(mean.cwiseAbs().maxCoeff(), 5 / std::sqrt(3.0 * n));
+  EXPECT_LT((second - Eigen::Matrix3d::Identity() / 3).cwiseAbs().maxCoeff(), 5 * std::sqrt(4.0 / 45 / n));
+}
+
+TEST(SimulatedData, JointsRoundedAsWritten) {
+  JointVector q;
+  q << 12.345678, -0.125, 179.99951, -45.0, 0.0049, 1e-9;
+  const JointVector r2 = round_joints(q, 2);
+  JointVector want;
+  want << 12.35, -0.13, 180.0, -45.0, 0.0, 0.0;
+  EXPECT_EQ(r2, want);
+  EXPECT_EQ(round_joints(q, 12), q.unaryExpr([](double v) { return std::round(v * 1e12) / 1e12; }).eval());
+  EXPECT_THROW(round_joints(q, 13), ArgumentError);
+  EXPECT_THROW(round_joints(q, -1), ArgumentError);
+}
+
+TEST(SimulatedData, OutlierRowsDistinctAndCounted) {
+  SimulationRng rng(23);
+  const auto rows = choose_outliers(40, 0.1, rng);
+  ASSERT_EQ(rows.size(), 4u);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_LT(rows[i], 40u);
+    if (i) EXPECT_LT(rows[i - 1], rows[i]);
+  }
+  EXPECT_TRUE(choose_outliers(40, 0.0, rng).empty());
+  EXPECT_EQ(choose_outliers(7, 1.0, rng).size(), 7u);
+  EXPECT_THROW(choose_outliers(5, 1.5, rng), ArgumentError);
+  // Every row equally likely: over many draws each of 10 rows is hit ~30% of the time.
+  std::array<int, 10> hits{};
+  for (int k = 0; k < 5000; ++k)
+    for (std::size_t i : choose_outliers(10, 0.3, rng)) ++hits[i];
+  for (int h : hits) EXPECT_NEAR(h / 5000.0, 0.3, 5 * std::sqrt(0.3 * 0.7 / 5000));
+}
+
+TEST(SimulatedData, ToolOffsetStaysWholeInTheTrueRobot) {
+  SimulatorConfig c = SimulatorConfig::paper_default();
+  const SimulatedRobot plain(c);
+  c.tool_offset_mm = Eigen::Vector3d(3, -40, 12);
+  const SimulatedRobot offset(c);
+  // Same absorbed base, the tool moved by exactly the offset in its own frame.
+  EXPECT_LT((plain.true_geometry().base().matrix() - offset.true_geometry().base().matrix()).cwiseAbs().maxCoeff(), 1e-12);
+  const Eigen::Vector3d d = plain.true_geometry().tool().linear().transpose() *
+                            (offset.true_geometry().tool().translation() - plain.true_geometry().tool().translation());
+  EXPECT_LT((d - c.tool_offset_mm).norm(), 1e-12);
+  // And the JSON round trip keeps it.
+  EXPECT_EQ(SimulatorConfig::from_json(c.to_json()).tool_offset_mm, c.tool_offset_mm);
 }
 
 }  // namespace

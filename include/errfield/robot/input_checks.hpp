@@ -1,9 +1,15 @@
 #pragma once
-/// Plausibility checks on robot data read from files, for warnings (not errors): measured
-/// positions that look like metres where millimetres are expected, and joint angles outside the
-/// model's limits (often radians where degrees are expected, or a wrong joint order). Use them
-/// where a command or pipeline reads positions or joint angles; print the returned text to the
-/// user and carry on, since the data may be right after all.
+/// Plausibility checks on robot data read from files.
+///
+/// Warnings (the data may be right after all; print the text and carry on): measured positions
+/// that look like metres where millimetres are expected, and joint angles outside the model's
+/// limits (often radians where degrees are expected, or a wrong joint order).
+///
+/// Errors (`check_*`: throw InputError with file:line and the likely cause; the CLI exits 2): data
+/// that cannot be what the command takes them for - nominal x,y,z that are not the robot's FK,
+/// a tracker registration that leaves more than a rigid motion can explain, distances <= 0, and
+/// robot-position base points taken as error-free. docs/robot.md ("Checks on the input") lists them
+/// with their limits.
 
 #include <optional>
 #include <string>
@@ -11,6 +17,7 @@
 
 #include <Eigen/Core>
 
+#include "errfield/csv_table.hpp"
 #include "errfield/robot/mdh_model.hpp"
 #include "errfield/row_labels.hpp"
 
@@ -43,5 +50,45 @@ std::optional<std::string> distances_in_metres(const std::vector<double>& distan
 /// limits, and how many rows are; nothing when all are within. `slack_deg` widens the limits.
 std::optional<std::string> joints_outside_limits(const std::vector<JointVector>& q_deg, const MdhModel& model,
                                                  const RowLabels& labels, double slack_deg = 1e-9);
+
+/// How far (mm) a row's nominal x,y,z may lie from the FK of its joints: joints recorded to two
+/// decimals move a 2 m arm's tool by ~0.2 mm, a wrong robot or a missing tool by tens of mm.
+inline constexpr double kNominalFkToleranceMm = 5.0;
+
+/// Throws InputError when `table` has x,y,z and some row's x,y,z lies more than `tolerance_mm`
+/// from forward_position(model, q1..q6), naming the worst row (file:line), both positions and
+/// the likely cause, tested in this order: x,y,z in metres; the FK with a constant tool offset
+/// (a tool or reflector missing from the robot; the offset is given); the FK in another frame (a
+/// base transform missing); else a wrong robot - "no --robot given, the built-in ER20-C10 was
+/// used" when `robot_given` is false. Also throws when x,y,z equal the tracker readings mx,my,mz
+/// in every row (nominal columns holding measurements: every error would be 0), whatever the FK
+/// says. Nothing happens for a table without x,y,z.
+void check_nominal_positions(const CsvTable& table, const MdhModel& model, bool robot_given,
+                             double tolerance_mm = kNominalFkToleranceMm);
+
+/// Registration tracker -> robot residual (RMS over the points, mm) beyond which a rigid motion
+/// cannot be what separates the readings from the nominal positions: an uncalibrated arm's error
+/// left after a rigid fit is ~0.1-3 mm; a tool or reflector offset that turns with the flange, a
+/// wrong robot or rows out of order leave tens of mm.
+inline constexpr double kRegistrationRmsLimitMm = 5.0;
+
+/// Throws InputError (naming `source`, the residual, the limit and the likely causes) when
+/// `rms_mm` exceeds `limit_mm`. `what` says which registration ("registration tracker -> robot");
+/// `fits_reflector_offset`: the registration fitted a reflector offset too (then a missing tool is
+/// not the cause).
+void check_registration_residual(double rms_mm, std::size_t points, const std::string& source,
+                                 const std::string& what, double limit_mm = kRegistrationRmsLimitMm,
+                                 bool fits_reflector_offset = false);
+
+/// Throws InputError naming file:line and column when a distance column dist_b0, dist_b1, ... holds
+/// a value <= 0, except 0 (or more) on the K-th base row (kind=base) of dist_bK: its distance to
+/// itself. Non-finite cells are refused by CsvTable already.
+void check_distance_columns(const CsvTable& table);
+
+/// Throws InputError when 3-D errors would be recovered from distances to robot-position base
+/// points (`robot_position_bases`: base rows with joints) and no tracker positions are available:
+/// the robot's own error at each base enters every distance (dL = n·(dP − dP0)), so taking the
+/// bases as error-free gives errors biased by the bases' errors.
+void check_error_vectors_from_distances(bool robot_position_bases, bool has_positions, const std::string& source);
 
 }  // namespace errfield::robot

@@ -73,6 +73,9 @@ struct SimulatorConfig {
   /// Absorb the best-fit rigid motion of the geometric error into the true base frame (computed
   /// over `absorb_joints_lo/hi`-uniform configurations). Leaves only non-rigid geometric error.
   bool absorb_rigid_part = true;
+  /// A tool/reflector offset the nominal robot does not know (mm, in the tool frame), added to the
+  /// true tool after the rigid part is absorbed, so it stays whole (`simulate --tool-offset`).
+  Eigen::Vector3d tool_offset_mm = Eigen::Vector3d::Zero();
   ComplianceModel compliance;
   TransmissionErrorModel transmission;
   /// Repeatability: per-axis Gaussian sigma of the position at each move (mm). 0.02 mm per axis
