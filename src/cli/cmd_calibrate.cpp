@@ -12,6 +12,7 @@
 #include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/input_checks.hpp"
 #include "errfield/robot/calibration.hpp"
 
 namespace errfield::cli {
@@ -56,6 +57,11 @@ void run_calibrate(const CalibrateArgs& a) {
     const Eigen::MatrixXd m = table.numeric_columns({"mx", "my", "mz"});
     std::vector<PositionMeasurement> data;
     for (std::size_t i = 0; i < q.size(); ++i) data.push_back({q[i], m.row(static_cast<Eigen::Index>(i)).transpose()});
+    {
+      Eigen::MatrixXd p(m.rows(), 3);
+      for (std::size_t i = 0; i < q.size(); ++i) p.row(static_cast<Eigen::Index>(i)) = forward_position(nominal, q[i]).transpose();
+      if (const auto why = tracker_frozen(m, p)) throw InputError(a.data + ": " + *why, a.data, 0, "mx");
+    }
     // Registration first (tracker <- robot base and reflector offset), then the full model in the
     // tracker frame; the output is expressed back in the registered robot frame.
     const CalibrationResult reg = with_source(a.data, [&] { return register_tracker(nominal, data, options); });
@@ -104,6 +110,9 @@ void run_calibrate(const CalibrateArgs& a) {
                                format_number(d[i]) + "; expected a distance > 0 to fixed base point " +
                                std::to_string(k),
                            a.data, table.line_of_row(i), col);
+        if (const auto why = implausible_distance(d[i], (forward_position(nominal, q[i]) - fixed[k]).norm(), nominal))
+          throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": column '" + col + "': " + *why,
+                           a.data, table.line_of_row(i), col);
         data.push_back({q[i], JointVector::Zero(), d[i], static_cast<int>(k)});
       }
     }
@@ -142,6 +151,10 @@ void run_calibrate(const CalibrateArgs& a) {
         if (d[i] <= 0)
           throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": column '" + col + "': " +
                                format_number(d[i]) + "; expected a distance > 0 for a point other than the base",
+                           a.data, table.line_of_row(i), col);
+        const double nominal_d = (forward_position(nominal, q[i]) - forward_position(nominal, q[base_rows[k]])).norm();
+        if (const auto why = implausible_distance(d[i], nominal_d, nominal))
+          throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": column '" + col + "': " + *why,
                            a.data, table.line_of_row(i), col);
         data.push_back({q[i], q[base_rows[k]], d[i]});
       }

@@ -106,7 +106,7 @@ void run_ik(const IkArgs& a) {
     if (is_seed) continue;
     std::vector<std::string> cells(n);
     for (std::size_t r = 0; r < n; ++r) cells[r] = table.row(r)[c];
-    out.add_column(table.header()[c], std::move(cells));
+    out.put_column(table.header()[c], std::move(cells));  // the input's own text
   }
   for (int k = 0; k < robot::kJointCount; ++k) out.add_numeric_column(qnames[static_cast<std::size_t>(k)], q[static_cast<std::size_t>(k)]);
   out.add_column("status", status);

@@ -1,5 +1,7 @@
 #include "errfield/robot/model_fitting.hpp"
 
+#include "errfield/robot/input_checks.hpp"
+
 #include <cmath>
 
 #include "errfield/cross_validation.hpp"
@@ -11,6 +13,7 @@
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/distance_error.hpp"
 #include "errfield/robot/error_fields.hpp"
+#include "errfield/robot/input_checks.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/scattered_idw.hpp"
 #include "robot/rigid_fit.hpp"
@@ -61,6 +64,29 @@ MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& rob
                          " base points; add rows with kind=base or give the base points (--base-point X,Y,Z)",
                      t.source());
   if (m.q_deg.empty()) throw InputError(t.source() + ": no target rows", t.source());
+  // Implausible measurements are refused here, before any method turns them into corrections.
+  std::vector<std::size_t> target_rows;
+  for (std::size_t r = 0; r < t.row_count(); ++r)
+    if (!has_kind || t.row(r)[kind_col] != "base") target_rows.push_back(r);
+  for (std::size_t k = 0; k < dist.size(); ++k)
+    for (std::size_t i = 0; i < m.q_deg.size(); ++i) {
+      const double nominal = (m.nominal_mm[i] - m.base_nominal_mm[k]).norm();
+      if (nominal < 1.0) continue;  // the point at its base: no distance to speak of
+      if (const auto why = implausible_distance(m.distance_mm[k][i], nominal, robot)) {
+        const std::size_t line = t.line_of_row(target_rows[i]);
+        const std::string col = "dist_b" + std::to_string(k);
+        throw InputError(t.source() + ":" + std::to_string(line) + ": column '" + col + "': " + *why, t.source(), line,
+                         col);
+      }
+    }
+  if (has_m) {
+    Eigen::MatrixXd measured(static_cast<Eigen::Index>(m.q_deg.size()), 3), nominal(measured.rows(), 3);
+    for (std::size_t i = 0; i < m.q_deg.size(); ++i) {
+      measured.row(static_cast<Eigen::Index>(i)) = m.measured_mm[i].transpose();
+      nominal.row(static_cast<Eigen::Index>(i)) = m.nominal_mm[i].transpose();
+    }
+    if (const auto why = tracker_frozen(measured, nominal)) throw InputError(t.source() + ": " + *why, t.source(), 0, "mx");
+  }
   return m;
 }
 
