@@ -34,8 +34,8 @@ void add_reproduce_command(CLI::App& app) {
     options.seed = args->seed;
     options.runs = args->runs;
     options.threads = args->threads;
+    check_thread_count("--threads", args->threads);  // naming the option, before validate() does
     options.validate();
-    check_thread_count("--threads", args->threads);
     // Each run is a simulated robot, its measurements and six fitted methods (about a second and
     // a few MB while it lasts); 2e9 runs exhausted the memory before the first finished.
     constexpr int kMaxRuns = 10000;

@@ -75,13 +75,14 @@ class SilentResults : public CliTest {
 TEST_F(SilentResults, FitRefusesZeroNegativeAndAbsurdDistancesNamingFileLineAndColumn) {
   simulate("g.csv");
   const std::string g = read("g.csv");
-  for (const std::string v : {"0", "-5", "1e300"}) {
+  const std::pair<std::string, std::string> values[] = {{"0", "0 mm"}, {"-5", "-5 mm"}, {"1e300", "1e+300 mm"}};
+  for (const auto& [v, shown] : values) {
     write("bad.csv", with_cell(g, "dist_b0", 5, v));
     for (const std::string method : {"distance-idw", "distance-kriging"}) {
       const auto r = run("fit --data " + path("bad.csv") + " --method " + method + " --out " + path("m.json"));
       EXPECT_EQ(r.exit_code, 2) << v << " " << method << ": " << r.err;
       // data row 5 is on line 5 + 1 (header) + the comment lines; the message names it
-      EXPECT_THAT(r.err, AllOf(HasSubstr("bad.csv:"), HasSubstr("column 'dist_b0': " + v))) << v;
+      EXPECT_THAT(r.err, AllOf(HasSubstr("bad.csv:"), HasSubstr("column 'dist_b0': " + shown))) << v;
       EXPECT_FALSE(exists("m.json")) << v << " " << method;
     }
   }
@@ -301,7 +302,18 @@ TEST_F(SilentResults, CommandsRunOnTheirOwnOutputsReplaceColumnsNeverDuplicate) 
 TEST_F(SilentResults, IdwWithAHugePowerIsTheNearestVertexNotAnEmptyPrediction) {
   simulate("g.csv");
   ASSERT_EQ(run("fit --data " + path("g.csv") + " --method distance-idw --power 1e6 --out " + path("m.json")).exit_code, 0);
-  write("t.csv", "q1,q2,q3,q4,q5,q6\n0,-20,30,0,40,0\n10,-10,20,0,30,0\n");
+  // Targets inside the cube but at no grid node: joints halfway between neighbouring nodes' joints.
+  const CsvTable g = CsvTable::read(path("g.csv"));
+  std::string t = "q1,q2,q3,q4,q5,q6\n";
+  const std::pair<std::size_t, std::size_t> neighbours[] = {{1, 2}, {5, 6}, {13, 14}};
+  for (const auto& [a, b] : neighbours) {
+    for (int j = 0; j < 6; ++j) {
+      const std::size_t col = g.column_index("q" + std::to_string(j + 1));
+      t += (j ? "," : "") + format_number((g.numeric_cell(a, col) + g.numeric_cell(b, col)) / 2);
+    }
+    t += "\n";
+  }
+  write("t.csv", t);
   const auto r = run("compensate --model " + path("m.json") + " --targets " + path("t.csv") + " --out " + path("c.csv"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const CsvTable c = CsvTable::read(path("c.csv"));
