@@ -91,6 +91,7 @@ void run_calibrate(const CalibrateArgs& a) {
     for (std::size_t k = 0; k < fixed.size(); ++k) {
       const std::string col = "dist_b" + std::to_string(k);
       const std::vector<double> d = table.numeric_column(col);
+      const bool in_metres = distances_in_metres(d, nominal, {}).has_value();  // warned about, not refused
       for (std::size_t i = 0; i < table.row_count(); ++i) {
         const std::string kind = has_kind ? table.row(i)[kind_col] : "target";
         if (kind == "base")
@@ -110,7 +111,8 @@ void run_calibrate(const CalibrateArgs& a) {
                                format_number(d[i]) + "; expected a distance > 0 to fixed base point " +
                                std::to_string(k),
                            a.data, table.line_of_row(i), col);
-        if (const auto why = implausible_distance(d[i], (forward_position(nominal, q[i]) - fixed[k]).norm(), nominal))
+        if (const auto why = implausible_distance(d[i], (forward_position(nominal, q[i]) - fixed[k]).norm(), nominal,
+                                                  !in_metres))
           throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": column '" + col + "': " + *why,
                            a.data, table.line_of_row(i), col);
         data.push_back({q[i], JointVector::Zero(), d[i], static_cast<int>(k)});
@@ -139,6 +141,7 @@ void run_calibrate(const CalibrateArgs& a) {
     for (std::size_t k = 0; k < base_rows.size(); ++k) {
       const std::string col = "dist_b" + std::to_string(k);
       const std::vector<double> d = table.numeric_column(col);
+      const bool in_metres = distances_in_metres(d, nominal, {}).has_value();  // warned about, not refused
       for (std::size_t i = 0; i < table.row_count(); ++i) {
         const auto it = std::find(base_rows.begin(), base_rows.end(), i);
         if (it != base_rows.end() && static_cast<std::size_t>(it - base_rows.begin()) <= k) continue;  // each base pair once
@@ -153,7 +156,7 @@ void run_calibrate(const CalibrateArgs& a) {
                                format_number(d[i]) + "; expected a distance > 0 for a point other than the base",
                            a.data, table.line_of_row(i), col);
         const double nominal_d = (forward_position(nominal, q[i]) - forward_position(nominal, q[base_rows[k]])).norm();
-        if (const auto why = implausible_distance(d[i], nominal_d, nominal))
+        if (const auto why = implausible_distance(d[i], nominal_d, nominal, !in_metres))
           throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": column '" + col + "': " + *why,
                            a.data, table.line_of_row(i), col);
         data.push_back({q[i], q[base_rows[k]], d[i]});

@@ -77,12 +77,13 @@ std::optional<std::string> joints_outside_limits(const std::vector<JointVector>&
          "; check units (degrees) and joint order";
 }
 
-std::optional<std::string> implausible_distance(double measured_mm, double nominal_mm, const MdhModel& model) {
+std::optional<std::string> implausible_distance(double measured_mm, double nominal_mm, const MdhModel& model,
+                                                bool near_nominal) {
   if (!(measured_mm > 0.0))
     return format_number(measured_mm) + " mm; expected a distance > 0 (the nominal distance is " +
            format_number(std::round(nominal_mm * 1000) / 1000) + " mm)";
   const double limit = reach_scale_mm(model) / 10.0;
-  if (std::abs(measured_mm - nominal_mm) <= limit) return std::nullopt;
+  if (!near_nominal || std::abs(measured_mm - nominal_mm) <= limit) return std::nullopt;
   return format_number(measured_mm) + " mm, but the nominal distance is " +
          format_number(std::round(nominal_mm * 1000) / 1000) + " mm: an error of " +
          format_number(std::round((measured_mm - nominal_mm) * 1000) / 1000) + " mm, more than a tenth of " +
@@ -99,7 +100,7 @@ std::optional<std::string> tracker_frozen(const Eigen::MatrixXd& measured_mm, co
     return (p.rowwise() - c).rowwise().norm().maxCoeff();
   };
   const double nominal = spread(nominal_mm), measured = spread(measured_mm);
-  if (!(nominal > 1.0) || measured > nominal * 1e-3) return std::nullopt;
+  if (!(nominal > 1.0) || measured > nominal * 1e-6) return std::nullopt;
   return "the " + std::to_string(measured_mm.rows()) + " measured positions (mx,my,mz) lie within " +
          format_number(measured) + " mm of their mean while the nominal positions spread over " +
          format_number(std::round(nominal)) +

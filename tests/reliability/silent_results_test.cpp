@@ -157,6 +157,20 @@ TEST_F(SilentResults, OverflowingResultsAreRefusedNotWrittenAsInf) {
   }
 }
 
+// ik wrote residual_mm = inf for a target 1e300 away.
+TEST_F(SilentResults, IkNeverWritesANonFiniteResidual) {
+  write("far.csv", "x,y,z,rx,ry,rz\n1200,0,900,180,0,180\n1e300,0,900,180,0,180\n");
+  write("o.csv", "previous\n");
+  const auto r = run("ik --input " + path("far.csv") + " --out " + path("o.csv"));
+  if (r.exit_code == 0) {
+    EXPECT_THAT(read("o.csv"), AllOf(Not(HasSubstr("inf")), Not(HasSubstr("nan"))));
+  } else {
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_THAT(r.err, AllOf(HasSubstr("row 2"), HasSubstr("non-finite")));
+    EXPECT_EQ(read("o.csv"), "previous\n");
+  }
+}
+
 // --clamp reported a 1e300 target as "interpolated" with an empty prediction.
 TEST_F(SilentResults, ClampRefusesATargetTooFarToInterpolate) {
   std::string grid = "x,y,z,v\n";

@@ -43,7 +43,10 @@ std::optional<std::string> distances_in_metres(const std::vector<double>& distan
 /// reach_scale_mm(model) / 10 of the nominal distance (250 mm for the ER20-C10; positioning
 /// errors are millimetres). Distances of 1e300 "calibrated" to a robot with 1e300 mm links, and a
 /// negative dist_b0 became a 1 m correction marked ok. The caller adds file, line and column.
-std::optional<std::string> implausible_distance(double measured_mm, double nominal_mm, const MdhModel& model);
+/// `near_nominal` false checks only > 0: for a column that distances_in_metres warns about (a
+/// warning, not an error, by the bad-input catalogue), whose errors are then all about -d.
+std::optional<std::string> implausible_distance(double measured_mm, double nominal_mm, const MdhModel& model,
+                                                bool near_nominal = true);
 
 /// Why tracker positions (N x 3, mm) cannot be measurements of the robot at the nominal positions
 /// (N x 3), or nothing: when the nominal positions spread over more than 1 mm and the measured
