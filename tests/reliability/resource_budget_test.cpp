@@ -236,12 +236,19 @@ TEST(ResourceBudget, LeaveOneOutIdwEqualsRefitsWithoutTheSample) {
     const ScatteredIdw<Eigen::Vector3d, double> idw(pts, v, o);
     const auto loo = idw.predict_leave_one_out();
     ASSERT_EQ(loo.size(), pts.size());
+    std::size_t ties = 0;
     for (std::size_t i = 0; i < pts.size(); ++i) {
       // brute force: the k nearest others (all for k = 0), weights 1/d^2, exact at distance 0
       std::vector<std::pair<double, std::size_t>> d;
       for (std::size_t j = 0; j < pts.size(); ++j)
         if (j != i) d.emplace_back((pts[j] - pts[i]).norm(), j);
       std::sort(d.begin(), d.end());
+      // A tie at the k-th distance (the duplicated pair) makes "the k nearest" ambiguous, for a
+      // refit as much as for one pass: such samples are not compared.
+      if (k > 0 && d[k - 1].first == d[k].first) {
+        ++ties;
+        continue;
+      }
       if (k > 0) d.resize(k);
       double expected = 0.0;
       if (d.front().first == 0.0) {
@@ -256,6 +263,7 @@ TEST(ResourceBudget, LeaveOneOutIdwEqualsRefitsWithoutTheSample) {
       }
       EXPECT_NEAR(loo[i], expected, 1e-12 * (1.0 + std::abs(expected))) << "k = " << k << ", sample " << i;
     }
+    EXPECT_LE(ties, 4u) << "k = " << k;  // only where the duplicated pair sits at the k-th place
   }
   EXPECT_EQ(pts[10], pts[11]);
 }
@@ -292,7 +300,7 @@ TEST(ResourceBudget, FitOnA26CubedGridIdwRunsAndKrigingIsRefusedNamingWhatFitCan
   EXPECT_THAT(r.err, AllOf(HasSubstr("resource limit"), HasSubstr("17576 points"), HasSubstr("--method distance-idw"),
                            Not(HasSubstr("sparse")), Not(HasSubstr("local back end"))));
   EXPECT_FALSE(std::filesystem::exists(dir / "k.json"));
-  EXPECT_LT(seconds_since(start), 10.0);
+  EXPECT_LT(seconds_since(start), 30.0);  // ~1 s of CPU (reading, distances); generous for a loaded machine
 }
 
 // ---- counts validated up front -----------------------------------------------------------------
