@@ -119,9 +119,14 @@ inline std::uint8_t grid_idw_one(const GridIdwGeometry& g, const GridIdwParams& 
   double acc[C];
   for (int c = 0; c < C; ++c) acc[c] = 0.0;
   double wsum = 0.0;
+  // A general power weighs relative to the nearest vertex, (d_min / d)^p in (0, 1]: the same
+  // ratios as 1 / d^p, without underflow to 0 / 0 for a large power (p = 1e6 gave empty
+  // predictions) or overflow near a vertex.
+  const double d2_near = dd[0][near_x] + dd[1][near_y] + dd[2][near_z];
   for (int v = 0; v < 8; ++v) {
     const int ix = v & 1, iy = (v >> 1) & 1, iz = v >> 2;
-    const double w = idw_weight<Mode>(dd[0][ix] + dd[1][iy] + dd[2][iz], p.power);
+    const double d2 = dd[0][ix] + dd[1][iy] + dd[2][iz];
+    const double w = Mode == kPowerGeneral ? std::pow(d2_near / d2, 0.5 * p.power) : idw_weight<Mode>(d2, p.power);
     wsum += w;
     const double* value = nodes + (base + ix + iy * nx + iz * nxy) * C;
     for (int c = 0; c < C; ++c) acc[c] += w * value[c];
@@ -233,7 +238,7 @@ void grid_idw_reference(const GridIdwGeometry& g, const GridIdwParams& p, const 
     double wsum = 0.0;
     for (int c = 0; c < C; ++c) o[c] = 0.0;
     for (int u = 0; u < 8; ++u) {
-      const double w = std::pow(dist[u], -p.power);
+      const double w = std::pow(dist[nearest] / dist[u], p.power);  // relative to the nearest: no underflow
       wsum += w;
       for (int c = 0; c < C; ++c) o[c] += w * nodes[node[u] * C + c];
     }

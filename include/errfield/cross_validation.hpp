@@ -50,6 +50,15 @@ concept HoldOutEstimator =
       { e.fit_predict(locations, values, query) } -> std::same_as<HoldOutPrediction<V>>;
     };
 
+/// An estimator that also predicts every sample from all the others in one pass (e.g. IDW: one
+/// k-d tree, k + 1 neighbours minus the sample itself); cross_validate uses it for leave-one-out
+/// instead of N refits. It must give what N calls of fit_predict would.
+template <class E, class L, class V>
+concept LeaveOneOutEstimator =
+    HoldOutEstimator<E, L, V> && requires(const E& e, std::span<const L> locations, std::span<const V> values) {
+      { e.leave_one_out(locations, values) } -> std::same_as<HoldOutPrediction<V>>;
+    };
+
 struct CrossValidationOptions {
   /// 0 = leave-one-out; otherwise the number of folds k, 2 <= k <= number of samples.
   std::size_t folds = 0;
@@ -122,9 +131,26 @@ CrossValidationResult<V> cross_validate(const E& estimator, std::span<const L> l
   std::vector<std::vector<std::size_t>> members(folds);
   for (std::size_t i = 0; i < n; ++i) members[result.fold[i]].push_back(i);
 
+  if constexpr (LeaveOneOutEstimator<E, L, V>) {
+    if (options.folds == 0) {
+      const HoldOutPrediction<V> p = estimator.leave_one_out(locations, values);
+      if (p.value.size() != n || (!p.variance.empty() && p.variance.size() != n))
+        throw Error("cross_validate: the estimator's leave-one-out returned " + std::to_string(p.value.size()) +
+                    " predictions and " + std::to_string(p.variance.size()) + " variances for " + std::to_string(n) +
+                    " samples");
+      for (std::size_t i = 0; i < n; ++i) {
+        result.predicted[i] = p.value[i];
+        result.residual[i] = V(values[i] - p.value[i]);
+      }
+      if (p.variance.empty()) has_variance = false;
+      else variance = p.variance;
+      members.clear();  // nothing left to refit
+    }
+  }
+
   std::vector<L> train_loc, query_loc;
   std::vector<V> train_val;
-  for (std::size_t f = 0; f < folds; ++f) {
+  for (std::size_t f = 0; f < members.size(); ++f) {
     const auto& held = members[f];
     if (held.empty()) continue;
     train_loc.clear();

@@ -8,6 +8,10 @@
 /// unit after a column name ("x [mm]" or "x (mm)" is found as "x"). Rejected with an InputError
 /// naming file, row and column: a row with a different number of cells than the header, duplicate
 /// column names, and — when a column is read as numbers — empty, non-numeric, NaN or infinite cells.
+///
+/// Bounds (so that a wrong file, `/dev/zero` or an endless pipe cannot hang the reader or eat the
+/// memory): at most kMaxColumns columns (InputError), at most kMaxInputBytes bytes per file
+/// (ResourceError, exit 3), and a NUL byte stops the reading at the first block that has one.
 
 #include <cstddef>
 #include <string>
@@ -20,8 +24,14 @@ namespace errfield {
 
 class CsvTable {
  public:
-  /// Reads and parses `path`. Throws InputError if the file cannot be opened or is malformed.
-  static CsvTable read(const std::string& path);
+  /// More columns than any tracker or controller export has; the header is refused beyond it.
+  static constexpr std::size_t kMaxColumns = 10000;
+  /// 4 GiB: the table in memory takes several times the file's size.
+  static constexpr std::size_t kMaxInputBytes = std::size_t{4} << 30;
+
+  /// Reads and parses `path`. Throws InputError if the file cannot be opened or is malformed,
+  /// ResourceError if it holds more than `max_bytes` bytes (read no further than that).
+  static CsvTable read(const std::string& path, std::size_t max_bytes = kMaxInputBytes);
   /// Parses text already in memory; `source` names it in error messages.
   static CsvTable parse(std::string_view text, std::string source);
 
@@ -50,6 +60,10 @@ class CsvTable {
   std::vector<std::vector<std::string>> rows_;
   std::vector<std::size_t> lines_;
 };
+
+/// The name under which a header cell is looked up: blanks trimmed, a unit ("x [mm]", "x (mm)")
+/// dropped. Two header cells with the same key are the same column (and a duplicate).
+std::string column_key(std::string_view name);
 
 /// Shortest text that reads back to exactly `value` ("nan" and "inf" never occur in our outputs;
 /// callers write an empty cell for a missing value instead).

@@ -88,6 +88,10 @@ class ScatteredIdw {
   std::vector<V> predict(std::span<const L> targets) const;
   /// As predict, with a status per target. Throws only for sizes that do not match.
   void predict_with_status(std::span<const L> targets, std::span<V> out, std::span<ScatteredIdwStatus> status) const;
+  /// Leave-one-out: each sample predicted from all the others (the same neighbours and weights as
+  /// an estimator fitted without it), from this one tree: k + 1 neighbours minus the sample itself.
+  /// O(N k log N) instead of N refits.
+  std::vector<V> predict_leave_one_out() const;
 
  private:
   struct Workspace {
@@ -98,8 +102,12 @@ class ScatteredIdw {
     std::vector<std::pair<double, std::size_t>> candidates;  // (distance, sample)
   };
   Workspace make_workspace() const;
-  ScatteredIdwStatus predict_one(const L& target, Workspace& ws, V& out) const;
-  void gather(const L& target, Workspace& ws) const;
+  static constexpr std::size_t kNoSample = static_cast<std::size_t>(-1);
+  // `exclude`: a sample left out (leave-one-out), kNoSample for none.
+  ScatteredIdwStatus predict_one(const L& target, Workspace& ws, V& out, std::size_t exclude = kNoSample) const;
+  void gather(const L& target, Workspace& ws, std::size_t exclude) const;
+  template <class F>
+  void for_each_target(std::ptrdiff_t n, F&& work) const;
   void check_targets(std::span<const L> targets) const;
 
   static constexpr bool kTreeMetric =
@@ -127,6 +135,11 @@ struct ScatteredIdwEstimator {
     const ScatteredIdw<L, V, M> idw(std::vector<L>(locations.begin(), locations.end()),
                                     std::vector<V>(values.begin(), values.end()), options, metric);
     return HoldOutPrediction<V>{idw.predict(query), {}};
+  }
+  HoldOutPrediction<V> leave_one_out(std::span<const L> locations, std::span<const V> values) const {
+    const ScatteredIdw<L, V, M> idw(std::vector<L>(locations.begin(), locations.end()),
+                                    std::vector<V>(values.begin(), values.end()), options, metric);
+    return HoldOutPrediction<V>{idw.predict_leave_one_out(), {}};
   }
 };
 
@@ -188,7 +201,8 @@ template <Location L, Value V, class M>
 typename ScatteredIdw<L, V, M>::Workspace ScatteredIdw<L, V, M>::make_workspace() const {
   Workspace ws;
   ws.query.resize(static_cast<std::size_t>(dim_));
-  const std::size_t k = options_.neighbors ? std::min(options_.neighbors, locations_.size()) : 0;
+  // one more for leave-one-out (the sample itself comes back among its nearest)
+  const std::size_t k = options_.neighbors ? std::min(options_.neighbors + 1, locations_.size()) : 0;
   ws.idx.resize(k);
   ws.d2.resize(k);
   ws.candidates.reserve(k ? k : locations_.size());
@@ -198,12 +212,14 @@ typename ScatteredIdw<L, V, M>::Workspace ScatteredIdw<L, V, M>::make_workspace(
 // Fills ws.candidates with (metric distance, sample) of the neighbours to use.
 template <Location L, Value V, class M>
   requires Metric<M, L>
-void ScatteredIdw<L, V, M>::gather(const L& target, Workspace& ws) const {
+void ScatteredIdw<L, V, M>::gather(const L& target, Workspace& ws, std::size_t exclude) const {
   ws.candidates.clear();
   const double radius = options_.radius;
   const bool limited_radius = std::isfinite(radius);
-  const std::size_t k = options_.neighbors ? std::min(options_.neighbors, locations_.size()) : 0;
+  const std::size_t available = locations_.size() - (exclude == kNoSample ? 0 : 1);
+  const std::size_t k = options_.neighbors ? std::min(options_.neighbors, available) : 0;
   auto keep = [&](std::size_t i) {
+    if (i == exclude) return;
     const double d = metric_(target, locations_[i]);
     if (!limited_radius || d <= radius) ws.candidates.emplace_back(d, i);
   };
@@ -212,8 +228,16 @@ void ScatteredIdw<L, V, M>::gather(const L& target, Workspace& ws) const {
       ws.query[static_cast<std::size_t>(c)] = scale_[static_cast<std::size_t>(c)] * LocationTraits<L>::coordinate(target, c);
     const auto& tree = *tree_;
     if (k > 0) {
-      const std::size_t found = tree.knn(ws.query.data(), k, ws.idx.data(), ws.d2.data());
-      for (std::size_t j = 0; j < found; ++j) keep(ws.idx[j]);
+      const std::size_t want = exclude == kNoSample ? k : k + 1;
+      const std::size_t found = tree.knn(ws.query.data(), want, ws.idx.data(), ws.d2.data());
+      // Nearest first; the excluded sample is skipped, and without it (a duplicate location
+      // may push it out of the first k + 1) the k nearest others are kept.
+      std::size_t kept = 0;
+      for (std::size_t j = 0; j < found && kept < k; ++j) {
+        if (ws.idx[j] == exclude) continue;
+        keep(ws.idx[j]);
+        ++kept;
+      }
       return;
     }
     if (limited_radius) {
@@ -234,8 +258,9 @@ void ScatteredIdw<L, V, M>::gather(const L& target, Workspace& ws) const {
 
 template <Location L, Value V, class M>
   requires Metric<M, L>
-ScatteredIdwStatus ScatteredIdw<L, V, M>::predict_one(const L& target, Workspace& ws, V& out) const {
-  gather(target, ws);
+ScatteredIdwStatus ScatteredIdw<L, V, M>::predict_one(const L& target, Workspace& ws, V& out,
+                                                     std::size_t exclude) const {
+  gather(target, ws, exclude);
   if (ws.candidates.empty()) {
     out = detail::nan_value<V>();
     return ScatteredIdwStatus::NoNeighbours;
@@ -314,6 +339,24 @@ void ScatteredIdw<L, V, M>::predict_with_status(std::span<const L> targets, std:
     const auto i = static_cast<std::size_t>(t);
     status[i] = predict_one(targets[i], ws, out[i]);
   };
+  for_each_target(n, work);
+}
+
+template <Location L, Value V, class M>
+  requires Metric<M, L>
+std::vector<V> ScatteredIdw<L, V, M>::predict_leave_one_out() const {
+  std::vector<V> out(locations_.size(), ValueTraits<V>::zero());
+  for_each_target(static_cast<std::ptrdiff_t>(locations_.size()), [&](Workspace& ws, std::ptrdiff_t t) {
+    const auto i = static_cast<std::size_t>(t);
+    predict_one(locations_[i], ws, out[i], i);
+  });
+  return out;
+}
+
+template <Location L, Value V, class M>
+  requires Metric<M, L>
+template <class F>
+void ScatteredIdw<L, V, M>::for_each_target(std::ptrdiff_t n, F&& work) const {
   // Small batches (a cross-validation fold, a single target) run serially: starting a parallel
   // region costs more than they do.
   const bool parallel = n >= 256;

@@ -2,7 +2,29 @@
 
 #include <unistd.h>
 
+#include <cstdio>
+#include <thread>
+
 namespace errfield::cli {
+
+void check_thread_count(const std::string& option, int threads) {
+  if (threads < 0)
+    throw ArgumentError(option + " is " + std::to_string(threads) + "; expected 0 (OpenMP's default) or a count >= 1");
+  if (threads > kMaxThreads)
+    throw ResourceError(option + " " + std::to_string(threads) + ": at most " + std::to_string(kMaxThreads) +
+                        " threads per job (this machine has " + std::to_string(std::thread::hardware_concurrency()) +
+                        " hardware threads); use 0 for OpenMP's default");
+}
+
+void OutputTable::write(const std::string& path) const {
+  write_file_atomically(path, to_csv());
+  if (!replaced.empty()) {
+    std::string names;
+    for (const auto& r : replaced) names += (names.empty() ? "'" : ", '") + r + "'";
+    std::fprintf(stderr, "errfield: note: %s: the input's column(s) %s replaced by the computed ones\n", path.c_str(),
+                 names.c_str());
+  }
+}
 
 Progress::Progress(std::string label, std::size_t total)
     : label_(std::move(label)),

@@ -3,9 +3,11 @@
 // and a progress line on the terminal for long runs.
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <utility>
+#include <string_view>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -22,11 +24,38 @@ namespace errfield::cli {
 struct OutputTable {
   std::vector<std::string> header;
   std::vector<std::vector<std::string>> columns;
+  /// Input columns that a computed column of the same name replaced (e.g. `ik` run on its own
+  /// output): a column twice would make the file unreadable to errfield itself.
+  std::vector<std::string> replaced;
 
+  /// Adds a computed column, or replaces the one whose name (without unit) is the same, in its
+  /// place. A cell reading "inf" or "nan" is refused (Error naming column and row): errfield never
+  /// writes a non-finite number; the caller leaves the cell empty and says why, or fails.
   void add_column(std::string name, std::vector<std::string> cells) {
+    for (std::size_t r = 0; r < cells.size(); ++r) check_finite_cell(name, r, cells[r]);
+    put_column(std::move(name), std::move(cells));
+  }
+  static void check_finite_cell(const std::string& column, std::size_t row, const std::string& cell) {
+    std::string_view v = cell;
+    if (!v.empty() && (v.front() == '-' || v.front() == '+')) v.remove_prefix(1);
+    if (v == "inf" || v == "nan" || v == "infinity")
+      throw Error("output column '" + column + "', row " + std::to_string(row + 1) + ": the computed value is " + cell +
+                  " (beyond the range of a double: inputs too large or too far apart for this computation; "
+                  "rescale them, e.g. other units); errfield writes no non-finite number, nothing written");
+  }
+  void put_column(std::string name, std::vector<std::string> cells) {
+    const std::string key = column_key(name);
+    for (std::size_t c = 0; c < header.size(); ++c)
+      if (column_key(header[c]) == key) {
+        replaced.push_back(header[c]);
+        header[c] = std::move(name);
+        columns[c] = std::move(cells);
+        return;
+      }
     header.push_back(std::move(name));
     columns.push_back(std::move(cells));
   }
+  /// Numbers as shortest round-trip text (a non-finite one is refused, as in add_column).
   void add_numeric_column(std::string name, const std::vector<double>& values) {
     std::vector<std::string> cells;
     cells.reserve(values.size());
@@ -38,7 +67,7 @@ struct OutputTable {
     for (std::size_t c = 0; c < input.header().size(); ++c) {
       std::vector<std::string> cells(input.row_count());
       for (std::size_t r = 0; r < input.row_count(); ++r) cells[r] = input.row(r)[c];
-      add_column(input.header()[c], std::move(cells));
+      put_column(input.header()[c], std::move(cells));  // the input's own text, as it was
     }
   }
   std::string to_csv() const {
@@ -55,8 +84,17 @@ struct OutputTable {
     }
     return out;
   }
-  void write(const std::string& path) const { write_file_atomically(path, to_csv()); }
+  /// Writes atomically; names on stderr the input columns that computed ones replaced.
+  void write(const std::string& path) const;
 };
+
+/// Most threads a job may ask for: each costs a stack and a workspace, and OpenMP fails with its
+/// own message (exit 1) when it cannot create them (`--threads 1000000000`).
+inline constexpr int kMaxThreads = 1024;
+
+/// Checks a --threads value up front: negative is bad usage (ArgumentError), more than
+/// kMaxThreads a resource limit (ResourceError), both naming the option.
+void check_thread_count(const std::string& option, int threads);
 
 /// Prints "label: i/n (p%)" to stderr at most every 0.2 s, only when stderr is a terminal and the
 /// job has run for more than a second; finish() clears the line.

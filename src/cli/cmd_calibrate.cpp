@@ -12,6 +12,7 @@
 #include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/input_checks.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/input_checks.hpp"
 
@@ -63,6 +64,11 @@ void run_calibrate(const CalibrateArgs& a) {
     const Eigen::MatrixXd m = table.numeric_columns({"mx", "my", "mz"});
     std::vector<PositionMeasurement> data;
     for (std::size_t i = 0; i < q.size(); ++i) data.push_back({q[i], m.row(static_cast<Eigen::Index>(i)).transpose()});
+    {
+      Eigen::MatrixXd p(m.rows(), 3);
+      for (std::size_t i = 0; i < q.size(); ++i) p.row(static_cast<Eigen::Index>(i)) = forward_position(nominal, q[i]).transpose();
+      if (const auto why = tracker_frozen(m, p)) throw InputError(a.data + ": " + *why, a.data, 0, "mx");
+    }
     // Registration first (tracker <- robot base and reflector offset), then the full model in the
     // tracker frame; the output is expressed back in the registered robot frame.
     const CalibrationResult reg = with_source(a.data, [&] { return register_tracker(nominal, data, options); });
@@ -95,6 +101,7 @@ void run_calibrate(const CalibrateArgs& a) {
     for (std::size_t k = 0; k < fixed.size(); ++k) {
       const std::string col = "dist_b" + std::to_string(k);
       const std::vector<double> d = table.numeric_column(col);
+      const bool in_metres = distances_in_metres(d, nominal, {}).has_value();  // warned about, not refused
       for (std::size_t i = 0; i < table.row_count(); ++i) {
         const std::string kind = has_kind ? table.row(i)[kind_col] : "target";
         if (kind == "base")
@@ -113,6 +120,10 @@ void run_calibrate(const CalibrateArgs& a) {
           throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": column '" + col + "': " +
                                format_number(d[i]) + "; expected a distance > 0 to fixed base point " +
                                std::to_string(k),
+                           a.data, table.line_of_row(i), col);
+        if (const auto why = implausible_distance(d[i], (forward_position(nominal, q[i]) - fixed[k]).norm(), nominal,
+                                                  !in_metres))
+          throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": column '" + col + "': " + *why,
                            a.data, table.line_of_row(i), col);
         data.push_back({q[i], JointVector::Zero(), d[i], static_cast<int>(k)});
       }
@@ -140,6 +151,7 @@ void run_calibrate(const CalibrateArgs& a) {
     for (std::size_t k = 0; k < base_rows.size(); ++k) {
       const std::string col = "dist_b" + std::to_string(k);
       const std::vector<double> d = table.numeric_column(col);
+      const bool in_metres = distances_in_metres(d, nominal, {}).has_value();  // warned about, not refused
       for (std::size_t i = 0; i < table.row_count(); ++i) {
         const auto it = std::find(base_rows.begin(), base_rows.end(), i);
         if (it != base_rows.end() && static_cast<std::size_t>(it - base_rows.begin()) <= k) continue;  // each base pair once
@@ -152,6 +164,10 @@ void run_calibrate(const CalibrateArgs& a) {
         if (d[i] <= 0)
           throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": column '" + col + "': " +
                                format_number(d[i]) + "; expected a distance > 0 for a point other than the base",
+                           a.data, table.line_of_row(i), col);
+        const double nominal_d = (forward_position(nominal, q[i]) - forward_position(nominal, q[base_rows[k]])).norm();
+        if (const auto why = implausible_distance(d[i], nominal_d, nominal, !in_metres))
+          throw InputError(a.data + ":" + std::to_string(table.line_of_row(i)) + ": column '" + col + "': " + *why,
                            a.data, table.line_of_row(i), col);
         data.push_back({q[i], q[base_rows[k]], d[i]});
       }

@@ -65,7 +65,7 @@ void run_compensate(const CompensateArgs& a) {
   out.add_all_columns(t);
   std::vector<std::vector<double>> cols(24, std::vector<double>(n, NAN));  // see `names` below
   std::vector<std::string> status(n);
-  std::size_t refused = 0;
+  std::size_t refused = 0, no_prediction = 0;
   for (std::size_t i = 0; i < n; ++i) {
     if (!ik_ok[i]) {
       status[i] = "unreachable";
@@ -81,6 +81,13 @@ void run_compensate(const CompensateArgs& a) {
     cols[13][i] = c.prediction.variance_mm2;
     cols[14][i] = c.p_within_tolerance;
     for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(15 + k)][i] = c.command_position_mm[k];
+    if (c.prediction.inside_region && !(c.prediction.position_error_mm.allFinite() && c.command_position_mm.allFinite())) {
+      // The field gave no number here (e.g. an overflow): never an IK failure's name, never ok.
+      status[i] = "no-prediction";
+      ++no_prediction;
+      ++refused;
+      continue;
+    }
     status[i] = !c.prediction.inside_region ? "outside-region"
                 : c.ik_status != IkStatus::converged ? std::string("ik-") + to_string(c.ik_status)
                                                      : "ok";
@@ -115,6 +122,10 @@ void run_compensate(const CompensateArgs& a) {
   std::cout << "compensate: " << n - refused << " of " << n << " targets compensated with " << method_name(model.method())
             << (refused ? "; " + std::to_string(refused) + " refused (status column): no joints written for them" : "")
             << "\n  written to " << a.out << "\n";
+  if (no_prediction)
+    std::cerr << "errfield compensate: warning: " << no_prediction
+              << " target(s) got no finite prediction from the model's field (status no-prediction); no joints "
+                 "written for them\n";
 }
 
 void add_compensate_command(CLI::App& app) {

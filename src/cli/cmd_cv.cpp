@@ -120,6 +120,15 @@ void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& ow
     throw Error("cv: method " + method.name + " returned results of the wrong size");
   const Eigen::MatrixXd residuals = r.sample_values - result.pred;
   const CrossValidationSummary s = summarize_residuals(residuals, result.variance);
+  // No prediction at all is a failed job (k-fold said "predicted 0 of 12" and exited 0), whatever
+  // made every fold fail; the notes say why.
+  if (s.predicted == 0) {
+    std::string why;
+    for (const auto& note : result.notes) why += "; " + note;
+    throw Error("cv: none of the " + std::to_string(n) + " samples of " + a.samples + " could be predicted by --method " +
+                method.name + (why.empty() ? std::string(" (e.g. no neighbour within --radius)") : why) +
+                "; nothing written");
+  }
 
   if (!a.out.empty()) {
     OutputTable out;

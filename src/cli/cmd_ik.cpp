@@ -1,5 +1,6 @@
 // `errfield ik`: inverse kinematics of a list of target poses.
 
+#include <algorithm>
 #include <iostream>
 #include <numbers>
 
@@ -100,13 +101,16 @@ void run_ik(const IkArgs& a) {
   OutputTable out;
   // Input columns are kept, except seed columns q1..q6, which the solution replaces.
   const auto qnames = joint_column_names();
+  // So are the columns ik computes (ik run on its own output): dropped here and written anew, in
+  // the same order as the first time.
+  const std::vector<std::string> computed{"status", "residual_mm", "residual_deg"};
   for (std::size_t c = 0; c < table.header().size(); ++c) {
     bool is_seed = false;
     for (const auto& qn : qnames) is_seed = is_seed || (has_seed && table.column_index(qn) == c);
-    if (is_seed) continue;
+    if (is_seed || std::find(computed.begin(), computed.end(), column_key(table.header()[c])) != computed.end()) continue;
     std::vector<std::string> cells(n);
     for (std::size_t r = 0; r < n; ++r) cells[r] = table.row(r)[c];
-    out.add_column(table.header()[c], std::move(cells));
+    out.put_column(table.header()[c], std::move(cells));  // the input's own text
   }
   for (int k = 0; k < robot::kJointCount; ++k) out.add_numeric_column(qnames[static_cast<std::size_t>(k)], q[static_cast<std::size_t>(k)]);
   out.add_column("status", status);

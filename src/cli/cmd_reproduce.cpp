@@ -36,7 +36,15 @@ void add_reproduce_command(CLI::App& app) {
     options.seed = args->seed;
     options.runs = args->runs;
     options.threads = args->threads;
+    check_thread_count("--threads", args->threads);  // naming the option, before validate() does
     options.validate();
+    // Each run is a simulated robot, its measurements and six fitted methods (about a second and
+    // a few MB while it lasts); 2e9 runs exhausted the memory before the first finished.
+    constexpr int kMaxRuns = 10000;
+    if (args->runs > kMaxRuns)
+      throw ResourceError("--runs " + std::to_string(args->runs) + ": at most " + std::to_string(kMaxRuns) +
+                          " runs per job (each simulates and fits a robot, about a second each; the paper uses 20); "
+                          "use a smaller --runs");
     // Options first, then an --out that can never become a directory: both fail now, not after
     // minutes of work. (Nothing is created yet: an interrupted run leaves no empty directory.)
     for (std::filesystem::path p = std::filesystem::absolute(args->out); !p.empty(); p = p.parent_path()) {

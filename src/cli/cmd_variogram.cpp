@@ -68,6 +68,7 @@ void run_variogram(const VariogramArgs& a) {
   options.convention = convention_from_name(a.convention);
   options.pair_fraction = a.subsample;
   options.seed = a.seed;
+  check_thread_count("--threads", a.threads);
   options.threads = a.threads;
   options.max_stored_differences = a.max_stored;
   naming_options([&] { options.validate(); }, {{"variogram options: pair_fraction", "--subsample"},

@@ -59,6 +59,17 @@ InterpolationResult interpolate_grid(const InterpolationRequest& r) {
     if (outside)  // only non-finite coordinates are Outside when clamping; CsvTable rejects those
       throw InputError(r.target_labels(first_outside) + ": target has no prediction", r.target_labels.source,
                        r.target_labels.line(first_outside));
+    // Clamping keeps the target's own distances to the nearest cell's vertices: far enough out
+    // (1e300) their squares overflow and the weights are 0 / 0. Said, never an empty "interpolated".
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      bool finite = true;
+      for (int c = 0; c < ValueTraits<V>::kComponents; ++c) finite = finite && std::isfinite(ValueTraits<V>::component(out[i], c));
+      if (!finite)
+        throw InputError(r.target_labels(i) + ": target is too far outside the grid (" + idw.grid().describe() +
+                             ") to be interpolated from the nearest cell with --clamp: its distances to the cell "
+                             "overflow a double; check its coordinates and units",
+                         r.target_labels.source, r.target_labels.line(i));
+    }
     if (clamped)
       result.notes.push_back(std::to_string(clamped) + " of " + std::to_string(out.size()) +
                              " targets are outside the grid (" + idw.grid().describe() +

@@ -1,6 +1,10 @@
 #include "cli/run_cli.hpp"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <new>
 #include <iostream>
 
 #include "cli/command_registry.hpp"
@@ -53,6 +57,11 @@ int run_cli(int argc, const char* const* argv) {
   } catch (const ResourceError& e) {
     std::cerr << "errfield: resource limit: " << e.what() << "\n";
     return kExitResource;
+  } catch (const std::bad_alloc&) {
+    // A job no budget foresaw: still a resource limit, not a bug (and no message from the runtime).
+    std::cerr << "errfield: resource limit: out of memory: the job needs more memory than this process can get; "
+                 "make it smaller (fewer samples, targets, neighbours or runs) or give it more memory\n";
+    return kExitResource;
   } catch (const Error& e) {
     std::cerr << "errfield: error: " << e.what() << "\n";
     return kExitFailure;
@@ -60,7 +69,19 @@ int run_cli(int argc, const char* const* argv) {
     std::cerr << "errfield: internal error: " << e.what() << "\n";
     return kExitInternal;
   }
-  return 0;
+  return finish_standard_output();
+}
+
+int finish_standard_output() {
+  // Results printed to standard output count as output: a full disk or a closed pipe there must
+  // not end in "success" (`errfield variogram ... > /dev/full` did).
+  std::cout.flush();
+  const bool failed = !std::cout || std::fflush(stdout) != 0 || std::ferror(stdout);
+  if (!failed) return 0;
+  const int err = errno;
+  std::cerr << "errfield: error: cannot write to standard output" << (err ? std::string(": ") + std::strerror(err) : "")
+            << "\n";
+  return kExitFailure;
 }
 
 }  // namespace errfield::cli

@@ -16,4 +16,8 @@ inline constexpr int kExitInternal = 70; ///< anything else: a bug
 /// (--help and --version print and return 0). Never calls exit().
 int run_cli(int argc, const char* const* argv);
 
+/// Flushes standard output; kExitFailure with a message on stderr if what the command printed
+/// could not be written (a full disk, /dev/full), else 0. run_cli ends with it.
+int finish_standard_output();
+
 }  // namespace errfield::cli

@@ -142,6 +142,15 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
   if (!j.contains("command_model")) fail_model(source, "member \"command_model\" is missing");
   MdhModel command = MdhModel::from_json(j["command_model"], source + " (command_model)");
   auto field = error_field_from_json(j.contains("field") ? j["field"] : nlohmann::json(nullptr), source);
+  // A method that corrects through a field, without one, would send uncorrected joints as "ok".
+  const bool needs_field = method != CompensationMethod::none && method != CompensationMethod::kinematic;
+  if (needs_field && !field)
+    fail_model(source, "member \"field\" is " + std::string(j.contains("field") ? "null" : "missing") +
+                           ", but method \"" + std::string(method_name(method)) +
+                           "\" corrects through its field; refit the model with 'errfield fit'");
+  if (!needs_field && field)
+    fail_model(source, "member \"field\": method \"" + std::string(method_name(method)) +
+                           "\" has no error field, yet the model carries one; refit the model with 'errfield fit'");
   return CompensationModel(method, std::move(command), std::move(field));
 }
 

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "errfield/cross_validation.hpp"
+#include "errfield/csv_table.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
 #include "errfield/kriging.hpp"
@@ -223,6 +224,21 @@ KrigingFieldFit make_field(std::string kind, const FieldSamples& samples, std::v
                            const Eigen::MatrixXd& flat, const KrigingFieldOptions& options,
                            std::optional<Eigen::Vector3d> base, bool with_leave_one_out) {
   options.validate();
+  // A field is one dense factorization (fit offers no local or sparse back end): refuse a sample
+  // count over the dense budget now, not after seconds of variogram estimation, and name what
+  // fit can do instead. K and its factor, plus one N x N for the leave-one-out.
+  const double n = static_cast<double>(values.size());
+  const double matrices = with_leave_one_out ? 3.0 : 2.0;
+  const double budget = static_cast<double>(KrigingOptions{}.dense_memory_budget_bytes);
+  if (matrices * n * n * sizeof(double) > budget) {
+    const auto fits = static_cast<std::size_t>(std::floor(std::sqrt(budget / (matrices * sizeof(double)))));
+    throw ResourceError(kind + ": " + std::to_string(values.size()) + " points need ~" +
+                        format_number(std::round(matrices * n * n * sizeof(double) / (1 << 20))) +
+                        " MiB for the dense covariance factorization, over the budget of " +
+                        format_number(std::round(budget / (1 << 20))) + " MiB; the kriging methods of fit are dense: "
+                        "use at most " + std::to_string(fits) +
+                        " points (a coarser grid), or --method distance-idw or position-idw, which have no such limit");
+  }
   if (!options.model && options.on_stage) options.on_stage("estimating the variogram");
   const VariogramModel model = options.model ? *options.model : estimate_field_variogram(samples, flat, options.space);
   if (options.on_stage)

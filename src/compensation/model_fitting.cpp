@@ -1,5 +1,7 @@
 #include "errfield/compensation/model_fitting.hpp"
 
+#include "errfield/robot/input_checks.hpp"
+
 #include <cmath>
 
 #include "errfield/cross_validation.hpp"
@@ -63,6 +65,31 @@ MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& rob
                          " base points; add rows with kind=base or give the base points (--base-point X,Y,Z)",
                      t.source());
   if (m.q_deg.empty()) throw InputError(t.source() + ": no target rows", t.source());
+  // Implausible measurements are refused here, before any method turns them into corrections.
+  std::vector<std::size_t> target_rows;
+  for (std::size_t r = 0; r < t.row_count(); ++r)
+    if (!has_kind || t.row(r)[kind_col] != "base") target_rows.push_back(r);
+  for (std::size_t k = 0; k < dist.size(); ++k) {
+    const bool metres = distances_in_metres(m.distance_mm[k], robot, {}).has_value();  // warned, not refused
+    for (std::size_t i = 0; i < m.q_deg.size(); ++i) {
+      const double nominal = (m.nominal_mm[i] - m.base_nominal_mm[k]).norm();
+      if (nominal < 1.0) continue;  // the point at its base: no distance to speak of
+      if (const auto why = implausible_distance(m.distance_mm[k][i], nominal, robot, !metres)) {
+        const std::size_t line = t.line_of_row(target_rows[i]);
+        const std::string col = "dist_b" + std::to_string(k);
+        throw InputError(t.source() + ":" + std::to_string(line) + ": column '" + col + "': " + *why, t.source(), line,
+                         col);
+      }
+    }
+  }
+  if (has_m) {
+    Eigen::MatrixXd measured(static_cast<Eigen::Index>(m.q_deg.size()), 3), nominal(measured.rows(), 3);
+    for (std::size_t i = 0; i < m.q_deg.size(); ++i) {
+      measured.row(static_cast<Eigen::Index>(i)) = m.measured_mm[i].transpose();
+      nominal.row(static_cast<Eigen::Index>(i)) = m.nominal_mm[i].transpose();
+    }
+    if (const auto why = tracker_frozen(measured, nominal)) throw InputError(t.source() + ": " + *why, t.source(), 0, "mx");
+  }
   return m;
 }
 

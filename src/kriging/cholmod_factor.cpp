@@ -45,28 +45,43 @@ struct CholmodFactor::State {
 CholmodFactor::CholmodFactor() : state_(std::make_unique<State>()) {}
 CholmodFactor::~CholmodFactor() = default;
 
+bool CholmodFactor::analyze(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_index,
+                            const std::vector<double>& values) {
+  auto& s = *state_;
+  auto& c = s.common;
+  if (s.a) return true;
+  const auto nnz = static_cast<std::size_t>(col_ptr.back());
+  s.a = cholmod_allocate_sparse(static_cast<std::size_t>(n), static_cast<std::size_t>(n), nnz, 1, 1, -1,
+                                CHOLMOD_REAL, &c);
+  if (!s.a) {
+    message_ = status_message(c.status) + " while allocating the " + std::to_string(n) + " x " +
+               std::to_string(n) + " matrix with " + std::to_string(nnz) + " non-zeros";
+    return false;
+  }
+  std::memcpy(s.a->p, col_ptr.data(), col_ptr.size() * sizeof(int));
+  std::memcpy(s.a->i, row_index.data(), row_index.size() * sizeof(int));
+  std::memcpy(s.a->x, values.data(), values.size() * sizeof(double));
+  s.l = cholmod_analyze(s.a, &c);
+  if (!s.l || c.status < CHOLMOD_OK) {
+    message_ = status_message(c.status) + " in the symbolic analysis";
+    return false;
+  }
+  return true;
+}
+
+double CholmodFactor::predicted_factor_bytes() const {
+  const auto* l = state_->l;
+  if (!l) return 0.0;
+  // Supernodal: xsize values (dense supernodes, more than lnz); simplicial: lnz values + indices.
+  const double values = l->is_super ? static_cast<double>(l->xsize) : state_->common.lnz;
+  return values * sizeof(double) + state_->common.lnz * sizeof(int);
+}
+
 bool CholmodFactor::factorize(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_index,
                               const std::vector<double>& values, double beta) {
   auto& s = *state_;
   auto& c = s.common;
-  if (!s.a) {
-    const auto nnz = static_cast<std::size_t>(col_ptr.back());
-    s.a = cholmod_allocate_sparse(static_cast<std::size_t>(n), static_cast<std::size_t>(n), nnz, 1, 1, -1,
-                                  CHOLMOD_REAL, &c);
-    if (!s.a) {
-      message_ = status_message(c.status) + " while allocating the " + std::to_string(n) + " x " +
-                 std::to_string(n) + " matrix with " + std::to_string(nnz) + " non-zeros";
-      return false;
-    }
-    std::memcpy(s.a->p, col_ptr.data(), col_ptr.size() * sizeof(int));
-    std::memcpy(s.a->i, row_index.data(), row_index.size() * sizeof(int));
-    std::memcpy(s.a->x, values.data(), values.size() * sizeof(double));
-    s.l = cholmod_analyze(s.a, &c);
-    if (!s.l || c.status < CHOLMOD_OK) {
-      message_ = status_message(c.status) + " in the symbolic analysis";
-      return false;
-    }
-  }
+  if (!s.a && !analyze(n, col_ptr, row_index, values)) return false;
   double b[2] = {beta, 0.0};
   const int ok = cholmod_factorize_p(s.a, b, nullptr, 0, s.l, &c);
   if (!ok || c.status < CHOLMOD_OK) {

@@ -25,6 +25,14 @@ class CholmodFactor {
   /// col_ptr n+1 entries, row indices sorted within a column, diagonal present), plus beta on the
   /// diagonal. Returns false with message() set when CHOLMOD fails (not positive definite: the
   /// failing column is named; out of memory; ...). May be called again with another beta.
+  /// The symbolic analysis alone (the fill-reducing ordering): after it, predicted_factor_bytes()
+  /// says what the numeric factor will take, before any of it is allocated. factorize() calls it
+  /// when it was not called. Returns false with message() set when CHOLMOD fails.
+  bool analyze(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_index,
+               const std::vector<double>& values);
+  /// Bytes of the numeric factor L (values and row indices) as the analysis predicts them.
+  double predicted_factor_bytes() const;
+
   bool factorize(int n, const std::vector<int>& col_ptr, const std::vector<int>& row_index,
                  const std::vector<double>& values, double beta);
 

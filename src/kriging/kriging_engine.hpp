@@ -73,6 +73,10 @@ class KrigingEngine {
   KrigingOutput unusable_output() const;
   void add_simple_mean(Eigen::MatrixXd& mean) const;
   int thread_count() const;
+  // Sparse back end's memory budget (dense_memory_budget_bytes), before assembly and before the
+  // numeric factorization.
+  void check_sparse_budget_before_assembly(double r2) const;
+  ResourceError sparse_over_budget(const std::string& what) const;
 
   KrigingOptions options_;
   VariogramModel model_;

@@ -160,7 +160,12 @@ LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eig
 
   const double var = std::max((values.array() - values.mean()).square().mean(), 1e-300);
   const double extent = (coordinates.colwise().maxCoeff() - coordinates.colwise().minCoeff()).norm();
-  const double span = extent > 0.0 ? extent : 1.0;
+  // All samples at one place: the ranges have no scale and every covariance matrix is singular
+  // without a nugget; the fit "converged" with a likelihood of inf.
+  if (!(extent > 0.0))
+    throw InputError("likelihood: all " + std::to_string(coordinates.rows()) +
+                     " samples are at one location; a variogram needs samples at different places");
+  const double span = extent;
   std::vector<double> x0, lb, ub;
   const double ns = static_cast<double>(pr.structure.size());
   for (const auto& c : pr.structure) {
@@ -185,6 +190,11 @@ LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eig
   res.evaluations = pr.evaluations;
   res.converged = outcome.converged;
   res.message = bobyqa.describe(outcome, "likelihood");
+  if (!std::isfinite(res.negative_log_likelihood))
+    throw Error("likelihood: the negative log-likelihood is " + format_number(res.negative_log_likelihood) +
+                " at the best parameters found (" + res.model.to_string() +
+                "): the covariance matrix is singular there (duplicate locations without a nugget?); no model to "
+                "report");
   return res;
 }
 

@@ -3,6 +3,7 @@
 // only ever grows (no allocation per target once warm).
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 
@@ -23,9 +24,11 @@ struct LocalWorkspace {
   Eigen::VectorXd c0, w, r, s, lambda;
   Eigen::RowVectorXd mean;
 
-  void reserve(Eigen::Index n, Eigen::Index p, Eigen::Index comps) {
+  void reserve(Eigen::Index n, Eigen::Index p, Eigen::Index comps, Eigen::Index ceiling) {
     if (k.rows() >= n && q.cols() >= p) return;
-    const Eigen::Index cap = std::max<Eigen::Index>(n, k.rows() * 2);
+    // Doubling, but never past the largest system this job can have (the budget was checked
+    // for that size, not for twice it).
+    const Eigen::Index cap = std::max<Eigen::Index>(n, std::min(k.rows() * 2, ceiling));
     k.resize(cap, cap);
     q.resize(cap, p);
     y.resize(cap, comps);
@@ -40,7 +43,23 @@ struct LocalWorkspace {
   }
 };
 
-enum class TargetOutcome : std::uint8_t { Ok, TooFew, NotPositiveDefinite, SingularDrift };
+enum class TargetOutcome : std::uint8_t { Ok, TooFew, NotPositiveDefinite, SingularDrift, OverBudget };
+
+// One thread's workspace for an n-neighbour system: the n x n matrix, the n-row blocks and the
+// drift's small matrices.
+double workspace_bytes(double n, double p, double comps) {
+  return sizeof(double) * (n * n + n * (p + comps + 3.0) + p * (p + comps + 2.0));
+}
+
+// The largest neighbour count whose workspaces, one per thread, fit the budget.
+std::size_t neighbours_that_fit(double budget, int threads, double p, double comps) {
+  double lo = 0, hi = 1e9;
+  while (hi - lo > 1) {
+    const double mid = std::floor((lo + hi) / 2);
+    (workspace_bytes(mid, p, comps) * threads <= budget ? lo : hi) = mid;
+  }
+  return static_cast<std::size_t>(lo);
+}
 
 }  // namespace
 
@@ -57,6 +76,27 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
   const Eigen::MatrixXd f0_all = drift_matrix(raw);  // validated before the parallel region
   const double nan = std::numeric_limits<double>::quiet_NaN();
 
+  // Memory budget, checked before any workspace exists: each thread holds one k x k system
+  // (k = 30,000 would be 7.2 GB per thread). With a radius and no k the size is known only per
+  // target; such a target stops the job below.
+  const int threads = thread_count();
+  const double budget = static_cast<double>(options_.dense_memory_budget_bytes);
+  const std::size_t fit = neighbours_that_fit(budget, threads, static_cast<double>(p), static_cast<double>(comps));
+  const auto mib = [](double b) { return format_number(std::round(b / (1 << 20))); };
+  const auto over_budget = [&](std::size_t k, const std::string& what) {
+    return ResourceError("kriging: the local back end with " + what + " solves a " +
+                         std::to_string(k) + " x " + std::to_string(k) + " system per target, ~" +
+                         mib(workspace_bytes(static_cast<double>(k), static_cast<double>(p),
+                                             static_cast<double>(comps)) * threads) +
+                         " MiB for " + std::to_string(threads) + " thread(s), over the memory budget of " +
+                         mib(budget) + " MiB (dense_memory_budget_bytes); use --neighbors " + std::to_string(fit) +
+                         " or fewer (20 to 100 is usual)" +
+                         (k_max > 0 ? std::string() : ", or a smaller --radius"));
+  };
+  const std::size_t k_ceiling = k_max > 0 ? std::min(k_max + (leave_one_out ? 1 : 0), n_samples) : n_samples;
+  if (k_max > 0 && k_ceiling > fit) throw over_budget(k_ceiling, "neighbors = " + std::to_string(k_max));
+  std::atomic<std::size_t> largest_over{0};
+
   KrigingOutput out;
   out.mean.resize(m, comps);
   if (want_var) out.variance.resize(m);
@@ -72,7 +112,8 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
     const std::size_t k_query = k_max > 0 ? std::min(k_max + (leave_one_out ? 1 : 0), n_samples) : 0;
     ws.index.resize(k_query);
     ws.d2.resize(k_query);
-    ws.reserve(static_cast<Eigen::Index>(std::max<std::size_t>(k_query, 1)), p, comps);
+    const auto ceiling = static_cast<Eigen::Index>(std::max<std::size_t>(k_ceiling, 1));
+    ws.reserve(static_cast<Eigen::Index>(std::max<std::size_t>(k_query, 1)), p, comps, ceiling);
 #pragma omp for schedule(dynamic, 64)
     for (Eigen::Index t = 0; t < m; ++t) {
       const double* target = embedded.col(t).data();
@@ -98,7 +139,14 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
         fail(TargetOutcome::TooFew);
         continue;
       }
-      ws.reserve(nn, p, comps);
+      if (static_cast<std::size_t>(nn) > fit) {
+        std::size_t seen = largest_over.load();
+        while (static_cast<std::size_t>(nn) > seen && !largest_over.compare_exchange_weak(seen, static_cast<std::size_t>(nn))) {
+        }
+        fail(TargetOutcome::OverBudget);
+        continue;
+      }
+      ws.reserve(nn, p, comps, ceiling);
       auto kb = ws.k.topLeftCorner(nn, nn);
       auto build = [&](double jitter) {
         for (Eigen::Index j = 0; j < nn; ++j) {
@@ -185,6 +233,9 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
     }
   }
 
+  if (largest_over.load() > 0)
+    throw over_budget(largest_over.load(), "radius = " + format_number(options_.radius) + " and no neighbour count");
+
   // Summarize failures (validated statuses, never a silent NaN).
   std::size_t failed = 0, first = 0;
   TargetOutcome first_outcome = TargetOutcome::Ok;
@@ -215,7 +266,8 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
               " are linearly dependent over its neighbours (e.g. neighbours on one line or plane); use a lower "
               "drift order or more neighbours";
         break;
-      case TargetOutcome::Ok: break;
+      case TargetOutcome::Ok:
+      case TargetOutcome::OverBudget: break;
     }
     out.message = std::to_string(failed) + " of " + std::to_string(m) + (leave_one_out ? " samples" : " targets") +
                   " could not be kriged (mean and variance NaN); first: " + (leave_one_out ? "sample " : "target ") +

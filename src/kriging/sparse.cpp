@@ -14,12 +14,48 @@
 
 namespace errfield::detail {
 
+namespace {
+std::string mib(double bytes) { return format_number(std::round(bytes / (1 << 20))); }
+}  // namespace
+
+ResourceError KrigingEngine::sparse_over_budget(const std::string& what) const {
+  return ResourceError("kriging: the sparse back end with N = " + std::to_string(points_.cols()) +
+                       " samples and a support of " + format_number(model_.support()) + ": " + what +
+                       ", over the memory budget of " +
+                       mib(static_cast<double>(options_.dense_memory_budget_bytes)) +
+                       " MiB (dense_memory_budget_bytes); use a model with a shorter range (the sparse back end "
+                       "pays off when each sample has few others within the range) or the local back end "
+                       "(--backend local --neighbors 32)");
+}
+
+// The lower triangle of K holds one entry per pair closer than the support; a range covering
+// everything makes it dense (N = 30,000: 4.5e8 entries, ~18 GB while being assembled). Counted on
+// an evenly spaced subset of samples, before anything is allocated.
+void KrigingEngine::check_sparse_budget_before_assembly(double r2) const {
+  const Eigen::Index n = points_.cols();
+  const Eigen::Index probes = std::min<Eigen::Index>(n, 256);
+  std::vector<std::pair<std::size_t, double>> hits;
+  double found = 0.0;
+  for (Eigen::Index a = 0; a < probes; ++a) {
+    tree_->within(points_.col(a * n / probes).data(), r2, hits);
+    found += static_cast<double>(hits.size());
+  }
+  const double entries = (found / static_cast<double>(probes) * static_cast<double>(n) + static_cast<double>(n)) / 2;
+  // pair<int,double> while gathering, then CSC (int + double) twice: ours and CHOLMOD's copy
+  const double bytes = entries * (16.0 + 12.0 + 12.0);
+  if (bytes > static_cast<double>(options_.dense_memory_budget_bytes))
+    throw sparse_over_budget("about " + format_number(std::round(entries)) +
+                             " pairs closer than the support make K nearly dense, ~" + mib(bytes) +
+                             " MiB to assemble");
+}
+
 void KrigingEngine::setup_sparse() {
   const Eigen::Index n = points_.cols();
   if (n > std::numeric_limits<int>::max() / 2)
     throw ResourceError("kriging: the sparse back end supports up to 1e9 samples");
   const double support = model_.support();
   const double r2 = support * support;
+  check_sparse_budget_before_assembly(r2);
   // Column j holds rows i >= j (lower triangle) with C(h_ij) != 0.
   std::vector<std::vector<std::pair<int, double>>> columns(static_cast<std::size_t>(n));
 #pragma omp parallel num_threads(thread_count())
@@ -55,6 +91,17 @@ void KrigingEngine::setup_sparse() {
   }
 
   sparse_ = std::make_unique<CholmodFactor>();
+  if (!sparse_->analyze(static_cast<int>(n), col_ptr, row_index, vals)) {
+    report_.status = KrigingStatus::NotPositiveDefinite;
+    report_.message = sparse_->message();
+    return;
+  }
+  // The fill-reducing ordering predicts the factor exactly; refuse before the numeric factor
+  // allocates it.
+  const double factor_bytes = sparse_->predicted_factor_bytes();
+  if (factor_bytes > static_cast<double>(options_.dense_memory_budget_bytes))
+    throw sparse_over_budget("its Cholesky factor would hold ~" + mib(factor_bytes) + " MiB (" +
+                             std::to_string(col_ptr.back()) + " non-zeros in K fill in)");
   double jitter = 0.0;
   for (int attempt = 0;; ++attempt) {
     if (sparse_->factorize(static_cast<int>(n), col_ptr, row_index, vals, jitter)) break;

@@ -222,4 +222,34 @@ void check_error_vectors_from_distances(bool robot_position_bases, bool has_posi
                    source, 0, "dist_b0");
 }
 
+std::optional<std::string> implausible_distance(double measured_mm, double nominal_mm, const MdhModel& model,
+                                                bool near_nominal) {
+  if (!(measured_mm > 0.0))
+    return format_number(measured_mm) + " mm; expected a distance > 0 (the nominal distance is " +
+           format_number(std::round(nominal_mm * 1000) / 1000) + " mm)";
+  const double limit = reach_scale_mm(model) / 10.0;
+  if (!near_nominal || std::abs(measured_mm - nominal_mm) <= limit) return std::nullopt;
+  return format_number(measured_mm) + " mm, but the nominal distance is " +
+         format_number(std::round(nominal_mm * 1000) / 1000) + " mm: an error of " +
+         format_number(std::round((measured_mm - nominal_mm) * 1000) / 1000) + " mm, more than a tenth of " +
+         model.name() + "'s size (" + format_number(std::round(limit)) +
+         " mm); check the column, its units (mm) and the base point";
+}
+
+std::optional<std::string> tracker_frozen(const Eigen::MatrixXd& measured_mm, const Eigen::MatrixXd& nominal_mm) {
+  if (measured_mm.rows() < 2 || measured_mm.rows() != nominal_mm.rows() || measured_mm.cols() != 3 ||
+      nominal_mm.cols() != 3)
+    return std::nullopt;
+  const auto spread = [](const Eigen::MatrixXd& p) {
+    const Eigen::RowVector3d c = p.colwise().mean();
+    return (p.rowwise() - c).rowwise().norm().maxCoeff();
+  };
+  const double nominal = spread(nominal_mm), measured = spread(measured_mm);
+  if (!(nominal > 1.0) || measured > nominal * 1e-6) return std::nullopt;
+  return "the " + std::to_string(measured_mm.rows()) + " measured positions (mx,my,mz) lie within " +
+         format_number(measured) + " mm of their mean while the nominal positions spread over " +
+         format_number(std::round(nominal)) +
+         " mm: the tracker did not follow the reflector (a frozen reading?); nothing can be fitted to them";
+}
+
 }  // namespace errfield::robot

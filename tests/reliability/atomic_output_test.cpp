@@ -430,7 +430,9 @@ TEST(AtomicCliOutput, SigintDuringPlanLeavesPreviousOutputs) {
 
 TEST(AtomicCliOutput, FitFailureAndSigintLeavePreviousModel) {
   ScratchDir dir;
-  simulate_into(dir, "25", "g.csv");  // 9,261 grid points: fitting takes seconds
+  // 4,913 grid points: a kriging fit takes seconds (distance-idw with its one-pass leave-one-out
+  // now takes a fraction of one, too little to be interrupted at work)
+  simulate_into(dir, "31.25", "g.csv");
   const auto r0 = testing::run_errfield({"simulate", "--seed", "5", "--step", "125", "--measure", "distances", "--out",
                                          "d.csv"},
                                         dir.path());
@@ -443,7 +445,7 @@ TEST(AtomicCliOutput, FitFailureAndSigintLeavePreviousModel) {
   EXPECT_THAT(r.err, HasSubstr("mx"));
   EXPECT_EQ(dir.read("m.json"), kOld);
   expect_sigint_keeps_previous(
-      dir, {"fit", "--robot", "robot.json", "--data", "g.csv", "--method", "distance-idw", "--out", "m.json"},
+      dir, {"fit", "--robot", "robot.json", "--data", "g.csv", "--method", "distance-kriging", "--out", "m.json"},
       {"g.csv", "d.csv", "robot.json", "m.json"}, {"m.json"});
 }
 

@@ -46,6 +46,21 @@ std::optional<std::string> lengths_in_metres(const MdhModel& model, const std::s
 std::optional<std::string> distances_in_metres(const std::vector<double>& distances_mm, const MdhModel& model,
                                                const std::string& what);
 
+/// Why a measured distance (mm) cannot be right, or nothing: it must be > 0 and within
+/// reach_scale_mm(model) / 10 of the nominal distance (250 mm for the ER20-C10; positioning
+/// errors are millimetres). Distances of 1e300 "calibrated" to a robot with 1e300 mm links, and a
+/// negative dist_b0 became a 1 m correction marked ok. The caller adds file, line and column.
+/// `near_nominal` false checks only > 0: for a column that distances_in_metres warns about (a
+/// warning, not an error, by the bad-input catalogue), whose errors are then all about -d.
+std::optional<std::string> implausible_distance(double measured_mm, double nominal_mm, const MdhModel& model,
+                                                bool near_nominal = true);
+
+/// Why tracker positions (N x 3, mm) cannot be measurements of the robot at the nominal positions
+/// (N x 3), or nothing: when the nominal positions spread over more than 1 mm and the measured
+/// ones over less than a thousandth of that, the tracker did not follow the reflector (a frozen
+/// reading), and any fit to them is made up.
+std::optional<std::string> tracker_frozen(const Eigen::MatrixXd& measured_mm, const Eigen::MatrixXd& nominal_mm);
+
 /// A warning naming the first row (via `labels`), joint and value outside the model's joint
 /// limits, and how many rows are; nothing when all are within. `slack_deg` widens the limits.
 std::optional<std::string> joints_outside_limits(const std::vector<JointVector>& q_deg, const MdhModel& model,
