@@ -17,7 +17,7 @@ namespace {
 struct FitArgs {
   std::string robot, data, method = "distance-idw", space = "task", out, model;
   std::vector<std::string> base_points;
-  double power = 1.0;
+  double power = 1.0, region_margin = 0.0;
   std::size_t base = 0;
 };
 
@@ -29,6 +29,7 @@ void run_fit(const FitArgs& a) {
   o.space = field_space_from_name(a.space);
   o.idw_power = a.power;
   o.base = a.base;
+  o.region_margin = a.region_margin;
   if (!a.model.empty()) o.model = VariogramModel::parse(a.model);
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.base_points) {
@@ -53,6 +54,9 @@ void run_fit(const FitArgs& a) {
     if (cv.mean_squared_z) std::cout << ", mean z^2 " << *cv.mean_squared_z << " (~1 when the variance is right)";
     std::cout << "\n";
   }
+  if (r.registration)
+    std::cout << "  registration tracker -> robot stored in the model (residual RMS "
+              << format_number(r.registration->residual_rms_mm) << " mm on " << r.registration->points << " points)\n";
   std::cout << "  model written to " << a.out << "\n";
   for (const auto& w : r.warnings) std::cerr << "errfield fit: warning: " << w << "\n";
 }
@@ -79,6 +83,9 @@ void add_fit_command(CLI::App& app) {
   cmd->add_option("--base", a->base, "index K of the base point whose distances dist_bK the distance methods use")
       ->capture_default_str();
   cmd->add_option("--base-point", a->base_points, "X,Y,Z of base point b0, b1, ... when the data have no base rows (fixed points)");
+  cmd->add_option("--region-margin", a->region_margin,
+                  "kriging: predict this far beyond the samples' box (mm in task space, deg per joint in joint space)")
+      ->capture_default_str();
   cmd->add_option("--out", a->out, "model JSON (written atomically)")->required();
   cmd->callback([a] { run_fit(*a); });
 }
