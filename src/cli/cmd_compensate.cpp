@@ -11,7 +11,7 @@
 #include "cli/robot_cli.hpp"
 #include "errfield/compensation/target_ik.hpp"
 #include "errfield/error.hpp"
-#include "errfield/robot/compensation.hpp"
+#include "errfield/compensation/compensation.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/pose.hpp"
 
@@ -26,6 +26,7 @@ struct CompensateArgs {
 
 void run_compensate(const CompensateArgs& a) {
   using namespace robot;
+  using namespace compensation;
   std::ifstream in(a.model);
   if (!in) throw InputError("cannot open model file '" + a.model + "'", a.model);
   nlohmann::json j;

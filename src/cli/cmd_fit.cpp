@@ -9,7 +9,7 @@
 #include "cli/robot_cli.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/error.hpp"
-#include "errfield/robot/model_fitting.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 
 namespace errfield::cli {
 namespace {
@@ -23,6 +23,7 @@ struct FitArgs {
 
 void run_fit(const FitArgs& a) {
   using namespace robot;
+  using namespace compensation;
   const MdhModel model = load_robot_or_default(a.robot);
   FitOptions o;
   o.method = method_from_name(a.method);

@@ -8,7 +8,7 @@
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/cube_budget.hpp"
-#include "errfield/robot/measurement_plan.hpp"
+#include "errfield/compensation/measurement_plan.hpp"
 #include "errfield/robot/pose.hpp"
 #include "errfield/variogram_fit.hpp"
 
@@ -51,6 +51,7 @@ VariogramModel model_from_variogram_csv(const std::string& path) {
 
 void run_plan(const PlanArgs& a) {
   using namespace robot;
+  using namespace compensation;
   const MdhModel robot = load_robot_or_default(a.robot);
   PlanOptions o;
   const auto cube = parse_numbers(a.cube, 4, "--cube");

@@ -16,7 +16,7 @@ struct PredictArgs {
 
 void run_predict(const PredictArgs& a) {
   const compensation::LoadedModel loaded = compensation::load_model(a.model);
-  const robot::CompensationModel& model = loaded.model;
+  const compensation::CompensationModel& model = loaded.model;
   const CsvTable table = CsvTable::read(a.joints);
   const std::vector<robot::JointVector> q = read_joint_columns(table);
   const std::size_t n = q.size();

@@ -75,6 +75,7 @@ OutputTable points_table(const compensation::ValidationReport& r) {
 
 void run_validate(const ValidateArgs& a) {
   using namespace robot;
+  using namespace compensation;
   const compensation::LoadedModel loaded = compensation::load_model(a.model);
   const CompensationModel& model = loaded.model;
   std::vector<Eigen::Vector3d> fixed;

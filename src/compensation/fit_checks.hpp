@@ -7,25 +7,25 @@
 
 #include <Eigen/Core>
 
-#include "errfield/robot/model_fitting.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 
 namespace errfield::compensation {
 
 /// Errors the model's field was fitted on, one row per sample (1 or 3 columns); empty without a field.
-Eigen::MatrixXd fitted_errors(const robot::ErrorField& field);
+Eigen::MatrixXd fitted_errors(const ErrorField& field);
 
 /// Why a kriging fit is not credible (condition beyond the limit, leave-one-out beyond 3 × the
 /// data's largest deviation); empty when it is fine or the model has no kriging system.
-std::string fit_problem(const robot::FitResult& fit);
+std::string fit_problem(const FitResult& fit);
 
 /// Returns `fit` if fit_problem() is empty; else refits with a nugget via `refit` when the variogram
 /// was estimated (options.model empty), or throws Error naming the figures.
-robot::FitResult check_fitted_model(robot::FitResult fit, const robot::FitOptions& options,
-                                    const std::function<robot::FitResult(const VariogramModel&)>& refit);
+FitResult check_fitted_model(FitResult fit, const FitOptions& options,
+                                    const std::function<FitResult(const VariogramModel&)>& refit);
 
 /// Stores the nominal robot (kinematic methods), the training joints, the credible range and the
 /// registration (the training rows' tracker readings onto the model's own predictions, unless the
 /// fit already registered them) in fit.model.
-robot::FitResult attach_artifacts(robot::FitResult fit, const robot::MdhModel& nominal, const robot::MeasurementSet& data);
+FitResult attach_artifacts(FitResult fit, const robot::MdhModel& nominal, const MeasurementSet& data);
 
 }  // namespace errfield::compensation

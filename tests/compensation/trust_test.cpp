@@ -9,15 +9,16 @@
 #include "errfield/compensation/target_ik.hpp"
 #include "errfield/error.hpp"
 #include "errfield/regular_grid.hpp"
-#include "errfield/robot/compensation.hpp"
-#include "errfield/robot/error_fields.hpp"
+#include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/error_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
-#include "errfield/robot/kriging_fields.hpp"
-#include "errfield/robot/model_fitting.hpp"
+#include "errfield/compensation/kriging_fields.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 #include "errfield/robot/pose.hpp"
 #include "errfield/robot/simulator.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
+using namespace errfield::robot;
 namespace {
 
 struct CubeData {
@@ -228,4 +229,4 @@ TEST(BranchIk, CrossingASingularityIsReportedAsABranchChange) {
 }
 
 }  // namespace
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

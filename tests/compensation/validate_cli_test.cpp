@@ -17,7 +17,8 @@
 #include "errfield/robot/mdh_model.hpp"
 #include "support/cli_harness.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
+using namespace errfield::robot;
 namespace {
 
 using errfield::testing::CliResult;
@@ -410,4 +411,4 @@ TEST_F(ValidateCli, CompensateSolvesPoseTargetsOnTheBranchOfTheData) {
 }
 
 }  // namespace
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

@@ -16,7 +16,7 @@
 
 #include <Eigen/Core>
 
-#include "errfield/robot/compensation.hpp"
+#include "errfield/compensation/compensation.hpp"
 
 namespace errfield::compensation {
 
@@ -31,18 +31,18 @@ struct PointPrediction {
   /// The same in the tracker frame, when the model holds a registration; NaN unless ok.
   std::optional<Eigen::Vector3d> tracker_mm;
   /// The field's part (zero without a field).
-  robot::ErrorPrediction error;
+  ErrorPrediction error;
   bool ok() const { return status == PredictionStatus::ok; }
 };
 
 /// Prediction at commanded joints `q_deg`.
-PointPrediction predict_position(const robot::CompensationModel& model, const robot::JointVector& q_deg);
+PointPrediction predict_position(const CompensationModel& model, const robot::JointVector& q_deg);
 
 /// A model file as validate, predict and fk read it: a compensation model (errfield fit) or a robot
 /// JSON (errfield calibrate, or any robot description: its FK is the prediction, its
 /// "registration" member, if any, the registration).
 struct LoadedModel {
-  robot::CompensationModel model;
+  CompensationModel model;
   bool is_robot_json = false;
   /// "vector-kriging model" or "robot JSON 'ER20-C10 (calibrated, position model)'".
   std::string description;

@@ -25,8 +25,8 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "errfield/csv_table.hpp"
-#include "errfield/robot/compensation.hpp"
-#include "errfield/robot/model_fitting.hpp"
+#include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 
 namespace errfield::compensation {
 
@@ -75,7 +75,7 @@ struct ValidationReport {
 
 /// Prediction mode on held-out rows. Positions are scored when the data have mx,my,mz and the model
 /// has a registration (else a note says why not); distances when the data have dist_bK.
-ValidationReport validate_predictions(const robot::CompensationModel& model, const robot::MeasurementSet& data);
+ValidationReport validate_predictions(const CompensationModel& model, const MeasurementSet& data);
 
 /// Targets mode. Columns: point; target nx,ny,nz (compensate output) or x,y,z (robot frame, mm);
 /// mx,my,mz (tracker frame) and/or dist_bK; optional run (before|after; absent = after), kind

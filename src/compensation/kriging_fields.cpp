@@ -1,4 +1,4 @@
-#include "errfield/robot/kriging_fields.hpp"
+#include "errfield/compensation/kriging_fields.hpp"
 
 #include <cmath>
 
@@ -11,7 +11,9 @@
 #include "errfield/metrics.hpp"
 #include "errfield/variogram_fit.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
+
+using namespace errfield::robot;
 
 std::string_view field_space_name(FieldSpace s) { return s == FieldSpace::task ? "task" : "joint"; }
 
@@ -356,4 +358,4 @@ std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& 
   }
 }
 
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

@@ -14,7 +14,7 @@
 #include "errfield/robot/mdh_model.hpp"
 #include "errfield/variogram_model.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
 
 struct PlanOptions {
   Eigen::Vector3d min_corner_mm = Eigen::Vector3d::Zero();
@@ -32,12 +32,12 @@ struct PlannedPoint {
   std::string id;    ///< "b0", "g0", "s0", ...
   std::string kind;  ///< "base", "grid" or "sample"
   Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();
-  JointVector q_deg = JointVector::Zero();
+  robot::JointVector q_deg = robot::JointVector::Zero();
 };
 
 /// Every point with its IK joints (seeded at the cube centre, so all on one branch). Throws
 /// InputError listing the unreachable points (id, position, IK status) when any is unreachable.
-std::vector<PlannedPoint> plan_measurements(const MdhModel& robot, const PlanOptions& options);
+std::vector<PlannedPoint> plan_measurements(const robot::MdhModel& robot, const PlanOptions& options);
 
 struct StepRecommendation {
   double step_mm = 0;
@@ -53,4 +53,4 @@ struct StepRecommendation {
 StepRecommendation recommend_grid_step(const VariogramModel& model, double size_mm, double gamma_max_mm2 = 0.01,
                                        double min_step_mm = 10.0);
 
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

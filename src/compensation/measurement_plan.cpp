@@ -1,4 +1,4 @@
-#include "errfield/robot/measurement_plan.hpp"
+#include "errfield/compensation/measurement_plan.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -8,7 +8,9 @@
 #include "errfield/robot/inverse_kinematics.hpp"
 #include "errfield/robot/random.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
+
+using namespace errfield::robot;
 
 namespace {
 // "g12": built by appending (GCC 12 warns falsely on "g" + std::to_string(n)).
@@ -127,4 +129,4 @@ StepRecommendation recommend_grid_step(const VariogramModel& model, double size_
   return best;
 }
 
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

@@ -1,14 +1,16 @@
-#include "errfield/robot/compensation.hpp"
+#include "errfield/compensation/compensation.hpp"
 
 #include <cmath>
 
 #include "compensation/fit_checks.hpp"
 #include "errfield/error.hpp"
-#include "errfield/robot/error_fields.hpp"
+#include "errfield/compensation/error_fields.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/kinematics.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
+
+using namespace errfield::robot;
 
 namespace {
 
@@ -246,4 +248,4 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
   return model;
 }
 
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

@@ -18,10 +18,10 @@
 
 #include <Eigen/Core>
 
-#include "errfield/robot/orientation_experiment.hpp"
+#include "errfield/reproduction/orientation_experiment.hpp"
 #include "errfield/variogram_model.hpp"
 
-namespace errfield::robot {
+namespace errfield::reproduction {
 
 struct ReproductionOptions {
   std::uint64_t seed = 1;  ///< master seed; run r of Table 6 uses a seed derived from (seed, r)
@@ -139,4 +139,4 @@ std::string reproduction_summary(const ReproductionResult& result);
 std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& result,
                                                       const std::filesystem::path& dir);
 
-}  // namespace errfield::robot
+}  // namespace errfield::reproduction

@@ -8,9 +8,11 @@
 #include "errfield/error.hpp"
 #include "errfield/report/html_report.hpp"
 #include "errfield/robot/paper_reference.hpp"
-#include "errfield/robot/paper_reproduction.hpp"
+#include "errfield/reproduction/paper_reproduction.hpp"
 
-namespace errfield::robot {
+namespace errfield::reproduction {
+
+using namespace errfield::robot;
 
 using report::Align;
 using report::fixed;
@@ -407,4 +409,4 @@ std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& 
   return written;
 }
 
-}  // namespace errfield::robot
+}  // namespace errfield::reproduction

@@ -16,20 +16,20 @@
 #include <Eigen/Geometry>
 
 #include "errfield/csv_table.hpp"
-#include "errfield/robot/compensation.hpp"
-#include "errfield/robot/kriging_fields.hpp"
+#include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/kriging_fields.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
 
 /// What was measured, in memory.
 struct MeasurementSet {
   std::string source;                     ///< file name, for messages
   std::vector<std::string> id;            ///< point names (targets)
-  std::vector<JointVector> q_deg;         ///< commanded joints of the targets
+  std::vector<robot::JointVector> q_deg;         ///< commanded joints of the targets
   std::vector<Eigen::Vector3d> nominal_mm;  ///< nominal positions (robot frame)
   std::vector<Eigen::Vector3d> measured_mm; ///< tracker readings (tracker frame); empty if none
   std::vector<Eigen::Vector3d> base_nominal_mm;  ///< base points bK (robot frame)
-  std::vector<JointVector> base_q_deg;  ///< joints of base rows (robot-position bases); empty for fixed bases
+  std::vector<robot::JointVector> base_q_deg;  ///< joints of base rows (robot-position bases); empty for fixed bases
   /// distance[k][i]: measured distance from base point k to target i (mm); empty if none.
   std::vector<std::vector<double>> distance_mm;
 
@@ -38,17 +38,15 @@ struct MeasurementSet {
   /// dist_b0, dist_b1, ... (mm; optional). A base row's nominal position is its base point; without
   /// base rows, `fixed_bases` give the base points of dist_b0.. (fixed points, robot frame).
   /// Throws InputError naming file, line and column.
-  static MeasurementSet from_table(const CsvTable& table, const MdhModel& robot,
+  static MeasurementSet from_table(const CsvTable& table, const robot::MdhModel& robot,
                                    const std::vector<Eigen::Vector3d>& fixed_bases = {});
 
   /// Distance errors to base k: dist_bk − |P − B_k| (mm). Throws InputError if absent.
   std::vector<double> distance_errors(std::size_t k) const;
 };
 
-/// Rigid registration robot ← tracker (compensation/registration.hpp): the frame in which measured
-/// positions become position errors; fit stores it in the model it writes.
-using compensation::Registration;
-using compensation::fit_registration;
+// Registration and fit_registration (robot ← tracker, the frame in which measured positions become
+// position errors; fit stores it in the model it writes): compensation/registration.hpp.
 
 struct FitOptions {
   CompensationMethod method = CompensationMethod::distance_idw;
@@ -98,6 +96,6 @@ struct FitResult {
 /// columns). kinematic: calibrate_distances on the distances to base point `base` (a robot
 /// position, i.e. a base row with joints); kinematic+kriging: that, then vector kriging of the 3-D
 /// residuals (measured positions registered to the identified model).
-FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& data, const FitOptions& options);
+FitResult fit_compensation_model(const robot::MdhModel& robot, const MeasurementSet& data, const FitOptions& options);
 
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

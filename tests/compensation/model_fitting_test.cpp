@@ -2,7 +2,7 @@
 // form leave-one-out of one factorization; here it is checked against the definition: refit
 // ordinary kriging without sample i, predict sample i, for every i (SIMULATED measurements).
 
-#include "errfield/robot/model_fitting.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,10 +11,11 @@
 #include <gtest/gtest.h>
 
 #include "errfield/kriging.hpp"
-#include "errfield/robot/measurement_plan.hpp"
+#include "errfield/compensation/measurement_plan.hpp"
 #include "errfield/robot/simulator.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
+using namespace errfield::robot;
 namespace {
 
 // The paper's cube on a 250 mm grid (27 points), measured by the simulated tracker from a base
@@ -213,4 +214,4 @@ TEST(KrigingFieldFit, VectorFieldAveragesRepeatedSamples) {
 }
 
 }  // namespace
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

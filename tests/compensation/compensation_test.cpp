@@ -1,15 +1,16 @@
-#include "errfield/robot/compensation.hpp"
+#include "errfield/compensation/compensation.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "errfield/error.hpp"
-#include "errfield/robot/error_fields.hpp"
+#include "errfield/compensation/error_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/simulator.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
+using namespace errfield::robot;
 namespace {
 
 TEST(CompensationMethod, NamesRoundTrip) {
@@ -158,4 +159,4 @@ TEST(CompensationModelJson, BadInputNamesTheProblem) {
 }
 
 }  // namespace
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

@@ -27,10 +27,10 @@
 
 #include "errfield/cross_validation.hpp"
 #include "errfield/kriging.hpp"
-#include "errfield/robot/compensation.hpp"
+#include "errfield/compensation/compensation.hpp"
 #include "errfield/variogram_model.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
 
 enum class FieldSpace { task, joint };
 
@@ -63,7 +63,7 @@ struct KrigingFieldOptions {
 /// Samples of an error field: nominal positions (mm), nominal joints (deg), one per sample.
 struct FieldSamples {
   std::vector<Eigen::Vector3d> position_mm;
-  std::vector<JointVector> joints_deg;
+  std::vector<robot::JointVector> joints_deg;
 };
 
 /// Kriging of distance errors `distance_error_mm` (one per sample) to `base_point_mm`.
@@ -109,4 +109,4 @@ VariogramModel estimate_field_variogram(const FieldSamples& samples, const Eigen
 /// "vector-kriging"); nullptr for another kind.
 std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& j, const std::string& source);
 
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

@@ -4,7 +4,7 @@
 
 #include <cstdint>
 
-namespace errfield::robot::detail {
+namespace errfield::reproduction::detail {
 
 /// splitmix64 of (seed, stream): streams of one master seed are decorrelated and the same on every
 /// platform and standard library.
@@ -15,4 +15,4 @@ inline std::uint64_t stream_seed(std::uint64_t seed, std::uint64_t stream) {
   return z ^ (z >> 31);
 }
 
-}  // namespace errfield::robot::detail
+}  // namespace errfield::reproduction::detail

@@ -14,9 +14,9 @@
 
 #include "errfield/grid_idw.hpp"
 #include "errfield/regular_grid.hpp"
-#include "errfield/robot/compensation.hpp"
+#include "errfield/compensation/compensation.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
 
 /// The paper's field (SPEC eqs. 19–23): distance errors dL_j of the grid nodes to a base point P0,
 /// interpolated by 8-vertex IDW (power p, 1 in the paper) to the target's nominal position, then
@@ -37,4 +37,4 @@ std::shared_ptr<const ErrorField> make_position_idw_field(const RegularGrid3& gr
 /// Throws InputError naming `source` and the member for anything malformed.
 std::shared_ptr<const ErrorField> error_field_from_json(const nlohmann::json& j, const std::string& source);
 
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

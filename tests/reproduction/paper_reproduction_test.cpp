@@ -1,8 +1,8 @@
-#include "errfield/robot/paper_reproduction.hpp"
+#include "errfield/reproduction/paper_reproduction.hpp"
 
 #include <gtest/gtest.h>
 
-#include "errfield/robot/orientation_experiment.hpp"
+#include "errfield/reproduction/orientation_experiment.hpp"
 
 #include <cmath>
 #include <cstdlib>
@@ -17,7 +17,9 @@
 #include "support/chromium_render.hpp"
 #include "support/cli_harness.hpp"
 
-namespace errfield::robot {
+namespace errfield::reproduction {
+using namespace errfield::robot;
+using namespace errfield::compensation;
 namespace {
 
 namespace fs = std::filesystem;
@@ -300,4 +302,4 @@ TEST(ReproduceCli, BadOptionsExitNonZero) {
 }
 
 }  // namespace
-}  // namespace errfield::robot
+}  // namespace errfield::reproduction

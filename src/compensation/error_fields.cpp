@@ -1,11 +1,13 @@
-#include "errfield/robot/error_fields.hpp"
+#include "errfield/compensation/error_fields.hpp"
 
 #include <nlohmann/json.hpp>
 
 #include "errfield/error.hpp"
-#include "errfield/robot/kriging_fields.hpp"
+#include "errfield/compensation/kriging_fields.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
+
+using namespace errfield::robot;
 
 namespace {
 
@@ -188,4 +190,4 @@ std::shared_ptr<const ErrorField> error_field_from_json(const nlohmann::json& j,
   bad(source, "member \"field.kind\": unknown kind '" + k + "' (expected distance-idw, position-idw, distance-kriging or vector-kriging)");
 }
 
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

@@ -28,7 +28,7 @@
 #include "errfield/robot/simulator.hpp"
 #include "errfield/variogram_model.hpp"
 
-namespace errfield::robot {
+namespace errfield::reproduction {
 
 struct OrientationExperimentOptions {
   std::uint64_t seed = 1;         ///< seeds the poses, the measurement and the evaluation noise
@@ -71,7 +71,7 @@ struct OrientationExperiment {
 /// Runs the experiment on the robot `config` simulates, in the paper's cube (paper_cube()).
 /// Throws ArgumentError for bad options, Error when a position admits no reachable orientation
 /// within max_orientation_draws or a field cannot be fitted.
-OrientationExperiment run_orientation_experiment(const SimulatorConfig& config,
+OrientationExperiment run_orientation_experiment(const robot::SimulatorConfig& config,
                                                  const OrientationExperimentOptions& options);
 
-}  // namespace errfield::robot
+}  // namespace errfield::reproduction

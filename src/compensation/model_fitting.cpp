@@ -1,4 +1,4 @@
-#include "errfield/robot/model_fitting.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 
 #include <cmath>
 
@@ -10,12 +10,14 @@
 #include "errfield/regular_grid.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/distance_error.hpp"
-#include "errfield/robot/error_fields.hpp"
+#include "errfield/compensation/error_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/scattered_idw.hpp"
 #include "compensation/fit_checks.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
+
+using namespace errfield::robot;
 
 MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& robot,
                                           const std::vector<Eigen::Vector3d>& fixed_bases) {
@@ -319,16 +321,16 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
 
 }  // namespace
 
-FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
+FitResult fit_compensation_model(const robot::MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
   o.validate();
   FitResult out = fit_unchecked(robot, d, o);
   // Judge the model before anyone writes it; an estimated variogram may be refitted with a nugget.
-  out = compensation::check_fitted_model(std::move(out), o, [&](const VariogramModel& m) {
+  out = check_fitted_model(std::move(out), o, [&](const VariogramModel& m) {
     FitOptions again = o;
     again.model = m;
     return fit_unchecked(robot, d, again);
   });
-  return compensation::attach_artifacts(std::move(out), robot, d);
+  return attach_artifacts(std::move(out), robot, d);
 }
 
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

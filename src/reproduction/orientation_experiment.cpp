@@ -1,20 +1,23 @@
 // The varying-orientation experiment (beyond the paper): task- vs joint-space vector kriging.
 // Protocol in the header; every random stream is separate, so the two orientation cases share
 // their target positions and nothing depends on which method runs first.
-#include "errfield/robot/orientation_experiment.hpp"
+#include "errfield/reproduction/orientation_experiment.hpp"
 
 #include <cmath>
 
 #include "errfield/error.hpp"
-#include "errfield/robot/compensation.hpp"
+#include "errfield/compensation/compensation.hpp"
 #include "errfield/robot/kinematics.hpp"
-#include "errfield/robot/kriging_fields.hpp"
-#include "errfield/robot/model_fitting.hpp"
-#include "errfield/robot/paper_reproduction.hpp"
+#include "errfield/compensation/kriging_fields.hpp"
+#include "errfield/compensation/model_fitting.hpp"
+#include "errfield/reproduction/paper_reproduction.hpp"
 #include "errfield/robot/pose.hpp"
-#include "robot/seed_streams.hpp"
+#include "reproduction/seed_streams.hpp"
 
-namespace errfield::robot {
+namespace errfield::reproduction {
+
+using namespace errfield::robot;
+using namespace errfield::compensation;
 
 void OrientationExperimentOptions::validate() const {
   const std::string where = "orientation experiment: ";
@@ -223,4 +226,4 @@ OrientationExperiment run_orientation_experiment(const SimulatorConfig& config,
   return out;
 }
 
-}  // namespace errfield::robot
+}  // namespace errfield::reproduction

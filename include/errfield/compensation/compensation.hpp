@@ -6,14 +6,14 @@
 /// keeps the orientation and solves inverse kinematics seeded at the nominal solution.
 ///
 /// A model has two parts, either of which may be trivial:
-///  - the **command model**: the MdhModel IK runs on (the nominal model, or the one identified by
+///  - the **command model**: the robot::MdhModel IK runs on (the nominal model, or the one identified by
 ///    kinematic calibration);
 ///  - an **error field**: the predicted remaining position error dP (robot frame, mm) at a nominal
 ///    target, from interpolation of measured errors (grid IDW of distance or position errors,
 ///    kriging of distance errors or error vectors, in task or joint space).
 /// The methods of `errfield fit` are combinations of the two (see CompensationMethod).
 ///
-/// Frames and units: positions in the robot's world frame (the MdhModel's base frame), mm; joints
+/// Frames and units: positions in the robot's world frame (the robot::MdhModel's base frame), mm; joints
 /// in degrees; the target point is the model's tool point.
 /// Thread safety: models are immutable after construction; compensate() may run concurrently.
 
@@ -32,7 +32,7 @@
 #include "errfield/robot/inverse_kinematics.hpp"
 #include "errfield/robot/mdh_model.hpp"
 
-namespace errfield::robot {
+namespace errfield::compensation {
 
 /// The methods of `errfield fit` / Table 6, named as on the command line.
 enum class CompensationMethod {
@@ -89,7 +89,7 @@ class ErrorField {
  public:
   virtual ~ErrorField() = default;
   /// Prediction at a nominal target position `p_mm` reached with nominal joints `q_deg`.
-  virtual ErrorPrediction predict(const Eigen::Vector3d& p_mm, const JointVector& q_deg) const = 0;
+  virtual ErrorPrediction predict(const Eigen::Vector3d& p_mm, const robot::JointVector& q_deg) const = 0;
   /// JSON description (see docs/data-formats.md, "model JSON").
   virtual nlohmann::json to_json() const = 0;
   /// One line for people ("distance IDW on x [..] ... base point (..)").
@@ -98,27 +98,27 @@ class ErrorField {
 
 /// The result of compensating one target.
 struct CompensatedTarget {
-  JointVector q_nominal_deg = JointVector::Zero();  ///< nominal IK solution of the target
+  robot::JointVector q_nominal_deg = robot::JointVector::Zero();  ///< nominal IK solution of the target
   ErrorPrediction prediction;                        ///< the field's prediction (zero if no field)
   Eigen::Vector3d command_position_mm = Eigen::Vector3d::Zero();  ///< P_cmd = P_n − dP
-  JointVector q_command_deg = JointVector::Zero();   ///< joints to send (IK of the command model)
-  IkStatus ik_status = IkStatus::converged;          ///< of the command IK (nominal IK if that failed)
+  robot::JointVector q_command_deg = robot::JointVector::Zero();   ///< joints to send (IK of the command model)
+  robot::IkStatus ik_status = robot::IkStatus::converged;          ///< of the command IK (nominal IK if that failed)
   double ik_residual_mm = 0.0;
   /// Probability that the remaining error along the predicted quantity lies within ±tolerance,
   /// assuming a Gaussian prediction error with the kriging variance; NaN without a variance.
   double p_within_tolerance = std::numeric_limits<double>::quiet_NaN();
   /// True when the target is inside the modelled region, the prediction is credible and both IK
   /// solves converged.
-  bool ok() const { return prediction.inside_region && prediction.credible && ik_status == IkStatus::converged; }
+  bool ok() const { return prediction.inside_region && prediction.credible && ik_status == robot::IkStatus::converged; }
 };
 
 class CompensationModel {
  public:
   /// `command_model` is what IK runs on; `field` may be null (none, kinematic).
-  CompensationModel(CompensationMethod method, MdhModel command_model, std::shared_ptr<const ErrorField> field);
+  CompensationModel(CompensationMethod method, robot::MdhModel command_model, std::shared_ptr<const ErrorField> field);
 
   CompensationMethod method() const noexcept { return method_; }
-  const MdhModel& command_model() const noexcept { return command_model_; }
+  const robot::MdhModel& command_model() const noexcept { return command_model_; }
   const ErrorField* field() const noexcept { return field_.get(); }
 
   /// The tracker ↔ robot registration of the training data (fit stores it when the data have
@@ -126,35 +126,35 @@ class CompensationModel {
   const std::optional<compensation::Registration>& registration() const noexcept { return registration_; }
   /// The nominal robot the model was fitted with (where it differs from command_model: the kinematic
   /// methods); the field is evaluated at this robot's FK of the joints.
-  const MdhModel& nominal_model() const noexcept { return nominal_model_ ? *nominal_model_ : command_model_; }
+  const robot::MdhModel& nominal_model() const noexcept { return nominal_model_ ? *nominal_model_ : command_model_; }
   bool has_nominal_model() const noexcept { return nominal_model_.has_value(); }
   /// Joints of the training rows: the branch pose targets are solved on (compensate).
-  const std::vector<JointVector>& data_joints() const noexcept { return data_joints_; }
+  const std::vector<robot::JointVector>& data_joints() const noexcept { return data_joints_; }
   /// Range of the fitted errors (set from the field's own values at construction); empty when the
   /// model has no field.
   const std::optional<CredibleRange>& credible_range() const noexcept { return credible_; }
 
   CompensationModel with_registration(std::optional<compensation::Registration> r) const;
-  CompensationModel with_nominal_model(MdhModel nominal) const;
-  CompensationModel with_data_joints(std::vector<JointVector> q_deg) const;
+  CompensationModel with_nominal_model(robot::MdhModel nominal) const;
+  CompensationModel with_data_joints(std::vector<robot::JointVector> q_deg) const;
   CompensationModel with_credible_range(std::optional<CredibleRange> range) const;
 
   /// The field's prediction at joints `q_deg` (evaluated at nominal_model()'s FK), with the credible
   /// range applied; zero prediction, inside the region, when the model has no field.
-  ErrorPrediction predict_error(const JointVector& q_deg) const;
+  ErrorPrediction predict_error(const robot::JointVector& q_deg) const;
 
   /// Compensates a target pose (robot frame, tool point). `nominal_model` gives the nominal joints
   /// (IK seeded at `seed_deg`); the field is evaluated there; the command is solved on
   /// command_model() seeded at the nominal joints. `tolerance_mm` > 0 feeds p_within_tolerance.
   /// Never throws for numerical outcomes: a failed IK or a target outside the region shows in the
   /// result (ok() false; then q_command_deg = q_nominal_deg).
-  CompensatedTarget compensate(const MdhModel& nominal_model, const Eigen::Isometry3d& target,
-                               const JointVector& seed_deg, double tolerance_mm = 0.25,
-                               const IkOptions& ik = {}) const;
+  CompensatedTarget compensate(const robot::MdhModel& nominal_model, const Eigen::Isometry3d& target,
+                               const robot::JointVector& seed_deg, double tolerance_mm = 0.25,
+                               const robot::IkOptions& ik = {}) const;
 
   /// Same, from nominal joints already known (the target is their nominal FK).
-  CompensatedTarget compensate_joints(const MdhModel& nominal_model, const JointVector& q_nominal_deg,
-                                      double tolerance_mm = 0.25, const IkOptions& ik = {}) const;
+  CompensatedTarget compensate_joints(const robot::MdhModel& nominal_model, const robot::JointVector& q_nominal_deg,
+                                      double tolerance_mm = 0.25, const robot::IkOptions& ik = {}) const;
 
   /// JSON form: {"format":"errfield-compensation-model","version":1,"method":...,
   /// "command_model":{robot JSON},"field":{...}|null} plus, when present, "nominal_model",
@@ -166,11 +166,11 @@ class CompensationModel {
 
  private:
   CompensationMethod method_;
-  MdhModel command_model_;
+  robot::MdhModel command_model_;
   std::shared_ptr<const ErrorField> field_;
   std::optional<compensation::Registration> registration_;
-  std::optional<MdhModel> nominal_model_;
-  std::vector<JointVector> data_joints_;
+  std::optional<robot::MdhModel> nominal_model_;
+  std::vector<robot::JointVector> data_joints_;
   std::optional<CredibleRange> credible_;
 };
 
@@ -180,4 +180,4 @@ Eigen::Vector3d radial_direction(const Eigen::Vector3d& p_mm, const Eigen::Vecto
 /// P(|e| <= tol) for e ~ N(0, variance) (both in mm / mm²); NaN for a NaN or negative variance.
 double probability_within(double tolerance_mm, double variance_mm2);
 
-}  // namespace errfield::robot
+}  // namespace errfield::compensation

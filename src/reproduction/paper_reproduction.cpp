@@ -2,7 +2,7 @@
 // calibration and the simulator come from their own modules; this file decides the protocol
 // (SPEC section 7) and keeps every random stream separate so results do not depend on threads or
 // on which methods run.
-#include "errfield/robot/paper_reproduction.hpp"
+#include "errfield/reproduction/paper_reproduction.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -19,19 +19,22 @@
 #include "errfield/regular_grid.hpp"
 #include "errfield/variogram_fit.hpp"
 #include "errfield/robot/calibration.hpp"
-#include "errfield/robot/compensation.hpp"
+#include "errfield/compensation/compensation.hpp"
 #include "errfield/robot/distance_error.hpp"
-#include "errfield/robot/error_fields.hpp"
+#include "errfield/compensation/error_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
-#include "errfield/robot/kriging_fields.hpp"
-#include "errfield/robot/model_fitting.hpp"
+#include "errfield/compensation/kriging_fields.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 #include "errfield/report/text_table.hpp"
 #include "errfield/robot/paper_reference.hpp"
 #include "errfield/robot/pose.hpp"
 #include "errfield/robot/simulator.hpp"
-#include "robot/seed_streams.hpp"
+#include "reproduction/seed_streams.hpp"
 
-namespace errfield::robot {
+namespace errfield::reproduction {
+
+using namespace errfield::robot;
+using namespace errfield::compensation;
 
 void ReproductionOptions::validate() const {
   if (runs < 1) throw ArgumentError("reproduce: runs = " + std::to_string(runs) + "; expected >= 1");
@@ -582,4 +585,4 @@ ReproductionResult reproduce_paper(const ReproductionOptions& options) {
   return result;
 }
 
-}  // namespace errfield::robot
+}  // namespace errfield::reproduction
