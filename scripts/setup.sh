@@ -10,6 +10,8 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev libnanoflann-dev
   # independent peers for cross-checks: R gstat, Orocos KDL, scipy
   r-cran-gstat liborocos-kdl-dev python3-numpy python3-scipy
+  # Python module (docs/python.md): pybind11 bindings, their pytest suite and example plots
+  python3-dev pybind11-dev python3-pybind11 python3-pytest python3-matplotlib
   # report rendering check, fuzzing and sanitizers
   chromium clang libclang-rt-14-dev libomp-14-dev
 )

@@ -19,7 +19,6 @@
 
 namespace errfield::reproduction {
 using namespace errfield::robot;
-using namespace errfield::compensation;
 namespace {
 
 namespace fs = std::filesystem;
