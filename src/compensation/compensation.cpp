@@ -139,7 +139,7 @@ CredibleRange CredibleRange::of(const Eigen::MatrixXd& e) {
   for (Eigen::Index c = 0; c < e.cols(); ++c) r.center_mm.push_back(mean[c]);
   double spread = 0.0;
   for (Eigen::Index i = 0; i < e.rows(); ++i) spread = std::max(spread, (e.row(i) - mean).norm());
-  r.radius_mm = 2.0 * spread;
+  r.radius_mm = 2.0 * spread + 1e-6;  // + 1 nm: a constant field must still predict its own value
   return r;
 }
 

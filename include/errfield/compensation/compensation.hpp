@@ -73,8 +73,9 @@ struct ErrorPrediction {
 /// The range of errors a model's data showed, against which a prediction is judged credible:
 /// |prediction − center| <= radius_mm, with center the mean of the fitted errors (the distance error
 /// for distance fields, the 3-D error vector otherwise) and radius_mm = 2 × the largest distance of a
-/// fitted error from that mean. A predictor that forms convex combinations of the data stays within
-/// 1 ×; kriging's negative weights overshoot a little; 2 × leaves room for that and nothing more.
+/// fitted error from that mean (+ 1 nm, so that a constant field still predicts its own value).
+/// A predictor that forms convex combinations of the data stays within 1 ×; kriging's negative
+/// weights overshoot a little; 2 × leaves room for that and nothing more.
 struct CredibleRange {
   std::vector<double> center_mm;  ///< 1 value (distance fields) or 3 (vector fields)
   double radius_mm = 0.0;
