@@ -50,8 +50,7 @@ LoadedModel load_model(const std::string& path) {
     const std::string what = std::string(method_name(m.method())) + " model";
     return {std::move(m), false, what};
   }
-  if (!j.is_object() || !j.contains("links"))
-    throw InputError(path + ": neither a compensation model (errfield fit) nor a robot JSON (member \"links\")", path);
+  // Anything else is read as a robot JSON, whose reader names what is missing or wrong.
   // The registration is not part of the robot description: read it, then the robot without it.
   std::optional<Registration> reg = find_registration(j, path);
   nlohmann::json robot_json = j;
