@@ -13,6 +13,7 @@
 #include "cli/robot_cli.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/input_checks.hpp"
+#include "errfield/compensation/registration.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/input_checks.hpp"
 
@@ -58,6 +59,7 @@ void run_calibrate(const CalibrateArgs& a) {
   std::ostringstream text;
   CalibrationResult result;
   MdhModel identified = nominal;
+  std::optional<compensation::Registration> registration;  // stored with the model (positions only)
   if (a.model == "position" && !a.base_points.empty())
     throw ArgumentError("--base-point: fixed base points are for --model distance, not --model position");
   if (a.model == "position") {
@@ -81,6 +83,16 @@ void run_calibrate(const CalibrateArgs& a) {
          << " ry " << t.ry_deg << " rz " << t.rz_deg << " deg\n\n";
     result = with_source(a.data, [&] { return calibrate_positions(reg.model, data, options); });
     identified = result.model.with_base(reg.model.base().inverse() * result.model.base());
+    // The identified model in the tracker frame is reg.base · identified: keep that transform (and the
+    // reflector offset found with it) at full precision, for validate, predict and fk.
+    registration.emplace();
+    registration->robot_from_tracker = reg.model.base().inverse();
+    registration->reflector_offset_mm = Eigen::Vector3d(reg.model.tool().translation());
+    registration->points = data.size();
+    double ss = 0.0;
+    for (const auto& d : data)
+      ss += (registration->robot_from_tracker * d.measured_mm - forward_position(identified, d.q_deg)).squaredNorm();
+    registration->residual_rms_mm = std::sqrt(ss / static_cast<double>(data.size()));
   } else if (a.model == "distance" && !a.base_points.empty()) {
     // Fixed base points (not robot positions): identified with the robot, from their nominals.
     std::vector<Eigen::Vector3d> fixed;
@@ -185,7 +197,9 @@ void run_calibrate(const CalibrateArgs& a) {
   // --out and --report all or none: an unwritable --report must not leave a new model next to an
   // old report (or the reverse).
   AtomicFileSet outputs;
-  outputs.add(a.out, identified.with_name(nominal.name() + " (calibrated, " + a.model + " model)").to_json().dump(2) + "\n");
+  nlohmann::json model_json = identified.with_name(nominal.name() + " (calibrated, " + a.model + " model)").to_json();
+  if (registration) model_json["registration"] = compensation::registration_to_json(*registration);
+  outputs.add(a.out, model_json.dump(2) + "\n");
   if (!a.report.empty()) outputs.add(a.report, text.str());
   outputs.commit();
   std::cerr << "calibrate: identified model written to " << a.out << "\n";

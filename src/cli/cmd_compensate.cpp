@@ -8,7 +8,9 @@
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
+#include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
+#include "errfield/compensation/target_ik.hpp"
 #include "errfield/error.hpp"
 #include "errfield/compensation/compensation.hpp"
 #include "errfield/json_file.hpp"
@@ -19,7 +21,7 @@ namespace errfield::cli {
 namespace {
 
 struct CompensateArgs {
-  std::string robot, model, targets, out;
+  std::string robot, model, targets, out, seed;
   double tolerance = 0.25;
   bool strict = false;
 };
@@ -34,9 +36,17 @@ void run_compensate(const CompensateArgs& a) {
   const CompensationModel model = with_json_source(a.model, [&] { return CompensationModel::from_json(j, a.model); });
   const bool kinematic = model.method() == CompensationMethod::kinematic ||
                          model.method() == CompensationMethod::kinematic_kriging;
-  if (kinematic && a.robot.empty())
+  if (kinematic && a.robot.empty() && !model.has_nominal_model())
     throw ArgumentError("--robot: a kinematic model's command model is the calibrated robot; give the nominal robot JSON");
-  const MdhModel nominal = a.robot.empty() ? model.command_model() : load_robot_or_default(a.robot);
+  const MdhModel nominal = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
+  std::optional<JointVector> seed;
+  if (!a.seed.empty()) {
+    const auto v = parse_numbers(a.seed, 6, "--seed");
+    seed = JointVector(v.data());
+  }
+  // The branch pose targets are solved on: the model's training joints (older model files: the
+  // kriging field's samples have none stored at model level, so multistart, as before).
+  const std::vector<JointVector>& reference = model.data_joints();
 
   const CsvTable t = CsvTable::read(a.targets);
   const bool joints = has_joint_columns(t);
@@ -49,6 +59,7 @@ void run_compensate(const CompensateArgs& a) {
   const std::size_t n = t.row_count();
   std::vector<JointVector> qn(n);
   std::vector<bool> ik_ok(n, true);
+  std::vector<std::string> ik_status(n);
   if (joints) {
     qn = read_joint_columns(t);
   } else {
@@ -56,9 +67,11 @@ void run_compensate(const CompensateArgs& a) {
     warn_if_metres(t, nominal, "compensate", kNominalXyz);
     for (std::size_t i = 0; i < n; ++i) {
       const auto r = p.row(static_cast<Eigen::Index>(i));
-      const IkResult ik = inverse_kinematics_multistart(nominal, to_isometry({r[0], r[1], r[2], r[3], r[4], r[5]}));
-      qn[i] = ik.q_deg;
+      const compensation::BranchIkResult ik =
+          compensation::solve_on_branch(nominal, to_isometry({r[0], r[1], r[2], r[3], r[4], r[5]}), reference, seed);
+      qn[i] = ik.ik.q_deg;
       ik_ok[i] = ik.ok();
+      ik_status[i] = ik.branch_changed ? "branch-change" : ik.ik.ok() ? "" : to_string(ik.ik.status);
     }
   }
   OutputTable out;
@@ -68,7 +81,7 @@ void run_compensate(const CompensateArgs& a) {
   std::size_t refused = 0, no_prediction = 0;
   for (std::size_t i = 0; i < n; ++i) {
     if (!ik_ok[i]) {
-      status[i] = "unreachable";
+      status[i] = ik_status[i] == "branch-change" ? "branch-change" : "unreachable";
       ++refused;
       continue;
     }
@@ -89,6 +102,7 @@ void run_compensate(const CompensateArgs& a) {
       continue;
     }
     status[i] = !c.prediction.inside_region ? "outside-region"
+                : !c.prediction.credible ? "not-credible"
                 : c.ik_status != IkStatus::converged ? std::string("ik-") + to_string(c.ik_status)
                                                      : "ok";
     if (!c.ok()) {
@@ -136,12 +150,17 @@ void add_compensate_command(CLI::App& app) {
       "models), kriging variance var_mm2 and the probability p_inside of being within ±tolerance where the\n"
       "model has a variance, the corrected command cmd_x..z and the compensated joints cq1..cq6 (IK, orientation\n"
       "kept). Targets: q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg). Targets outside the modelled\n"
-      "region are refused (status outside-region, no joints), never extrapolated.\n"
+      "region are refused (status outside-region, no joints), never extrapolated; so are predictions far beyond\n"
+      "the model's range of errors (not-credible) and pose targets whose IK left the data's branch\n"
+      "(branch-change: solved from the nearest training sample, or --seed, along the pose path).\n"
       "Example: errfield compensate --model model.json --targets targets.csv --out joints.csv");
   cmd->add_option("--robot", a->robot, "nominal robot JSON or built-in name (er20-c10, kr16, ur5e; default: the model's command model)");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();
   cmd->add_option("--targets", a->targets, "targets CSV")->required();
   cmd->add_option("--tolerance", a->tolerance, "tolerance for p_inside (± mm)")->capture_default_str();
+  cmd->add_option("--seed", a->seed,
+                  "Q1,...,Q6 (deg): solve pose targets from these joints (default: the model's nearest training "
+                  "sample), on their branch");
   cmd->add_flag("--strict", a->strict,
                 "if any target is refused: write nothing, name the refused rows and exit with status 1");
   cmd->add_option("--out", a->out, "output CSV (written atomically)")->required();

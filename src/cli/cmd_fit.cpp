@@ -18,7 +18,7 @@ namespace {
 struct FitArgs {
   std::string robot, data, method = "distance-idw", space = "task", out, model;
   std::vector<std::string> base_points;
-  double power = 1.0, max_registration_rms = robot::kRegistrationRmsLimitMm;
+  double power = 1.0, max_registration_rms = robot::kRegistrationRmsLimitMm, region_margin = 0.0;
   std::size_t base = 0;
 };
 
@@ -31,6 +31,7 @@ void run_fit(const FitArgs& a) {
   o.space = field_space_from_name(a.space);
   o.idw_power = a.power;
   o.base = a.base;
+  o.region_margin = a.region_margin;
   if (!a.model.empty()) o.model = VariogramModel::parse(a.model);
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.base_points) {
@@ -70,6 +71,9 @@ void run_fit(const FitArgs& a) {
     if (cv.mean_squared_z) std::cout << ", mean z^2 " << *cv.mean_squared_z << " (~1 when the variance is right)";
     std::cout << "\n";
   }
+  if (r.registration)
+    std::cout << "  registration tracker -> robot stored in the model (residual RMS "
+              << format_number(r.registration->residual_rms_mm) << " mm on " << r.registration->points << " points)\n";
   std::cout << "  model written to " << a.out << "\n";
   for (const auto& w : r.warnings) std::cerr << "errfield fit: warning: " << w << "\n";
 }
@@ -102,6 +106,9 @@ void add_fit_command(CLI::App& app) {
   cmd->add_option("--max-registration-rms", a->max_registration_rms,
                   "refuse (exit 2) when the tracker -> robot registration leaves a larger RMS (mm): a tool/reflector "
                   "offset missing from --robot, a wrong robot (docs/robot.md)")
+      ->capture_default_str();
+  cmd->add_option("--region-margin", a->region_margin,
+                  "kriging: predict this far beyond the samples' box (mm in task space, deg per joint in joint space)")
       ->capture_default_str();
   cmd->add_option("--out", a->out, "model JSON (written atomically)")->required();
   cmd->callback([a] { run_fit(*a); });

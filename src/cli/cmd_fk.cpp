@@ -6,6 +6,7 @@
 #include "cli/command_registry.hpp"
 #include "cli/interpolation_methods.hpp"
 #include "cli/robot_cli.hpp"
+#include "errfield/compensation/prediction.hpp"
 #include "errfield/robot/input_checks.hpp"
 #include "errfield/robot/kinematics.hpp"
 
@@ -17,20 +18,34 @@ struct FkArgs {
 };
 
 void run_fk(const FkArgs& a) {
-  const robot::MdhModel model = load_robot_or_default(a.robot);
+  // --robot: a robot JSON or a compensation model (its command model); either may hold the tracker
+  // registration, and then the tracker-frame position is written too.
+  robot::MdhModel model = load_robot_or_default("");
+  std::optional<compensation::Registration> registration;
+  if (!a.robot.empty()) {
+    const compensation::LoadedModel loaded = compensation::load_model(a.robot);
+    model = loaded.is_robot_json ? load_robot_or_default(a.robot) : loaded.model.command_model();
+    registration = loaded.model.registration();
+  }
   const robot::EndFrame frame = robot::parse_end_frame(a.frame);
   const CsvTable table = CsvTable::read(a.input);
   const auto joints = read_joint_columns(table);
   const std::size_t n = joints.size();
   if (const auto warning = robot::joints_outside_limits(joints, model, row_labels_of(table, "row")))
     std::cerr << "errfield fk: warning: " << *warning << "\n";
-  std::vector<double> x(n), y(n), z(n);
+  std::vector<double> x(n), y(n), z(n), tx(n), ty(n), tz(n);
   std::vector<std::vector<double>> r(9, std::vector<double>(n));
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Isometry3d t = robot::forward_kinematics(model, joints[i], frame);
     x[i] = t.translation().x();
     y[i] = t.translation().y();
     z[i] = t.translation().z();
+    if (registration) {
+      const Eigen::Vector3d p = registration->robot_from_tracker.inverse() * t.translation();
+      tx[i] = p.x();
+      ty[i] = p.y();
+      tz[i] = p.z();
+    }
     for (int k = 0; k < 9; ++k) r[static_cast<std::size_t>(k)][i] = t.linear()(k / 3, k % 3);
   }
   OutputTable out;
@@ -39,6 +54,11 @@ void run_fk(const FkArgs& a) {
   out.add_numeric_column("y", y);
   out.add_numeric_column("z", z);
   for (int k = 0; k < 9; ++k) out.add_numeric_column(rotation_column_names()[static_cast<std::size_t>(k)], r[static_cast<std::size_t>(k)]);
+  if (registration) {
+    out.add_numeric_column("tx", tx);
+    out.add_numeric_column("ty", ty);
+    out.add_numeric_column("tz", tz);
+  }
   out.write(a.out);
   std::cerr << "fk: " << n << " poses of " << model.name() << " (" << a.frame << " frame) written to " << a.out << "\n";
 }
@@ -49,12 +69,13 @@ void add_fk_command(CLI::App& app) {
       "fk",
       "Forward kinematics: joint angles -> tool or flange poses.\n"
       "Input columns q1..q6 (degrees); output keeps the input columns and adds x,y,z (mm, world frame)\n"
-      "and the rotation matrix r11,r12,r13,r21,r22,r23,r31,r32,r33.\n"
+      "and the rotation matrix r11,r12,r13,r21,r22,r23,r31,r32,r33; with a stored tracker registration (robot\n"
+      "JSON from 'calibrate --model position', or a model from 'fit') also tx,ty,tz (tracker frame, mm).\n"
       "Example: errfield fk --input joints.csv --robot robot.json --frame tool --out poses.csv");
   cmd->add_option("--input", args->input, "CSV with columns q1..q6 (deg)")->required();
   cmd->add_option("--robot", args->robot,
-                  "robot description JSON (docs/robot.md) or built-in name (er20-c10, kr16, ur5e; errfield robots); "
-                  "default: built-in nominal ER20-C10, no tool");
+                  "robot description JSON (docs/robot.md), built-in name (er20-c10, kr16, ur5e; errfield robots) or "
+                  "compensation model JSON (its command model); default: built-in nominal ER20-C10, no tool");
   cmd->add_option("--frame", args->frame, "flange or tool (default tool)");
   cmd->add_option("--out", args->out, "output CSV (written atomically)")->required();
   cmd->callback([args] { run_fk(*args); });

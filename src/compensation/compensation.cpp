@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "compensation/fit_checks.hpp"
 #include "errfield/error.hpp"
 #include "errfield/compensation/error_fields.hpp"
 #include "errfield/robot/calibration.hpp"
@@ -63,7 +64,14 @@ double probability_within(double tolerance_mm, double variance_mm2) {
 
 CompensationModel::CompensationModel(CompensationMethod method, MdhModel command_model,
                                      std::shared_ptr<const ErrorField> field)
-    : method_(method), command_model_(std::move(command_model)), field_(std::move(field)) {}
+    : method_(method), command_model_(std::move(command_model)), field_(std::move(field)) {
+  // Every field carries the errors it was fitted on, so every model (also a file written before the
+  // range was stored) judges its predictions against them.
+  if (field_) {
+    const Eigen::MatrixXd e = compensation::fitted_errors(*field_);
+    if (e.rows() > 0) credible_ = CredibleRange::of(e);
+  }
+}
 
 CompensatedTarget CompensationModel::compensate(const MdhModel& nominal_model, const Eigen::Isometry3d& target,
                                                 const JointVector& seed_deg, double tolerance_mm,
@@ -88,8 +96,12 @@ CompensatedTarget CompensationModel::compensate_joints(const MdhModel& nominal_m
   Eigen::Isometry3d pose = forward_kinematics(nominal_model, q_nominal_deg, ik.frame);
   const Eigen::Vector3d p_nominal = pose.translation();
   if (field_) {
-    out.prediction = field_->predict(p_nominal, q_nominal_deg);
-    if (!out.prediction.inside_region) {
+    // The field lives on the nominal robot the model was fitted with (the caller's, unless the model
+    // stored its own).
+    out.prediction = has_nominal_model() ? predict_error(q_nominal_deg) : field_->predict(p_nominal, q_nominal_deg);
+    if (!has_nominal_model() && credible_ && out.prediction.inside_region)
+      out.prediction.credible = credible_->contains(out.prediction);
+    if (!out.prediction.inside_region || !out.prediction.credible) {
       out.command_position_mm = p_nominal;
       return out;
     }
@@ -110,6 +122,55 @@ CompensatedTarget CompensationModel::compensate_joints(const MdhModel& nominal_m
   return out;
 }
 
+bool CredibleRange::contains(const ErrorPrediction& p) const {
+  if (center_mm.size() == 1) {
+    const double d = std::abs(p.distance_error_mm - center_mm[0]);
+    return d <= radius_mm;  // false for NaN
+  }
+  if (center_mm.size() != 3) return true;
+  const double d = (p.position_error_mm - Eigen::Vector3d(center_mm[0], center_mm[1], center_mm[2])).norm();
+  return d <= radius_mm;
+}
+
+CredibleRange CredibleRange::of(const Eigen::MatrixXd& e) {
+  CredibleRange r;
+  if (e.rows() == 0) return r;
+  const Eigen::RowVectorXd mean = e.colwise().mean();
+  for (Eigen::Index c = 0; c < e.cols(); ++c) r.center_mm.push_back(mean[c]);
+  double spread = 0.0;
+  for (Eigen::Index i = 0; i < e.rows(); ++i) spread = std::max(spread, (e.row(i) - mean).norm());
+  r.radius_mm = 2.0 * spread + 1e-6;  // + 1 nm: a constant field must still predict its own value
+  return r;
+}
+
+CompensationModel CompensationModel::with_registration(std::optional<compensation::Registration> r) const {
+  CompensationModel m = *this;
+  m.registration_ = std::move(r);
+  return m;
+}
+CompensationModel CompensationModel::with_nominal_model(MdhModel nominal) const {
+  CompensationModel m = *this;
+  m.nominal_model_ = std::move(nominal);
+  return m;
+}
+CompensationModel CompensationModel::with_data_joints(std::vector<JointVector> q_deg) const {
+  CompensationModel m = *this;
+  m.data_joints_ = std::move(q_deg);
+  return m;
+}
+CompensationModel CompensationModel::with_credible_range(std::optional<CredibleRange> range) const {
+  CompensationModel m = *this;
+  m.credible_ = std::move(range);
+  return m;
+}
+
+ErrorPrediction CompensationModel::predict_error(const JointVector& q_deg) const {
+  if (!field_) return {};
+  ErrorPrediction p = field_->predict(forward_position(nominal_model(), q_deg), q_deg);
+  if (p.inside_region && credible_) p.credible = credible_->contains(p);
+  return p;
+}
+
 nlohmann::json CompensationModel::to_json() const {
   nlohmann::json j;
   j["format"] = "errfield-compensation-model";
@@ -117,6 +178,14 @@ nlohmann::json CompensationModel::to_json() const {
   j["method"] = std::string(method_name(method_));
   j["command_model"] = command_model_.to_json();
   j["field"] = field_ ? field_->to_json() : nlohmann::json(nullptr);
+  if (nominal_model_) j["nominal_model"] = nominal_model_->to_json();
+  if (registration_) j["registration"] = compensation::registration_to_json(*registration_);
+  if (credible_) j["credible_range"] = {{"center_mm", credible_->center_mm}, {"radius_mm", credible_->radius_mm}};
+  if (!data_joints_.empty()) {
+    nlohmann::json q = nlohmann::json::array();
+    for (const JointVector& v : data_joints_) q.push_back({v[0], v[1], v[2], v[3], v[4], v[5]});
+    j["data_joints_deg"] = q;
+  }
   return j;
 }
 
@@ -151,7 +220,41 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
   if (!needs_field && field)
     fail_model(source, "member \"field\": method \"" + std::string(method_name(method)) +
                            "\" has no error field, yet the model carries one; refit the model with 'errfield fit'");
-  return CompensationModel(method, std::move(command), std::move(field));
+  CompensationModel model(method, std::move(command), std::move(field));
+  if (j.contains("nominal_model"))
+    model.nominal_model_ = MdhModel::from_json(j["nominal_model"], source + " (nominal_model)");
+  model.registration_ = compensation::find_registration(j, source);
+  if (j.contains("credible_range")) {
+    const auto& c = j["credible_range"];
+    CredibleRange r;
+    if (!c.is_object() || !c.contains("center_mm") || !c["center_mm"].is_array() || !c.contains("radius_mm") ||
+        !c["radius_mm"].is_number())
+      fail_model(source, "member \"credible_range\": expected {\"center_mm\": [1 or 3 numbers], \"radius_mm\": number}");
+    for (const auto& v : c["center_mm"]) {
+      if (!v.is_number()) fail_model(source, "member \"credible_range.center_mm\": expected numbers");
+      r.center_mm.push_back(v.get<double>());
+    }
+    r.radius_mm = c["radius_mm"].get<double>();
+    if ((r.center_mm.size() != 1 && r.center_mm.size() != 3) || !(r.radius_mm >= 0.0))
+      fail_model(source, "member \"credible_range\": expected 1 or 3 centre values and a radius >= 0");
+    model.credible_ = r;
+  }
+  if (j.contains("data_joints_deg")) {
+    const auto& q = j["data_joints_deg"];
+    if (!q.is_array()) fail_model(source, "member \"data_joints_deg\": expected an array of 6-number arrays");
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      if (!q[i].is_array() || q[i].size() != 6)
+        fail_model(source, "member \"data_joints_deg\"[" + std::to_string(i) + "]: expected 6 numbers");
+      JointVector v;
+      for (int k = 0; k < 6; ++k) {
+        if (!q[i][static_cast<std::size_t>(k)].is_number())
+          fail_model(source, "member \"data_joints_deg\"[" + std::to_string(i) + "]: expected 6 numbers");
+        v[k] = q[i][static_cast<std::size_t>(k)].get<double>();
+      }
+      model.data_joints_.push_back(v);
+    }
+  }
+  return model;
 }
 
 }  // namespace errfield::compensation

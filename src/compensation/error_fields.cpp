@@ -60,15 +60,24 @@ GridIdwOptions idw_options(double power) {
   return o;
 }
 
+/// Targets on a face of the grid come from FK of rounded joints or from IK: micrometres outside
+/// must count as inside (kRegionToleranceMm), and the IDW must then treat them as on the face.
+GridIdwOptions with_face_tolerance(GridIdwOptions o, const RegularGrid3& grid) {
+  o.boundary_tolerance = std::min(0.01, std::max(o.boundary_tolerance, kRegionToleranceMm / grid.step().minCoeff()));
+  return o;
+}
+
+bool in_grid(const RegularGrid3& grid, const Eigen::Vector3d& p) { return grid.contains(p, kRegionToleranceMm); }
+
 class DistanceIdwField final : public ErrorField {
  public:
   DistanceIdwField(const RegularGrid3& grid, std::vector<double> values, const Eigen::Vector3d& base,
                    const GridIdwOptions& options)
-      : grid_(grid), values_(std::move(values)), base_(base), options_(options),
+      : grid_(grid), values_(std::move(values)), base_(base), options_(with_face_tolerance(options, grid)),
         idw_(grid_, std::span<const double>(values_), options_) {}
   ErrorPrediction predict(const Eigen::Vector3d& p, const JointVector&) const override {
     ErrorPrediction out;
-    if (!grid_.contains(p, 1e-9 * grid_.step().minCoeff())) {
+    if (!in_grid(grid_, p)) {
       out.inside_region = false;
       return out;
     }
@@ -100,11 +109,11 @@ class DistanceIdwField final : public ErrorField {
 class PositionIdwField final : public ErrorField {
  public:
   PositionIdwField(const RegularGrid3& grid, std::vector<Eigen::Vector3d> values, const GridIdwOptions& options)
-      : grid_(grid), values_(std::move(values)), options_(options),
+      : grid_(grid), values_(std::move(values)), options_(with_face_tolerance(options, grid)),
         idw_(grid_, std::span<const Eigen::Vector3d>(values_), options_) {}
   ErrorPrediction predict(const Eigen::Vector3d& p, const JointVector&) const override {
     ErrorPrediction out;
-    if (!grid_.contains(p, 1e-9 * grid_.step().minCoeff())) {
+    if (!in_grid(grid_, p)) {
       out.inside_region = false;
       return out;
     }

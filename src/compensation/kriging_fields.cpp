@@ -28,6 +28,9 @@ void KrigingFieldOptions::validate() const {
   if (!(region_margin_mm >= 0.0) || !std::isfinite(region_margin_mm))
     throw ArgumentError("KrigingFieldOptions: region_margin_mm = " + std::to_string(region_margin_mm) +
                         "; expected a finite value >= 0");
+  if (!(region_margin_deg >= 0.0) || !std::isfinite(region_margin_deg))
+    throw ArgumentError("KrigingFieldOptions: region_margin_deg = " + std::to_string(region_margin_deg) +
+                        "; expected a finite value >= 0");
 }
 
 namespace {
@@ -42,22 +45,29 @@ void check_samples(const FieldSamples& s, std::size_t values, const char* what) 
   if (values < 8) throw InputError(std::string(what) + ": " + std::to_string(values) + " samples; need at least 8");
 }
 
+/// The box a field answers for: of the sample positions (task space) or joints (joint space).
 struct Region {
-  Eigen::Vector3d lower, upper;
-  bool contains(const Eigen::Vector3d& p) const {
-    return (p.array() >= lower.array()).all() && (p.array() <= upper.array()).all();
+  Eigen::VectorXd lower, upper;
+  bool contains(const Eigen::VectorXd& x) const {
+    return (x.array() >= lower.array()).all() && (x.array() <= upper.array()).all();
   }
 };
 
-Region region_of(const FieldSamples& s, double margin) {
-  Region r{s.position_mm.front(), s.position_mm.front()};
-  for (const auto& p : s.position_mm) {
-    r.lower = r.lower.cwiseMin(p);
-    r.upper = r.upper.cwiseMax(p);
+template <class V>
+Region box_of(const std::vector<V>& points, double widen) {
+  Region r{points.front(), points.front()};
+  for (const auto& p : points) {
+    r.lower = r.lower.cwiseMin(Eigen::VectorXd(p));
+    r.upper = r.upper.cwiseMax(Eigen::VectorXd(p));
   }
-  r.lower.array() -= margin;
-  r.upper.array() += margin;
+  r.lower.array() -= widen;
+  r.upper.array() += widen;
   return r;
+}
+
+Region region_of(const FieldSamples& s, const KrigingFieldOptions& o) {
+  if (o.space == FieldSpace::joint) return box_of(s.joints_deg, o.region_margin_deg + kRegionToleranceDeg);
+  return box_of(s.position_mm, o.region_margin_mm + kRegionToleranceMm);
 }
 
 template <class L, class M>
@@ -108,7 +118,7 @@ class KrigingField final : public ErrorField {
                VariogramModel model, const KrigingFieldOptions& options, std::optional<Eigen::Vector3d> base)
       : kind_(std::move(kind)), samples_(std::move(samples)), locations_(std::move(locations)),
         values_(std::move(values)), model_(std::move(model)), options_(options), base_(base),
-        region_(region_of(samples_, options.region_margin_mm)),
+        region_(region_of(samples_, options)),
         kriging_(std::span<const L>(locations_), std::span<const V>(values_), model_, kriging_options(options)) {
     if (!kriging_.report().usable())
       throw InputError("kriging field: the kriging system cannot be solved: " + kriging_.report().message);
@@ -116,7 +126,9 @@ class KrigingField final : public ErrorField {
 
   ErrorPrediction predict(const Eigen::Vector3d& p, const JointVector& q) const override {
     ErrorPrediction out;
-    if (!region_.contains(p) || (base_ && (p - *base_).norm() < 1.0)) {
+    const bool inside = options_.space == FieldSpace::joint ? region_.contains(Eigen::VectorXd(q))
+                                                            : region_.contains(Eigen::VectorXd(p));
+    if (!inside || (base_ && (p - *base_).norm() < 1.0)) {
       out.inside_region = false;
       return out;
     }
@@ -157,6 +169,7 @@ class KrigingField final : public ErrorField {
                         {"model", model_.to_string()},
                         {"nugget_is_measurement_error", options_.nugget_is_measurement_error},
                         {"region_margin_mm", options_.region_margin_mm},
+                        {"region_margin_deg", options_.region_margin_deg},
                         {"samples", {{"position_mm", pos}, {"joints_deg", joints}}},
                         {"values", vals}};
     if (base_) j["base_point_mm"] = vec_json(*base_);
@@ -340,6 +353,8 @@ std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& 
       o.nugget_is_measurement_error = j["nugget_is_measurement_error"].get<bool>();
     if (optional("region_margin_mm", &nlohmann::json::is_number, "a number"))
       o.region_margin_mm = j["region_margin_mm"].get<double>();
+    if (optional("region_margin_deg", &nlohmann::json::is_number, "a number"))
+      o.region_margin_deg = j["region_margin_deg"].get<double>();
     if (!j.contains("samples") || !j.contains("values")) bad(source, "member \"field\": needs \"samples\" and \"values\"");
     if (!j["samples"].is_object())
       bad(source, "member \"field.samples\": expected an object {position_mm, joints_deg}, got " + j["samples"].dump());

@@ -15,7 +15,7 @@
 #include "errfield/compensation/error_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/scattered_idw.hpp"
-#include "robot/rigid_fit.hpp"
+#include "compensation/fit_checks.hpp"
 
 namespace errfield::compensation {
 
@@ -103,17 +103,6 @@ std::vector<double> MeasurementSet::distance_errors(std::size_t k) const {
   return out;
 }
 
-Registration fit_registration(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
-  if (a.size() != b.size() || a.size() < 3)
-    throw InputError("registration: need at least 3 point pairs, got " + std::to_string(std::min(a.size(), b.size())));
-  Registration r;
-  r.robot_from_tracker = fit_rigid(a, b);
-  double ss = 0.0;
-  for (std::size_t i = 0; i < a.size(); ++i) ss += (r.robot_from_tracker * a[i] - b[i]).squaredNorm();
-  r.residual_rms_mm = std::sqrt(ss / static_cast<double>(a.size()));
-  return r;
-}
-
 void FitOptions::validate() const {
   if (!(idw_power >= 0.0) || !std::isfinite(idw_power))
     throw ArgumentError("fit: idw power " + std::to_string(idw_power) + "; expected a finite value >= 0");
@@ -146,6 +135,10 @@ CrossValidationReport kriging_report(const KrigingFieldFit& fit, FieldSpace spac
 /// and the leave-one-out summary are then dominated by rounding.
 void note_factorization(FitResult& out, const KrigingFieldFit& fit, const VariogramModel& model) {
   const KrigingReport& f = fit.factorization;
+  if (out.cross_validation) {
+    out.cross_validation->variogram = model;
+    out.cross_validation->factorization = f;
+  }
   std::string note = "kriging system: " + std::to_string(f.samples_used) + " samples";
   if (std::isfinite(f.condition_number)) note += ", condition number " + format_number(f.condition_number);
   if (f.jitter > 0.0) note += ", jitter " + format_number(f.jitter) + " added to the diagonal";
@@ -170,6 +163,14 @@ CrossValidationReport idw_cv(const std::vector<Eigen::Vector3d>& p, const std::v
                 "not defined)");
 }
 
+KrigingFieldOptions field_options(const FitOptions& o) {
+  KrigingFieldOptions ko;
+  ko.on_stage = o.on_stage;
+  ko.space = o.space;
+  (o.space == FieldSpace::task ? ko.region_margin_mm : ko.region_margin_deg) += o.region_margin;
+  return ko;
+}
+
 RegularGrid3 detect_grid(const MeasurementSet& d, std::vector<std::size_t>& sample_of_node) {
   Eigen::MatrixXd pts(static_cast<Eigen::Index>(d.nominal_mm.size()), 3);
   for (std::size_t i = 0; i < d.nominal_mm.size(); ++i) pts.row(static_cast<Eigen::Index>(i)) = d.nominal_mm[i].transpose();
@@ -182,8 +183,9 @@ RegularGrid3 detect_grid(const MeasurementSet& d, std::vector<std::size_t>& samp
 
 }  // namespace
 
-FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
-  o.validate();
+namespace {
+
+FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
   const CompensationMethod method = o.method;
   GridIdwOptions idw;
   idw.power = o.idw_power;
@@ -238,9 +240,7 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
     case CompensationMethod::distance_kriging: {
       need_base();
       const std::vector<double> dl = d.distance_errors(o.base);
-      KrigingFieldOptions ko;
-      ko.on_stage = o.on_stage;
-      ko.space = o.space;
+      KrigingFieldOptions ko = field_options(o);
       const Eigen::MatrixXd flat = Eigen::Map<const Eigen::VectorXd>(dl.data(), static_cast<Eigen::Index>(dl.size()));
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
       ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
@@ -274,9 +274,7 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       } else {
         dp = registered_errors(out);
       }
-      KrigingFieldOptions ko;
-      ko.on_stage = o.on_stage;
-      ko.space = o.space;
+      KrigingFieldOptions ko = field_options(o);
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(dp.size()), 3);
       for (std::size_t i = 0; i < dp.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = dp[i].transpose();
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
@@ -335,9 +333,7 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       std::vector<Eigen::Vector3d> residual(identified.size());
       for (std::size_t i = 0; i < residual.size(); ++i)
         residual[i] = reg.robot_from_tracker * d.measured_mm[i] - identified[i];
-      KrigingFieldOptions ko;
-      ko.on_stage = o.on_stage;
-      ko.space = o.space;
+      KrigingFieldOptions ko = field_options(o);
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(residual.size()), 3);
       for (std::size_t i = 0; i < residual.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = residual[i].transpose();
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
@@ -351,6 +347,20 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
     }
   }
   throw ArgumentError("fit: unknown method");
+}
+
+}  // namespace
+
+FitResult fit_compensation_model(const robot::MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
+  o.validate();
+  FitResult out = fit_unchecked(robot, d, o);
+  // Judge the model before anyone writes it; an estimated variogram may be refitted with a nugget.
+  out = check_fitted_model(std::move(out), o, [&](const VariogramModel& m) {
+    FitOptions again = o;
+    again.model = m;
+    return fit_unchecked(robot, d, again);
+  });
+  return attach_artifacts(std::move(out), robot, d);
 }
 
 }  // namespace errfield::compensation

@@ -92,7 +92,8 @@ MdhModel MdhModel::er20_c10() {
 
 MdhModel MdhModel::from_json(const nlohmann::json& j, const std::string& source) {
   if (!j.is_object()) fail(source, "(top level)", "expected a JSON object, got " + j.dump().substr(0, 60));
-  json_check_keys(j, {"name", "units", "links", "base", "tool", "comment"}, "", source);
+  // "registration": the tracker registration calibrate stores beside the robot (compensation/registration.hpp).
+  json_check_keys(j, {"name", "units", "links", "base", "tool", "comment", "registration"}, "", source);
   std::string name = "robot";
   if (const auto it = j.find("name"); it != j.end()) {
     if (!it->is_string()) fail(source, "name", "expected a string, got " + it->dump());

@@ -184,7 +184,13 @@ TEST(OrientationExperiment, ToolOffsetErrorIsSeenInJointSpaceOnly) {
   // Constant orientation: nothing left but noise (a few tracker sigmas), with or without a field.
   for (const char* space : {"-", "task", "joint"}) {
     EXPECT_LT(orientation_row(e, "constant", space).max_mm, 0.02) << space;
-    EXPECT_EQ(orientation_row(e, "constant", space).refused, 0u) << space;
+    // A joint-space field answers inside the box of its training joints (issue 10 item 6), and a few
+    // random validation poses reach the cube with a joint just outside that box: refused, not
+    // extrapolated. Task space judges by positions, all inside the cube.
+    if (std::string(space) == "joint")
+      EXPECT_LT(orientation_row(e, "constant", space).refused, o.validation_poses / 10) << space;
+    else
+      EXPECT_EQ(orientation_row(e, "constant", space).refused, 0u) << space;
   }
   // Varying orientation: ±30° turns d by up to ~0.5 rad, a few tenths of a mm.
   const double none = orientation_row(e, "varying", "-").mean_mm;

@@ -6,14 +6,14 @@
 /// keeps the orientation and solves inverse kinematics seeded at the nominal solution.
 ///
 /// A model has two parts, either of which may be trivial:
-///  - the **command model**: the MdhModel IK runs on (the nominal model, or the one identified by
+///  - the **command model**: the robot::MdhModel IK runs on (the nominal model, or the one identified by
 ///    kinematic calibration);
 ///  - an **error field**: the predicted remaining position error dP (robot frame, mm) at a nominal
 ///    target, from interpolation of measured errors (grid IDW of distance or position errors,
 ///    kriging of distance errors or error vectors, in task or joint space).
 /// The methods of `errfield fit` are combinations of the two (see CompensationMethod).
 ///
-/// Frames and units: positions in the robot's world frame (the MdhModel's base frame), mm; joints
+/// Frames and units: positions in the robot's world frame (the robot::MdhModel's base frame), mm; joints
 /// in degrees; the target point is the model's tool point.
 /// Thread safety: models are immutable after construction; compensate() may run concurrently.
 
@@ -28,6 +28,7 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "errfield/compensation/registration.hpp"
 #include "errfield/robot/inverse_kinematics.hpp"
 #include "errfield/robot/mdh_model.hpp"
 
@@ -64,6 +65,24 @@ struct ErrorPrediction {
   /// False when the target lies outside the modelled region (then nothing is extrapolated:
   /// position_error_mm is zero and compensate() refuses the target).
   bool inside_region = true;
+  /// False when the prediction lies far beyond the range of errors the model was fitted on
+  /// (CredibleRange): compensate() and predict refuse it (status not-credible).
+  bool credible = true;
+};
+
+/// The range of errors a model's data showed, against which a prediction is judged credible:
+/// |prediction − center| <= radius_mm, with center the mean of the fitted errors (the distance error
+/// for distance fields, the 3-D error vector otherwise) and radius_mm = 2 × the largest distance of a
+/// fitted error from that mean (+ 1 nm, so that a constant field still predicts its own value).
+/// A predictor that forms convex combinations of the data stays within 1 ×; kriging's negative
+/// weights overshoot a little; 2 × leaves room for that and nothing more.
+struct CredibleRange {
+  std::vector<double> center_mm;  ///< 1 value (distance fields) or 3 (vector fields)
+  double radius_mm = 0.0;
+  /// True if `prediction` is within the range (a NaN prediction is not).
+  bool contains(const ErrorPrediction& prediction) const;
+  /// From fitted errors: one row per sample, 1 or 3 columns.
+  static CredibleRange of(const Eigen::MatrixXd& errors_mm);
 };
 
 /// The spatial part of a compensation model. Implementations: distance_idw_field, ...
@@ -89,8 +108,9 @@ struct CompensatedTarget {
   /// Probability that the remaining error along the predicted quantity lies within ±tolerance,
   /// assuming a Gaussian prediction error with the kriging variance; NaN without a variance.
   double p_within_tolerance = std::numeric_limits<double>::quiet_NaN();
-  /// True when the target is inside the modelled region and both IK solves converged.
-  bool ok() const { return prediction.inside_region && ik_status == robot::IkStatus::converged; }
+  /// True when the target is inside the modelled region, the prediction is credible and both IK
+  /// solves converged.
+  bool ok() const { return prediction.inside_region && prediction.credible && ik_status == robot::IkStatus::converged; }
 };
 
 class CompensationModel {
@@ -101,6 +121,28 @@ class CompensationModel {
   CompensationMethod method() const noexcept { return method_; }
   const robot::MdhModel& command_model() const noexcept { return command_model_; }
   const ErrorField* field() const noexcept { return field_.get(); }
+
+  /// The tracker ↔ robot registration of the training data (fit stores it when the data have
+  /// tracker positions): validate and predict map tracker readings with it.
+  const std::optional<compensation::Registration>& registration() const noexcept { return registration_; }
+  /// The nominal robot the model was fitted with (where it differs from command_model: the kinematic
+  /// methods); the field is evaluated at this robot's FK of the joints.
+  const robot::MdhModel& nominal_model() const noexcept { return nominal_model_ ? *nominal_model_ : command_model_; }
+  bool has_nominal_model() const noexcept { return nominal_model_.has_value(); }
+  /// Joints of the training rows: the branch pose targets are solved on (compensate).
+  const std::vector<robot::JointVector>& data_joints() const noexcept { return data_joints_; }
+  /// Range of the fitted errors (set from the field's own values at construction); empty when the
+  /// model has no field.
+  const std::optional<CredibleRange>& credible_range() const noexcept { return credible_; }
+
+  CompensationModel with_registration(std::optional<compensation::Registration> r) const;
+  CompensationModel with_nominal_model(robot::MdhModel nominal) const;
+  CompensationModel with_data_joints(std::vector<robot::JointVector> q_deg) const;
+  CompensationModel with_credible_range(std::optional<CredibleRange> range) const;
+
+  /// The field's prediction at joints `q_deg` (evaluated at nominal_model()'s FK), with the credible
+  /// range applied; zero prediction, inside the region, when the model has no field.
+  ErrorPrediction predict_error(const robot::JointVector& q_deg) const;
 
   /// Compensates a target pose (robot frame, tool point). `nominal_model` gives the nominal joints
   /// (IK seeded at `seed_deg`); the field is evaluated there; the command is solved on
@@ -116,7 +158,9 @@ class CompensationModel {
                                       double tolerance_mm = 0.25, const robot::IkOptions& ik = {}) const;
 
   /// JSON form: {"format":"errfield-compensation-model","version":1,"method":...,
-  /// "command_model":{robot JSON},"field":{...}|null}.
+  /// "command_model":{robot JSON},"field":{...}|null} plus, when present, "nominal_model",
+  /// "registration" (registration.hpp), "data_joints_deg" [N][6] and "credible_range"
+  /// {"center_mm": [1 or 3], "radius_mm"}.
   nlohmann::json to_json() const;
   /// Reads the JSON form; throws InputError naming `source` and the field.
   static CompensationModel from_json(const nlohmann::json& j, const std::string& source);
@@ -125,6 +169,10 @@ class CompensationModel {
   CompensationMethod method_;
   robot::MdhModel command_model_;
   std::shared_ptr<const ErrorField> field_;
+  std::optional<compensation::Registration> registration_;
+  std::optional<robot::MdhModel> nominal_model_;
+  std::vector<robot::JointVector> data_joints_;
+  std::optional<CredibleRange> credible_;
 };
 
 /// Unit direction m = (p − base)/|p − base| of eq. 22. Precondition: p != base.

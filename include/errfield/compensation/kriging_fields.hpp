@@ -11,8 +11,11 @@
 /// deg): with a constant orientation both work; where the orientation varies, errors are similar in
 /// joint space, not in task space (the paper's section 3.1).
 ///
-/// The region a field answers for is the box of its samples' nominal positions (task space) widened
-/// by `region_margin_mm`; targets outside are refused, never extrapolated.
+/// The region a field answers for is, in task space, the box of its samples' nominal positions
+/// widened by `region_margin_mm` and by kRegionToleranceMm (FK of rounded joints puts a target
+/// on a face of the box micrometres outside it); in joint space, the box of the samples' joints
+/// widened by `region_margin_deg` and kRegionToleranceDeg. Targets outside are refused, never
+/// extrapolated.
 
 #include <functional>
 #include <memory>
@@ -30,6 +33,12 @@
 namespace errfield::compensation {
 
 enum class FieldSpace { task, joint };
+
+/// What the region test always tolerates beyond the samples' box: 10 µm in task space, 1e-4 deg per
+/// joint (≈ 3 µm at 1.5 m reach) in joint space. Far below any error a model predicts, far above
+/// the rounding of joints recorded to 4+ decimals or of IK (1e-7 mm).
+inline constexpr double kRegionToleranceMm = 0.01;
+inline constexpr double kRegionToleranceDeg = 1e-4;
 std::string_view field_space_name(FieldSpace s);
 /// "task" | "joint"; throws ArgumentError.
 FieldSpace field_space_from_name(std::string_view name);
@@ -42,7 +51,8 @@ struct KrigingFieldOptions {
   /// The nugget stands for measurement noise (smoothing, gstat's Err) rather than micro-scale
   /// variation: predictions are of the noise-free error. Default true (tracker + repeatability).
   bool nugget_is_measurement_error = true;
-  double region_margin_mm = 1e-6;
+  double region_margin_mm = 0.0;   ///< task space
+  double region_margin_deg = 0.0;  ///< joint space, per joint
   /// Called before each long stage (factoring the N x N covariance, the leave-one-out) with what it
   /// is about to do, for progress output; empty = silent. Not called from parallel regions.
   std::function<void(const std::string& stage)> on_stage;

@@ -45,15 +45,8 @@ struct MeasurementSet {
   std::vector<double> distance_errors(std::size_t k) const;
 };
 
-/// Rigid registration robot ← tracker by least squares over point pairs (Horn's closed form via
-/// SVD): the frame in which measured positions become position errors. 6 parameters; the residual
-/// RMS (mm) says how well the rigid model fits (it absorbs the rigid part of the robot's error).
-struct Registration {
-  Eigen::Isometry3d robot_from_tracker = Eigen::Isometry3d::Identity();
-  double residual_rms_mm = 0.0;
-};
-Registration fit_registration(const std::vector<Eigen::Vector3d>& tracker_mm,
-                              const std::vector<Eigen::Vector3d>& robot_mm);
+// Registration and fit_registration (robot ← tracker, the frame in which measured positions become
+// position errors; fit stores it in the model it writes): compensation/registration.hpp.
 
 struct FitOptions {
   CompensationMethod method = CompensationMethod::distance_idw;
@@ -61,6 +54,9 @@ struct FitOptions {
   double idw_power = 1.0;               ///< IDW methods (the paper: 1)
   std::optional<VariogramModel> model;  ///< kriging; empty = estimated
   std::size_t base = 0;                 ///< which base point the distance methods use
+  /// Kriging fields: how far beyond the samples' box a target is still predicted — mm in task
+  /// space, degrees per joint in joint space (the box is then that of the samples' joints).
+  double region_margin = 0.0;
   /// Called before each long stage (variogram, factorization, leave-one-out, calibration) with what
   /// it is about to do, for progress output; empty = silent.
   std::function<void(const std::string& stage)> on_stage;
@@ -73,6 +69,10 @@ struct CrossValidationReport {
   std::size_t samples = 0;
   double mean_abs_mm = 0, rms_mm = 0, max_abs_mm = 0;
   std::optional<double> mean_squared_z;  ///< kriging: ~1 when the variance is calibrated
+  /// Kriging: the variogram model and how its system factored — what fit_compensation_model's
+  /// credibility check judges (and refits with a nugget when it fails).
+  std::optional<VariogramModel> variogram;
+  std::optional<KrigingReport> factorization;
 };
 
 struct FitResult {
@@ -85,7 +85,14 @@ struct FitResult {
   std::vector<std::string> warnings;
 };
 
-/// Builds the model. Throws InputError when the data lack what the method needs (names the
+/// Builds the model. The model carries what later steps need: the registration of the training
+/// rows' tracker readings (when the data have mx,my,mz) onto the model's own predictions, the
+/// nominal robot, the training joints and the range of the fitted errors (compensation.hpp).
+/// No silent wrong model: a kriging system beyond the condition limit (KrigingOptions, 1e12) or a
+/// leave-one-out error beyond what any credible prediction could give (3 × the data's largest
+/// deviation from their mean) is refitted with a nugget when the variogram was estimated (1e-4,
+/// 1e-3, 1e-2, 1e-1 of the sill, the first that passes; noted), and refused with an Error naming
+/// the figures when the user gave the model or no nugget helps. Throws InputError when the data lack what the method needs (names the
 /// columns). kinematic: calibrate_distances on the distances to base point `base` (a robot
 /// position, i.e. a base row with joints); kinematic+kriging: that, then vector kriging of the 3-D
 /// residuals (measured positions registered to the identified model).

@@ -1,0 +1,53 @@
+#pragma once
+/// Where the robot goes: a compensation model's prediction of the actual tool position at given
+/// commanded joints — the command model's FK plus the error field's predicted error dP at those
+/// joints (evaluated at the nominal robot's FK, where the field was fitted). `errfield predict`
+/// writes it per row; `errfield validate` compares it with held-out measurements.
+///
+/// A prediction the model cannot vouch for is refused with a status, never given as a number:
+/// outside the modelled region, or not credible (beyond the range of errors the model was fitted
+/// on, CredibleRange in compensation.hpp).
+/// Frames: robot frame (the model's world frame), mm; the tracker frame through the model's stored
+/// registration (registration.hpp).
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include <Eigen/Core>
+
+#include "errfield/compensation/compensation.hpp"
+
+namespace errfield::compensation {
+
+enum class PredictionStatus { ok, outside_region, not_credible };
+/// "ok", "outside-region", "not-credible" (the status column of predict, validate, compensate).
+std::string_view status_name(PredictionStatus s);
+
+struct PointPrediction {
+  PredictionStatus status = PredictionStatus::ok;
+  /// Predicted actual tool position, robot frame (mm); NaN unless ok.
+  Eigen::Vector3d position_mm = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  /// The same in the tracker frame, when the model holds a registration; NaN unless ok.
+  std::optional<Eigen::Vector3d> tracker_mm;
+  /// The field's part (zero without a field).
+  ErrorPrediction error;
+  bool ok() const { return status == PredictionStatus::ok; }
+};
+
+/// Prediction at commanded joints `q_deg`.
+PointPrediction predict_position(const CompensationModel& model, const robot::JointVector& q_deg);
+
+/// A model file as validate, predict and fk read it: a compensation model (errfield fit) or a robot
+/// JSON (errfield calibrate, or any robot description: its FK is the prediction, its
+/// "registration" member, if any, the registration).
+struct LoadedModel {
+  CompensationModel model;
+  bool is_robot_json = false;
+  /// "vector-kriging model" or "robot JSON 'ER20-C10 (calibrated, position model)'".
+  std::string description;
+};
+/// Throws InputError naming the file and the member for anything malformed.
+LoadedModel load_model(const std::string& path);
+
+}  // namespace errfield::compensation

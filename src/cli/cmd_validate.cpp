@@ -1,0 +1,138 @@
+// `errfield validate`: scores a model on measurements it was not fitted on (prediction mode), or
+// the validation run on the robot after compensation (--targets).
+#include <fstream>
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/cli_support.hpp"
+#include "cli/command_registry.hpp"
+#include "cli/pipeline_cli.hpp"
+#include "cli/robot_cli.hpp"
+#include "errfield/atomic_file.hpp"
+#include "errfield/compensation/prediction.hpp"
+#include "errfield/compensation/validation.hpp"
+#include "errfield/error.hpp"
+
+namespace errfield::cli {
+namespace {
+
+struct ValidateArgs {
+  std::string model, data, robot, out, summary_out, report;
+  std::vector<std::string> base_points;
+  bool targets = false;
+};
+
+/// A file written by `errfield simulate` says so in a leading comment; its report must too.
+bool marked_simulated(const std::string& path) {
+  std::ifstream in(path);
+  std::string line;
+  while (std::getline(in, line) && !line.empty() && line[0] == '#')
+    if (line.find("SIMULATED") != std::string::npos) return true;
+  return false;
+}
+
+std::string cell(double v) { return std::isfinite(v) ? format_number(v) : ""; }
+
+OutputTable points_table(const compensation::ValidationReport& r) {
+  const std::size_t n = r.points.size();
+  OutputTable t;
+  std::vector<std::string> point(n), status(n), before(n), after(n);
+  std::vector<std::vector<std::string>> comp(6, std::vector<std::string>(n));
+  const bool positions = r.position.has_value();
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& p = r.points[i];
+    point[i] = p.point;
+    status[i] = p.status;
+    // before_mm/after_mm: the 3-D error where positions were scored, else |distance error| to b0.
+    const double b = positions ? p.before_mm.norm() : (p.distance_before_mm.empty() ? NAN : std::abs(p.distance_before_mm[0]));
+    const double a = positions ? p.after_mm.norm() : (p.distance_after_mm.empty() ? NAN : std::abs(p.distance_after_mm[0]));
+    before[i] = cell(b);
+    after[i] = cell(a);
+    for (int c = 0; c < 3; ++c) {
+      comp[static_cast<std::size_t>(c)][i] = cell(p.before_mm[c]);
+      comp[static_cast<std::size_t>(3 + c)][i] = cell(p.after_mm[c]);
+    }
+  }
+  t.add_column("point", point);
+  t.add_column("status", status);
+  t.add_column("before_mm", before);
+  t.add_column("after_mm", after);
+  const char* names[] = {"before_dx", "before_dy", "before_dz", "after_dx", "after_dy", "after_dz"};
+  for (std::size_t c = 0; c < 6; ++c) t.add_column(names[c], comp[c]);
+  for (std::size_t k = 0; k < r.distance_columns; ++k) {
+    std::vector<std::string> db(n), da(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& p = r.points[i];
+      db[i] = k < p.distance_before_mm.size() ? cell(p.distance_before_mm[k]) : "";
+      da[i] = k < p.distance_after_mm.size() ? cell(p.distance_after_mm[k]) : "";
+    }
+    t.add_column("before_dl_b" + std::to_string(k), db);
+    t.add_column("after_dl_b" + std::to_string(k), da);
+  }
+  return t;
+}
+
+void run_validate(const ValidateArgs& a) {
+  using namespace robot;
+  using namespace compensation;
+  const compensation::LoadedModel loaded = compensation::load_model(a.model);
+  const CompensationModel& model = loaded.model;
+  std::vector<Eigen::Vector3d> fixed;
+  for (const auto& b : a.base_points) {
+    const auto v = parse_numbers(b, 3, "--base-point");
+    fixed.emplace_back(v[0], v[1], v[2]);
+  }
+  const CsvTable table = CsvTable::read(a.data);
+  compensation::ValidationReport r;
+  if (a.targets) {
+    r = with_source(a.data, [&] { return compensation::validate_targets(table, model.registration(), fixed); });
+  } else {
+    const MdhModel nominal = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
+    const MeasurementSet data = MeasurementSet::from_table(table, nominal, fixed);
+    warn_if_metres(table, nominal, "validate");
+    r = with_source(a.data, [&] { return compensation::validate_predictions(model, data); });
+    if (loaded.is_robot_json && a.robot.empty() && !table.has_column("x"))
+      r.notes.push_back("no --robot and no x,y,z columns: 'before' is this robot's own FK; give the nominal robot "
+                        "with --robot for an uncompensated baseline");
+  }
+  const nlohmann::json summary = r.summary_json();
+  AtomicFileSet outputs;
+  if (!a.out.empty()) outputs.add(a.out, points_table(r).to_csv());
+  if (!a.summary_out.empty()) outputs.add(a.summary_out, summary.dump(2) + "\n");
+  if (!a.report.empty())
+    outputs.add(a.report, compensation::validation_report_html(r, "errfield validate: " + loaded.description + " on " + a.data,
+                                                                marked_simulated(a.data)));
+  outputs.commit();
+  std::cout << "validate: " << loaded.description << " from " << a.model << " on " << a.data << "\n" << r.summary_text();
+  for (const auto& f : {a.out, a.summary_out, a.report})
+    if (!f.empty()) std::cout << "  written " << f << "\n";
+}
+
+void add_validate_command(CLI::App& app) {
+  auto a = std::make_shared<ValidateArgs>();
+  auto* cmd = app.add_subcommand(
+      "validate",
+      "Score a model on measurements it was not fitted on. Default (prediction mode): at each row's joints\n"
+      "q1..q6 the model predicts where the tool point is (command model FK + error field); the tracker reading\n"
+      "mx,my,mz is mapped with the model's stored registration (never re-registered on these rows) and\n"
+      "distances dist_bK are compared frame-free. 'before' is the nominal robot, 'after' the model.\n"
+      "--targets: the validation run after compensation; rows carry the intended target (nx,ny,nz or x,y,z)\n"
+      "and optionally run=before|after; error = measured - target.\n"
+      "Writes per-point errors (--out), summary JSON (--summary-out) and an HTML report (--report).\n"
+      "Example: errfield validate --model model.json --data holdout.csv --out points.csv --summary-out summary.json");
+  cmd->add_option("--model", a->model, "model JSON from 'errfield fit' or robot JSON from 'errfield calibrate'")->required();
+  cmd->add_option("--data", a->data, "held-out measurement CSV (or the validation run with --targets)")->required();
+  cmd->add_option("--robot", a->robot, "nominal robot JSON for the 'before' baseline (default: the model's nominal robot)");
+  cmd->add_option("--base-point", a->base_points, "X,Y,Z of fixed base point bK when the data have no base rows");
+  cmd->add_flag("--targets", a->targets, "validation-run mode: error = measured - intended target");
+  cmd->add_option("--out", a->out, "per-point CSV: point,status,before_mm,after_mm and the error components");
+  cmd->add_option("--summary-out", a->summary_out, "summary JSON (points, refused, position/distance before/after)");
+  cmd->add_option("--report", a->report, "HTML report with histograms and per-point errors before/after");
+  cmd->callback([a] { run_validate(*a); });
+}
+
+Registration reg{"validate", 73, &add_validate_command};
+
+}  // namespace
+}  // namespace errfield::cli

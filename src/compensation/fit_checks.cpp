@@ -1,0 +1,126 @@
+#include "compensation/fit_checks.hpp"
+
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
+#include "errfield/robot/kinematics.hpp"
+
+namespace errfield::compensation {
+
+using namespace errfield::robot;
+
+Eigen::MatrixXd fitted_errors(const ErrorField& field) {
+  // Every field serializes the errors it interpolates; reading them back keeps the fields free of a
+  // second accessor.
+  const nlohmann::json j = field.to_json();
+  const char* names[] = {"values", "node_distance_error_mm", "node_position_error_mm"};
+  for (const char* name : names) {
+    if (!j.contains(name) || !j[name].is_array() || j[name].empty()) continue;
+    const auto& v = j[name];
+    const bool vector = v[0].is_array();
+    Eigen::MatrixXd e(static_cast<Eigen::Index>(v.size()), vector ? 3 : 1);
+    for (std::size_t i = 0; i < v.size(); ++i)
+      for (int c = 0; c < e.cols(); ++c)
+        e(static_cast<Eigen::Index>(i), c) = vector ? v[i][static_cast<std::size_t>(c)].get<double>() : v[i].get<double>();
+    return e;
+  }
+  return {};
+}
+
+namespace {
+
+double largest_deviation(const Eigen::MatrixXd& e) {
+  if (e.rows() == 0) return 0.0;
+  const Eigen::RowVectorXd mean = e.colwise().mean();
+  double s = 0.0;
+  for (Eigen::Index i = 0; i < e.rows(); ++i) s = std::max(s, (e.row(i) - mean).norm());
+  return s;
+}
+
+}  // namespace
+
+std::string fit_problem(const FitResult& fit) {
+  if (!fit.cross_validation || !fit.cross_validation->factorization || !fit.model.field()) return {};
+  const KrigingReport& f = *fit.cross_validation->factorization;
+  std::string problem;
+  if (f.status == KrigingStatus::IllConditioned || f.jitter > 0.0)
+    problem = "its kriging system is ill-conditioned (condition number " + format_number(f.condition_number) +
+              (f.jitter > 0.0 ? ", jitter " + format_number(f.jitter) + " needed" : std::string()) + ")";
+  {
+    const double spread = largest_deviation(fitted_errors(*fit.model.field()));
+    if (fit.cross_validation->max_abs_mm > 3.0 * spread)
+      problem += std::string(problem.empty() ? "" : " and ") + "its leave-one-out error reaches " +
+                 format_number(fit.cross_validation->max_abs_mm) + " mm where the data deviate at most " +
+                 format_number(spread) + " mm from their mean (a credible prediction stays within 3x that)";
+  }
+  return problem;
+}
+
+FitResult check_fitted_model(FitResult fit, const FitOptions& options,
+                             const std::function<FitResult(const VariogramModel&)>& refit) {
+  const std::string problem = fit_problem(fit);
+  if (problem.empty()) return fit;
+  const VariogramModel model = *fit.cross_validation->variogram;
+  if (options.model)
+    throw Error("fit: the variogram model " + model.to_string() + " gives a model that cannot be trusted: " + problem +
+                "; nothing was written. Give the model a larger nugget, e.g. +nug(" +
+                format_number(1e-2 * model.sill()) + ")");
+  std::vector<ModelComponent> structure;
+  for (const auto& c : model.components())
+    if (c.kind != ModelKind::Nugget) structure.push_back(c);
+  std::string tried;
+  for (double fraction : {1e-4, 1e-3, 1e-2, 1e-1}) {
+    std::vector<ModelComponent> with = structure;
+    ModelComponent nug;
+    nug.kind = ModelKind::Nugget;
+    nug.sill = std::max(model.nugget(), fraction * model.sill());
+    with.push_back(nug);
+    const VariogramModel candidate(with);
+    FitResult again = refit(candidate);
+    const std::string left = fit_problem(again);
+    if (left.empty()) {
+      again.warnings.push_back("the estimated variogram model " + model.to_string() + " was rejected: " + problem +
+                               "; refitted with " + candidate.to_string() + " (nugget " + format_number(fraction) +
+                               " of the sill), which passes");
+      return again;
+    }
+    tried += (tried.empty() ? "" : "; ") + candidate.to_string() + ": " + left;
+  }
+  throw Error("fit: the estimated variogram model " + model.to_string() + " gives a model that cannot be trusted: " +
+              problem + "; refits with a nugget did not help (" + tried +
+              "); nothing was written. Try --space task|joint or another --method");
+}
+
+FitResult attach_artifacts(FitResult fit, const MdhModel& nominal, const MeasurementSet& d) {
+  CompensationModel m = fit.model.with_data_joints(d.q_deg);
+  const bool kinematic =
+      m.method() == CompensationMethod::kinematic || m.method() == CompensationMethod::kinematic_kriging;
+  if (kinematic) m = m.with_nominal_model(nominal);
+  if (!fit.registration && !d.measured_mm.empty()) {
+    // The model's own prediction of the training rows: the frame its errors live in.
+    std::vector<Eigen::Vector3d> tracker, predicted;
+    for (std::size_t i = 0; i < d.q_deg.size(); ++i) {
+      const ErrorPrediction e = m.predict_error(d.q_deg[i]);
+      if (!e.inside_region) continue;
+      tracker.push_back(d.measured_mm[i]);
+      predicted.push_back(forward_position(m.command_model(), d.q_deg[i]) + e.position_error_mm);
+    }
+    if (tracker.size() >= 3) {
+      fit.registration = fit_registration(tracker, predicted);
+      fit.notes.push_back("registration tracker -> robot fitted on the model's predictions of " +
+                          std::to_string(tracker.size()) + " training points, residual RMS " +
+                          format_number(fit.registration->residual_rms_mm) + " mm (stored in the model)");
+    }
+  }
+  if (fit.registration) {
+    if (fit.registration->points == 0) fit.registration->points = d.measured_mm.size();
+    m = m.with_registration(fit.registration);
+  }
+  fit.model = std::move(m);
+  return fit;
+}
+
+}  // namespace errfield::compensation

@@ -1,0 +1,31 @@
+#pragma once
+// Internal to fit_compensation_model: the credibility check of a fitted model (refit with a nugget
+// or refuse) and the artifacts a written model carries (registration, nominal robot, training
+// joints, credible range). See model_fitting.hpp for the rules.
+
+#include <functional>
+
+#include <Eigen/Core>
+
+#include "errfield/compensation/model_fitting.hpp"
+
+namespace errfield::compensation {
+
+/// Errors the model's field was fitted on, one row per sample (1 or 3 columns); empty without a field.
+Eigen::MatrixXd fitted_errors(const ErrorField& field);
+
+/// Why a kriging fit is not credible (condition beyond the limit, leave-one-out beyond 3 × the
+/// data's largest deviation); empty when it is fine or the model has no kriging system.
+std::string fit_problem(const FitResult& fit);
+
+/// Returns `fit` if fit_problem() is empty; else refits with a nugget via `refit` when the variogram
+/// was estimated (options.model empty), or throws Error naming the figures.
+FitResult check_fitted_model(FitResult fit, const FitOptions& options,
+                                    const std::function<FitResult(const VariogramModel&)>& refit);
+
+/// Stores the nominal robot (kinematic methods), the training joints, the credible range and the
+/// registration (the training rows' tracker readings onto the model's own predictions, unless the
+/// fit already registered them) in fit.model.
+FitResult attach_artifacts(FitResult fit, const robot::MdhModel& nominal, const MeasurementSet& data);
+
+}  // namespace errfield::compensation

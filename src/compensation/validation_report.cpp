@@ -1,0 +1,114 @@
+#include <algorithm>
+#include <cmath>
+
+#include "errfield/compensation/validation.hpp"
+#include "errfield/report/html_report.hpp"
+
+namespace errfield::compensation {
+
+namespace {
+
+using report::BarChart;
+using report::BarSeries;
+using report::LinePlot;
+using report::Series;
+using report::SeriesStyle;
+
+std::string num(double v) { return std::isfinite(v) ? report::tick_label(v, 1e-4) : "-"; }
+
+void add_rows(report::TextTable& t, const std::string& what, const std::optional<BeforeAfter>& b) {
+  if (!b) return;
+  auto row = [&](const std::string& when, const ErrorStats& s) {
+    t.add_row({what, when, std::to_string(s.count), num(s.mean_mm), num(s.rms_mm), num(s.p95_mm), num(s.max_mm)});
+  };
+  if (b->before) row("before", *b->before);
+  row("after", b->after);
+}
+
+/// Histogram of |e| before and after on common bins (counts per bin).
+BarChart histogram(const std::string& title, const std::vector<double>& before, const std::vector<double>& after) {
+  double hi = 0.0;
+  for (double v : before) hi = std::isfinite(v) ? std::max(hi, std::abs(v)) : hi;
+  for (double v : after) hi = std::isfinite(v) ? std::max(hi, std::abs(v)) : hi;
+  if (!(hi > 0.0)) hi = 1.0;
+  const std::vector<double> ticks = report::nice_ticks(0.0, hi, 12);
+  const double step = ticks.size() >= 2 ? ticks[1] - ticks[0] : hi;
+  const std::size_t bins = static_cast<std::size_t>(std::floor(hi / step)) + 1;
+  BarChart c;
+  c.title = title;
+  c.category_label = "|error| bin [mm]";
+  c.y_axis = report::AxisSpec("points", "", 0.0);
+  for (std::size_t b = 0; b < bins; ++b)
+    c.categories.push_back(report::tick_label(static_cast<double>(b) * step, step) + "–" +
+                           report::tick_label(static_cast<double>(b + 1) * step, step));
+  auto counts = [&](const std::vector<double>& v) {
+    std::vector<double> n(bins, 0.0);
+    for (double e : v)
+      if (std::isfinite(e)) n[std::min(bins - 1, static_cast<std::size_t>(std::floor(std::abs(e) / step)))] += 1.0;
+    return n;
+  };
+  bool any_before = false;
+  for (double v : before) any_before = any_before || std::isfinite(v);
+  if (any_before) c.series.push_back(BarSeries{"before", counts(before), ""});
+  c.series.push_back(BarSeries{"after", counts(after), ""});
+  return c;
+}
+
+LinePlot per_point(const std::string& title, const std::vector<double>& before, const std::vector<double>& after) {
+  LinePlot p;
+  p.title = title;
+  p.x_axis = report::AxisSpec("point (row order)", "");
+  p.y_axis = report::AxisSpec("|error|", "mm", std::nullopt, std::nullopt, true);
+  std::vector<double> x(after.size()), b(before.size()), a(after.size());
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    x[i] = static_cast<double>(i);
+    a[i] = std::abs(after[i]);
+    b[i] = std::abs(before[i]);
+  }
+  bool any_before = false;
+  for (double v : b) any_before = any_before || std::isfinite(v);
+  if (any_before) p.series.push_back(Series{"before", x, b, SeriesStyle::Points, ""});
+  p.series.push_back(Series{"after", x, a, SeriesStyle::Points, ""});
+  return p;
+}
+
+}  // namespace
+
+std::string validation_report_html(const ValidationReport& r, const std::string& title, bool simulated) {
+  report::HtmlReport html(title, simulated);
+  html.add_heading("Summary");
+  html.add_paragraph(std::to_string(r.points.size()) + " points, " + std::to_string(r.refused) +
+                     " refused (not counted below), " + r.mode + " mode. Figures are of error magnitudes: the 3-D "
+                     "position error and |distance error|; before and after over the same points.");
+  report::TextTable t({{"error", "", report::Align::Left}, {"", "", report::Align::Left}, {"points"}, {"mean", "mm"},
+                       {"rms", "mm"}, {"p95", "mm"}, {"max", "mm"}});
+  add_rows(t, "3-D position", r.position);
+  add_rows(t, "distance", r.distance);
+  html.add_table(t);
+  for (const auto& n : r.notes) html.add_paragraph("Note: " + n);
+  std::vector<double> pb, pa, db, da;
+  for (const ValidatedPoint& p : r.points) {
+    if (!p.ok()) continue;
+    if (r.position) {
+      pb.push_back(p.before_mm.norm());
+      pa.push_back(p.after_mm.norm());
+    }
+    for (std::size_t k = 0; k < p.distance_after_mm.size(); ++k) {
+      db.push_back(k < p.distance_before_mm.size() ? p.distance_before_mm[k] : NAN);
+      da.push_back(p.distance_after_mm[k]);
+    }
+  }
+  if (r.position && !pa.empty()) {
+    html.add_heading("3-D position error");
+    html.add_figure(histogram("Histogram of the 3-D position error", pb, pa));
+    html.add_figure(per_point("3-D position error per point", pb, pa));
+  }
+  if (r.distance && !da.empty()) {
+    html.add_heading("Distance error");
+    html.add_figure(histogram("Histogram of |distance error|", db, da));
+    html.add_figure(per_point("|distance error| per point and base point", db, da));
+  }
+  return html.to_html();
+}
+
+}  // namespace errfield::compensation

@@ -1,0 +1,414 @@
+// `errfield validate` and `errfield predict` against computations written here: a quaternion (Horn
+// 1987) registration, ordinary kriging solved directly, and the summary statistics (numpy's
+// percentile). SIMULATED data from `errfield simulate`.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+
+#include <Eigen/Dense>
+#include <nlohmann/json.hpp>
+
+#include "errfield/csv_table.hpp"
+#include "errfield/robot/inverse_kinematics.hpp"
+#include "errfield/robot/kinematics.hpp"
+#include "errfield/robot/pose.hpp"
+#include "errfield/robot/mdh_model.hpp"
+#include "support/cli_harness.hpp"
+
+namespace errfield::compensation {
+using namespace errfield::robot;
+namespace {
+
+using errfield::testing::CliResult;
+
+class ValidateCli : public errfield::testing::CliTest {
+ protected:
+  nlohmann::json json(const std::string& name) const { return nlohmann::json::parse(read(name)); }
+};
+
+/// Horn's quaternion solution of min sum |R a + t - b|^2 (not the SVD the library uses).
+Eigen::Isometry3d horn(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
+  Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ca += a[i];
+    cb += b[i];
+  }
+  ca /= static_cast<double>(a.size());
+  cb /= static_cast<double>(b.size());
+  Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < a.size(); ++i) s += (a[i] - ca) * (b[i] - cb).transpose();
+  Eigen::Matrix4d n;
+  n << s(0, 0) + s(1, 1) + s(2, 2), s(1, 2) - s(2, 1), s(2, 0) - s(0, 2), s(0, 1) - s(1, 0),
+      s(1, 2) - s(2, 1), s(0, 0) - s(1, 1) - s(2, 2), s(0, 1) + s(1, 0), s(2, 0) + s(0, 2),
+      s(2, 0) - s(0, 2), s(0, 1) + s(1, 0), -s(0, 0) + s(1, 1) - s(2, 2), s(1, 2) + s(2, 1),
+      s(0, 1) - s(1, 0), s(2, 0) + s(0, 2), s(1, 2) + s(2, 1), -s(0, 0) - s(1, 1) + s(2, 2);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(n);
+  const Eigen::Vector4d q = es.eigenvectors().col(3);
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).toRotationMatrix();
+  t.translation() = cb - t.linear() * ca;
+  return t;
+}
+
+/// numpy.percentile(v, 95) (linear interpolation).
+double p95(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const double r = 0.95 * static_cast<double>(v.size() - 1);
+  const std::size_t lo = static_cast<std::size_t>(r);
+  const std::size_t hi = std::min(lo + 1, v.size() - 1);
+  return v[lo] + (r - static_cast<double>(lo)) * (v[hi] - v[lo]);
+}
+
+void expect_stats(const nlohmann::json& s, const std::vector<double>& e, double tol) {
+  double sum = 0, ss = 0, mx = 0;
+  for (double v : e) {
+    sum += v;
+    ss += v * v;
+    mx = std::max(mx, v);
+  }
+  const double n = static_cast<double>(e.size());
+  EXPECT_EQ(s["count"].get<std::size_t>(), e.size());
+  EXPECT_NEAR(s["mean_mm"].get<double>(), sum / n, tol);
+  EXPECT_NEAR(s["rms_mm"].get<double>(), std::sqrt(ss / n), tol);
+  EXPECT_NEAR(s["max_mm"].get<double>(), mx, tol);
+  EXPECT_NEAR(s["p95_mm"].get<double>(), p95(e), tol);
+}
+
+struct Rows {
+  std::vector<std::string> point, kind;
+  std::vector<JointVector> q;
+  std::vector<Eigen::Vector3d> xyz, m;
+  std::vector<double> dist;
+};
+
+Rows read_rows(const std::string& file) {
+  const CsvTable t = CsvTable::read(file);
+  Rows r;
+  for (std::size_t i = 0; i < t.row_count(); ++i) {
+    auto num = [&](const char* c) { return t.numeric_cell(i, t.column_index(c)); };
+    r.point.push_back(t.row(i)[t.column_index("point")]);
+    r.kind.push_back(t.row(i)[t.column_index("kind")]);
+    JointVector q;
+    for (int k = 0; k < 6; ++k) q[k] = num(("q" + std::to_string(k + 1)).c_str());
+    r.q.push_back(q);
+    r.xyz.emplace_back(num("x"), num("y"), num("z"));
+    r.m.emplace_back(num("mx"), num("my"), num("mz"));
+    r.dist.push_back(t.has_column("dist_b0") ? num("dist_b0") : NAN);
+  }
+  return r;
+}
+
+/// Ordinary kriging of 3-vectors with the covariance of "sph(sill=S,range=A)+nug(N)" at a location
+/// that is no sample: [K 1; 1' 0] [w; mu] = [k; 1], K_ii = S + N.
+Eigen::Vector3d ordinary_kriging(const std::vector<Eigen::Vector3d>& x, const std::vector<Eigen::Vector3d>& v,
+                                 const Eigen::Vector3d& at, double sill, double range, double nugget) {
+  auto cov = [&](double h) { return h >= range ? 0.0 : sill * (1.0 - 1.5 * h / range + 0.5 * std::pow(h / range, 3)); };
+  const Eigen::Index n = static_cast<Eigen::Index>(x.size());
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  Eigen::VectorXd rhs(n + 1);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (Eigen::Index j = 0; j < n; ++j)
+      a(i, j) = i == j ? sill + nugget : cov((x[static_cast<std::size_t>(i)] - x[static_cast<std::size_t>(j)]).norm());
+    a(i, n) = a(n, i) = 1.0;
+    rhs[i] = cov((x[static_cast<std::size_t>(i)] - at).norm());
+  }
+  rhs[n] = 1.0;
+  const Eigen::VectorXd w = a.fullPivLu().solve(rhs);
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  for (Eigen::Index i = 0; i < n; ++i) p += w[i] * v[static_cast<std::size_t>(i)];
+  return p;
+}
+
+TEST_F(ValidateCli, PredictionModeScoresHeldOutRowsWithTheStoredRegistration) {
+  ASSERT_EQ(run("simulate --seed 1 --sample grid --step 125 --robot-out robot.json --out train.csv").exit_code, 0);
+  ASSERT_EQ(run("simulate --seed 2 --sample cells --step 125 --out holdout.csv").exit_code, 0);
+  const std::string model = "sph(sill=0.5,range=600)+nug(0.001)";
+  const CliResult fit = run("fit --robot robot.json --data train.csv --method vector-kriging --model \"" + model +
+                            "\" --out model.json");
+  ASSERT_EQ(fit.exit_code, 0) << fit.output();
+  const CliResult v = run("validate --model model.json --data holdout.csv --out points.csv --summary-out summary.json "
+                          "--report report.html");
+  ASSERT_EQ(v.exit_code, 0) << v.output();
+
+  const MdhModel robot = MdhModel::load(path("robot.json"));
+  const Rows train = read_rows(path("train.csv")), held = read_rows(path("holdout.csv"));
+  std::vector<Eigen::Vector3d> tm, tn, samples, errors;
+  for (std::size_t i = 0; i < train.q.size(); ++i)
+    if (train.kind[i] == "target") {
+      tm.push_back(train.m[i]);
+      tn.push_back(train.xyz[i]);
+    }
+  // The stored registration is the training rows' (tracker -> nominal), at full precision.
+  const Eigen::Isometry3d reg = horn(tm, tn);
+  const nlohmann::json mj = json("model.json");
+  ASSERT_TRUE(mj.contains("registration")) << mj.dump().substr(0, 400);
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 4; ++k)
+      EXPECT_NEAR(mj["registration"]["robot_from_tracker"][i][k].get<double>(), reg.matrix()(i, k), 1e-9);
+  for (std::size_t i = 0; i < tm.size(); ++i) errors.push_back(reg * tm[i] - tn[i]);
+
+  std::vector<double> before, after, dbefore, dafter;
+  const Eigen::Vector3d base_nominal = held.xyz[0];
+  ASSERT_EQ(held.kind[0], "base");
+  const Eigen::Vector3d base_pred = held.xyz[0] + ordinary_kriging(tn, errors, held.xyz[0], 0.5, 600, 0.001);
+  for (std::size_t i = 0; i < held.q.size(); ++i) {
+    if (held.kind[i] != "target") continue;
+    const Eigen::Vector3d p = forward_position(robot, held.q[i]);
+    ASSERT_LT((p - held.xyz[i]).norm(), 1e-6);
+    const Eigen::Vector3d predicted = p + ordinary_kriging(tn, errors, p, 0.5, 600, 0.001);
+    const Eigen::Vector3d measured = reg * held.m[i];
+    before.push_back((measured - p).norm());
+    after.push_back((measured - predicted).norm());
+    dbefore.push_back(std::abs(held.dist[i] - (p - base_nominal).norm()));
+    dafter.push_back(std::abs(held.dist[i] - (predicted - base_pred).norm()));
+  }
+  ASSERT_EQ(before.size(), 64u);
+  const nlohmann::json s = json("summary.json");
+  EXPECT_EQ(s["points"].get<std::size_t>(), 64u);
+  EXPECT_EQ(s["refused"].get<std::size_t>(), 0u);
+  expect_stats(s["position"]["before"], before, 1e-9);
+  expect_stats(s["position"]["after"], after, 1e-6);
+  expect_stats(s["distance"]["before"], dbefore, 1e-9);
+  expect_stats(s["distance"]["after"], dafter, 1e-6);
+  // the model must actually help on held-out rows
+  EXPECT_LT(s["position"]["after"]["rms_mm"].get<double>(), 0.5 * s["position"]["before"]["rms_mm"].get<double>());
+
+  const CsvTable pts = CsvTable::read(path("points.csv"));
+  ASSERT_EQ(pts.row_count(), 64u);
+  for (const char* c : {"point", "status", "before_mm", "after_mm", "before_dx", "before_dy", "before_dz", "after_dx",
+                        "after_dy", "after_dz"})
+    EXPECT_TRUE(pts.has_column(c)) << c;
+  for (std::size_t i = 0; i < 64; ++i) {
+    EXPECT_EQ(pts.row(i)[pts.column_index("status")], "ok");
+    EXPECT_NEAR(pts.numeric_cell(i, pts.column_index("after_mm")), after[i], 1e-6);
+  }
+  // the console prints the same figures
+  EXPECT_NE(v.out.find("3-D position error"), std::string::npos) << v.out;
+  const std::string html = read("report.html");
+  EXPECT_NE(html.find("<svg"), std::string::npos);
+  EXPECT_NE(html.find("SIMULATED"), std::string::npos);
+}
+
+TEST_F(ValidateCli, EveryMethodIsScoredAndNoneChangesNothing) {
+  ASSERT_EQ(run("simulate --seed 1 --sample grid --step 125 --robot-out robot.json --out train.csv").exit_code, 0);
+  ASSERT_EQ(run("simulate --seed 2 --sample cells --step 125 --out holdout.csv").exit_code, 0);
+  for (const std::string method : {"none", "kinematic", "kinematic+kriging", "distance-idw", "position-idw"}) {
+    SCOPED_TRACE(method);
+    ASSERT_EQ(run("fit --robot robot.json --data train.csv --method " + method + " --out m.json").exit_code, 0);
+    const CliResult v = run("validate --model m.json --data holdout.csv --summary-out s.json");
+    ASSERT_EQ(v.exit_code, 0) << v.output();
+    const nlohmann::json s = json("s.json");
+    ASSERT_TRUE(s["position"].is_object()) << s.dump();
+    const double b = s["position"]["before"]["rms_mm"].get<double>(), a = s["position"]["after"]["rms_mm"].get<double>();
+    if (method == "none") {
+      EXPECT_NEAR(a, b, 1e-12);
+    } else if (method != "distance-idw") {  // radial-only distance-idw need not help the 3-D error much
+      EXPECT_LT(a, 0.8 * b);
+    }
+    const double db = s["distance"]["before"]["rms_mm"].get<double>(), da = s["distance"]["after"]["rms_mm"].get<double>();
+    if (method != "none") EXPECT_LT(da, 0.8 * db);
+  }
+}
+
+TEST_F(ValidateCli, PredictWritesRobotAndTrackerPositions) {
+  ASSERT_EQ(run("simulate --seed 1 --sample grid --step 125 --robot-out robot.json --out train.csv").exit_code, 0);
+  ASSERT_EQ(run("fit --robot robot.json --data train.csv --method vector-kriging --model "
+                "\"sph(sill=0.5,range=600)+nug(0.001)\" --out model.json").exit_code, 0);
+  const MdhModel robot = MdhModel::load(path("robot.json"));
+  const Rows train = read_rows(path("train.csv"));
+  std::vector<Eigen::Vector3d> tm, tn, errors;
+  for (std::size_t i = 0; i < train.q.size(); ++i)
+    if (train.kind[i] == "target") {
+      tm.push_back(train.m[i]);
+      tn.push_back(train.xyz[i]);
+    }
+  const Eigen::Isometry3d reg = horn(tm, tn);
+  for (std::size_t i = 0; i < tm.size(); ++i) errors.push_back(reg * tm[i] - tn[i]);
+  // two rows inside the cube, one far outside it
+  const JointVector inside1 = train.q[7], inside2 = (train.q[32] + train.q[33]) / 2;  // interior grid points
+  JointVector outside = train.q[7];
+  outside[0] += 40;
+  std::string csv = "q1,q2,q3,q4,q5,q6,label\n";
+  for (const JointVector& q : {inside1, inside2, outside}) {
+    for (int k = 0; k < 6; ++k) csv += format_number(q[k]) + ",";
+    csv += "r\n";
+  }
+  write("joints.csv", csv);
+  const CliResult p = run("predict --model model.json --joints joints.csv --out p.csv");
+  ASSERT_EQ(p.exit_code, 0) << p.output();
+  const CsvTable t = CsvTable::read(path("p.csv"));
+  for (const char* c : {"label", "px", "py", "pz", "tx", "ty", "tz", "var_mm2", "status"}) EXPECT_TRUE(t.has_column(c)) << c;
+  std::size_t r = 0;
+  for (const JointVector& q : {inside1, inside2}) {
+    const Eigen::Vector3d nominal = forward_position(robot, q);
+    const Eigen::Vector3d expected = nominal + ordinary_kriging(tn, errors, nominal, 0.5, 600, 0.001);
+    const Eigen::Vector3d tracker = reg.inverse() * expected;
+    EXPECT_EQ(t.row(r)[t.column_index("status")], "ok");
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(t.numeric_cell(r, t.column_index(std::string(1, "xyz"[k]).insert(0, "p"))), expected[k], 1e-6);
+      EXPECT_NEAR(t.numeric_cell(r, t.column_index(std::string(1, "xyz"[k]).insert(0, "t"))), tracker[k], 1e-6);
+    }
+    EXPECT_GT(t.numeric_cell(r, t.column_index("var_mm2")), 0.0);
+    ++r;
+  }
+  EXPECT_EQ(t.row(2)[t.column_index("status")], "outside-region");
+  EXPECT_EQ(t.row(2)[t.column_index("px")], "");
+}
+
+TEST_F(ValidateCli, CalibratedRobotCarriesItsRegistrationIntoFk) {
+  ASSERT_EQ(run("simulate --seed 1 --sample grid --step 125 --robot-out robot.json --out train.csv").exit_code, 0);
+  const CliResult c = run("calibrate --robot robot.json --data train.csv --model position --out cal.json");
+  ASSERT_EQ(c.exit_code, 0) << c.output();
+  const nlohmann::json cal = json("cal.json");
+  ASSERT_TRUE(cal.contains("registration")) << cal.dump().substr(0, 300);
+  ASSERT_EQ(cal["registration"]["reflector_offset_mm"].size(), 3u);
+  // the calibrated robot, mapped to the tracker frame with the stored registration, lands on the
+  // tracker readings (to the calibration's residual, a few hundredths of a mm)
+  std::string joints = "point,q1,q2,q3,q4,q5,q6,mx,my,mz\n";
+  const Rows rows = read_rows(path("train.csv"));
+  for (std::size_t i = 0; i < rows.q.size(); ++i) {
+    joints += rows.point[i];
+    for (int k = 0; k < 6; ++k) joints += "," + format_number(rows.q[i][k]);
+    for (int k = 0; k < 3; ++k) joints += "," + format_number(rows.m[i][k]);
+    joints += "\n";
+  }
+  write("joints.csv", joints);
+  const CliResult fk = run("fk --robot cal.json --input joints.csv --out fk.csv");
+  ASSERT_EQ(fk.exit_code, 0) << fk.output();
+  const CsvTable t = CsvTable::read(path("fk.csv"));
+  double worst = 0, ss = 0;
+  for (std::size_t i = 0; i < t.row_count(); ++i) {
+    Eigen::Vector3d d;
+    for (int k = 0; k < 3; ++k) {
+      const std::string a(1, "xyz"[k]);
+      d[k] = t.numeric_cell(i, t.column_index("t" + a)) - t.numeric_cell(i, t.column_index("m" + a));
+    }
+    worst = std::max(worst, d.norm());
+    ss += d.squaredNorm();
+  }
+  EXPECT_LT(worst, 1.0);
+  // exactly the residual the calibration reported for its registration (same rows, same transform)
+  EXPECT_NEAR(std::sqrt(ss / static_cast<double>(t.row_count())), cal["registration"]["residual_rms_mm"].get<double>(), 1e-9);
+  // a compensation model works as fk --robot too (its command model, and its registration)
+  ASSERT_EQ(run("fit --robot robot.json --data train.csv --method none --out none.json").exit_code, 0);
+  const CliResult fk2 = run("fk --robot none.json --input joints.csv --out fk2.csv");
+  ASSERT_EQ(fk2.exit_code, 0) << fk2.output();
+  EXPECT_TRUE(CsvTable::read(path("fk2.csv")).has_column("tx"));
+  // and validate reads the calibrated robot JSON as a model
+  ASSERT_EQ(run("simulate --seed 2 --sample cells --step 125 --out holdout.csv").exit_code, 0);
+  const CliResult v = run("validate --model cal.json --robot robot.json --data holdout.csv --summary-out s.json");
+  ASSERT_EQ(v.exit_code, 0) << v.output();
+  const nlohmann::json s = json("s.json");
+  EXPECT_LT(s["position"]["after"]["rms_mm"].get<double>(), 0.5 * s["position"]["before"]["rms_mm"].get<double>());
+}
+
+TEST_F(ValidateCli, TargetsModeScoresTheValidationRunAfterCompensation) {
+  ASSERT_EQ(run("simulate --seed 1 --sample grid --step 125 --robot-out robot.json --out train.csv").exit_code, 0);
+  ASSERT_EQ(run("fit --robot robot.json --data train.csv --method vector-kriging --model "
+                "\"sph(sill=0.5,range=600)+nug(0.001)\" --out model.json").exit_code, 0);
+  ASSERT_EQ(run("simulate --seed 3 --sample cells --step 125 --out targets.csv").exit_code, 0);
+  ASSERT_EQ(run("compensate --model model.json --targets targets.csv --out joints.csv").exit_code, 0);
+  // the validation run: the robot (simulated) is sent the compensated joints, and for the baseline
+  // the nominal ones; the tracker measures both
+  const CsvTable joints = CsvTable::read(path("joints.csv"));
+  std::string cq = "q1,q2,q3,q4,q5,q6\n", nq = cq;
+  std::vector<std::size_t> rows;
+  for (std::size_t i = 0; i < joints.row_count(); ++i) {
+    if (joints.row(i)[joints.column_index("kind")] != "target") continue;
+    ASSERT_EQ(joints.row(i)[joints.column_index("status")], "ok");
+    rows.push_back(i);
+    for (int k = 1; k <= 6; ++k) {
+      cq += joints.row(i)[joints.column_index("cq" + std::to_string(k))] + (k < 6 ? "," : "\n");
+      nq += joints.row(i)[joints.column_index("nq" + std::to_string(k))] + (k < 6 ? "," : "\n");
+    }
+  }
+  write("cq.csv", cq);
+  write("nq.csv", nq);
+  ASSERT_EQ(run("simulate --seed 4 --joints cq.csv --measure positions --out after.csv").exit_code, 0);
+  ASSERT_EQ(run("simulate --seed 5 --joints nq.csv --measure positions --out before.csv").exit_code, 0);
+  const Rows after = read_rows(path("after.csv")), before = read_rows(path("before.csv"));
+  std::string csv = "point,run,nx,ny,nz,mx,my,mz\n";
+  std::vector<Eigen::Vector3d> goal;
+  for (std::size_t j = 0; j < rows.size(); ++j) {
+    const std::size_t i = rows[j];
+    std::string target;
+    for (const char* c : {"nx", "ny", "nz"}) target += "," + joints.row(i)[joints.column_index(c)];
+    goal.emplace_back(joints.numeric_cell(i, joints.column_index("nx")), joints.numeric_cell(i, joints.column_index("ny")),
+                      joints.numeric_cell(i, joints.column_index("nz")));
+    const std::string name = joints.row(i)[joints.column_index("point")];
+    for (const auto* m : {&before, &after}) {
+      const Eigen::Vector3d r = m->m[j + 1];  // row 0 is the base b0
+      csv += name + (m == &before ? ",before" : ",after") + target + "," + format_number(r.x()) + "," +
+             format_number(r.y()) + "," + format_number(r.z()) + "\n";
+    }
+  }
+  write("run.csv", csv);
+  const CliResult v = run("validate --targets --model model.json --data run.csv --summary-out s.json --out pts.csv");
+  ASSERT_EQ(v.exit_code, 0) << v.output();
+  // independent: error = registered measurement - target, with the training rows' registration
+  const Rows train = read_rows(path("train.csv"));
+  std::vector<Eigen::Vector3d> tm, tn;
+  for (std::size_t i = 0; i < train.q.size(); ++i)
+    if (train.kind[i] == "target") {
+      tm.push_back(train.m[i]);
+      tn.push_back(train.xyz[i]);
+    }
+  const Eigen::Isometry3d reg = horn(tm, tn);
+  std::vector<double> eb, ea;
+  for (std::size_t j = 0; j < rows.size(); ++j) {
+    eb.push_back((reg * before.m[j + 1] - goal[j]).norm());
+    ea.push_back((reg * after.m[j + 1] - goal[j]).norm());
+  }
+  const nlohmann::json s = json("s.json");
+  EXPECT_EQ(s["mode"], "targets");
+  EXPECT_EQ(s["points"].get<std::size_t>(), rows.size());
+  expect_stats(s["position"]["before"], eb, 1e-9);
+  expect_stats(s["position"]["after"], ea, 1e-9);
+  EXPECT_LT(s["position"]["after"]["rms_mm"].get<double>(), 0.5 * s["position"]["before"]["rms_mm"].get<double>());
+}
+
+TEST_F(ValidateCli, CompensateSolvesPoseTargetsOnTheBranchOfTheData) {
+  ASSERT_EQ(run("simulate --seed 1 --sample grid --step 125 --robot-out robot.json --out grid.csv").exit_code, 0);
+  const MdhModel robot = MdhModel::load(path("robot.json"));
+  const Rows grid = read_rows(path("grid.csv"));
+  // a multistart solver reaches the targets below on one wrist branch (what compensate did before);
+  // measure the grid on the other one (q4 + 180, -q5, q6 + 180 reach the same pose)
+  const IkResult multistart = inverse_kinematics_multistart(robot, to_isometry({900, -100, 500, 180, 0, 0}));
+  ASSERT_TRUE(multistart.ok());
+  std::string csv = "q1,q2,q3,q4,q5,q6\n";
+  double data_q5 = 0;
+  for (std::size_t i = 0; i < grid.q.size(); ++i) {
+    if (grid.kind[i] != "target") continue;
+    JointVector q = grid.q[i];
+    if (q[4] * multistart.q_deg[4] > 0) {
+      q[3] += q[3] > 0 ? -180 : 180;
+      q[4] = -q[4];
+      q[5] += q[5] > 0 ? -180 : 180;
+    }
+    data_q5 = q[4];
+    for (int k = 0; k < 6; ++k) csv += format_number(q[k]) + (k < 5 ? "," : "\n");
+  }
+  write("flipped.csv", csv);
+  ASSERT_EQ(run("simulate --seed 1 --joints flipped.csv --measure positions --out train.csv").exit_code, 0);
+  ASSERT_EQ(run("fit --robot robot.json --data train.csv --method vector-kriging --space joint --model "
+                "\"sph(sill=0.5,range=200)+nug(0.001)\" --out model.json").exit_code, 0);
+  // pose targets inside the cube at the data's orientation
+  const std::vector<Eigen::Vector3d> points{{900, -100, 500}, {1010, 40, 600}, {1200, 200, 800}};
+  std::string targets = "x,y,z,rx,ry,rz\n";
+  for (const auto& p : points) targets += format_number(p.x()) + "," + format_number(p.y()) + "," + format_number(p.z()) + ",180,0,0\n";
+  write("targets.csv", targets);
+  ASSERT_LT(multistart.q_deg[4] * data_q5, 0.0) << "the data are on the other branch than multistart's";
+  const CliResult c = run("compensate --model model.json --targets targets.csv --out joints.csv");
+  ASSERT_EQ(c.exit_code, 0) << c.output();
+  const CsvTable t = CsvTable::read(path("joints.csv"));
+  for (std::size_t r = 0; r < points.size(); ++r) {
+    EXPECT_EQ(t.row(r)[t.column_index("status")], "ok");
+    EXPECT_GT(t.numeric_cell(r, t.column_index("nq5")) * data_q5, 0.0) << "row " << r << ": solved on the data's branch";
+    EXPECT_GT(t.numeric_cell(r, t.column_index("cq5")) * data_q5, 0.0);
+  }
+}
+
+}  // namespace
+}  // namespace errfield::compensation
