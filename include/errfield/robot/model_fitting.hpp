@@ -10,12 +10,14 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
 #include "errfield/csv_table.hpp"
+#include "errfield/robot/calibration.hpp"
 #include "errfield/robot/compensation.hpp"
 #include "errfield/robot/kriging_fields.hpp"
 
@@ -55,12 +57,25 @@ struct Registration {
 Registration fit_registration(const std::vector<Eigen::Vector3d>& tracker_mm,
                               const std::vector<Eigen::Vector3d>& robot_mm);
 
+/// What the kinematic methods calibrate from.
+enum class CalibrationData {
+  automatic,  ///< positions when the data have them (mx,my,mz), else distances
+  position,   ///< tracker positions: registration (with the reflector offset), then the model
+  distance,   ///< distances to a base point (dist_bK): frame-free
+};
+/// "position" / "distance" (CLI `--calibration`); throws ArgumentError naming the option otherwise.
+CalibrationData calibration_data_from_name(std::string_view name);
+
 struct FitOptions {
   CompensationMethod method = CompensationMethod::distance_idw;
   FieldSpace space = FieldSpace::task;  ///< kriging methods only
   double idw_power = 1.0;               ///< IDW methods (the paper: 1)
   std::optional<VariogramModel> model;  ///< kriging; empty = estimated
   std::size_t base = 0;                 ///< which base point the distance methods use
+  /// kinematic methods: positions or distances, and the calibration's options (robust weights,
+  /// condition number cap).
+  CalibrationData calibration_data = CalibrationData::automatic;
+  CalibrationOptions calibration;
   /// Called before each long stage (variogram, factorization, leave-one-out, calibration) with what
   /// it is about to do, for progress output; empty = silent.
   std::function<void(const std::string& stage)> on_stage;
@@ -85,10 +100,14 @@ struct FitResult {
   std::vector<std::string> warnings;
 };
 
-/// Builds the model. Throws InputError when the data lack what the method needs (names the
-/// columns). kinematic: calibrate_distances on the distances to base point `base` (a robot
-/// position, i.e. a base row with joints); kinematic+kriging: that, then vector kriging of the 3-D
-/// residuals (measured positions registered to the identified model).
+/// Builds the model. Throws InputError when the data have not what the method needs (names the
+/// columns). kinematic, from positions (the default when the data have mx,my,mz):
+/// register_tracker (tracker ← robot base and the reflector offset) then calibrate_positions; the
+/// identified model is expressed in the robot frame and `registration` holds robot ← tracker. From
+/// distances: calibrate_distances on the distances to base point `base` (a base row's robot
+/// position) or to every fixed point. kinematic+kriging: that, then vector kriging of the 3-D
+/// residuals (measured positions mapped through the calibration's registration, or for distance
+/// calibration a registration fitted to the identified model).
 FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& data, const FitOptions& options);
 
 }  // namespace errfield::robot
