@@ -16,12 +16,13 @@
 #include <benchmark/benchmark.h>
 
 #include "errfield/robot/calibration.hpp"
-#include "errfield/robot/paper_reproduction.hpp"
+#include "errfield/reproduction/paper_reproduction.hpp"
 #include "errfield/robot/simulator.hpp"
 
 namespace {
 
 using namespace errfield::robot;
+using namespace errfield::reproduction;
 
 MdhModel bench_model() { return MdhModel::er20_c10().with_tool(paper_ball()); }
 

@@ -3,14 +3,15 @@
 #include <cstdio>
 
 #include "errfield/grid_idw.hpp"
-#include "errfield/robot/compensation.hpp"
-#include "errfield/robot/error_fields.hpp"
+#include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/error_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/simulator.hpp"
 
 int main() {
   using namespace errfield;
   using namespace errfield::robot;
+  using namespace errfield::compensation;
   const SimulatedRobot sim(SimulatorConfig::paper_default());
   const MdhModel& robot = sim.nominal();
   const MeasurementCube cube = paper_cube();

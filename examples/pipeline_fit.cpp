@@ -3,12 +3,13 @@
 // robot, read your CSV with CsvTable::read and MeasurementSet::from_table instead.
 #include <cstdio>
 
-#include "errfield/robot/model_fitting.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 #include "errfield/robot/simulator.hpp"
 
 int main() {
   using namespace errfield;
   using namespace errfield::robot;
+  using namespace errfield::compensation;
   const SimulatedRobot sim(SimulatorConfig::paper_default());
   const MdhModel& robot = sim.nominal();
   const MeasurementCube cube = paper_cube();

@@ -3,13 +3,14 @@
 // with its IK joints, and one base point. Run it, then measure the printed joints.
 #include <cstdio>
 
-#include "errfield/robot/measurement_plan.hpp"
+#include "errfield/compensation/measurement_plan.hpp"
 #include "errfield/robot/pose.hpp"
 #include "errfield/robot/simulator.hpp"
 
 int main() {
   using namespace errfield;
   using namespace errfield::robot;
+  using namespace errfield::compensation;
   // The robot: the ER20-C10 carrying the Table 7 target ball (use MdhModel::load for your own).
   const MdhModel robot = MdhModel::er20_c10().with_tool(paper_ball());
 

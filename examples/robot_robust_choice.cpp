@@ -17,10 +17,11 @@
 #include <vector>
 
 #include "errfield/robot/calibration.hpp"
-#include "errfield/robot/model_fitting.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 #include "errfield/robot/simulator.hpp"
 
 using namespace errfield::robot;
+using namespace errfield::compensation;
 
 namespace {
 

@@ -8,8 +8,12 @@ PACKAGES=(
   libeigen3-dev libsuitesparse-dev libnlopt-dev libnlopt-cxx-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libnanoflann-dev
+  # URDF import (errfield import-urdf); kdl_parser is its peer in tests/peers
+  liburdfdom-dev libkdl-parser-dev
   # independent peers for cross-checks: R gstat, Orocos KDL, scipy
   r-cran-gstat liborocos-kdl-dev python3-numpy python3-scipy
+  # Python module (docs/python.md): pybind11 bindings, their pytest suite and example plots
+  python3-dev pybind11-dev python3-pybind11 python3-pytest python3-matplotlib
   # report rendering check, fuzzing and sanitizers
   chromium clang libclang-rt-14-dev libomp-14-dev
 )

@@ -199,8 +199,8 @@ std::vector<std::uint64_t> dowd_offsets(const std::vector<std::uint64_t>& count,
                         " stored differences (" + format_number(std::ceil(static_cast<double>(values) * 8e-6)) +
                         " MB) exceed max_stored_differences = " +
                         std::to_string(o.max_stored_differences) +
-                        "; use pair_fraction <= " + format_number(fraction) +
-                        " (--subsample), a smaller max lag, or the Cressie-Hawkins estimator");
+                        "; use pair_fraction (--subsample) <= " + format_number(fraction) +
+                        ", a smaller max lag, or the Cressie-Hawkins estimator");
   }
   std::vector<std::uint64_t> offsets(chunks * B + 1, 0);
   std::uint64_t next = 0;

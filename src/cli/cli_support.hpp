@@ -5,8 +5,10 @@
 #include <chrono>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <Eigen/Core>
 
 #include "errfield/atomic_file.hpp"
@@ -97,5 +99,55 @@ class StageLog {
   bool enabled_;
   std::chrono::steady_clock::time_point start_;
 };
+
+/// Refuses, before any work, two output options naming one file in any spelling (`--out c.json
+/// --report ./c.json`, a symlink): AtomicFileSet::commit would refuse them too, but only after
+/// the job ran. `outputs` are (option, path) pairs; empty paths are options not given.
+inline void refuse_same_output(std::initializer_list<std::pair<const char*, const std::string*>> outputs) {
+  for (auto i = outputs.begin(); i != outputs.end(); ++i)
+    for (auto j = outputs.begin(); j != i; ++j)
+      if (!i->second->empty() && !j->second->empty() && same_output_file(*i->second, *j->second))
+        throw ArgumentError(std::string(i->first) + " " + *i->second + " and " + j->first + " " + *j->second +
+                            ": the same output file is given twice");
+}
+
+/// CLI11 check for an option read into an unsigned integer (--neighbors, --seed): CLI11 would
+/// wrap "-3" to 2^64 - 3. CLI11 puts the option's name in front of the message.
+inline const CLI::Validator kUnsignedInteger(
+    [](std::string& s) -> std::string {
+      const auto first = s.find_first_not_of(" \t");
+      if (first != std::string::npos && s[first] == '-') return "'" + s + "' is negative; expected an integer >= 0";
+      return {};
+    },
+    "UINT");
+
+/// Runs `f()` (typically `options.validate()` of a library struct filled from the command line);
+/// an ArgumentError naming the library's field (`IkOptions::max_iterations`) is re-thrown naming
+/// the command-line option that set it (`--max-iterations`): a user can act only on the option.
+/// A ResourceError is renamed the same way (its advice names what to change).
+template <class F>
+void naming_options(F f, std::initializer_list<std::pair<const char*, const char*>> internal_to_option) {
+  bool renamed = false;
+  auto rename = [&](std::string message) {
+    for (const auto& [internal, option] : internal_to_option)
+      for (auto pos = message.find(internal); pos != std::string::npos; pos = message.find(internal, pos)) {
+        message.replace(pos, std::char_traits<char>::length(internal), option);
+        pos += std::char_traits<char>::length(option);
+        renamed = true;
+      }
+    return message;
+  };
+  try {
+    f();
+  } catch (const ArgumentError& e) {
+    std::string message = rename(e.what());
+    if (!renamed) throw;
+    throw ArgumentError(message);
+  } catch (const ResourceError& e) {
+    std::string message = rename(e.what());
+    if (!renamed) throw;
+    throw ResourceError(message);
+  }
+}
 
 }  // namespace errfield::cli

@@ -25,6 +25,7 @@ struct CalibrateArgs {
 };
 
 void run_calibrate(const CalibrateArgs& a) {
+  refuse_same_output({{"--out", &a.out}, {"--report", &a.report}});
   using namespace robot;
   const MdhModel nominal = load_robot_or_default(a.robot);
   CalibrationOptions options;
@@ -36,7 +37,8 @@ void run_calibrate(const CalibrateArgs& a) {
   options.robust.k0 = a.k0;
   options.robust.k1 = a.k1;
   options.max_condition_number = a.max_condition;
-  options.validate();
+  naming_options([&] { options.validate(); }, {{"CalibrationOptions::max_condition_number", "--max-condition"},
+                                               {"CalibrationOptions::robust: need 0 < k0 < k1", "need 0 < --k0 < --k1"}});
   const CsvTable table = CsvTable::read(a.data);
   const auto q = read_joint_columns(table);
   for (std::size_t i = 0; i < q.size(); ++i)

@@ -1,4 +1,5 @@
 // `errfield compensate`: joints to send for a list of targets, from a fitted model (step 4).
+#include <cmath>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -9,7 +10,8 @@
 #include "cli/command_registry.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/error.hpp"
-#include "errfield/robot/compensation.hpp"
+#include "errfield/compensation/compensation.hpp"
+#include "errfield/json_file.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/pose.hpp"
 
@@ -24,15 +26,12 @@ struct CompensateArgs {
 
 void run_compensate(const CompensateArgs& a) {
   using namespace robot;
-  std::ifstream in(a.model);
-  if (!in) throw InputError("cannot open model file '" + a.model + "'", a.model);
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(a.model + ": not valid JSON: " + e.what(), a.model);
-  }
-  const CompensationModel model = CompensationModel::from_json(j, a.model);
+  using namespace compensation;
+  // p_inside is P(|error| <= tolerance): 0, a negative or a NaN tolerance makes it meaningless.
+  if (!(std::isfinite(a.tolerance) && a.tolerance > 0.0))
+    throw ArgumentError("--tolerance: " + format_number(a.tolerance) + "; expected a finite tolerance > 0 (mm)");
+  const nlohmann::json j = read_json_file(a.model, "model file");
+  const CompensationModel model = with_json_source(a.model, [&] { return CompensationModel::from_json(j, a.model); });
   const bool kinematic = model.method() == CompensationMethod::kinematic ||
                          model.method() == CompensationMethod::kinematic_kriging;
   if (kinematic && a.robot.empty())
@@ -101,11 +100,21 @@ void run_compensate(const CompensateArgs& a) {
                          "cq5", "cq6"};
   for (std::size_t c = 0; c < 24; ++c) out.add_column(names[c], cells(c));
   out.add_column("status", status);
+  if (a.strict && refused) {
+    // Checked before writing: a job that fails leaves any previous output as it was.
+    std::string rows;
+    std::size_t named = 0;
+    for (std::size_t i = 0; i < n && named < 5; ++i) {
+      if (status[i] == "ok") continue;
+      rows += (named++ ? "; " : "") + a.targets + ":" + std::to_string(t.line_of_row(i)) + ": " + status[i];
+    }
+    throw Error("--strict: " + std::to_string(refused) + " of " + std::to_string(n) + " target(s) refused (" + rows +
+                (refused > named ? "; ..." : "") + "); " + a.out + " not written");
+  }
   out.write(a.out);
   std::cout << "compensate: " << n - refused << " of " << n << " targets compensated with " << method_name(model.method())
             << (refused ? "; " + std::to_string(refused) + " refused (status column): no joints written for them" : "")
             << "\n  written to " << a.out << "\n";
-  if (a.strict && refused) throw InputError(std::to_string(refused) + " target(s) refused (--strict)", a.targets);
 }
 
 void add_compensate_command(CLI::App& app) {
@@ -122,7 +131,8 @@ void add_compensate_command(CLI::App& app) {
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();
   cmd->add_option("--targets", a->targets, "targets CSV")->required();
   cmd->add_option("--tolerance", a->tolerance, "tolerance for p_inside (± mm)")->capture_default_str();
-  cmd->add_flag("--strict", a->strict, "exit with an error if any target is refused");
+  cmd->add_flag("--strict", a->strict,
+                "if any target is refused: write nothing, name the refused rows and exit with status 1");
   cmd->add_option("--out", a->out, "output CSV (written atomically)")->required();
   cmd->callback([a] { run_compensate(*a); });
 }

@@ -195,10 +195,11 @@ void add_cv_command(CLI::App& app) {
   cmd->add_option("--coords", args->coords, "Coordinate columns, comma-separated (any number)")->required();
   cmd->add_option("--value", args->value, "Value column, or 2-3 comma-separated columns of a vector value")->required();
   cmd->add_option("--folds", args->folds, "'loo' (leave-one-out, default) or the number of folds K >= 2");
-  handles->seed = cmd->add_option("--seed", args->seed, "Seed of the k-fold assignment (default 1)");
+  handles->seed = cmd->add_option("--seed", args->seed, "Seed of the k-fold assignment (default 1)")->check(kUnsignedInteger);
   cmd->add_option("--out", args->out, "Optional CSV of per-sample predictions and residuals");
   handles->power = cmd->add_option("--power", args->power, "Power p of the inverse-distance weights (idw: default 2)");
-  handles->neighbors = cmd->add_option("--neighbors", args->neighbors, "Use the K nearest samples (default: all)");
+  handles->neighbors = cmd->add_option("--neighbors", args->neighbors, "Use the K nearest samples (default: all)")
+                          ->check(kUnsignedInteger);
   handles->radius = cmd->add_option("--radius", args->radius, "Use only samples within this distance (coordinates' unit)");
   auto owners = std::make_shared<MethodOptionOwnership>(add_method_options(*cmd, true));
   cmd->callback([args, handles, owners] { run_cv(*args, *handles, *owners); });

@@ -9,7 +9,7 @@
 #include "cli/robot_cli.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/error.hpp"
-#include "errfield/robot/model_fitting.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 
 namespace errfield::cli {
 namespace {
@@ -24,6 +24,7 @@ struct FitArgs {
 
 void run_fit(const FitArgs& a) {
   using namespace robot;
+  using namespace compensation;
   const MdhModel model = load_robot_or_default(a.robot);
   FitOptions o;
   o.method = method_from_name(a.method);
@@ -87,6 +88,7 @@ void add_fit_command(CLI::App& app) {
   cmd->add_option("--power", a->power, "IDW power p (the paper: 1)")->capture_default_str();
   cmd->add_option("--model", a->model, "kriging variogram model, e.g. \"gau(sill=0.05,range=400)+nug(0.001)\"; default: fitted");
   cmd->add_option("--base", a->base, "index K of the base point whose distances dist_bK the distance methods use")
+      ->check(kUnsignedInteger)
       ->capture_default_str();
   cmd->add_option("--base-point", a->base_points, "X,Y,Z of base point b0, b1, ... when the data have no base rows (fixed points)");
   cmd->add_option("--calibration", a->calibration,

@@ -42,6 +42,8 @@ ModelComponent structure_from(const FitArgs& a) {
     throw ArgumentError("--model: 'nug' alone has nothing to fit; use --nugget for the nugget");
   if (structure.kind == ModelKind::Matern && !a.nu_given)
     throw ArgumentError("--model mat needs --nu (the Matérn smoothness, e.g. 0.5, 1.5, 2.5)");
+  if (structure.kind != ModelKind::Matern && a.nu_given)
+    throw ArgumentError("--nu applies to --model mat only (the Matérn smoothness), not --model " + a.model);
   if (!(a.nu > 0.0)) throw ArgumentError("--nu: " + format_number(a.nu) + "; expected > 0");
   structure.nu = a.nu;
   return structure;
@@ -139,6 +141,9 @@ void run_fit(const FitArgs& a) {
   } else {
     throw ArgumentError("--nugget: '" + a.nugget + "'; expected free, fixed=V or none");
   }
+  // 0 means "the default" to the library; given on the command line it is a mistake, not a request.
+  if (a.range_max_given && !(std::isfinite(a.range_max) && a.range_max > 0.0))
+    throw ArgumentError("--range-max: " + format_number(a.range_max) + "; expected a finite range > 0 (lag unit)");
   o.range_max = a.range_max;
   o.validate();
   const ModelComponent structure = structure_from(a);

@@ -24,7 +24,7 @@ void run_ik(const IkArgs& a) {
   options.frame = robot::parse_end_frame(a.frame);
   options.position_only = a.position_only;
   options.max_iterations = a.max_iterations;
-  options.validate();
+  naming_options([&] { options.validate(); }, {{"IkOptions::max_iterations", "--max-iterations"}});
   const CsvTable table = CsvTable::read(a.input);
   const Eigen::MatrixXd xyz = table.numeric_columns({"x", "y", "z"});
   const std::size_t n = static_cast<std::size_t>(xyz.rows());

@@ -149,7 +149,8 @@ void add_interpolate_command(CLI::App& app) {
   cmd->add_option("--value", args->value, "Value column, or 2-3 comma-separated columns of a vector value")->required();
   cmd->add_option("--out", args->out, "Output CSV")->required();
   handles->power = cmd->add_option("--power", args->power, "Power p of the inverse-distance weights 1/d^p (default: 1 for idw-grid as in the paper, 2 for idw as in gstat)");
-  handles->neighbors = cmd->add_option("--neighbors", args->neighbors, "Use the K nearest samples (scattered methods; default: all)");
+  handles->neighbors = cmd->add_option("--neighbors", args->neighbors, "Use the K nearest samples (scattered methods; default: all)")
+                          ->check(kUnsignedInteger);
   handles->radius = cmd->add_option("--radius", args->radius, "Use only samples within this distance, in the coordinates' unit (scattered methods)");
   handles->clamp = cmd->add_flag("--clamp", args->clamp, "idw-grid: interpolate targets outside the grid from the nearest cell instead of failing");
   auto owners = std::make_shared<MethodOptionOwnership>(add_method_options(*cmd, false));

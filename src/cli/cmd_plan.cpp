@@ -8,7 +8,7 @@
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/cube_budget.hpp"
-#include "errfield/robot/measurement_plan.hpp"
+#include "errfield/compensation/measurement_plan.hpp"
 #include "errfield/robot/pose.hpp"
 #include "errfield/variogram_fit.hpp"
 
@@ -50,7 +50,9 @@ VariogramModel model_from_variogram_csv(const std::string& path) {
 }
 
 void run_plan(const PlanArgs& a) {
+  refuse_same_output({{"--out", &a.out}, {"--samples-out", &a.samples_out}});
   using namespace robot;
+  using namespace compensation;
   const MdhModel robot = load_robot_or_default(a.robot);
   PlanOptions o;
   const auto cube = parse_numbers(a.cube, 4, "--cube");
@@ -69,14 +71,18 @@ void run_plan(const PlanArgs& a) {
       throw ArgumentError("--step auto needs exactly one of --variogram CSV or --variogram-model TEXT (lags in mm)");
     const VariogramModel m = a.variogram_model.empty() ? model_from_variogram_csv(a.variogram)
                                                        : VariogramModel::parse(a.variogram_model);
-    const StepRecommendation rec = recommend_grid_step(m, o.size_mm, a.gamma_max);
+    StepRecommendation rec;
+    naming_options([&] { rec = recommend_grid_step(m, o.size_mm, a.gamma_max); },
+                   {{"recommend_grid_step: gamma_max", "--gamma-max"}});
     std::cout << "plan: variogram model " << m.to_string() << "\n  recommended " << rec.reason << "\n";
     o.step_mm = rec.step_mm;
   } else {
     o.step_mm = parse_numbers(a.step, 1, "--step")[0];
   }
   check_cube_budget(o.size_mm, o.step_mm, o.sample_per_cell, "--step");
-  const auto points = plan_measurements(robot, o);
+  std::vector<PlannedPoint> points;
+  naming_options([&] { points = plan_measurements(robot, o); },
+                 {{"plan: step", "--step"}, {"plan: cube size", "--cube SIZE"}, {"plan: cube corner", "--cube corner"}});
   auto table = [&](const std::vector<const PlannedPoint*>& rows) {
     OutputTable t;
     std::vector<std::string> id, kind;
@@ -128,7 +134,7 @@ void add_plan_command(CLI::App& app) {
   cmd->add_option("--gamma-max", a->gamma_max, "--step auto: largest semivariance allowed at the cell diagonal (mm²)")
       ->capture_default_str();
   cmd->add_option("--samples-out", a->samples_out, "also write one random validation point per cell here");
-  cmd->add_option("--seed", a->seed, "seed of the validation samples")->capture_default_str();
+  cmd->add_option("--seed", a->seed, "seed of the validation samples")->check(kUnsignedInteger)->capture_default_str();
   cmd->add_option("--out", a->out, "plan CSV: point,kind,x,y,z,rx,ry,rz,q1..q6 (written atomically)")->required();
   cmd->callback([a] { run_plan(*a); });
 }

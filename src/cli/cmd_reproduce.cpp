@@ -6,7 +6,7 @@
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
 #include "errfield/error.hpp"
-#include "errfield/robot/paper_reproduction.hpp"
+#include "errfield/reproduction/paper_reproduction.hpp"
 
 namespace errfield::cli {
 namespace {
@@ -26,11 +26,13 @@ void add_reproduce_command(CLI::App& app) {
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("--out", args->out, "output directory (created if missing)")->capture_default_str();
-  cmd->add_option("--seed", args->seed, "master seed; the same seed gives the same numbers")->capture_default_str();
+  cmd->add_option("--seed", args->seed, "master seed; the same seed gives the same numbers")
+      ->check(kUnsignedInteger)
+      ->capture_default_str();
   cmd->add_option("--runs", args->runs, "independent simulated robots for Table 6 (>= 1)")->capture_default_str();
   cmd->add_option("--threads", args->threads, "OpenMP threads (0 = default)")->capture_default_str();
   cmd->callback([args] {
-    robot::ReproductionOptions options;
+    reproduction::ReproductionOptions options;
     options.seed = args->seed;
     options.runs = args->runs;
     options.threads = args->threads;
@@ -57,10 +59,10 @@ void add_reproduce_command(CLI::App& app) {
       }
       progress->update(done);
     };
-    const auto result = robot::reproduce_paper(options);
+    const auto result = reproduction::reproduce_paper(options);
     if (progress) progress->finish();
-    std::cout << robot::reproduction_summary(result);
-    const auto files = robot::write_reproduction(result, args->out);
+    std::cout << reproduction::reproduction_summary(result);
+    const auto files = reproduction::write_reproduction(result, args->out);
     std::cout << "\nwritten (SIMULATED data):\n";
     for (const auto& f : files) std::cout << "  " << f.string() << "\n";
   });

@@ -55,6 +55,8 @@ Eigen::Vector3d parse_vec3(const std::string& text, const std::string& what) {
 }
 
 void run_simulate(const SimulateArgs& a) {
+  refuse_same_output({{"--out", &a.out}, {"--truth-out", &a.truth_out}, {"--config-out", &a.config_out},
+                      {"--robot-out", &a.robot_out}});
   using namespace robot;
   SimulatorConfig config = a.config.empty() ? SimulatorConfig::paper_default() : SimulatorConfig::load(a.config);
   if (!a.robot.empty()) config.nominal = load_robot_or_default(a.robot);
@@ -122,9 +124,10 @@ void run_simulate(const SimulateArgs& a) {
     std::vector<Eigen::Vector3d> pts;
     if (a.sample == "grid" || a.sample == "cells") check_cube_budget(cube.size_mm, a.step, false, "--step");
     if (a.sample == "grid") {
-      pts = cube.grid(a.step);
+      naming_options([&] { pts = cube.grid(a.step); }, {{"MeasurementCube::grid: step", "--step"}});
     } else if (a.sample == "cells") {
-      pts = cube.random_per_cell(a.step, rng);
+      naming_options([&] { pts = cube.random_per_cell(a.step, rng); },
+                     {{"MeasurementCube::random_per_cell: step", "--step"}});
     } else if (a.sample.rfind("random:", 0) == 0) {
       const double nd = parse_number(a.sample.substr(7), "--sample random:N");
       check_point_budget(nd, "--sample " + a.sample);  // before the cast: 1e12 must not wrap
@@ -228,7 +231,7 @@ void add_simulate_command(CLI::App& app) {
       "Example: errfield simulate --sample grid --step 125 --out grid.csv --truth-out true_robot.json");
   cmd->add_option("--config", args->config, "simulation JSON (docs/robot.md); default: the paper's set-up");
   cmd->add_option("--robot", args->robot, "nominal robot JSON (overrides the config's robot)");
-  cmd->add_option("--seed", args->seed, "random seed (overrides the config's)");
+  cmd->add_option("--seed", args->seed, "random seed (overrides the config's)")->check(kUnsignedInteger);
   cmd->add_option("--joints", args->joints, "CSV with commanded joints q1..q6 (deg) instead of cube points");
   cmd->add_option("--cube", args->cube, "X0,Y0,Z0,SIZE: cube min corner and side (mm); default the paper cube");
   cmd->add_option("--orientation", args->orientation, "RX,RY,RZ tool orientation in the cube (deg; default 180,0,0)");

@@ -70,7 +70,9 @@ void run_variogram(const VariogramArgs& a) {
   options.seed = a.seed;
   options.threads = a.threads;
   options.max_stored_differences = a.max_stored;
-  options.validate();
+  naming_options([&] { options.validate(); }, {{"variogram options: pair_fraction", "--subsample"},
+                                               {"pair_fraction", "--subsample"},
+                                               {"variogram options: threads", "--threads"}});
 
   const CsvTable table = CsvTable::read(a.input);
   if (table.row_count() < 2)
@@ -79,7 +81,9 @@ void run_variogram(const VariogramArgs& a) {
                      a.input);
   const Eigen::MatrixXd x = table.numeric_columns(coord_names);
   const Eigen::MatrixXd z = table.numeric_columns(value_names);
-  const EmpiricalVariogram v = empirical_variogram(x, z, bins, options);
+  EmpiricalVariogram v;
+  naming_options([&] { v = empirical_variogram(x, z, bins, options); },
+                 {{"max_stored_differences", "--max-stored"}, {"pair_fraction (--subsample)", "--subsample"}});
 
   OutputTable out;
   std::vector<std::string> lo, hi, mean, gamma, pairs;
@@ -139,14 +143,15 @@ void add_variogram_command(CLI::App& app) {
                   "matheron (default), cressie (Cressie-Hawkins) or dowd (median-based; stores the "
                   "binned differences, at most --max-stored of them)");
   cmd->add_option("--max-stored", args->max_stored,
-                  "dowd only: budget of stored differences (8 bytes each; default 25000000)");
+                  "dowd only: budget of stored differences (8 bytes each; default 25000000)")
+      ->check(kUnsignedInteger);
   cmd->add_option("--convention", args->convention,
                   "paper (default): bins [lo,hi); gstat: [e0,e1], then (lo,hi] as R gstat's boundaries=");
   cmd->add_flag("--per-component", args->per_component,
                 "add a gamma_<column> column per value column");
   cmd->add_option("--subsample", args->subsample,
                   "use a deterministic fraction of the pairs, in (0,1] (default 1: all pairs)");
-  cmd->add_option("--seed", args->seed, "seed of --subsample (default 0)");
+  cmd->add_option("--seed", args->seed, "seed of --subsample (default 0)")->check(kUnsignedInteger);
   cmd->add_option("--threads", args->threads, "OpenMP threads (default: all); the result does not depend on it");
   cmd->add_option("--out", args->out, "output CSV (written atomically); default: standard output");
   cmd->footer(

@@ -2,7 +2,9 @@
 // universal kriging (errfield/kriging.hpp) with the dense, local or sparse back end, and a model
 // given as text or fitted automatically (--model auto).
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <iostream>
 #include <limits>
 
@@ -173,6 +175,28 @@ Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const E
 
 const char* status_word(KrigingStatus s) { return kriging_status_name(s).data(); }
 
+// k-fold kriges each fold from the other folds' samples alone, where a duplicate pair would be
+// named by its index within that subset ("samples 3 and 7"); checked on the whole file first, so
+// the message names both rows as file:line like every row error.
+void refuse_duplicate_samples(const Eigen::MatrixXd& coords, const RowLabels& labels) {
+  std::vector<Eigen::Index> order(static_cast<std::size_t>(coords.rows()));
+  std::iota(order.begin(), order.end(), Eigen::Index{0});
+  auto less = [&](Eigen::Index a, Eigen::Index b) {
+    for (Eigen::Index c = 0; c < coords.cols(); ++c)
+      if (coords(a, c) != coords(b, c)) return coords(a, c) < coords(b, c);
+    return a < b;
+  };
+  std::sort(order.begin(), order.end(), less);
+  for (std::size_t k = 1; k < order.size(); ++k) {
+    const Eigen::Index a = order[k - 1], b = order[k];
+    if (coords.row(a) != coords.row(b)) continue;
+    const auto first = static_cast<std::size_t>(std::min(a, b)), later = static_cast<std::size_t>(std::max(a, b));
+    throw InputError(labels(later) + ": kriging: this sample and " + labels(first) +
+                         " are duplicates (same location); remove one",
+                     labels.source, labels.line(later));
+  }
+}
+
 InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
   InterpolationResult result;
   const Setup s = make_setup(*r.samples, r.sample_coords, r.sample_values, r.shared, result.notes);
@@ -191,7 +215,7 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
     const Kriging<Eigen::VectorXd, V> kriging(points, values, s.model, s.options, {}, meas);
     const auto& rep = kriging.report();
     if (!rep.usable())
-      throw Error("kriging failed: " + std::string(status_word(rep.status)) + ": " + rep.message);
+      throw Error(r.samples->source() + ": kriging failed: " + std::string(status_word(rep.status)) + ": " + rep.message);
     if (!rep.message.empty()) result.notes.push_back(std::string(status_word(rep.status)) + ": " + rep.message);
     if (rep.merged_duplicates) result.notes.push_back(std::to_string(rep.merged_duplicates) + " duplicate samples merged");
     const auto pred = kriging.predict(targets);
@@ -227,10 +251,11 @@ CrossValidationOutput cross_validate_kriging(const CrossValidationRequest& r) {
       auto options = s.options;
       const Kriging<Eigen::VectorXd, V> kriging(points, values, s.model, options, {}, meas);
       if (kriging.report().merged_duplicates)
-        throw InputError("cv --method kriging: duplicate samples; remove them first");
+        throw InputError(r.samples->source() + ": cv --method kriging: duplicate samples; remove them first",
+                         r.samples->source());
       const auto cv = kriging.leave_one_out();
       if (cv.prediction.size() != values.size())
-        throw Error("kriging failed: " + std::string(status_word(cv.status)) + ": " + cv.message);
+        throw Error(r.samples->source() + ": kriging failed: " + std::string(status_word(cv.status)) + ": " + cv.message);
       if (!cv.message.empty()) out.notes.push_back(cv.message);
       out.fold.resize(values.size());
       for (std::size_t i = 0; i < values.size(); ++i) out.fold[i] = i;
@@ -241,6 +266,7 @@ CrossValidationOutput cross_validate_kriging(const CrossValidationRequest& r) {
                               : "leave-one-out: each sample kriged from its neighbours without itself");
       return;
     }
+    if (s.options.duplicates == DuplicatePolicy::Error) refuse_duplicate_samples(r.sample_coords, s.options.sample_labels);
     KrigingEstimator<Eigen::VectorXd, V> estimator{s.model, s.options, {}};
     CrossValidationOptions cvo;
     cvo.folds = r.folds;

@@ -29,6 +29,15 @@ int run_cli(int argc, const char* const* argv) {
   std::sort(entries.begin(), entries.end(),
             [](const auto& a, const auto& b) { return a.order != b.order ? a.order < b.order : a.name < b.name; });
   for (const auto& e : entries) e.add(app);
+  // CLI11 would answer a mistyped command with "A subcommand is required"; name it instead.
+  if (argc > 1 && argv[1][0] != '-' &&
+      std::none_of(entries.begin(), entries.end(), [&](const auto& e) { return e.name == argv[1]; })) {
+    std::string names;
+    for (const auto& e : entries) names += (names.empty() ? "" : ", ") + e.name;
+    std::cerr << "errfield: unknown command '" << argv[1] << "'; the commands are: " << names
+              << "\nRun 'errfield --help' for what each does.\n";
+    return kExitUsage;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

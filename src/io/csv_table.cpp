@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -69,6 +70,9 @@ std::vector<std::string> split_line(std::string_view line, char delimiter, const
 }  // namespace
 
 CsvTable CsvTable::read(const std::string& path) {
+  // Reading a directory "succeeds" with no bytes; say what it is rather than "file is empty".
+  if (std::error_code ec; std::filesystem::is_directory(path, ec))
+    throw InputError(path + ": is a directory, not a CSV file", path);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open file for reading", path);
   std::ostringstream buffer;

@@ -26,6 +26,10 @@ double json_number(const nlohmann::json& obj, const std::string& key, const std:
 
 void json_check_keys(const nlohmann::json& obj, std::initializer_list<const char*> allowed, const std::string& path,
                      const std::string& source) {
+  if (!obj.is_object()) {
+    const std::string where = path.empty() ? "(top level)" : path.substr(0, path.size() - (path.back() == '.' ? 1 : 0));
+    json_fail(source, where, "expected an object, got " + obj.dump());
+  }
   for (auto it = obj.begin(); it != obj.end(); ++it) {
     bool ok = false;
     for (const char* a : allowed) ok = ok || it.key() == a;

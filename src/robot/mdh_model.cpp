@@ -9,6 +9,7 @@
 
 #include "errfield/atomic_file.hpp"
 #include "errfield/error.hpp"
+#include "errfield/json_file.hpp"
 #include "robot/json_fields.hpp"
 
 namespace errfield::robot {
@@ -135,15 +136,7 @@ MdhModel MdhModel::from_json(const nlohmann::json& j, const std::string& source)
 }
 
 MdhModel MdhModel::load(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError("cannot open robot description '" + path.string() + "'", path.string());
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(path.string() + ": not valid JSON: " + e.what(), path.string());
-  }
-  return from_json(j, path.string());
+  return with_json_source(path.string(), [&] { return from_json(read_json_file(path, "robot description"), path.string()); });
 }
 
 nlohmann::json MdhModel::to_json() const {

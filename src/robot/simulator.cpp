@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "errfield/error.hpp"
+#include "errfield/json_file.hpp"
 #include "errfield/robot/cube_budget.hpp"
 #include "errfield/robot/paper_reference.hpp"
 #include "robot/json_fields.hpp"
@@ -171,15 +172,7 @@ SimulatorConfig SimulatorConfig::from_json(const nlohmann::json& j, const std::s
 }
 
 SimulatorConfig SimulatorConfig::load(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError("cannot open simulation JSON '" + path + "'", path);
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(path + ": not valid JSON: " + e.what(), path);
-  }
-  return from_json(j, path);
+  return with_json_source(path, [&] { return from_json(read_json_file(path, "simulation JSON"), path); });
 }
 
 nlohmann::json SimulatorConfig::to_json() const {

@@ -10,11 +10,12 @@
 
 #include "errfield/csv_table.hpp"
 #include "errfield/robot/kinematics.hpp"
-#include "errfield/robot/model_fitting.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 #include "errfield/robot/simulator.hpp"
 #include "support/cli_harness.hpp"
 
 namespace errfield::robot {
+using namespace errfield::compensation;
 namespace {
 
 namespace fs = std::filesystem;

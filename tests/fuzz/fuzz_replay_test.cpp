@@ -17,6 +17,7 @@
 #include <gtest/gtest.h>
 
 #include "fuzz/fuzz_checks.hpp"
+#include "fuzz/fuzz_json_checks.hpp"
 
 namespace errfield::fuzz {
 namespace {
@@ -58,6 +59,7 @@ TEST(FuzzReplay, VariogramModel) {
 }
 TEST(FuzzReplay, ModelJson) { replay("model_json", [](const std::string& s) { check_model_json(s); }); }
 TEST(FuzzReplay, RobotJson) { replay("robot_json", [](const std::string& s) { check_robot_json(s); }); }
+TEST(FuzzReplay, JsonInputs) { replay("json_inputs", [](const std::string& s) { check_json_inputs(s); }); }
 
 // Runs the CLI with `args` in `dir`, output discarded; returns the wait status.
 int run_cli_in(const fs::path& dir, const std::vector<std::string>& args) {

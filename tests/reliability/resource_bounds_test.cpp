@@ -11,7 +11,7 @@
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/cube_budget.hpp"
-#include "errfield/robot/measurement_plan.hpp"
+#include "errfield/compensation/measurement_plan.hpp"
 #include "errfield/robot/simulator.hpp"
 #include "support/cli_harness.hpp"
 
@@ -122,7 +122,7 @@ TEST(ResourceBounds, LibraryChecksTheCubeBudgetAtTheBoundary) {
   robot::SimulationRng rng(1);
   EXPECT_THROW(cube.random_per_cell(0.01, rng), ResourceError);
   EXPECT_EQ(cube.grid(125.0).size(), 125u);
-  robot::PlanOptions o;
+  compensation::PlanOptions o;
   o.size_mm = 500;
   o.step_mm = 2;
   EXPECT_THROW(o.validate(), ResourceError);

@@ -11,7 +11,7 @@
 
 #include "errfield/error.hpp"
 #include "errfield/robot/distance_error.hpp"
-#include "errfield/robot/model_fitting.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 
 namespace errfield::robot {
 namespace {
@@ -203,7 +203,7 @@ TEST(Simulator, DefaultErrorSizeIsThePapers) {
     truth.push_back(robot.true_position(solve_cube_pose(robot.nominal(), cube, p, seed.q_deg).q_deg));
     nominal.push_back(p);
   }
-  const Eigen::Isometry3d robot_from_world = fit_registration(truth, nominal).robot_from_tracker;
+  const Eigen::Isometry3d robot_from_world = compensation::fit_registration(truth, nominal).robot_from_tracker;
   const Eigen::Vector3d p0 = robot_from_world * robot.config().tracker.tracker_from_world.inverse().translation();
   for (std::uint64_t s = 1; s <= 3; ++s) {
     SimulationRng rng(s);

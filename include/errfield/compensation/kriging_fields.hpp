@@ -1,0 +1,102 @@
+#pragma once
+/// Error fields by kriging (compensation.hpp): errfield's stronger options beside the paper's IDW.
+/// Use them when you want a prediction variance (is the target inside a ±0.25 mm tolerance, with
+/// what confidence?) or samples that are not a complete regular grid.
+///  - distance kriging: the scalar distance error to a base point, kriged, then projected along
+///    m = (P − P0)/|P − P0| like the paper's eq. 23 (radial correction only);
+///  - vector kriging: the 3-D error vector dP (from registered positions, or recovered from
+///    distances to >= 3 base points), the three components kriged with one shared factorization
+///    (an intrinsic coregionalization with one structure; docs/reproduction.md says what that assumes).
+/// Locations are the targets' nominal positions (task space, mm) or nominal joints (joint space,
+/// deg): with a constant orientation both work; where the orientation varies, errors are similar in
+/// joint space, not in task space (the paper's section 3.1).
+///
+/// The region a field answers for is the box of its samples' nominal positions (task space) widened
+/// by `region_margin_mm`; targets outside are refused, never extrapolated.
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "errfield/cross_validation.hpp"
+#include "errfield/kriging.hpp"
+#include "errfield/compensation/compensation.hpp"
+#include "errfield/variogram_model.hpp"
+
+namespace errfield::compensation {
+
+enum class FieldSpace { task, joint };
+std::string_view field_space_name(FieldSpace s);
+/// "task" | "joint"; throws ArgumentError.
+FieldSpace field_space_from_name(std::string_view name);
+
+struct KrigingFieldOptions {
+  FieldSpace space = FieldSpace::task;
+  /// Variogram model of the values (mm², lag in mm or deg); empty = estimated from the samples
+  /// (empirical variogram + best of sph/exp/gau with a free nugget, gstat's N_j/h² weights).
+  std::optional<VariogramModel> model;
+  /// The nugget stands for measurement noise (smoothing, gstat's Err) rather than micro-scale
+  /// variation: predictions are of the noise-free error. Default true (tracker + repeatability).
+  bool nugget_is_measurement_error = true;
+  double region_margin_mm = 1e-6;
+  /// Called before each long stage (factoring the N x N covariance, the leave-one-out) with what it
+  /// is about to do, for progress output; empty = silent. Not called from parallel regions.
+  std::function<void(const std::string& stage)> on_stage;
+  /// Throws ArgumentError naming the field.
+  void validate() const;
+};
+
+/// Samples of an error field: nominal positions (mm), nominal joints (deg), one per sample.
+struct FieldSamples {
+  std::vector<Eigen::Vector3d> position_mm;
+  std::vector<robot::JointVector> joints_deg;
+};
+
+/// Kriging of distance errors `distance_error_mm` (one per sample) to `base_point_mm`.
+/// Throws ArgumentError/InputError for mismatched sizes, fewer than 8 samples or non-finite data.
+std::shared_ptr<const ErrorField> make_distance_kriging_field(const FieldSamples& samples,
+                                                              std::vector<double> distance_error_mm,
+                                                              const Eigen::Vector3d& base_point_mm,
+                                                              const KrigingFieldOptions& options = {});
+
+/// Kriging of 3-D position errors (robot frame, mm), one per sample.
+std::shared_ptr<const ErrorField> make_vector_kriging_field(const FieldSamples& samples,
+                                                            std::vector<Eigen::Vector3d> position_error_mm,
+                                                            const KrigingFieldOptions& options = {});
+
+/// A kriging field and its leave-one-out cross-validation, both from the one factorization (the
+/// closed form of Dubrule 1983: O(N^3), not N refits). Samples at the same location (repeated
+/// measurements of one pose) are averaged into one, so leave-one-out leaves out a location and
+/// `leave_one_out.predicted` counts locations. Residual variances are those of a new observation
+/// (kriging variance plus the measurement-error nugget), so mean_squared_z ~ 1 when calibrated.
+struct KrigingFieldFit {
+  std::shared_ptr<const ErrorField> field;
+  CrossValidationSummary leave_one_out;
+  std::size_t merged_duplicates = 0;  ///< samples folded into another at the same location
+  /// How the covariance was factored: condition number, jitter, IllConditioned status.
+  KrigingReport factorization;
+};
+
+/// make_distance_kriging_field plus its leave-one-out summary (mm).
+KrigingFieldFit fit_distance_kriging_field(const FieldSamples& samples, std::vector<double> distance_error_mm,
+                                           const Eigen::Vector3d& base_point_mm,
+                                           const KrigingFieldOptions& options = {});
+
+/// make_vector_kriging_field plus its leave-one-out summary (norm of the 3-D residual, mm).
+KrigingFieldFit fit_vector_kriging_field(const FieldSamples& samples, std::vector<Eigen::Vector3d> position_error_mm,
+                                         const KrigingFieldOptions& options = {});
+
+/// The variogram model the fields estimate when none is given: empirical variogram of the values
+/// over the samples' lags (10 bins up to 60% of the largest lag) and the best-fitting of sph/exp/gau
+/// with a free nugget. `values` is N x K (K = 1 or 3).
+VariogramModel estimate_field_variogram(const FieldSamples& samples, const Eigen::MatrixXd& values, FieldSpace space);
+
+/// Reads a kriging field from JSON (called by error_field_from_json for kinds "distance-kriging" and
+/// "vector-kriging"); nullptr for another kind.
+std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& j, const std::string& source);
+
+}  // namespace errfield::compensation

@@ -1,0 +1,91 @@
+#pragma once
+/// Import of a robot's nominal kinematics from a URDF file into an MdhModel (`errfield import-urdf`).
+///
+/// Three steps, usable separately:
+///  1. read_urdf_chain / parse_urdf_chain: parse the URDF (urdfdom, Debian liburdfdom-dev) and take
+///     the joints on the path base link -> tip link, in mm. Refuses, naming the joint or link, what a
+///     6R MD-H model cannot hold: prismatic, continuous, planar or floating joints and mimic joints on
+///     the path, a moving joint branching off a link between base and tip, an axis that is not a unit
+///     vector, and any number of revolute joints other than six.
+///  2. mdh_from_urdf_chain: the equivalent modified D-H table (common normals between consecutive
+///     joint axes), with what is left over in the model's base and tool transforms. Joint angles map
+///     1:1: q_i of the model is the URDF joint position of the i-th revolute joint, in degrees.
+///  3. verify_urdf_import: FK of the model against urdf_chain_pose (the URDF chain evaluated as
+///     its own product of origin and joint-rotation transforms) at random joint vectors.
+///
+/// The conversion rules (which frame gets which offset, the Hayati beta for nearly parallel axes)
+/// are in docs/robot.md ("Importing a URDF").
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "errfield/robot/mdh_model.hpp"
+
+namespace errfield::robot {
+
+/// One joint on the URDF path from the base link to the tip link, in URDF terms but in mm and deg.
+struct UrdfJoint {
+  std::string name;
+  std::string parent_link, child_link;
+  bool revolute = false;  ///< false: a fixed joint (only its origin counts)
+  /// Parent link frame <- joint frame (the URDF `<origin xyz rpy>`), translation in mm.
+  Eigen::Isometry3d origin = Eigen::Isometry3d::Identity();
+  /// Unit rotation axis in the joint frame (revolute joints).
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();
+  double lower_deg = -180.0, upper_deg = 180.0;  ///< joint limits (revolute joints)
+};
+
+/// The joints on the path base link -> tip link, base side first.
+struct UrdfChain {
+  std::string robot_name;  ///< the URDF's <robot name>
+  std::string base_link, tip_link;
+  std::string source;  ///< file name (or "URDF") for messages
+  std::vector<UrdfJoint> joints;
+  /// The revolute joints in chain order (joint i of the MD-H model is revolute()[i - 1]).
+  std::vector<const UrdfJoint*> revolute() const;
+};
+
+/// True when this build can parse URDF files (urdfdom found at configure time).
+bool urdf_support_available() noexcept;
+
+/// Parses URDF text and extracts the chain base_link -> tip_link. Throws InputError naming `source`
+/// and the joint or link (see the file comment); when urdfdom rejects the file its own messages are
+/// in the exception. Without URDF support in the build throws Error saying so.
+UrdfChain parse_urdf_chain(const std::string& urdf_xml, const std::string& base_link, const std::string& tip_link,
+                           const std::string& source = "URDF");
+/// Same, reading the file at `path`.
+UrdfChain read_urdf_chain(const std::filesystem::path& path, const std::string& base_link,
+                          const std::string& tip_link);
+
+/// Pose of the tip link in the base link frame (mm) for the revolute joint positions `q_deg`
+/// (chain order): the product over the path of origin · rotation(axis, q). Independent of MdhModel.
+Eigen::Isometry3d urdf_chain_pose(const UrdfChain& chain, const JointVector& q_deg);
+
+/// The MD-H model whose FK equals urdf_chain_pose(chain, q) · tool for every q: world frame = the
+/// base link frame, flange = frame 6, model tool = flange <- tip link · `tool`. Limits from the URDF.
+/// Named after the URDF robot. Throws ArgumentError unless the chain has six revolute joints.
+MdhModel mdh_from_urdf_chain(const UrdfChain& chain, const Eigen::Isometry3d& tool = Eigen::Isometry3d::Identity());
+
+struct UrdfVerification {
+  int samples = 0;
+  double max_position_mm = 0.0;   ///< largest |p_model - p_urdf| of the tool point
+  double max_rotation_rad = 0.0;  ///< largest rotation angle of R_model^T R_urdf
+  /// Accepted when max_position_mm <= 1e-9 mm and max_rotation_rad <= 1e-12 rad (1e-9 mm at 1 m).
+  bool passed = false;
+};
+
+inline constexpr double kUrdfPositionTolerance_mm = 1e-9;
+inline constexpr double kUrdfRotationTolerance_rad = 1e-12;
+
+/// Compares forward_kinematics(model, q, tool frame) with urdf_chain_pose(chain, q) · tool at the
+/// zero vector and `samples - 1` joint vectors drawn uniformly within the URDF limits.
+UrdfVerification verify_urdf_import(const MdhModel& model, const UrdfChain& chain,
+                                    const Eigen::Isometry3d& tool = Eigen::Isometry3d::Identity(),
+                                    int samples = 1000, std::uint64_t seed = 1);
+
+}  // namespace errfield::robot

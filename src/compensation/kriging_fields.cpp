@@ -1,0 +1,358 @@
+#include "errfield/compensation/kriging_fields.hpp"
+
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "errfield/cross_validation.hpp"
+#include "errfield/empirical_variogram.hpp"
+#include "errfield/error.hpp"
+#include "errfield/kriging.hpp"
+#include "errfield/metrics.hpp"
+#include "errfield/variogram_fit.hpp"
+
+namespace errfield::compensation {
+
+using namespace errfield::robot;
+
+std::string_view field_space_name(FieldSpace s) { return s == FieldSpace::task ? "task" : "joint"; }
+
+FieldSpace field_space_from_name(std::string_view name) {
+  if (name == "task") return FieldSpace::task;
+  if (name == "joint") return FieldSpace::joint;
+  throw ArgumentError("unknown space '" + std::string(name) + "'; expected task or joint");
+}
+
+void KrigingFieldOptions::validate() const {
+  if (!(region_margin_mm >= 0.0) || !std::isfinite(region_margin_mm))
+    throw ArgumentError("KrigingFieldOptions: region_margin_mm = " + std::to_string(region_margin_mm) +
+                        "; expected a finite value >= 0");
+}
+
+namespace {
+
+void check_samples(const FieldSamples& s, std::size_t values, const char* what) {
+  if (s.position_mm.size() != s.joints_deg.size())
+    throw ArgumentError(std::string(what) + ": " + std::to_string(s.position_mm.size()) + " positions but " +
+                        std::to_string(s.joints_deg.size()) + " joint vectors; expected one of each per sample");
+  if (s.position_mm.size() != values)
+    throw ArgumentError(std::string(what) + ": " + std::to_string(s.position_mm.size()) + " samples but " +
+                        std::to_string(values) + " values");
+  if (values < 8) throw InputError(std::string(what) + ": " + std::to_string(values) + " samples; need at least 8");
+}
+
+struct Region {
+  Eigen::Vector3d lower, upper;
+  bool contains(const Eigen::Vector3d& p) const {
+    return (p.array() >= lower.array()).all() && (p.array() <= upper.array()).all();
+  }
+};
+
+Region region_of(const FieldSamples& s, double margin) {
+  Region r{s.position_mm.front(), s.position_mm.front()};
+  for (const auto& p : s.position_mm) {
+    r.lower = r.lower.cwiseMin(p);
+    r.upper = r.upper.cwiseMax(p);
+  }
+  r.lower.array() -= margin;
+  r.upper.array() += margin;
+  return r;
+}
+
+template <class L, class M>
+EmpiricalVariogram empirical_of(const std::vector<L>& locations, const Eigen::MatrixXd& values, const M& metric) {
+  double max_lag = 0.0;
+  for (std::size_t i = 0; i < locations.size(); ++i)
+    for (std::size_t j = i + 1; j < locations.size(); ++j) max_lag = std::max(max_lag, metric(locations[i], locations[j]));
+  if (!(max_lag > 0.0)) throw InputError("kriging field: all samples at the same location");
+  EmpiricalVariogramOptions o;
+  o.threads = 1;
+  return empirical_variogram<L, M>(std::span<const L>(locations), values, metric,
+                                   LagBins::uniform(0.0, 0.6 * max_lag, 0.06 * max_lag), o);
+}
+
+VariogramModel best_fit(const EmpiricalVariogram& ev) {
+  VariogramFitOptions fo;
+  fo.weighting = FitWeighting::NjOverH2;
+  VariogramModel best;
+  double best_sse = INFINITY;
+  for (ModelKind kind : {ModelKind::Spherical, ModelKind::Exponential, ModelKind::Gaussian}) {
+    ModelComponent c;
+    c.kind = kind;
+    try {
+      const VariogramFitResult fit = fit_variogram(ev, {c}, fo);
+      if (fit.status != FitStatus::Failed && fit.weighted_sse < best_sse) {
+        best = fit.model;
+        best_sse = fit.weighted_sse;
+      }
+    } catch (const ArgumentError&) {
+      // too few usable bins for this structure; try the next
+    }
+  }
+  if (!std::isfinite(best_sse)) throw InputError("kriging field: could not fit a variogram to the samples");
+  return best;
+}
+
+nlohmann::json vec_json(const Eigen::VectorXd& v) {
+  nlohmann::json a = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(v[i]);
+  return a;
+}
+
+/// One kriging field: L the location type, V the value type, M the metric.
+template <class L, class V, class M>
+class KrigingField final : public ErrorField {
+ public:
+  KrigingField(std::string kind, FieldSamples samples, std::vector<L> locations, std::vector<V> values,
+               VariogramModel model, const KrigingFieldOptions& options, std::optional<Eigen::Vector3d> base)
+      : kind_(std::move(kind)), samples_(std::move(samples)), locations_(std::move(locations)),
+        values_(std::move(values)), model_(std::move(model)), options_(options), base_(base),
+        region_(region_of(samples_, options.region_margin_mm)),
+        kriging_(std::span<const L>(locations_), std::span<const V>(values_), model_, kriging_options(options)) {
+    if (!kriging_.report().usable())
+      throw InputError("kriging field: the kriging system cannot be solved: " + kriging_.report().message);
+  }
+
+  ErrorPrediction predict(const Eigen::Vector3d& p, const JointVector& q) const override {
+    ErrorPrediction out;
+    if (!region_.contains(p) || (base_ && (p - *base_).norm() < 1.0)) {
+      out.inside_region = false;
+      return out;
+    }
+    L target;
+    if constexpr (std::is_same_v<L, JointVector>)
+      target = q;
+    else
+      target = p;
+    const auto pred = kriging_.predict(std::span<const L>(&target, 1));
+    if (!pred.usable() || pred.mean.empty()) {
+      out.inside_region = false;
+      return out;
+    }
+    if constexpr (std::is_same_v<V, double>) {
+      out.distance_error_mm = pred.mean[0];
+      out.position_error_mm = pred.mean[0] * radial_direction(p, *base_);
+      out.variance_mm2 = pred.variance.empty() ? NAN : pred.variance[0];
+    } else {
+      out.position_error_mm = pred.mean[0];
+      // the variance is per component (shared structure); the 3-D error's variance is the sum
+      out.variance_mm2 = pred.variance.empty() ? NAN : 3.0 * pred.variance[0];
+    }
+    return out;
+  }
+
+  nlohmann::json to_json() const override {
+    nlohmann::json pos = nlohmann::json::array(), joints = nlohmann::json::array(), vals = nlohmann::json::array();
+    for (std::size_t i = 0; i < values_.size(); ++i) {
+      pos.push_back(vec_json(samples_.position_mm[i]));
+      joints.push_back(vec_json(samples_.joints_deg[i]));
+      if constexpr (std::is_same_v<V, double>)
+        vals.push_back(values_[i]);
+      else
+        vals.push_back(vec_json(values_[i]));
+    }
+    nlohmann::json j = {{"kind", kind_},
+                        {"space", std::string(field_space_name(options_.space))},
+                        {"model", model_.to_string()},
+                        {"nugget_is_measurement_error", options_.nugget_is_measurement_error},
+                        {"region_margin_mm", options_.region_margin_mm},
+                        {"samples", {{"position_mm", pos}, {"joints_deg", joints}}},
+                        {"values", vals}};
+    if (base_) j["base_point_mm"] = vec_json(*base_);
+    return j;
+  }
+
+  /// Closed-form leave-one-out over the field's (merged) samples, from its factorization.
+  CrossValidationSummary leave_one_out() const {
+    const KrigingCrossValidation<V> cv = kriging_.leave_one_out();
+    // IllConditioned still predicts (fit warns about it from the factorization's report).
+    if (cv.status != KrigingStatus::Ok && cv.status != KrigingStatus::IllConditioned)
+      throw Error(kind_ + " field: leave-one-out failed: " + cv.message);
+    constexpr int C = ValueTraits<V>::kComponents;
+    Eigen::MatrixXd residual(static_cast<Eigen::Index>(cv.residual.size()), C);
+    for (std::size_t i = 0; i < cv.residual.size(); ++i)
+      for (int c = 0; c < C; ++c)
+        residual(static_cast<Eigen::Index>(i), c) = ValueTraits<V>::component(cv.residual[i], c);
+    return summarize_residuals(residual, cv.variance);
+  }
+
+  const KrigingReport& factorization() const { return kriging_.report(); }
+
+  std::string describe() const override {
+    return kind_ + " (" + std::string(field_space_name(options_.space)) + " space, " + std::to_string(values_.size()) +
+           " samples, model " + model_.to_string() + ")";
+  }
+
+ private:
+  static KrigingOptions kriging_options(const KrigingFieldOptions& o) {
+    KrigingOptions k;
+    k.kind = KrigingKind::Ordinary;
+    k.nugget = o.nugget_is_measurement_error ? NuggetTreatment::MeasurementError : NuggetTreatment::MicroScale;
+    k.threads = 1;
+    k.duplicates = DuplicatePolicy::Average;
+    return k;
+  }
+
+  std::string kind_;
+  FieldSamples samples_;
+  std::vector<L> locations_;
+  std::vector<V> values_;
+  VariogramModel model_;
+  KrigingFieldOptions options_;
+  std::optional<Eigen::Vector3d> base_;
+  Region region_;
+  Kriging<L, V, M> kriging_;
+};
+
+template <class L, class V, class M>
+KrigingFieldFit fit_field(std::shared_ptr<const KrigingField<L, V, M>> field, bool with_leave_one_out,
+                          const KrigingFieldOptions& options) {
+  KrigingFieldFit fit;
+  if (with_leave_one_out) {
+    if (options.on_stage) options.on_stage("leave-one-out from the factorization");
+    fit.leave_one_out = field->leave_one_out();
+  }
+  fit.factorization = field->factorization();
+  fit.merged_duplicates = fit.factorization.merged_duplicates;
+  fit.field = std::move(field);
+  return fit;
+}
+
+template <class V>
+KrigingFieldFit make_field(std::string kind, const FieldSamples& samples, std::vector<V> values,
+                           const Eigen::MatrixXd& flat, const KrigingFieldOptions& options,
+                           std::optional<Eigen::Vector3d> base, bool with_leave_one_out) {
+  options.validate();
+  if (!options.model && options.on_stage) options.on_stage("estimating the variogram");
+  const VariogramModel model = options.model ? *options.model : estimate_field_variogram(samples, flat, options.space);
+  if (options.on_stage)
+    options.on_stage("factoring the " + std::to_string(values.size()) + " x " + std::to_string(values.size()) +
+                     " covariance matrix (dense Cholesky, O(N^3))");
+  if (options.space == FieldSpace::task)
+    return fit_field(std::make_shared<const KrigingField<Eigen::Vector3d, V, EuclideanMetric>>(
+                         std::move(kind), samples, samples.position_mm, std::move(values), model, options, base),
+                     with_leave_one_out, options);
+  return fit_field(std::make_shared<const KrigingField<JointVector, V, JointSpaceMetric>>(
+                       std::move(kind), samples, samples.joints_deg, std::move(values), model, options, base),
+                   with_leave_one_out, options);
+}
+
+KrigingFieldFit distance_field(const FieldSamples& samples, std::vector<double> distance_error_mm,
+                               const Eigen::Vector3d& base_point_mm, const KrigingFieldOptions& options,
+                               bool with_leave_one_out) {
+  check_samples(samples, distance_error_mm.size(), "distance-kriging field");
+  const Eigen::MatrixXd flat = Eigen::Map<const Eigen::VectorXd>(distance_error_mm.data(),
+                                                                 static_cast<Eigen::Index>(distance_error_mm.size()));
+  return make_field<double>("distance-kriging", samples, std::move(distance_error_mm), flat, options, base_point_mm,
+                            with_leave_one_out);
+}
+
+KrigingFieldFit vector_field(const FieldSamples& samples, std::vector<Eigen::Vector3d> position_error_mm,
+                             const KrigingFieldOptions& options, bool with_leave_one_out) {
+  check_samples(samples, position_error_mm.size(), "vector-kriging field");
+  Eigen::MatrixXd flat(static_cast<Eigen::Index>(position_error_mm.size()), 3);
+  for (std::size_t i = 0; i < position_error_mm.size(); ++i)
+    flat.row(static_cast<Eigen::Index>(i)) = position_error_mm[i].transpose();
+  return make_field<Eigen::Vector3d>("vector-kriging", samples, std::move(position_error_mm), flat, options,
+                                     std::nullopt, with_leave_one_out);
+}
+
+}  // namespace
+
+VariogramModel estimate_field_variogram(const FieldSamples& samples, const Eigen::MatrixXd& values, FieldSpace space) {
+  if (space == FieldSpace::task) return best_fit(empirical_of(samples.position_mm, values, EuclideanMetric{}));
+  return best_fit(empirical_of(samples.joints_deg, values, JointSpaceMetric{}));
+}
+
+std::shared_ptr<const ErrorField> make_distance_kriging_field(const FieldSamples& samples,
+                                                              std::vector<double> distance_error_mm,
+                                                              const Eigen::Vector3d& base_point_mm,
+                                                              const KrigingFieldOptions& options) {
+  return distance_field(samples, std::move(distance_error_mm), base_point_mm, options, false).field;
+}
+
+std::shared_ptr<const ErrorField> make_vector_kriging_field(const FieldSamples& samples,
+                                                            std::vector<Eigen::Vector3d> position_error_mm,
+                                                            const KrigingFieldOptions& options) {
+  return vector_field(samples, std::move(position_error_mm), options, false).field;
+}
+
+KrigingFieldFit fit_distance_kriging_field(const FieldSamples& samples, std::vector<double> distance_error_mm,
+                                           const Eigen::Vector3d& base_point_mm, const KrigingFieldOptions& options) {
+  return distance_field(samples, std::move(distance_error_mm), base_point_mm, options, true);
+}
+
+KrigingFieldFit fit_vector_kriging_field(const FieldSamples& samples, std::vector<Eigen::Vector3d> position_error_mm,
+                                         const KrigingFieldOptions& options) {
+  return vector_field(samples, std::move(position_error_mm), options, true);
+}
+
+namespace {
+
+[[noreturn]] void bad(const std::string& source, const std::string& what) { throw InputError(source + ": " + what, source); }
+
+template <int N>
+Eigen::Matrix<double, N, 1> read_vec(const nlohmann::json& j, const std::string& source, const std::string& name) {
+  if (!j.is_array() || j.size() != N)
+    bad(source, "member \"" + name + "\": expected an array of " + std::to_string(N) + " numbers");
+  Eigen::Matrix<double, N, 1> v;
+  for (int i = 0; i < N; ++i) {
+    if (!j[i].is_number()) bad(source, "member \"" + name + "\"[" + std::to_string(i) + "]: expected a number");
+    v[i] = j[i].get<double>();
+  }
+  return v;
+}
+
+}  // namespace
+
+std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& j, const std::string& source) {
+  const std::string kind = j.value("kind", std::string());
+  if (kind != "distance-kriging" && kind != "vector-kriging") return nullptr;
+  try {
+    KrigingFieldOptions o;
+    // Each optional member checked for its type: j.value() would throw nlohmann's type_error, an
+    // internal error to the CLI, for e.g. "nugget_is_measurement_error": "yes".
+    auto optional = [&](const char* key, bool (nlohmann::json::*is_type)() const noexcept, const char* expected) {
+      if (j.contains(key) && !(j[key].*is_type)())
+        bad(source, std::string("member \"field.") + key + "\": expected " + expected + ", got " + j[key].dump());
+      return j.contains(key);
+    };
+    if (optional("space", &nlohmann::json::is_string, "a string")) o.space = field_space_from_name(j["space"].get<std::string>());
+    if (!j.contains("model") || !j["model"].is_string()) bad(source, "member \"field.model\": expected a model string");
+    o.model = VariogramModel::parse(j["model"].get<std::string>());
+    if (optional("nugget_is_measurement_error", &nlohmann::json::is_boolean, "true or false"))
+      o.nugget_is_measurement_error = j["nugget_is_measurement_error"].get<bool>();
+    if (optional("region_margin_mm", &nlohmann::json::is_number, "a number"))
+      o.region_margin_mm = j["region_margin_mm"].get<double>();
+    if (!j.contains("samples") || !j.contains("values")) bad(source, "member \"field\": needs \"samples\" and \"values\"");
+    if (!j["samples"].is_object())
+      bad(source, "member \"field.samples\": expected an object {position_mm, joints_deg}, got " + j["samples"].dump());
+    const auto& pos = j["samples"].value("position_mm", nlohmann::json::array());
+    const auto& joints = j["samples"].value("joints_deg", nlohmann::json::array());
+    const auto& vals = j["values"];
+    if (!pos.is_array() || !joints.is_array() || !vals.is_array() || pos.size() != vals.size() ||
+        joints.size() != vals.size())
+      bad(source, "member \"field.samples\": position_mm, joints_deg and values must be arrays of equal length");
+    FieldSamples s;
+    for (std::size_t i = 0; i < pos.size(); ++i) {
+      s.position_mm.push_back(read_vec<3>(pos[i], source, "samples.position_mm[" + std::to_string(i) + "]"));
+      s.joints_deg.push_back(read_vec<6>(joints[i], source, "samples.joints_deg[" + std::to_string(i) + "]"));
+    }
+    if (kind == "distance-kriging") {
+      std::vector<double> v;
+      for (std::size_t i = 0; i < vals.size(); ++i) {
+        if (!vals[i].is_number()) bad(source, "member \"values\"[" + std::to_string(i) + "]: expected a number");
+        v.push_back(vals[i].get<double>());
+      }
+      if (!j.contains("base_point_mm")) bad(source, "member \"base_point_mm\" is missing");
+      return make_distance_kriging_field(s, std::move(v), read_vec<3>(j["base_point_mm"], source, "base_point_mm"), o);
+    }
+    std::vector<Eigen::Vector3d> v;
+    for (std::size_t i = 0; i < vals.size(); ++i) v.push_back(read_vec<3>(vals[i], source, "values[" + std::to_string(i) + "]"));
+    return make_vector_kriging_field(s, std::move(v), o);
+  } catch (const ArgumentError& e) {
+    bad(source, std::string("member \"field\": ") + e.what());
+  }
+}
+
+}  // namespace errfield::compensation

@@ -1,0 +1,300 @@
+#include "errfield/compensation/model_fitting.hpp"
+
+#include <cmath>
+
+#include "errfield/cross_validation.hpp"
+#include "errfield/error.hpp"
+#include "errfield/grid_idw.hpp"
+#include "errfield/kriging.hpp"
+#include "errfield/metrics.hpp"
+#include "errfield/regular_grid.hpp"
+#include "errfield/robot/calibration.hpp"
+#include "errfield/robot/distance_error.hpp"
+#include "errfield/compensation/error_fields.hpp"
+#include "errfield/robot/kinematics.hpp"
+#include "errfield/scattered_idw.hpp"
+#include "compensation/kinematic_fit.hpp"
+#include "robot/rigid_fit.hpp"
+
+namespace errfield::compensation {
+
+using namespace errfield::robot;
+
+MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& robot,
+                                          const std::vector<Eigen::Vector3d>& fixed_bases) {
+  MeasurementSet m;
+  m.source = t.source();
+  const Eigen::MatrixXd q = t.numeric_columns({"q1", "q2", "q3", "q4", "q5", "q6"});
+  const bool has_xyz = t.has_column("x") && t.has_column("y") && t.has_column("z");
+  const Eigen::MatrixXd xyz = has_xyz ? t.numeric_columns({"x", "y", "z"}) : Eigen::MatrixXd();
+  const bool has_m = t.has_column("mx") && t.has_column("my") && t.has_column("mz");
+  const Eigen::MatrixXd mxyz = has_m ? t.numeric_columns({"mx", "my", "mz"}) : Eigen::MatrixXd();
+  std::vector<std::vector<double>> dist;
+  for (std::size_t k = 0; t.has_column("dist_b" + std::to_string(k)); ++k)
+    dist.push_back(t.numeric_column("dist_b" + std::to_string(k)));
+  const bool has_kind = t.has_column("kind");
+  const std::size_t kind_col = has_kind ? t.column_index("kind") : 0;
+  const bool has_point = t.has_column("point");
+  const std::size_t point_col = has_point ? t.column_index("point") : 0;
+  m.distance_mm.assign(dist.size(), {});
+  for (std::size_t r = 0; r < t.row_count(); ++r) {
+    const JointVector qr = q.row(static_cast<Eigen::Index>(r)).transpose();
+    const Eigen::Vector3d p = has_xyz ? Eigen::Vector3d(xyz.row(static_cast<Eigen::Index>(r)).transpose())
+                                      : forward_position(robot, qr);
+    const std::string kind = has_kind ? t.row(r)[kind_col] : "target";
+    if (kind == "base") {
+      m.base_nominal_mm.push_back(p);
+      m.base_q_deg.push_back(qr);
+      continue;
+    }
+    if (kind != "target")
+      throw InputError(t.source() + ":" + std::to_string(t.line_of_row(r)) + ": column 'kind': '" + kind +
+                           "'; expected base or target",
+                       t.source(), t.line_of_row(r), "kind");
+    m.id.push_back(has_point ? t.row(r)[point_col] : "row" + std::to_string(t.line_of_row(r)));
+    m.q_deg.push_back(qr);
+    m.nominal_mm.push_back(p);
+    if (has_m) m.measured_mm.push_back(mxyz.row(static_cast<Eigen::Index>(r)).transpose());
+    for (std::size_t k = 0; k < dist.size(); ++k) m.distance_mm[k].push_back(dist[k][r]);
+  }
+  if (m.base_nominal_mm.empty()) m.base_nominal_mm = fixed_bases;
+  if (!dist.empty() && m.base_nominal_mm.size() < dist.size())
+    throw InputError(t.source() + ": " + std::to_string(dist.size()) + " distance columns (dist_b0..) but " +
+                         std::to_string(m.base_nominal_mm.size()) +
+                         " base points; add rows with kind=base or give the base points (--base-point X,Y,Z)",
+                     t.source());
+  if (m.q_deg.empty()) throw InputError(t.source() + ": no target rows", t.source());
+  return m;
+}
+
+std::vector<double> MeasurementSet::distance_errors(std::size_t k) const {
+  if (k >= distance_mm.size())
+    throw InputError(source + ": no column dist_b" + std::to_string(k) +
+                         " (distances to a base point are needed by the distance methods)",
+                     source, 0, "dist_b" + std::to_string(k));
+  std::vector<double> out(q_deg.size());
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = distance_mm[k][i] - (nominal_mm[i] - base_nominal_mm[k]).norm();
+  return out;
+}
+
+Registration fit_registration(const std::vector<Eigen::Vector3d>& a, const std::vector<Eigen::Vector3d>& b) {
+  if (a.size() != b.size() || a.size() < 3)
+    throw InputError("registration: need at least 3 point pairs, got " + std::to_string(std::min(a.size(), b.size())));
+  Registration r;
+  r.robot_from_tracker = fit_rigid(a, b);
+  double ss = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) ss += (r.robot_from_tracker * a[i] - b[i]).squaredNorm();
+  r.residual_rms_mm = std::sqrt(ss / static_cast<double>(a.size()));
+  return r;
+}
+
+void FitOptions::validate() const {
+  if (!(idw_power >= 0.0) || !std::isfinite(idw_power))
+    throw ArgumentError("fit: idw power " + std::to_string(idw_power) + "; expected a finite value >= 0");
+  calibration.validate();
+}
+
+namespace {
+
+CrossValidationReport report(const CrossValidationSummary& s, std::string how) {
+  CrossValidationReport c;
+  c.method = std::move(how);
+  c.samples = s.predicted;
+  c.mean_abs_mm = s.mean_abs_error;
+  c.rms_mm = s.rms_error;
+  c.max_abs_mm = s.max_abs_error;
+  c.mean_squared_z = s.mean_squared_z;
+  return c;
+}
+
+/// The kriging field's own leave-one-out (closed form from its factorization; KrigingFieldFit).
+CrossValidationReport kriging_report(const KrigingFieldFit& fit, FieldSpace space) {
+  std::string how = "leave-one-out, ordinary kriging in " + std::string(field_space_name(space)) + " space";
+  if (fit.merged_duplicates > 0)
+    how += "; " + std::to_string(fit.merged_duplicates) +
+           " repeated measurements averaged into their location, so one location is left out at a time";
+  return report(fit.leave_one_out, std::move(how));
+}
+
+/// The kriging system's conditioning, as a note, and as a warning when it costs precision: a model
+/// without nugget (Gaussian above all) on dense samples makes K nearly singular, and predictions
+/// and the leave-one-out summary are then dominated by rounding.
+void note_factorization(FitResult& out, const KrigingFieldFit& fit, const VariogramModel& model) {
+  const KrigingReport& f = fit.factorization;
+  std::string note = "kriging system: " + std::to_string(f.samples_used) + " samples";
+  if (std::isfinite(f.condition_number)) note += ", condition number " + format_number(f.condition_number);
+  if (f.jitter > 0.0) note += ", jitter " + format_number(f.jitter) + " added to the diagonal";
+  out.notes.push_back(std::move(note));
+  if (f.status == KrigingStatus::IllConditioned || f.jitter > 0.0)
+    out.warnings.push_back("the kriging system is ill-conditioned: " +
+                           (f.message.empty() ? "jitter " + format_number(f.jitter) + " was needed" : f.message) +
+                           ". Predictions and the leave-one-out summary lose precision; give the variogram model " +
+                           (model.nugget() > 0.0 ? "a larger nugget" : "a nugget") + " (model " + model.to_string() +
+                           "), e.g. --model \"...+nug(" + format_number(1e-3 * model.sill()) + ")\"");
+}
+
+template <class V>
+CrossValidationReport idw_cv(const std::vector<Eigen::Vector3d>& p, const std::vector<V>& values, double power) {
+  ScatteredIdwEstimator<Eigen::Vector3d, V> est;
+  est.options.power = power;
+  est.options.neighbors = 8;
+  est.options.threads = 1;
+  return report(cross_validate<Eigen::Vector3d, V>(est, std::span<const Eigen::Vector3d>(p), std::span<const V>(values))
+                    .summary,
+                "leave-one-out with 8-nearest-neighbour IDW (grid IDW needs every node, so its own LOO is "
+                "not defined)");
+}
+
+RegularGrid3 detect_grid(const MeasurementSet& d, std::vector<std::size_t>& sample_of_node) {
+  Eigen::MatrixXd pts(static_cast<Eigen::Index>(d.nominal_mm.size()), 3);
+  for (std::size_t i = 0; i < d.nominal_mm.size(); ++i) pts.row(static_cast<Eigen::Index>(i)) = d.nominal_mm[i].transpose();
+  RowLabels labels;
+  labels.source = d.source;
+  GridDetection g = detect_regular_grid(pts, labels);
+  sample_of_node = std::move(g.sample_of_node);
+  return g.grid;
+}
+
+}  // namespace
+
+FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
+  o.validate();
+  using detail::fit_kinematic;
+  using detail::KinematicFit;
+  const CompensationMethod method = o.method;
+  GridIdwOptions idw;
+  idw.power = o.idw_power;
+  const FieldSamples samples{d.nominal_mm, d.q_deg};
+  auto need_base = [&] {
+    if (o.base >= d.base_nominal_mm.size())
+      throw InputError(d.source + ": base point " + std::to_string(o.base) + " requested but the data have " +
+                           std::to_string(d.base_nominal_mm.size()),
+                       d.source);
+  };
+  auto registered_errors = [&](FitResult& out) {
+    if (d.measured_mm.empty())
+      throw InputError(d.source + ": the method needs measured positions (columns mx,my,mz, tracker frame)", d.source, 0,
+                       "mx");
+    const Registration reg = fit_registration(d.measured_mm, d.nominal_mm);
+    std::vector<Eigen::Vector3d> dp(d.nominal_mm.size());
+    for (std::size_t i = 0; i < dp.size(); ++i) dp[i] = reg.robot_from_tracker * d.measured_mm[i] - d.nominal_mm[i];
+    out.registration = reg;
+    out.notes.push_back("registration tracker -> robot fitted on " + std::to_string(dp.size()) +
+                        " points, residual RMS " + std::to_string(reg.residual_rms_mm) +
+                        " mm (it absorbs the rigid part of the robot's error)");
+    return dp;
+  };
+  switch (method) {
+    case CompensationMethod::none:
+      return {CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {"no correction"}, {}};
+    case CompensationMethod::distance_idw: {
+      need_base();
+      const std::vector<double> dl = d.distance_errors(o.base);
+      std::vector<std::size_t> order;
+      const RegularGrid3 grid = detect_grid(d, order);
+      std::vector<double> node(order.size());
+      for (std::size_t n = 0; n < order.size(); ++n) node[n] = dl[order[n]];
+      FitResult out{CompensationModel(method, robot, make_distance_idw_field(grid, node, d.base_nominal_mm[o.base], idw)),
+                    std::nullopt, idw_cv(d.nominal_mm, dl, o.idw_power), {}, {}};
+      out.notes.push_back("base point b" + std::to_string(o.base) + " at (" + std::to_string(d.base_nominal_mm[o.base].x()) +
+                          ", " + std::to_string(d.base_nominal_mm[o.base].y()) + ", " +
+                          std::to_string(d.base_nominal_mm[o.base].z()) + ") mm");
+      return out;
+    }
+    case CompensationMethod::position_idw: {
+      FitResult out{CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {}, {}};
+      const auto dp = registered_errors(out);
+      std::vector<std::size_t> order;
+      const RegularGrid3 grid = detect_grid(d, order);
+      std::vector<Eigen::Vector3d> node(order.size());
+      for (std::size_t n = 0; n < order.size(); ++n) node[n] = dp[order[n]];
+      out.model = CompensationModel(method, robot, make_position_idw_field(grid, node, idw));
+      out.cross_validation = idw_cv(d.nominal_mm, dp, o.idw_power);
+      return out;
+    }
+    case CompensationMethod::distance_kriging: {
+      need_base();
+      const std::vector<double> dl = d.distance_errors(o.base);
+      KrigingFieldOptions ko;
+      ko.on_stage = o.on_stage;
+      ko.space = o.space;
+      const Eigen::MatrixXd flat = Eigen::Map<const Eigen::VectorXd>(dl.data(), static_cast<Eigen::Index>(dl.size()));
+      if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
+      ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
+      const KrigingFieldFit fit = fit_distance_kriging_field(samples, dl, d.base_nominal_mm[o.base], ko);
+      FitResult out{CompensationModel(method, robot, fit.field), std::nullopt, kriging_report(fit, o.space), {}, {}};
+      note_factorization(out, fit, *ko.model);
+      out.notes.push_back("variogram model " + ko.model->to_string() + "; base point b" + std::to_string(o.base));
+      return out;
+    }
+    case CompensationMethod::vector_kriging: {
+      FitResult out{CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {}, {}};
+      std::vector<Eigen::Vector3d> dp;
+      if (d.distance_mm.size() >= 3) {
+        // registration-free: the full error vector from distances to >= 3 base points
+        std::vector<std::vector<double>> dl;
+        for (std::size_t k = 0; k < d.distance_mm.size(); ++k) dl.push_back(d.distance_errors(k));
+        double worst = 0.0;
+        for (std::size_t i = 0; i < d.q_deg.size(); ++i) {
+          std::vector<double> di;
+          for (const auto& col : dl) di.push_back(col[i]);
+          const PositionErrorRecovery rec = recover_position_error(d.base_nominal_mm, di, d.nominal_mm[i]);
+          if (!rec.ok) throw InputError(d.source + ": point " + d.id[i] + ": " + rec.message, d.source);
+          worst = std::max(worst, rec.condition_number);
+          dp.push_back(rec.position_error_mm);
+        }
+        out.notes.push_back("error vectors recovered from distances to " + std::to_string(dl.size()) +
+                            " base points (worst condition number " + std::to_string(worst) + ")");
+      } else {
+        dp = registered_errors(out);
+      }
+      KrigingFieldOptions ko;
+      ko.on_stage = o.on_stage;
+      ko.space = o.space;
+      Eigen::MatrixXd flat(static_cast<Eigen::Index>(dp.size()), 3);
+      for (std::size_t i = 0; i < dp.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = dp[i].transpose();
+      if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
+      ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
+      const KrigingFieldFit fit = fit_vector_kriging_field(samples, dp, ko);
+      out.model = CompensationModel(method, robot, fit.field);
+      out.cross_validation = kriging_report(fit, o.space);
+      out.notes.push_back("variogram model " + ko.model->to_string() + " (shared by the 3 components)");
+      note_factorization(out, fit, *ko.model);
+      return out;
+    }
+    case CompensationMethod::kinematic:
+    case CompensationMethod::kinematic_kriging: {
+      const KinematicFit kin = fit_kinematic(robot, d, o);
+      FitResult out{CompensationModel(CompensationMethod::kinematic, kin.model, nullptr), kin.registration,
+                    std::nullopt, kin.notes, kin.warnings};
+      if (method == CompensationMethod::kinematic) return out;
+      if (d.measured_mm.empty())
+        throw InputError(d.source + ": kinematic+kriging needs measured positions (mx,my,mz) for the residuals",
+                         d.source, 0, "mx");
+      std::vector<Eigen::Vector3d> identified(d.q_deg.size());
+      for (std::size_t i = 0; i < identified.size(); ++i) identified[i] = forward_position(kin.model, d.q_deg[i]);
+      // Position calibration found the registration with the model; distance calibration has none.
+      const Registration reg = kin.registration ? *kin.registration : fit_registration(d.measured_mm, identified);
+      if (!kin.registration) out.registration = reg;
+      std::vector<Eigen::Vector3d> residual(identified.size());
+      for (std::size_t i = 0; i < residual.size(); ++i)
+        residual[i] = reg.robot_from_tracker * d.measured_mm[i] - identified[i];
+      KrigingFieldOptions ko;
+      ko.on_stage = o.on_stage;
+      ko.space = o.space;
+      Eigen::MatrixXd flat(static_cast<Eigen::Index>(residual.size()), 3);
+      for (std::size_t i = 0; i < residual.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = residual[i].transpose();
+      if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
+      ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
+      const KrigingFieldFit fit = fit_vector_kriging_field(samples, residual, ko);
+      out.model = CompensationModel(method, kin.model, fit.field);
+      out.cross_validation = kriging_report(fit, o.space);
+      out.notes.push_back("residuals after calibration kriged with " + ko.model->to_string());
+      note_factorization(out, fit, *ko.model);
+      return out;
+    }
+  }
+  throw ArgumentError("fit: unknown method");
+}
+
+}  // namespace errfield::compensation

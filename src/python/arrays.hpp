@@ -1,0 +1,50 @@
+#pragma once
+// NumPy <-> Eigen at the Python boundary: every array argument is checked here so that a bad
+// shape, a non-finite number or a wrong dtype raises a Python exception naming the argument
+// (errfield.ArgumentError, a ValueError, for shapes and values; TypeError for dtypes).
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+namespace errfield::python {
+
+namespace py = pybind11;
+
+/// What an array argument must look like.
+struct ArraySpec {
+  int min_ndim = 1;                ///< 1-D arrays become one column (N,) -> N x 1 ...
+  int max_ndim = 2;
+  Eigen::Index cols = -1;          ///< required number of columns of a 2-D array; -1 = any
+  Eigen::Index min_rows = 1;
+  bool finite = true;              ///< reject NaN and infinities, naming the element
+  bool one_d_is_row = false;       ///< ... unless set: then (C,) is one row 1 x C (a single joint vector)
+};
+
+/// A checked argument: the data (rows x cols, copied into column-major storage for the library)
+/// and whether it came as a 1-D array (results then drop the same axis).
+struct MatrixArg {
+  Eigen::MatrixXd data;
+  bool one_d = false;
+};
+
+MatrixArg matrix_arg(const py::handle& object, const std::string& name, const ArraySpec& spec = {});
+
+/// A 1-D float64 vector argument (e.g. bin edges); `min_size` elements at least.
+std::vector<double> vector_arg(const py::handle& object, const std::string& name, std::size_t min_size = 1,
+                               bool finite = true);
+
+/// The object as a float64 C-ordered array of any shape (integers convert); TypeError naming
+/// `name` for other dtypes. For arguments whose shape matrix_arg cannot describe (N x 4 x 4 poses).
+py::array_t<double, py::array::c_style> float_array(const py::handle& object, const std::string& name);
+
+/// Copies into new NumPy arrays (C order). A matrix with `squeeze_cols` and one column becomes 1-D.
+py::array_t<double> to_numpy(const Eigen::MatrixXd& m, bool squeeze_cols = false);
+py::array_t<double> to_numpy(const std::vector<double>& v);
+py::array_t<std::uint64_t> to_numpy(const std::vector<std::uint64_t>& v);
+
+}  // namespace errfield::python

@@ -1,0 +1,510 @@
+// errfield.Kriging, errfield.ScatteredIdw and errfield.GridIdw, with cross-validation as
+// `errfield cv` does it (leave-one-out in closed form for dense/local kriging, else the folds of
+// errfield::cross_validate).
+
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include "errfield/cross_validation.hpp"
+#include "errfield/error.hpp"
+#include "errfield/grid_idw.hpp"
+#include "errfield/kriging.hpp"
+#include "errfield/scattered_idw.hpp"
+#include "python/arrays.hpp"
+#include "python/bindings.hpp"
+#include "python/options.hpp"
+
+namespace errfield::python {
+
+namespace {
+
+template <class V>
+std::vector<V> rows_as_values(const Eigen::MatrixXd& m) {
+  std::vector<V> v(static_cast<std::size_t>(m.rows()));
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    if constexpr (std::is_same_v<V, double>) v[static_cast<std::size_t>(i)] = m(i, 0);
+    else v[static_cast<std::size_t>(i)] = m.row(i).transpose();
+  }
+  return v;
+}
+
+template <class V>
+Eigen::MatrixXd values_as_rows(const std::vector<V>& v) {
+  constexpr int C = ValueTraits<V>::kComponents;
+  Eigen::MatrixXd m(static_cast<Eigen::Index>(v.size()), C);
+  for (std::size_t i = 0; i < v.size(); ++i)
+    for (int c = 0; c < C; ++c) m(static_cast<Eigen::Index>(i), c) = ValueTraits<V>::component(std::as_const(v[i]), c);
+  return m;
+}
+
+std::vector<Eigen::VectorXd> rows_as_points(const Eigen::MatrixXd& m) {
+  std::vector<Eigen::VectorXd> p(static_cast<std::size_t>(m.rows()));
+  for (Eigen::Index i = 0; i < m.rows(); ++i) p[static_cast<std::size_t>(i)] = m.row(i).transpose();
+  return p;
+}
+
+/// Samples checked once for every estimator: coords (N, D), values (N,) or (N, K), K in 1..3.
+struct Samples {
+  Eigen::MatrixXd x, z;
+  bool scalar = true;  // values came 1-D: predictions are 1-D too
+};
+
+Samples samples_arg(const py::object& coords, const py::object& values, Eigen::Index dims = -1) {
+  Samples s;
+  s.x = matrix_arg(coords, "coords", ArraySpec{1, 2, dims, 1}).data;
+  const MatrixArg z = matrix_arg(values, "values", ArraySpec{1, 2, -1, 1});
+  if (z.data.rows() != s.x.rows())
+    throw ArgumentError("values: " + std::to_string(z.data.rows()) + " rows but coords has " +
+                        std::to_string(s.x.rows()) + "; expected one value (row) per location");
+  if (z.data.cols() < 1 || z.data.cols() > 3)
+    throw ArgumentError("values: " + std::to_string(z.data.cols()) + " columns; expected 1, 2 or 3 value components");
+  s.z = z.data;
+  s.scalar = z.one_d;
+  return s;
+}
+
+Eigen::MatrixXd targets_arg(const py::object& targets, Eigen::Index dims) {
+  return matrix_arg(targets, "targets", ArraySpec{1, 2, dims, 0}).data;
+}
+
+/// Cross-validation output, with the summary `errfield cv` prints.
+struct PyCrossValidation {
+  py::object fold, prediction, residual, variance;
+  std::size_t samples = 0, predicted = 0;
+  py::object mean_error;
+  double mean_abs_error = 0, max_abs_error = 0, rms_error = 0;
+  py::object mean_z, mean_squared_z;
+  std::size_t max_abs_index = 0;
+};
+
+PyCrossValidation make_cv(const Eigen::MatrixXd& observed, const std::vector<std::size_t>& fold,
+                          const Eigen::MatrixXd& pred, const std::vector<double>& variance, bool scalar) {
+  const Eigen::MatrixXd residual = observed - pred;
+  const CrossValidationSummary s = summarize_residuals(residual, variance);
+  PyCrossValidation cv;
+  py::array_t<std::int64_t> f(static_cast<py::ssize_t>(fold.size()));
+  for (std::size_t i = 0; i < fold.size(); ++i) f.mutable_data()[i] = static_cast<std::int64_t>(fold[i]);
+  cv.fold = f;
+  cv.prediction = to_numpy(pred, scalar);
+  cv.residual = to_numpy(residual, scalar);
+  cv.variance = variance.empty() ? py::object(py::none()) : py::object(to_numpy(variance));
+  cv.samples = s.samples;
+  cv.predicted = s.predicted;
+  cv.mean_error = to_numpy(s.mean_error);
+  cv.mean_abs_error = s.mean_abs_error;
+  cv.max_abs_error = s.max_abs_error;
+  cv.max_abs_index = s.max_abs_index;
+  cv.rms_error = s.rms_error;
+  cv.mean_z = s.mean_z ? py::object(py::float_(*s.mean_z)) : py::object(py::none());
+  cv.mean_squared_z = s.mean_squared_z ? py::object(py::float_(*s.mean_squared_z)) : py::object(py::none());
+  return cv;
+}
+
+std::size_t folds_arg(const py::object& folds) {
+  if (py::isinstance<py::str>(folds)) {
+    if (folds.cast<std::string>() != "loo") throw ArgumentError("folds: expected 'loo' or a number of folds >= 2");
+    return 0;
+  }
+  const long f = folds.cast<long>();
+  if (f < 0) throw ArgumentError("folds: " + std::to_string(f) + "; expected 'loo' (or 0) or a number >= 2");
+  return static_cast<std::size_t>(f);
+}
+
+// ---- Kriging ------------------------------------------------------------------------------------
+
+struct KrigingPrediction_ {
+  Eigen::MatrixXd mean;
+  std::vector<double> variance;
+  KrigingStatus status = KrigingStatus::Ok;
+  std::string message;
+  std::size_t failed = 0;
+};
+
+struct CvRaw {
+  std::vector<std::size_t> fold;
+  Eigen::MatrixXd pred;
+  std::vector<double> variance;
+};
+
+struct KrigingBase {
+  virtual ~KrigingBase() = default;
+  virtual const KrigingReport& report() const = 0;
+  virtual KrigingPrediction_ predict(const Eigen::MatrixXd& targets) const = 0;
+  virtual CvRaw cross_validate(std::size_t folds, std::uint64_t seed) const = 0;
+};
+
+template <class V>
+struct KrigingImpl final : KrigingBase {
+  std::vector<Eigen::VectorXd> points;
+  std::vector<V> values;
+  VariogramModel model;
+  KrigingOptions options;
+  std::unique_ptr<Kriging<Eigen::VectorXd, V>> kriging;
+
+  KrigingImpl(const Samples& s, const VariogramModel& m, const KrigingOptions& o, const Eigen::VectorXd& meas)
+      : points(rows_as_points(s.x)), values(rows_as_values<V>(s.z)), model(m), options(o) {
+    std::span<const double> mv(meas.data(), static_cast<std::size_t>(meas.size()));
+    kriging = std::make_unique<Kriging<Eigen::VectorXd, V>>(points, values, model, options, EuclideanMetric{}, mv);
+  }
+  const KrigingReport& report() const override { return kriging->report(); }
+  KrigingPrediction_ predict(const Eigen::MatrixXd& targets) const override {
+    const auto p = kriging->predict(rows_as_points(targets));
+    KrigingPrediction_ out;
+    out.mean = values_as_rows(p.mean);
+    out.variance = p.variance;
+    out.status = p.status;
+    out.message = p.message;
+    out.failed = p.failed_targets;
+    return out;
+  }
+  CvRaw cross_validate(std::size_t folds, std::uint64_t seed) const override {
+    CvRaw out;
+    if (folds == 0 && options.backend != KrigingBackend::Sparse) {
+      if (kriging->report().merged_duplicates)
+        throw InputError("cross_validate: duplicate samples; remove them first");
+      const auto cv = kriging->leave_one_out();
+      if (cv.prediction.size() != values.size())
+        throw Error("kriging failed: " + std::string(kriging_status_name(cv.status)) + ": " + cv.message);
+      out.fold.resize(values.size());
+      for (std::size_t i = 0; i < values.size(); ++i) out.fold[i] = i;
+      out.pred = values_as_rows(cv.prediction);
+      out.variance = cv.variance;
+      return out;
+    }
+    KrigingEstimator<Eigen::VectorXd, V> estimator{model, options, {}};
+    CrossValidationOptions cvo;
+    cvo.folds = folds;
+    cvo.seed = seed;
+    const auto r = errfield::cross_validate(estimator, std::span<const Eigen::VectorXd>(points),
+                                            std::span<const V>(values), cvo);
+    out.fold = r.fold;
+    out.pred = values_as_rows(r.predicted);
+    out.variance = r.variance;
+    return out;
+  }
+};
+
+class PyKriging {
+ public:
+  PyKriging(const py::object& coords, const py::object& values, const py::object& model_arg, const std::string& kind,
+            const std::string& backend, const py::object& mean, int drift_order, const std::string& nugget,
+            std::size_t neighbors, double radius, const py::object& measurement_variance,
+            const std::string& duplicates, double duplicate_distance, int threads)
+      : samples_(samples_arg(coords, values)) {
+    const VariogramModel model = py::isinstance<py::str>(model_arg)
+                                     ? VariogramModel::parse(model_arg.cast<std::string>())
+                                     : model_arg.cast<VariogramModel>();
+    KrigingOptions o;
+    const KindChoice k = kriging_kind_arg(kind, drift_order);
+    o.kind = k.kind;
+    o.drift_order = k.drift_order;
+    if (o.kind == KrigingKind::Simple) {
+      if (mean.is_none()) throw ArgumentError("mean: kind='simple' needs the known mean (a number, or one per component)");
+      o.simple_mean = py::isinstance<py::float_>(mean) || py::isinstance<py::int_>(mean)
+                          ? std::vector<double>{mean.cast<double>()}
+                          : vector_arg(mean, "mean");
+    } else if (!mean.is_none()) {
+      throw ArgumentError("mean: applies to kind='simple' only (ordinary and universal kriging estimate the mean)");
+    }
+    o.backend = kriging_backend_from_name(backend);
+    o.neighbors = neighbors;
+    o.radius = radius;
+    if (o.backend == KrigingBackend::Local && neighbors == 0 && !std::isfinite(radius))
+      throw ArgumentError("backend='local' needs neighbors=K and/or a finite radius=R");
+    if (nugget == "micro") o.nugget = NuggetTreatment::MicroScale;
+    else if (nugget == "error") o.nugget = NuggetTreatment::MeasurementError;
+    else throw ArgumentError("nugget: '" + nugget + "'; expected 'micro' or 'error'");
+    if (duplicates == "error") o.duplicates = DuplicatePolicy::Error;
+    else if (duplicates == "average") o.duplicates = DuplicatePolicy::Average;
+    else throw ArgumentError("duplicates: '" + duplicates + "'; expected 'error' or 'average'");
+    o.duplicate_distance = duplicate_distance;
+    o.threads = threads;
+    o.validate();
+    Eigen::VectorXd meas;
+    if (!measurement_variance.is_none()) {
+      const auto mv = vector_arg(measurement_variance, "measurement_variance");
+      if (mv.size() != static_cast<std::size_t>(samples_.x.rows()))
+        throw ArgumentError("measurement_variance: " + std::to_string(mv.size()) + " values for " +
+                            std::to_string(samples_.x.rows()) + " samples; expected one per sample");
+      meas = Eigen::Map<const Eigen::VectorXd>(mv.data(), static_cast<Eigen::Index>(mv.size()));
+    }
+    {
+      py::gil_scoped_release release;
+      impl_ = with_components(samples_.z.cols(), "values", [&]<class V>() -> std::shared_ptr<KrigingBase> {
+        return std::make_shared<KrigingImpl<V>>(samples_, model, o, meas);
+      });
+    }
+    model_ = model;
+    const auto& rep = impl_->report();
+    if (!rep.usable())
+      throw Error("kriging failed: " + std::string(kriging_status_name(rep.status)) + ": " + rep.message);
+    if (!rep.message.empty()) {
+      const std::string w = std::string(kriging_status_name(rep.status)) + ": " + rep.message;
+      if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
+    }
+  }
+
+  py::tuple predict(const py::object& targets) const {
+    const Eigen::MatrixXd t = targets_arg(targets, samples_.x.cols());
+    KrigingPrediction_ p;
+    {
+      py::gil_scoped_release release;
+      p = impl_->predict(t);
+    }
+    if (p.failed) {
+      const std::string w = std::to_string(p.failed) + " of " + std::to_string(t.rows()) +
+                            " targets could not be kriged (" + std::string(kriging_status_name(p.status)) +
+                            "); their predictions are NaN";
+      if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
+    }
+    return py::make_tuple(to_numpy(p.mean, samples_.scalar), to_numpy(p.variance));
+  }
+
+  PyCrossValidation cross_validate(const py::object& folds, std::uint64_t seed) const {
+    const std::size_t k = folds_arg(folds);
+    CvRaw r;
+    {
+      py::gil_scoped_release release;
+      r = impl_->cross_validate(k, seed);
+    }
+    return make_cv(samples_.z, r.fold, r.pred, r.variance, samples_.scalar);
+  }
+
+  py::dict report() const {
+    const auto& r = impl_->report();
+    py::dict d;
+    d["status"] = std::string(kriging_status_name(r.status));
+    d["message"] = r.message;
+    d["condition_number"] = r.condition_number;
+    d["jitter"] = r.jitter;
+    d["samples_used"] = r.samples_used;
+    d["merged_duplicates"] = r.merged_duplicates;
+    d["drift_terms"] = r.drift_terms;
+    return d;
+  }
+  const VariogramModel& model() const { return model_; }
+
+ private:
+  Samples samples_;
+  VariogramModel model_;
+  std::shared_ptr<const KrigingBase> impl_;
+};
+
+// ---- IDW ----------------------------------------------------------------------------------------
+
+struct IdwBase {
+  virtual ~IdwBase() = default;
+  virtual Eigen::MatrixXd predict(const Eigen::MatrixXd& targets) const = 0;
+  virtual CvRaw cross_validate(std::size_t folds, std::uint64_t seed) const = 0;
+};
+
+template <class V>
+struct ScatteredImpl final : IdwBase {
+  std::vector<Eigen::VectorXd> points;
+  std::vector<V> values;
+  ScatteredIdwOptions options;
+  ScatteredIdw<Eigen::VectorXd, V> idw;
+  ScatteredImpl(const Samples& s, const ScatteredIdwOptions& o)
+      : points(rows_as_points(s.x)), values(rows_as_values<V>(s.z)), options(o), idw(points, values, o) {}
+  Eigen::MatrixXd predict(const Eigen::MatrixXd& targets) const override {
+    const auto t = rows_as_points(targets);
+    return values_as_rows(idw.predict(t));
+  }
+  CvRaw cross_validate(std::size_t folds, std::uint64_t seed) const override {
+    ScatteredIdwEstimator<Eigen::VectorXd, V> estimator{options, {}};
+    CrossValidationOptions cvo;
+    cvo.folds = folds;
+    cvo.seed = seed;
+    const auto r = errfield::cross_validate(estimator, std::span<const Eigen::VectorXd>(points),
+                                            std::span<const V>(values), cvo);
+    CvRaw out;
+    out.fold = r.fold;
+    out.pred = values_as_rows(r.predicted);
+    return out;
+  }
+};
+
+class PyScatteredIdw {
+ public:
+  PyScatteredIdw(const py::object& coords, const py::object& values, double power, std::size_t neighbors,
+                 double radius, double exact_distance, int threads)
+      : samples_(samples_arg(coords, values)) {
+    ScatteredIdwOptions o;
+    o.power = power;
+    o.neighbors = neighbors;
+    o.radius = radius;
+    o.exact_distance = exact_distance;
+    o.threads = threads;
+    o.validate();
+    py::gil_scoped_release release;
+    impl_ = with_components(samples_.z.cols(), "values", [&]<class V>() -> std::shared_ptr<IdwBase> {
+      return std::make_shared<ScatteredImpl<V>>(samples_, o);
+    });
+  }
+  py::object predict(const py::object& targets) const {
+    const Eigen::MatrixXd t = targets_arg(targets, samples_.x.cols());
+    Eigen::MatrixXd out;
+    {
+      py::gil_scoped_release release;
+      out = impl_->predict(t);
+    }
+    return to_numpy(out, samples_.scalar);
+  }
+  PyCrossValidation cross_validate(const py::object& folds, std::uint64_t seed) const {
+    const std::size_t k = folds_arg(folds);
+    CvRaw r;
+    {
+      py::gil_scoped_release release;
+      r = impl_->cross_validate(k, seed);
+    }
+    return make_cv(samples_.z, r.fold, r.pred, r.variance, samples_.scalar);
+  }
+
+ private:
+  Samples samples_;
+  std::shared_ptr<const IdwBase> impl_;
+};
+
+struct GridBase {
+  virtual ~GridBase() = default;
+  virtual const RegularGrid3& grid() const = 0;
+  virtual Eigen::MatrixXd predict(const Eigen::MatrixXd& targets, std::vector<GridIdwStatus>& status) const = 0;
+};
+
+template <class V>
+struct GridImpl final : GridBase {
+  GridIdw<V> idw;
+  GridImpl(const Samples& s, const GridIdwOptions& o) : idw(GridIdw<V>::from_samples(s.x, rows_as_values<V>(s.z), o)) {}
+  const RegularGrid3& grid() const override { return idw.grid(); }
+  Eigen::MatrixXd predict(const Eigen::MatrixXd& targets, std::vector<GridIdwStatus>& status) const override {
+    if (!idw.options().clamp) return values_as_rows(idw.predict(targets));  // throws OutsideGridError
+    std::vector<V> out(static_cast<std::size_t>(targets.rows()), ValueTraits<V>::zero());
+    status.resize(out.size());
+    idw.predict_with_status(targets, out, status);
+    return values_as_rows(out);
+  }
+};
+
+class PyGridIdw {
+ public:
+  PyGridIdw(const py::object& coords, const py::object& values, double power, bool clamp, int threads)
+      : samples_(samples_arg(coords, values, 3)) {
+    GridIdwOptions o;
+    o.power = power;
+    o.clamp = clamp;
+    o.threads = threads;
+    o.validate();
+    py::gil_scoped_release release;
+    impl_ = with_components(samples_.z.cols(), "values", [&]<class V>() -> std::shared_ptr<GridBase> {
+      return std::make_shared<GridImpl<V>>(samples_, o);
+    });
+  }
+  py::object predict(const py::object& targets) const {
+    const Eigen::MatrixXd t = targets_arg(targets, 3);
+    Eigen::MatrixXd out;
+    std::vector<GridIdwStatus> status;
+    {
+      py::gil_scoped_release release;
+      out = impl_->predict(t, status);
+    }
+    return to_numpy(out, samples_.scalar);
+  }
+  py::dict grid() const {
+    const auto& g = impl_->grid();
+    py::dict d;
+    d["origin"] = to_numpy(Eigen::MatrixXd(g.origin().transpose()), false)[py::int_(0)];
+    d["step"] = to_numpy(Eigen::MatrixXd(g.step().transpose()), false)[py::int_(0)];
+    d["counts"] = py::make_tuple(g.counts()[0], g.counts()[1], g.counts()[2]);
+    d["description"] = g.describe();
+    return d;
+  }
+
+ private:
+  Samples samples_;
+  std::shared_ptr<const GridBase> impl_;
+};
+
+}  // namespace
+
+void bind_interpolation(py::module_& m) {
+  py::class_<PyCrossValidation>(m, "CrossValidation",
+                                "Per-sample cross-validation results and the summary `errfield cv` prints. "
+                                "residual = observed - predicted (value unit, e.g. mm).")
+      .def_readonly("fold", &PyCrossValidation::fold, "fold of each sample (leave-one-out: its own index)")
+      .def_readonly("prediction", &PyCrossValidation::prediction, "(N,) or (N, K) held-out predictions (NaN: none)")
+      .def_readonly("residual", &PyCrossValidation::residual, "observed - predicted, shaped as prediction")
+      .def_readonly("variance", &PyCrossValidation::variance, "(N,) prediction variances (value unit^2) or None")
+      .def_readonly("samples", &PyCrossValidation::samples)
+      .def_readonly("predicted", &PyCrossValidation::predicted, "samples that got a prediction")
+      .def_readonly("mean_error", &PyCrossValidation::mean_error, "(K,) mean residual per component")
+      .def_readonly("mean_abs_error", &PyCrossValidation::mean_abs_error, "mean |residual|")
+      .def_readonly("max_abs_error", &PyCrossValidation::max_abs_error, "max |residual|")
+      .def_readonly("max_abs_index", &PyCrossValidation::max_abs_index, "sample with the largest |residual|")
+      .def_readonly("rms_error", &PyCrossValidation::rms_error, "sqrt(mean |residual|^2)")
+      .def_readonly("mean_z", &PyCrossValidation::mean_z, "mean residual/sqrt(variance), or None")
+      .def_readonly("mean_squared_z", &PyCrossValidation::mean_squared_z, "mean residual^2/variance (MSDR), or None");
+
+  py::class_<PyKriging>(m, "Kriging",
+                        "Simple, ordinary or universal kriging (best linear unbiased prediction with its variance), "
+                        "as `errfield interpolate --method kriging`. Construction factors the covariance once "
+                        "(dense, sparse); predict() may then be called many times. docs/kriging.md.")
+      .def(py::init<const py::object&, const py::object&, const py::object&, const std::string&, const std::string&,
+                    const py::object&, int, const std::string&, std::size_t, double, const py::object&,
+                    const std::string&, double, int>(),
+           py::arg("coords"), py::arg("values"), py::arg("model"), py::kw_only(), py::arg("kind") = "ordinary",
+           py::arg("backend") = "dense", py::arg("mean") = py::none(), py::arg("drift_order") = 1,
+           py::arg("nugget") = "micro", py::arg("neighbors") = 0,
+           py::arg("radius") = std::numeric_limits<double>::infinity(), py::arg("measurement_variance") = py::none(),
+           py::arg("duplicates") = "error", py::arg("duplicate_distance") = 0.0, py::arg("threads") = 0,
+           "coords: (N, D) sample locations (mm, deg, ...). values: (N,) or (N, K), K <= 3 (mm).\n"
+           "model: VariogramModel or its text (sill mm^2, range in the coordinates' unit).\n"
+           "kind: 'simple' (needs mean) | 'ordinary' | 'universal' (drift_order 0, 1, 2) | 'universal1' | 'universal2'.\n"
+           "backend: 'dense' | 'local' (neighbors=K and/or radius=R) | 'sparse' (sph/wen + nugget only).\n"
+           "nugget: 'micro' (exact at the data, gstat's krige) | 'error' (measurement error, smoothing).\n"
+           "measurement_variance: (N,) per-sample variances (value unit^2) or None.\n"
+           "duplicates: 'error' | 'average' samples closer than duplicate_distance.\n"
+           "Raises errfield.Error when the covariance cannot be factored; warns (RuntimeWarning) when ill-conditioned.")
+      .def("predict", &PyKriging::predict, py::arg("targets"),
+           "Kriging mean and variance at targets (M, D): returns (mean, var), mean (M,) or (M, K) in the value unit,\n"
+           "var (M,) in value unit^2 (shared by all components). NaN (with a RuntimeWarning) where a target could not\n"
+           "be kriged. Releases the GIL.")
+      .def("cross_validate", &PyKriging::cross_validate, py::arg("folds") = "loo", py::arg("seed") = 1,
+           "Cross-validation as `errfield cv --method kriging`: folds='loo' (closed form for dense, one local solve\n"
+           "per sample for local; sparse uses folds) or k >= 2 folds shuffled by seed. Returns CrossValidation.")
+      .def_property_readonly("report", &PyKriging::report,
+                             "dict: status, message, condition_number, jitter, samples_used, merged_duplicates, drift_terms")
+      .def_property_readonly("model", &PyKriging::model);
+
+  py::class_<PyScatteredIdw>(m, "ScatteredIdw",
+                             "Inverse-distance weighting over scattered samples, as `errfield interpolate --method idw`: "
+                             "v(x) = sum w_i v_i / sum w_i with w_i = 1/d^power over the k nearest (neighbors) and/or "
+                             "within radius. docs/idw.md.")
+      .def(py::init<const py::object&, const py::object&, double, std::size_t, double, double, int>(),
+           py::arg("coords"), py::arg("values"), py::kw_only(), py::arg("power") = 2.0, py::arg("neighbors") = 0,
+           py::arg("radius") = std::numeric_limits<double>::infinity(), py::arg("exact_distance") = 0.0,
+           py::arg("threads") = 0,
+           "coords: (N, D); values: (N,) or (N, K), K <= 3. neighbors: 0 = all. radius in the coordinates' unit.")
+      .def("predict", &PyScatteredIdw::predict, py::arg("targets"),
+           "Values at targets (M, D): (M,) or (M, K); NaN where no sample lies within radius. Releases the GIL.")
+      .def("cross_validate", &PyScatteredIdw::cross_validate, py::arg("folds") = "loo", py::arg("seed") = 1,
+           "Cross-validation as `errfield cv --method idw`. Returns CrossValidation (variance None).");
+
+  py::class_<PyGridIdw>(m, "GridIdw",
+                        "The paper's IDW on a complete regular 3-D grid (8 vertices of the target's cell, w = 1/d^power), "
+                        "as `errfield interpolate --method idw-grid`. docs/idw.md.")
+      .def(py::init<const py::object&, const py::object&, double, bool, int>(), py::arg("coords"), py::arg("values"),
+           py::kw_only(), py::arg("power") = 1.0, py::arg("clamp") = false, py::arg("threads") = 0,
+           "coords: (N, 3) grid nodes in any order (mm), forming a complete regular grid; values: (N,) or (N, K).")
+      .def("predict", &PyGridIdw::predict, py::arg("targets"),
+           "Values at targets (M, 3). Raises OutsideGridError for a target outside the grid unless clamp=True.")
+      .def_property_readonly("grid", &PyGridIdw::grid, "dict: origin, step (mm), counts, description");
+}
+
+}  // namespace errfield::python

@@ -1,0 +1,359 @@
+// errfield.variogram, errfield.VariogramModel, errfield.fit_variogram and the likelihood fits.
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include "errfield/empirical_variogram.hpp"
+#include "errfield/error.hpp"
+#include "errfield/kriging_likelihood.hpp"
+#include "errfield/variogram_fit.hpp"
+#include "errfield/variogram_model.hpp"
+#include "python/arrays.hpp"
+#include "python/bindings.hpp"
+#include "python/options.hpp"
+
+namespace errfield::python {
+
+namespace {
+
+/// The result of errfield.variogram: the CLI's CSV columns as NumPy arrays.
+struct PyVariogram {
+  py::object lag_lo, lag_hi, lag_mean, gamma, pairs, component_gamma;
+  std::string estimator, convention;
+  double pair_fraction = 1.0;
+};
+
+PyVariogram run_variogram(const py::object& coords, const py::object& values, const py::object& bins,
+                          const std::string& estimator, const std::string& convention, double pair_fraction,
+                          std::uint64_t seed, int threads) {
+  const MatrixArg x = matrix_arg(coords, "coords", ArraySpec{1, 2, -1, 2});
+  const MatrixArg z = matrix_arg(values, "values", ArraySpec{1, 2, -1, 1});
+  if (z.data.rows() != x.data.rows())
+    throw ArgumentError("values: " + std::to_string(z.data.rows()) + " rows but coords has " +
+                        std::to_string(x.data.rows()) + "; expected one value (row) per location");
+  const LagBins lag_bins = LagBins::from_edges(vector_arg(bins, "bins", 2));
+  EmpiricalVariogramOptions options;
+  options.estimator = estimator_from_name(estimator);
+  options.convention = convention_from_name(convention);
+  options.pair_fraction = pair_fraction;
+  options.seed = seed;
+  options.threads = threads;
+  options.validate();
+  EmpiricalVariogram v;
+  {
+    py::gil_scoped_release release;
+    v = empirical_variogram(x.data, z.data, lag_bins, options);
+  }
+  const std::size_t n = v.bins.size();
+  std::vector<double> lo(n), hi(n), mean(n), gamma(n);
+  std::vector<std::uint64_t> pairs(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    lo[k] = v.bins[k].lag_lo;
+    hi[k] = v.bins[k].lag_hi;
+    mean[k] = v.bins[k].lag_mean;
+    gamma[k] = v.bins[k].gamma;
+    pairs[k] = v.bins[k].pairs;
+  }
+  PyVariogram out;
+  out.lag_lo = to_numpy(lo);
+  out.lag_hi = to_numpy(hi);
+  out.lag_mean = to_numpy(mean);
+  out.gamma = to_numpy(gamma);
+  out.pairs = to_numpy(pairs);
+  out.component_gamma = to_numpy(v.component_gamma);
+  out.estimator = std::string(estimator_name(v.estimator));
+  out.convention = std::string(convention_name(v.convention));
+  out.pair_fraction = v.pair_fraction;
+  return out;
+}
+
+/// Lags h as a scalar or an array of any shape; negative or NaN lags are an ArgumentError.
+py::object evaluate(const py::object& h, const std::string& name, const std::function<double(double)>& f) {
+  auto check = [&](double x) {
+    if (!(x >= 0.0))
+      throw ArgumentError(name + ": lag " + (std::isnan(x) ? std::string("nan") : std::to_string(x)) +
+                          "; expected lags >= 0");
+    return f(x);
+  };
+  if (py::isinstance<py::float_>(h) || py::isinstance<py::int_>(h)) return py::float_(check(h.cast<double>()));
+  py::array any = py::array::ensure(h);
+  if (!any || (any.dtype().kind() != 'f' && any.dtype().kind() != 'i' && any.dtype().kind() != 'u'))
+    throw py::type_error(name + ": expected a number or an array of numbers (lags)");
+  auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(any);
+  py::array_t<double> out(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim()));
+  const double* in = a.data();
+  double* w = out.mutable_data();
+  for (py::ssize_t i = 0; i < a.size(); ++i) w[i] = check(in[i]);
+  return out;
+}
+
+py::list components_list(const VariogramModel& model) {
+  py::list out;
+  for (const auto& c : model.components()) {
+    py::dict d;
+    d["kind"] = std::string(model_kind_name(c.kind));
+    d["sill"] = c.sill;
+    if (c.kind == ModelKind::Power) d["exponent"] = c.range;
+    else if (c.kind != ModelKind::Nugget && c.kind != ModelKind::Linear) d["range"] = c.range;
+    if (c.kind == ModelKind::Matern) d["nu"] = c.nu;
+    out.append(d);
+  }
+  return out;
+}
+
+/// The structure to fit: a kind name ("sph"; "mat" needs nu) or a model text whose non-nugget
+/// components (with their parameters as a starting point) are fitted.
+std::vector<ModelComponent> structure_arg(const std::string& model, std::optional<double> nu) {
+  std::vector<ModelComponent> s;
+  if (model.find('(') != std::string::npos) {
+    const VariogramModel parsed = VariogramModel::parse(model);  // named: components() must outlive the loop
+    for (const auto& c : parsed.components())
+      if (c.kind != ModelKind::Nugget) s.push_back(c);
+    if (s.empty()) throw ArgumentError("model: '" + model + "' has no component other than a nugget to fit");
+    if (nu) throw ArgumentError("nu: give the Matérn smoothness inside the model text, e.g. mat(1,100,1.5)");
+    return s;
+  }
+  ModelComponent c;
+  c.kind = model_kind_from_name(model);
+  if (c.kind == ModelKind::Nugget) throw ArgumentError("model: 'nug' alone has nothing to fit; use nugget= for the nugget");
+  if (c.kind == ModelKind::Matern && !nu) throw ArgumentError("nu: model 'mat' needs nu (the Matérn smoothness, e.g. 1.5)");
+  if (nu && !(*nu > 0.0)) throw ArgumentError("nu: " + std::to_string(*nu) + "; expected > 0");
+  if (nu) c.nu = *nu;
+  s.push_back(c);
+  return s;
+}
+
+const char* fit_status_name(FitStatus s) {
+  return s == FitStatus::Converged ? "converged" : s == FitStatus::MaxEvaluations ? "max_evaluations" : "failed";
+}
+
+py::dict fit_variogram_py(const py::object& variogram, const std::string& model, const std::string& weights,
+                          const py::object& nugget, std::optional<double> nu, double range_max, int starts) {
+  for (const char* attr : {"lag_mean", "gamma", "pairs"})
+    if (!py::hasattr(variogram, attr))
+      throw py::type_error(std::string("variogram: has no attribute '") + attr +
+                           "'; expected the result of errfield.variogram (or anything with lag_mean, gamma, pairs)");
+  const auto lag = vector_arg(variogram.attr("lag_mean"), "variogram.lag_mean", 1, false);
+  const auto gamma = vector_arg(variogram.attr("gamma"), "variogram.gamma", 1, false);
+  const auto pairs = vector_arg(variogram.attr("pairs"), "variogram.pairs", 1, true);
+  if (gamma.size() != lag.size() || pairs.size() != lag.size())
+    throw ArgumentError("variogram: lag_mean, gamma and pairs have " + std::to_string(lag.size()) + ", " +
+                        std::to_string(gamma.size()) + " and " + std::to_string(pairs.size()) +
+                        " elements; expected one per bin");
+  // Empty bins are skipped as `errfield fit-variogram` skips them in the CSV.
+  std::vector<double> h, g;
+  std::vector<std::uint64_t> n;
+  for (std::size_t k = 0; k < lag.size(); ++k) {
+    if (pairs[k] < 0.0 || pairs[k] != std::floor(pairs[k]))
+      throw ArgumentError("variogram.pairs[" + std::to_string(k) + "] is " + std::to_string(pairs[k]) +
+                          "; expected a pair count (an integer >= 0)");
+    if (pairs[k] == 0.0) continue;
+    if (!std::isfinite(lag[k]) || !std::isfinite(gamma[k]))
+      throw ArgumentError("variogram: bin " + std::to_string(k) + " has pairs but a non-finite lag_mean or gamma");
+    h.push_back(lag[k]);
+    g.push_back(gamma[k]);
+    n.push_back(static_cast<std::uint64_t>(pairs[k]));
+  }
+  if (h.empty()) throw InputError("variogram: no bin with pairs > 0; nothing to fit");
+  VariogramFitOptions o;
+  o.weighting = weighting_from_name(weights);
+  if (nugget.is_none()) {
+    o.nugget = NuggetMode::None;
+  } else if (py::isinstance<py::str>(nugget)) {
+    const auto text = nugget.cast<std::string>();
+    if (text == "free") o.nugget = NuggetMode::Free;
+    else if (text == "none") o.nugget = NuggetMode::None;
+    else throw ArgumentError("nugget: '" + text + "'; expected 'free', 'none' (or None) or a fixed value >= 0 (mm^2)");
+  } else {
+    o.nugget = NuggetMode::Fixed;
+    o.nugget_value = nugget.cast<double>();
+    if (!std::isfinite(o.nugget_value) || o.nugget_value < 0.0)
+      throw ArgumentError("nugget: " + std::to_string(o.nugget_value) + "; expected a fixed value >= 0");
+  }
+  o.range_max = range_max;
+  o.starts = starts;
+  o.validate();
+  const auto structure = structure_arg(model, nu);
+  VariogramFitResult r;
+  {
+    py::gil_scoped_release release;
+    r = fit_variogram(h, g, n, structure, o);
+  }
+  if (r.status == FitStatus::Failed) throw Error("fit_variogram: the optimizer failed: " + r.message);
+  py::dict d;
+  d["model"] = r.model;
+  d["weighted_sse"] = r.weighted_sse;
+  d["status"] = fit_status_name(r.status);
+  d["message"] = r.message;
+  d["evaluations"] = r.evaluations;
+  d["bins_used"] = r.bins_used;
+  return d;
+}
+
+LikelihoodFitOptions likelihood_options(const std::string& method, const std::string& kind, int drift_order,
+                                        double mean, bool nugget) {
+  LikelihoodFitOptions o;
+  if (method == "reml") o.restricted = true;
+  else if (method == "ml") o.restricted = false;
+  else throw ArgumentError("method: '" + method + "'; expected 'reml' or 'ml'");
+  const KindChoice k = kriging_kind_arg(kind, drift_order);
+  o.kind = k.kind;
+  o.drift_order = k.drift_order;
+  o.simple_mean = mean;
+  o.fit_nugget = nugget;
+  o.validate();
+  return o;
+}
+
+struct ScalarSamples {
+  Eigen::MatrixXd x;
+  Eigen::VectorXd z;
+};
+
+ScalarSamples scalar_samples(const py::object& coords, const py::object& values) {
+  ScalarSamples s;
+  s.x = matrix_arg(coords, "coords", ArraySpec{1, 2, -1, 2}).data;
+  const MatrixArg z = matrix_arg(values, "values", ArraySpec{1, 2, 1, 1});
+  if (z.data.rows() != s.x.rows())
+    throw ArgumentError("values: " + std::to_string(z.data.rows()) + " values but coords has " +
+                        std::to_string(s.x.rows()) + " rows; expected one per location");
+  s.z = z.data.col(0);
+  return s;
+}
+
+}  // namespace
+
+void bind_variogram(py::module_& m) {
+  py::class_<PyVariogram>(m, "EmpiricalVariogram",
+                          "Empirical semivariogram, one entry per lag bin: the columns of the CLI's "
+                          "`errfield variogram` CSV as NumPy arrays. Empty bins have pairs 0 and NaN "
+                          "lag_mean and gamma.")
+      .def_readonly("lag_lo", &PyVariogram::lag_lo, "lower bin edges (lag unit: mm, deg, ...)")
+      .def_readonly("lag_hi", &PyVariogram::lag_hi, "upper bin edges (lag unit)")
+      .def_readonly("lag_mean", &PyVariogram::lag_mean, "mean lag of the pairs in each bin (lag unit)")
+      .def_readonly("gamma", &PyVariogram::gamma,
+                    "semivariance (value unit^2, e.g. mm^2), summed over the value components")
+      .def_readonly("pairs", &PyVariogram::pairs, "number of pairs per bin (uint64)")
+      .def_readonly("component_gamma", &PyVariogram::component_gamma,
+                    "(bins, K) semivariance of each value component (value unit^2)")
+      .def_readonly("estimator", &PyVariogram::estimator)
+      .def_readonly("convention", &PyVariogram::convention)
+      .def_readonly("pair_fraction", &PyVariogram::pair_fraction)
+      .def("__len__", [](const PyVariogram& v) { return py::len(v.gamma); })
+      .def("__repr__", [](const PyVariogram& v) {
+        return "EmpiricalVariogram(" + std::to_string(py::len(v.gamma)) + " bins, estimator='" + v.estimator + "')";
+      });
+
+  m.def("variogram", &run_variogram, py::arg("coords"), py::arg("values"), py::arg("bins"),
+        py::arg("estimator") = "matheron", py::kw_only(), py::arg("convention") = "paper",
+        py::arg("pair_fraction") = 1.0, py::arg("seed") = 0, py::arg("threads") = 0,
+        "Empirical semivariogram of `values` at `coords`, as `errfield variogram`.\n\n"
+        "coords: (N, D) float64, any D (task space mm, joint space deg, ...); (N,) for 1-D.\n"
+        "values: (N,) or (N, K); K > 1 is a vector value (gamma is the sum over components).\n"
+        "bins: increasing bin edges e0 < e1 < ... (lag unit), at least two.\n"
+        "estimator: 'matheron' | 'cressie' | 'dowd'.  convention: 'paper' ([lo, hi)) | 'gstat'.\n"
+        "pair_fraction: deterministic fraction of the pairs in (0, 1], seeded by `seed`.\n"
+        "Returns an EmpiricalVariogram with NumPy arrays lag_lo, lag_hi, lag_mean, gamma (value unit^2), pairs.\n"
+        "Releases the GIL; runs OpenMP on `threads` threads (0 = default), result independent of it.");
+
+  py::class_<VariogramModel>(m, "VariogramModel",
+                             "A variogram model in gstat's vgm vocabulary, e.g. 'sph(sill=0.3,range=400)+nug(0.002)'. "
+                             "sill in value unit^2 (mm^2), range in lag unit (mm or deg); range of exp/gau is the "
+                             "scale parameter a, not the practical range.")
+      .def(py::init([](const std::string& text) { return VariogramModel::parse(text); }), py::arg("text"),
+           "Parses the text form (components joined by '+': kind(sill=S,range=A[,nu=V]), nug(S), "
+           "pow(sill=S,exponent=E), lin(slope=S)); raises ArgumentError pointing at bad text.")
+      .def_static("parse", &VariogramModel::parse, py::arg("text"), "Same as the constructor.")
+      .def("__str__", &VariogramModel::to_string)
+      .def("__repr__", [](const VariogramModel& v) { return "VariogramModel('" + v.to_string() + "')"; })
+      .def("__eq__", [](const VariogramModel& a, const VariogramModel& b) { return a.to_string() == b.to_string(); })
+      .def(
+          "gamma",
+          [](const VariogramModel& v, const py::object& h) {
+            return evaluate(h, "h", [&](double x) { return v.gamma(x); });
+          },
+          py::arg("h"), "Semivariance gamma(h) (value unit^2) at lags h >= 0 (scalar or array of any shape).")
+      .def(
+          "__call__",
+          [](const VariogramModel& v, const py::object& h) {
+            return evaluate(h, "h", [&](double x) { return v.gamma(x); });
+          },
+          py::arg("h"), "Same as gamma(h).")
+      .def(
+          "covariance",
+          [](const VariogramModel& v, const py::object& h) {
+            if (!v.bounded())
+              throw ArgumentError("covariance: model '" + v.to_string() + "' is unbounded (pow, lin); it has no covariance");
+            return evaluate(h, "h", [&](double x) { return v.covariance(x); });
+          },
+          py::arg("h"), "Covariance C(h) = sill - gamma(h) (value unit^2); bounded models only.")
+      .def_property_readonly("sill", &VariogramModel::sill, "total sill, nugget included (value unit^2)")
+      .def_property_readonly("nugget", &VariogramModel::nugget, "sum of the nugget components (value unit^2)")
+      .def_property_readonly("bounded", &VariogramModel::bounded)
+      .def_property_readonly("compact", &VariogramModel::compact)
+      .def_property_readonly("support", &VariogramModel::support, "lag beyond which C(h) = 0 (inf unless compact)")
+      .def_property_readonly("components", &components_list, "list of dicts: kind, sill, range (or exponent), nu");
+
+  m.def("fit_variogram", &fit_variogram_py, py::arg("variogram"), py::arg("model"), py::kw_only(),
+        py::arg("weights") = "nj_h2", py::arg("nugget") = "free", py::arg("nu") = py::none(),
+        py::arg("range_max") = 0.0, py::arg("starts") = 6,
+        "Weighted least-squares fit of a model to an empirical variogram, as `errfield fit-variogram`.\n\n"
+        "variogram: the result of errfield.variogram (or anything with lag_mean, gamma, pairs; empty bins skipped).\n"
+        "model: a kind ('sph', 'exp', 'gau', 'mat', 'wen', 'pow', 'lin'; 'mat' needs nu) or a model text whose\n"
+        "  non-nugget components are fitted from their given parameters.\n"
+        "weights: 'nj_h2' (gstat's default, N_j/h_j^2) | 'nj' | 'cressie'.\n"
+        "nugget: 'free' | 'none' (or None) | a fixed value >= 0 (value unit^2).\n"
+        "range_max: upper bound of the ranges (lag unit); 0 = automatic.\n"
+        "Returns a dict: model (VariogramModel), weighted_sse, status ('converged' | 'max_evaluations'), message,\n"
+        "evaluations, bins_used. Raises errfield.Error when the optimizer fails.");
+
+  m.def(
+      "fit_likelihood",
+      [](const py::object& coords, const py::object& values, const std::string& model, const std::string& method,
+         const std::string& kind, int drift_order, double mean, bool nugget, std::optional<double> nu) {
+        const ScalarSamples s = scalar_samples(coords, values);
+        const auto o = likelihood_options(method, kind, drift_order, mean, nugget);
+        const auto structure = structure_arg(model, nu);
+        LikelihoodFitResult r;
+        {
+          py::gil_scoped_release release;
+          r = fit_likelihood(s.x, s.z, structure, o);
+        }
+        py::dict d;
+        d["model"] = r.model;
+        d["negative_log_likelihood"] = r.negative_log_likelihood;
+        d["evaluations"] = r.evaluations;
+        d["converged"] = r.converged;
+        d["message"] = r.message;
+        return d;
+      },
+      py::arg("coords"), py::arg("values"), py::arg("model"), py::kw_only(), py::arg("method") = "reml",
+      py::arg("kind") = "ordinary", py::arg("drift_order") = 1, py::arg("mean") = 0.0, py::arg("nugget") = true,
+      py::arg("nu") = py::none(),
+      "ML or REML estimate of a model's sills and ranges from scalar samples, as\n"
+      "`errfield fit-variogram --method reml|ml` (which uses kind='ordinary').\n\n"
+      "coords: (N, D); values: (N,) scalar. model: a bounded kind or model text (see fit_variogram).\n"
+      "method: 'reml' | 'ml'. kind: 'simple' (known mean) | 'ordinary' | 'universal' (drift_order 0-2).\n"
+      "nugget: fit a nugget (True) or none. O(N^3) per evaluation: meant for N up to a few thousand.\n"
+      "Returns a dict: model, negative_log_likelihood, evaluations, converged, message.");
+
+  m.def(
+      "negative_log_likelihood",
+      [](const py::object& coords, const py::object& values, const VariogramModel& model, const std::string& method,
+         const std::string& kind, int drift_order, double mean) {
+        const ScalarSamples s = scalar_samples(coords, values);
+        const auto o = likelihood_options(method, kind, drift_order, mean, true);
+        py::gil_scoped_release release;
+        return negative_log_likelihood(s.x, s.z, model, o);
+      },
+      py::arg("coords"), py::arg("values"), py::arg("model"), py::kw_only(), py::arg("method") = "reml",
+      py::arg("kind") = "ordinary", py::arg("drift_order") = 1, py::arg("mean") = 0.0,
+      "The (restricted) negative log-likelihood of a Gaussian field with covariance `model` at the samples\n"
+      "(+inf when the covariance is not positive definite). Formula: include/errfield/kriging_likelihood.hpp.");
+}
+
+}  // namespace errfield::python

@@ -1,0 +1,230 @@
+# Type stub of the errfield extension module (src/python). Units: coordinates mm (task space) or
+# deg (joint space), values mm, semivariances and variances mm^2, joints deg.
+import os
+from typing import Any, Literal, Sequence, overload
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+ArrayLike = npt.ArrayLike
+F64 = npt.NDArray[np.float64]
+
+class Error(RuntimeError): ...
+class ArgumentError(Error, ValueError): ...
+class InputError(Error, ValueError):
+    file: str | None
+    row: int | None
+    column: str | None
+class OutsideGridError(InputError): ...
+class ResourceError(Error): ...
+
+class EmpiricalVariogram:
+    lag_lo: F64
+    lag_hi: F64
+    lag_mean: F64
+    gamma: F64
+    pairs: npt.NDArray[np.uint64]
+    component_gamma: F64
+    estimator: str
+    convention: str
+    pair_fraction: float
+    def __len__(self) -> int: ...
+
+def variogram(
+    coords: ArrayLike,
+    values: ArrayLike,
+    bins: ArrayLike,
+    estimator: Literal["matheron", "cressie", "dowd"] = "matheron",
+    *,
+    convention: Literal["paper", "gstat"] = "paper",
+    pair_fraction: float = 1.0,
+    seed: int = 0,
+    threads: int = 0,
+) -> EmpiricalVariogram: ...
+
+class VariogramModel:
+    def __init__(self, text: str) -> None: ...
+    @staticmethod
+    def parse(text: str) -> VariogramModel: ...
+    @overload
+    def gamma(self, h: float) -> float: ...
+    @overload
+    def gamma(self, h: ArrayLike) -> F64: ...
+    @overload
+    def __call__(self, h: float) -> float: ...
+    @overload
+    def __call__(self, h: ArrayLike) -> F64: ...
+    @overload
+    def covariance(self, h: float) -> float: ...
+    @overload
+    def covariance(self, h: ArrayLike) -> F64: ...
+    @property
+    def sill(self) -> float: ...
+    @property
+    def nugget(self) -> float: ...
+    @property
+    def bounded(self) -> bool: ...
+    @property
+    def compact(self) -> bool: ...
+    @property
+    def support(self) -> float: ...
+    @property
+    def components(self) -> list[dict[str, Any]]: ...
+
+def fit_variogram(
+    variogram: Any,
+    model: str,
+    *,
+    weights: Literal["nj_h2", "nj", "cressie"] = "nj_h2",
+    nugget: Literal["free", "none"] | float | None = "free",
+    nu: float | None = None,
+    range_max: float = 0.0,
+    starts: int = 6,
+) -> dict[str, Any]: ...
+def fit_likelihood(
+    coords: ArrayLike,
+    values: ArrayLike,
+    model: str,
+    *,
+    method: Literal["reml", "ml"] = "reml",
+    kind: str = "ordinary",
+    drift_order: int = 1,
+    mean: float = 0.0,
+    nugget: bool = True,
+    nu: float | None = None,
+) -> dict[str, Any]: ...
+def negative_log_likelihood(
+    coords: ArrayLike,
+    values: ArrayLike,
+    model: VariogramModel,
+    *,
+    method: Literal["reml", "ml"] = "reml",
+    kind: str = "ordinary",
+    drift_order: int = 1,
+    mean: float = 0.0,
+) -> float: ...
+
+class CrossValidation:
+    fold: npt.NDArray[np.int64]
+    prediction: F64
+    residual: F64
+    variance: F64 | None
+    samples: int
+    predicted: int
+    mean_error: F64
+    mean_abs_error: float
+    max_abs_error: float
+    max_abs_index: int
+    rms_error: float
+    mean_z: float | None
+    mean_squared_z: float | None
+
+class Kriging:
+    def __init__(
+        self,
+        coords: ArrayLike,
+        values: ArrayLike,
+        model: VariogramModel | str,
+        *,
+        kind: Literal["simple", "ordinary", "universal", "universal1", "universal2"] = "ordinary",
+        backend: Literal["dense", "local", "sparse"] = "dense",
+        mean: float | Sequence[float] | None = None,
+        drift_order: int = 1,
+        nugget: Literal["micro", "error"] = "micro",
+        neighbors: int = 0,
+        radius: float = ...,
+        measurement_variance: ArrayLike | None = None,
+        duplicates: Literal["error", "average"] = "error",
+        duplicate_distance: float = 0.0,
+        threads: int = 0,
+    ) -> None: ...
+    def predict(self, targets: ArrayLike) -> tuple[F64, F64]: ...
+    def cross_validate(self, folds: int | Literal["loo"] = "loo", seed: int = 1) -> CrossValidation: ...
+    @property
+    def report(self) -> dict[str, Any]: ...
+    @property
+    def model(self) -> VariogramModel: ...
+
+class ScatteredIdw:
+    def __init__(
+        self,
+        coords: ArrayLike,
+        values: ArrayLike,
+        *,
+        power: float = 2.0,
+        neighbors: int = 0,
+        radius: float = ...,
+        exact_distance: float = 0.0,
+        threads: int = 0,
+    ) -> None: ...
+    def predict(self, targets: ArrayLike) -> F64: ...
+    def cross_validate(self, folds: int | Literal["loo"] = "loo", seed: int = 1) -> CrossValidation: ...
+
+class GridIdw:
+    def __init__(self, coords: ArrayLike, values: ArrayLike, *, power: float = 1.0, clamp: bool = False,
+                 threads: int = 0) -> None: ...
+    def predict(self, targets: ArrayLike) -> F64: ...
+    @property
+    def grid(self) -> dict[str, Any]: ...
+
+class IkSolution:
+    q: F64
+    ok: npt.NDArray[np.bool_]
+    status: list[str]
+    residual_mm: F64
+    residual_deg: F64
+    iterations: npt.NDArray[np.int64]
+
+class Robot:
+    @staticmethod
+    def builtin(name: str = "er20_c10") -> Robot: ...
+    @staticmethod
+    def load(path: str | os.PathLike[str]) -> Robot: ...
+    @staticmethod
+    def from_json(text: str, source: str = "robot JSON") -> Robot: ...
+    def to_json(self) -> str: ...
+    def save(self, path: str | os.PathLike[str]) -> None: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def mdh(self) -> F64: ...
+    @property
+    def q_min(self) -> F64: ...
+    @property
+    def q_max(self) -> F64: ...
+    @property
+    def base(self) -> F64: ...
+    @property
+    def tool(self) -> F64: ...
+    def with_tool(self, tool: ArrayLike) -> Robot: ...
+    def with_base(self, base: ArrayLike) -> Robot: ...
+    def within_limits(self, q: ArrayLike, slack_deg: float = 0.0) -> npt.NDArray[np.bool_]: ...
+    def fk(self, q: ArrayLike, frame: Literal["tool", "flange"] = "tool") -> F64: ...
+    def position(self, q: ArrayLike, frame: Literal["tool", "flange"] = "tool") -> F64: ...
+    def jacobian(self, q: ArrayLike, frame: Literal["tool", "flange"] = "tool") -> F64: ...
+    def identification_jacobian(self, q: ArrayLike) -> F64: ...
+    @staticmethod
+    def parameter_names() -> list[str]: ...
+    def apply_parameter_increment(self, delta: ArrayLike) -> Robot: ...
+    def ik(
+        self,
+        targets: ArrayLike,
+        *,
+        seed: ArrayLike | None = None,
+        frame: Literal["tool", "flange"] = "tool",
+        position_only: bool = False,
+        max_iterations: int = 100,
+    ) -> IkSolution: ...
+
+def calibrate_positions(
+    robot: Robot,
+    q: ArrayLike,
+    measured: ArrayLike,
+    *,
+    robust: bool = True,
+    k0: float = 1.5,
+    k1: float = 3.0,
+    max_condition: float = 1e3,
+) -> dict[str, Any]: ...

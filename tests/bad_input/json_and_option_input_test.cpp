@@ -1,0 +1,308 @@
+// Bad-input catalogue, round two (issue 12, "Exit statuses and messages"; "compensate --strict"):
+// JSON inputs that are bad input, not internal errors (a number beyond a double, a wrong type, a
+// key given twice, a directory); option values that were accepted silently; messages that named
+// the library's fields instead of the command-line option; an unknown command; row errors that
+// did not name file:line. Every case: the exit status `errfield --help` documents and the words
+// that point at what to fix. Robot data are SIMULATED (`errfield simulate`).
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "errfield/error.hpp"
+#include "errfield/json_file.hpp"
+#include "errfield/robot/mdh_model.hpp"
+#include "support/cli_test_common.hpp"
+
+namespace errfield {
+namespace {
+
+using namespace testing::cli_common;
+namespace fs = std::filesystem;
+
+// A simulated grid (27 points), its robot, a fitted vector-kriging model and the plan of the cube
+// as targets, made once for the suite (ScratchDir names itself after the running test, and there
+// is none yet in SetUpTestSuite: the directory is managed here).
+class RobotFiles : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / ("errfield_RobotFiles_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    auto r = run({"simulate", "--seed", "5", "--step", "250", "--out", "g.csv", "--robot-out", "robot.json"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    r = run({"fit", "--robot", "robot.json", "--data", "g.csv", "--method", "vector-kriging", "--out", "m.json"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    r = run({"plan", "--robot", "robot.json", "--cube", "750,-250,350,500", "--step", "250", "--out", "t.csv"});
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  static void TearDownTestSuite() {
+    std::error_code ec;
+    fs::remove_all(dir_, ec);
+  }
+  static CliResult run(const std::vector<std::string>& args) { return run_errfield(args, dir_); }
+  static std::string path(const std::string& name) { return (dir_ / name).string(); }
+  static std::string read(const std::string& name) { return ScratchDir::slurp(dir_ / name); }
+  static void write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name, std::ios::binary) << text;
+  }
+  static fs::path dir_;
+};
+fs::path RobotFiles::dir_;
+
+// ---- JSON files --------------------------------------------------------------------------------
+
+TEST(JsonFile, NumberBeyondADoubleNamesFileLineAndKey) {
+  const std::string text = "{\n  \"links\": [\n    {\"a_mm\": 1e400}\n  ]\n}\n";
+  try {
+    parse_json_text(text, "r.json");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "r.json");
+    EXPECT_EQ(e.row(), 3u);
+    EXPECT_THAT(e.what(), AllOf(HasSubstr("r.json:3"), HasSubstr("1e400"), HasSubstr("links[0].a_mm"),
+                                HasSubstr("beyond the range of a double")));
+  }
+}
+
+TEST(JsonFile, DuplicateKeyNamesItsPathAndLine) {
+  const std::string text = "{\"links\": [{}, {},\n {\"a_mm\": 1,\n  \"a_mm\": 2}]}";
+  try {
+    parse_json_text(text, "r.json");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.row(), 3u);
+    EXPECT_THAT(e.what(), AllOf(HasSubstr("r.json:3"), HasSubstr("'links[2].a_mm' given twice")));
+  }
+  // The same key in two different objects is fine.
+  EXPECT_NO_THROW(parse_json_text(R"({"a": {"x": 1}, "b": {"x": 2}, "c": [{"x": 1}, {"x": 2}]})", "ok.json"));
+}
+
+TEST(JsonFile, InvalidJsonAndEmptyFileAreBadInput) {
+  EXPECT_THROW(parse_json_text("{\"a\": }", "x.json"), InputError);
+  EXPECT_THROW(parse_json_text("", "x.json"), InputError);
+  try {
+    parse_json_text("{\n\"a\": tru}", "x.json");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), AllOf(HasSubstr("x.json:2"), HasSubstr("not valid JSON")));
+  }
+}
+
+TEST_F(RobotFiles, RobotJsonWithAHugeNumberOrADuplicateKeyExitsTwo) {
+  auto j = robot::MdhModel::er20_c10().to_json();
+  std::string text = j.dump(1);
+  const auto pos = text.find("\"a_mm\"");
+  ASSERT_NE(pos, std::string::npos);
+  const std::size_t number = pos + std::string("\"a_mm\": ").size();
+  const std::size_t number_end = text.find_first_of(",\n}", number);
+  write("huge.json", text.substr(0, number) + "1e400" + text.substr(number_end));
+  auto r = run({"fk", "--robot", "huge.json", "--input", "t.csv", "--out", "o.csv"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("huge.json:"), HasSubstr("1e400"), HasSubstr("links[0].a_mm")));
+  write("dup.json", text.substr(0, pos) + "\"a_mm\": 5, " + text.substr(pos));
+  r = run({"fk", "--robot", "dup.json", "--input", "t.csv", "--out", "o.csv"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("dup.json:"), HasSubstr("links[0].a_mm' given twice")));
+  EXPECT_FALSE(fs::exists(path("o.csv")));
+}
+
+TEST_F(RobotFiles, ADirectoryGivenAsJsonOrCsvIsNamedAsADirectory) {
+  fs::create_directories(path("adir"));
+  auto r = run({"fk", "--robot", "adir", "--input", "t.csv", "--out", "o.csv"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("adir"), HasSubstr("is a directory")));
+  r = run({"compensate", "--model", "adir", "--targets", "t.csv", "--out", "o.csv"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("is a directory"));
+  r = run({"simulate", "--config", "adir", "--out", "o.csv"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("is a directory"));
+  r = run({"fk", "--input", "adir", "--out", "o.csv"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("adir: is a directory"), Not(HasSubstr("empty"))));
+}
+
+TEST_F(RobotFiles, ModelJsonWithWrongTypesExitsTwoNamingTheKey) {
+  const auto model = nlohmann::json::parse(read("m.json"));
+  ASSERT_EQ(model["field"]["kind"], "vector-kriging");
+  struct Case {
+    const char* key;
+    nlohmann::json value;
+  };
+  for (const Case& c : {Case{"nugget_is_measurement_error", "yes"}, Case{"region_margin_mm", "wide"},
+                        Case{"space", 3}, Case{"samples", nlohmann::json::array()}}) {
+    auto bad = model;
+    bad["field"][c.key] = c.value;
+    write("bad.json", bad.dump(1));
+    const auto r = run({"compensate", "--model", "bad.json", "--targets", "t.csv", "--out", "o.csv"});
+    EXPECT_EQ(r.exit_code, 2) << c.key << ": " << r.err;
+    EXPECT_THAT(r.err, AllOf(HasSubstr("bad.json"), HasSubstr(c.key))) << c.key;
+  }
+  // A simulation set-up whose link deviations are numbers instead of objects.
+  write("sim.json", R"({"geometry": {"links": [1, 2, 3, 4, 5, 6]}})");
+  const auto r = run({"simulate", "--config", "sim.json", "--step", "500", "--out", "o.csv"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("sim.json"), HasSubstr("geometry.links[0]"), HasSubstr("expected an object")));
+  EXPECT_FALSE(fs::exists(path("o.csv")));
+}
+
+// ---- compensate --strict -----------------------------------------------------------------------
+
+TEST_F(RobotFiles, CompensateStrictWritesNothingNamesTheRowAndExitsOne) {
+  // The plan's targets plus one far outside the modelled cube (row 2 of the file, line 3).
+  const std::string plan = read("t.csv");
+  const std::size_t header_end = plan.find('\n') + 1;
+  std::string far = plan.substr(header_end, plan.find('\n', header_end) - header_end);
+  // q1..q6 are the last six cells: turn the base joint by 90 degrees, out of the cube.
+  std::vector<std::string> cells;
+  for (std::size_t start = 0, comma; start <= far.size(); start = comma + 1) {
+    comma = far.find(',', start);
+    if (comma == std::string::npos) comma = far.size();
+    cells.push_back(far.substr(start, comma - start));
+  }
+  cells[cells.size() - 6] = std::to_string(std::stod(cells[cells.size() - 6]) + 90.0);
+  std::string row;
+  for (const auto& c : cells) row += (row.empty() ? "" : ",") + c;
+  write("strict.csv", plan.substr(0, header_end) + row + "\n" + plan.substr(header_end));
+  write("j.csv", "previous\n");
+  const auto r = run({"compensate", "--model", "m.json", "--targets", "strict.csv", "--out", "j.csv", "--strict"});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("--strict"), HasSubstr("strict.csv:2: outside-region"), HasSubstr("1 of ")));
+  EXPECT_EQ(read("j.csv"), "previous\n") << "a failed --strict run replaced the output";
+  // Without --strict the same run succeeds and marks the row.
+  const auto ok = run({"compensate", "--model", "m.json", "--targets", "strict.csv", "--out", "j.csv"});
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+  EXPECT_THAT(read("j.csv"), HasSubstr("outside-region"));
+}
+
+// ---- option values accepted silently -----------------------------------------------------------
+
+TEST_F(RobotFiles, CompensateToleranceMustBePositiveAndFinite) {
+  for (const char* v : {"-1", "0", "nan", "inf"}) {
+    const auto r = run({"compensate", "--model", "m.json", "--targets", "t.csv", "--out", "tol.csv", "--tolerance", v});
+    EXPECT_EQ(r.exit_code, 2) << v << ": " << r.err;
+    EXPECT_THAT(r.err, HasSubstr("--tolerance")) << v;
+  }
+  EXPECT_FALSE(fs::exists(path("tol.csv")));
+}
+
+TEST(OptionValues, NegativeCountsAreRefusedNotWrapped) {
+  ScratchDir dir;
+  dir.write("g.csv", kUnitCubeGrid);
+  for (const std::string cmd : {"interpolate", "cv"}) {
+    std::vector<std::string> args{cmd, "--method", "idw", "--samples", "g.csv", "--coords", "x,y,z", "--value", "v",
+                                  "--neighbors", "-3"};
+    if (cmd == "interpolate") args.insert(args.end(), {"--targets", "g.csv", "--out", "o.csv"});
+    const auto r = run_errfield(args, dir.path());
+    EXPECT_EQ(r.exit_code, 2) << cmd << ": " << r.err;
+    EXPECT_THAT(r.err, AllOf(HasSubstr("--neighbors"), HasSubstr("negative"))) << cmd;
+  }
+  const auto r = run_errfield({"simulate", "--seed", "-1", "--step", "500", "--out", "o.csv"}, dir.path());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("--seed"));
+  EXPECT_FALSE(fs::exists(dir.path() / "o.csv"));
+}
+
+TEST(OptionValues, FitVariogramRangeMaxAndNu) {
+  ScratchDir dir;
+  dir.write("v.csv", "lag_lo,lag_hi,lag_mean,gamma,pairs\n0,1,0.5,0.1,10\n1,2,1.5,0.3,20\n2,3,2.5,0.45,30\n"
+                     "3,4,3.5,0.5,30\n4,5,4.5,0.5,30\n");
+  for (const char* v : {"0", "-5", "nan"}) {
+    const auto r = run_errfield({"fit-variogram", "--input", "v.csv", "--model", "sph", "--range-max", v}, dir.path());
+    EXPECT_EQ(r.exit_code, 2) << v << ": " << r.output();
+    EXPECT_THAT(r.err, HasSubstr("--range-max")) << v;
+  }
+  auto r = run_errfield({"fit-variogram", "--input", "v.csv", "--model", "sph", "--nu", "1.5"}, dir.path());
+  EXPECT_EQ(r.exit_code, 2) << r.output();
+  EXPECT_THAT(r.err, AllOf(HasSubstr("--nu"), HasSubstr("mat")));
+  r = run_errfield({"fit-variogram", "--input", "v.csv", "--model", "sph", "--range-max", "10"}, dir.path());
+  EXPECT_EQ(r.exit_code, 0) << r.output();
+}
+
+// ---- messages that named internals -------------------------------------------------------------
+
+TEST(OptionMessages, NameTheOptionNotTheLibraryField) {
+  ScratchDir dir;
+  dir.write("g.csv", kUnitCubeGrid);
+  dir.write("p.csv", "x,y,z\n1000,0,1000\n");
+  struct Case {
+    std::vector<std::string> args;
+    const char* option;
+    const char* internal;
+  };
+  const std::vector<Case> cases{
+      {{"variogram", "--input", "g.csv", "--coords", "x,y,z", "--value", "v", "--bins", "0:2:1", "--subsample", "2"},
+       "--subsample", "pair_fraction"},
+      {{"simulate", "--step", "7", "--out", "o.csv"}, "--step", "MeasurementCube"},
+      {{"plan", "--cube", "750,-250,350,500", "--step", "7", "--out", "p.csv"}, "--step", "plan: step"},
+      {{"ik", "--input", "p.csv", "--max-iterations", "0", "--out", "o.csv"}, "--max-iterations", "IkOptions"},
+      {{"calibrate", "--data", "g.csv", "--max-condition", "0.5", "--out", "o.json"}, "--max-condition",
+       "CalibrationOptions"},
+      {{"calibrate", "--data", "g.csv", "--k0", "3", "--k1", "2", "--out", "o.json"}, "--k0", "CalibrationOptions"},
+  };
+  for (const auto& c : cases) {
+    const auto r = run_errfield(c.args, dir.path());
+    EXPECT_EQ(r.exit_code, 2) << testing::command_line(c.args) << "\n" << r.err;
+    EXPECT_THAT(r.err, AllOf(HasSubstr(c.option), Not(HasSubstr(c.internal)))) << testing::command_line(c.args);
+  }
+}
+
+TEST(OptionMessages, AnUnknownCommandIsNamed) {
+  ScratchDir dir;
+  const auto r = run_errfield({"interpolat", "--samples", "g.csv"}, dir.path());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, AllOf(HasSubstr("unknown command 'interpolat'"), HasSubstr("interpolate"),
+                           Not(HasSubstr("A subcommand is required"))));
+  // Still: no command at all is a usage error, and --help/--version succeed.
+  EXPECT_EQ(run_errfield({}, dir.path()).exit_code, 2);
+  EXPECT_EQ(run_errfield({"--version"}, dir.path()).exit_code, 0);
+}
+
+// ---- row errors with file:line ------------------------------------------------------------------
+
+TEST(RowMessages, KFoldDuplicatesNameBothLines) {
+  ScratchDir dir;
+  // Row i (line i + 2) at (i, i^2 mod 7, i mod 5): distinct. Line 14 repeats line 6 (i = 4).
+  std::string s = "x,y,z,v\n";
+  for (int i = 0; i < 12; ++i)
+    s += std::to_string(i) + "," + std::to_string(i * i % 7) + "," + std::to_string(i % 5) + "," + std::to_string(i % 3) + "\n";
+  s += "4,2,4,9\n";
+  dir.write("s.csv", s);
+  for (const char* folds : {"3", "loo"}) {
+    const auto r = run_errfield({"cv", "--method", "kriging", "--model", "sph(sill=1,range=20)", "--samples", "s.csv",
+                                 "--coords", "x,y,z", "--value", "v", "--folds", folds},
+                                dir.path());
+    EXPECT_EQ(r.exit_code, 2) << folds << ": " << r.err;
+    EXPECT_THAT(r.err, AllOf(HasSubstr("s.csv:14"), HasSubstr("s.csv:6"), HasSubstr("duplicates"))) << folds;
+  }
+}
+
+TEST(RowMessages, UniversalDriftFailureNamesTheFile) {
+  ScratchDir dir;
+  std::string s = "x,y,z,v\n";
+  for (int i = 0; i < 10; ++i) s += std::to_string(i) + "," + std::to_string(2 * i) + ",0," + std::to_string(i % 4) + "\n";
+  dir.write("line.csv", s);
+  dir.write("t.csv", "x,y,z\n1,1,1\n");
+  const auto r = run_errfield({"interpolate", "--method", "kriging", "--kind", "universal1", "--model",
+                               "sph(sill=1,range=20)", "--samples", "line.csv", "--targets", "t.csv", "--coords", "x,y,z",
+                               "--value", "v", "--out", "o.csv"},
+                              dir.path());
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("line.csv: kriging failed"), HasSubstr("collinear")));
+  const auto cv = run_errfield({"cv", "--method", "kriging", "--kind", "universal1", "--model", "sph(sill=1,range=20)",
+                                "--samples", "line.csv", "--coords", "x,y,z", "--value", "v"},
+                               dir.path());
+  EXPECT_EQ(cv.exit_code, 1) << cv.err;
+  EXPECT_THAT(cv.err, HasSubstr("line.csv: kriging failed"));
+}
+
+}  // namespace
+}  // namespace errfield
