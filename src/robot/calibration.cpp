@@ -82,9 +82,9 @@ std::vector<int> default_candidates(const MdhModel& model, bool with_base) {
 
 CalibrationResult register_tracker(const MdhModel& model, const std::vector<PositionMeasurement>& data,
                                    const CalibrationOptions& options) {
-  if (data.size() < 3)
-    throw InputError("register_tracker: " + std::to_string(data.size()) +
-                     " measured positions; need at least 4 (9 parameters: base 6, reflector offset 3)");
+  if (data.size() < 3)  // fewer than the closed-form start needs; the solver's guard names the count for more
+    throw InputError("calibration: tracker registration from " + std::to_string(data.size()) +
+                     " measured position(s); need at least 4 (9 parameters: base 6, reflector offset 3)");
   // Closed-form start: the rigid motion taking nominal robot-frame positions onto the measured ones.
   const MdhModel robot_frame = model.with_base(Eigen::Isometry3d::Identity());
   std::vector<Eigen::Vector3d> a(data.size()), b(data.size());
