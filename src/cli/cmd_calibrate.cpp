@@ -21,7 +21,7 @@ namespace errfield::cli {
 namespace {
 
 struct CalibrateArgs {
-  std::string robot, data, model = "distance", out, report;
+  std::string robot, data, model = "distance", out, report, robust;
   std::vector<std::string> base_points;
   double k0 = 1.5, k1 = 3.0, max_condition = 1e3, max_registration_rms = robot::kRegistrationRmsLimitMm;
   bool no_robust = false;
@@ -32,7 +32,11 @@ void run_calibrate(const CalibrateArgs& a) {
   using namespace robot;
   const MdhModel nominal = load_robot_or_default(a.robot);
   CalibrationOptions options;
-  options.robust.enabled = !a.no_robust;
+  if (!a.robust.empty() && a.robust != "none" && a.robust != "igg3")
+    throw ArgumentError("--robust: expected 'none' or 'igg3', got '" + a.robust + "'");
+  if (a.no_robust && a.robust == "igg3") throw ArgumentError("--no-robust contradicts --robust igg3; give one");
+  if (!a.robust.empty()) options.robust.enabled = a.robust == "igg3";
+  if (a.no_robust) options.robust.enabled = false;
   options.robust.k0 = a.k0;
   options.robust.k1 = a.k1;
   options.max_condition_number = a.max_condition;
@@ -82,11 +86,12 @@ void run_calibrate(const CalibrateArgs& a) {
     text << "tracker <- robot base: x " << t.x_mm << " y " << t.y_mm << " z " << t.z_mm << " mm, rx " << t.rx_deg
          << " ry " << t.ry_deg << " rz " << t.rz_deg << " deg\n\n";
     result = with_source(a.data, [&] { return calibrate_positions(reg.model, data, options); });
-    identified = result.model.with_base(reg.model.base().inverse() * result.model.base());
-    // The identified model in the tracker frame is reg.base · identified: keep that transform (and the
+    // reg.model.base() is tracker <- robot chain, the nominal base world <- robot chain.
+    identified = result.model.with_base(nominal.base() * reg.model.base().inverse() * result.model.base());
+    // Tracker readings map into the identified model's world frame by nominal.base · reg.base^-1: keep it (and the
     // reflector offset found with it) at full precision, for validate, predict and fk.
     registration.emplace();
-    registration->robot_from_tracker = reg.model.base().inverse();
+    registration->robot_from_tracker = nominal.base() * reg.model.base().inverse();
     registration->reflector_offset_mm = Eigen::Vector3d(reg.model.tool().translation());
     registration->points = data.size();
     double ss = 0.0;
@@ -209,7 +214,7 @@ void add_calibrate_command(CLI::App& app) {
   auto args = std::make_shared<CalibrateArgs>();
   auto* cmd = app.add_subcommand(
       "calibrate",
-      "Kinematic calibration (Levenberg-Marquardt, IGG3 robust weights, automatic removal of\n"
+      "Kinematic calibration (Levenberg-Marquardt, optional IGG3 robust weights, automatic removal of\n"
       "unidentifiable parameters) from tracker measurements in the columns 'errfield simulate' writes:\n"
       "q1..q6 (deg) and either mx,my,mz (--model position: tracker frame, mm; registration first) or\n"
       "kind (base|target) + dist_b0,dist_b1,... (--model distance: distances to the base points, mm).\n"
@@ -227,10 +232,13 @@ void add_calibrate_command(CLI::App& app) {
                   "for data without base rows (--model distance); identified with the robot");
   cmd->add_option("--k0", args->k0, "IGG3 k0 (default 1.5)");
   cmd->add_option("--k1", args->k1, "IGG3 k1 (default 3.0)");
-  cmd->add_flag("--no-robust", args->no_robust, "plain least squares (no IGG3 reweighting)");
+  cmd->add_option("--robust", args->robust,
+                  "'none' (plain least squares, the default) or 'igg3' (IGG3 reweighting against gross outliers); "
+                  "docs/robot.md says which data decided the default");
+  cmd->add_flag("--no-robust", args->no_robust, "the same as --robust none");
   cmd->add_option("--max-condition", args->max_condition,
-                  "remove weakly identifiable parameters until the scaled Jacobian's condition number is below this "
-                  "(default 1000)");
+                  "remove weakly identifiable parameters until the physically scaled Jacobian's condition number "
+                  "(mm, and rad x the arm's reach) is below this (default 1000)");
   cmd->add_option("--max-registration-rms", args->max_registration_rms,
                   "--model position: refuse (exit 2) when the registration (with reflector offset) leaves a larger RMS "
                   "(mm; default 5): a wrong robot or mixed-up rows");

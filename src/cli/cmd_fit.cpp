@@ -16,7 +16,8 @@ namespace errfield::cli {
 namespace {
 
 struct FitArgs {
-  std::string robot, data, method = "distance-idw", space = "task", out, model;
+  std::string robot, data, method = "distance-idw", space = "task", out, model, calibration, robust;
+  double max_condition = 1e3;
   std::vector<std::string> base_points;
   double power = 1.0, max_registration_rms = robot::kRegistrationRmsLimitMm, region_margin = 0.0;
   std::size_t base = 0;
@@ -33,6 +34,14 @@ void run_fit(const FitArgs& a) {
   o.base = a.base;
   o.region_margin = a.region_margin;
   if (!a.model.empty()) o.model = VariogramModel::parse(a.model);
+  if (!a.calibration.empty()) o.calibration_data = calibration_data_from_name(a.calibration);
+  if (!a.robust.empty()) {
+    if (a.robust != "none" && a.robust != "igg3")
+      throw ArgumentError("--robust: expected 'none' or 'igg3', got '" + a.robust + "'");
+    o.calibration.robust.enabled = a.robust == "igg3";
+  }
+  o.calibration.max_condition_number = a.max_condition;
+  o.calibration.validate();
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.base_points) {
     const auto v = parse_numbers(b, 3, "--base-point");
@@ -86,8 +95,9 @@ void add_fit_command(CLI::App& app) {
       "q1..q6, x,y,z, mx,my,mz, dist_b0..). Methods: distance-idw (the paper's: 8-vertex IDW of distance\n"
       "errors on a complete grid, radial correction), position-idw (IDW of registered 3-D position errors),\n"
       "distance-kriging, vector-kriging (3-D errors from >= 3 base points' distances, else from positions),\n"
-      "kinematic and kinematic+kriging (kinematic calibration on the distances to a base row, or to every\n"
-      "--base-point, whose coordinates are then identified too). Prints a leave-one-out\n"
+      "kinematic and kinematic+kriging (kinematic calibration from the tracker positions mx,my,mz when the\n"
+      "data have them: registration with the reflector offset, then the model; or from the distances to a\n"
+      "base row, or to every --base-point, whose coordinates are then identified too). Prints a leave-one-out\n"
       "summary. Kriging models follow gstat's vgm: range is the scale parameter a.\n"
       "Example: errfield fit --data grid.csv --method distance-idw --out model.json");
   cmd->add_option("--robot", a->robot,
@@ -109,6 +119,16 @@ void add_fit_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--region-margin", a->region_margin,
                   "kriging: predict this far beyond the samples' box (mm in task space, deg per joint in joint space)")
+      ->capture_default_str();
+  cmd->add_option("--calibration", a->calibration,
+                  "kinematic methods: calibrate from 'position' (tracker positions mx,my,mz; the default when the "
+                  "data have them) or 'distance' (dist_bK to a base point)");
+  cmd->add_option("--robust", a->robust,
+                  "kinematic methods: 'none' (plain least squares, the default) or 'igg3' (IGG3 reweighting against "
+                  "gross outliers); docs/robot.md says which data decided the default");
+  cmd->add_option("--max-condition", a->max_condition,
+                  "kinematic methods: remove weakly identifiable parameters until the physically scaled Jacobian's "
+                  "condition number is below this")
       ->capture_default_str();
   cmd->add_option("--out", a->out, "model JSON (written atomically)")->required();
   cmd->callback([a] { run_fit(*a); });

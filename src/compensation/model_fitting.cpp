@@ -16,6 +16,8 @@
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/scattered_idw.hpp"
 #include "compensation/fit_checks.hpp"
+#include "compensation/kinematic_fit.hpp"
+#include "robot/rigid_fit.hpp"
 
 namespace errfield::compensation {
 
@@ -106,6 +108,7 @@ std::vector<double> MeasurementSet::distance_errors(std::size_t k) const {
 void FitOptions::validate() const {
   if (!(idw_power >= 0.0) || !std::isfinite(idw_power))
     throw ArgumentError("fit: idw power " + std::to_string(idw_power) + "; expected a finite value >= 0");
+  calibration.validate();
 }
 
 namespace {
@@ -186,6 +189,8 @@ RegularGrid3 detect_grid(const MeasurementSet& d, std::vector<std::size_t>& samp
 namespace {
 
 FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
+  using detail::fit_kinematic;
+  using detail::KinematicFit;
   const CompensationMethod method = o.method;
   GridIdwOptions idw;
   idw.power = o.idw_power;
@@ -288,48 +293,18 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
     }
     case CompensationMethod::kinematic:
     case CompensationMethod::kinematic_kriging: {
-      need_base();
-      const bool fixed_bases = d.base_q_deg.empty();  // --base-point: points in the cell, not robot positions
-      if (o.base >= d.distance_mm.size() || (!fixed_bases && o.base >= d.base_q_deg.size()))
-        throw InputError(d.source + ": kinematic calibration needs distances dist_b" + std::to_string(o.base) +
-                             " to a base point: a robot position (a kind=base row with its joints) or fixed "
-                             "points given with --base-point",
-                         d.source, 0, "dist_b" + std::to_string(o.base));
-      std::vector<DistanceMeasurement> dm;
-      if (fixed_bases) {
-        // Every fixed point's distances: their coordinates are identified with the robot.
-        for (std::size_t k = 0; k < d.distance_mm.size(); ++k)
-          for (std::size_t i = 0; i < d.q_deg.size(); ++i)
-            dm.push_back({d.q_deg[i], JointVector::Zero(), d.distance_mm[k][i], static_cast<int>(k)});
-      } else {
-        for (std::size_t i = 0; i < d.q_deg.size(); ++i)
-          if ((d.nominal_mm[i] - d.base_nominal_mm[o.base]).norm() > 1.0)
-            dm.push_back({d.base_q_deg[o.base], d.q_deg[i], d.distance_mm[o.base][i]});
-      }
-      if (o.on_stage) o.on_stage("kinematic calibration on " + std::to_string(dm.size()) + " distances");
-      const CalibrationResult cal =
-          fixed_bases ? calibrate_distances(robot, dm, d.base_nominal_mm, CalibrationOptions{}) : calibrate_distances(robot, dm);
-      FitResult out{CompensationModel(CompensationMethod::kinematic, cal.model, nullptr), std::nullopt, std::nullopt, {}, {}};
-      out.notes.push_back("calibration on " + std::to_string(dm.size()) + " distances: residual RMS " +
-                          std::to_string(cal.before.rms_mm) + " -> " + std::to_string(cal.after.rms_mm) + " mm, " +
-                          std::to_string(cal.parameters.size()) + " parameters identified, " +
-                          std::to_string(cal.removed.size()) + " removed, condition number " +
-                          std::to_string(cal.condition_number) + "; " + cal.message);
-      for (std::size_t k = 0; k < cal.base_points.size(); ++k) {
-        const BasePointEstimate& b = cal.base_points[k];
-        out.notes.push_back("fixed base point b" + std::to_string(k) + " identified at (" + format_number(b.position_mm.x()) +
-                            ", " + format_number(b.position_mm.y()) + ", " + format_number(b.position_mm.z()) +
-                            ") mm, nominal (" + format_number(b.nominal_mm.x()) + ", " +
-                            format_number(b.nominal_mm.y()) + ", " + format_number(b.nominal_mm.z()) + ") mm");
-      }
-      if (!cal.converged) out.warnings.push_back("the kinematic calibration did not converge: " + cal.message);
+      const KinematicFit kin = fit_kinematic(robot, d, o);
+      FitResult out{CompensationModel(CompensationMethod::kinematic, kin.model, nullptr), kin.registration,
+                    std::nullopt, kin.notes, kin.warnings};
       if (method == CompensationMethod::kinematic) return out;
       if (d.measured_mm.empty())
         throw InputError(d.source + ": kinematic+kriging needs measured positions (mx,my,mz) for the residuals",
                          d.source, 0, "mx");
       std::vector<Eigen::Vector3d> identified(d.q_deg.size());
-      for (std::size_t i = 0; i < identified.size(); ++i) identified[i] = forward_position(cal.model, d.q_deg[i]);
-      const Registration reg = fit_registration(d.measured_mm, identified);
+      for (std::size_t i = 0; i < identified.size(); ++i) identified[i] = forward_position(kin.model, d.q_deg[i]);
+      // Position calibration found the registration with the model; distance calibration has none.
+      const Registration reg = kin.registration ? *kin.registration : fit_registration(d.measured_mm, identified);
+      if (!kin.registration) out.registration = reg;
       std::vector<Eigen::Vector3d> residual(identified.size());
       for (std::size_t i = 0; i < residual.size(); ++i)
         residual[i] = reg.robot_from_tracker * d.measured_mm[i] - identified[i];
@@ -339,7 +314,7 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
       ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
       const KrigingFieldFit fit = fit_vector_kriging_field(samples, residual, ko);
-      out.model = CompensationModel(method, cal.model, fit.field);
+      out.model = CompensationModel(method, kin.model, fit.field);
       out.cross_validation = kriging_report(fit, o.space);
       out.notes.push_back("residuals after calibration kriged with " + ko.model->to_string());
       note_factorization(out, fit, *ko.model);

@@ -53,14 +53,14 @@ SimulatorConfig SimulatorConfig::paper_default() {
   // Geometric deviations (docs/robot.md "Simulator"): a few tenths of a mm and hundredths of a
   // degree per parameter, the size an uncalibrated arm of this class shows after assembly.
   c.geometry.link = {{
-      {0.038, 0.756, 0.057, 0.945, 0.000},
-      {-0.057, -0.945, 0.076, 0.567, 0.000},
-      {0.047, 1.512, -0.066, -0.756, 0.038},
-      {-0.076, -0.567, 0.057, 1.323, 0.000},
-      {0.066, 0.472, -0.085, -0.378, 0.000},
-      {-0.057, 0.378, 0.076, 0.567, 0.000},
+      {0.073, 1.452, 0.109, 1.814, 0.000},
+      {-0.109, -1.814, 0.146, 1.089, 0.000},
+      {0.090, 2.903, -0.127, -1.452, 0.073},
+      {-0.146, -1.089, 0.109, 2.540, 0.000},
+      {0.127, 0.906, -0.163, -0.726, 0.000},
+      {-0.109, 0.726, 0.146, 1.089, 0.000},
   }};
-  c.geometry.tool = {0.05, -0.04, 0.08, 0.0, 0.0, 0.0};
+  c.geometry.tool = {0.096, -0.077, 0.154, 0.0, 0.0, 0.0};
   c.absorb_rigid_part = true;
   c.compliance.stiffness_nm_per_rad = {3.0e6, 3.0e6, 2.4e6, 6.0e5, 5.0e5, 3.0e5};
   c.compliance.link_mass_kg = {60.0, 45.0, 35.0, 18.0, 6.0, 2.0};

@@ -98,11 +98,10 @@ void pipeline_reduces_errors(const std::string& robot_json, const MdhModel& nomi
     std::cout << "[ pipeline ] " << method << ": mean |distance error| " << none.mean_distance << " -> "
               << after.mean_distance << " mm, mean position error (registered frame) " << none.mean_position
               << " -> " << after.mean_position << " mm\n";
-    if (method == "kinematic") {
-      EXPECT_LT(after.mean_distance, 0.8 * none.mean_distance);  // calibration removes part of it
-    } else if (method == "kinematic+kriging") {
-      // its positions live in the calibrated model's frame, so judge it on distances
-      EXPECT_LT(after.mean_distance, 0.5 * none.mean_distance);
+    if (method == "kinematic" || method == "kinematic+kriging") {
+      // grid.csv has tracker positions, so fit calibrates from them (registration first): the
+      // model lives in the registered frame and the full 3-D error drops
+      EXPECT_LT(after.mean_position, 0.6 * none.mean_position);
     } else if (method.rfind("distance", 0) == 0) {
       EXPECT_LT(after.mean_distance, 0.5 * none.mean_distance);  // the radial error drops
     } else {

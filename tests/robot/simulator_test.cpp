@@ -4,12 +4,15 @@
 #include <numbers>
 
 #include <Eigen/Dense>
+#include <iostream>
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
 #include "errfield/error.hpp"
 #include "errfield/robot/distance_error.hpp"
 #include "errfield/robot/simulated_data.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 
 namespace errfield::robot {
 namespace {
@@ -186,14 +189,23 @@ TEST(Simulator, PaperCubeIsReachableOnOneBranch) {
 
 TEST(Simulator, DefaultErrorSizeIsThePapers) {
   // The tuning target of SimulatorConfig::paper_default (docs/robot.md): uncompensated distance
-  // error to the base point over 64 random cube points at tool-down orientation of about the
-  // paper's "none" row (max 1.346, mean 0.514 mm). Noise-free truth, three sample sets.
+  // error on the paper's own metric — the distance to its base point P0(0,0,0) of the measurement
+  // frame, the tracker itself (a fixed point) — over 64 random cube points at tool-down
+  // orientation, of about the paper's "none" row (mean 0.514 mm, max 1.346 mm). Noise-free truth,
+  // the tracker's true position, three sample sets.
   const SimulatedRobot robot(SimulatorConfig::paper_default());
   const MeasurementCube cube = paper_cube();
   const IkResult seed = cube_seed(robot.nominal(), cube);
   ASSERT_TRUE(seed.ok());
-  const Eigen::Vector3d b = paper_base_point_nominal();
-  const BasePoint base = BasePoint::robot_position(b, robot.true_position(solve_cube_pose(robot.nominal(), cube, b, seed.q_deg).q_deg));
+  // As the paper and `reproduce` do, the tracker is placed in the robot frame by a registration on
+  // the 125 grid nodes (here noise-free), which absorbs the rigid part of the error in the cube.
+  std::vector<Eigen::Vector3d> truth, nominal;
+  for (const auto& p : cube.grid(125)) {
+    truth.push_back(robot.true_position(solve_cube_pose(robot.nominal(), cube, p, seed.q_deg).q_deg));
+    nominal.push_back(p);
+  }
+  const Eigen::Isometry3d robot_from_world = compensation::fit_registration(truth, nominal).robot_from_tracker;
+  const Eigen::Vector3d p0 = robot_from_world * robot.config().tracker.tracker_from_world.inverse().translation();
   for (std::uint64_t s = 1; s <= 3; ++s) {
     SimulationRng rng(s);
     double mx = 0, mean = 0;
@@ -201,14 +213,14 @@ TEST(Simulator, DefaultErrorSizeIsThePapers) {
     for (const auto& p : pts) {
       const IkResult r = solve_cube_pose(robot.nominal(), cube, p, seed.q_deg);
       ASSERT_TRUE(r.ok());
-      const double dl = std::abs(distance_error(base, p, robot.true_position(r.q_deg)));
+      const double dl = std::abs((robot_from_world * robot.true_position(r.q_deg) - p0).norm() - (p - p0).norm());
       mx = std::max(mx, dl);
       mean += dl / static_cast<double>(pts.size());
     }
-    EXPECT_GT(mean, 0.35);
-    EXPECT_LT(mean, 0.65);
-    EXPECT_GT(mx, 0.9);
-    EXPECT_LT(mx, 1.8);
+    std::cout << "[ none, distance to the tracker ] mean " << mean << " mm, max " << mx << " mm\n";
+    EXPECT_GT(mean, 0.8 * 0.514);
+    EXPECT_LT(mean, 1.25 * 0.514);
+    EXPECT_GT(mx, 0.7 * 1.346);
   }
 }
 

@@ -10,6 +10,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -18,6 +19,7 @@
 #include "errfield/csv_table.hpp"
 #include "errfield/compensation/compensation.hpp"
 #include "errfield/compensation/kriging_fields.hpp"
+#include "errfield/robot/calibration.hpp"
 
 namespace errfield::compensation {
 
@@ -48,6 +50,15 @@ struct MeasurementSet {
 // Registration and fit_registration (robot ← tracker, the frame in which measured positions become
 // position errors; fit stores it in the model it writes): compensation/registration.hpp.
 
+/// What the kinematic methods calibrate from.
+enum class CalibrationData {
+  automatic,  ///< positions when the data have them (mx,my,mz), else distances
+  position,   ///< tracker positions: registration (with the reflector offset), then the model
+  distance,   ///< distances to a base point (dist_bK): frame-free
+};
+/// "position" / "distance" (CLI `--calibration`); throws ArgumentError naming the option otherwise.
+CalibrationData calibration_data_from_name(std::string_view name);
+
 struct FitOptions {
   CompensationMethod method = CompensationMethod::distance_idw;
   FieldSpace space = FieldSpace::task;  ///< kriging methods only
@@ -57,6 +68,10 @@ struct FitOptions {
   /// Kriging fields: how far beyond the samples' box a target is still predicted — mm in task
   /// space, degrees per joint in joint space (the box is then that of the samples' joints).
   double region_margin = 0.0;
+  /// kinematic methods: positions or distances, and the calibration's options (robust weights,
+  /// condition number cap).
+  CalibrationData calibration_data = CalibrationData::automatic;
+  robot::CalibrationOptions calibration;
   /// Called before each long stage (variogram, factorization, leave-one-out, calibration) with what
   /// it is about to do, for progress output; empty = silent.
   std::function<void(const std::string& stage)> on_stage;
@@ -85,17 +100,22 @@ struct FitResult {
   std::vector<std::string> warnings;
 };
 
-/// Builds the model. The model carries what later steps need: the registration of the training
-/// rows' tracker readings (when the data have mx,my,mz) onto the model's own predictions, the
-/// nominal robot, the training joints and the range of the fitted errors (compensation.hpp).
-/// No silent wrong model: a kriging system beyond the condition limit (KrigingOptions, 1e12) or a
-/// leave-one-out error beyond what any credible prediction could give (3 × the data's largest
-/// deviation from their mean) is refitted with a nugget when the variogram was estimated (1e-4,
-/// 1e-3, 1e-2, 1e-1 of the sill, the first that passes; noted), and refused with an Error naming
-/// the figures when the user gave the model or no nugget helps. Throws InputError when the data lack what the method needs (names the
-/// columns). kinematic: calibrate_distances on the distances to base point `base` (a robot
-/// position, i.e. a base row with joints); kinematic+kriging: that, then vector kriging of the 3-D
-/// residuals (measured positions registered to the identified model).
+/// Builds the model. Throws InputError when the data have not what the method needs (names the
+/// columns). kinematic, from positions (the default when the data have mx,my,mz):
+/// register_tracker (tracker ← robot base and the reflector offset) then calibrate_positions; the
+/// identified model is expressed in the robot frame and `registration` holds robot ← tracker. From
+/// distances: calibrate_distances on the distances to base point `base` (a base row's robot
+/// position) or to every fixed point. kinematic+kriging: that, then vector kriging of the 3-D
+/// residuals (measured positions mapped through the calibration's registration, or for distance
+/// calibration a registration fitted to the identified model).
+/// The model carries what later steps need: the registration of the training rows' tracker
+/// readings (when the data have mx,my,mz) onto the model's own predictions, the nominal robot, the
+/// training joints and the range of the fitted errors (compensation.hpp). No silent wrong model: a
+/// kriging system beyond the condition limit (KrigingOptions, 1e12) or a leave-one-out error beyond
+/// what any credible prediction could give (3 × the data's largest deviation from their mean) is
+/// refitted with a nugget when the variogram was estimated (1e-4, 1e-3, 1e-2, 1e-1 of the sill, the
+/// first that passes; noted), and refused with an Error naming the figures when the user gave the
+/// model or no nugget helps.
 FitResult fit_compensation_model(const robot::MdhModel& robot, const MeasurementSet& data, const FitOptions& options);
 
 }  // namespace errfield::compensation

@@ -1,0 +1,110 @@
+#include "compensation/kinematic_fit.hpp"
+
+#include <sstream>
+
+#include "errfield/error.hpp"
+
+namespace errfield::compensation {
+
+using namespace errfield::robot;
+
+CalibrationData calibration_data_from_name(std::string_view name) {
+  if (name == "position") return CalibrationData::position;
+  if (name == "distance") return CalibrationData::distance;
+  throw ArgumentError("--calibration: expected 'position' or 'distance', got '" + std::string(name) + "'");
+}
+
+namespace detail {
+
+namespace {
+
+// 5 significant digits: notes are read by people; the numbers that matter are in the model JSON.
+std::string short_number(double v) {
+  std::ostringstream s;
+  s.precision(5);
+  s << v;
+  return s.str();
+}
+
+std::string summary(const CalibrationResult& cal, std::size_t count, const std::string& what, bool robust) {
+  return "calibration on " + std::to_string(count) + " " + what + ": residual RMS " + short_number(cal.before.rms_mm) +
+         " -> " + short_number(cal.after.rms_mm) + " mm, " + std::to_string(cal.parameters.size()) +
+         " parameters identified, " + std::to_string(cal.removed.size()) + " removed, condition number " +
+         short_number(cal.condition_number) + " (physically scaled), robust weights " +
+         (robust ? "igg3 (" + std::to_string(cal.rejected) + " rejected)" : std::string("none")) + "; " + cal.message;
+}
+
+// Registration (tracker ← robot base and the reflector offset, MD-H fixed), then the full model in
+// the tracker frame; the result is expressed back in the robot's world frame (the nominal
+// model's base frame), and the registration maps tracker readings into it.
+KinematicFit from_positions(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
+  if (d.measured_mm.empty())
+    throw InputError(d.source + ": --calibration position needs measured positions (columns mx,my,mz, tracker frame)",
+                     d.source, 0, "mx");
+  std::vector<PositionMeasurement> pm;
+  for (std::size_t i = 0; i < d.q_deg.size(); ++i) pm.push_back({d.q_deg[i], d.measured_mm[i]});
+  if (o.on_stage) o.on_stage("registration and kinematic calibration on " + std::to_string(pm.size()) + " positions");
+  const CalibrationResult reg = register_tracker(robot, pm, o.calibration);
+  const CalibrationResult cal = calibrate_positions(reg.model, pm, o.calibration);
+  // reg.model.base() is tracker ← robot chain; the nominal base is world ← robot chain.
+  const Eigen::Isometry3d world_from_tracker = robot.base() * reg.model.base().inverse();
+  KinematicFit out{cal.model.with_base(world_from_tracker * cal.model.base()), Registration{}, {}, {}};
+  out.registration->robot_from_tracker = world_from_tracker;
+  out.registration->residual_rms_mm = cal.after.rms_mm;
+  const Eigen::Vector3d reflector = reg.model.tool().translation();
+  out.notes.push_back("registration tracker -> robot with the reflector offset (" + short_number(reflector.x()) + ", " +
+                      short_number(reflector.y()) + ", " + short_number(reflector.z()) +
+                      ") mm in the flange: residual RMS " + short_number(reg.after.rms_mm) + " mm");
+  out.notes.push_back(summary(cal, pm.size(), "positions (tracker frame)", o.calibration.robust.enabled));
+  if (!reg.converged) out.warnings.push_back("the tracker registration did not converge: " + reg.message);
+  if (!cal.converged) out.warnings.push_back("the kinematic calibration did not converge: " + cal.message);
+  return out;
+}
+
+KinematicFit from_distances(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
+  const bool fixed_bases = d.base_q_deg.empty();  // --base-point: points in the cell, not robot positions
+  if (o.base >= d.distance_mm.size() || o.base >= d.base_nominal_mm.size() ||
+      (!fixed_bases && o.base >= d.base_q_deg.size()))
+    throw InputError(d.source + ": kinematic calibration from distances needs distances dist_b" +
+                         std::to_string(o.base) +
+                         " to a base point: a robot position (a kind=base row with its joints) or fixed points given "
+                         "with --base-point" +
+                         (d.measured_mm.empty() ? std::string() : "; or calibrate from the positions (--calibration position)"),
+                     d.source, 0, "dist_b" + std::to_string(o.base));
+  std::vector<DistanceMeasurement> dm;
+  if (fixed_bases) {
+    // Every fixed point's distances: their coordinates are identified with the robot.
+    for (std::size_t k = 0; k < d.distance_mm.size(); ++k)
+      for (std::size_t i = 0; i < d.q_deg.size(); ++i)
+        dm.push_back({d.q_deg[i], JointVector::Zero(), d.distance_mm[k][i], static_cast<int>(k)});
+  } else {
+    for (std::size_t i = 0; i < d.q_deg.size(); ++i)
+      if ((d.nominal_mm[i] - d.base_nominal_mm[o.base]).norm() > 1.0)
+        dm.push_back({d.base_q_deg[o.base], d.q_deg[i], d.distance_mm[o.base][i]});
+  }
+  if (o.on_stage) o.on_stage("kinematic calibration on " + std::to_string(dm.size()) + " distances");
+  const CalibrationResult cal = fixed_bases ? calibrate_distances(robot, dm, d.base_nominal_mm, o.calibration)
+                                            : calibrate_distances(robot, dm, o.calibration);
+  KinematicFit out{cal.model, std::nullopt, {}, {}};
+  out.notes.push_back(summary(cal, dm.size(), "distances", o.calibration.robust.enabled));
+  for (std::size_t k = 0; k < cal.base_points.size(); ++k) {
+    const BasePointEstimate& b = cal.base_points[k];
+    out.notes.push_back("fixed base point b" + std::to_string(k) + " identified at (" + short_number(b.position_mm.x()) +
+                        ", " + short_number(b.position_mm.y()) + ", " + short_number(b.position_mm.z()) +
+                        ") mm, nominal (" + short_number(b.nominal_mm.x()) + ", " + short_number(b.nominal_mm.y()) +
+                        ", " + short_number(b.nominal_mm.z()) + ") mm");
+  }
+  if (!cal.converged) out.warnings.push_back("the kinematic calibration did not converge: " + cal.message);
+  return out;
+}
+
+}  // namespace
+
+KinematicFit fit_kinematic(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
+  CalibrationData how = o.calibration_data;
+  if (how == CalibrationData::automatic) how = d.measured_mm.empty() ? CalibrationData::distance : CalibrationData::position;
+  return how == CalibrationData::position ? from_positions(robot, d, o) : from_distances(robot, d, o);
+}
+
+}  // namespace detail
+}  // namespace errfield::compensation

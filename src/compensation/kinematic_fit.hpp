@@ -1,0 +1,22 @@
+#pragma once
+// Internal: the kinematic-calibration step of `fit --method kinematic|kinematic+kriging`
+// (model_fitting.hpp): from tracker positions (registration with the reflector offset, then the
+// model) or from distances to base points, whichever FitOptions::calibration_data asks for.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "errfield/compensation/model_fitting.hpp"
+
+namespace errfield::compensation::detail {
+
+struct KinematicFit {
+  robot::MdhModel model;  ///< identified, in the nominal robot's world frame
+  std::optional<Registration> registration;  ///< robot ← tracker, from position calibration
+  std::vector<std::string> notes, warnings;
+};
+
+KinematicFit fit_kinematic(const robot::MdhModel& robot, const MeasurementSet& data, const FitOptions& options);
+
+}  // namespace errfield::compensation::detail

@@ -1,0 +1,300 @@
+#include "robot/calibration_solver.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+#include <Eigen/Dense>
+
+#include "errfield/error.hpp"
+#include "robot/calibration_identifiability.hpp"
+
+namespace errfield::robot::detail {
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+/// IGG3 weights are considered settled when no weight moves by more than this in a round.
+constexpr double kWeightsSettled = 1e-3;
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  double m = *mid;
+  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), mid));
+  return m;
+}
+
+// Per-measurement residual size: |v| (distance) or the 3-D norm (position).
+std::vector<double> residual_sizes(const Eigen::VectorXd& r, int dim) {
+  std::vector<double> s(static_cast<std::size_t>(r.size() / dim));
+  for (std::size_t i = 0; i < s.size(); ++i) s[i] = r.segment(static_cast<Eigen::Index>(i) * dim, dim).norm();
+  return s;
+}
+
+ResidualSummary summarize(const std::vector<double>& sizes) {
+  ResidualSummary s;
+  s.count = sizes.size();
+  if (sizes.empty()) return s;
+  double sq = 0;
+  for (double v : sizes) {
+    sq += v * v;
+    s.mean_abs_mm += v;
+    s.max_abs_mm = std::max(s.max_abs_mm, v);
+  }
+  s.mean_abs_mm /= static_cast<double>(sizes.size());
+  s.rms_mm = std::sqrt(sq / static_cast<double>(sizes.size()));
+  return s;
+}
+
+double weighted_cost(const Eigen::VectorXd& r, const std::vector<double>& w, int dim) {
+  double c = 0;
+  for (std::size_t i = 0; i < w.size(); ++i)
+    c += w[i] * r.segment(static_cast<Eigen::Index>(i) * dim, dim).squaredNorm();
+  return c;
+}
+
+// The state moved by `delta` (one entry per active candidate).
+CalibrationState apply_step(const CalibrationState& s, const std::vector<int>& active, const Eigen::VectorXd& delta) {
+  ParameterVector full = ParameterVector::Zero();
+  CalibrationState t{s.model, s.extra};
+  for (std::size_t c = 0; c < active.size(); ++c) {
+    const double v = delta[static_cast<Eigen::Index>(c)];
+    if (active[c] < param::kCount) full[active[c]] = v;
+    else t.extra[active[c] - param::kCount] += v;
+  }
+  t.model = apply_parameter_increment(s.model, full);
+  return t;
+}
+
+// Value of parameter `index` in report units (deg / mm) relative to `reference` (for base
+// rotation: the rotation vector of R · R_ref^T in deg; base/tool translations: the difference).
+double report_value(const MdhModel& m, const MdhModel& reference, int index) {
+  if (index < param::kBaseTranslation) {
+    const MdhLink& l = m.link(index / param::kPerLink);
+    switch (index % param::kPerLink) {
+      case param::kAlpha: return l.alpha_deg;
+      case param::kA: return l.a_mm;
+      case param::kTheta0: return l.theta0_deg;
+      case param::kD: return l.d_mm;
+      default: return l.beta_deg;
+    }
+  }
+  if (index < param::kBaseRotation)
+    return m.base().translation()[index - param::kBaseTranslation] -
+           reference.base().translation()[index - param::kBaseTranslation];
+  if (index < param::kToolTranslation)
+    return rotation_log(m.base().linear() * reference.base().linear().transpose())[index - param::kBaseRotation] / kDeg;
+  return m.tool().translation()[index - param::kToolTranslation] -
+         reference.tool().translation()[index - param::kToolTranslation];
+}
+
+}  // namespace
+
+std::vector<double> igg3_weights(const std::vector<double>& sizes, int dim, const RobustOptions& o) {
+  constexpr double kSigmaFloorMm = 1e-6;  // 1 nm: below any tracker's resolution
+  double sigma0;
+  double scale;  // turns a residual size into u
+  if (dim == 1) {
+    sigma0 = std::max(1.4826 * median(sizes), kSigmaFloorMm);
+    scale = sigma0;
+  } else {
+    // |r| of a 3-D Gaussian residual with per-axis sigma has median 1.5382 sigma (chi, 3 dof);
+    // u = |r| / (sqrt(3) sigma) has RMS 1 like a standardized scalar.
+    sigma0 = std::max(median(sizes) / 1.5382, kSigmaFloorMm);
+    scale = std::sqrt(3.0) * sigma0;
+  }
+  std::vector<double> w(sizes.size());
+  for (std::size_t i = 0; i < sizes.size(); ++i) w[i] = igg3_weight(sizes[i] / scale, o.k0, o.k1);
+  return w;
+}
+
+
+CalibrationResult solve_calibration(const CalibrationProblem& problem, const CalibrationState& start,
+                                    const std::vector<int>& candidates, const CalibrationOptions& o) {
+  o.validate();
+  const MdhModel& initial = start.model;
+  CalibrationResult out;
+  out.model = initial;
+  out.reach_mm = arm_reach_mm(initial);
+  const int dim = problem.dim();
+  const std::size_t n = problem.count();
+  // Too few poses: fail here, naming the count needed, rather than fit the few parameters these
+  // data happen to move and claim convergence.
+  const std::size_t identifiable =
+      generically_identifiable(problem, start, candidates, out.reach_mm, o.redundancy_tolerance);
+  const std::size_t needed = identifiable / static_cast<std::size_t>(dim) + 1;  // more equations than unknowns
+  const std::size_t distinct = problem.distinct();
+  if (distinct < needed) {
+    const std::string kind = dim == 3 ? "position" : "distance";
+    const std::string repeats =
+        distinct < n ? " at " + std::to_string(distinct) + " distinct " + (dim == 3 ? "pose(s)" : "pose pair(s)") +
+                           " (the others repeat one)"
+                     : std::string();
+    throw InputError("calibration: " + std::to_string(n) + " measured " + kind + "(s)" + repeats + " give " +
+                     std::to_string(distinct * static_cast<std::size_t>(dim)) + " equation(s), but " + kind +
+                     " measurements identify " + std::to_string(identifiable) + " parameters of robot '" +
+                     initial.name() + "' (of " + std::to_string(candidates.size()) + " candidates); need at least " +
+                     std::to_string(needed) + " measured " + kind +
+                     "s at distinct poses (more equations than parameters), in practice several times as many, "
+                     "spread over the workspace");
+  }
+
+  Eigen::VectorXd r;
+  Eigen::MatrixXd jac;
+  problem.evaluate(start, candidates, r, &jac);
+  if (!r.allFinite() || !jac.allFinite())
+    throw ArgumentError("calibration: non-finite residual or Jacobian at the initial model");
+  out.before = summarize(residual_sizes(r, dim));
+
+  const ParameterSelection sel =
+      select_parameters(jac, candidates, out.reach_mm, o.redundancy_tolerance, o.max_condition_number);
+  out.removed = sel.removed;
+  out.condition_number = sel.condition_number;
+  const std::vector<int>& active = sel.kept;
+  const auto p = static_cast<Eigen::Index>(active.size());
+  if (static_cast<std::size_t>(p) >= n * static_cast<std::size_t>(dim))
+    throw ArgumentError("calibration: " + std::to_string(p) + " identifiable parameters but only " +
+                        std::to_string(n * static_cast<std::size_t>(dim)) + " equations; measure more points");
+
+  CalibrationState state = start;
+  std::vector<double> w(n, 1.0);
+  problem.evaluate(state, active, r, &jac);
+  // Column scaling, fixed at the start: every parameter moves in units of its column norm
+  // (Marquardt's scaling; it shapes the steps, the selection above decided what may move).
+  Eigen::VectorXd scale(p);
+  for (Eigen::Index c = 0; c < p; ++c) scale[c] = std::max(jac.col(c).norm(), 1e-300);
+  double cost = weighted_cost(r, w, dim);
+  double lambda = 1e-6;
+  const int rounds = o.robust.enabled ? o.robust.max_rounds : 1;
+  bool converged_lm = false;
+  // IGG3 re-estimates sigma0 every round, so the weights can keep moving (points near k0/k1 flip,
+  // or the rejection creeps as the fit tightens). Such a solution is the last round's, not a fixed
+  // point, and is reported as not converged.
+  bool weights_settled = !o.robust.enabled;
+  for (int round = 0; round < rounds; ++round) {
+    ++out.rounds;
+    converged_lm = false;
+    for (int it = 0; it < o.max_iterations; ++it) {
+      ++out.iterations;
+      Eigen::MatrixXd js = jac * scale.cwiseInverse().asDiagonal();
+      Eigen::MatrixXd a = Eigen::MatrixXd::Zero(p, p);
+      Eigen::VectorXd g = Eigen::VectorXd::Zero(p);
+      for (std::size_t i = 0; i < n; ++i) {
+        if (w[i] == 0) continue;
+        const auto rows = js.middleRows(static_cast<Eigen::Index>(i) * dim, dim);
+        a.noalias() += w[i] * rows.transpose() * rows;
+        g.noalias() += w[i] * rows.transpose() * r.segment(static_cast<Eigen::Index>(i) * dim, dim);
+      }
+      bool accepted = false;
+      double new_cost = cost;
+      double moved_mm = 0;  // RMS change of the predictions by the accepted step
+      for (int tries = 0; tries < 20 && !accepted; ++tries) {
+        Eigen::MatrixXd damped = a;
+        damped.diagonal().array() += lambda * std::max(a.diagonal().maxCoeff(), 1e-300);
+        const Eigen::VectorXd step = damped.ldlt().solve(g).cwiseQuotient(scale);
+        if (!step.allFinite()) {
+          lambda *= 10;
+          continue;
+        }
+        const CalibrationState trial = apply_step(state, active, step);
+        Eigen::VectorXd r_trial;
+        problem.evaluate(trial, active, r_trial, nullptr);
+        new_cost = weighted_cost(r_trial, w, dim);
+        if (new_cost <= cost) {
+          state = trial;
+          accepted = true;
+          moved_mm = (jac * step).norm() / std::sqrt(static_cast<double>(std::max<Eigen::Index>(jac.rows(), 1)));
+          lambda = std::max(lambda / 10, 1e-12);
+        } else {
+          lambda *= 10;
+        }
+      }
+      if (!accepted) {
+        converged_lm = true;  // no decrease possible: at a minimum to working precision
+        break;
+      }
+      const double decrease = cost - new_cost;
+      cost = new_cost;
+      problem.evaluate(state, active, r, &jac);
+      // Also done when a step no longer moves any prediction measurably (a picometre): along a
+      // weakly determined direction the cost can keep decreasing by rounding-level amounts.
+      if (decrease <= o.cost_tolerance * std::max(cost, 1e-300) || cost < 1e-24 || moved_mm < 1e-9) {
+        converged_lm = true;
+        break;
+      }
+    }
+    if (!o.robust.enabled) break;
+    const std::vector<double> nw = igg3_weights(residual_sizes(r, dim), dim, o.robust);
+    double change = 0;
+    for (std::size_t i = 0; i < n; ++i) change = std::max(change, std::abs(nw[i] - w[i]));
+    w = nw;
+    cost = weighted_cost(r, w, dim);
+    out.weight_change = change;
+    if (change < kWeightsSettled) {
+      weights_settled = true;
+      break;
+    }
+  }
+  out.converged = converged_lm && weights_settled;
+  if (!converged_lm) {
+    out.message = "LM iteration limit reached";
+  } else if (!weights_settled) {
+    std::ostringstream m;
+    m << "not converged: IGG3 weights still changing after " << out.rounds
+      << " weighting rounds (largest weight change in the last round " << out.weight_change << ", settled below "
+      << kWeightsSettled << "); the model is the last round's";
+    out.message = m.str();
+  } else {
+    out.message = "converged";
+  }
+  const MdhModel& model = state.model;
+  out.model = model;
+  out.weights = w;
+  out.rejected = static_cast<std::size_t>(std::count(w.begin(), w.end(), 0.0));
+  out.after = summarize(residual_sizes(r, dim));
+
+  // Standard errors at the solution (weighted, column-scaled for the SVD's sake).
+  Eigen::MatrixXd js = jac * scale.cwiseInverse().asDiagonal();
+  for (std::size_t i = 0; i < n; ++i) js.middleRows(static_cast<Eigen::Index>(i) * dim, dim) *= std::sqrt(w[i]);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(js, Eigen::ComputeThinV);
+  const Eigen::VectorXd sv = svd.singularValues();
+  double used = 0;
+  for (double wi : w) used += wi > 0 ? 1.0 : 0.0;
+  const double dof = used * dim - static_cast<double>(p);
+  const double sigma2 = dof > 0 ? cost / dof : 0.0;
+  // Cov(scaled) = sigma² V S⁻² Vᵀ; unscale by the column norms.
+  const Eigen::MatrixXd v = svd.matrixV();
+  const Eigen::VectorXd inv_s2 = sv.array().square().inverse();
+  out.base_points.resize(static_cast<std::size_t>(start.extra.size() / 3));
+  for (std::size_t k = 0; k < out.base_points.size(); ++k) {
+    out.base_points[k].nominal_mm = start.extra.segment<3>(3 * static_cast<Eigen::Index>(k));
+    out.base_points[k].position_mm = state.extra.segment<3>(3 * static_cast<Eigen::Index>(k));
+  }
+  for (Eigen::Index c = 0; c < p; ++c) {
+    const double var_scaled = (v.row(c).array().square() * inv_s2.transpose().array()).sum();
+    if (active[static_cast<std::size_t>(c)] >= param::kCount) {  // a fixed base point's coordinate (mm)
+      const int e = active[static_cast<std::size_t>(c)] - param::kCount;
+      BasePointEstimate& b = out.base_points[static_cast<std::size_t>(e / 3)];
+      b.identified[e % 3] = true;
+      b.standard_error_mm[e % 3] = std::sqrt(sigma2 * var_scaled) / scale[c];
+      continue;
+    }
+    ParameterEstimate e;
+    e.index = active[static_cast<std::size_t>(c)];
+    e.name = parameter_name(e.index);
+    const bool angle = parameter_is_angle(e.index);
+    e.unit = angle ? "deg" : "mm";
+    const bool relative = e.index >= param::kBaseTranslation;
+    e.nominal = relative ? 0.0 : report_value(initial, initial, e.index);
+    e.increment = report_value(model, initial, e.index) - e.nominal;
+    e.standard_error = std::sqrt(sigma2 * var_scaled) / scale[c] / (angle ? kDeg : 1.0);
+    out.parameters.push_back(e);
+  }
+  return out;
+}
+
+}  // namespace errfield::robot::detail

@@ -1,0 +1,161 @@
+// Kinematic calibration on data it did not generate (issue 10, item 4): joints recorded to a few
+// decimals must not make noise-level parameters identifiable, the reported condition number is
+// that of the parameters kept, and distance calibration's frame is aligned over configurations.
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include "errfield/robot/calibration.hpp"
+#include "errfield/robot/random.hpp"
+#include "errfield/robot/simulator.hpp"
+
+namespace errfield::robot {
+namespace {
+
+JointVector rounded(const JointVector& q, int decimals) {
+  if (decimals < 0) return q;
+  const double f = std::pow(10.0, decimals);
+  JointVector r;
+  for (int j = 0; j < kJointCount; ++j) r[j] = std::round(q[j] * f) / f;
+  return r;
+}
+
+// `errfield simulate --seed 1 --measure distances` in the library: the default simulated robot,
+// the paper cube's 125 grid points at tool-down, distances from the corner node (a robot position
+// measured once) to the other 124. The controller's joints are recorded to `decimals` decimals
+// (-1: exactly); the robot moved at the unrounded ones.
+struct CubeDistances {
+  SimulatedRobot sim{SimulatorConfig::paper_default()};
+  MeasurementCube cube = paper_cube();
+  JointVector seed, qb;
+  std::vector<DistanceMeasurement> data;
+
+  explicit CubeDistances(int decimals, std::uint64_t stream = 1) {
+    const MdhModel& nominal = sim.nominal();
+    seed = cube_seed(nominal, cube).q_deg;
+    const Eigen::Vector3d b = paper_base_point_nominal();
+    qb = solve_cube_pose(nominal, cube, b, seed).q_deg;
+    SimulationRng rng(stream);
+    const Eigen::Vector3d base_measured = sim.measure(sim.move(qb, rng), rng);
+    for (const auto& p : cube.grid(125)) {
+      if ((p - b).norm() < 1) continue;
+      const JointVector q = solve_cube_pose(nominal, cube, p, seed).q_deg;
+      data.push_back({rounded(qb, decimals), rounded(q, decimals),
+                      (sim.measure(sim.move(q, rng), rng) - base_measured).norm()});
+    }
+  }
+
+  // Mean |error| of the distance from the base pose to 64 held-out poses (one random target per
+  // cell) that `model` predicts, against the true distance. Frame-free, like the data: distances
+  // leave the identified model's frame free.
+  double heldout_mean_mm(const MdhModel& model) const {
+    SimulationRng rng(99);
+    double sum = 0;
+    const auto targets = cube.random_per_cell(125, rng);
+    for (const auto& p : targets) {
+      const JointVector q = solve_cube_pose(sim.nominal(), cube, p, seed).q_deg;
+      const double predicted = (forward_position(model, q) - forward_position(model, qb)).norm();
+      sum += std::abs(predicted - (sim.true_position(q) - sim.true_position(qb)).norm());
+    }
+    return sum / static_cast<double>(targets.size());
+  }
+};
+
+CalibrationOptions plain() {
+  CalibrationOptions o;
+  o.robust.enabled = false;
+  return o;
+}
+
+// The issue's reproduction: with joints rounded to 6 decimals the tool offset (whose column, at one
+// constant orientation, only the rounding moves) was identified as (193364, 82946, 124810) mm and
+// LM hit its iteration limit. Rounding at 6 or 3 decimals must leave the calibration where the
+// exact joints put it: converged, no parameter moved beyond a physically plausible size, and the
+// same held-out accuracy.
+TEST(CalibrationRounding, RoundedJointsDoNotRunAway) {
+  const CubeDistances exact(-1);
+  const CalibrationResult ref = calibrate_distances(exact.sim.nominal(), exact.data, plain());
+  ASSERT_TRUE(ref.converged) << ref.report();
+  const double none = exact.heldout_mean_mm(exact.sim.nominal());
+  const double ref_heldout = exact.heldout_mean_mm(ref.model);
+  EXPECT_LT(ref_heldout, 0.3 * none) << ref.report();
+  for (int decimals : {6, 3}) {
+    SCOPED_TRACE(std::to_string(decimals) + " decimals");
+    const CubeDistances data(decimals);
+    for (bool robust : {false, true}) {
+      SCOPED_TRACE(robust ? "igg3" : "plain least squares");
+      CalibrationOptions o = plain();
+      o.robust.enabled = robust;
+      const CalibrationResult r = calibrate_distances(data.sim.nominal(), data.data, o);
+      EXPECT_NE(r.message, "LM iteration limit reached") << r.report();
+      // The simulated deviations are below 3 mm and 0.17 deg per parameter; kept parameters trade
+      // off along weakly determined directions by a few times that, a runaway by 1e5 mm.
+      for (const auto& p : r.parameters) EXPECT_LT(std::abs(p.increment), p.unit == "mm" ? 50.0 : 5.0) << p.name;
+      for (const char* tool : {"tool.x", "tool.y", "tool.z"})
+        EXPECT_TRUE(std::none_of(r.parameters.begin(), r.parameters.end(),
+                                 [&](const ParameterEstimate& p) { return p.name == tool; }))
+            << tool << " identified from rounding noise\n" << r.report();
+      const double heldout = data.heldout_mean_mm(r.model);
+      EXPECT_LT(heldout, 0.3 * none) << r.report();
+      if (!robust) EXPECT_NEAR(heldout, ref_heldout, 0.1 * ref_heldout) << r.report();
+    }
+  }
+}
+
+// The condition number reported is the one of the kept parameters' Jacobian in physical units
+// (mm, and rad × reach, reach = Σ(|a| + |d|) + |tool|), recomputed here from the public Jacobian,
+// and it respects the cap (the issue saw 4e5–5e8 reported against a documented 1e3).
+TEST(CalibrationRounding, ConditionNumberIsThatOfTheKeptParameters) {
+  const CubeDistances data(6);
+  const MdhModel& nominal = data.sim.nominal();
+  for (double cap : {1e3, 1e2}) {
+    CalibrationOptions o = plain();
+    o.max_condition_number = cap;
+    const CalibrationResult r = calibrate_distances(nominal, data.data, o);
+    double reach = nominal.tool().translation().norm();
+    for (const MdhLink& l : nominal.links()) reach += std::abs(l.a_mm) + std::abs(l.d_mm);
+    EXPECT_DOUBLE_EQ(r.reach_mm, reach);
+    std::vector<int> kept;
+    for (const auto& p : r.parameters) kept.push_back(p.index);
+    ASSERT_FALSE(kept.empty());
+    Eigen::MatrixXd j = distance_identification_jacobian(nominal, data.data, {}, kept);
+    for (std::size_t c = 0; c < kept.size(); ++c)
+      if (parameter_is_angle(kept[c])) j.col(static_cast<Eigen::Index>(c)) /= reach;
+    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(j).singularValues();
+    const double cond = sv[0] / sv[sv.size() - 1];
+    EXPECT_LE(r.condition_number, cap);
+    EXPECT_NEAR(r.condition_number, cond, 1e-6 * cond) << r.report();
+    EXPECT_NE(r.report().find("condition number"), std::string::npos);
+  }
+}
+
+// Distances leave the frame free; the identified model is placed by the least-squares rigid fit
+// to the initial model over the measured configurations, each counted once. At that optimum the
+// centroids agree and the cross-covariance of the centred point sets is symmetric (Kabsch: the
+// identity is the best rotation iff H = Σ a bᵀ is symmetric positive semidefinite). Counting the
+// base point once per pair (124 times) moved the centroid onto it.
+TEST(CalibrationRounding, FrameAlignedOverConfigurationsNotPairs) {
+  const CubeDistances data(-1);
+  const MdhModel& nominal = data.sim.nominal();
+  const CalibrationResult r = calibrate_distances(nominal, data.data, plain());
+  std::vector<JointVector> q{data.data.front().q_a_deg};  // the base pose, once
+  for (const auto& d : data.data) q.push_back(d.q_b_deg);
+  Eigen::Vector3d ca = Eigen::Vector3d::Zero(), cb = Eigen::Vector3d::Zero();
+  for (const auto& qk : q) {
+    ca += forward_position(r.model, qk);
+    cb += forward_position(nominal, qk);
+  }
+  ca /= static_cast<double>(q.size());
+  cb /= static_cast<double>(q.size());
+  EXPECT_LT((ca - cb).norm(), 1e-6);
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  for (const auto& qk : q) h += (forward_position(r.model, qk) - ca) * (forward_position(nominal, qk) - cb).transpose();
+  EXPECT_LT((h - h.transpose()).norm(), 1e-9 * h.norm());
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(0.5 * (h + h.transpose())).eigenvalues().minCoeff(), 0.0);
+}
+
+}  // namespace
+}  // namespace errfield::robot
