@@ -9,7 +9,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libcli11-dev nlohmann-json3-dev libnanoflann-dev
   # independent peers for cross-checks: R gstat, Orocos KDL, scipy
-  r-cran-gstat liborocos-kdl-dev python3-numpy python3-scipy
+  r-cran-gstat liborocos-kdl-dev python3-numpy python3-scipy python3-sklearn
   # report rendering check, fuzzing and sanitizers
   chromium clang libclang-rt-14-dev libomp-14-dev
 )

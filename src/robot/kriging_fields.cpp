@@ -1,5 +1,7 @@
 #include "errfield/robot/kriging_fields.hpp"
 
+#include "errfield/kriging_likelihood.hpp"
+
 #include <cmath>
 
 #include <nlohmann/json.hpp>
@@ -22,6 +24,9 @@ FieldSpace field_space_from_name(std::string_view name) {
 }
 
 void KrigingFieldOptions::validate() const {
+  if (kind == KrigingKind::Simple) throw ArgumentError("KrigingFieldOptions: simple kriging is not offered (the mean is unknown)");
+  if (kind == KrigingKind::Universal && (drift_order < 0 || drift_order > 2))
+    throw ArgumentError("KrigingFieldOptions: drift_order = " + std::to_string(drift_order) + "; expected 0, 1 or 2");
   if (!(region_margin_mm >= 0.0) || !std::isfinite(region_margin_mm))
     throw ArgumentError("KrigingFieldOptions: region_margin_mm = " + std::to_string(region_margin_mm) +
                         "; expected a finite value >= 0");
@@ -153,6 +158,8 @@ class KrigingField final : public ErrorField {
                         {"space", std::string(field_space_name(options_.space))},
                         {"model", model_.to_string()},
                         {"nugget_is_measurement_error", options_.nugget_is_measurement_error},
+                        {"kriging_kind", std::string(kriging_kind_name(options_.kind))},
+                        {"drift_order", options_.drift_order},
                         {"region_margin_mm", options_.region_margin_mm},
                         {"samples", {{"position_mm", pos}, {"joints_deg", joints}}},
                         {"values", vals}};
@@ -184,7 +191,8 @@ class KrigingField final : public ErrorField {
  private:
   static KrigingOptions kriging_options(const KrigingFieldOptions& o) {
     KrigingOptions k;
-    k.kind = KrigingKind::Ordinary;
+    k.kind = o.kind;
+    k.drift_order = o.drift_order;
     k.nugget = o.nugget_is_measurement_error ? NuggetTreatment::MeasurementError : NuggetTreatment::MicroScale;
     k.threads = 1;
     k.duplicates = DuplicatePolicy::Average;
@@ -222,7 +230,8 @@ KrigingFieldFit make_field(std::string kind, const FieldSamples& samples, std::v
                            std::optional<Eigen::Vector3d> base, bool with_leave_one_out) {
   options.validate();
   if (!options.model && options.on_stage) options.on_stage("estimating the variogram");
-  const VariogramModel model = options.model ? *options.model : estimate_field_variogram(samples, flat, options.space);
+  std::string reason;
+  const VariogramModel model = options.model ? *options.model : choose_field_model(samples, flat, options, reason);
   if (options.on_stage)
     options.on_stage("factoring the " + std::to_string(values.size()) + " x " + std::to_string(values.size()) +
                      " covariance matrix (dense Cholesky, O(N^3))");
@@ -303,6 +312,27 @@ Eigen::Matrix<double, N, 1> read_vec(const nlohmann::json& j, const std::string&
 
 }  // namespace
 
+VariogramModel choose_field_model(const FieldSamples& samples, const Eigen::MatrixXd& values,
+                                  const KrigingFieldOptions& options, std::string& reason) {
+  constexpr std::size_t kMaxLikelihoodSamples = 3000;  // O(N^3) per evaluation beyond
+  if (options.space == FieldSpace::task || samples.joints_deg.size() > kMaxLikelihoodSamples) {
+    reason = options.space == FieldSpace::task
+                 ? "empirical variogram, best weighted fit of sph/exp/gau with a nugget"
+                 : "empirical variogram (more than 3,000 samples for a likelihood fit)";
+    return estimate_field_variogram(samples, values, options.space);
+  }
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(samples.joints_deg.size()), 6);
+  for (std::size_t i = 0; i < samples.joints_deg.size(); ++i) x.row(static_cast<Eigen::Index>(i)) = samples.joints_deg[i].transpose();
+  ModelChoiceOptions mo;
+  mo.fit.kind = options.kind;
+  mo.fit.drift_order = options.drift_order;
+  mo.fit.starts = 4;
+  mo.fit.local_runs = 1;
+  const ModelChoice choice = choose_likelihood_model(x, values, mo);
+  reason = choice.reason;
+  return choice.model;
+}
+
 std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& j, const std::string& source) {
   const std::string kind = j.value("kind", std::string());
   if (kind != "distance-kriging" && kind != "vector-kriging") return nullptr;
@@ -312,6 +342,10 @@ std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& 
     if (!j.contains("model") || !j["model"].is_string()) bad(source, "member \"field.model\": expected a model string");
     o.model = VariogramModel::parse(j["model"].get<std::string>());
     o.nugget_is_measurement_error = j.value("nugget_is_measurement_error", true);
+    const std::string kk = j.value("kriging_kind", std::string("ordinary"));
+    if (kk != "ordinary" && kk != "universal") bad(source, "member \"field.kriging_kind\": '" + kk + "'; expected ordinary or universal");
+    o.kind = kk == "universal" ? KrigingKind::Universal : KrigingKind::Ordinary;
+    o.drift_order = j.value("drift_order", 1);
     o.region_margin_mm = j.value("region_margin_mm", 1e-6);
     if (!j.contains("samples") || !j.contains("values")) bad(source, "member \"field\": needs \"samples\" and \"values\"");
     const auto& pos = j["samples"].value("position_mm", nlohmann::json::array());

@@ -104,8 +104,11 @@ CrossValidationReport report(const CrossValidationSummary& s, std::string how) {
 }
 
 /// The kriging field's own leave-one-out (closed form from its factorization; KrigingFieldFit).
-CrossValidationReport kriging_report(const KrigingFieldFit& fit, FieldSpace space) {
-  std::string how = "leave-one-out, ordinary kriging in " + std::string(field_space_name(space)) + " space";
+CrossValidationReport kriging_report(const KrigingFieldFit& fit, FieldSpace space, const FitOptions& o) {
+  std::string how = "leave-one-out, " +
+                    (o.kind == KrigingKind::Universal ? "universal kriging (drift order " + std::to_string(o.drift_order) + ")"
+                                                      : std::string("ordinary kriging")) +
+                    " in " + std::string(field_space_name(space)) + " space";
   if (fit.merged_duplicates > 0)
     how += "; " + std::to_string(fit.merged_duplicates) +
            " repeated measurements averaged into their location, so one location is left out at a time";
@@ -141,6 +144,13 @@ CrossValidationReport idw_cv(const std::vector<Eigen::Vector3d>& p, const std::v
                 "not defined)");
 }
 
+/// The given model, or the one choose_field_model picks (its reason in `reason`).
+VariogramModel chosen_model(const FitOptions& o, const FieldSamples& samples, const Eigen::MatrixXd& values,
+                            const KrigingFieldOptions& ko, std::string& reason) {
+  if (o.model) return *o.model;
+  return choose_field_model(samples, values, ko, reason);
+}
+
 RegularGrid3 detect_grid(const MeasurementSet& d, std::vector<std::size_t>& sample_of_node) {
   Eigen::MatrixXd pts(static_cast<Eigen::Index>(d.nominal_mm.size()), 3);
   for (std::size_t i = 0; i < d.nominal_mm.size(); ++i) pts.row(static_cast<Eigen::Index>(i)) = d.nominal_mm[i].transpose();
@@ -155,6 +165,7 @@ RegularGrid3 detect_grid(const MeasurementSet& d, std::vector<std::size_t>& samp
 
 FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
   o.validate();
+  std::string model_reason;
   const CompensationMethod method = o.method;
   GridIdwOptions idw;
   idw.power = o.idw_power;
@@ -212,12 +223,15 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       KrigingFieldOptions ko;
       ko.on_stage = o.on_stage;
       ko.space = o.space;
+      ko.kind = o.kind;
+      ko.drift_order = o.drift_order;
       const Eigen::MatrixXd flat = Eigen::Map<const Eigen::VectorXd>(dl.data(), static_cast<Eigen::Index>(dl.size()));
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
-      ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
+      ko.model = chosen_model(o, samples, flat, ko, model_reason);
       const KrigingFieldFit fit = fit_distance_kriging_field(samples, dl, d.base_nominal_mm[o.base], ko);
-      FitResult out{CompensationModel(method, robot, fit.field), std::nullopt, kriging_report(fit, o.space), {}, {}};
+      FitResult out{CompensationModel(method, robot, fit.field), std::nullopt, kriging_report(fit, o.space, o), {}, {}};
       note_factorization(out, fit, *ko.model);
+      if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
       out.notes.push_back("variogram model " + ko.model->to_string() + "; base point b" + std::to_string(o.base));
       return out;
     }
@@ -245,15 +259,18 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       KrigingFieldOptions ko;
       ko.on_stage = o.on_stage;
       ko.space = o.space;
+      ko.kind = o.kind;
+      ko.drift_order = o.drift_order;
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(dp.size()), 3);
       for (std::size_t i = 0; i < dp.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = dp[i].transpose();
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
-      ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
+      ko.model = chosen_model(o, samples, flat, ko, model_reason);
       const KrigingFieldFit fit = fit_vector_kriging_field(samples, dp, ko);
       out.model = CompensationModel(method, robot, fit.field);
-      out.cross_validation = kriging_report(fit, o.space);
+      out.cross_validation = kriging_report(fit, o.space, o);
       out.notes.push_back("variogram model " + ko.model->to_string() + " (shared by the 3 components)");
       note_factorization(out, fit, *ko.model);
+      if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
       return out;
     }
     case CompensationMethod::kinematic:
@@ -306,15 +323,18 @@ FitResult fit_compensation_model(const MdhModel& robot, const MeasurementSet& d,
       KrigingFieldOptions ko;
       ko.on_stage = o.on_stage;
       ko.space = o.space;
+      ko.kind = o.kind;
+      ko.drift_order = o.drift_order;
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(residual.size()), 3);
       for (std::size_t i = 0; i < residual.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = residual[i].transpose();
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
-      ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
+      ko.model = chosen_model(o, samples, flat, ko, model_reason);
       const KrigingFieldFit fit = fit_vector_kriging_field(samples, residual, ko);
       out.model = CompensationModel(method, cal.model, fit.field);
-      out.cross_validation = kriging_report(fit, o.space);
+      out.cross_validation = kriging_report(fit, o.space, o);
       out.notes.push_back("residuals after calibration kriged with " + ko.model->to_string());
       note_factorization(out, fit, *ko.model);
+      if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
       return out;
     }
   }
