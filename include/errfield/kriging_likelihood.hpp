@@ -94,7 +94,8 @@ namespace errfield {
 /// (AIC = 2 nll + 2 k, or BIC = 2 nll + k log(N C)) wins among those whose covariance matrix at the
 /// samples has an estimated 1-norm condition number <= max_condition_number. A candidate beyond
 /// it is never returned; if all are, the nugget floor is raised tenfold and the choice repeated.
-/// Cost: one likelihood fit per candidate (O(N^3) per evaluation).
+/// Cost: one likelihood fit per candidate (O(n^3) per evaluation, n = min(N, choice_subsample)),
+/// plus one refit on all N samples when N > choice_subsample.
 struct ModelChoiceOptions {
   LikelihoodFitOptions fit;
   std::vector<ModelKind> kinds{ModelKind::Spherical, ModelKind::Exponential, ModelKind::Gaussian, ModelKind::Matern};
@@ -103,6 +104,10 @@ struct ModelChoiceOptions {
   bool try_ard = true;
   enum class Criterion { Aic, Bic } criterion = Criterion::Aic;
   double max_condition_number = 1e12;
+  /// With more samples than this, the candidates are compared on a deterministic random subset of
+  /// this size (the choice needs the family, not the last digit) and the winner is refitted on all
+  /// samples; 0 = always all.
+  std::size_t choice_subsample = 300;
 };
 
 struct ModelChoiceCandidate {

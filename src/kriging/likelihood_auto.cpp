@@ -1,7 +1,9 @@
 // choose_likelihood_model (kriging_likelihood.hpp): families x {isotropic, ARD} by AIC/BIC, with
 // ill-conditioned candidates refused.
 
+#include <algorithm>
 #include <cmath>
+#include <random>
 #include <limits>
 
 #include <Eigen/Cholesky>
@@ -36,9 +38,7 @@ double condition_number(const Eigen::MatrixXd& x, const VariogramModel& model) {
   return rc > 0.0 ? 1.0 / rc : std::numeric_limits<double>::infinity();
 }
 
-}  // namespace
-
-ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::MatrixXd& values,
+ModelChoice choose_among_candidates(const Eigen::MatrixXd& x, const Eigen::MatrixXd& values,
                                     const ModelChoiceOptions& o) {
   o.fit.validate();
   if (o.kinds.empty()) throw ArgumentError("model choice: no model families to try");
@@ -98,13 +98,49 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
       if (attempt > 0) choice.reason += ", nugget floor raised to " + format_number(fit.min_nugget_ratio) + " x sill";
       return choice;
     }
-    bool any_fitted = false;
-    for (const auto& c : choice.candidates) any_fitted = any_fitted || std::isfinite(c.condition_number) || c.condition_number > 0.0;
-    if (!any_fitted && attempt > 0) break;
-    fit.min_nugget_ratio = std::max(fit.min_nugget_ratio * 10.0, 1e-8) * (attempt == 0 ? 1.0 : 10.0);
+    // Every candidate ill-conditioned (or unfittable): raise the nugget floor. With nugget/sill
+    // >= N / limit the 2-norm condition number of the correlation matrix is below ~limit.
+    fit.min_nugget_ratio = std::max(fit.min_nugget_ratio * 100.0, static_cast<double>(x.rows()) / o.max_condition_number);
   }
   throw InputError("model choice: no candidate model gave a kriging system with condition number <= " +
                    format_number(o.max_condition_number));
+}
+
+}  // namespace
+
+ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::MatrixXd& values,
+                                    const ModelChoiceOptions& o) {
+  const auto n = static_cast<std::size_t>(x.rows());
+  if (o.choice_subsample == 0 || n <= o.choice_subsample) return choose_among_candidates(x, values, o);
+  std::vector<Eigen::Index> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = static_cast<Eigen::Index>(i);
+  std::mt19937_64 rng(20261123);
+  std::shuffle(order.begin(), order.end(), rng);
+  order.resize(o.choice_subsample);
+  std::sort(order.begin(), order.end());
+  const Eigen::MatrixXd xs = x(order, Eigen::placeholders::all), vs = values(order, Eigen::placeholders::all);
+  ModelChoice choice = choose_among_candidates(xs, vs, o);
+  // Refit the winning family (and isotropy) on every sample, with the nugget floor it needed.
+  ModelComponent structure = choice.model.components().front();
+  LikelihoodFitOptions f = o.fit;
+  f.fit_nugget = true;
+  f.anisotropy = choice.model.anisotropy().isotropic() ? LikelihoodFitOptions::Anisotropy::None
+                                                       : LikelihoodFitOptions::Anisotropy::Ard;
+  double cond = std::numeric_limits<double>::infinity();
+  for (int attempt = 0; attempt < 4; ++attempt) {
+    LikelihoodFitResult r = fit_likelihood(x, values, {structure}, f);
+    cond = condition_number(x, r.model);
+    if (cond <= o.max_condition_number) {
+      choice.model = r.model;
+      choice.fit = std::move(r);
+      choice.reason += " on a random subset of " + std::to_string(o.choice_subsample) + " of the " +
+                       std::to_string(n) + " samples, then refitted on all (condition number " + format_number(cond) + ")";
+      return choice;
+    }
+    f.min_nugget_ratio = std::max(f.min_nugget_ratio * 100.0, static_cast<double>(n) / o.max_condition_number);
+  }
+  throw InputError("model choice: the refit of " + choice.model.to_string() + " on all " + std::to_string(n) +
+                   " samples stays ill-conditioned (condition number " + format_number(cond) + ")");
 }
 
 }  // namespace errfield

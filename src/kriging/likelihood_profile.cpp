@@ -211,6 +211,25 @@ bool profiled_fit_supported(const ModelComponent& s) {
   }
 }
 
+double profiled_negative_log_likelihood(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const Eigen::MatrixXd& f,
+                                        const ModelComponent& structure, bool ard, bool fit_nugget, bool restricted,
+                                        const std::vector<double>& theta, std::vector<double>* gradient,
+                                        double* sigma2) {
+  Profile pr;
+  pr.x = &x;
+  pr.z = &z;
+  pr.f = &f;
+  pr.corr = correlation_of(structure);
+  pr.ard = ard;
+  pr.fit_nugget = fit_nugget;
+  pr.restricted = restricted;
+  pr.dims = static_cast<int>(x.cols());
+  if (gradient) gradient->assign(theta.size(), 0.0);
+  const double v = pr.evaluate(theta.data(), gradient ? gradient->data() : nullptr);
+  if (sigma2) *sigma2 = pr.sigma2;
+  return v;
+}
+
 LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z,
                                             const Eigen::MatrixXd& f, const ModelComponent& structure,
                                             const LikelihoodFitOptions& o) {

@@ -3,6 +3,8 @@
 // or ARD, the sill profiled out, L-BFGS on log ranges and log(nugget / sill) with analytic
 // gradients. Formulas: docs/kriging.md, "Likelihood fits".
 
+#include <vector>
+
 #include <Eigen/Core>
 
 #include "errfield/kriging_likelihood.hpp"
@@ -16,5 +18,13 @@ bool profiled_fit_supported(const ModelComponent& structure);
 /// Precondition: profiled_fit_supported(structure), inputs checked by the caller.
 LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const Eigen::MatrixXd& f,
                                             const ModelComponent& structure, const LikelihoodFitOptions& options);
+
+/// The profiled negative log-likelihood the fit minimizes, at theta = (log ranges: one, or one per
+/// coordinate when `ard`; then log(nugget / sill) when `fit_nugget`), with its analytic gradient
+/// when `gradient` is not null and the profiled sill in `sigma2`. For tests of the gradient.
+double profiled_negative_log_likelihood(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const Eigen::MatrixXd& f,
+                                        const ModelComponent& structure, bool ard, bool fit_nugget, bool restricted,
+                                        const std::vector<double>& theta, std::vector<double>* gradient,
+                                        double* sigma2 = nullptr);
 
 }  // namespace errfield::detail
