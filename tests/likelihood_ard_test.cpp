@@ -155,7 +155,7 @@ double condition_1norm(const Eigen::MatrixXd& x, const VariogramModel& m) {
 }
 
 TEST(ModelChoice, PicksTheSmallestCriterionAmongWellConditionedFits) {
-  const Field f = simulate(80, Eigen::Vector3d(8, 40, 200), 1.0, 0.02, 1, 21);
+  const Field f = simulate(50, Eigen::Vector3d(8, 40, 200), 1.0, 0.02, 1, 21);
   ModelChoiceOptions o;
   o.max_condition_number = 1e4;  // strict, so that some candidates are refused
   const ModelChoice choice = choose_likelihood_model(f.x, f.z, o);

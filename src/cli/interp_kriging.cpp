@@ -139,6 +139,10 @@ VariogramModel likelihood_auto_model(const Eigen::MatrixXd& coords, const Eigen:
   mo.fit.drift_order = kriging.drift_order;
   if (kriging.kind == KrigingKind::Simple) mo.fit.simple_mean = kriging.simple_mean.empty() ? 0.0 : kriging.simple_mean[0];
   mo.max_condition_number = kriging.max_condition_number;
+  // Ten candidates: one polished run each from the best of four screened starts is enough to rank
+  // families whose AIC differ by units.
+  mo.fit.starts = 4;
+  mo.fit.local_runs = 1;
   const ModelChoice choice = choose_likelihood_model(coords, values, mo);
   notes.push_back("--model auto: " + choice.model.to_string() + ", chosen by " + choice.reason);
   return choice.model;

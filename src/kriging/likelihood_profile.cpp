@@ -169,21 +169,21 @@ double objective(const double* theta, double* grad, void* data) {
   return std::isfinite(v) ? v : kFailed;
 }
 
-// Observed information of the profiled likelihood by central differences of the analytic
-// gradient; standard errors of the log ranges from its inverse (NaN when not positive definite).
+// Observed information of the profiled likelihood by forward differences of the analytic gradient
+// (np + 1 evaluations; the step's O(h) error, ~1e-4 relative, is far below what a standard error
+// needs); standard errors of the log ranges from its inverse (NaN when not positive definite).
 std::vector<double> log_range_errors(Profile& pr, const std::vector<double>& theta) {
   const int np = static_cast<int>(theta.size());
   const int nr = pr.range_count();
   Eigen::MatrixXd h(np, np);
-  std::vector<double> t = theta, gp(np), gm(np);
+  std::vector<double> t = theta, g0(np), gp(np);
+  pr.evaluate(theta.data(), g0.data());
   for (int i = 0; i < np; ++i) {
     const double step = 1e-4;
     t[i] = theta[i] + step;
     pr.evaluate(t.data(), gp.data());
-    t[i] = theta[i] - step;
-    pr.evaluate(t.data(), gm.data());
     t[i] = theta[i];
-    for (int j = 0; j < np; ++j) h(i, j) = (gp[j] - gm[j]) / (2.0 * step);
+    for (int j = 0; j < np; ++j) h(i, j) = (gp[j] - g0[j]) / step;
   }
   pr.evaluate(theta.data(), nullptr);  // restore sigma2 at the optimum
   const Eigen::MatrixXd hs = 0.5 * (h + h.transpose());
@@ -295,7 +295,7 @@ LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eige
   }
   if (!(best < kFailed)) throw InputError("likelihood: the covariance is not positive definite at any starting point");
   std::vector<double> se_log = log_range_errors(pr, best_theta);
-  evaluations += 2 * np + 1;
+  evaluations += np + 2;
   pr.evaluate(best_theta.data(), nullptr);
 
   std::vector<double> ranges(nr);
