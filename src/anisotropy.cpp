@@ -30,11 +30,12 @@ Anisotropy Anisotropy::ard(std::vector<double> range_multipliers) {
   Anisotropy a;
   a.type_ = Type::Ard;
   a.dimension_ = static_cast<int>(range_multipliers.size());
+  // Only the diagonal: a D x D matrix would let a long text ask for D^2 doubles.
   const std::size_t d = range_multipliers.size();
-  a.matrix_.assign(d * d, 0.0);
+  a.matrix_.assign(d, 0.0);
   for (std::size_t k = 0; k < d; ++k) {
     check_positive(range_multipliers[k], "ard multiplier of coordinate " + std::to_string(k + 1));
-    a.matrix_[k * d + k] = 1.0 / range_multipliers[k];
+    a.matrix_[k] = 1.0 / range_multipliers[k];
   }
   a.parameters_ = std::move(range_multipliers);
   return a;
@@ -116,7 +117,7 @@ void Anisotropy::apply(const double* in, double* out, int dimension) const {
     return;
   }
   if (type_ == Type::Ard) {
-    for (int k = 0; k < dimension; ++k) out[k] = in[k] * matrix_[static_cast<std::size_t>(k * dimension + k)];
+    for (int k = 0; k < dimension; ++k) out[k] = in[k] * matrix_[static_cast<std::size_t>(k)];
     return;
   }
   for (int r = 0; r < dimension; ++r) {

@@ -42,9 +42,10 @@ class Anisotropy {
   int dimension() const noexcept { return dimension_; }
   /// The numbers as given (ARD multipliers, or gstat's anis).
   const std::vector<double>& parameters() const noexcept { return parameters_; }
-  /// A, row-major D x D (empty for isotropic).
+  /// A: row-major D x D when rotated, its D diagonal entries 1/s_k for ARD, empty for isotropic.
   const std::vector<double>& matrix() const noexcept { return matrix_; }
-  /// out = A in (D doubles each; `in` and `out` must not overlap). Isotropic: a copy.
+  /// out = A in (D doubles each, D = dimension() unless isotropic; `in` and `out` must not
+  /// overlap). Isotropic: a copy.
   void apply(const double* in, double* out, int dimension) const;
   /// "ard(1,0.5)" / "anis(30,0.5)"; empty for isotropic.
   std::string to_string() const;
