@@ -130,7 +130,10 @@ void Anisotropy::apply(const double* in, double* out, int dimension) const {
 std::string Anisotropy::to_string() const {
   if (type_ == Type::None) return {};
   std::string s = type_ == Type::Ard ? "ard(" : "anis(";
-  for (std::size_t i = 0; i < parameters_.size(); ++i) s += (i ? "," : "") + format_number(parameters_[i]);
+  for (std::size_t i = 0; i < parameters_.size(); ++i) {
+    if (i) s += ',';
+    s += format_number(parameters_[i]);
+  }
   return s + ")";
 }
 

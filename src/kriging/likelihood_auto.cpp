@@ -118,7 +118,7 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
   std::shuffle(order.begin(), order.end(), rng);
   order.resize(o.choice_subsample);
   std::sort(order.begin(), order.end());
-  const Eigen::MatrixXd xs = x(order, Eigen::placeholders::all), vs = values(order, Eigen::placeholders::all);
+  const Eigen::MatrixXd xs = x(order, Eigen::all), vs = values(order, Eigen::all);
   ModelChoice choice = choose_among_candidates(xs, vs, o);
   // Refit the winning family (and isotropy) on every sample, with the nugget floor it needed.
   ModelComponent structure = choice.model.components().front();
