@@ -11,7 +11,7 @@ PACKAGES=(
   # URDF import (errfield import-urdf); kdl_parser is its peer in tests/peers
   liburdfdom-dev libkdl-parser-dev
   # independent peers for cross-checks: R gstat, Orocos KDL, scipy
-  r-cran-gstat liborocos-kdl-dev python3-numpy python3-scipy
+  r-cran-gstat liborocos-kdl-dev python3-numpy python3-scipy python3-sklearn
   # Python module (docs/python.md): pybind11 bindings, their pytest suite and example plots
   python3-dev pybind11-dev python3-pybind11 python3-pytest python3-matplotlib
   # report rendering check, fuzzing and sanitizers

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <fstream>
 #include <limits>
 
 #include <nlohmann/json.hpp>
@@ -212,13 +213,19 @@ double ModelComponent::gamma(double h) const {
   return 0.0;
 }
 
-VariogramModel::VariogramModel(std::vector<ModelComponent> components)
-    : components_(std::move(components)) {
+VariogramModel::VariogramModel(std::vector<ModelComponent> components, Anisotropy anisotropy)
+    : components_(std::move(components)), anisotropy_(std::move(anisotropy)) {
   if (components_.empty()) throw ArgumentError("variogram model: no components");
   for (std::size_t i = 0; i < components_.size(); ++i) validate(components_[i], i);
 }
 
-VariogramModel VariogramModel::parse(std::string_view text) {
+VariogramModel VariogramModel::parse(std::string_view full_text) {
+  std::string_view text = full_text;
+  Anisotropy anisotropy;
+  if (const auto at = full_text.find('@'); at != std::string_view::npos) {
+    text = full_text.substr(0, at);
+    anisotropy = Anisotropy::parse(full_text.substr(at + 1));
+  }
   std::vector<ModelComponent> components;
   int depth = 0;
   std::size_t start = 0;
@@ -238,7 +245,7 @@ VariogramModel VariogramModel::parse(std::string_view text) {
     }
   }
   if (depth != 0) throw ArgumentError("variogram model: unbalanced '(' in '" + std::string(text) + "'");
-  return VariogramModel(std::move(components));
+  return VariogramModel(std::move(components), std::move(anisotropy));
 }
 
 std::string VariogramModel::to_string() const {
@@ -260,6 +267,7 @@ std::string VariogramModel::to_string() const {
         out += "(sill=" + format_number(c.sill) + ",range=" + format_number(c.range) + ")";
     }
   }
+  if (!anisotropy_.isotropic()) out += "@" + anisotropy_.to_string();
   return out;
 }
 
@@ -312,6 +320,8 @@ void to_json(nlohmann::json& j, const VariogramModel& model) {
     if (c.kind == ModelKind::Matern) e["nu"] = c.nu;
     arr.push_back(std::move(e));
   }
+  const Anisotropy& a = model.anisotropy();
+  if (!a.isotropic()) j["anisotropy"] = {{a.type() == Anisotropy::Type::Ard ? "ard" : "anis", a.parameters()}};
   j["expression"] = model.to_string();
 }
 
@@ -338,7 +348,41 @@ void from_json(const nlohmann::json& j, VariogramModel& model) {
     if (c.kind == ModelKind::Matern) c.nu = number("nu");
     components.push_back(c);
   }
-  model = VariogramModel(std::move(components));
+  Anisotropy anisotropy;
+  if (j.contains("anisotropy")) {
+    const auto& a = j["anisotropy"];
+    auto numbers = [&](const char* key) {
+      if (!a[key].is_array()) throw ArgumentError(std::string("variogram model JSON: anisotropy.") + key + ": expected an array of numbers");
+      std::vector<double> v;
+      for (const auto& x : a[key]) {
+        if (!x.is_number()) throw ArgumentError(std::string("variogram model JSON: anisotropy.") + key + ": expected numbers");
+        v.push_back(x.get<double>());
+      }
+      return v;
+    };
+    if (!a.is_object() || a.size() != 1 || !(a.contains("ard") || a.contains("anis")))
+      throw ArgumentError("variogram model JSON: 'anisotropy' must be {\"ard\": [...]} or {\"anis\": [...]}");
+    anisotropy = a.contains("ard") ? Anisotropy::ard(numbers("ard")) : Anisotropy::rotated(numbers("anis"));
+  }
+  model = VariogramModel(std::move(components), std::move(anisotropy));
+}
+
+VariogramModel load_variogram_model(std::string_view text_or_file) {
+  const std::string s(text_or_file);
+  if (s.size() < 5 || s.compare(s.size() - 5, 5, ".json") != 0) return VariogramModel::parse(s);
+  std::ifstream in(s);
+  if (!in) throw InputError(s + ": cannot open the model JSON", s);
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(s + ": not valid JSON (" + e.what() + ")", s);
+  }
+  try {
+    return j.get<VariogramModel>();
+  } catch (const ArgumentError& e) {
+    throw InputError(s + ": " + e.what(), s);
+  }
 }
 
 }  // namespace errfield

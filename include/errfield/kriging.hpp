@@ -283,7 +283,7 @@ class Kriging {
   Kriging(std::span<const L> samples, std::span<const V> values, const VariogramModel& model,
           const KrigingOptions& options = {}, const M& metric = {},
           std::span<const double> measurement_variance = {})
-      : scales_(EuclideanEmbedding<M>::scales(metric)) {
+      : scales_(EuclideanEmbedding<M>::scales(metric)), anisotropy_(model.anisotropy()) {
     options.validate();
     if (samples.size() != values.size())
       throw ArgumentError("kriging: " + std::to_string(samples.size()) + " sample locations but " +
@@ -294,6 +294,10 @@ class Kriging {
                           " samples; expected none or one per sample");
     if (samples.empty()) throw InputError("kriging: no samples");
     dimension_ = LocationTraits<L>::size(samples[0]);
+    if (!anisotropy_.isotropic() && anisotropy_.dimension() != dimension_)
+      throw ArgumentError("kriging: the model's anisotropy " + anisotropy_.to_string() + " is for " +
+                          std::to_string(anisotropy_.dimension()) + " coordinates but locations have " +
+                          std::to_string(dimension_));
     Eigen::MatrixXd raw = to_matrix(samples, "sample");
     Eigen::MatrixXd values_matrix(static_cast<Eigen::Index>(values.size()), kComponents);
     for (std::size_t i = 0; i < values.size(); ++i)
@@ -354,14 +358,20 @@ class Kriging {
     return m;
   }
 
+  // The metric's scaling, then the model's anisotropy: the engine sees isotropic Euclidean lags,
+  // so every back end (and the local back end's neighbour search) honours both.
   Eigen::MatrixXd embed(const Eigen::MatrixXd& raw) const {
-    if (scales_.empty()) return raw;
-    if (static_cast<int>(scales_.size()) != dimension_)
+    if (scales_.empty() && anisotropy_.isotropic()) return raw;
+    if (!scales_.empty() && static_cast<int>(scales_.size()) != dimension_)
       throw ArgumentError("kriging: the metric has " + std::to_string(scales_.size()) +
                           " weights but locations have " + std::to_string(dimension_) + " coordinates");
     Eigen::MatrixXd e = raw;
-    for (int k = 0; k < dimension_; ++k) e.row(k) *= scales_[static_cast<std::size_t>(k)];
-    return e;
+    if (!scales_.empty())
+      for (int k = 0; k < dimension_; ++k) e.row(k) *= scales_[static_cast<std::size_t>(k)];
+    if (anisotropy_.isotropic()) return e;
+    Eigen::MatrixXd mapped(e.rows(), e.cols());
+    for (Eigen::Index j = 0; j < e.cols(); ++j) anisotropy_.apply(e.col(j).data(), mapped.col(j).data(), dimension_);
+    return mapped;
   }
 
   static V row_value(const Eigen::MatrixXd& m, Eigen::Index r) {
@@ -415,6 +425,7 @@ class Kriging {
   }
 
   std::vector<double> scales_;
+  Anisotropy anisotropy_;
   int dimension_ = 0;
   std::shared_ptr<const detail::KrigingEngine> engine_;
 };

@@ -9,9 +9,17 @@
 /// beta_hat = (F'K^-1F)^-1 F'K^-1 z, the negative log-likelihoods are
 ///   ML:   0.5 [ log det K + (z - F beta)'K^-1(z - F beta) + N log 2 pi ]
 ///   REML: 0.5 [ log det K + log det F'K^-1F + (z - F beta)'K^-1(z - F beta) + (N - p) log 2 pi ]
-/// (simple kriging: F empty, z minus the known mean). Scalar values only. Dense: O(N^3) per
-/// evaluation, so meant for N up to a few thousand. Coordinates are Euclidean (scale them first
-/// for a weighted metric).
+/// (simple kriging: F empty, z minus the known mean). Vector values (N x C) share one model, as
+/// kriging does (intrinsic coregionalization): the negative log-likelihood is the sum over the C
+/// columns. Dense: O(N^3) per evaluation, so meant for N up to a few thousand. Coordinates are
+/// Euclidean (scale them first for a weighted metric); a model's anisotropy (anisotropy.hpp) maps
+/// them before the lags are taken.
+///
+/// The fit of one structure (sph, exp, gau, wen, or mat with nu 0.5, 1.5 or 2.5) plus a nugget,
+/// isotropic or with one range per coordinate (ARD), profiles the sill out in closed form and
+/// minimizes over log ranges and log(nugget/sill) with analytic gradients (NLopt's L-BFGS) from the
+/// best of several screened starts; other structures (nested models, mat with another nu) are
+/// fitted isotropically by BOBYQA without gradients. The mathematics: docs/kriging.md.
 
 #include <string>
 #include <vector>
@@ -29,6 +37,17 @@ struct LikelihoodFitOptions {
   int drift_order = 1;                      ///< Universal: 0, 1 or 2
   double simple_mean = 0.0;                 ///< Simple: the known mean
   bool fit_nugget = true;                   ///< estimate a nugget (else none)
+  /// Ard: one range per coordinate (the model gets an Anisotropy::ard); needs the gradient path.
+  enum class Anisotropy { None, Ard } anisotropy = Anisotropy::None;
+  /// mat: try each of these nu and keep the most likely (empty = the structure's nu, fixed).
+  std::vector<double> matern_nu_choices;
+  /// Gradient path: starting points screened by their likelihood before the local runs.
+  int starts = 8;
+  /// Gradient path: local L-BFGS runs from the best screened starts.
+  int local_runs = 2;
+  /// Lower bound of nugget / total sill when the nugget is fitted: a floor keeps the kriging system
+  /// well conditioned (its condition number is then below ~ N / min_nugget_ratio).
+  double min_nugget_ratio = 1e-9;
   int max_evaluations = 3000;
   double relative_tolerance = 1e-9;
   /// Throws ArgumentError naming the field.
@@ -41,20 +60,74 @@ struct LikelihoodFitResult {
   int evaluations = 0;
   bool converged = false;                  ///< NLopt met a tolerance (not the evaluation limit)
   std::string message;                     ///< NLopt's outcome in words
+  int parameters = 0;                      ///< estimated covariance parameters (for AIC, BIC)
+  double aic = 0.0;                        ///< 2 nll + 2 parameters
+  double bic = 0.0;                        ///< 2 nll + parameters log(N C)
+  /// Ranges along each coordinate (one entry when isotropic) in the coordinate unit, and their
+  /// standard errors from the observed information of the profiled likelihood (delta method on
+  /// log ranges); NaN when not available (BOBYQA path, or a singular information matrix).
+  std::vector<double> ranges;
+  std::vector<double> range_standard_errors;
 };
 
 /// The (restricted) negative log-likelihood above for `model` at samples given as the rows of
-/// `coordinates` (N x D) with scalar `values` (N). Returns +infinity when K or F'K^-1F is not
+/// `coordinates` (N x D) with `values` (N x C, C >= 1; a VectorXd is one column). Returns +infinity when K or F'K^-1F is not
 /// positive definite. Throws ArgumentError for mismatched sizes or an unbounded model.
-double negative_log_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::VectorXd& values,
+double negative_log_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
                                const VariogramModel& model, const LikelihoodFitOptions& options);
 
-/// Maximizes the (restricted) likelihood over the partial sills and ranges of `structure` (kinds
-/// and Matérn nu fixed; non-zero parameters are the starting point, else data-based defaults) and
-/// a nugget, with NLopt's BOBYQA on log-parameters. Throws ArgumentError / InputError for bad
-/// input; the optimizer's outcome is in the result.
-LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::VectorXd& values,
+/// Maximizes the (restricted) likelihood over the partial sills and ranges of `structure` and a
+/// nugget (gradient path or BOBYQA, see above; BOBYQA starts from non-zero parameters of
+/// `structure`, else data-based defaults). Throws ArgumentError / InputError for bad input; the
+/// optimizer's outcome is in the result.
+LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
                                    const std::vector<ModelComponent>& structure,
                                    const LikelihoodFitOptions& options = {});
+
+}  // namespace errfield
+
+namespace errfield {
+
+/// Automatic model choice by likelihood: every family in `kinds` (mat with each nu in
+/// `matern_nu`) with a free nugget, isotropic and (if `try_ard` and D > 1) ARD, fitted by
+/// fit_likelihood with `fit`'s kind and REML/ML; the candidate with the smallest criterion
+/// (AIC = 2 nll + 2 k, or BIC = 2 nll + k log(N C)) wins among those whose covariance matrix at the
+/// samples has an estimated 1-norm condition number <= max_condition_number. A candidate beyond
+/// it is never returned; if all are, the nugget floor is raised tenfold and the choice repeated.
+/// Cost: one likelihood fit per candidate (O(n^3) per evaluation, n = min(N, choice_subsample)),
+/// plus one refit on all N samples when N > choice_subsample.
+struct ModelChoiceOptions {
+  LikelihoodFitOptions fit;
+  std::vector<ModelKind> kinds{ModelKind::Spherical, ModelKind::Exponential, ModelKind::Gaussian, ModelKind::Matern};
+  std::vector<double> matern_nu{1.5, 2.5};  ///< mat(0.5) is exp, so it is not repeated by default
+  bool try_isotropic = true;
+  bool try_ard = true;
+  enum class Criterion { Aic, Bic } criterion = Criterion::Aic;
+  double max_condition_number = 1e12;
+  /// With more samples than this, the candidates are compared on a deterministic random subset of
+  /// this size (the choice needs the family, not the last digit) and the winner is refitted on all
+  /// samples; 0 = always all.
+  std::size_t choice_subsample = 300;
+};
+
+struct ModelChoiceCandidate {
+  VariogramModel model;
+  double negative_log_likelihood = 0.0;
+  double criterion = 0.0;         ///< AIC or BIC as asked
+  double condition_number = 0.0;  ///< of the covariance at the samples (1-norm estimate)
+  bool accepted = false;          ///< fitted and well conditioned
+  std::string note;               ///< why rejected, or the optimizer's outcome
+};
+
+struct ModelChoice {
+  VariogramModel model;
+  LikelihoodFitResult fit;                       ///< of the chosen candidate
+  std::vector<ModelChoiceCandidate> candidates;  ///< every candidate tried, in order
+  std::string reason;                            ///< one line: what won and by which criterion
+};
+
+/// Throws InputError when no candidate can be fitted; ArgumentError for bad options.
+ModelChoice choose_likelihood_model(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
+                                    const ModelChoiceOptions& options = {});
 
 }  // namespace errfield

@@ -18,12 +18,17 @@
 /// Text form (parse/to_string): components joined by '+', each `kind(sill=S,range=A[,nu=V])`, or
 /// positionally `kind(S,A[,V])`; a nugget is `nug(S)`; `pow(sill=S,exponent=E)`, `lin(slope=S)`.
 /// Example: "sph(sill=0.3,range=400)+nug(0.002)".
+/// A geometric anisotropy of the whole model (anisotropy.hpp) follows an '@':
+/// "mat(sill=1,range=40,nu=2.5)+nug(0.01)@ard(1,0.5,0.25)" (ranges 40, 20, 10 along x, y, z), or
+/// "sph(sill=1,range=100)@anis(30,0.5)" (gstat's anis). Lags h below are then |A (x - y)|.
 
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include <nlohmann/json_fwd.hpp>
+
+#include "errfield/anisotropy.hpp"
 
 namespace errfield {
 
@@ -56,7 +61,7 @@ class VariogramModel {
   VariogramModel() = default;
   /// Throws ArgumentError naming the component and parameter when a parameter is out of domain
   /// (negative sill, range <= 0, nu outside (0, 100], power exponent outside (0, 2)).
-  explicit VariogramModel(std::vector<ModelComponent> components);
+  explicit VariogramModel(std::vector<ModelComponent> components, Anisotropy anisotropy = {});
 
   /// Parses the text form described above; throws ArgumentError pointing at the offending text.
   static VariogramModel parse(std::string_view text);
@@ -64,6 +69,12 @@ class VariogramModel {
   std::string to_string() const;
 
   const std::vector<ModelComponent>& components() const noexcept { return components_; }
+  /// The map of coordinate differences applied before the lag (isotropic by default).
+  const Anisotropy& anisotropy() const noexcept { return anisotropy_; }
+  /// The same components with another anisotropy.
+  VariogramModel with_anisotropy(Anisotropy anisotropy) const { return VariogramModel(components_, std::move(anisotropy)); }
+  /// The same components, isotropic: what the lag-based evaluation below uses.
+  VariogramModel isotropic_part() const { return VariogramModel(components_); }
 
   /// Semivariance at lag h >= 0 (gamma(0) = 0).
   double gamma(double h) const;
@@ -82,11 +93,18 @@ class VariogramModel {
 
  private:
   std::vector<ModelComponent> components_;
+  Anisotropy anisotropy_;
 };
 
-/// JSON form: {"components":[{"kind":"sph","sill":0.3,"range":400}, ...]} (nu only for mat).
+/// JSON form: {"components":[{"kind":"sph","sill":0.3,"range":400}, ...]} (nu only for mat), plus
+/// "anisotropy": {"ard": [s1, ...]} or {"anis": [angle, ratio]} when not isotropic.
 void to_json(nlohmann::json& j, const VariogramModel& model);
 /// Throws ArgumentError naming the offending field.
 void from_json(const nlohmann::json& j, VariogramModel& model);
+
+/// A model given on a command line or in a file: a path ending in ".json" (a model JSON as
+/// fit-variogram writes it) is read, anything else is parsed as model text. Throws ArgumentError /
+/// InputError naming the file or the text.
+VariogramModel load_variogram_model(std::string_view text_or_file);
 
 }  // namespace errfield

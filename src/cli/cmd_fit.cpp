@@ -16,7 +16,7 @@ namespace errfield::cli {
 namespace {
 
 struct FitArgs {
-  std::string robot, data, method = "distance-idw", space = "task", out, model, calibration, robust;
+  std::string robot, data, method = "distance-idw", space = "task", out, model, calibration, robust, kind = "ordinary";
   double max_condition = 1e3;
   std::vector<std::string> base_points;
   double power = 1.0, max_registration_rms = robot::kRegistrationRmsLimitMm, region_margin = 0.0;
@@ -33,7 +33,7 @@ void run_fit(const FitArgs& a) {
   o.idw_power = a.power;
   o.base = a.base;
   o.region_margin = a.region_margin;
-  if (!a.model.empty()) o.model = VariogramModel::parse(a.model);
+  if (!a.model.empty() && a.model != "auto") o.model = load_variogram_model(a.model);
   if (!a.calibration.empty()) o.calibration_data = calibration_data_from_name(a.calibration);
   if (!a.robust.empty()) {
     if (a.robust != "none" && a.robust != "igg3")
@@ -42,6 +42,12 @@ void run_fit(const FitArgs& a) {
   }
   o.calibration.max_condition_number = a.max_condition;
   o.calibration.validate();
+  if (a.kind == "universal1" || a.kind == "universal2") {
+    o.kind = KrigingKind::Universal;
+    o.drift_order = a.kind == "universal1" ? 1 : 2;
+  } else if (a.kind != "ordinary") {
+    throw ArgumentError("--kind: '" + a.kind + "'; expected ordinary, universal1 or universal2");
+  }
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.base_points) {
     const auto v = parse_numbers(b, 3, "--base-point");
@@ -108,7 +114,15 @@ void add_fit_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--space", a->space, "kriging in task (nominal positions, mm) or joint (deg) space")->capture_default_str();
   cmd->add_option("--power", a->power, "IDW power p (the paper: 1)")->capture_default_str();
-  cmd->add_option("--model", a->model, "kriging variogram model, e.g. \"gau(sill=0.05,range=400)+nug(0.001)\"; default: fitted");
+  cmd->add_option("--model", a->model,
+                  "kriging variogram model, e.g. \"gau(sill=0.05,range=400)+nug(0.001)\", or a model JSON file "
+                  "(fit-variogram --out); default (auto): in joint space the REML fit of sph/exp/gau/mat(1.5,2.5) "
+                  "+ nugget, isotropic or ARD, with the smallest AIC among well-conditioned ones; in task space the "
+                  "best weighted fit to the empirical variogram");
+  cmd->add_option("--kind", a->kind,
+                  "kriging methods: ordinary (default), universal1 or universal2 (linear / quadratic drift in the "
+                  "field's coordinates)")
+      ->capture_default_str();
   cmd->add_option("--base", a->base, "index K of the base point whose distances dist_bK the distance methods use")
       ->check(kUnsignedInteger)
       ->capture_default_str();

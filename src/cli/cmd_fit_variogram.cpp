@@ -19,9 +19,9 @@ namespace {
 
 struct FitArgs {
   std::string input, model, nugget = "free", weights = "nj_h2", out;
-  std::string method = "wls", coords, value;
-  bool weights_given = false, range_max_given = false;
-  double nu = 0.5;
+  std::string method = "wls", coords, value, anisotropy = "none", kind = "ordinary";
+  bool weights_given = false, range_max_given = false, anisotropy_given = false, kind_given = false;
+  std::string nu_text;
   bool nu_given = false;
   double range_max = 0.0;
 };
@@ -41,11 +41,21 @@ ModelComponent structure_from(const FitArgs& a) {
   if (structure.kind == ModelKind::Nugget)
     throw ArgumentError("--model: 'nug' alone has nothing to fit; use --nugget for the nugget");
   if (structure.kind == ModelKind::Matern && !a.nu_given)
-    throw ArgumentError("--model mat needs --nu (the Matérn smoothness, e.g. 0.5, 1.5, 2.5)");
+    throw ArgumentError("--model mat needs --nu (the Matérn smoothness, e.g. 0.5, 1.5, 2.5; with --method ml|reml "
+                        "also 'auto': the most likely of 0.5, 1.5 and 2.5)");
   if (structure.kind != ModelKind::Matern && a.nu_given)
     throw ArgumentError("--nu applies to --model mat only (the Matérn smoothness), not --model " + a.model);
-  if (!(a.nu > 0.0)) throw ArgumentError("--nu: " + format_number(a.nu) + "; expected > 0");
-  structure.nu = a.nu;
+  if (a.nu_given && a.nu_text != "auto") {
+    const auto res = std::from_chars(a.nu_text.data(), a.nu_text.data() + a.nu_text.size(), structure.nu);
+    if (a.nu_text.empty() || res.ec != std::errc() || res.ptr != a.nu_text.data() + a.nu_text.size() ||
+        !(structure.nu > 0.0))
+      throw ArgumentError("--nu: '" + a.nu_text + "'; expected a number > 0" +
+                          (a.method == "wls" ? std::string() : std::string(" or auto")));
+  } else if (a.nu_given && a.method == "wls") {
+    throw ArgumentError("--nu auto applies to --method ml or reml; give --nu a number with --method wls");
+  } else {
+    structure.nu = 2.5;  // a placeholder for 'auto': the fit tries 0.5, 1.5 and 2.5
+  }
   return structure;
 }
 
@@ -66,8 +76,9 @@ void print_components(const VariogramModel& model) {
 // run for hours, so it is refused up front (exit 3) with the alternative named.
 constexpr std::size_t kMaxLikelihoodSamples = 3000;
 
-/// ML/REML on the samples (kriging_likelihood.hpp): ordinary kriging's likelihood, the mean
-/// profiled out, nugget free or none.
+/// ML/REML on the samples (kriging_likelihood.hpp): the likelihood of kriging of --kind (the mean
+/// or drift profiled out), nugget free or none, isotropic or ARD, one value or a vector sharing one
+/// model.
 void run_likelihood_fit(const FitArgs& a) {
   const bool restricted = a.method == "reml";
   if (a.coords.empty() || a.value.empty())
@@ -77,6 +88,18 @@ void run_likelihood_fit(const FitArgs& a) {
   if (a.range_max_given) throw ArgumentError("--range-max applies to --method wls only");
   LikelihoodFitOptions o;
   o.restricted = restricted;
+  if (a.anisotropy == "ard") o.anisotropy = LikelihoodFitOptions::Anisotropy::Ard;
+  else if (a.anisotropy != "none") throw ArgumentError("--anisotropy: '" + a.anisotropy + "'; expected none or ard");
+  if (a.kind == "ordinary") o.kind = KrigingKind::Ordinary;
+  else if (a.kind == "universal1" || a.kind == "universal2") {
+    o.kind = KrigingKind::Universal;
+    o.drift_order = a.kind == "universal1" ? 1 : 2;
+  } else if (a.kind == "simple0") {
+    o.kind = KrigingKind::Simple;
+  } else {
+    throw ArgumentError("--kind: '" + a.kind + "'; expected ordinary, universal1, universal2 or simple0 (known mean 0)");
+  }
+  if (a.nu_given && a.nu_text == "auto") o.matern_nu_choices = {0.5, 1.5, 2.5};
   if (a.nugget == "free") o.fit_nugget = true;
   else if (a.nugget == "none") o.fit_nugget = false;
   else throw ArgumentError("--nugget: '" + a.nugget + "'; with --method " + a.method + " expected free or none");
@@ -87,9 +110,6 @@ void run_likelihood_fit(const FitArgs& a) {
                         "(sph, exp, gau, mat, wen)");
   const auto coord_names = split_column_list(a.coords, "--coords");
   const auto value_names = split_column_list(a.value, "--value");
-  if (value_names.size() != 1)
-    throw ArgumentError("--value: " + std::to_string(value_names.size()) + " columns; --method " + a.method +
-                        " fits one scalar value column");
   const CsvTable t = CsvTable::read(a.input);
   if (t.row_count() > kMaxLikelihoodSamples)
     throw ResourceError(a.input + ": " + std::to_string(t.row_count()) + " samples; --method " + a.method +
@@ -99,16 +119,34 @@ void run_likelihood_fit(const FitArgs& a) {
     throw InputError(a.input + ": " + std::to_string(t.row_count()) + " data row(s); the likelihood fit needs "
                      "at least 4 samples", a.input);
   const Eigen::MatrixXd x = t.numeric_columns(coord_names);
-  const Eigen::VectorXd z = t.numeric_columns(value_names).col(0);
+  const Eigen::MatrixXd z = t.numeric_columns(value_names);
   const LikelihoodFitResult r = with_source(a.input, [&] { return fit_likelihood(x, z, {structure}, o); });
   print_components(r.model);
   std::cout << (restricted ? "REML" : "ML") << " negative log-likelihood = " << format_number(r.negative_log_likelihood)
-            << ", " << t.row_count() << " samples, " << r.evaluations << " evaluations, status "
-            << (r.converged ? "converged" : "not converged") << " (" << r.message << ")\n";
+            << ", " << t.row_count() << " samples x " << value_names.size() << " value column(s), " << r.evaluations
+            << " evaluations, status " << (r.converged ? "converged" : "not converged") << " (" << r.message << ")\n";
+  std::cout << "AIC = " << format_number(r.aic) << ", BIC = " << format_number(r.bic) << " (" << r.parameters
+            << " covariance parameters)\n";
+  nlohmann::json ranges = nlohmann::json::array(), errors = nlohmann::json::array();
+  for (std::size_t k = 0; k < r.ranges.size(); ++k) {
+    std::cout << "  range" << (r.ranges.size() > 1 ? " along " + coord_names[k] : std::string()) << " = "
+              << format_number(r.ranges[k]) << " +- " << format_number(r.range_standard_errors[k]) << " (standard error)\n";
+    ranges.push_back(r.ranges[k]);
+    errors.push_back(std::isfinite(r.range_standard_errors[k]) ? nlohmann::json(r.range_standard_errors[k]) : nlohmann::json());
+  }
   if (!a.out.empty()) {
     nlohmann::json j = r.model;
     j["fit"] = {{"method", a.method},
                 {"nugget", a.nugget},
+                {"anisotropy", a.anisotropy},
+                {"kind", a.kind},
+                {"coords", coord_names},
+                {"values", value_names},
+                {"ranges", ranges},
+                {"range_standard_errors", errors},
+                {"aic", r.aic},
+                {"bic", r.bic},
+                {"parameters", r.parameters},
                 {"negative_log_likelihood", r.negative_log_likelihood},
                 {"samples", t.row_count()},
                 {"evaluations", r.evaluations},
@@ -123,6 +161,8 @@ void run_likelihood_fit(const FitArgs& a) {
 void run_fit(const FitArgs& a) {
   if (a.method == "ml" || a.method == "reml") return run_likelihood_fit(a);
   if (a.method != "wls") throw ArgumentError("--method: '" + a.method + "'; expected wls, ml or reml");
+  if (a.anisotropy_given) throw ArgumentError("--anisotropy applies to --method ml or reml");
+  if (a.kind_given) throw ArgumentError("--kind applies to --method ml or reml");
   if (!a.coords.empty() || !a.value.empty())
     throw ArgumentError("--coords/--value belong to --method ml or reml; --method wls reads an empirical variogram");
   VariogramFitOptions o;
@@ -215,9 +255,20 @@ void add_fit_variogram_command(CLI::App& app) {
                   "wls (default: weighted least squares on the empirical variogram), ml or reml (likelihood of the "
                   "samples; REML removes the bias of estimating the mean)");
   cmd->add_option("--coords", args->coords, "ml/reml: coordinate columns of --input, e.g. x,y,z (any unit)");
-  cmd->add_option("--value", args->value, "ml/reml: the value column, e.g. dL (value unit)");
+  cmd->add_option("--value", args->value,
+                  "ml/reml: the value column, e.g. dL, or several (ex,ey,ez): one model shared by the components, "
+                  "the sum of their log-likelihoods");
+  cmd->add_option("--anisotropy", args->anisotropy,
+                  "ml/reml: none (default, one range) or ard (one range per --coords column; the model gets @ard(...))")
+      ->each([args](const std::string&) { args->anisotropy_given = true; });
+  cmd->add_option("--kind", args->kind,
+                  "ml/reml: the kriging whose mean the likelihood profiles out: ordinary (default), universal1, "
+                  "universal2, or simple0 (known mean 0, as scikit-learn's GaussianProcessRegressor)")
+      ->each([args](const std::string&) { args->kind_given = true; });
   cmd->add_option("--model", args->model, "sph, exp, gau, mat (needs --nu), wen, pow or lin")->required();
-  cmd->add_option("--nu", args->nu, "Matérn smoothness nu (gstat's kappa), fixed during the fit")
+  cmd->add_option("--nu", args->nu_text,
+                  "Matérn smoothness nu (gstat's kappa), fixed during the fit; ml/reml: 'auto' = the most likely of "
+                  "0.5, 1.5, 2.5")
       ->each([args](const std::string&) { args->nu_given = true; });
   cmd->add_option("--nugget", args->nugget, "free (default), fixed=V (value unit^2) or none");
   cmd->add_option("--weights", args->weights,
@@ -232,7 +283,9 @@ void add_fit_variogram_command(CLI::App& app) {
       "Example:\n"
       "  errfield variogram --input errors.csv --coords x,y,z --value dL --bins 0:2200:200 --out vario.csv\n"
       "  errfield fit-variogram --input vario.csv --model sph --nugget free --weights nj_h2 --out model.json\n"
-      "  errfield fit-variogram --method reml --input errors.csv --coords x,y,z --value dL --model exp --out model.json");
+      "  errfield fit-variogram --method reml --input errors.csv --coords x,y,z --value dL --model exp --out model.json\n"
+      "  errfield fit-variogram --method reml --anisotropy ard --input res.csv --coords q1,q2,q3,q4,q5,q6 \\\n"
+      "      --value ex,ey,ez --model mat --nu 2.5 --out model.json   (then --model model.json)");
   cmd->callback([args] { run_fit(*args); });
 }
 

@@ -70,7 +70,10 @@ void run_plan(const PlanArgs& a) {
     if (a.variogram.empty() == a.variogram_model.empty())
       throw ArgumentError("--step auto needs exactly one of --variogram CSV or --variogram-model TEXT (lags in mm)");
     const VariogramModel m = a.variogram_model.empty() ? model_from_variogram_csv(a.variogram)
-                                                       : VariogramModel::parse(a.variogram_model);
+                                                       : load_variogram_model(a.variogram_model);
+    if (!m.anisotropy().isotropic())
+      throw ArgumentError("--variogram-model: the step recommendation uses one range; '" + m.to_string() +
+                          "' is anisotropic (give an isotropic model)");
     StepRecommendation rec;
     naming_options([&] { rec = recommend_grid_step(m, o.size_mm, a.gamma_max); },
                    {{"recommend_grid_step: gamma_max", "--gamma-max"}});

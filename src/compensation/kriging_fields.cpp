@@ -1,5 +1,7 @@
 #include "errfield/compensation/kriging_fields.hpp"
 
+#include "errfield/kriging_likelihood.hpp"
+
 #include <cmath>
 
 #include <nlohmann/json.hpp>
@@ -25,6 +27,9 @@ FieldSpace field_space_from_name(std::string_view name) {
 }
 
 void KrigingFieldOptions::validate() const {
+  if (kind == KrigingKind::Simple) throw ArgumentError("KrigingFieldOptions: simple kriging is not offered (the mean is unknown)");
+  if (kind == KrigingKind::Universal && (drift_order < 0 || drift_order > 2))
+    throw ArgumentError("KrigingFieldOptions: drift_order = " + std::to_string(drift_order) + "; expected 0, 1 or 2");
   if (!(region_margin_mm >= 0.0) || !std::isfinite(region_margin_mm))
     throw ArgumentError("KrigingFieldOptions: region_margin_mm = " + std::to_string(region_margin_mm) +
                         "; expected a finite value >= 0");
@@ -168,6 +173,8 @@ class KrigingField final : public ErrorField {
                         {"space", std::string(field_space_name(options_.space))},
                         {"model", model_.to_string()},
                         {"nugget_is_measurement_error", options_.nugget_is_measurement_error},
+                        {"kriging_kind", std::string(kriging_kind_name(options_.kind))},
+                        {"drift_order", options_.drift_order},
                         {"region_margin_mm", options_.region_margin_mm},
                         {"region_margin_deg", options_.region_margin_deg},
                         {"samples", {{"position_mm", pos}, {"joints_deg", joints}}},
@@ -200,7 +207,8 @@ class KrigingField final : public ErrorField {
  private:
   static KrigingOptions kriging_options(const KrigingFieldOptions& o) {
     KrigingOptions k;
-    k.kind = KrigingKind::Ordinary;
+    k.kind = o.kind;
+    k.drift_order = o.drift_order;
     k.nugget = o.nugget_is_measurement_error ? NuggetTreatment::MeasurementError : NuggetTreatment::MicroScale;
     k.threads = 1;
     k.duplicates = DuplicatePolicy::Average;
@@ -253,7 +261,8 @@ KrigingFieldFit make_field(std::string kind, const FieldSamples& samples, std::v
                         " points (a coarser grid), or --method distance-idw or position-idw, which have no such limit");
   }
   if (!options.model && options.on_stage) options.on_stage("estimating the variogram");
-  const VariogramModel model = options.model ? *options.model : estimate_field_variogram(samples, flat, options.space);
+  std::string reason;
+  const VariogramModel model = options.model ? *options.model : choose_field_model(samples, flat, options, reason);
   if (options.on_stage)
     options.on_stage("factoring the " + std::to_string(values.size()) + " x " + std::to_string(values.size()) +
                      " covariance matrix (dense Cholesky, O(N^3))");
@@ -334,6 +343,27 @@ Eigen::Matrix<double, N, 1> read_vec(const nlohmann::json& j, const std::string&
 
 }  // namespace
 
+VariogramModel choose_field_model(const FieldSamples& samples, const Eigen::MatrixXd& values,
+                                  const KrigingFieldOptions& options, std::string& reason) {
+  constexpr std::size_t kMaxLikelihoodSamples = 3000;  // O(N^3) per evaluation beyond
+  if (options.space == FieldSpace::task || samples.joints_deg.size() > kMaxLikelihoodSamples) {
+    reason = options.space == FieldSpace::task
+                 ? "empirical variogram, best weighted fit of sph/exp/gau with a nugget"
+                 : "empirical variogram (more than 3,000 samples for a likelihood fit)";
+    return estimate_field_variogram(samples, values, options.space);
+  }
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(samples.joints_deg.size()), 6);
+  for (std::size_t i = 0; i < samples.joints_deg.size(); ++i) x.row(static_cast<Eigen::Index>(i)) = samples.joints_deg[i].transpose();
+  ModelChoiceOptions mo;
+  mo.fit.kind = options.kind;
+  mo.fit.drift_order = options.drift_order;
+  mo.fit.starts = 4;
+  mo.fit.local_runs = 1;
+  const ModelChoice choice = choose_likelihood_model(x, values, mo);
+  reason = choice.reason;
+  return choice.model;
+}
+
 std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& j, const std::string& source) {
   const std::string kind = j.value("kind", std::string());
   if (kind != "distance-kriging" && kind != "vector-kriging") return nullptr;
@@ -355,6 +385,11 @@ std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& 
       o.region_margin_mm = j["region_margin_mm"].get<double>();
     if (optional("region_margin_deg", &nlohmann::json::is_number, "a number"))
       o.region_margin_deg = j["region_margin_deg"].get<double>();
+    const std::string kk = j.value("kriging_kind", std::string("ordinary"));
+    if (kk != "ordinary" && kk != "universal") bad(source, "member \"field.kriging_kind\": '" + kk + "'; expected ordinary or universal");
+    o.kind = kk == "universal" ? KrigingKind::Universal : KrigingKind::Ordinary;
+    if (optional("drift_order", &nlohmann::json::is_number_integer, "an integer"))
+      o.drift_order = j["drift_order"].get<int>();
     if (!j.contains("samples") || !j.contains("values")) bad(source, "member \"field\": needs \"samples\" and \"values\"");
     if (!j["samples"].is_object())
       bad(source, "member \"field.samples\": expected an object {position_mm, joints_deg}, got " + j["samples"].dump());

@@ -125,8 +125,11 @@ CrossValidationReport report(const CrossValidationSummary& s, std::string how) {
 }
 
 /// The kriging field's own leave-one-out (closed form from its factorization; KrigingFieldFit).
-CrossValidationReport kriging_report(const KrigingFieldFit& fit, FieldSpace space) {
-  std::string how = "leave-one-out, ordinary kriging in " + std::string(field_space_name(space)) + " space";
+CrossValidationReport kriging_report(const KrigingFieldFit& fit, FieldSpace space, const FitOptions& o) {
+  std::string how = "leave-one-out, " +
+                    (o.kind == KrigingKind::Universal ? "universal kriging (drift order " + std::to_string(o.drift_order) + ")"
+                                                      : std::string("ordinary kriging")) +
+                    " in " + std::string(field_space_name(space)) + " space";
   if (fit.merged_duplicates > 0)
     how += "; " + std::to_string(fit.merged_duplicates) +
            " repeated measurements averaged into their location, so one location is left out at a time";
@@ -170,8 +173,17 @@ KrigingFieldOptions field_options(const FitOptions& o) {
   KrigingFieldOptions ko;
   ko.on_stage = o.on_stage;
   ko.space = o.space;
+  ko.kind = o.kind;
+  ko.drift_order = o.drift_order;
   (o.space == FieldSpace::task ? ko.region_margin_mm : ko.region_margin_deg) += o.region_margin;
   return ko;
+}
+
+/// The given model, or the one choose_field_model picks (its reason in `reason`).
+VariogramModel chosen_model(const FitOptions& o, const FieldSamples& samples, const Eigen::MatrixXd& values,
+                            const KrigingFieldOptions& ko, std::string& reason) {
+  if (o.model) return *o.model;
+  return choose_field_model(samples, values, ko, reason);
 }
 
 RegularGrid3 detect_grid(const MeasurementSet& d, std::vector<std::size_t>& sample_of_node) {
@@ -191,6 +203,7 @@ namespace {
 FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
   using detail::fit_kinematic;
   using detail::KinematicFit;
+  std::string model_reason;
   const CompensationMethod method = o.method;
   GridIdwOptions idw;
   idw.power = o.idw_power;
@@ -248,10 +261,11 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       KrigingFieldOptions ko = field_options(o);
       const Eigen::MatrixXd flat = Eigen::Map<const Eigen::VectorXd>(dl.data(), static_cast<Eigen::Index>(dl.size()));
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
-      ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
+      ko.model = chosen_model(o, samples, flat, ko, model_reason);
       const KrigingFieldFit fit = fit_distance_kriging_field(samples, dl, d.base_nominal_mm[o.base], ko);
-      FitResult out{CompensationModel(method, robot, fit.field), std::nullopt, kriging_report(fit, o.space), {}, {}};
+      FitResult out{CompensationModel(method, robot, fit.field), std::nullopt, kriging_report(fit, o.space, o), {}, {}};
       note_factorization(out, fit, *ko.model);
+      if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
       out.notes.push_back("variogram model " + ko.model->to_string() + "; base point b" + std::to_string(o.base));
       return out;
     }
@@ -283,12 +297,13 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(dp.size()), 3);
       for (std::size_t i = 0; i < dp.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = dp[i].transpose();
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
-      ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
+      ko.model = chosen_model(o, samples, flat, ko, model_reason);
       const KrigingFieldFit fit = fit_vector_kriging_field(samples, dp, ko);
       out.model = CompensationModel(method, robot, fit.field);
-      out.cross_validation = kriging_report(fit, o.space);
+      out.cross_validation = kriging_report(fit, o.space, o);
       out.notes.push_back("variogram model " + ko.model->to_string() + " (shared by the 3 components)");
       note_factorization(out, fit, *ko.model);
+      if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
       return out;
     }
     case CompensationMethod::kinematic:
@@ -312,12 +327,13 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(residual.size()), 3);
       for (std::size_t i = 0; i < residual.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = residual[i].transpose();
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
-      ko.model = o.model ? *o.model : estimate_field_variogram(samples, flat, o.space);
+      ko.model = chosen_model(o, samples, flat, ko, model_reason);
       const KrigingFieldFit fit = fit_vector_kriging_field(samples, residual, ko);
       out.model = CompensationModel(method, kin.model, fit.field);
-      out.cross_validation = kriging_report(fit, o.space);
+      out.cross_validation = kriging_report(fit, o.space, o);
       out.notes.push_back("residuals after calibration kriged with " + ko.model->to_string());
       note_factorization(out, fit, *ko.model);
+      if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
       return out;
     }
   }

@@ -10,6 +10,7 @@
 #include "covariance_kernel.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
+#include "kriging/likelihood_profile.hpp"
 #include "optim/bobyqa.hpp"
 
 namespace errfield {
@@ -36,7 +37,7 @@ Eigen::MatrixXd drift(const Eigen::MatrixXd& x, const LikelihoodFitOptions& o) {
   return f;
 }
 
-double nll(const Eigen::MatrixXd& x, const Eigen::VectorXd& z, const Eigen::MatrixXd& f, const VariogramModel& model,
+double nll(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const Eigen::MatrixXd& f, const VariogramModel& model,
            bool restricted) {
   const kernels::CovarianceKernel kernel(model);
   const Eigen::Index n = x.rows(), p = f.cols();
@@ -50,7 +51,7 @@ double nll(const Eigen::MatrixXd& x, const Eigen::VectorXd& z, const Eigen::Matr
   const auto& l = llt.matrixLLT();
   double logdet = 0.0;
   for (Eigen::Index i = 0; i < n; ++i) logdet += 2.0 * std::log(l(i, i));
-  Eigen::VectorXd y = z;
+  Eigen::MatrixXd y = z;
   llt.matrixL().solveInPlace(y);
   double extra = 0.0;
   if (p > 0) {
@@ -58,23 +59,28 @@ double nll(const Eigen::MatrixXd& x, const Eigen::VectorXd& z, const Eigen::Matr
     llt.matrixL().solveInPlace(q);
     Eigen::LLT<Eigen::MatrixXd> g(q.transpose() * q);
     if (g.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
-    const Eigen::VectorXd beta = g.solve(q.transpose() * y);
+    const Eigen::MatrixXd beta = g.solve(q.transpose() * y);
     y -= q * beta;
     if (restricted)
       for (Eigen::Index i = 0; i < p; ++i) extra += 2.0 * std::log(g.matrixLLT()(i, i));
   }
+  // Vector values: the components are independent given the shared model, so the terms sum.
+  const double c = static_cast<double>(z.cols());
   const double m = restricted ? static_cast<double>(n - p) : static_cast<double>(n);
-  return 0.5 * (logdet + extra + y.squaredNorm() + m * std::log(2.0 * std::numbers::pi));
+  return 0.5 * (c * (logdet + extra) + y.squaredNorm() + c * m * std::log(2.0 * std::numbers::pi));
 }
 
-void check_input(const Eigen::MatrixXd& x, const Eigen::VectorXd& z) {
-  if (x.rows() != z.size())
-    throw ArgumentError("likelihood: " + std::to_string(x.rows()) + " coordinate rows but " + std::to_string(z.size()) +
+void check_input(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z) {
+  if (x.rows() != z.rows())
+    throw ArgumentError("likelihood: " + std::to_string(x.rows()) + " coordinate rows but " + std::to_string(z.rows()) +
                         " values");
+  if (z.cols() < 1) throw ArgumentError("likelihood: values have no column");
   if (x.rows() < 3) throw InputError("likelihood: " + std::to_string(x.rows()) + " samples; need at least 3");
   for (Eigen::Index i = 0; i < x.rows(); ++i) {
-    if (!std::isfinite(z[i]))
-      throw InputError("likelihood: value of sample " + std::to_string(i) + " is " + format_number(z[i]));
+    for (Eigen::Index c = 0; c < z.cols(); ++c)
+      if (!std::isfinite(z(i, c)))
+        throw InputError("likelihood: value of sample " + std::to_string(i) + " (component " + std::to_string(c) +
+                         ") is " + format_number(z(i, c)));
     for (Eigen::Index k = 0; k < x.cols(); ++k)
       if (!std::isfinite(x(i, k)))
         throw InputError("likelihood: coordinate " + std::to_string(k) + " of sample " + std::to_string(i) + " is " +
@@ -84,7 +90,7 @@ void check_input(const Eigen::MatrixXd& x, const Eigen::VectorXd& z) {
 
 struct Problem {
   const Eigen::MatrixXd* x;
-  const Eigen::VectorXd* z;
+  const Eigen::MatrixXd* z;
   const Eigen::MatrixXd* f;
   std::vector<ModelComponent> structure;
   bool fit_nugget;
@@ -114,6 +120,27 @@ double objective(const double* theta, void* data) {
   return std::isfinite(v) ? v : 1e300;
 }
 
+double nll_of_model(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const Eigen::MatrixXd& f,
+                    const VariogramModel& model, bool restricted) {
+  const Anisotropy& a = model.anisotropy();
+  if (a.isotropic()) return nll(x, z, f, model, restricted);
+  // The drift stays a polynomial of the given coordinates; only the lags are mapped.
+  Eigen::MatrixXd mapped(x.rows(), x.cols());
+  Eigen::VectorXd in(x.cols()), out(x.cols());
+  for (Eigen::Index i = 0; i < x.rows(); ++i) {
+    in = x.row(i).transpose();
+    a.apply(in.data(), out.data(), static_cast<int>(in.size()));
+    mapped.row(i) = out.transpose();
+  }
+  return nll(mapped, z, f, model, restricted);
+}
+
+LikelihoodFitResult fit_likelihood_checked(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
+                                           const std::vector<ModelComponent>& structure,
+                                           const LikelihoodFitOptions& options);
+LikelihoodFitResult fit_bobyqa(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
+                               const std::vector<ModelComponent>& structure, const LikelihoodFitOptions& options);
+
 }  // namespace
 
 void LikelihoodFitOptions::validate() const {
@@ -122,21 +149,82 @@ void LikelihoodFitOptions::validate() const {
   if (!std::isfinite(simple_mean)) throw ArgumentError("likelihood options: simple_mean is not finite");
   if (max_evaluations < 1) throw ArgumentError("likelihood options: max_evaluations = " + std::to_string(max_evaluations) + "; expected >= 1");
   if (!(relative_tolerance > 0.0)) throw ArgumentError("likelihood options: relative_tolerance must be > 0");
+  if (starts < 1 || local_runs < 1) throw ArgumentError("likelihood options: starts and local_runs must be >= 1");
+  if (!(min_nugget_ratio >= 0.0) || !std::isfinite(min_nugget_ratio))
+    throw ArgumentError("likelihood options: min_nugget_ratio must be a finite value >= 0");
+  for (double nu : matern_nu_choices)
+    if (!(nu > 0.0 && nu <= 100.0)) throw ArgumentError("likelihood options: matern_nu_choices has " + format_number(nu) + "; expected 0 < nu <= 100");
 }
 
-double negative_log_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::VectorXd& values,
+double negative_log_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
                                const VariogramModel& model, const LikelihoodFitOptions& options) {
   options.validate();
   check_input(coordinates, values);
-  Eigen::VectorXd z = values;
+  Eigen::MatrixXd z = values;
   if (options.kind == KrigingKind::Simple) z.array() -= options.simple_mean;
-  return nll(coordinates, z, drift(coordinates, options), model, options.restricted);
+  const Anisotropy& a = model.anisotropy();
+  if (!a.isotropic() && a.dimension() != coordinates.cols())
+    throw ArgumentError("likelihood: the model's anisotropy " + a.to_string() + " is for " +
+                        std::to_string(a.dimension()) + " coordinates but the samples have " +
+                        std::to_string(coordinates.cols()));
+  return nll_of_model(coordinates, z, drift(coordinates, options), model, options.restricted);
 }
 
-LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::VectorXd& values,
+LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
                                    const std::vector<ModelComponent>& structure, const LikelihoodFitOptions& options) {
   options.validate();
   check_input(coordinates, values);
+  LikelihoodFitResult res = fit_likelihood_checked(coordinates, values, structure, options);
+  const double n = static_cast<double>(coordinates.rows() * values.cols());
+  res.aic = 2.0 * res.negative_log_likelihood + 2.0 * res.parameters;
+  res.bic = 2.0 * res.negative_log_likelihood + res.parameters * std::log(n);
+  return res;
+}
+
+namespace {
+
+LikelihoodFitResult fit_likelihood_checked(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
+                                           const std::vector<ModelComponent>& structure,
+                                           const LikelihoodFitOptions& options) {
+  std::vector<ModelComponent> non_nugget;
+  for (const auto& c : structure)
+    if (c.kind != ModelKind::Nugget) non_nugget.push_back(c);
+  const bool ard = options.anisotropy == LikelihoodFitOptions::Anisotropy::Ard;
+  if (non_nugget.size() == 1 && non_nugget[0].kind == ModelKind::Matern && !options.matern_nu_choices.empty()) {
+    LikelihoodFitResult best;
+    bool have = false;
+    for (double nu : options.matern_nu_choices) {
+      std::vector<ModelComponent> s{non_nugget[0]};
+      s[0].nu = nu;
+      LikelihoodFitOptions o = options;
+      o.matern_nu_choices.clear();
+      LikelihoodFitResult r = fit_likelihood_checked(coordinates, values, s, o);
+      if (!have || r.negative_log_likelihood < best.negative_log_likelihood) best = std::move(r), have = true;
+    }
+    best.message += "; nu chosen among the " + std::to_string(options.matern_nu_choices.size()) + " given";
+    return best;
+  }
+  if (non_nugget.size() == 1 && detail::profiled_fit_supported(non_nugget[0])) {
+    Eigen::MatrixXd z = values;
+    if (options.kind == KrigingKind::Simple) z.array() -= options.simple_mean;
+    const Eigen::MatrixXd f = drift(coordinates, options);
+    if (f.cols() >= coordinates.rows())
+      throw InputError("likelihood: " + std::to_string(coordinates.rows()) + " samples for " +
+                       std::to_string(f.cols()) + " drift terms");
+    LikelihoodFitResult r = detail::fit_profiled_likelihood(coordinates, z, f, non_nugget[0], options);
+    // Report the likelihood of the model as written, by the plain formula (a check of the profile).
+    r.negative_log_likelihood = nll_of_model(coordinates, z, f, r.model, options.restricted);
+    return r;
+  }
+  if (ard)
+    throw ArgumentError("likelihood: ARD fits one structure of sph, exp, gau, wen or mat with nu 0.5, 1.5 or 2.5 "
+                        "(plus a nugget); got " + std::to_string(non_nugget.size()) + " structure(s)" +
+                        (non_nugget.size() == 1 ? " '" + std::string(model_kind_name(non_nugget[0].kind)) + "'" : ""));
+  return fit_bobyqa(coordinates, values, structure, options);
+}
+
+LikelihoodFitResult fit_bobyqa(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
+                               const std::vector<ModelComponent>& structure, const LikelihoodFitOptions& options) {
   Problem pr;
   for (const auto& c : structure)
     if (c.kind != ModelKind::Nugget) {
@@ -146,7 +234,7 @@ LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eig
       pr.structure.push_back(c);
     }
   if (pr.structure.empty()) throw ArgumentError("likelihood: the structure has no non-nugget component");
-  Eigen::VectorXd z = values;
+  Eigen::MatrixXd z = values;
   if (options.kind == KrigingKind::Simple) z.array() -= options.simple_mean;
   const Eigen::MatrixXd f = drift(coordinates, options);
   if (f.cols() >= coordinates.rows())
@@ -158,7 +246,7 @@ LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eig
   pr.fit_nugget = options.fit_nugget;
   pr.restricted = options.restricted;
 
-  const double var = std::max((values.array() - values.mean()).square().mean(), 1e-300);
+  const double var = std::max((values.rowwise() - values.colwise().mean()).array().square().mean(), 1e-300);
   const double extent = (coordinates.colwise().maxCoeff() - coordinates.colwise().minCoeff()).norm();
   // All samples at one place: the ranges have no scale and every covariance matrix is singular
   // without a nugget; the fit "converged" with a likelihood of inf.
@@ -195,7 +283,15 @@ LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eig
                 " at the best parameters found (" + res.model.to_string() +
                 "): the covariance matrix is singular there (duplicate locations without a nugget?); no model to "
                 "report");
+  res.parameters = static_cast<int>(x0.size());
+  for (const auto& c : res.model.components())
+    if (c.kind != ModelKind::Nugget) {
+      res.ranges.push_back(c.range);
+      res.range_standard_errors.push_back(std::numeric_limits<double>::quiet_NaN());
+    }
   return res;
 }
+
+}  // namespace
 
 }  // namespace errfield

@@ -198,9 +198,23 @@ TEST_F(VariogramCli, FitVariogramByLikelihoodMatchesTheLibraryAndRefusesWhatDoes
             "--weights nj");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("--weights applies to --method wls"), std::string::npos) << bad.err;
-  bad = run("fit-variogram --method ml --input " + path("in.csv") + " --coords x,y,z --value dx,dy --model exp");
+  // A vector value: one model shared by the components, ARD ranges; the CLI writes the library's fit.
+  const auto v = run("fit-variogram --method ml --anisotropy ard --input " + path("in.csv") +
+                     " --coords \"x [mm],y,z\" --value dx,dy --model mat --nu 1.5 --out " + path("v.json"));
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  LikelihoodFitOptions ard;
+  ard.restricted = false;
+  ard.anisotropy = LikelihoodFitOptions::Anisotropy::Ard;
+  const auto vlib = fit_likelihood(x, z.middleCols(1, 2), {{ModelKind::Matern, 0, 0, 1.5}}, ard);
+  const auto vj = nlohmann::json::parse(read("v.json"));
+  EXPECT_EQ(vj.get<VariogramModel>().to_string(), vlib.model.to_string());
+  EXPECT_EQ(vj["fit"]["ranges"].size(), 3u);
+  bad = run("fit-variogram --method ml --input " + path("in.csv") + " --coords x,y,z --value dL --model exp --anisotropy diag");
   EXPECT_EQ(bad.exit_code, 2);
-  EXPECT_NE(bad.err.find("one scalar value column"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("none or ard"), std::string::npos) << bad.err;
+  bad = run("fit-variogram --input " + path("in.csv") + " --model exp --anisotropy ard");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--anisotropy applies to --method ml or reml"), std::string::npos) << bad.err;
   bad = run("fit-variogram --method reml --input " + path("in.csv") + " --coords x,y,z --value dL --model lin");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("bounded model"), std::string::npos) << bad.err;

@@ -51,6 +51,10 @@ struct KrigingFieldOptions {
   /// The nugget stands for measurement noise (smoothing, gstat's Err) rather than micro-scale
   /// variation: predictions are of the noise-free error. Default true (tracker + repeatability).
   bool nugget_is_measurement_error = true;
+  /// Which kriging: ordinary (default) or universal with a polynomial drift of drift_order in the
+  /// field's coordinates (simple kriging is not offered: the mean of an error field is unknown).
+  KrigingKind kind = KrigingKind::Ordinary;
+  int drift_order = 1;
   double region_margin_mm = 0.0;   ///< task space
   double region_margin_deg = 0.0;  ///< joint space, per joint
   /// Called before each long stage (factoring the N x N covariance, the leave-one-out) with what it
@@ -104,6 +108,13 @@ KrigingFieldFit fit_vector_kriging_field(const FieldSamples& samples, std::vecto
 /// over the samples' lags (10 bins up to 60% of the largest lag) and the best-fitting of sph/exp/gau
 /// with a free nugget. `values` is N x K (K = 1 or 3).
 VariogramModel estimate_field_variogram(const FieldSamples& samples, const Eigen::MatrixXd& values, FieldSpace space);
+
+/// The model a field uses when none is given, and why. Joint space: choose_likelihood_model
+/// (REML with the field's kriging kind; sph/exp/gau/mat(1.5, 2.5) with a nugget, isotropic or
+/// ARD over the six joints, smallest AIC among well-conditioned fits) on up to 3,000 samples;
+/// task space: estimate_field_variogram.
+VariogramModel choose_field_model(const FieldSamples& samples, const Eigen::MatrixXd& values,
+                                  const KrigingFieldOptions& options, std::string& reason);
 
 /// Reads a kriging field from JSON (called by error_field_from_json for kinds "distance-kriging" and
 /// "vector-kriging"); nullptr for another kind.

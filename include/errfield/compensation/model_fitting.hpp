@@ -63,7 +63,9 @@ struct FitOptions {
   CompensationMethod method = CompensationMethod::distance_idw;
   FieldSpace space = FieldSpace::task;  ///< kriging methods only
   double idw_power = 1.0;               ///< IDW methods (the paper: 1)
-  std::optional<VariogramModel> model;  ///< kriging; empty = estimated
+  std::optional<VariogramModel> model;  ///< kriging; empty = chosen (choose_field_model)
+  KrigingKind kind = KrigingKind::Ordinary;  ///< kriging methods: ordinary or universal
+  int drift_order = 1;                       ///< universal kriging: polynomial drift order
   std::size_t base = 0;                 ///< which base point the distance methods use
   /// Kriging fields: how far beyond the samples' box a target is still predicted — mm in task
   /// space, degrees per joint in joint space (the box is then that of the samples' joints).
