@@ -205,6 +205,10 @@ LikelihoodFitResult fit_likelihood_checked(const Eigen::MatrixXd& coordinates, c
     return best;
   }
   if (non_nugget.size() == 1 && detail::profiled_fit_supported(non_nugget[0])) {
+    // All samples at one place: no range has a scale and the fit would "converge" to inf.
+    if (coordinates.rows() > 0 && !((coordinates.colwise().maxCoeff() - coordinates.colwise().minCoeff()).norm() > 0.0))
+      throw InputError("likelihood: all " + std::to_string(coordinates.rows()) +
+                       " samples are at one location; a variogram needs samples at different places");
     Eigen::MatrixXd z = values;
     if (options.kind == KrigingKind::Simple) z.array() -= options.simple_mean;
     const Eigen::MatrixXd f = drift(coordinates, options);
@@ -214,6 +218,11 @@ LikelihoodFitResult fit_likelihood_checked(const Eigen::MatrixXd& coordinates, c
     LikelihoodFitResult r = detail::fit_profiled_likelihood(coordinates, z, f, non_nugget[0], options);
     // Report the likelihood of the model as written, by the plain formula (a check of the profile).
     r.negative_log_likelihood = nll_of_model(coordinates, z, f, r.model, options.restricted);
+    if (!std::isfinite(r.negative_log_likelihood))
+      throw Error("likelihood: the negative log-likelihood is " + format_number(r.negative_log_likelihood) +
+                  " at the best parameters found (" + r.model.to_string() +
+                  "): the covariance matrix is singular there (duplicate locations without a nugget?); no model to "
+                  "report");
     return r;
   }
   if (ard)

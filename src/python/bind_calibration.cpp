@@ -51,8 +51,8 @@ py::dict calibrate_positions_py(const MdhModel& nominal, const py::object& q, co
     py::gil_scoped_release release;
     reg = register_tracker(nominal, data, options);
     result = calibrate_positions(reg.model, data, options);
-    // As the CLI: the identified model expressed in the registered robot frame.
-    identified = result.model.with_base(reg.model.base().inverse() * result.model.base())
+    // As the CLI: the identified model expressed in the nominal robot's base frame.
+    identified = result.model.with_base(nominal.base() * reg.model.base().inverse() * result.model.base())
                      .with_name(nominal.name() + " (calibrated, position model)");
   }
   py::list parameters, removed;
@@ -96,7 +96,7 @@ py::dict calibrate_positions_py(const MdhModel& nominal, const py::object& q, co
 
 void bind_calibration(py::module_& m) {
   m.def("calibrate_positions", &calibrate_positions_py, py::arg("robot"), py::arg("q"), py::arg("measured"),
-        py::kw_only(), py::arg("robust") = true, py::arg("k0") = 1.5, py::arg("k1") = 3.0,
+        py::kw_only(), py::arg("robust") = false, py::arg("k0") = 1.5, py::arg("k1") = 3.0,
         py::arg("max_condition") = 1e3,
         "Kinematic calibration from tracker positions, as `errfield calibrate --model position`: registration\n"
         "(tracker <- robot base, reflector offset), then MD-H + base + tool by Levenberg-Marquardt with IGG3\n"

@@ -223,7 +223,7 @@ def calibrate_positions(
     q: ArrayLike,
     measured: ArrayLike,
     *,
-    robust: bool = True,
+    robust: bool = False,
     k0: float = 1.5,
     k1: float = 3.0,
     max_condition: float = 1e3,

@@ -28,6 +28,8 @@ void OrientationExperimentOptions::validate() const {
   if (!(orientation_spread_deg > 0.0 && orientation_spread_deg <= 90.0))
     throw ArgumentError(where + "orientation_spread_deg = " + std::to_string(orientation_spread_deg) +
                         "; expected a value in (0, 90]");
+  if (!(region_margin_deg >= 0.0) || !std::isfinite(region_margin_deg))
+    throw ArgumentError(where + "region_margin_deg = " + std::to_string(region_margin_deg) + "; expected >= 0");
   if (!(region_margin_mm >= 0.0) || !std::isfinite(region_margin_mm))
     throw ArgumentError(where + "region_margin_mm = " + std::to_string(region_margin_mm) +
                         "; expected a finite value >= 0");
@@ -138,6 +140,7 @@ CaseResult run_case(const SimulatedRobot& sim, const MeasurementCube& cube, cons
     KrigingFieldOptions ko;
     ko.space = space;
     ko.region_margin_mm = o.region_margin_mm;
+    ko.region_margin_deg = o.region_margin_deg;
     try {
       ko.model = estimate_field_variogram(samples, flat, space);
       methods.push_back({std::string(field_space_name(space)), *ko.model,

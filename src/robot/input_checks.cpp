@@ -204,7 +204,7 @@ void check_distance_columns(const CsvTable& t) {
     for (std::size_t i = 0; i < d.size(); ++i) {
       const bool own_base = k < base_rows.size() && base_rows[k] == i;
       if (d[i] > 0 || (own_base && d[i] >= 0)) continue;
-      throw InputError(line_of(t, i) + ": column '" + col + "': " + format_number(d[i]) + "; expected a distance > 0 (mm) " +
+      throw InputError(line_of(t, i) + ": column '" + col + "': " + format_number(d[i]) + " mm; expected a distance > 0 " +
                            (own_base ? "" : "from base point b" + std::to_string(k) + " ") +
                            "(a tracker distance is never negative, and 0 only on the base row itself)",
                        t.source(), t.line_of_row(i), col);

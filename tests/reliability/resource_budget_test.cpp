@@ -296,15 +296,15 @@ TEST(ResourceBudget, LeaveOneOutIdwOf20000SamplesTakesSeconds) {
 // fit can do (it took seconds, then named the local and sparse back ends fit cannot select).
 TEST(ResourceBudget, FitOnA26CubedGridIdwRunsAndKrigingIsRefusedNamingWhatFitCanDo) {
   ScratchDir dir;
-  auto r = testing::run_errfield({"simulate", "--sample", "grid", "--step", "20", "--out", "g.csv"}, dir.path());
+  auto r = testing::run_errfield({"simulate", "--sample", "grid", "--step", "20", "--robot-out", "robot.json", "--out", "g.csv"}, dir.path());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   auto start = std::chrono::steady_clock::now();
-  r = testing::run_errfield({"fit", "--data", "g.csv", "--method", "distance-idw", "--out", "m.json"}, dir.path());
+  r = testing::run_errfield({"fit", "--robot", "robot.json", "--data", "g.csv", "--method", "distance-idw", "--out", "m.json"}, dir.path());
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("17576 points"));
   EXPECT_LT(seconds_since(start), 15.0);
   start = std::chrono::steady_clock::now();
-  r = testing::run_errfield({"fit", "--data", "g.csv", "--method", "distance-kriging", "--out", "k.json"}, dir.path());
+  r = testing::run_errfield({"fit", "--robot", "robot.json", "--data", "g.csv", "--method", "distance-kriging", "--out", "k.json"}, dir.path());
   EXPECT_EQ(r.exit_code, 3) << r.err;
   EXPECT_THAT(r.err, AllOf(HasSubstr("resource limit"), HasSubstr("17576 points"), HasSubstr("--method distance-idw"),
                            Not(HasSubstr("sparse")), Not(HasSubstr("local back end"))));

@@ -29,7 +29,7 @@ class SilentResults : public CliTest {
  protected:
   // SIMULATED measurements on the paper's cube (1 base row + 27 grid points at --step 250).
   void simulate(const std::string& file, const std::string& step = "250") {
-    const auto r = run("simulate --sample grid --step " + step + " --out " + path(file));
+    const auto r = run("simulate --sample grid --step " + step + " --robot-out " + path("robot.json") + " --out " + path(file));
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
   // `text` with column `col` of data row `row` (0-based, after comments and header) set to `value`
@@ -79,14 +79,14 @@ TEST_F(SilentResults, FitRefusesZeroNegativeAndAbsurdDistancesNamingFileLineAndC
   for (const auto& [v, shown] : values) {
     write("bad.csv", with_cell(g, "dist_b0", 5, v));
     for (const std::string method : {"distance-idw", "distance-kriging"}) {
-      const auto r = run("fit --data " + path("bad.csv") + " --method " + method + " --out " + path("m.json"));
+      const auto r = run("fit --robot " + path("robot.json") + " --data " + path("bad.csv") + " --method " + method + " --out " + path("m.json"));
       EXPECT_EQ(r.exit_code, 2) << v << " " << method << ": " << r.err;
       // data row 5 is on line 5 + 1 (header) + the comment lines; the message names it
       EXPECT_THAT(r.err, AllOf(HasSubstr("bad.csv:"), HasSubstr("column 'dist_b0': " + shown))) << v;
       EXPECT_FALSE(exists("m.json")) << v << " " << method;
     }
   }
-  const auto ok = run("fit --data " + path("g.csv") + " --method distance-idw --out " + path("m.json"));
+  const auto ok = run("fit --robot " + path("robot.json") + " --data " + path("g.csv") + " --method distance-idw --out " + path("m.json"));
   EXPECT_EQ(ok.exit_code, 0) << ok.err;
 }
 
@@ -96,7 +96,7 @@ TEST_F(SilentResults, CalibrateRefusesAbsurdDistancesAndAFrozenTracker) {
   simulate("g.csv");
   const std::string g = read("g.csv");
   write("far.csv", with_cell(g, "dist_b0", -1, "1e300"));
-  auto r = run("calibrate --data " + path("far.csv") + " --model distance --out " + path("c.json"));
+  auto r = run("calibrate --robot " + path("robot.json") + " --data " + path("far.csv") + " --model distance --out " + path("c.json"));
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_THAT(r.err, AllOf(HasSubstr("far.csv:"), HasSubstr("column 'dist_b0': 1e+300 mm"), HasSubstr("nominal distance")));
   EXPECT_THAT(r.out, Not(HasSubstr("converged")));
@@ -106,11 +106,11 @@ TEST_F(SilentResults, CalibrateRefusesAbsurdDistancesAndAFrozenTracker) {
   frozen = with_cell(frozen, "my", -1, "-30.25");
   frozen = with_cell(frozen, "mz", -1, "800");
   write("frozen.csv", frozen);
-  r = run("calibrate --data " + path("frozen.csv") + " --model position --out " + path("c.json"));
+  r = run("calibrate --robot " + path("robot.json") + " --data " + path("frozen.csv") + " --model position --out " + path("c.json"));
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_THAT(r.err, AllOf(HasSubstr("frozen.csv: "), HasSubstr("did not follow the reflector")));
   EXPECT_FALSE(exists("c.json"));
-  r = run("fit --data " + path("frozen.csv") + " --method position-idw --out " + path("m.json"));
+  r = run("fit --robot " + path("robot.json") + " --data " + path("frozen.csv") + " --method position-idw --out " + path("m.json"));
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_THAT(r.err, HasSubstr("did not follow the reflector"));
   EXPECT_FALSE(exists("m.json"));
@@ -229,7 +229,7 @@ TEST_F(SilentResults, AFullStandardOutputIsAFailedJob) {
 // compensate with a model whose field is null or missing applied no correction and said ok.
 TEST_F(SilentResults, CompensateRefusesAModelWithoutItsField) {
   simulate("g.csv");
-  ASSERT_EQ(run("fit --data " + path("g.csv") + " --method distance-idw --out " + path("m.json")).exit_code, 0);
+  ASSERT_EQ(run("fit --robot " + path("robot.json") + " --data " + path("g.csv") + " --method distance-idw --out " + path("m.json")).exit_code, 0);
   write("t.csv", "q1,q2,q3,q4,q5,q6\n0,-20,30,0,40,0\n");
   auto model = nlohmann::json::parse(read("m.json"));
   model["field"] = nullptr;
@@ -301,7 +301,7 @@ TEST_F(SilentResults, CommandsRunOnTheirOwnOutputsReplaceColumnsNeverDuplicate) 
   EXPECT_NO_THROW(unique("ik2.csv")) << header_of("ik2.csv");
   EXPECT_EQ(header_of("ik2.csv"), header_of("ik.csv"));
 
-  ASSERT_EQ(run("fit --data " + path("g.csv") + " --method distance-idw --out " + path("m.json")).exit_code, 0);
+  ASSERT_EQ(run("fit --robot " + path("robot.json") + " --data " + path("g.csv") + " --method distance-idw --out " + path("m.json")).exit_code, 0);
   write("t.csv", "q1,q2,q3,q4,q5,q6\n0,-20,30,0,40,0\n10,-10,20,0,30,0\n");
   ASSERT_EQ(run("compensate --model " + path("m.json") + " --targets " + path("t.csv") + " --out " + path("c.csv")).exit_code, 0);
   r = run("compensate --model " + path("m.json") + " --targets " + path("c.csv") + " --out " + path("c2.csv"));
@@ -315,11 +315,14 @@ TEST_F(SilentResults, CommandsRunOnTheirOwnOutputsReplaceColumnsNeverDuplicate) 
 // power that large is nearest-vertex interpolation.
 TEST_F(SilentResults, IdwWithAHugePowerIsTheNearestVertexNotAnEmptyPrediction) {
   simulate("g.csv");
-  ASSERT_EQ(run("fit --data " + path("g.csv") + " --method distance-idw --power 1e6 --out " + path("m.json")).exit_code, 0);
+  ASSERT_EQ(run("fit --robot " + path("robot.json") + " --data " + path("g.csv") + " --method distance-idw --power 1e6 --out " + path("m.json")).exit_code, 0);
   // Targets inside the cube but at no grid node: joints halfway between neighbouring nodes' joints.
   const CsvTable g = CsvTable::read(path("g.csv"));
   std::string t = "q1,q2,q3,q4,q5,q6\n";
-  const std::pair<std::size_t, std::size_t> neighbours[] = {{1, 2}, {5, 6}, {13, 14}};
+  // Row 0 is the base row; rows 1..27 the 3x3x3 grid (x fastest), row 14 its centre. Midpoints
+  // between the centre and three face centres lie well inside the cube, so the targets are inside
+  // the region whatever the FK's curvature between grid joints.
+  const std::pair<std::size_t, std::size_t> neighbours[] = {{14, 13}, {14, 15}, {14, 23}};
   for (const auto& [a, b] : neighbours) {
     for (int j = 0; j < 6; ++j) {
       const std::size_t col = g.column_index("q" + std::to_string(j + 1));

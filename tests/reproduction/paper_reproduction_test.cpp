@@ -138,7 +138,9 @@ TEST(Reproduction, ResultsAreSane) {
   const double joint_constant = orientation_row(e, "constant", "joint").mean_mm;
   EXPECT_LT(task_constant, 0.3 * none_constant);
   EXPECT_LT(joint_constant, 0.3 * none_constant);
-  EXPECT_LT(std::max(task_constant, joint_constant), 1.5 * std::min(task_constant, joint_constant));
+  // The joint-space field must not lose to the task-space one (its default model, chosen by REML
+  // with one range per joint, may beat it: docs/kriging.md "Automatic model choice").
+  EXPECT_LT(joint_constant, 1.5 * task_constant);
   EXPECT_GT(orientation_row(e, "varying", "-").mean_mm, none_constant);
   EXPECT_GT(e.orientation_effect_mean_mm, 0.0);
   std::cout << "[ orientation ] mean residual (mm): varying none/task/joint = "

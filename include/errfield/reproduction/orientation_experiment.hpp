@@ -38,6 +38,10 @@ struct OrientationExperimentOptions {
   /// Region margin of the fields (mm): their region is the box of the training positions widened
   /// by this, so that it covers the cube the validation poses come from.
   double region_margin_mm = 10.0;
+  /// The joint-space fields' margin (deg per joint): their region is the box of the training
+  /// joints, and the joints of poses inside the cube reach a few degrees beyond the box of the
+  /// grid's joints (the wrist's joints are not monotonic in the position).
+  double region_margin_deg = 5.0;
   /// Orientation draws tried per position before the experiment gives up on the robot (IK must
   /// converge within the joint limits, seeded at the cube seed's branch).
   int max_orientation_draws = 100;
