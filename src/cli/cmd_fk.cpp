@@ -23,6 +23,7 @@ void run_fk(const FkArgs& a) {
   robot::MdhModel model = load_robot_or_default("");
   std::optional<compensation::Registration> registration;
   if (!a.robot.empty()) {
+    if (a.robot == "list") (void)load_robot_or_default(a.robot);  // lists the built-in robots (exit 2)
     const compensation::LoadedModel loaded = compensation::load_model(a.robot);
     model = loaded.is_robot_json ? load_robot_or_default(a.robot) : loaded.model.command_model();
     registration = loaded.model.registration();

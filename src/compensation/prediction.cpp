@@ -1,10 +1,13 @@
 #include "errfield/compensation/prediction.hpp"
 
+#include <filesystem>
 #include <fstream>
 
 #include <nlohmann/json.hpp>
 
 #include "errfield/error.hpp"
+#include "errfield/json_file.hpp"
+#include "errfield/robot/builtin_robots.hpp"
 #include "errfield/robot/kinematics.hpp"
 
 namespace errfield::compensation {
@@ -37,16 +40,16 @@ PointPrediction predict_position(const CompensationModel& model, const JointVect
 }
 
 LoadedModel load_model(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError("cannot open model file '" + path + "'", path);
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw InputError(path + ": not valid JSON: " + e.what(), path);
+  // A built-in robot's name, unless a file of that name exists (as for --robot elsewhere).
+  if (const robot::BuiltinRobot* b = robot::find_builtin_robot(path); b && !std::filesystem::exists(path)) {
+    CompensationModel m(CompensationMethod::kinematic, b->model, nullptr);
+    return {std::move(m), true, "built-in robot '" + b->model.name() + "'"};
   }
+  // The one JSON reader: directories, numbers out of range and duplicate keys are bad input
+  // naming the file, never an internal error.
+  const nlohmann::json j = read_json_file(path, "model file");
   if (j.is_object() && j.contains("format")) {
-    CompensationModel m = CompensationModel::from_json(j, path);
+    CompensationModel m = with_json_source(path, [&] { return CompensationModel::from_json(j, path); });
     const std::string what = std::string(method_name(m.method())) + " model";
     return {std::move(m), false, what};
   }
@@ -55,7 +58,7 @@ LoadedModel load_model(const std::string& path) {
   std::optional<Registration> reg = find_registration(j, path);
   nlohmann::json robot_json = j;
   robot_json.erase("registration");
-  MdhModel robot = MdhModel::from_json(robot_json, path);
+  MdhModel robot = with_json_source(path, [&] { return MdhModel::from_json(robot_json, path); });
   const std::string what = "robot JSON '" + robot.name() + "'";
   CompensationModel m = CompensationModel(CompensationMethod::kinematic, std::move(robot), nullptr).with_registration(reg);
   return {std::move(m), true, what};
