@@ -113,7 +113,8 @@ struct Profile {
     double logdet = 0.0;
     for (Eigen::Index i = 0; i < n; ++i) logdet += 2.0 * std::log(llt.matrixLLT()(i, i));
     Eigen::MatrixXd y = l.solve(*z);
-    Eigen::MatrixXd q = l.solve(*f);
+    // No drift (simple kriging): Eigen's triangular solve must not see a 0-column right-hand side.
+    Eigen::MatrixXd q = p > 0 ? Eigen::MatrixXd(l.solve(*f)) : Eigen::MatrixXd(n, 0);
     Eigen::LLT<Eigen::MatrixXd> gl;
     double logdet_g = 0.0;
     if (p > 0) {

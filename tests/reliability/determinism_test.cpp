@@ -138,7 +138,7 @@ std::vector<Case> cases() {
       {"interpolate_kriging_sparse", scattered(2000),
        with(interp, {"--method", "kriging", "--backend", "sparse", "--model", "wen(sill=0.5,range=150)+nug(0.0001)"}),
        {"p.csv"}},
-      {"interpolate_kriging_auto", scattered(800), with(interp, {"--method", "kriging", "--model", "auto"}), {"p.csv"}},
+      {"interpolate_kriging_auto", scattered(200), with(interp, {"--method", "kriging", "--model", "auto"}), {"p.csv"}},
       // Universal kriging with a quadratic drift (10 terms) and N >= 1000 differed between 1 and
       // 2 threads (Eigen's own parallel products, blocked by thread count): dense and sparse,
       // interpolate and cv.
