@@ -1,5 +1,6 @@
 // `errfield fit`: a compensation model from measurements (step 3 of plan → measure → fit → compensate).
 #include <iostream>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
@@ -16,7 +17,7 @@ namespace errfield::cli {
 namespace {
 
 struct FitArgs {
-  std::string robot, data, method = "distance-idw", space = "task", out, model, calibration, robust, kind = "ordinary";
+  std::string robot, data, method = "auto", space = "auto", out, model, calibration, robust, kind = "ordinary";
   double max_condition = 1e3;
   std::vector<std::string> base_points;
   double power = 1.0, max_registration_rms = robot::kRegistrationRmsLimitMm, region_margin = 0.0;
@@ -28,8 +29,8 @@ void run_fit(const FitArgs& a) {
   using namespace compensation;
   const MdhModel model = load_robot_or_default(a.robot);
   FitOptions o;
-  o.method = method_from_name(a.method);
-  o.space = field_space_from_name(a.space);
+  if (a.method != "auto") o.method = method_from_name(a.method);
+  if (a.space != "auto") o.space = field_space_from_name(a.space);
   o.idw_power = a.power;
   o.base = a.base;
   o.region_margin = a.region_margin;
@@ -59,6 +60,15 @@ void run_fit(const FitArgs& a) {
   check_nominal_positions(table, model, !a.robot.empty());
   const MeasurementSet data = MeasurementSet::from_table(table, model, fixed);
   warn_if_metres(table, model, "fit");
+  std::optional<std::string> why;
+  if (a.method == "auto") {
+    const MethodChoice c = choose_method(data);
+    o.method = c.method;
+    why = "method auto: " + std::string(method_name(c.method)) + " (" + c.reason + ")";
+  }
+  // Every kriging method was more accurate on held-out points in joint space than in task space
+  // (docs/robot.md, "Which method"): the error of a serial arm follows its joints.
+  if (a.space == "auto") o.space = FieldSpace::joint;
   const bool from_distances = o.method == CompensationMethod::vector_kriging && data.distance_mm.size() >= 3;
   if (from_distances) check_error_vectors_from_distances(!data.base_q_deg.empty(), !data.measured_mm.empty(), a.data);
   if ((o.method == CompensationMethod::position_idw || o.method == CompensationMethod::vector_kriging) &&
@@ -75,7 +85,8 @@ void run_fit(const FitArgs& a) {
     check_registration_residual(r.registration->residual_rms_mm, data.measured_mm.size(), a.data,
                                 "registration tracker -> robot", a.max_registration_rms);
   write_file_atomically(a.out, r.model.to_json().dump(1) + "\n");
-  std::cout << "fit: method " << a.method << " on " << data.q_deg.size() << " points of " << a.data << "\n";
+  std::cout << "fit: method " << method_name(o.method) << " on " << data.q_deg.size() << " points of " << a.data << "\n";
+  if (why) std::cout << "  " << *why << "\n";
   if (r.model.field()) std::cout << "  field: " << r.model.field()->describe() << "\n";
   for (const auto& n : r.notes) std::cout << "  " << n << "\n";
   if (r.cross_validation) {
@@ -105,14 +116,19 @@ void add_fit_command(CLI::App& app) {
       "data have them: registration with the reflector offset, then the model; or from the distances to a\n"
       "base row, or to every --base-point, whose coordinates are then identified too). Prints a leave-one-out\n"
       "summary. Kriging models follow gstat's vgm: range is the scale parameter a.\n"
-      "Example: errfield fit --data grid.csv --method distance-idw --out model.json");
+      "Default (auto): kinematic+kriging in joint space when the data have tracker positions, kinematic from\n"
+      "distances otherwise: the most accurate on held-out points of the data in docs/robot.md.\n"
+      "Example: errfield fit --robot robot.json --data measured.csv --out model.json\n"
+      "Example: errfield fit --data grid.csv --method distance-idw --out model.json   (the paper's method)");
   cmd->add_option("--robot", a->robot,
                   "nominal robot JSON or built-in name (er20-c10, kr16, ur5e); default: built-in ER20-C10, no tool. "
                   "x,y,z that are not its FK (within 5 mm) are refused with the likely cause");
   cmd->add_option("--data", a->data, "measurement CSV")->required();
-  cmd->add_option("--method", a->method, "distance-idw | position-idw | distance-kriging | vector-kriging | kinematic | kinematic+kriging")
+  cmd->add_option("--method", a->method, "auto | distance-idw | position-idw | distance-kriging | vector-kriging | kinematic | kinematic+kriging; "
+                  "auto: kinematic+kriging when the data have mx,my,mz, else kinematic (from distances)")
       ->capture_default_str();
-  cmd->add_option("--space", a->space, "kriging in task (nominal positions, mm) or joint (deg) space")->capture_default_str();
+  cmd->add_option("--space", a->space, "kriging methods: the field's coordinates, task (nominal positions, mm) or joint (deg); auto = joint, "
+                  "more accurate on every held-out set in docs/robot.md")->capture_default_str();
   cmd->add_option("--power", a->power, "IDW power p (the paper: 1)")->capture_default_str();
   cmd->add_option("--model", a->model,
                   "kriging variogram model, e.g. \"gau(sill=0.05,range=400)+nug(0.001)\", or a model JSON file "

@@ -81,7 +81,7 @@ void run_simulate(const SimulateArgs& a) {
   const BuiltinRobot* builtin = nullptr;
   if (!a.robot.empty()) {
     config.nominal = load_robot_or_default(a.robot);
-    if (!std::filesystem::exists(a.robot)) builtin = find_builtin_robot(a.robot);
+    builtin = builtin_robot_unless_file(a.robot);
   }
   if (a.seed >= 0) config.seed = static_cast<std::uint64_t>(a.seed);
   if (a.measure != "positions" && a.measure != "distances" && a.measure != "both")

@@ -11,9 +11,7 @@ namespace errfield::cli {
 
 robot::MdhModel load_robot_or_default(const std::string& path) {
   if (path.empty()) return robot::MdhModel::er20_c10();
-  // A built-in name wins unless a file of that name exists (a file called "kr16" is the user's).
-  if (const robot::BuiltinRobot* b = robot::find_builtin_robot(path); b && !std::filesystem::exists(path))
-    return b->model;
+  if (const robot::BuiltinRobot* b = robot::builtin_robot_unless_file(path)) return b->model;
   if (path == "list")
     throw ArgumentError("--robot list: the built-in robots are " + robot::builtin_robot_names() +
                         " (errfield robots describes them)");

@@ -105,6 +105,20 @@ std::vector<double> MeasurementSet::distance_errors(std::size_t k) const {
   return out;
 }
 
+MethodChoice choose_method(const MeasurementSet& d) {
+  if (!d.measured_mm.empty())
+    return {CompensationMethod::kinematic_kriging, FieldSpace::joint,
+            "the data have tracker positions (mx,my,mz): kinematic calibration, then kriging of the 3-D residuals in "
+            "joint space (the most accurate on held-out points in docs/robot.md)"};
+  if (!d.distance_mm.empty())
+    return {CompensationMethod::kinematic, FieldSpace::joint,
+            "the data have distances only (dist_bK): kinematic calibration from the distances (robust to scattered "
+            "poses and varying orientation; docs/robot.md)"};
+  throw InputError(d.source + ": neither tracker positions (mx,my,mz) nor distances (dist_b0, ...): nothing to fit "
+                   "a compensation model to",
+                   d.source);
+}
+
 void FitOptions::validate() const {
   if (!(idw_power >= 0.0) || !std::isfinite(idw_power))
     throw ArgumentError("fit: idw power " + std::to_string(idw_power) + "; expected a finite value >= 0");

@@ -41,7 +41,7 @@ PointPrediction predict_position(const CompensationModel& model, const JointVect
 
 LoadedModel load_model(const std::string& path) {
   // A built-in robot's name, unless a file of that name exists (as for --robot elsewhere).
-  if (const robot::BuiltinRobot* b = robot::find_builtin_robot(path); b && !std::filesystem::exists(path)) {
+  if (const robot::BuiltinRobot* b = robot::builtin_robot_unless_file(path)) {
     CompensationModel m(CompensationMethod::kinematic, b->model, nullptr);
     return {std::move(m), true, "built-in robot '" + b->model.name() + "'"};
   }

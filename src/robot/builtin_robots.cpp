@@ -1,6 +1,7 @@
 #include "errfield/robot/builtin_robots.hpp"
 
 #include <algorithm>
+#include <filesystem>
 #include <cctype>
 
 namespace errfield::robot {
@@ -72,6 +73,15 @@ const BuiltinRobot* find_builtin_robot(const std::string& name) {
   for (const BuiltinRobot& r : builtin_robots())
     if (r.name == n) return &r;
   return nullptr;
+}
+
+const BuiltinRobot* builtin_robot_unless_file(const std::string& name_or_path) {
+  const BuiltinRobot* b = find_builtin_robot(name_or_path);
+  if (!b) return nullptr;
+  std::error_code ec;
+  const auto status = std::filesystem::status(name_or_path, ec);
+  const bool user_file = !ec && std::filesystem::exists(status) && !std::filesystem::is_directory(status);
+  return user_file ? nullptr : b;
 }
 
 std::string builtin_robot_names() {

@@ -4,8 +4,12 @@
 
 #include "errfield/robot/builtin_robots.hpp"
 
+#include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <random>
+
+#include <unistd.h>
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
@@ -110,6 +114,26 @@ TEST(BuiltinRobots, FoundByNameCaseInsensitively) {
   EXPECT_EQ(find_builtin_robot("er20")->name, "er20-c10");
   EXPECT_EQ(find_builtin_robot("ur5"), nullptr);
   EXPECT_EQ(builtin_robot_names(), "er20-c10, kr16, ur5e");
+}
+
+// A user who keeps each robot's outputs in a folder named after it ("kr16/") still means the
+// built-in robot; a file of that name is the user's robot JSON.
+TEST(BuiltinRobots, NameBeatsADirectoryButNotAFile) {
+  const auto dir = std::filesystem::temp_directory_path() / ("errfield_builtin_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir / "kr16");
+  std::ofstream(dir / "ur5e") << "{}";
+  const auto old = std::filesystem::current_path();
+  std::filesystem::current_path(dir);
+  const BuiltinRobot* from_dir = builtin_robot_unless_file("kr16");
+  const BuiltinRobot* from_file = builtin_robot_unless_file("ur5e");
+  const BuiltinRobot* absent = builtin_robot_unless_file("er20-c10");
+  std::filesystem::current_path(old);
+  std::filesystem::remove_all(dir);
+  ASSERT_NE(from_dir, nullptr);
+  EXPECT_EQ(from_dir->name, "kr16");
+  EXPECT_EQ(from_file, nullptr);
+  ASSERT_NE(absent, nullptr);
+  EXPECT_EQ(builtin_robot_unless_file("not-a-robot"), nullptr);
 }
 
 TEST(BuiltinRobots, DefaultCubesAreReachableOnOneBranch) {

@@ -102,6 +102,24 @@ struct FitResult {
   std::vector<std::string> warnings;
 };
 
+/// The method and field space a user gets without choosing (the CLI's `fit --method auto`, its
+/// default), from what the data hold, and why (one sentence for the console and the model's notes).
+/// Chosen by held-out 3-D / distance RMS on SIMULATED data (docs/robot.md, "Which method"):
+///   - tracker positions (mx,my,mz): kinematic+kriging, the residuals kriged in joint space. Best on
+///     every set measured: scattered poses of the KR 16 and the UR5e with varying orientation,
+///     rounded joints and an unknown reflector offset, and the paper's 125 mm grid (where it beats
+///     the paper's distance-idw 18x in 3-D and 7x on distances);
+///   - distances only: kinematic, calibrated from the distances. Distance-kriging in joint space is
+///     3x better on the paper's grid at constant orientation but 3x worse on scattered poses with
+///     varying orientation; the calibration is good on both.
+/// Throws InputError (naming the columns) when the data have neither.
+struct MethodChoice {
+  CompensationMethod method;
+  FieldSpace space;
+  std::string reason;
+};
+MethodChoice choose_method(const MeasurementSet& data);
+
 /// Builds the model. Throws InputError when the data have not what the method needs (names the
 /// columns). kinematic, from positions (the default when the data have mx,my,mz):
 /// register_tracker (tracker ← robot base and the reflector offset) then calibrate_positions; the

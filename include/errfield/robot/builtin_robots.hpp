@@ -32,6 +32,10 @@ const std::vector<BuiltinRobot>& builtin_robots();
 /// The built-in robot called `name` (case-insensitive; "er20" is accepted for "er20-c10"), or
 /// nothing.
 const BuiltinRobot* find_builtin_robot(const std::string& name);
+/// What a `--robot` argument names: the built-in robot of that name unless a file (not a
+/// directory: a folder called "kr16" holding a user's outputs is not a robot) of that name
+/// exists, in which case the user's file wins; nothing when it is not a built-in name.
+const BuiltinRobot* builtin_robot_unless_file(const std::string& name_or_path);
 /// "er20-c10, kr16, ur5e" for messages.
 std::string builtin_robot_names();
 
