@@ -65,6 +65,16 @@ void CalibrationOptions::validate() const {
                           std::to_string(param::kCount) + ")");
 }
 
+namespace {
+// Consecutive axes are parallel when alpha is 0 or 180 deg (anti-parallel: URDF imports and arms
+// whose joint 3 turns the other way have alpha = +-180); d and theta0 alone then cannot describe a
+// small tilt between them, Hayati's beta can.
+bool parallel_axes(double alpha_deg) {
+  const double folded = std::fmod(std::abs(alpha_deg), 180.0);
+  return folded < 1e-6 || 180.0 - folded < 1e-6;
+}
+}  // namespace
+
 std::vector<int> default_candidates(const MdhModel& model, bool with_base) {
   std::vector<int> c;
   if (with_base)
@@ -75,7 +85,7 @@ std::vector<int> default_candidates(const MdhModel& model, bool with_base) {
     c.push_back(param::link_index(i, param::kA));
     c.push_back(param::link_index(i, param::kTheta0));
     c.push_back(param::link_index(i, param::kD));
-    if (i > 0 && std::abs(model.link(i).alpha_deg) < 1e-6) c.push_back(param::link_index(i, param::kBeta));
+    if (i > 0 && parallel_axes(model.link(i).alpha_deg)) c.push_back(param::link_index(i, param::kBeta));
   }
   return c;
 }

@@ -125,7 +125,7 @@ TEST_F(ValidateCli, PredictionModeScoresHeldOutRowsWithTheStoredRegistration) {
   ASSERT_EQ(run("simulate --seed 1 --sample grid --step 125 --robot-out robot.json --out train.csv").exit_code, 0);
   ASSERT_EQ(run("simulate --seed 2 --sample cells --step 125 --out holdout.csv").exit_code, 0);
   const std::string model = "sph(sill=0.5,range=600)+nug(0.001)";
-  const CliResult fit = run("fit --robot robot.json --data train.csv --method vector-kriging --model \"" + model +
+  const CliResult fit = run("fit --robot robot.json --data train.csv --method vector-kriging --space task --model \"" + model +
                             "\" --out model.json");
   ASSERT_EQ(fit.exit_code, 0) << fit.output();
   const CliResult v = run("validate --model model.json --data holdout.csv --out points.csv --summary-out summary.json "
@@ -214,7 +214,7 @@ TEST_F(ValidateCli, EveryMethodIsScoredAndNoneChangesNothing) {
 
 TEST_F(ValidateCli, PredictWritesRobotAndTrackerPositions) {
   ASSERT_EQ(run("simulate --seed 1 --sample grid --step 125 --robot-out robot.json --out train.csv").exit_code, 0);
-  ASSERT_EQ(run("fit --robot robot.json --data train.csv --method vector-kriging --model "
+  ASSERT_EQ(run("fit --robot robot.json --data train.csv --method vector-kriging --space task --model "
                 "\"sph(sill=0.5,range=600)+nug(0.001)\" --out model.json").exit_code, 0);
   const MdhModel robot = MdhModel::load(path("robot.json"));
   const Rows train = read_rows(path("train.csv"));
@@ -306,7 +306,7 @@ TEST_F(ValidateCli, CalibratedRobotCarriesItsRegistrationIntoFk) {
 
 TEST_F(ValidateCli, TargetsModeScoresTheValidationRunAfterCompensation) {
   ASSERT_EQ(run("simulate --seed 1 --sample grid --step 125 --robot-out robot.json --out train.csv").exit_code, 0);
-  ASSERT_EQ(run("fit --robot robot.json --data train.csv --method vector-kriging --model "
+  ASSERT_EQ(run("fit --robot robot.json --data train.csv --method vector-kriging --space task --model "
                 "\"sph(sill=0.5,range=600)+nug(0.001)\" --out model.json").exit_code, 0);
   ASSERT_EQ(run("simulate --seed 3 --sample cells --step 125 --out targets.csv").exit_code, 0);
   ASSERT_EQ(run("compensate --model model.json --targets targets.csv --out joints.csv").exit_code, 0);

@@ -88,7 +88,8 @@ struct CalibrationOptions {
 
 /// Identification candidates for a model. Order matters (earlier candidates are kept when a later
 /// one is redundant with them): base (if `with_base`), tool translation, then per link alpha, a,
-/// theta0, d, and beta where |alpha_{i-1}| < 1e-6 deg (parallel axes).
+/// theta0, d, and beta where alpha_{i-1} is within 1e-6 deg of 0 or +-180 (parallel or anti-parallel
+/// axes).
 std::vector<int> default_candidates(const MdhModel& model, bool with_base);
 
 struct ParameterEstimate {
