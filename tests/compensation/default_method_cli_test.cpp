@@ -1,9 +1,10 @@
 // `errfield fit` with no --method (auto) as a new user runs it: simulate → fit with defaults →
 // validate on held-out rows, on data unlike the built-in set-up (the UR5e, scattered poses with
 // varying orientation, joints recorded to 2 decimals, an unknown reflector offset). The default
-// must be within 10 % (held-out 3-D RMS) of the best of the alternatives a user could hand-pick,
-// scored on the held-out points every model accepted (a model that refuses the hard points must not
-// look better for it). SIMULATED data.
+// must be within 10 % (held-out 3-D RMS; issue 10) of the best of the alternatives a user could
+// hand-pick, and its automatically chosen joint-space model within 5 % (issue 11) — the tighter
+// bound is asserted, scored on the held-out points every model accepted (a model that refuses the
+// hard points must not look better for it). SIMULATED data.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -62,7 +63,7 @@ double rms_over(const std::map<std::string, double>& e, const std::set<std::stri
   return std::sqrt(ss / static_cast<double>(points.size()));
 }
 
-TEST_F(DefaultMethodCli, PositionsDefaultIsWithinTenPercentOfTheBestHandPickedMethod) {
+TEST_F(DefaultMethodCli, PositionsDefaultIsWithinFivePercentOfTheBestHandPickedMethod) {
   ASSERT_EQ(run("simulate --robot ur5e --seed 11 --sample scattered:330 --orientation-spread 30 --joint-decimals 2 "
                 "--tool-offset random:20 --measure positions --robot-out r.json --out all.csv")
                 .exit_code,
@@ -96,7 +97,7 @@ TEST_F(DefaultMethodCli, PositionsDefaultIsWithinTenPercentOfTheBestHandPickedMe
     if (const double r = rms_over(errors, common); r < best) best = r, best_name = name;
   std::cout << "held-out 3-D RMS on " << common.size() << " points: default " << mine << " mm; best hand-picked ("
             << best_name << ") " << best << " mm\n";
-  EXPECT_LE(mine, 1.10 * best) << "default " << mine << " mm, best hand-picked (" << best_name << ") " << best
+  EXPECT_LE(mine, 1.05 * best) << "default " << mine << " mm, best hand-picked (" << best_name << ") " << best
                                << " mm on " << common.size() << " held-out points";
   // and the default is an actual compensation: well below the kinematic calibration alone
   EXPECT_LT(mine, 0.8 * rms_over(alt.at("kinematic"), common));
