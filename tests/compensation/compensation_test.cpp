@@ -158,5 +158,21 @@ TEST(CompensationModelJson, BadInputNamesTheProblem) {
   expect_error(j, "node_distance_error_mm");
 }
 
+// A robot nested in a model: file() is the plain path (scripts and the fuzz contract rely on it),
+// the member path is in the message and the column.
+TEST(CompensationModelJson, NestedRobotErrorNamesFileAndMemberPath) {
+  nlohmann::json j = CompensationModel(CompensationMethod::none, MdhModel::er20_c10(), nullptr).to_json();
+  j["command_model"]["links"][2]["a_mm"] = "x";
+  try {
+    CompensationModel::from_json(j, "model.json");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "model.json");
+    EXPECT_EQ(e.column(), "command_model.links[2].a_mm");
+    EXPECT_EQ(std::string(e.what()).rfind("model.json: command_model.links[2].a_mm: expected a number", 0), 0u)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace errfield::compensation

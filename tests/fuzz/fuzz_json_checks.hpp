@@ -21,8 +21,8 @@
 namespace errfield::fuzz {
 
 inline bool names_source(const InputError& e) {
-  // A nested member's reader may name it after the file ("fuzz.json (command_model)").
-  return std::string_view(e.what()).find("fuzz.json") != std::string_view::npos && e.file().rfind("fuzz.json", 0) == 0;
+  // The file is the plain path even for a nested member (its path is in the message and column).
+  return std::string_view(e.what()).find("fuzz.json") != std::string_view::npos && e.file() == "fuzz.json";
 }
 
 /// parse_json_text: bad text only ever raises InputError naming the file and a line >= 1; it
