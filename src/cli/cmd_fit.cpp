@@ -18,7 +18,7 @@ namespace {
 
 struct FitArgs {
   std::string robot, data, method = "auto", space = "auto", out, model, calibration, robust, kind = "ordinary";
-  double max_condition = 1e3;
+  double max_condition = 1e3, outlier_limit = 5.0;
   std::vector<std::string> base_points;
   double power = 1.0, max_registration_rms = robot::kRegistrationRmsLimitMm, region_margin = 0.0;
   std::size_t base = 0;
@@ -42,6 +42,7 @@ void run_fit(const FitArgs& a) {
     o.calibration.robust.enabled = a.robust == "igg3";
   }
   o.calibration.max_condition_number = a.max_condition;
+  o.outlier_limit = a.outlier_limit;
   o.calibration.validate();
   if (a.kind == "universal1" || a.kind == "universal2") {
     o.kind = KrigingKind::Universal;
@@ -159,6 +160,12 @@ void add_fit_command(CLI::App& app) {
   cmd->add_option("--max-condition", a->max_condition,
                   "kinematic methods: remove weakly identifiable parameters until the physically scaled Jacobian's "
                   "condition number is below this")
+      ->capture_default_str();
+  cmd->add_option("--outlier-limit", a->outlier_limit,
+                  "kinematic methods from positions: refit without rows whose residual after calibration is beyond this "
+                  "many robust sigmas (gross outliers: a lost reflector, a wrong row; listed in a warning); 0 keeps "
+                  "every row")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--out", a->out, "model JSON (written atomically)")->required();
   cmd->callback([a] { run_fit(*a); });

@@ -103,6 +103,69 @@ TEST_F(DefaultMethodCli, PositionsDefaultIsWithinFivePercentOfTheBestHandPickedM
   EXPECT_LT(mine, 0.8 * rms_over(alt.at("kinematic"), common));
 }
 
+/// Points whose `outlier` truth column is 1 (simulate --truth-columns).
+std::set<std::string> true_outliers(const std::string& file) {
+  const CsvTable t = CsvTable::read(file);
+  std::set<std::string> s;
+  for (std::size_t i = 0; i < t.row_count(); ++i)
+    if (t.row(i)[t.column_index("outlier")] == "1") s.insert(t.row(i)[t.column_index("point")]);
+  return s;
+}
+
+// Gross tracker outliers (4 % of rows, 3 mm) among 0.1 mm errors: kriged as if they were the field
+// they spread into their neighbourhood. The default must find exactly the simulated ones and score,
+// on the clean held-out points, as well as the same method fitted on data with the outliers removed
+// by hand (the oracle), and far better than keeping them.
+TEST_F(DefaultMethodCli, GrossOutliersAreExcludedAsAnOracleWould) {
+  ASSERT_EQ(run("simulate --robot ur5e --seed 13 --sample scattered:330 --orientation-spread 30 --joint-decimals 2 "
+                "--tool-offset random:20 --outliers 0.04:3 --truth-columns --measure positions --robot-out r.json "
+                "--out all.csv")
+                .exit_code,
+            0);
+  split("all.csv", 220, "train.csv", "hold.csv");
+  const std::set<std::string> train_bad = true_outliers(path("train.csv")), hold_bad = true_outliers(path("hold.csv"));
+  ASSERT_GE(train_bad.size(), 4u);
+  // the oracle's training file: the same rows without the simulated outliers
+  {
+    std::istringstream in(read("train.csv"));
+    std::string line, text;
+    while (std::getline(in, line)) {
+      const std::string id = line.substr(0, line.find(','));
+      if (!train_bad.count(id)) text += line + "\n";
+    }
+    write("oracle.csv", text);
+  }
+  std::string said;
+  const auto by_default = held_out_errors("", &said);
+  const auto kept_all = held_out_errors("--outlier-limit 0");
+  const errfield::testing::CliResult f = run("fit --robot r.json --data train.csv --out m.json");
+  const std::size_t at = f.err.find("gross outliers");
+  ASSERT_NE(at, std::string::npos) << f.output();
+  const std::string listed = f.err.substr(at, f.err.find('\n', at) - at);
+  for (const auto& id : train_bad) EXPECT_NE(listed.find(" " + id), std::string::npos) << id << " not in: " << listed;
+  EXPECT_NE(f.err.find(std::to_string(train_bad.size()) + " row(s) excluded"), std::string::npos) << f.err;
+
+  const errfield::testing::CliResult o = run("fit --robot r.json --data oracle.csv --out oracle.json");
+  ASSERT_EQ(o.exit_code, 0) << o.output();
+  ASSERT_EQ(run("validate --model oracle.json --data hold.csv --out oracle_points.csv").exit_code, 0);
+  std::map<std::string, double> oracle;
+  const CsvTable op = CsvTable::read(path("oracle_points.csv"));
+  for (std::size_t i = 0; i < op.row_count(); ++i)
+    if (op.row(i)[op.column_index("status")] == "ok")
+      oracle[op.row(i)[op.column_index("point")]] = op.numeric_cell(i, op.column_index("after_mm"));
+
+  std::set<std::string> clean;
+  for (const auto& [p, e] : by_default)
+    if (!hold_bad.count(p) && kept_all.count(p) && oracle.count(p)) clean.insert(p);
+  ASSERT_GE(clean.size(), 90u);
+  const double mine = rms_over(by_default, clean), oracle_rms = rms_over(oracle, clean),
+               naive = rms_over(kept_all, clean);
+  std::cout << "clean held-out 3-D RMS on " << clean.size() << " points: default " << mine << " mm, oracle "
+            << oracle_rms << " mm, outliers kept " << naive << " mm\n";
+  EXPECT_LE(mine, 1.05 * oracle_rms);
+  EXPECT_LT(mine, 0.6 * naive);
+}
+
 TEST_F(DefaultMethodCli, DistancesOnlyDefaultIsTheKinematicCalibration) {
   ASSERT_EQ(run("simulate --robot ur5e --seed 12 --sample scattered:200 --orientation-spread 30 --joint-decimals 2 "
                 "--tool-offset random:20 --measure distances --robot-out r.json --out all.csv")
