@@ -20,7 +20,8 @@ struct FitArgs {
   std::string robot, data, method = "auto", space = "auto", out, model, calibration, robust, kind = "ordinary";
   double max_condition = 1e3, outlier_limit = 5.0;
   std::vector<std::string> base_points;
-  double power = 1.0, max_registration_rms = robot::kRegistrationRmsLimitMm, region_margin = 0.0;
+  double power = 1.0, max_registration_rms = robot::kRegistrationRmsLimitMm;
+  std::optional<double> region_margin;
   std::size_t base = 0;
 };
 
@@ -149,8 +150,9 @@ void add_fit_command(CLI::App& app) {
                   "offset missing from --robot, a wrong robot (docs/robot.md)")
       ->capture_default_str();
   cmd->add_option("--region-margin", a->region_margin,
-                  "kriging: predict this far beyond the samples' box (mm in task space, deg per joint in joint space)")
-      ->capture_default_str();
+                  "kriging: predict this far beyond the samples' box (mm in task space, deg per joint in joint space); "
+                  "default 5 deg in joint space (measured, docs/robot.md), 0 mm in task space")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--calibration", a->calibration,
                   "kinematic methods: calibrate from 'position' (tracker positions mx,my,mz; the default when the "
                   "data have them) or 'distance' (dist_bK to a base point)");

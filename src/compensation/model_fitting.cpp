@@ -123,6 +123,8 @@ MethodChoice choose_method(const MeasurementSet& d) {
 void FitOptions::validate() const {
   if (!(idw_power >= 0.0) || !std::isfinite(idw_power))
     throw ArgumentError("fit: idw power " + std::to_string(idw_power) + "; expected a finite value >= 0");
+  if (region_margin && (!(*region_margin >= 0.0) || !std::isfinite(*region_margin)))
+    throw ArgumentError("fit: region margin " + std::to_string(*region_margin) + "; expected a finite value >= 0");
   if (!(outlier_limit >= 0.0) || !std::isfinite(outlier_limit))
     throw ArgumentError("fit: outlier limit " + std::to_string(outlier_limit) + "; expected a finite value >= 0 (0 = off)");
   calibration.validate();
@@ -192,7 +194,8 @@ KrigingFieldOptions field_options(const FitOptions& o) {
   ko.space = o.space;
   ko.kind = o.kind;
   ko.drift_order = o.drift_order;
-  (o.space == FieldSpace::task ? ko.region_margin_mm : ko.region_margin_deg) += o.region_margin;
+  (o.space == FieldSpace::task ? ko.region_margin_mm : ko.region_margin_deg) +=
+      o.region_margin.value_or(o.space == FieldSpace::joint ? 5.0 : 0.0);
   return ko;
 }
 
