@@ -9,6 +9,7 @@
 
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
+#include "errfield/interpolation_options.hpp"
 #include "errfield/kriging_likelihood.hpp"
 #include "errfield/variogram_fit.hpp"
 #include "errfield/variogram_model.hpp"
@@ -200,7 +201,9 @@ LikelihoodFitOptions likelihood_options(const std::string& method, const std::st
   if (method == "reml") o.restricted = true;
   else if (method == "ml") o.restricted = false;
   else throw ArgumentError("method: '" + method + "'; expected 'reml' or 'ml'");
-  const KindChoice k = kriging_kind_arg(kind, drift_order);
+  // drift_order defaults to 1 here, so it only speaks for kind="universal" (as before).
+  const KrigingKindChoice k =
+      kriging_kind_from_text(kind, kind == "universal" ? std::optional<int>(drift_order) : std::nullopt);
   o.kind = k.kind;
   o.drift_order = k.drift_order;
   o.simple_mean = mean;
