@@ -88,4 +88,5 @@ PYBIND11_MODULE(errfield, m) {
   errfield::python::bind_interpolation(m);
   errfield::python::bind_robot(m);
   errfield::python::bind_calibration(m);
+  errfield::python::bind_pipeline(m);
 }
