@@ -241,13 +241,13 @@ py::dict validate_py(const PyModel& m, const py::object& data, const py::object&
   const CompensationModel& model = m.loaded.model;
   const CsvTable table = table_arg(data, "data");
   const auto fixed = base_points_arg(base_points);
+  const MdhModel nominal = robot.is_none() ? model.nominal_model() : robot_arg(robot);
   ValidationReport r;
   {
     py::gil_scoped_release release;
     if (targets) {
       r = validate_targets(table, model.registration(), fixed);
     } else {
-      const MdhModel nominal = robot.is_none() ? model.nominal_model() : robot_arg(robot);
       r = validate_predictions(model, MeasurementSet::from_table(table, nominal, fixed));
     }
   }

@@ -228,3 +228,58 @@ def calibrate_positions(
     k1: float = 3.0,
     max_condition: float = 1e3,
 ) -> dict[str, Any]: ...
+
+# Robot pipeline (the CLI's fit / predict / compensate / validate). Columns: a dict of 1-D arrays
+# named as the CLI's CSV columns (point, kind, q1..q6 deg, x,y,z mm, mx,my,mz mm, dist_bK mm);
+# a pandas DataFrame works too. Results: dicts of NumPy arrays with the CLI's output column names.
+Columns = dict[str, Any]
+RobotLike = Robot | str | os.PathLike[str] | None
+
+class CompensationModel:
+    @staticmethod
+    def load(path: str | os.PathLike[str]) -> CompensationModel: ...
+    def save(self, path: str | os.PathLike[str]) -> None: ...
+    def to_json(self) -> str: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def description(self) -> str: ...
+    @property
+    def is_robot_json(self) -> bool: ...
+    fit_report: dict[str, Any] | None
+
+def fit(
+    data: Columns,
+    *,
+    robot: RobotLike = None,
+    method: Literal["distance-idw", "position-idw", "distance-kriging", "vector-kriging", "kinematic",
+                    "kinematic+kriging"] = "distance-idw",
+    space: Literal["task", "joint"] = "task",
+    power: float = 1.0,
+    model: str | None = None,
+    kind: Literal["ordinary", "universal1", "universal2"] = "ordinary",
+    base: int = 0,
+    base_points: ArrayLike | None = None,
+    region_margin: float = 0.0,
+    calibration: Literal["position", "distance"] | None = None,
+    robust: Literal["none", "igg3"] | None = None,
+    max_condition: float = 1e3,
+    max_registration_rms: float = 5.0,
+) -> CompensationModel: ...
+def predict(model: CompensationModel, joints: ArrayLike | Columns) -> dict[str, Any]: ...
+def compensate(
+    model: CompensationModel,
+    targets: ArrayLike | Columns,
+    *,
+    robot: RobotLike = None,
+    tolerance: float = 0.25,
+    seed: ArrayLike | None = None,
+) -> dict[str, Any]: ...
+def validate(
+    model: CompensationModel,
+    data: Columns,
+    *,
+    robot: RobotLike = None,
+    base_points: ArrayLike | None = None,
+    targets: bool = False,
+) -> dict[str, Any]: ...
