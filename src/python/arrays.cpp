@@ -1,9 +1,13 @@
 #include "python/arrays.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <sstream>
 
+#include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/builtin_robots.hpp"
+#include "errfield/robot/mdh_model.hpp"
 
 namespace errfield::python {
 
@@ -124,6 +128,72 @@ py::array_t<std::uint64_t> to_numpy(const std::vector<std::uint64_t>& v) {
   py::array_t<std::uint64_t> out(static_cast<py::ssize_t>(v.size()));
   std::copy(v.begin(), v.end(), out.mutable_data());
   return out;
+}
+
+bool is_columns(const py::handle& o) { return py::hasattr(o, "items") && !py::isinstance<py::array>(o); }
+
+/// A dict of columns as the CsvTable the CLI would read from the same CSV: numbers in shortest
+/// round-trip form (so the table holds the same doubles), NaN as an empty cell, text as it is.
+CsvTable table_arg(const py::handle& data, const std::string& name) {
+  if (!is_columns(data))
+    throw ArgumentError(name + ": expected a dict of columns (name -> 1-D array), e.g. the columns of "
+                        "`errfield simulate`; got " + std::string(py::str(py::type::of(data).attr("__name__"))));
+  std::vector<std::string> names;
+  std::vector<std::vector<std::string>> cells;
+  for (const auto item : data.attr("items")()) {
+    const auto kv = item.cast<py::tuple>();
+    const std::string col = py::str(kv[0]);
+    if (col.empty() || col.find_first_of(",\"\n\r") != std::string::npos)
+      throw ArgumentError(name + ": column name '" + col + "' is empty or holds a comma, quote or newline");
+    const py::array a = py::array::ensure(kv[1]);
+    if (!a || a.ndim() != 1) throw ArgumentError(name + "['" + col + "']: expected a 1-D column");
+    std::vector<std::string> c(static_cast<std::size_t>(a.size()));
+    const char k = a.dtype().kind();
+    if (k == 'f' || k == 'i' || k == 'u' || k == 'b') {
+      const auto v = py::array_t<double, py::array::forcecast>::ensure(a);
+      for (std::size_t i = 0; i < c.size(); ++i) {
+        const double x = v.data()[i];
+        if (std::isinf(x))
+          throw ArgumentError(name + "['" + col + "'][" + std::to_string(i) + "] is " + format_number(x) +
+                              "; expected a finite number (NaN for an empty cell)");
+        if (!std::isnan(x)) c[i] = format_number(x);
+      }
+    } else {
+      for (std::size_t i = 0; i < c.size(); ++i) {
+        c[i] = py::str(a[py::int_(i)]);
+        if (c[i].find_first_of(",\"\n\r") != std::string::npos)
+          throw ArgumentError(name + "['" + col + "'][" + std::to_string(i) + "]: '" + c[i] +
+                              "' holds a comma, quote or newline");
+      }
+    }
+    if (!cells.empty() && c.size() != cells.front().size())
+      throw ArgumentError(name + "['" + col + "']: " + std::to_string(c.size()) + " rows but '" + names.front() +
+                          "' has " + std::to_string(cells.front().size()) + "; expected columns of one length");
+    names.push_back(col);
+    cells.push_back(std::move(c));
+  }
+  if (names.empty()) throw ArgumentError(name + ": no columns");
+  std::string text;
+  for (std::size_t j = 0; j < names.size(); ++j) text += (j ? "," : "") + names[j];
+  text += "\n";
+  for (std::size_t i = 0; i < cells.front().size(); ++i) {
+    for (std::size_t j = 0; j < names.size(); ++j) text += (j ? "," : "") + cells[j][i];
+    text += "\n";
+  }
+  return CsvTable::parse(text, name);
+}
+
+/// None: the built-in ER20-C10 (as the CLI without --robot); a Robot; a built-in name or a robot
+/// JSON path (a file of a built-in's name wins, as in the CLI).
+robot::MdhModel robot_arg(const py::object& r) {
+  if (r.is_none()) return robot::MdhModel::er20_c10();
+  if (py::isinstance<robot::MdhModel>(r)) return r.cast<robot::MdhModel>();
+  const std::string path = py::str(r);
+  if (const robot::BuiltinRobot* b = robot::find_builtin_robot(path); b && !std::filesystem::exists(path)) return b->model;
+  if (!std::filesystem::exists(path))
+    throw InputError("robot '" + path + "': no such file and not a built-in robot (" + robot::builtin_robot_names() + ")",
+                     path);
+  return robot::MdhModel::load(path);
 }
 
 }  // namespace errfield::python

@@ -11,6 +11,13 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+namespace errfield {
+class CsvTable;
+namespace robot {
+class MdhModel;
+}
+}  // namespace errfield
+
 namespace errfield::python {
 
 namespace py = pybind11;
@@ -46,5 +53,17 @@ py::array_t<double, py::array::c_style> float_array(const py::handle& object, co
 py::array_t<double> to_numpy(const Eigen::MatrixXd& m, bool squeeze_cols = false);
 py::array_t<double> to_numpy(const std::vector<double>& v);
 py::array_t<std::uint64_t> to_numpy(const std::vector<std::uint64_t>& v);
+
+/// True for a dict-like of columns (has items(), not an array): a dict, a pandas DataFrame.
+bool is_columns(const py::handle& object);
+
+/// A dict of columns (name -> 1-D array; numbers, or text such as point and kind) as the CsvTable
+/// the CLI reads from the same CSV, `name` as its source in messages. Numbers go through their
+/// shortest round-trip text, so the table holds the same doubles; NaN is an empty cell.
+CsvTable table_arg(const py::handle& data, const std::string& name);
+
+/// None: the built-in ER20-C10 (the CLI without --robot); a Robot; a built-in name or a robot JSON
+/// path (a file of a built-in's name wins, as in the CLI).
+robot::MdhModel robot_arg(const py::object& robot);
 
 }  // namespace errfield::python
