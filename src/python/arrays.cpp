@@ -1,5 +1,6 @@
 #include "python/arrays.hpp"
 
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <sstream>
@@ -53,8 +54,23 @@ py::array_t<double, py::array::c_style> float_array(const py::handle& object, co
   return as_float_array(object, name);
 }
 
-MatrixArg matrix_arg(const py::handle& object, const std::string& name, const ArraySpec& spec) {
-  const auto a = as_float_array(object, name);
+namespace {
+
+std::atomic<std::size_t> g_input_copies{0};
+
+// The checked float64 C-ordered array of an argument and its shape as rows x cols; no copy when
+// the object already is such an array (NumPy returns it as it is), else one conversion, counted.
+struct Checked {
+  py::array_t<double, py::array::c_style> array;
+  Eigen::Index rows = 0, cols = 0;
+  bool one_d = false;
+};
+
+Checked checked_array(const py::handle& object, const std::string& name, const ArraySpec& spec) {
+  Checked c;
+  c.array = as_float_array(object, name);
+  if (c.array.ptr() != object.ptr()) ++g_input_copies;
+  const auto& a = c.array;
   const auto nd = static_cast<int>(a.ndim());
   if (nd < spec.min_ndim || nd > spec.max_ndim) {
     std::string expected = spec.min_ndim == spec.max_ndim ? std::to_string(spec.min_ndim) + "-D"
@@ -63,36 +79,52 @@ MatrixArg matrix_arg(const py::handle& object, const std::string& name, const Ar
     throw ArgumentError(name + ": array of shape " + shape_text(a) + " is " + std::to_string(nd) + "-D; expected " +
                         expected);
   }
-  MatrixArg out;
-  out.one_d = nd == 1;
-  Eigen::Index rows = 0, cols = 0;
+  c.one_d = nd == 1;
   if (nd == 1) {
-    rows = spec.one_d_is_row ? 1 : static_cast<Eigen::Index>(a.shape(0));
-    cols = spec.one_d_is_row ? static_cast<Eigen::Index>(a.shape(0)) : 1;
+    c.rows = spec.one_d_is_row ? 1 : static_cast<Eigen::Index>(a.shape(0));
+    c.cols = spec.one_d_is_row ? static_cast<Eigen::Index>(a.shape(0)) : 1;
   } else {
-    rows = static_cast<Eigen::Index>(a.shape(0));
-    cols = static_cast<Eigen::Index>(a.shape(1));
+    c.rows = static_cast<Eigen::Index>(a.shape(0));
+    c.cols = static_cast<Eigen::Index>(a.shape(1));
   }
-  if (spec.cols >= 0 && cols != spec.cols)
-    throw ArgumentError(name + ": array of shape " + shape_text(a) + " has " + std::to_string(cols) +
+  if (spec.cols >= 0 && c.cols != spec.cols)
+    throw ArgumentError(name + ": array of shape " + shape_text(a) + " has " + std::to_string(c.cols) +
                         (spec.one_d_is_row && nd == 1 ? " elements" : " columns") + "; expected " +
                         std::to_string(spec.cols));
-  if (rows < spec.min_rows)
-    throw ArgumentError(name + ": array of shape " + shape_text(a) + " has " + std::to_string(rows) +
+  if (c.rows < spec.min_rows)
+    throw ArgumentError(name + ": array of shape " + shape_text(a) + " has " + std::to_string(c.rows) +
                         " rows; expected at least " + std::to_string(spec.min_rows));
-  out.data.resize(rows, cols);
-  const double* p = a.data();
-  for (Eigen::Index r = 0; r < rows; ++r)
-    for (Eigen::Index c = 0; c < cols; ++c) {
-      const double v = p[r * cols + c];
-      if (spec.finite && !std::isfinite(v)) {
-        const std::string where = nd == 1 ? "[" + std::to_string(nd == 1 && spec.one_d_is_row ? c : r) + "]"
-                                          : "[" + std::to_string(r) + ", " + std::to_string(c) + "]";
+  if (spec.finite) {
+    const double* p = a.data();
+    for (Eigen::Index r = 0; r < c.rows; ++r)
+      for (Eigen::Index k = 0; k < c.cols; ++k) {
+        const double v = p[r * c.cols + k];
+        if (std::isfinite(v)) continue;
+        const std::string where = nd == 1 ? "[" + std::to_string(spec.one_d_is_row ? k : r) + "]"
+                                          : "[" + std::to_string(r) + ", " + std::to_string(k) + "]";
         throw ArgumentError(name + where + " is " + number_text(v) + "; expected a finite number");
       }
-      out.data(r, c) = v;
-    }
+  }
+  return c;
+}
+
+}  // namespace
+
+std::size_t input_copies() { return g_input_copies.load(); }
+
+MatrixArg matrix_arg(const py::handle& object, const std::string& name, const ArraySpec& spec) {
+  const Checked c = checked_array(object, name, spec);
+  MatrixArg out;
+  out.one_d = c.one_d;
+  // Column-major storage for the library: a copy, counted.
+  out.data = Eigen::Map<const RowMatrixXd>(c.array.data(), c.rows, c.cols);
+  ++g_input_copies;
   return out;
+}
+
+RowsArg rows_arg(const py::handle& object, const std::string& name, const ArraySpec& spec) {
+  Checked c = checked_array(object, name, spec);
+  return RowsArg(std::move(c.array), c.rows, c.cols, c.one_d);
 }
 
 std::vector<double> vector_arg(const py::handle& object, const std::string& name, std::size_t min_size, bool finite) {

@@ -41,6 +41,27 @@ struct MatrixArg {
 
 MatrixArg matrix_arg(const py::handle& object, const std::string& name, const ArraySpec& spec = {});
 
+using RowMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+/// A checked argument read in place: a C-contiguous float64 array is not copied (`data` views its
+/// buffer, `array` keeps it alive); anything else (other dtype, order or a list) is converted
+/// once by NumPy. Checked as matrix_arg (shape, finiteness). The caller must not keep `data`
+/// beyond `array`, and another thread mutating the array while the GIL is released is a race, as
+/// in NumPy itself.
+struct RowsArg {
+  RowsArg(py::array_t<double, py::array::c_style> a, Eigen::Index rows, Eigen::Index cols, bool one_d_)
+      : array(std::move(a)), data(array.data(), rows, cols), one_d(one_d_) {}
+  py::array_t<double, py::array::c_style> array;
+  Eigen::Map<const RowMatrixXd> data;
+  bool one_d = false;
+};
+RowsArg rows_arg(const py::handle& object, const std::string& name, const ArraySpec& spec = {});
+
+/// How many array arguments the module has copied so far (NumPy conversions of a non-float64 or
+/// non-C-ordered argument, and matrix_arg's column-major copies): errfield._input_copies(), for
+/// tests that an argument was read in place.
+std::size_t input_copies();
+
 /// A 1-D float64 vector argument (e.g. bin edges); `min_size` elements at least.
 std::vector<double> vector_arg(const py::handle& object, const std::string& name, std::size_t min_size = 1,
                                bool finite = true);

@@ -45,7 +45,8 @@ Eigen::MatrixXd values_as_rows(const std::vector<V>& v) {
   return m;
 }
 
-std::vector<Eigen::VectorXd> rows_as_points(const Eigen::MatrixXd& m) {
+template <class M>
+std::vector<Eigen::VectorXd> rows_as_points(const M& m) {
   std::vector<Eigen::VectorXd> p(static_cast<std::size_t>(m.rows()));
   for (Eigen::Index i = 0; i < m.rows(); ++i) p[static_cast<std::size_t>(i)] = m.row(i).transpose();
   return p;
@@ -71,9 +72,12 @@ Samples samples_arg(const py::object& coords, const py::object& values, Eigen::I
   return s;
 }
 
-Eigen::MatrixXd targets_arg(const py::object& targets, Eigen::Index dims) {
-  return matrix_arg(targets, "targets", ArraySpec{1, 2, dims, 0}).data;
+/// Read in place when C-contiguous float64 (the estimators copy them into their own points).
+RowsArg targets_arg(const py::object& targets, Eigen::Index dims) {
+  return rows_arg(targets, "targets", ArraySpec{1, 2, dims, 0});
 }
+
+using TargetRows = Eigen::Map<const RowMatrixXd>;
 
 /// Cross-validation output, with the summary `errfield cv` prints.
 struct PyCrossValidation {
@@ -137,7 +141,7 @@ struct CvRaw {
 struct KrigingBase {
   virtual ~KrigingBase() = default;
   virtual const KrigingReport& report() const = 0;
-  virtual KrigingPrediction_ predict(const Eigen::MatrixXd& targets) const = 0;
+  virtual KrigingPrediction_ predict(const TargetRows& targets) const = 0;
   virtual CvRaw cross_validate(std::size_t folds, std::uint64_t seed) const = 0;
 };
 
@@ -155,7 +159,7 @@ struct KrigingImpl final : KrigingBase {
     kriging = std::make_unique<Kriging<Eigen::VectorXd, V>>(points, values, model, options, EuclideanMetric{}, mv);
   }
   const KrigingReport& report() const override { return kriging->report(); }
-  KrigingPrediction_ predict(const Eigen::MatrixXd& targets) const override {
+  KrigingPrediction_ predict(const TargetRows& targets) const override {
     const auto p = kriging->predict(rows_as_points(targets));
     KrigingPrediction_ out;
     out.mean = values_as_rows(p.mean);
@@ -244,14 +248,14 @@ class PyKriging {
   }
 
   py::tuple predict(const py::object& targets) const {
-    const Eigen::MatrixXd t = targets_arg(targets, samples_.x.cols());
+    const RowsArg t = targets_arg(targets, samples_.x.cols());
     KrigingPrediction_ p;
     {
       py::gil_scoped_release release;
-      p = impl_->predict(t);
+      p = impl_->predict(t.data);
     }
     if (p.failed) {
-      const std::string w = std::to_string(p.failed) + " of " + std::to_string(t.rows()) +
+      const std::string w = std::to_string(p.failed) + " of " + std::to_string(t.data.rows()) +
                             " targets could not be kriged (" + std::string(kriging_status_name(p.status)) +
                             "); their predictions are NaN";
       if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
@@ -293,7 +297,7 @@ class PyKriging {
 
 struct IdwBase {
   virtual ~IdwBase() = default;
-  virtual Eigen::MatrixXd predict(const Eigen::MatrixXd& targets) const = 0;
+  virtual Eigen::MatrixXd predict(const TargetRows& targets) const = 0;
   virtual CvRaw cross_validate(std::size_t folds, std::uint64_t seed) const = 0;
 };
 
@@ -305,7 +309,7 @@ struct ScatteredImpl final : IdwBase {
   ScatteredIdw<Eigen::VectorXd, V> idw;
   ScatteredImpl(const Samples& s, const ScatteredIdwOptions& o)
       : points(rows_as_points(s.x)), values(rows_as_values<V>(s.z)), options(o), idw(points, values, o) {}
-  Eigen::MatrixXd predict(const Eigen::MatrixXd& targets) const override {
+  Eigen::MatrixXd predict(const TargetRows& targets) const override {
     const auto t = rows_as_points(targets);
     return values_as_rows(idw.predict(t));
   }
@@ -339,11 +343,11 @@ class PyScatteredIdw {
     });
   }
   py::object predict(const py::object& targets) const {
-    const Eigen::MatrixXd t = targets_arg(targets, samples_.x.cols());
+    const RowsArg t = targets_arg(targets, samples_.x.cols());
     Eigen::MatrixXd out;
     {
       py::gil_scoped_release release;
-      out = impl_->predict(t);
+      out = impl_->predict(t.data);
     }
     return to_numpy(out, samples_.scalar);
   }
@@ -397,7 +401,7 @@ class PyGridIdw {
     });
   }
   py::object predict(const py::object& targets) const {
-    const Eigen::MatrixXd t = targets_arg(targets, 3);
+    const Eigen::MatrixXd t = matrix_arg(targets, "targets", ArraySpec{1, 2, 3, 0}).data;
     Eigen::MatrixXd out;
     std::vector<GridIdwStatus> status;
     {
