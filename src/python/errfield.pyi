@@ -229,6 +229,16 @@ def calibrate_positions(
     k1: float = 3.0,
     max_condition: float = 1e3,
 ) -> dict[str, Any]: ...
+def calibrate_distances(
+    robot: Robot | str | os.PathLike[str] | None,
+    data: dict[str, Any],
+    *,
+    base_points: ArrayLike | None = None,
+    robust: bool = False,
+    k0: float = 1.5,
+    k1: float = 3.0,
+    max_condition: float = 1e3,
+) -> dict[str, Any]: ...
 
 # Robot pipeline (the CLI's fit / predict / compensate / validate). Columns: a dict of 1-D arrays
 # named as the CLI's CSV columns (point, kind, q1..q6 deg, x,y,z mm, mx,my,mz mm, dist_bK mm);
