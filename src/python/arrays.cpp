@@ -182,7 +182,7 @@ CsvTable table_arg(const py::handle& data, const std::string& name) {
     std::vector<std::string> c(static_cast<std::size_t>(a.size()));
     const char k = a.dtype().kind();
     if (k == 'f' || k == 'i' || k == 'u' || k == 'b') {
-      const auto v = py::array_t<double, py::array::forcecast>::ensure(a);
+      const auto v = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
       for (std::size_t i = 0; i < c.size(); ++i) {
         const double x = v.data()[i];
         if (std::isinf(x))

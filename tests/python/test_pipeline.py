@@ -90,6 +90,13 @@ def test_predict_matches_cli(sim, fitted, tmp_path):
     from_array = errfield.predict(fitted, q)
     for name in from_dict:
         assert np.array_equal(from_array[name], from_dict[name]), name
+    # Columns that are strided views of one (N, 6) array (a regression: they were read as if
+    # contiguous) give the same predictions.
+    strided = {f"q{k + 1}": q[:, k] for k in range(6)}
+    assert not strided["q1"].flags.c_contiguous
+    from_strided = errfield.predict(fitted, strided)
+    for name in from_dict:
+        assert np.array_equal(from_strided[name], from_dict[name]), name
     one = errfield.predict(fitted, q[3])
     assert same(one["px"], from_dict["px"][3:4])
 
