@@ -43,8 +43,8 @@ void run_fit(const FitArgs& a) {
   fo.max_registration_rms_mm = a.max_registration_rms;
   // Dense kriging of a few thousand points takes tens of seconds: say which stage is running.
   fo.fit.on_stage = StageLog("fit", table.row_count() >= 1000);
+  fo.on_measurements_read = [&] { warn_if_metres(table, model, "fit"); };
   const TableFit fit = with_source(a.data, [&] { return fit_table(model, table, fo); });
-  warn_if_metres(table, model, "fit");
   const FitResult& r = fit.result;
   write_file_atomically(a.out, r.model.to_json().dump(1) + "\n");
   std::cout << "fit: method " << a.method << " on " << fit.points << " points of " << a.data << "\n";

@@ -54,6 +54,7 @@ TableFit fit_table(const robot::MdhModel& robot, const CsvTable& table, const Fi
   robot::check_distance_columns(table);
   robot::check_nominal_positions(table, robot, options.robot_given);
   const MeasurementSet data = MeasurementSet::from_table(table, robot, options.fixed_bases);
+  if (options.on_measurements_read) options.on_measurements_read();
   const FitOptions& o = options.fit;
   const bool from_distances = o.method == CompensationMethod::vector_kriging && data.distance_mm.size() >= 3;
   if (from_distances)

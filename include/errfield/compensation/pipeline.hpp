@@ -7,6 +7,7 @@
 /// model_fitting.hpp, prediction.hpp and compensation.hpp directly for finer control.
 
 #include <cstddef>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -62,6 +63,9 @@ struct FitTableOptions {
   std::vector<Eigen::Vector3d> fixed_bases;  ///< --base-point: base points b0, b1, ... (robot frame, mm)
   bool robot_given = false;                  ///< for check_nominal_positions' message
   double max_registration_rms_mm = robot::kRegistrationRmsLimitMm;
+  /// Called once the table has been read as measurements, before any fitting or registration
+  /// check (the CLI warns here about values that look like metres); empty = nothing.
+  std::function<void()> on_measurements_read;
 };
 
 /// A fit and the number of measured points (targets, not base rows) it was made from.
