@@ -39,15 +39,11 @@ void run_compensate(const CompensateArgs& a) {
   if (kinematic && a.robot.empty() && !model.has_nominal_model())
     throw ArgumentError("--robot: a kinematic model's command model is the calibrated robot; give the nominal robot JSON");
   const MdhModel nominal = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
-  std::optional<JointVector> seed;
+  CompensationTargets targets;
   if (!a.seed.empty()) {
     const auto v = parse_numbers(a.seed, 6, "--seed");
-    seed = JointVector(v.data());
+    targets.seed_deg = JointVector(v.data());
   }
-  // The branch pose targets are solved on: the model's training joints (older model files: the
-  // kriging field's samples have none stored at model level, so multistart, as before).
-  const std::vector<JointVector>& reference = model.data_joints();
-
   const CsvTable t = CsvTable::read(a.targets);
   const bool joints = has_joint_columns(t);
   const std::vector<std::string> pose_cols{"x", "y", "z", "rx", "ry", "rz"};
@@ -57,70 +53,18 @@ void run_compensate(const CompensateArgs& a) {
     throw InputError(a.targets + ": targets need columns q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg)",
                      a.targets);
   const std::size_t n = t.row_count();
-  std::vector<JointVector> qn(n);
-  std::vector<bool> ik_ok(n, true);
-  std::vector<std::string> ik_status(n);
   if (joints) {
-    qn = read_joint_columns(t);
+    targets.joints_deg = read_joint_columns(t);
   } else {
-    const Eigen::MatrixXd p = t.numeric_columns(pose_cols);
+    targets.poses = t.numeric_columns(pose_cols);
     warn_if_metres(t, nominal, "compensate", kNominalXyz);
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto r = p.row(static_cast<Eigen::Index>(i));
-      const compensation::BranchIkResult ik =
-          compensation::solve_on_branch(nominal, to_isometry({r[0], r[1], r[2], r[3], r[4], r[5]}), reference, seed);
-      qn[i] = ik.ik.q_deg;
-      ik_ok[i] = ik.ok();
-      ik_status[i] = ik.branch_changed ? "branch-change" : ik.ik.ok() ? "" : to_string(ik.ik.status);
-    }
   }
+  const StepColumns step = compensate_columns(model, nominal, targets, a.tolerance);
+  const std::size_t refused = step.refused, no_prediction = step.no_prediction;
+  const std::vector<std::string>& status = step.columns.back().words;
   OutputTable out;
   out.add_all_columns(t);
-  std::vector<std::vector<double>> cols(24, std::vector<double>(n, NAN));  // see `names` below
-  std::vector<std::string> status(n);
-  std::size_t refused = 0, no_prediction = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!ik_ok[i]) {
-      status[i] = ik_status[i] == "branch-change" ? "branch-change" : "unreachable";
-      ++refused;
-      continue;
-    }
-    const CompensatedTarget c = model.compensate_joints(nominal, qn[i], a.tolerance);
-    const Eigen::Vector3d p = forward_position(nominal, qn[i]);
-    for (int k = 0; k < 6; ++k) cols[static_cast<std::size_t>(k)][i] = qn[i][k];
-    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(6 + k)][i] = p[k];
-    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(9 + k)][i] = c.prediction.position_error_mm[k];
-    cols[12][i] = c.prediction.distance_error_mm;
-    cols[13][i] = c.prediction.variance_mm2;
-    cols[14][i] = c.p_within_tolerance;
-    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(15 + k)][i] = c.command_position_mm[k];
-    if (c.prediction.inside_region && !(c.prediction.position_error_mm.allFinite() && c.command_position_mm.allFinite())) {
-      // The field gave no number here (e.g. an overflow): never an IK failure's name, never ok.
-      status[i] = "no-prediction";
-      ++no_prediction;
-      ++refused;
-      continue;
-    }
-    status[i] = !c.prediction.inside_region ? "outside-region"
-                : !c.prediction.credible ? "not-credible"
-                : c.ik_status != IkStatus::converged ? std::string("ik-") + to_string(c.ik_status)
-                                                     : "ok";
-    if (!c.ok()) {
-      ++refused;
-      continue;  // compensated joints stay empty: nothing is sent for a refused target
-    }
-    for (int k = 0; k < 6; ++k) cols[static_cast<std::size_t>(18 + k)][i] = c.q_command_deg[k];
-  }
-  auto cells = [&](std::size_t c) {
-    std::vector<std::string> v(n);
-    for (std::size_t i = 0; i < n; ++i) v[i] = std::isfinite(cols[c][i]) ? format_number(cols[c][i]) : "";
-    return v;
-  };
-  const char* names[] = {"nq1", "nq2", "nq3", "nq4", "nq5", "nq6", "nx", "ny", "nz", "pred_dx", "pred_dy", "pred_dz",
-                         "pred_dl", "var_mm2", "p_inside", "cmd_x", "cmd_y", "cmd_z", "cq1", "cq2", "cq3", "cq4",
-                         "cq5", "cq6"};
-  for (std::size_t c = 0; c < 24; ++c) out.add_column(names[c], cells(c));
-  out.add_column("status", status);
+  add_step_columns(out, step);
   if (a.strict && refused) {
     // Checked before writing: a job that fails leaves any previous output as it was.
     std::string rows;

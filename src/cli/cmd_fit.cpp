@@ -11,6 +11,7 @@
 #include "errfield/atomic_file.hpp"
 #include "errfield/error.hpp"
 #include "errfield/compensation/model_fitting.hpp"
+#include "errfield/compensation/pipeline.hpp"
 #include "errfield/robot/input_checks.hpp"
 
 namespace errfield::cli {
@@ -29,66 +30,26 @@ void run_fit(const FitArgs& a) {
   using namespace robot;
   using namespace compensation;
   const MdhModel model = load_robot_or_default(a.robot);
-  FitOptions o;
-  if (a.method != "auto") o.method = method_from_name(a.method);
-  if (a.space != "auto") o.space = field_space_from_name(a.space);
-  o.idw_power = a.power;
-  o.base = a.base;
-  o.region_margin = a.region_margin;
-  if (!a.model.empty() && a.model != "auto") o.model = load_variogram_model(a.model);
-  if (!a.calibration.empty()) o.calibration_data = calibration_data_from_name(a.calibration);
-  if (!a.robust.empty()) {
-    if (a.robust != "none" && a.robust != "igg3")
-      throw ArgumentError("--robust: expected 'none' or 'igg3', got '" + a.robust + "'");
-    o.calibration.robust.enabled = a.robust == "igg3";
-  }
-  o.calibration.max_condition_number = a.max_condition;
-  o.outlier_limit = a.outlier_limit;
-  o.calibration.validate();
-  if (a.kind == "universal1" || a.kind == "universal2") {
-    o.kind = KrigingKind::Universal;
-    o.drift_order = a.kind == "universal1" ? 1 : 2;
-  } else if (a.kind != "ordinary") {
-    throw ArgumentError("--kind: '" + a.kind + "'; expected ordinary, universal1 or universal2");
-  }
+  const FitOptions o = fit_options_from_text({a.method, a.space, a.power, a.model, a.kind, a.base, a.region_margin,
+                                              a.calibration, a.robust, a.max_condition, a.outlier_limit});
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.base_points) {
     const auto v = parse_numbers(b, 3, "--base-point");
     fixed.emplace_back(v[0], v[1], v[2]);
   }
   const CsvTable table = CsvTable::read(a.data);
-  // Misuse is an error with a reason (robot/input_checks.hpp), before any fitting.
-  check_distance_columns(table);
-  check_nominal_positions(table, model, !a.robot.empty());
-  const MeasurementSet data = MeasurementSet::from_table(table, model, fixed);
-  warn_if_metres(table, model, "fit");
-  std::optional<std::string> why;
-  if (a.method == "auto") {
-    const MethodChoice c = choose_method(data);
-    o.method = c.method;
-    why = "method auto: " + std::string(method_name(c.method)) + " (" + c.reason + ")";
-  }
-  // Every kriging method was more accurate on held-out points in joint space than in task space
-  // (docs/robot.md, "Which method"): the error of a serial arm follows its joints.
-  if (a.space == "auto") o.space = FieldSpace::joint;
-  const bool from_distances = o.method == CompensationMethod::vector_kriging && data.distance_mm.size() >= 3;
-  if (from_distances) check_error_vectors_from_distances(!data.base_q_deg.empty(), !data.measured_mm.empty(), a.data);
-  if ((o.method == CompensationMethod::position_idw || o.method == CompensationMethod::vector_kriging) &&
-      !data.measured_mm.empty() && data.measured_mm.size() >= 3 && (!from_distances || !data.base_q_deg.empty())) {
-    // The registration these methods fit, checked before the (possibly long) fit.
-    const auto reg = fit_registration(data.measured_mm, data.nominal_mm);
-    check_registration_residual(reg.residual_rms_mm, data.measured_mm.size(), a.data, "registration tracker -> robot",
-                                a.max_registration_rms);
-  }
+  FitTableOptions fo;
+  fo.fit = o;
+  fo.fixed_bases = fixed;
+  fo.robot_given = !a.robot.empty();
+  fo.max_registration_rms_mm = a.max_registration_rms;
   // Dense kriging of a few thousand points takes tens of seconds: say which stage is running.
-  o.on_stage = StageLog("fit", data.q_deg.size() >= 1000);
-  const FitResult r = with_source(a.data, [&] { return fit_compensation_model(model, data, o); });
-  if (r.registration)
-    check_registration_residual(r.registration->residual_rms_mm, data.measured_mm.size(), a.data,
-                                "registration tracker -> robot", a.max_registration_rms);
+  fo.fit.on_stage = StageLog("fit", table.row_count() >= 1000);
+  fo.on_measurements_read = [&] { warn_if_metres(table, model, "fit"); };
+  const TableFit fit = with_source(a.data, [&] { return fit_table(model, table, fo); });
+  const FitResult& r = fit.result;
   write_file_atomically(a.out, r.model.to_json().dump(1) + "\n");
-  std::cout << "fit: method " << method_name(o.method) << " on " << data.q_deg.size() << " points of " << a.data << "\n";
-  if (why) std::cout << "  " << *why << "\n";
+  std::cout << "fit: method " << method_name(r.model.method()) << " on " << fit.points << " points of " << a.data << "\n";
   if (r.model.field()) std::cout << "  field: " << r.model.field()->describe() << "\n";
   for (const auto& n : r.notes) std::cout << "  " << n << "\n";
   if (r.cross_validation) {

@@ -3,6 +3,7 @@
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
+#include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/compensation/prediction.hpp"
 #include "errfield/error.hpp"
@@ -21,33 +22,13 @@ void run_predict(const PredictArgs& a) {
   const std::vector<robot::JointVector> q = read_joint_columns(table);
   const std::size_t n = q.size();
   const bool tracker = model.registration().has_value();
-  std::vector<std::vector<std::string>> cols(7, std::vector<std::string>(n));
-  std::vector<std::string> status(n);
+  const compensation::StepColumns step = compensation::predict_columns(model, q);
+  const std::size_t refused = step.refused;
   bool any_variance = false;
-  std::size_t refused = 0;
-  auto cell = [](double v) { return std::isfinite(v) ? format_number(v) : std::string(); };
-  for (std::size_t i = 0; i < n; ++i) {
-    const compensation::PointPrediction p = compensation::predict_position(model, q[i]);
-    status[i] = std::string(compensation::status_name(p.status));
-    if (!p.ok()) {
-      ++refused;  // no position for a prediction the model cannot vouch for
-      continue;
-    }
-    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(k)][i] = cell(p.position_mm[k]);
-    if (p.tracker_mm)
-      for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(3 + k)][i] = cell((*p.tracker_mm)[k]);
-    cols[6][i] = cell(p.error.variance_mm2);
-    any_variance = any_variance || std::isfinite(p.error.variance_mm2);
-  }
+  for (const auto& c : step.columns) any_variance = any_variance || c.name == "var_mm2";
   OutputTable out;
   out.add_all_columns(table);
-  const char* names[] = {"px", "py", "pz", "tx", "ty", "tz", "var_mm2"};
-  for (std::size_t c = 0; c < 7; ++c) {
-    if (c >= 3 && c < 6 && !tracker) continue;
-    if (c == 6 && !any_variance) continue;
-    out.add_column(names[c], cols[c]);
-  }
-  out.add_column("status", status);
+  add_step_columns(out, step);
   out.write(a.out);
   std::cout << "predict: " << n - refused << " of " << n << " rows predicted with " << loaded.description << " from "
             << a.model;

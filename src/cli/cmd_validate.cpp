@@ -10,6 +10,7 @@
 #include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/atomic_file.hpp"
+#include "errfield/compensation/pipeline.hpp"
 #include "errfield/compensation/prediction.hpp"
 #include "errfield/compensation/validation.hpp"
 #include "errfield/error.hpp"
@@ -30,47 +31,6 @@ bool marked_simulated(const std::string& path) {
   while (std::getline(in, line) && !line.empty() && line[0] == '#')
     if (line.find("SIMULATED") != std::string::npos) return true;
   return false;
-}
-
-std::string cell(double v) { return std::isfinite(v) ? format_number(v) : ""; }
-
-OutputTable points_table(const compensation::ValidationReport& r) {
-  const std::size_t n = r.points.size();
-  OutputTable t;
-  std::vector<std::string> point(n), status(n), before(n), after(n);
-  std::vector<std::vector<std::string>> comp(6, std::vector<std::string>(n));
-  const bool positions = r.position.has_value();
-  for (std::size_t i = 0; i < n; ++i) {
-    const auto& p = r.points[i];
-    point[i] = p.point;
-    status[i] = p.status;
-    // before_mm/after_mm: the 3-D error where positions were scored, else |distance error| to b0.
-    const double b = positions ? p.before_mm.norm() : (p.distance_before_mm.empty() ? NAN : std::abs(p.distance_before_mm[0]));
-    const double a = positions ? p.after_mm.norm() : (p.distance_after_mm.empty() ? NAN : std::abs(p.distance_after_mm[0]));
-    before[i] = cell(b);
-    after[i] = cell(a);
-    for (int c = 0; c < 3; ++c) {
-      comp[static_cast<std::size_t>(c)][i] = cell(p.before_mm[c]);
-      comp[static_cast<std::size_t>(3 + c)][i] = cell(p.after_mm[c]);
-    }
-  }
-  t.add_column("point", point);
-  t.add_column("status", status);
-  t.add_column("before_mm", before);
-  t.add_column("after_mm", after);
-  const char* names[] = {"before_dx", "before_dy", "before_dz", "after_dx", "after_dy", "after_dz"};
-  for (std::size_t c = 0; c < 6; ++c) t.add_column(names[c], comp[c]);
-  for (std::size_t k = 0; k < r.distance_columns; ++k) {
-    std::vector<std::string> db(n), da(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto& p = r.points[i];
-      db[i] = k < p.distance_before_mm.size() ? cell(p.distance_before_mm[k]) : "";
-      da[i] = k < p.distance_after_mm.size() ? cell(p.distance_after_mm[k]) : "";
-    }
-    t.add_column("before_dl_b" + std::to_string(k), db);
-    t.add_column("after_dl_b" + std::to_string(k), da);
-  }
-  return t;
 }
 
 void run_validate(const ValidateArgs& a) {
@@ -98,7 +58,11 @@ void run_validate(const ValidateArgs& a) {
   }
   const nlohmann::json summary = r.summary_json();
   AtomicFileSet outputs;
-  if (!a.out.empty()) outputs.add(a.out, points_table(r).to_csv());
+  if (!a.out.empty()) {
+    OutputTable points;
+    add_step_columns(points, compensation::validation_point_columns(r));
+    outputs.add(a.out, points.to_csv());
+  }
   if (!a.summary_out.empty()) outputs.add(a.summary_out, summary.dump(2) + "\n");
   if (!a.report.empty())
     outputs.add(a.report, compensation::validation_report_html(r, "errfield validate: " + loaded.description + " on " + a.data,

@@ -8,6 +8,7 @@
 #include "errfield/error.hpp"
 #include "errfield/cross_validation.hpp"
 #include "errfield/grid_idw.hpp"
+#include "errfield/interpolation_options.hpp"
 #include "errfield/scattered_idw.hpp"
 
 namespace errfield::cli {
@@ -86,11 +87,7 @@ std::vector<Eigen::VectorXd> rows_as_points(const Eigen::MatrixXd& m) {
 }
 
 ScatteredIdwOptions scattered_options(const SharedInterpolationOptions& shared) {
-  ScatteredIdwOptions o;
-  o.power = shared.power.value_or(2.0);
-  o.neighbors = shared.neighbors.value_or(0);
-  if (shared.radius) o.radius = *shared.radius;
-  return o;
+  return scattered_idw_options_from_text({shared.power, shared.neighbors, shared.radius}, cli_option_names());
 }
 
 InterpolationResult interpolate_scattered(const InterpolationRequest& r) {

@@ -12,6 +12,7 @@
 #include "errfield/cross_validation.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
+#include "errfield/interpolation_options.hpp"
 #include "errfield/kriging.hpp"
 #include "errfield/kriging_likelihood.hpp"
 #include "errfield/variogram_fit.hpp"
@@ -160,35 +161,15 @@ Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const E
                  const SharedInterpolationOptions& shared, std::vector<std::string>& notes) {
   const auto& o = cli_options;
   Setup s;
+  KrigingOptionText text;
+  text.kind = o.kind;
+  if (!std::isnan(o.mean)) text.mean = std::vector<double>{o.mean};
+  if (!o.backend.empty()) text.backend = o.backend;
+  text.neighbors = shared.neighbors;
+  text.radius = shared.radius;
+  text.nugget = o.nugget_as;
+  s.options = kriging_options_from_text(text, cli_option_names());
   auto& opt = s.options;
-  if (o.kind == "simple") opt.kind = KrigingKind::Simple;
-  else if (o.kind == "ordinary") opt.kind = KrigingKind::Ordinary;
-  else if (o.kind == "universal1" || o.kind == "universal2") {
-    opt.kind = KrigingKind::Universal;
-    opt.drift_order = o.kind == "universal1" ? 1 : 2;
-  } else {
-    throw ArgumentError("--kind is '" + o.kind + "'; expected simple, ordinary, universal1 or universal2");
-  }
-  if (opt.kind == KrigingKind::Simple) {
-    if (std::isnan(o.mean)) throw ArgumentError("--kind simple needs the known mean: --mean M");
-    if (!std::isfinite(o.mean)) throw ArgumentError("--mean is " + format_number(o.mean) + "; expected a finite number");
-    opt.simple_mean = {o.mean};
-  } else if (!std::isnan(o.mean)) {
-    throw ArgumentError("--mean applies to --kind simple only (ordinary and universal kriging estimate the mean)");
-  }
-  if (o.backend.empty()) opt.backend = (shared.neighbors || shared.radius) ? KrigingBackend::Local : KrigingBackend::Dense;
-  else opt.backend = kriging_backend_from_name(o.backend);
-  if (opt.backend != KrigingBackend::Local && (shared.neighbors || shared.radius))
-    throw ArgumentError("--neighbors/--radius select the neighbourhood of --backend local, not --backend " + o.backend);
-  if (opt.backend == KrigingBackend::Local) {
-    opt.neighbors = shared.neighbors.value_or(0);
-    if (shared.radius) opt.radius = *shared.radius;
-    if (!shared.neighbors && !shared.radius)
-      throw ArgumentError("--backend local needs --neighbors K and/or --radius R");
-  }
-  if (o.nugget_as == "micro") opt.nugget = NuggetTreatment::MicroScale;
-  else if (o.nugget_as == "error") opt.nugget = NuggetTreatment::MeasurementError;
-  else throw ArgumentError("--nugget-as is '" + o.nugget_as + "'; expected micro or error");
   opt.sample_labels = row_labels_of(samples, "sample");
 
   if (o.model.empty()) throw ArgumentError("--method kriging needs --model, e.g. --model \"sph(sill=0.3,range=400)+nug(0.002)\" or --model auto");

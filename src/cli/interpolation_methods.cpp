@@ -62,6 +62,19 @@ std::string method_names(bool for_cv) {
   return s;
 }
 
+OptionNames cli_option_names() {
+  OptionNames n;
+  n.kind = "--kind";
+  n.mean = "--mean";
+  n.backend = "--backend";
+  n.neighbors = "--neighbors";
+  n.radius = "--radius";
+  n.nugget = "--nugget-as";
+  n.duplicates = "--duplicates";
+  n.power = "--power";
+  return n;
+}
+
 RowLabels row_labels_of(const CsvTable& table, std::string noun) {
   RowLabels labels;
   labels.source = table.source();

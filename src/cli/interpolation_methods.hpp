@@ -27,6 +27,7 @@
 #include <Eigen/Core>
 
 #include "errfield/csv_table.hpp"
+#include "errfield/interpolation_options.hpp"
 #include "errfield/row_labels.hpp"
 
 namespace errfield::cli {
@@ -117,6 +118,10 @@ std::string method_names(bool for_cv);
 
 /// Rows of a table as labels for messages ("S.csv:7").
 RowLabels row_labels_of(const CsvTable& table, std::string noun);
+
+/// The option names of interpolate/cv, for the messages of kriging_options_from_text and
+/// scattered_idw_options_from_text.
+OptionNames cli_option_names();
 
 /// The unit written after a column name in a header ("dL [mm]" -> "mm"), or empty.
 std::string unit_of_column(const CsvTable& table, const std::string& name);

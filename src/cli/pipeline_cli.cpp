@@ -26,4 +26,17 @@ std::vector<double> parse_numbers(const std::string& text, std::size_t count, co
   return v;
 }
 
+void add_step_columns(OutputTable& out, const compensation::StepColumns& step) {
+  for (const auto& c : step.columns) {
+    if (c.is_words()) {
+      out.add_column(c.name, c.words);
+      continue;
+    }
+    std::vector<std::string> cells(c.numbers.size());
+    for (std::size_t i = 0; i < cells.size(); ++i)
+      if (std::isfinite(c.numbers[i])) cells[i] = format_number(c.numbers[i]);
+    out.add_column(c.name, std::move(cells));
+  }
+}
+
 }  // namespace errfield::cli

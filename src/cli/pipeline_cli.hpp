@@ -4,9 +4,16 @@
 #include <string>
 #include <vector>
 
+#include "cli/cli_support.hpp"
+#include "errfield/compensation/pipeline.hpp"
+
 namespace errfield::cli {
 
 /// "a,b,c" -> exactly `count` numbers; ArgumentError naming `what` and the bad item otherwise.
 std::vector<double> parse_numbers(const std::string& text, std::size_t count, const std::string& what);
+
+/// Appends a step's columns (compensation/pipeline.hpp) to `out`: numbers in shortest round-trip
+/// form, NaN as an empty cell.
+void add_step_columns(OutputTable& out, const compensation::StepColumns& step);
 
 }  // namespace errfield::cli

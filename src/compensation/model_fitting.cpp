@@ -417,8 +417,18 @@ std::string point_list(const MeasurementSet& d, const std::vector<std::size_t>& 
 
 }  // namespace
 
-FitResult fit_compensation_model(const robot::MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
-  o.validate();
+FitResult fit_compensation_model(const robot::MdhModel& robot, const MeasurementSet& d, const FitOptions& options) {
+  options.validate();
+  if (options.choose_method) {
+    const MethodChoice c = choose_method(d);
+    FitOptions o = options;
+    o.choose_method = false;
+    o.method = c.method;
+    FitResult out = fit_compensation_model(robot, d, o);
+    out.notes.insert(out.notes.begin(), "method auto: " + std::string(method_name(c.method)) + " (" + c.reason + ")");
+    return out;
+  }
+  const FitOptions& o = options;
   FitResult out = fit_checked(robot, d, o);
   const bool screened = o.outlier_limit > 0 && !d.measured_mm.empty() && out.registration &&
                         (o.method == CompensationMethod::kinematic || o.method == CompensationMethod::kinematic_kriging);

@@ -15,6 +15,7 @@
 #include "errfield/cross_validation.hpp"
 #include "errfield/error.hpp"
 #include "errfield/grid_idw.hpp"
+#include "errfield/interpolation_options.hpp"
 #include "errfield/kriging.hpp"
 #include "errfield/scattered_idw.hpp"
 #include "python/arrays.hpp"
@@ -44,7 +45,8 @@ Eigen::MatrixXd values_as_rows(const std::vector<V>& v) {
   return m;
 }
 
-std::vector<Eigen::VectorXd> rows_as_points(const Eigen::MatrixXd& m) {
+template <class M>
+std::vector<Eigen::VectorXd> rows_as_points(const M& m) {
   std::vector<Eigen::VectorXd> p(static_cast<std::size_t>(m.rows()));
   for (Eigen::Index i = 0; i < m.rows(); ++i) p[static_cast<std::size_t>(i)] = m.row(i).transpose();
   return p;
@@ -70,9 +72,12 @@ Samples samples_arg(const py::object& coords, const py::object& values, Eigen::I
   return s;
 }
 
-Eigen::MatrixXd targets_arg(const py::object& targets, Eigen::Index dims) {
-  return matrix_arg(targets, "targets", ArraySpec{1, 2, dims, 0}).data;
+/// Read in place when C-contiguous float64 (the estimators copy them into their own points).
+RowsArg targets_arg(const py::object& targets, Eigen::Index dims) {
+  return rows_arg(targets, "targets", ArraySpec{1, 2, dims, 0});
 }
+
+using TargetRows = Eigen::Map<const RowMatrixXd>;
 
 /// Cross-validation output, with the summary `errfield cv` prints.
 struct PyCrossValidation {
@@ -136,7 +141,7 @@ struct CvRaw {
 struct KrigingBase {
   virtual ~KrigingBase() = default;
   virtual const KrigingReport& report() const = 0;
-  virtual KrigingPrediction_ predict(const Eigen::MatrixXd& targets) const = 0;
+  virtual KrigingPrediction_ predict(const TargetRows& targets) const = 0;
   virtual CvRaw cross_validate(std::size_t folds, std::uint64_t seed) const = 0;
 };
 
@@ -154,7 +159,7 @@ struct KrigingImpl final : KrigingBase {
     kriging = std::make_unique<Kriging<Eigen::VectorXd, V>>(points, values, model, options, EuclideanMetric{}, mv);
   }
   const KrigingReport& report() const override { return kriging->report(); }
-  KrigingPrediction_ predict(const Eigen::MatrixXd& targets) const override {
+  KrigingPrediction_ predict(const TargetRows& targets) const override {
     const auto p = kriging->predict(rows_as_points(targets));
     KrigingPrediction_ out;
     out.mean = values_as_rows(p.mean);
@@ -194,36 +199,27 @@ struct KrigingImpl final : KrigingBase {
 class PyKriging {
  public:
   PyKriging(const py::object& coords, const py::object& values, const py::object& model_arg, const std::string& kind,
-            const std::string& backend, const py::object& mean, int drift_order, const std::string& nugget,
-            std::size_t neighbors, double radius, const py::object& measurement_variance,
+            const std::optional<std::string>& backend, const py::object& mean, const std::optional<int>& drift_order,
+            const std::string& nugget, const std::optional<std::size_t>& neighbors,
+            const std::optional<double>& radius, const py::object& measurement_variance,
             const std::string& duplicates, double duplicate_distance, int threads)
       : samples_(samples_arg(coords, values)) {
     const VariogramModel model = py::isinstance<py::str>(model_arg)
                                      ? VariogramModel::parse(model_arg.cast<std::string>())
                                      : model_arg.cast<VariogramModel>();
-    KrigingOptions o;
-    const KindChoice k = kriging_kind_arg(kind, drift_order);
-    o.kind = k.kind;
-    o.drift_order = k.drift_order;
-    if (o.kind == KrigingKind::Simple) {
-      if (mean.is_none()) throw ArgumentError("mean: kind='simple' needs the known mean (a number, or one per component)");
-      o.simple_mean = py::isinstance<py::float_>(mean) || py::isinstance<py::int_>(mean)
-                          ? std::vector<double>{mean.cast<double>()}
-                          : vector_arg(mean, "mean");
-    } else if (!mean.is_none()) {
-      throw ArgumentError("mean: applies to kind='simple' only (ordinary and universal kriging estimate the mean)");
-    }
-    o.backend = kriging_backend_from_name(backend);
-    o.neighbors = neighbors;
-    o.radius = radius;
-    if (o.backend == KrigingBackend::Local && neighbors == 0 && !std::isfinite(radius))
-      throw ArgumentError("backend='local' needs neighbors=K and/or a finite radius=R");
-    if (nugget == "micro") o.nugget = NuggetTreatment::MicroScale;
-    else if (nugget == "error") o.nugget = NuggetTreatment::MeasurementError;
-    else throw ArgumentError("nugget: '" + nugget + "'; expected 'micro' or 'error'");
-    if (duplicates == "error") o.duplicates = DuplicatePolicy::Error;
-    else if (duplicates == "average") o.duplicates = DuplicatePolicy::Average;
-    else throw ArgumentError("duplicates: '" + duplicates + "'; expected 'error' or 'average'");
+    KrigingOptionText text;
+    text.kind = kind;
+    text.drift_order = drift_order;
+    if (!mean.is_none())
+      text.mean = py::isinstance<py::float_>(mean) || py::isinstance<py::int_>(mean)
+                      ? std::vector<double>{mean.cast<double>()}
+                      : vector_arg(mean, "mean");
+    text.backend = backend;
+    text.neighbors = neighbors;
+    text.radius = radius;
+    text.nugget = nugget;
+    text.duplicates = duplicates;
+    KrigingOptions o = kriging_options_from_text(text);
     o.duplicate_distance = duplicate_distance;
     o.threads = threads;
     o.validate();
@@ -252,14 +248,14 @@ class PyKriging {
   }
 
   py::tuple predict(const py::object& targets) const {
-    const Eigen::MatrixXd t = targets_arg(targets, samples_.x.cols());
+    const RowsArg t = targets_arg(targets, samples_.x.cols());
     KrigingPrediction_ p;
     {
       py::gil_scoped_release release;
-      p = impl_->predict(t);
+      p = impl_->predict(t.data);
     }
     if (p.failed) {
-      const std::string w = std::to_string(p.failed) + " of " + std::to_string(t.rows()) +
+      const std::string w = std::to_string(p.failed) + " of " + std::to_string(t.data.rows()) +
                             " targets could not be kriged (" + std::string(kriging_status_name(p.status)) +
                             "); their predictions are NaN";
       if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
@@ -301,7 +297,7 @@ class PyKriging {
 
 struct IdwBase {
   virtual ~IdwBase() = default;
-  virtual Eigen::MatrixXd predict(const Eigen::MatrixXd& targets) const = 0;
+  virtual Eigen::MatrixXd predict(const TargetRows& targets) const = 0;
   virtual CvRaw cross_validate(std::size_t folds, std::uint64_t seed) const = 0;
 };
 
@@ -313,7 +309,7 @@ struct ScatteredImpl final : IdwBase {
   ScatteredIdw<Eigen::VectorXd, V> idw;
   ScatteredImpl(const Samples& s, const ScatteredIdwOptions& o)
       : points(rows_as_points(s.x)), values(rows_as_values<V>(s.z)), options(o), idw(points, values, o) {}
-  Eigen::MatrixXd predict(const Eigen::MatrixXd& targets) const override {
+  Eigen::MatrixXd predict(const TargetRows& targets) const override {
     const auto t = rows_as_points(targets);
     return values_as_rows(idw.predict(t));
   }
@@ -333,13 +329,11 @@ struct ScatteredImpl final : IdwBase {
 
 class PyScatteredIdw {
  public:
-  PyScatteredIdw(const py::object& coords, const py::object& values, double power, std::size_t neighbors,
-                 double radius, double exact_distance, int threads)
+  PyScatteredIdw(const py::object& coords, const py::object& values, const std::optional<double>& power,
+                 const std::optional<std::size_t>& neighbors, const std::optional<double>& radius,
+                 double exact_distance, int threads)
       : samples_(samples_arg(coords, values)) {
-    ScatteredIdwOptions o;
-    o.power = power;
-    o.neighbors = neighbors;
-    o.radius = radius;
+    ScatteredIdwOptions o = scattered_idw_options_from_text({power, neighbors, radius});
     o.exact_distance = exact_distance;
     o.threads = threads;
     o.validate();
@@ -349,11 +343,11 @@ class PyScatteredIdw {
     });
   }
   py::object predict(const py::object& targets) const {
-    const Eigen::MatrixXd t = targets_arg(targets, samples_.x.cols());
+    const RowsArg t = targets_arg(targets, samples_.x.cols());
     Eigen::MatrixXd out;
     {
       py::gil_scoped_release release;
-      out = impl_->predict(t);
+      out = impl_->predict(t.data);
     }
     return to_numpy(out, samples_.scalar);
   }
@@ -407,7 +401,7 @@ class PyGridIdw {
     });
   }
   py::object predict(const py::object& targets) const {
-    const Eigen::MatrixXd t = targets_arg(targets, 3);
+    const Eigen::MatrixXd t = matrix_arg(targets, "targets", ArraySpec{1, 2, 3, 0}).data;
     Eigen::MatrixXd out;
     std::vector<GridIdwStatus> status;
     {
@@ -455,18 +449,20 @@ void bind_interpolation(py::module_& m) {
                         "Simple, ordinary or universal kriging (best linear unbiased prediction with its variance), "
                         "as `errfield interpolate --method kriging`. Construction factors the covariance once "
                         "(dense, sparse); predict() may then be called many times. docs/kriging.md.")
-      .def(py::init<const py::object&, const py::object&, const py::object&, const std::string&, const std::string&,
-                    const py::object&, int, const std::string&, std::size_t, double, const py::object&,
+      .def(py::init<const py::object&, const py::object&, const py::object&, const std::string&,
+                    const std::optional<std::string>&, const py::object&, const std::optional<int>&, const std::string&,
+                    const std::optional<std::size_t>&, const std::optional<double>&, const py::object&,
                     const std::string&, double, int>(),
            py::arg("coords"), py::arg("values"), py::arg("model"), py::kw_only(), py::arg("kind") = "ordinary",
-           py::arg("backend") = "dense", py::arg("mean") = py::none(), py::arg("drift_order") = 1,
-           py::arg("nugget") = "micro", py::arg("neighbors") = 0,
-           py::arg("radius") = std::numeric_limits<double>::infinity(), py::arg("measurement_variance") = py::none(),
+           py::arg("backend") = py::none(), py::arg("mean") = py::none(), py::arg("drift_order") = py::none(),
+           py::arg("nugget") = "micro", py::arg("neighbors") = py::none(), py::arg("radius") = py::none(),
+           py::arg("measurement_variance") = py::none(),
            py::arg("duplicates") = "error", py::arg("duplicate_distance") = 0.0, py::arg("threads") = 0,
            "coords: (N, D) sample locations (mm, deg, ...). values: (N,) or (N, K), K <= 3 (mm).\n"
            "model: VariogramModel or its text (sill mm^2, range in the coordinates' unit).\n"
-           "kind: 'simple' (needs mean) | 'ordinary' | 'universal' (drift_order 0, 1, 2) | 'universal1' | 'universal2'.\n"
-           "backend: 'dense' | 'local' (neighbors=K and/or radius=R) | 'sparse' (sph/wen + nugget only).\n"
+           "kind: 'simple' (needs mean) | 'ordinary' | 'universal' (drift_order 0, 1, 2; default 1) | 'universal1' | 'universal2'.\n"
+           "backend: 'dense' | 'local' (neighbors=K and/or radius=R) | 'sparse' (sph/wen + nugget only);\n"
+           "None: 'local' when neighbors or radius is given, else 'dense' (as the CLI's --backend).\n"
            "nugget: 'micro' (exact at the data, gstat's krige) | 'error' (measurement error, smoothing).\n"
            "measurement_variance: (N,) per-sample variances (value unit^2) or None.\n"
            "duplicates: 'error' | 'average' samples closer than duplicate_distance.\n"
@@ -486,11 +482,13 @@ void bind_interpolation(py::module_& m) {
                              "Inverse-distance weighting over scattered samples, as `errfield interpolate --method idw`: "
                              "v(x) = sum w_i v_i / sum w_i with w_i = 1/d^power over the k nearest (neighbors) and/or "
                              "within radius. docs/idw.md.")
-      .def(py::init<const py::object&, const py::object&, double, std::size_t, double, double, int>(),
-           py::arg("coords"), py::arg("values"), py::kw_only(), py::arg("power") = 2.0, py::arg("neighbors") = 0,
-           py::arg("radius") = std::numeric_limits<double>::infinity(), py::arg("exact_distance") = 0.0,
+      .def(py::init<const py::object&, const py::object&, const std::optional<double>&,
+                    const std::optional<std::size_t>&, const std::optional<double>&, double, int>(),
+           py::arg("coords"), py::arg("values"), py::kw_only(), py::arg("power") = py::none(),
+           py::arg("neighbors") = py::none(), py::arg("radius") = py::none(), py::arg("exact_distance") = 0.0,
            py::arg("threads") = 0,
-           "coords: (N, D); values: (N,) or (N, K), K <= 3. neighbors: 0 = all. radius in the coordinates' unit.")
+           "coords: (N, D); values: (N,) or (N, K), K <= 3. power: None = 2 (gstat's idw). neighbors: None or 0 = all.\n"
+           "radius in the coordinates' unit, None = no limit.")
       .def("predict", &PyScatteredIdw::predict, py::arg("targets"),
            "Values at targets (M, D): (M,) or (M, K); NaN where no sample lies within radius. Releases the GIL.")
       .def("cross_validate", &PyScatteredIdw::cross_validate, py::arg("folds") = "loo", py::arg("seed") = 1,

@@ -28,15 +28,17 @@ using robot::MdhModel;
 constexpr int kJ = robot::kJointCount;
 
 /// Joint vectors (N, 6) or one (6,) in degrees.
-MatrixArg joints_arg(const py::object& q, const std::string& name = "q") {
+/// Read in place (no copy) when q is a C-contiguous float64 array.
+RowsArg joints_arg(const py::object& q, const std::string& name = "q") {
   ArraySpec spec;
   spec.cols = kJ;
   spec.min_rows = 0;
   spec.one_d_is_row = true;
-  return matrix_arg(q, name, spec);
+  return rows_arg(q, name, spec);
 }
 
-JointVector row_joints(const Eigen::MatrixXd& m, Eigen::Index r) { return m.row(r).transpose(); }
+template <class M>
+JointVector row_joints(const M& m, Eigen::Index r) { return m.row(r).transpose(); }
 
 py::array_t<double> stack(std::size_t n, py::ssize_t rows, py::ssize_t cols, bool single) {
   if (single) return py::array_t<double>({rows, cols});
@@ -123,7 +125,7 @@ PyIkSolution solve_ik(const MdhModel& model, const py::object& targets, const py
                         (position_only ? ", or positions (N, 3) or (3,)" : " (positions (N, 3) need position_only=True)"));
   }
   const std::size_t n = goal.size();
-  Eigen::MatrixXd seeds;
+  RowMatrixXd seeds;
   if (!seed.is_none()) {
     seeds = joints_arg(seed, "seed").data;
     if (static_cast<std::size_t>(seeds.rows()) != n)
@@ -249,7 +251,7 @@ void bind_robot(py::module_& m) {
       .def(
           "within_limits",
           [](const MdhModel& r, const py::object& q, double slack_deg) {
-            const MatrixArg j = joints_arg(q);
+            const RowsArg j = joints_arg(q);
             py::array_t<bool> out(static_cast<py::ssize_t>(j.data.rows()));
             for (Eigen::Index i = 0; i < j.data.rows(); ++i) out.mutable_data()[i] = r.within_limits(row_joints(j.data, i), slack_deg);
             return out;
@@ -258,7 +260,7 @@ void bind_robot(py::module_& m) {
       .def(
           "fk",
           [](const MdhModel& r, const py::object& q, const std::string& frame) {
-            const MatrixArg j = joints_arg(q);
+            const RowsArg j = joints_arg(q);
             const auto f = frame_arg(frame);
             const auto n = static_cast<std::size_t>(j.data.rows());
             const bool single = j.one_d;
@@ -279,7 +281,7 @@ void bind_robot(py::module_& m) {
       .def(
           "position",
           [](const MdhModel& r, const py::object& q, const std::string& frame) {
-            const MatrixArg j = joints_arg(q);
+            const RowsArg j = joints_arg(q);
             const auto f = frame_arg(frame);
             Eigen::MatrixXd p(j.data.rows(), 3);
             {
@@ -294,7 +296,7 @@ void bind_robot(py::module_& m) {
       .def(
           "jacobian",
           [](const MdhModel& r, const py::object& q, const std::string& frame) {
-            const MatrixArg j = joints_arg(q);
+            const RowsArg j = joints_arg(q);
             const auto f = frame_arg(frame);
             const auto n = static_cast<std::size_t>(j.data.rows());
             auto out = stack(n, 6, kJ, j.one_d);
@@ -314,7 +316,7 @@ void bind_robot(py::module_& m) {
       .def(
           "identification_jacobian",
           [](const MdhModel& r, const py::object& q) {
-            const MatrixArg j = joints_arg(q);
+            const RowsArg j = joints_arg(q);
             const auto n = static_cast<std::size_t>(j.data.rows());
             constexpr int P = robot::param::kCount;
             auto out = stack(n, 3, P, j.one_d);

@@ -9,6 +9,7 @@
 
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
+#include "errfield/interpolation_options.hpp"
 #include "errfield/kriging_likelihood.hpp"
 #include "errfield/variogram_fit.hpp"
 #include "errfield/variogram_model.hpp"
@@ -200,7 +201,9 @@ LikelihoodFitOptions likelihood_options(const std::string& method, const std::st
   if (method == "reml") o.restricted = true;
   else if (method == "ml") o.restricted = false;
   else throw ArgumentError("method: '" + method + "'; expected 'reml' or 'ml'");
-  const KindChoice k = kriging_kind_arg(kind, drift_order);
+  // drift_order defaults to 1 here, so it only speaks for kind="universal" (as before).
+  const KrigingKindChoice k =
+      kriging_kind_from_text(kind, kind == "universal" ? std::optional<int>(drift_order) : std::nullopt);
   o.kind = k.kind;
   o.drift_order = k.drift_order;
   o.simple_mean = mean;
@@ -314,9 +317,13 @@ void bind_variogram(py::module_& m) {
   m.def(
       "fit_likelihood",
       [](const py::object& coords, const py::object& values, const std::string& model, const std::string& method,
-         const std::string& kind, int drift_order, double mean, bool nugget, std::optional<double> nu) {
+         const std::string& kind, int drift_order, double mean, bool nugget, std::optional<double> nu,
+         const std::string& anisotropy) {
         const ScalarSamples s = scalar_samples(coords, values);
-        const auto o = likelihood_options(method, kind, drift_order, mean, nugget);
+        auto o = likelihood_options(method, kind, drift_order, mean, nugget);
+        if (anisotropy == "ard") o.anisotropy = LikelihoodFitOptions::Anisotropy::Ard;
+        else if (anisotropy != "none") throw ArgumentError("anisotropy: '" + anisotropy + "'; expected 'none' or 'ard'");
+        o.validate();
         const auto structure = structure_arg(model, nu);
         LikelihoodFitResult r;
         {
@@ -329,17 +336,24 @@ void bind_variogram(py::module_& m) {
         d["evaluations"] = r.evaluations;
         d["converged"] = r.converged;
         d["message"] = r.message;
+        d["ranges"] = to_numpy(r.ranges);
+        d["range_standard_errors"] = to_numpy(r.range_standard_errors);
+        d["aic"] = r.aic;
+        d["bic"] = r.bic;
+        d["parameters"] = r.parameters;
         return d;
       },
       py::arg("coords"), py::arg("values"), py::arg("model"), py::kw_only(), py::arg("method") = "reml",
       py::arg("kind") = "ordinary", py::arg("drift_order") = 1, py::arg("mean") = 0.0, py::arg("nugget") = true,
-      py::arg("nu") = py::none(),
+      py::arg("nu") = py::none(), py::arg("anisotropy") = "none",
       "ML or REML estimate of a model's sills and ranges from scalar samples, as\n"
       "`errfield fit-variogram --method reml|ml` (which uses kind='ordinary').\n\n"
       "coords: (N, D); values: (N,) scalar. model: a bounded kind or model text (see fit_variogram).\n"
       "method: 'reml' | 'ml'. kind: 'simple' (known mean) | 'ordinary' | 'universal' (drift_order 0-2).\n"
       "nugget: fit a nugget (True) or none. O(N^3) per evaluation: meant for N up to a few thousand.\n"
-      "Returns a dict: model, negative_log_likelihood, evaluations, converged, message.");
+      "anisotropy: 'none' | 'ard' (one range per coordinate: the model gets '@ard(s_1,...,s_D)').\n"
+      "Returns a dict: model, negative_log_likelihood, evaluations, converged, message, ranges (one per\n"
+      "coordinate with ard, in the coordinates' unit), range_standard_errors, aic, bic, parameters.");
 
   m.def(
       "negative_log_likelihood",

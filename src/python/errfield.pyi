@@ -94,6 +94,7 @@ def fit_likelihood(
     mean: float = 0.0,
     nugget: bool = True,
     nu: float | None = None,
+    anisotropy: Literal["none", "ard"] = "none",
 ) -> dict[str, Any]: ...
 def negative_log_likelihood(
     coords: ArrayLike,
@@ -129,12 +130,12 @@ class Kriging:
         model: VariogramModel | str,
         *,
         kind: Literal["simple", "ordinary", "universal", "universal1", "universal2"] = "ordinary",
-        backend: Literal["dense", "local", "sparse"] = "dense",
+        backend: Literal["dense", "local", "sparse"] | None = None,
         mean: float | Sequence[float] | None = None,
-        drift_order: int = 1,
+        drift_order: int | None = None,
         nugget: Literal["micro", "error"] = "micro",
-        neighbors: int = 0,
-        radius: float = ...,
+        neighbors: int | None = None,
+        radius: float | None = None,
         measurement_variance: ArrayLike | None = None,
         duplicates: Literal["error", "average"] = "error",
         duplicate_distance: float = 0.0,
@@ -153,9 +154,9 @@ class ScatteredIdw:
         coords: ArrayLike,
         values: ArrayLike,
         *,
-        power: float = 2.0,
-        neighbors: int = 0,
-        radius: float = ...,
+        power: float | None = None,
+        neighbors: int | None = None,
+        radius: float | None = None,
         exact_distance: float = 0.0,
         threads: int = 0,
     ) -> None: ...
@@ -227,4 +228,70 @@ def calibrate_positions(
     k0: float = 1.5,
     k1: float = 3.0,
     max_condition: float = 1e3,
+) -> dict[str, Any]: ...
+def calibrate_distances(
+    robot: Robot | str | os.PathLike[str] | None,
+    data: dict[str, Any],
+    *,
+    base_points: ArrayLike | None = None,
+    robust: bool = False,
+    k0: float = 1.5,
+    k1: float = 3.0,
+    max_condition: float = 1e3,
+) -> dict[str, Any]: ...
+
+# Robot pipeline (the CLI's fit / predict / compensate / validate). Columns: a dict of 1-D arrays
+# named as the CLI's CSV columns (point, kind, q1..q6 deg, x,y,z mm, mx,my,mz mm, dist_bK mm);
+# a pandas DataFrame works too. Results: dicts of NumPy arrays with the CLI's output column names.
+Columns = dict[str, Any]
+RobotLike = Robot | str | os.PathLike[str] | None
+
+class CompensationModel:
+    @staticmethod
+    def load(path: str | os.PathLike[str]) -> CompensationModel: ...
+    def save(self, path: str | os.PathLike[str]) -> None: ...
+    def to_json(self) -> str: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def description(self) -> str: ...
+    @property
+    def is_robot_json(self) -> bool: ...
+    fit_report: dict[str, Any] | None
+
+def fit(
+    data: Columns,
+    *,
+    robot: RobotLike = None,
+    method: Literal["auto", "distance-idw", "position-idw", "distance-kriging", "vector-kriging", "kinematic",
+                    "kinematic+kriging"] = "auto",
+    space: Literal["auto", "task", "joint"] = "auto",
+    power: float = 1.0,
+    model: str | None = None,
+    kind: Literal["ordinary", "universal1", "universal2"] = "ordinary",
+    base: int = 0,
+    base_points: ArrayLike | None = None,
+    region_margin: float | None = None,
+    calibration: Literal["position", "distance"] | None = None,
+    robust: Literal["none", "igg3"] | None = None,
+    max_condition: float = 1e3,
+    max_registration_rms: float = 5.0,
+    outlier_limit: float = 5.0,
+) -> CompensationModel: ...
+def predict(model: CompensationModel, joints: ArrayLike | Columns) -> dict[str, Any]: ...
+def compensate(
+    model: CompensationModel,
+    targets: ArrayLike | Columns,
+    *,
+    robot: RobotLike = None,
+    tolerance: float = 0.25,
+    seed: ArrayLike | None = None,
+) -> dict[str, Any]: ...
+def validate(
+    model: CompensationModel,
+    data: Columns,
+    *,
+    robot: RobotLike = None,
+    base_points: ArrayLike | None = None,
+    targets: bool = False,
 ) -> dict[str, Any]: ...

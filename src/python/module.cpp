@@ -10,6 +10,7 @@
 
 #include "errfield/error.hpp"
 #include "errfield/grid_idw.hpp"
+#include "python/arrays.hpp"
 #include "python/bindings.hpp"
 
 namespace py = pybind11;
@@ -84,8 +85,12 @@ PYBIND11_MODULE(errfield, m) {
     }
   });
 
+  m.def("_input_copies", &errfield::python::input_copies,
+        "Array arguments copied so far (conversions of non-float64 or non-C-ordered arrays, and copies into\n"
+        "column-major storage): for tests that an argument was read in place.");
   errfield::python::bind_variogram(m);
   errfield::python::bind_interpolation(m);
   errfield::python::bind_robot(m);
   errfield::python::bind_calibration(m);
+  errfield::python::bind_pipeline(m);
 }

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import errfield
-from conftest import numbers, read_csv, run_cli, same, write_csv
+from conftest import numbers, read_csv, run_cli, run_cli_status, same, write_csv
 
 MODEL = "exp(sill=0.5,range=300)+nug(0.01)"
 
@@ -34,6 +34,8 @@ def write_samples(tmp_path, x, z, t):
     ("simple", {"mean": 0.7}, ["--mean", "0.7"]),
     ("universal1", {}, []),
     ("ordinary", {"backend": "local", "neighbors": 12}, ["--backend", "local", "--neighbors", "12"]),
+    # No backend but a neighbourhood: the local back end, for both (one shared option mapping).
+    ("ordinary", {"neighbors": 9, "radius": 400.0}, ["--neighbors", "9", "--radius", "400"]),
 ])
 def test_kriging_matches_cli(tmp_path, kind, extra, cli_extra):
     x, z, t = data()
@@ -157,7 +159,7 @@ def test_interpolation_errors():
     x, z, t = data(n=10)
     with pytest.raises(errfield.ArgumentError, match=r"targets: array of shape \(4, 3\) has 3 columns; expected 2"):
         errfield.Kriging(x, z, MODEL).predict(np.zeros((4, 3)))
-    with pytest.raises(errfield.ArgumentError, match="mean: kind='simple' needs"):
+    with pytest.raises(errfield.ArgumentError, match=r"kind simple needs the known mean \(mean\)"):
         errfield.Kriging(x, z, MODEL, kind="simple")
     with pytest.raises(errfield.ArgumentError, match="dense"):
         errfield.Kriging(x, z, MODEL, backend="gpu")
@@ -170,3 +172,22 @@ def test_interpolation_errors():
     dup = np.r_[x, x[:1]]
     with pytest.raises(errfield.InputError):
         errfield.Kriging(dup, np.r_[z, z[:1]], MODEL)
+
+
+@pytest.mark.parametrize("extra,cli_extra,message", [
+    ({"backend": "dense", "neighbors": 5}, ["--backend", "dense", "--neighbors", "5"],
+     "neighbors/{p}radius select the neighbourhood of {p}backend local, not {p}backend dense"),
+    ({"kind": "kriged"}, ["--kind", "kriged"], "{p}kind is 'kriged'; expected simple, ordinary"),
+    ({"nugget": "both"}, ["--nugget-as", "both"], "is 'both'; expected micro or error"),
+    ({"kind": "ordinary", "mean": 1.0}, ["--mean", "1"], "mean applies to {p}kind simple only"),
+])
+def test_kriging_option_words_refused_alike_by_cli_and_python(tmp_path, extra, cli_extra, message):
+    x, z, t = data(n=12)
+    s, tt, _ = write_samples(tmp_path, x, z, t)
+    status, _, err = run_cli_status("interpolate", "--method", "kriging", "--samples", s, "--targets", tt,
+                                    "--coords", "x,y", "--value", "v", "--model", MODEL, *cli_extra,
+                                    "--out", tmp_path / "o.csv")
+    assert status == 2 and message.format(p="--") in err
+    with pytest.raises(errfield.ArgumentError) as e:
+        errfield.Kriging(x, z, MODEL, **extra)
+    assert message.format(p="") in str(e.value)

@@ -61,6 +61,8 @@ CalibrationData calibration_data_from_name(std::string_view name);
 
 struct FitOptions {
   CompensationMethod method = CompensationMethod::distance_idw;
+  /// Use choose_method(data) instead of `method` (`fit --method auto`, the CLI's default).
+  bool choose_method = false;
   FieldSpace space = FieldSpace::task;  ///< kriging methods only
   double idw_power = 1.0;               ///< IDW methods (the paper: 1)
   std::optional<VariogramModel> model;  ///< kriging; empty = chosen (choose_field_model)

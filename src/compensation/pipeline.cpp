@@ -1,0 +1,232 @@
+// fit / predict / compensate / validate on tables, shared by the CLI (src/cli/cmd_*.cpp) and the
+// Python module: the checks and the output columns live here once.
+
+#include "errfield/compensation/pipeline.hpp"
+
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include "errfield/compensation/prediction.hpp"
+#include "errfield/compensation/registration.hpp"
+#include "errfield/compensation/target_ik.hpp"
+#include "errfield/error.hpp"
+#include "errfield/robot/kinematics.hpp"
+#include "errfield/robot/pose.hpp"
+
+namespace errfield::compensation {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+OutputColumn numbers(std::string name, std::vector<double> v) { return {std::move(name), std::move(v), {}}; }
+OutputColumn words(std::string name, std::vector<std::string> v) { return {std::move(name), {}, std::move(v)}; }
+
+}  // namespace
+
+FitOptions fit_options_from_text(const FitOptionText& a) {
+  FitOptions o;
+  // Every kriging method was more accurate on held-out points in joint space than in task space
+  // (docs/robot.md, "Which method"): the error of a serial arm follows its joints.
+  o.choose_method = a.method == "auto";
+  if (!o.choose_method) o.method = method_from_name(a.method);
+  o.space = a.space == "auto" ? FieldSpace::joint : field_space_from_name(a.space);
+  o.idw_power = a.power;
+  o.base = a.base;
+  o.region_margin = a.region_margin;
+  if (!a.model.empty() && a.model != "auto") o.model = load_variogram_model(a.model);
+  if (!a.calibration.empty()) o.calibration_data = calibration_data_from_name(a.calibration);
+  if (!a.robust.empty()) {
+    if (a.robust != "none" && a.robust != "igg3")
+      throw ArgumentError("--robust: expected 'none' or 'igg3', got '" + a.robust + "'");
+    o.calibration.robust.enabled = a.robust == "igg3";
+  }
+  o.calibration.max_condition_number = a.max_condition;
+  o.outlier_limit = a.outlier_limit;
+  o.calibration.validate();
+  if (a.kind == "universal1" || a.kind == "universal2") {
+    o.kind = KrigingKind::Universal;
+    o.drift_order = a.kind == "universal1" ? 1 : 2;
+  } else if (a.kind != "ordinary") {
+    throw ArgumentError("--kind: '" + a.kind + "'; expected ordinary, universal1 or universal2");
+  }
+  return o;
+}
+
+TableFit fit_table(const robot::MdhModel& robot, const CsvTable& table, const FitTableOptions& options) {
+  // Misuse is an error with a reason (robot/input_checks.hpp), before any fitting.
+  robot::check_distance_columns(table);
+  robot::check_nominal_positions(table, robot, options.robot_given);
+  const MeasurementSet data = MeasurementSet::from_table(table, robot, options.fixed_bases);
+  if (options.on_measurements_read) options.on_measurements_read();
+  FitOptions o = options.fit;
+  // --method auto: the method the data support best (after the input checks, before the
+  // method-specific ones below).
+  std::optional<std::string> chosen;
+  if (o.choose_method) {
+    const MethodChoice c = choose_method(data);
+    o.choose_method = false;
+    o.method = c.method;
+    chosen = "method auto: " + std::string(method_name(c.method)) + " (" + c.reason + ")";
+  }
+  const bool from_distances = o.method == CompensationMethod::vector_kriging && data.distance_mm.size() >= 3;
+  if (from_distances)
+    robot::check_error_vectors_from_distances(!data.base_q_deg.empty(), !data.measured_mm.empty(), table.source());
+  if ((o.method == CompensationMethod::position_idw || o.method == CompensationMethod::vector_kriging) &&
+      !data.measured_mm.empty() && data.measured_mm.size() >= 3 && (!from_distances || !data.base_q_deg.empty())) {
+    // The registration these methods fit, checked before the (possibly long) fit.
+    const auto reg = fit_registration(data.measured_mm, data.nominal_mm);
+    robot::check_registration_residual(reg.residual_rms_mm, data.measured_mm.size(), table.source(),
+                                       "registration tracker -> robot", options.max_registration_rms_mm);
+  }
+  TableFit fit{fit_compensation_model(robot, data, o), data.q_deg.size()};
+  if (chosen) fit.result.notes.insert(fit.result.notes.begin(), *chosen);
+  const FitResult& r = fit.result;
+  if (r.registration)
+    robot::check_registration_residual(r.registration->residual_rms_mm, data.measured_mm.size(), table.source(),
+                                       "registration tracker -> robot", options.max_registration_rms_mm);
+  return fit;
+}
+
+StepColumns predict_columns(const CompensationModel& model, std::span<const robot::JointVector> q) {
+  const std::size_t n = q.size();
+  const bool tracker = model.registration().has_value();
+  std::vector<std::vector<double>> cols(7, std::vector<double>(n, kNaN));
+  std::vector<std::string> status(n);
+  bool any_variance = false;
+  StepColumns out;
+  for (std::size_t i = 0; i < n; ++i) {
+    const PointPrediction p = predict_position(model, q[i]);
+    status[i] = std::string(status_name(p.status));
+    if (!p.ok()) {
+      ++out.refused;  // no position for a prediction the model cannot vouch for
+      continue;
+    }
+    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(k)][i] = p.position_mm[k];
+    if (p.tracker_mm)
+      for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(3 + k)][i] = (*p.tracker_mm)[k];
+    cols[6][i] = p.error.variance_mm2;
+    any_variance = any_variance || std::isfinite(p.error.variance_mm2);
+  }
+  const char* names[] = {"px", "py", "pz", "tx", "ty", "tz", "var_mm2"};
+  for (std::size_t c = 0; c < 7; ++c) {
+    if (c >= 3 && c < 6 && !tracker) continue;
+    if (c == 6 && !any_variance) continue;
+    out.columns.push_back(numbers(names[c], std::move(cols[c])));
+  }
+  out.columns.push_back(words("status", std::move(status)));
+  return out;
+}
+
+StepColumns compensate_columns(const CompensationModel& model, const robot::MdhModel& nominal,
+                               const CompensationTargets& targets, double tolerance_mm) {
+  using namespace robot;
+  // p_inside is P(|error| <= tolerance): 0, a negative or a NaN tolerance makes it meaningless.
+  if (!(std::isfinite(tolerance_mm) && tolerance_mm > 0.0))
+    throw ArgumentError("tolerance: " + format_number(tolerance_mm) + "; expected a finite tolerance > 0 (mm)");
+  const bool joints = !targets.joints_deg.empty() || targets.poses.rows() == 0;
+  if (!joints && targets.poses.cols() != 6)
+    throw ArgumentError("poses: " + std::to_string(targets.poses.cols()) + " columns; expected x,y,z,rx,ry,rz");
+  const std::size_t n = joints ? targets.joints_deg.size() : static_cast<std::size_t>(targets.poses.rows());
+  // The branch pose targets are solved on: the model's training joints (older model files have
+  // none: multistart).
+  const std::vector<JointVector>& reference = model.data_joints();
+  std::vector<JointVector> qn(n);
+  std::vector<bool> ik_ok(n, true);
+  std::vector<std::string> ik_status(n);
+  if (joints) {
+    qn = targets.joints_deg;
+  } else {
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto r = targets.poses.row(static_cast<Eigen::Index>(i));
+      const BranchIkResult ik =
+          solve_on_branch(nominal, to_isometry({r[0], r[1], r[2], r[3], r[4], r[5]}), reference, targets.seed_deg);
+      qn[i] = ik.ik.q_deg;
+      ik_ok[i] = ik.ok();
+      ik_status[i] = ik.branch_changed ? "branch-change" : ik.ik.ok() ? "" : to_string(ik.ik.status);
+    }
+  }
+  std::vector<std::vector<double>> cols(24, std::vector<double>(n, kNaN));  // see `names` below
+  std::vector<std::string> status(n);
+  StepColumns out;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!ik_ok[i]) {
+      status[i] = ik_status[i] == "branch-change" ? "branch-change" : "unreachable";
+      ++out.refused;
+      continue;
+    }
+    const CompensatedTarget c = model.compensate_joints(nominal, qn[i], tolerance_mm);
+    const Eigen::Vector3d p = forward_position(nominal, qn[i]);
+    for (int k = 0; k < 6; ++k) cols[static_cast<std::size_t>(k)][i] = qn[i][k];
+    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(6 + k)][i] = p[k];
+    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(9 + k)][i] = c.prediction.position_error_mm[k];
+    cols[12][i] = c.prediction.distance_error_mm;
+    cols[13][i] = c.prediction.variance_mm2;
+    cols[14][i] = c.p_within_tolerance;
+    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(15 + k)][i] = c.command_position_mm[k];
+    if (c.prediction.inside_region && !(c.prediction.position_error_mm.allFinite() && c.command_position_mm.allFinite())) {
+      // The field gave no number here (e.g. an overflow): never an IK failure's name, never ok.
+      status[i] = "no-prediction";
+      ++out.no_prediction;
+      ++out.refused;
+      continue;
+    }
+    status[i] = !c.prediction.inside_region ? "outside-region"
+                : !c.prediction.credible ? "not-credible"
+                : c.ik_status != IkStatus::converged ? std::string("ik-") + to_string(c.ik_status)
+                                                     : "ok";
+    if (!c.ok()) {
+      ++out.refused;
+      continue;  // compensated joints stay empty: nothing is sent for a refused target
+    }
+    for (int k = 0; k < 6; ++k) cols[static_cast<std::size_t>(18 + k)][i] = c.q_command_deg[k];
+  }
+  const char* names[] = {"nq1", "nq2", "nq3", "nq4", "nq5", "nq6", "nx", "ny", "nz", "pred_dx", "pred_dy", "pred_dz",
+                         "pred_dl", "var_mm2", "p_inside", "cmd_x", "cmd_y", "cmd_z", "cq1", "cq2", "cq3", "cq4",
+                         "cq5", "cq6"};
+  for (std::size_t c = 0; c < 24; ++c) out.columns.push_back(numbers(names[c], std::move(cols[c])));
+  out.columns.push_back(words("status", std::move(status)));
+  return out;
+}
+
+StepColumns validation_point_columns(const ValidationReport& r) {
+  const std::size_t n = r.points.size();
+  std::vector<std::string> point(n), status(n);
+  std::vector<double> before(n), after(n);
+  std::vector<std::vector<double>> comp(6, std::vector<double>(n));
+  const bool positions = r.position.has_value();
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& p = r.points[i];
+    point[i] = p.point;
+    status[i] = p.status;
+    // before_mm/after_mm: the 3-D error where positions were scored, else |distance error| to b0.
+    before[i] = positions ? p.before_mm.norm() : (p.distance_before_mm.empty() ? kNaN : std::abs(p.distance_before_mm[0]));
+    after[i] = positions ? p.after_mm.norm() : (p.distance_after_mm.empty() ? kNaN : std::abs(p.distance_after_mm[0]));
+    for (int c = 0; c < 3; ++c) {
+      comp[static_cast<std::size_t>(c)][i] = p.before_mm[c];
+      comp[static_cast<std::size_t>(3 + c)][i] = p.after_mm[c];
+    }
+  }
+  StepColumns out;
+  out.columns.push_back(words("point", std::move(point)));
+  out.columns.push_back(words("status", std::move(status)));
+  out.columns.push_back(numbers("before_mm", std::move(before)));
+  out.columns.push_back(numbers("after_mm", std::move(after)));
+  const char* names[] = {"before_dx", "before_dy", "before_dz", "after_dx", "after_dy", "after_dz"};
+  for (std::size_t c = 0; c < 6; ++c) out.columns.push_back(numbers(names[c], std::move(comp[c])));
+  for (std::size_t k = 0; k < r.distance_columns; ++k) {
+    std::vector<double> db(n, kNaN), da(n, kNaN);
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& p = r.points[i];
+      if (k < p.distance_before_mm.size()) db[i] = p.distance_before_mm[k];
+      if (k < p.distance_after_mm.size()) da[i] = p.distance_after_mm[k];
+    }
+    out.columns.push_back(numbers("before_dl_b" + std::to_string(k), std::move(db)));
+    out.columns.push_back(numbers("after_dl_b" + std::to_string(k), std::move(da)));
+  }
+  for (const auto& p : r.points) out.refused += p.status != "ok";
+  return out;
+}
+
+}  // namespace errfield::compensation

@@ -1,0 +1,252 @@
+// errfield.fit / predict / compensate / validate and CompensationModel: the robot pipeline of the
+// CLI commands of the same names, on dicts of columns (the CLI's CSV column names; a pandas
+// DataFrame works too) or arrays. The steps themselves are errfield/compensation/pipeline.hpp, which
+// the CLI calls as well; this file only converts arguments and results.
+
+#include <cmath>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include "errfield/atomic_file.hpp"
+#include "errfield/compensation/pipeline.hpp"
+#include "errfield/compensation/prediction.hpp"
+#include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
+#include "errfield/robot/builtin_robots.hpp"
+#include "python/arrays.hpp"
+#include "python/bindings.hpp"
+
+namespace errfield::python {
+
+namespace {
+
+using namespace errfield::compensation;
+using robot::JointVector;
+using robot::MdhModel;
+using namespace pybind11::literals;
+
+std::vector<JointVector> joints_of(const Eigen::MatrixXd& m) {
+  std::vector<JointVector> q(static_cast<std::size_t>(m.rows()));
+  for (Eigen::Index i = 0; i < m.rows(); ++i) q[static_cast<std::size_t>(i)] = m.row(i).transpose();
+  return q;
+}
+
+Eigen::MatrixXd columns_matrix(const CsvTable& t, const std::vector<std::string>& cols) { return t.numeric_columns(cols); }
+
+const std::vector<std::string> kJointCols{"q1", "q2", "q3", "q4", "q5", "q6"};
+const std::vector<std::string> kPoseCols{"x", "y", "z", "rx", "ry", "rz"};
+
+bool has_all(const CsvTable& t, const std::vector<std::string>& cols) {
+  for (const auto& c : cols)
+    if (!t.has_column(c)) return false;
+  return true;
+}
+
+/// (N, 6) joints (deg) or a dict with q1..q6.
+std::vector<JointVector> joints_arg(const py::object& o, const std::string& name) {
+  if (is_columns(o)) {
+    const CsvTable t = table_arg(o, name);
+    if (!has_all(t, kJointCols)) throw InputError(name + ": needs columns q1..q6 (deg)", name);
+    return joints_of(columns_matrix(t, kJointCols));
+  }
+  return joints_of(matrix_arg(o, name, ArraySpec{1, 2, robot::kJointCount, 0, true, true}).data);
+}
+
+py::dict columns_dict(const StepColumns& step) {
+  py::dict d;
+  const py::object array = py::module_::import("numpy").attr("array");
+  for (const auto& c : step.columns) {
+    if (c.is_words()) d[py::str(c.name)] = array(py::cast(c.words), "dtype"_a = "str");
+    else d[py::str(c.name)] = to_numpy(c.numbers);
+  }
+  return d;
+}
+
+/// A compensation model (errfield fit) or a robot JSON read as one (errfield calibrate), with the
+/// report of the fit that made it, if any.
+struct PyModel {
+  LoadedModel loaded;
+  py::object fit_report = py::none();
+};
+
+std::string model_json(const PyModel& m) { return m.loaded.model.to_json().dump(1) + "\n"; }
+
+py::dict fit_report_dict(const TableFit& f) {
+  const FitResult& r = f.result;
+  py::dict d;
+  d["points"] = f.points;
+  d["notes"] = r.notes;
+  d["warnings"] = r.warnings;
+  d["field"] = r.model.field() ? py::object(py::str(r.model.field()->describe())) : py::object(py::none());
+  if (r.cross_validation) {
+    const auto& cv = *r.cross_validation;
+    py::dict c;
+    c["method"] = cv.method;
+    c["samples"] = cv.samples;
+    c["mean_abs_mm"] = cv.mean_abs_mm;
+    c["rms_mm"] = cv.rms_mm;
+    c["max_abs_mm"] = cv.max_abs_mm;
+    c["mean_squared_z"] = cv.mean_squared_z ? py::object(py::float_(*cv.mean_squared_z)) : py::object(py::none());
+    d["cross_validation"] = c;
+  } else {
+    d["cross_validation"] = py::none();
+  }
+  d["registration_rms_mm"] =
+      r.registration ? py::object(py::float_(r.registration->residual_rms_mm)) : py::object(py::none());
+  return d;
+}
+
+std::vector<Eigen::Vector3d> base_points_arg(const py::object& o) {
+  std::vector<Eigen::Vector3d> fixed;
+  if (o.is_none()) return fixed;
+  const Eigen::MatrixXd b = matrix_arg(o, "base_points", ArraySpec{1, 2, 3, 1, true, true}).data;
+  for (Eigen::Index i = 0; i < b.rows(); ++i) fixed.emplace_back(b.row(i).transpose());
+  return fixed;
+}
+
+PyModel fit_py(const py::object& data, const py::object& robot, const std::string& method, const std::string& space,
+               double power, const std::optional<std::string>& model, const std::string& kind, std::size_t base,
+               const py::object& base_points, std::optional<double> region_margin,
+               const std::optional<std::string>& calibration, const std::optional<std::string>& robust,
+               double max_condition, double max_registration_rms, double outlier_limit) {
+  const MdhModel nominal = robot_arg(robot);
+  const CsvTable table = table_arg(data, "data");
+  FitTableOptions fo;
+  fo.fit = fit_options_from_text({method, space, power, model.value_or(""), kind, base, region_margin,
+                                  calibration.value_or(""), robust.value_or(""), max_condition, outlier_limit});
+  fo.fixed_bases = base_points_arg(base_points);
+  fo.robot_given = !robot.is_none();
+  fo.max_registration_rms_mm = max_registration_rms;
+  std::optional<TableFit> fit;
+  {
+    py::gil_scoped_release release;
+    fit = fit_table(nominal, table, fo);
+  }
+  for (const auto& w : fit->result.warnings)
+    if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
+  PyModel m{LoadedModel{fit->result.model, false, std::string(method_name(fit->result.model.method())) + " model"},
+            fit_report_dict(*fit)};
+  return m;
+}
+
+py::dict predict_py(const PyModel& m, const py::object& joints) {
+  const std::vector<JointVector> q = joints_arg(joints, "joints");
+  std::optional<StepColumns> step;
+  {
+    py::gil_scoped_release release;
+    step = predict_columns(m.loaded.model, q);
+  }
+  return columns_dict(*step);
+}
+
+py::dict compensate_py(const PyModel& m, const py::object& targets, const py::object& robot, double tolerance,
+                       const py::object& seed) {
+  const CompensationModel& model = m.loaded.model;
+  const bool kinematic =
+      model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging;
+  if (kinematic && robot.is_none() && !model.has_nominal_model())
+    throw ArgumentError("robot: a kinematic model's command model is the calibrated robot; give the nominal robot");
+  const MdhModel nominal = robot.is_none() ? model.nominal_model() : robot_arg(robot);
+  CompensationTargets t;
+  if (!seed.is_none()) t.seed_deg = matrix_arg(seed, "seed", ArraySpec{1, 1, -1, robot::kJointCount}).data.col(0);
+  if (is_columns(targets)) {
+    const CsvTable table = table_arg(targets, "targets");
+    if (has_all(table, kJointCols)) t.joints_deg = joints_of(columns_matrix(table, kJointCols));
+    else if (has_all(table, kPoseCols)) t.poses = columns_matrix(table, kPoseCols);
+    else throw InputError("targets: need columns q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg)", "targets");
+  } else {
+    t.joints_deg = joints_arg(targets, "targets");
+  }
+  std::optional<StepColumns> step;
+  {
+    py::gil_scoped_release release;
+    step = compensate_columns(model, nominal, t, tolerance);
+  }
+  return columns_dict(*step);
+}
+
+py::dict validate_py(const PyModel& m, const py::object& data, const py::object& robot, const py::object& base_points,
+                     bool targets) {
+  const CompensationModel& model = m.loaded.model;
+  const CsvTable table = table_arg(data, "data");
+  const auto fixed = base_points_arg(base_points);
+  const MdhModel nominal = robot.is_none() ? model.nominal_model() : robot_arg(robot);
+  ValidationReport r;
+  {
+    py::gil_scoped_release release;
+    if (targets) {
+      r = validate_targets(table, model.registration(), fixed);
+    } else {
+      r = validate_predictions(model, MeasurementSet::from_table(table, nominal, fixed));
+    }
+  }
+  if (!targets && m.loaded.is_robot_json && robot.is_none() && !table.has_column("x"))
+    r.notes.push_back("no robot and no x,y,z columns: 'before' is this robot's own FK; give the nominal robot "
+                      "for an uncompensated baseline");
+  py::dict d;
+  d["points"] = columns_dict(validation_point_columns(r));
+  const std::string summary = r.summary_json().dump(2) + "\n";
+  d["summary_json"] = summary;
+  d["summary"] = py::module_::import("json").attr("loads")(summary);
+  d["text"] = r.summary_text();
+  return d;
+}
+
+}  // namespace
+
+void bind_pipeline(py::module_& m) {
+  py::class_<PyModel>(m, "CompensationModel",
+                      "A compensation model as `errfield fit` writes it (or a robot JSON from `errfield calibrate`, "
+                      "read as a model whose prediction is its FK). save() writes the CLI's model file byte for byte.")
+      .def_static(
+          "load", [](const std::filesystem::path& path) { return PyModel{load_model(path.string()), py::none()}; },
+          py::arg("path"), "Reads a model JSON (errfield fit --out) or a robot JSON; InputError names file and member.")
+      .def(
+          "save", [](const PyModel& self, const std::filesystem::path& path) { write_file_atomically(path, model_json(self)); },
+          py::arg("path"), "Writes the model JSON atomically, identical to `errfield fit --out`.")
+      .def("to_json", &model_json, "The model file's text (JSON, as save() writes it).")
+      .def_property_readonly("method", [](const PyModel& self) { return std::string(method_name(self.loaded.model.method())); },
+                             "distance-idw | position-idw | distance-kriging | vector-kriging | kinematic | kinematic+kriging")
+      .def_property_readonly("description", [](const PyModel& self) { return self.loaded.description; })
+      .def_property_readonly("is_robot_json", [](const PyModel& self) { return self.loaded.is_robot_json; })
+      .def_readonly("fit_report", &PyModel::fit_report,
+                    "dict from fit(): points, notes, warnings, field, cross_validation (mm), registration_rms_mm; "
+                    "None for a loaded model")
+      .def("__repr__", [](const PyModel& self) { return "CompensationModel('" + self.loaded.description + "')"; });
+
+  m.def("fit", &fit_py, py::arg("data"), py::kw_only(), py::arg("robot") = py::none(),
+        py::arg("method") = "auto", py::arg("space") = "auto", py::arg("power") = 1.0,
+        py::arg("model") = py::none(), py::arg("kind") = "ordinary", py::arg("base") = 0,
+        py::arg("base_points") = py::none(), py::arg("region_margin") = py::none(), py::arg("calibration") = py::none(),
+        py::arg("robust") = py::none(), py::arg("max_condition") = 1e3,
+        py::arg("max_registration_rms") = robot::kRegistrationRmsLimitMm, py::arg("outlier_limit") = 5.0,
+        "`errfield fit`: a CompensationModel from measurements, a dict of columns named as the CLI's CSV\n"
+        "(point, kind, q1..q6 deg, x,y,z mm, mx,my,mz mm, dist_b0.. mm). robot: None (built-in ER20-C10), a Robot,\n"
+        "a built-in name or a robot JSON path. The options are the CLI's (--method, --space, --power, --model,\n"
+        "--kind, --base, --base-point as base_points (K, 3) mm, --region-margin, --calibration, --robust,\n"
+        "--max-condition, --max-registration-rms mm, --outlier-limit); method='auto' chooses from the data as the\n"
+        "CLI does (kinematic+kriging in joint space with tracker positions, kinematic from distances). The fit's warnings are RuntimeWarnings. Releases the GIL.");
+  m.def("predict", &predict_py, py::arg("model"), py::arg("joints"),
+        "`errfield predict`: where the tool goes at joints ((N, 6) deg or a dict with q1..q6). Returns a dict:\n"
+        "px,py,pz (robot frame, mm), tx,ty,tz (tracker frame; models with a registration), var_mm2 (where the\n"
+        "model has a variance), status (ok | outside-region | not-credible; refused rows are NaN).");
+  m.def("compensate", &compensate_py, py::arg("model"), py::arg("targets"), py::kw_only(),
+        py::arg("robot") = py::none(), py::arg("tolerance") = 0.25, py::arg("seed") = py::none(),
+        "`errfield compensate`: joints to send. targets: (N, 6) nominal joints (deg) or a dict with q1..q6 or\n"
+        "x,y,z,rx,ry,rz (mm, deg). Returns a dict: nq1..nq6, nx,ny,nz, pred_dx..dz, pred_dl, var_mm2, p_inside\n"
+        "(P(|error| <= tolerance mm)), cmd_x..z, cq1..cq6 (NaN for refused targets: nothing to send) and status.");
+  m.def("validate", &validate_py, py::arg("model"), py::arg("data"), py::kw_only(), py::arg("robot") = py::none(),
+        py::arg("base_points") = py::none(), py::arg("targets") = false,
+        "`errfield validate` on held-out measurements (dict of columns). Returns a dict: points (the columns of\n"
+        "--out: point, status, before_mm, after_mm, before_dx.., after_dx.., before_dl_bK, after_dl_bK; mm),\n"
+        "summary (dict) and summary_json (the text of --summary-out), text (the printed summary).");
+}
+
+}  // namespace errfield::python

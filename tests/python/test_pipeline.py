@@ -1,0 +1,152 @@
+"""errfield.fit / predict / compensate / validate against `errfield fit/predict/compensate/validate` on
+the same SIMULATED data (`errfield simulate`): the model JSON byte for byte, every output column bit
+for bit, and the validation summary JSON byte for byte."""
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+import errfield
+from conftest import numbers, read_csv, run_cli, run_cli_status, same, write_csv
+
+
+def read_measurements(path):
+    """A CSV of `errfield simulate` (leading '#' comments: SIMULATED) as a dict of columns: numbers
+    as float64 arrays (empty cell = NaN), text columns (point, kind) as str arrays."""
+    with open(path, newline="") as f:
+        rows = [r for r in csv.reader(line for line in f if not line.startswith("#"))]
+    header, body = rows[0], rows[1:]
+    cols = {}
+    for k, name in enumerate(header):
+        cells = [r[k] for r in body]
+        try:
+            cols[name] = np.array([float(c) if c != "" else math.nan for c in cells])
+        except ValueError:
+            cols[name] = np.array(cells)
+    return cols
+
+
+@pytest.fixture(scope="module")
+def sim(tmp_path_factory):
+    d = tmp_path_factory.mktemp("sim")
+    run_cli("simulate", "--robot-out", d / "robot.json", "--out", d / "grid.csv")
+    run_cli("simulate", "--sample", "random:30", "--seed", "7", "--out", d / "hold.csv")
+    with open(d / "grid.csv") as f:
+        assert "SIMULATED" in f.readline()
+    return d
+
+
+@pytest.mark.parametrize("method", ["distance-idw", "vector-kriging", "kinematic"])
+def test_fit_writes_the_cli_model_file(sim, tmp_path, method):
+    run_cli("fit", "--robot", sim / "robot.json", "--data", sim / "grid.csv", "--method", method,
+            "--out", tmp_path / "cli.json")
+    model = errfield.fit(read_measurements(sim / "grid.csv"), robot=str(sim / "robot.json"), method=method)
+    model.save(tmp_path / "py.json")
+    cli = (tmp_path / "cli.json").read_bytes()
+    assert (tmp_path / "py.json").read_bytes() == cli
+    assert model.to_json().encode() == cli
+    assert model.method == method
+    assert model.fit_report["points"] == 125
+    if method != "kinematic":  # a calibration has no leave-one-out of a field
+        assert model.fit_report["cross_validation"]["samples"] == 125
+    # The Robot object and the path give the same model.
+    again = errfield.fit(read_measurements(sim / "grid.csv"), robot=errfield.Robot.load(sim / "robot.json"),
+                         method=method)
+    assert again.to_json() == model.to_json()
+    # A loaded model is the same model (its text may differ in the last digit of angles that the
+    # robot JSON reader turns into radians and back; test_predict_matches_cli uses a loaded model).
+    loaded = errfield.CompensationModel.load(tmp_path / "cli.json")
+    assert loaded.method == method and loaded.fit_report is None
+
+
+def check_columns(result, csv_path):
+    """Every column the binding returns equals the CLI's column of that name (numbers bit for bit)."""
+    csv_ = read_csv(csv_path)
+    added = [n for n in csv_ if n in result]
+    assert set(result) == set(added), (sorted(result), list(csv_))
+    for name, values in result.items():
+        if values.dtype.kind == "U":
+            assert list(values) == csv_[name], name
+        else:
+            assert same(values, numbers(csv_[name])), name
+
+
+@pytest.fixture(scope="module")
+def fitted(sim):
+    run_cli("fit", "--robot", sim / "robot.json", "--data", sim / "grid.csv", "--method", "vector-kriging",
+            "--out", sim / "vk.json")
+    return errfield.CompensationModel.load(sim / "vk.json")
+
+
+def test_predict_matches_cli(sim, fitted, tmp_path):
+    run_cli("predict", "--model", sim / "vk.json", "--joints", sim / "hold.csv", "--out", tmp_path / "p.csv")
+    data = read_measurements(sim / "hold.csv")
+    from_dict = errfield.predict(fitted, data)
+    check_columns(from_dict, tmp_path / "p.csv")
+    assert set(from_dict) == {"px", "py", "pz", "tx", "ty", "tz", "var_mm2", "status"}
+    q = np.column_stack([data[f"q{j}"] for j in range(1, 7)])
+    from_array = errfield.predict(fitted, q)
+    for name in from_dict:
+        assert np.array_equal(from_array[name], from_dict[name]), name
+    # Columns that are strided views of one (N, 6) array (a regression: they were read as if
+    # contiguous) give the same predictions.
+    strided = {f"q{k + 1}": q[:, k] for k in range(6)}
+    assert not strided["q1"].flags.c_contiguous
+    from_strided = errfield.predict(fitted, strided)
+    for name in from_dict:
+        assert np.array_equal(from_strided[name], from_dict[name]), name
+    one = errfield.predict(fitted, q[3])
+    assert same(one["px"], from_dict["px"][3:4])
+
+
+def test_compensate_matches_cli(sim, fitted, tmp_path):
+    run_cli("compensate", "--model", sim / "vk.json", "--targets", sim / "hold.csv", "--tolerance", "0.3",
+            "--out", tmp_path / "c.csv")
+    data = read_measurements(sim / "hold.csv")
+    out = errfield.compensate(fitted, data, tolerance=0.3)
+    check_columns(out, tmp_path / "c.csv")
+    assert (out["status"] == "ok").sum() > 20
+    # Pose targets (x,y,z,rx,ry,rz): solved on the training branch, as the CLI does. The simulated
+    # targets are tool-down (orientation 180,0,0, simulate's default).
+    n = len(data["x"])
+    poses = {"x": data["x"], "y": data["y"], "z": data["z"], "rx": np.full(n, 180.0), "ry": np.zeros(n),
+             "rz": np.zeros(n)}
+    write_csv(tmp_path / "poses.csv", poses)
+    run_cli("compensate", "--model", sim / "vk.json", "--robot", sim / "robot.json", "--targets",
+            tmp_path / "poses.csv", "--out", tmp_path / "cp.csv")
+    by_pose = errfield.compensate(fitted, poses, robot=str(sim / "robot.json"))
+    check_columns(by_pose, tmp_path / "cp.csv")
+    assert (by_pose["status"] == "ok").sum() > 20
+
+
+def test_validate_matches_cli(sim, fitted, tmp_path):
+    run_cli("validate", "--model", sim / "vk.json", "--robot", sim / "robot.json", "--data", sim / "hold.csv",
+            "--out", tmp_path / "v.csv", "--summary-out", tmp_path / "s.json")
+    r = errfield.validate(fitted, read_measurements(sim / "hold.csv"), robot=str(sim / "robot.json"))
+    check_columns(r["points"], tmp_path / "v.csv")
+    assert r["summary_json"].encode() == (tmp_path / "s.json").read_bytes()
+    assert r["summary"] == json.loads((tmp_path / "s.json").read_text())
+    # Compensation helps on simulated data with a smooth error field: RMS after < before.
+    pos = r["summary"]["position"]
+    assert pos["after"]["rms_mm"] < pos["before"]["rms_mm"]
+
+
+def test_pipeline_errors(sim, fitted):
+    data = read_measurements(sim / "grid.csv")
+    with pytest.raises(errfield.ArgumentError, match="--robust: expected 'none' or 'igg3'"):
+        errfield.fit(data, robot=str(sim / "robot.json"), method="kinematic", robust="huber")
+    with pytest.raises(errfield.ArgumentError, match=r"data\['q1'\]: 3 rows but 'point' has 126"):
+        errfield.fit({**data, "q1": np.zeros(3)})
+    with pytest.raises(errfield.ArgumentError, match="data: expected a dict of columns"):
+        errfield.fit(np.zeros((4, 6)))
+    with pytest.raises(errfield.ArgumentError, match="tolerance"):
+        errfield.compensate(fitted, np.zeros((1, 6)), tolerance=0.0)
+    with pytest.raises(errfield.ArgumentError, match="joints"):
+        errfield.predict(fitted, np.zeros((2, 5)))
+    # Without the robot that has the measured tool, the CLI and the binding refuse alike.
+    status, _, err = run_cli_status("fit", "--data", sim / "grid.csv", "--out", sim / "never.json")
+    with pytest.raises(errfield.InputError) as e:
+        errfield.fit(data)
+    assert status == 2 and str(e.value).split(": ", 1)[1][:60] in err
