@@ -109,6 +109,48 @@ TEST(LikelihoodRotated, RecoversAngleAndRatioIn2DWithinTheirStandardErrors) {
   EXPECT_LT(se, asd * 3.0);
 }
 
+// 3-D: too slow for replications here (~200 ARD fits per fit), so one small draw: the fitted model
+// as written (azimuth, dip, rotation, two ratios composed by the library) is at least as likely
+// as the truth, built by hand as an ellipsoid with its major axis horizontal at azimuth 30.
+TEST(LikelihoodRotated, ThreeDimensionalFitIsAtLeastAsLikelyAsTheTruth) {
+  const int n = 60;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 100.0);
+  std::normal_distribution<double> g(0.0, 1.0);
+  Eigen::MatrixXd x(n, 3);
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) x(i, k) = u(rng);
+  const double a = 30.0 * kRad;
+  const Eigen::Vector3d major(std::sin(a), std::cos(a), 0.0), minor1(std::cos(a), -std::sin(a), 0.0), up(0, 0, 1);
+  Eigen::MatrixXd k(n, n);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const Eigen::Vector3d s = x.row(i).transpose() - x.row(j).transpose();
+      const double h = std::sqrt(std::pow(s.dot(major) / 60.0, 2) + std::pow(s.dot(minor1) / 30.0, 2) +
+                                 std::pow(s.dot(up) / 15.0, 2));
+      k(i, j) = std::exp(-h) + (i == j ? 0.02 : 0.0);
+    }
+  const Eigen::LLT<Eigen::MatrixXd> llt(k);
+  Eigen::VectorXd w(n);
+  for (int i = 0; i < n; ++i) w(i) = g(rng);
+  const Eigen::MatrixXd z = Eigen::MatrixXd(llt.matrixL()) * w;
+  LikelihoodFitOptions o;
+  o.anisotropy = LikelihoodFitOptions::Anisotropy::Rotated;
+  o.starts = 2;
+  o.local_runs = 1;
+  ModelComponent exp;
+  exp.kind = ModelKind::Exponential;
+  const LikelihoodFitResult fit = fit_likelihood(x, z, {exp}, o);
+  ASSERT_EQ(fit.angles_deg.size(), 3u);
+  ASSERT_EQ(fit.model.anisotropy().parameters().size(), 5u);
+  // gstat's anis(30, 0, 0, 0.5, 0.25): major axis horizontal at azimuth 30, minor 1 horizontal.
+  const VariogramModel truth({{ModelKind::Exponential, 1.0, 60.0, 0.5}, {ModelKind::Nugget, 0.02, 0.0, 0.5}},
+                             Anisotropy::rotated({30.0, 0.0, 0.0, 0.5, 0.25}));
+  EXPECT_LE(fit.negative_log_likelihood, negative_log_likelihood(x, z, truth, o) + 1e-6) << fit.model.to_string();
+  EXPECT_NEAR(fit.negative_log_likelihood, negative_log_likelihood(x, z, fit.model, o),
+              1e-8 * std::fabs(fit.negative_log_likelihood));
+}
+
 TEST(LikelihoodRotated, RefusesOtherDimensions) {
   Eigen::MatrixXd x = Eigen::MatrixXd::Random(20, 4), z = Eigen::MatrixXd::Random(20, 1);
   LikelihoodFitOptions o;
