@@ -9,7 +9,10 @@
 
 #include "errfield/csv_table.hpp"
 #include "errfield/empirical_variogram.hpp"
+#include "errfield/kriging_likelihood.hpp"
 #include "support/cli_harness.hpp"
+
+#include <nlohmann/json.hpp>
 
 namespace errfield {
 namespace {
@@ -108,6 +111,28 @@ TEST_F(VariogramDirectionCli, DirectionsThatDoNotFitAreUsageErrors) {
     EXPECT_EQ(r.exit_code, 2) << r.err;
     EXPECT_NE(r.err.find("--"), std::string::npos) << r.err;  // names the option
   }
+}
+
+// fit-variogram --anisotropy rotated writes the library's fit (model with @anis, angles and their
+// standard errors in the JSON) and refuses other dimensions with a usage error.
+TEST_F(VariogramDirectionCli, RotatedLikelihoodFitWritesTheLibrarysModelAndAngles) {
+  Eigen::MatrixXd x, z;
+  write("in.csv", simulated_csv(60, &x, &z));
+  const auto r = run("fit-variogram --method reml --anisotropy rotated --input " + path("in.csv") +
+                     " --coords x,y --value a --model exp --out " + path("m.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  LikelihoodFitOptions o;
+  o.anisotropy = LikelihoodFitOptions::Anisotropy::Rotated;
+  const auto lib = fit_likelihood(x.leftCols(2), z.col(0), {{ModelKind::Exponential, 0, 0, 0.5}}, o);
+  const auto j = nlohmann::json::parse(read("m.json"));
+  EXPECT_EQ(j.get<VariogramModel>().to_string(), lib.model.to_string());
+  ASSERT_EQ(j["fit"]["angles_deg"].size(), 1u);
+  EXPECT_EQ(j["fit"]["angles_deg"][0].get<double>(), lib.angles_deg[0]);
+  EXPECT_NE(r.out.find("angle = "), std::string::npos) << r.out;
+  const auto bad = run("fit-variogram --method reml --anisotropy anis --input " + path("in.csv") +
+                       " --coords x --value a --model exp");
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
+  EXPECT_NE(bad.err.find("2 or 3 coordinates"), std::string::npos) << bad.err;
 }
 
 }  // namespace
