@@ -110,8 +110,9 @@ TEST(LikelihoodRotated, RecoversAngleAndRatioIn2DWithinTheirStandardErrors) {
 }
 
 // 3-D: too slow for replications here (~200 ARD fits per fit), so one small draw: the fitted model
-// as written (azimuth, dip, rotation, two ratios composed by the library) is at least as likely
-// as the truth, built by hand as an ellipsoid with its major axis horizontal at azimuth 30.
+// as written (azimuth, dip, rotation, two ratios composed by the library; the frame re-sorted by
+// range, which inverts the library's rotation) is at least as likely as the truth, built by hand
+// as an ellipsoid with its major axis horizontal at azimuth 30.
 TEST(LikelihoodRotated, ThreeDimensionalFitIsAtLeastAsLikelyAsTheTruth) {
   const int n = 60;
   std::mt19937_64 rng(7);
@@ -143,6 +144,14 @@ TEST(LikelihoodRotated, ThreeDimensionalFitIsAtLeastAsLikelyAsTheTruth) {
   const LikelihoodFitResult fit = fit_likelihood(x, z, {exp}, o);
   ASSERT_EQ(fit.angles_deg.size(), 3u);
   ASSERT_EQ(fit.model.anisotropy().parameters().size(), 5u);
+  // Written as gstat wants it: the longest range first (ratios <= 1), angles in [0, 360).
+  const auto& p = fit.model.anisotropy().parameters();
+  EXPECT_LE(p[3], 1.0);
+  EXPECT_LE(p[4], 1.0);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_GE(p[static_cast<std::size_t>(k)], 0.0);
+    EXPECT_LT(p[static_cast<std::size_t>(k)], 360.0);
+  }
   // gstat's anis(30, 0, 0, 0.5, 0.25): major axis horizontal at azimuth 30, minor 1 horizontal.
   const VariogramModel truth({{ModelKind::Exponential, 1.0, 60.0, 0.5}, {ModelKind::Nugget, 0.02, 0.0, 0.5}},
                              Anisotropy::rotated({30.0, 0.0, 0.0, 0.5, 0.25}));

@@ -8,9 +8,12 @@
 // profile likelihood. Formulas: docs/kriging.md, "Rotated anisotropy".
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
+
+#include <Eigen/LU>
 
 #include "errfield/anisotropy.hpp"
 #include "errfield/error.hpp"
@@ -73,6 +76,46 @@ double golden(G g, double lo, double hi, double tol) {
   return gc < gd ? c : d;
 }
 
+// The rotation's rows (major, minor 1, minor 2) as errfield's Anisotropy::rotated builds them.
+Eigen::Matrix3d frame_of(const std::vector<double>& angles) {
+  const Anisotropy q = Anisotropy::rotated({angles[0], angles[1], angles[2], 1.0, 1.0});
+  Eigen::Matrix3d m;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) m(r, c) = q.matrix()[static_cast<std::size_t>(3 * r + c)];
+  return m;
+}
+
+// gstat's (azimuth, dip, rotation) of a right-handed orthonormal frame, inverting the GSLIB rotation
+// of anisotropy.cpp: u = (cb ca, cb sa, -sb), v_z = st cb, w_z = ct cb, with alpha = 90 - azimuth,
+// beta = -dip, theta = rotation. Angles in [0, 360), as gstat wants them.
+std::vector<double> angles_of(const Eigen::Matrix3d& m) {
+  const double deg = 180.0 / std::numbers::pi;
+  const double sb = std::clamp(-m(0, 2), -1.0, 1.0);
+  const double cb = std::sqrt(std::max(0.0, 1.0 - sb * sb));
+  double alpha, theta;
+  if (cb > 1e-12) {
+    alpha = std::atan2(m(0, 1), m(0, 0));
+    theta = std::atan2(m(1, 2), m(2, 2));
+  } else {  // major axis vertical: the rotation about it is folded into alpha
+    theta = 0.0;
+    alpha = std::atan2(-m(1, 0), m(1, 1));
+  }
+  auto wrap = [](double a) { return std::fmod(std::fmod(a, 360.0) + 360.0, 360.0); };
+  return {wrap(90.0 - alpha * deg), wrap(-std::asin(sb) * deg), wrap(theta * deg)};
+}
+
+// The frame's rows sorted by decreasing range (an odd permutation flips the last row, keeping it
+// right-handed; an axis' sign does not change the lags), as gstat's angles.
+std::vector<double> sorted_angles(const std::vector<double>& angles, const std::vector<double>& ranges) {
+  const Eigen::Matrix3d m = frame_of(angles);
+  std::array<int, 3> order{0, 1, 2};
+  std::sort(order.begin(), order.end(), [&](int a, int b) { return ranges[static_cast<std::size_t>(a)] > ranges[static_cast<std::size_t>(b)]; });
+  Eigen::Matrix3d s;
+  for (int r = 0; r < 3; ++r) s.row(r) = m.row(order[static_cast<std::size_t>(r)]);
+  if (s.determinant() < 0.0) s.row(2) *= -1.0;
+  return angles_of(s);
+}
+
 }  // namespace
 
 LikelihoodFitResult fit_rotated_likelihood(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z,
@@ -126,6 +169,12 @@ LikelihoodFitResult fit_rotated_likelihood(const Eigen::MatrixXd& x, const Eigen
       if (v < best_value) best_value = v, best = t;
     }
 
+  // 3-D: rewrite the frame with the longest range first (gstat wants ratios <= 1); the profile is
+  // the same function of the frame, so the fit there is the same up to the optimizer's tolerance.
+  if (na == 3) {
+    const std::vector<double> sorted = sorted_angles(best, pr.fit_at(best).ranges);
+    if (pr.value(sorted) <= best_value + 1e-6 * std::fabs(best_value)) best = sorted;
+  }
   LikelihoodFitResult r = pr.fit_at(best);
   // Standard errors of the angles from the profile's curvature (step 1 degree; NaN if not convex).
   std::vector<double> angle_se(na, std::numeric_limits<double>::quiet_NaN());
@@ -139,7 +188,8 @@ LikelihoodFitResult fit_rotated_likelihood(const Eigen::MatrixXd& x, const Eigen
     if (curvature_rad > 0.0) angle_se[k] = std::sqrt(1.0 / curvature_rad) * (180.0 / std::numbers::pi);
   }
   // ARD ranges on the rotated axes -> range = the one along the first axis, ratios to it. In 2-D
-  // the major axis is made the longer one (ratio <= 1, angle + 90 otherwise), as gstat writes it.
+  // the major axis is made the longer one (ratio <= 1, angle + 90 otherwise), as gstat writes it;
+  // in 3-D the frame was sorted above (ratios <= 1 unless the refit there moved).
   const std::vector<double> ranges = r.ranges;  // along the rotated axes
   std::vector<double> range_se = r.range_standard_errors;
   double angle0 = best[0];
