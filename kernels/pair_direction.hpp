@@ -60,16 +60,59 @@ inline bool direction_accepts(const DirectionCone& c, const double* s) noexcept 
   return std::fabs(dot) >= c.cos_tol * std::sqrt(norm2);
 }
 
-/// h[t] = NaN for the pairs (i, j0 + t), t < m, outside the cone (at most 64 axes).
+/// h[t] = NaN for the pairs (i, j0 + t), t < m <= 256, outside the cone (at most 64 axes). The
+/// same rule as direction_accepts, written on squares so that the loops over t have no branch and
+/// no square root (they vectorize): for cos T > 0, |d| >= cos T |s| <=> d^2 >= cos^2 T |s|^2; a
+/// zero separation gives 0 >= 0 (accepted, as above). Rounding can differ from direction_accepts
+/// only for pairs within a few ulp of the boundary.
 inline void mask_directions(const DirectionCone& c, std::size_t i, std::size_t j0, std::size_t m,
                             double* h) noexcept {
-  double s[64];
-  s[0] = s[1] = s[2] = 0.0;  // the gstat test reads three axes (dimension >= 2 is checked)
-  const std::size_t D = static_cast<std::size_t>(c.dimension);
-  for (std::size_t t = 0; t < m; ++t) {
-    for (std::size_t a = 0; a < D; ++a)
-      s[a] = c.coordinates[a * c.n + i] - c.coordinates[a * c.n + j0 + t];
-    if (!direction_accepts(c, s)) h[t] = std::numeric_limits<double>::quiet_NaN();
+  constexpr std::size_t kBlock = 256;
+  double dot[kBlock], norm2[kBlock];
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::size_t n = c.n;
+  for (std::size_t b = 0; b < m; b += kBlock) {
+    const std::size_t len = m - b < kBlock ? m - b : kBlock;
+    const std::size_t j = j0 + b;
+    double* hb = h + b;
+    if (c.gstat) {
+      const double* x = c.coordinates;
+      const double* y = c.coordinates + n;
+      const double xi = x[i], yi = y[i];
+      for (std::size_t t = 0; t < len; ++t) {
+        const double dx = xi - x[j + t], dy = yi - y[j + t];
+        dot[t] = dx * c.hor_x + dy * c.hor_y;
+        norm2[t] = dx * dx + dy * dy;
+      }
+      if (c.check_hor && c.cos_tol_hor > 0.0) {
+        const double k = c.cos_tol_hor * c.cos_tol_hor;
+        for (std::size_t t = 0; t < len; ++t) hb[t] = dot[t] * dot[t] >= k * norm2[t] ? hb[t] : nan;
+      }
+      if (c.check_ver && c.cos_tol_ver > 0.0 && c.dimension > 2) {
+        const double* z = c.coordinates + 2 * n;
+        const double zi = z[i];
+        const double k = c.cos_tol_ver * c.cos_tol_ver;
+        for (std::size_t t = 0; t < len; ++t) {
+          const double dz = zi - z[j + t];
+          const double v = std::sqrt(norm2[t]) * c.ver_xy + dz * c.ver_z;
+          hb[t] = v * v >= k * (norm2[t] + dz * dz) ? hb[t] : nan;
+        }
+      }
+      continue;
+    }
+    if (!(c.cos_tol > 0.0)) continue;  // a tolerance >= 90 degrees keeps every pair
+    for (std::size_t t = 0; t < len; ++t) dot[t] = norm2[t] = 0.0;
+    for (int a = 0; a < c.dimension; ++a) {
+      const double* x = c.coordinates + static_cast<std::size_t>(a) * n;
+      const double xa = x[i], ua = c.axis[a];
+      for (std::size_t t = 0; t < len; ++t) {
+        const double d = xa - x[j + t];
+        dot[t] += d * ua;
+        norm2[t] += d * d;
+      }
+    }
+    const double k = c.cos_tol * c.cos_tol;
+    for (std::size_t t = 0; t < len; ++t) hb[t] = dot[t] * dot[t] >= k * norm2[t] ? hb[t] : nan;
   }
 }
 

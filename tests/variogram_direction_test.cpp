@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "errfield/empirical_variogram.hpp"
+#include "pair_direction.hpp"
 
 namespace errfield {
 namespace {
@@ -238,6 +239,44 @@ TEST(VariogramDirection, SubsamplingAndDowdKeepTheSameDirectionalPairs) {
   o.pair_fraction = 0.5;
   const auto half = empirical_variogram(x, z, bins, o);
   for (std::size_t k = 0; k < half.bins.size(); ++k) EXPECT_LE(half.bins[k].pairs, full.bins[k].pairs);
+}
+
+// The block kernel (squares, no branch) against the per-pair rule it restates (cosines).
+TEST(VariogramDirection, BlockMaskAgreesWithThePerPairRule) {
+  const int n = 300;
+  for (int d : {2, 3, 6}) {
+    const Eigen::MatrixXd x = random_points(n, d, 70 + static_cast<std::uint64_t>(d));
+    std::vector<double> soa(static_cast<std::size_t>(n * d));
+    for (int a = 0; a < d; ++a)
+      for (int i = 0; i < n; ++i) soa[static_cast<std::size_t>(a * n + i)] = x(i, a);
+    std::vector<double> u(static_cast<std::size_t>(d), 0.0);
+    u[0] = 0.6, u[1] = 0.8;
+    kernels::DirectionCone cones[3];
+    for (auto& c : cones) c.coordinates = soa.data(), c.n = n, c.dimension = d;
+    cones[0].axis = u.data(), cones[0].cos_tol = std::cos(25.0 / kDeg);
+    if (d <= 3) {
+      cones[1].gstat = cones[2].gstat = true;
+      cones[1].check_hor = true, cones[1].hor_x = std::sin(0.7), cones[1].hor_y = std::cos(0.7);
+      cones[1].cos_tol_hor = std::cos(20.0 / kDeg);
+      cones[2] = cones[1];
+      cones[2].check_ver = d == 3, cones[2].ver_xy = std::cos(0.4), cones[2].ver_z = std::sin(0.4);
+      cones[2].cos_tol_ver = std::cos(30.0 / kDeg);
+    }
+    for (int k = 0; k < (d <= 3 ? 3 : 1); ++k) {
+      int kept = 0;
+      for (std::size_t i = 1; i < static_cast<std::size_t>(n); ++i) {
+        std::vector<double> h(i, 1.0);
+        kernels::mask_directions(cones[k], i, 0, i, h.data());
+        for (std::size_t j = 0; j < i; ++j) {
+          double s[64];
+          for (int a = 0; a < d; ++a) s[a] = soa[static_cast<std::size_t>(a * n) + i] - soa[static_cast<std::size_t>(a * n) + j];
+          ASSERT_EQ(kernels::direction_accepts(cones[k], s), !std::isnan(h[j])) << "d " << d << " cone " << k;
+          kept += !std::isnan(h[j]);
+        }
+      }
+      EXPECT_GT(kept, 0);
+    }
+  }
 }
 
 TEST(VariogramDirection, RejectsDirectionsThatDoNotFitTheData) {
