@@ -4,6 +4,9 @@
 //
 //   build/benchmarks/bm_variogram --benchmark_filter='BM_Variogram3d/N:20000/threads:2'
 //
+// BM_Variogram3dAlpha / BM_Variogram6dAxis: the same with a direction filter (gstat alpha 45,
+// tol.hor 22.5; coordinate axis 0 within 45 degrees).
+//
 // BM_VariogramKernel3d runs the pair kernel alone (one thread, all rows as one chunk, N = 20,000,
 // 3-D, 20 bins) with each instruction set this CPU has, for a same-process A/B comparison:
 //
@@ -21,7 +24,8 @@
 namespace {
 
 template <int D>
-void run(benchmark::State& state, double extent) {
+void run(benchmark::State& state, double extent,
+         const errfield::VariogramDirection& direction = errfield::VariogramDirection()) {
   using L = Eigen::Matrix<double, D, 1>;
   const std::size_t n = static_cast<std::size_t>(state.range(0));
   const int threads = static_cast<int>(state.range(1));
@@ -39,6 +43,7 @@ void run(benchmark::State& state, double extent) {
   const auto bins = errfield::LagBins::uniform(0.0, max_lag, max_lag / 20.0);
   errfield::EmpiricalVariogramOptions options;
   options.threads = threads;
+  options.direction = direction;
   for (auto _ : state) {
     auto v = errfield::empirical_variogram<L, errfield::EuclideanMetric, double>(
         std::span<const L>(loc), std::span<const double>(val), errfield::EuclideanMetric{}, bins,
@@ -52,6 +57,13 @@ void run(benchmark::State& state, double extent) {
 
 void BM_Variogram3d(benchmark::State& state) { run<3>(state, 2000.0); }
 void BM_Variogram6d(benchmark::State& state) { run<6>(state, 180.0); }
+// Directional: one angle test per pair, and no SIMD kernel (compare with BM_Variogram3d).
+void BM_Variogram3dAlpha(benchmark::State& state) {
+  run<3>(state, 2000.0, errfield::VariogramDirection::gstat(45.0, 22.5));
+}
+void BM_Variogram6dAxis(benchmark::State& state) {
+  run<6>(state, 180.0, errfield::VariogramDirection::axis(0, 6, 45.0));
+}
 
 void sizes(benchmark::internal::Benchmark* b) {
   for (long n : {2000L, 20000L, 50000L})
@@ -102,3 +114,5 @@ void BM_VariogramKernel3d(benchmark::State& state) {
 BENCHMARK(BM_VariogramKernel3d)->Arg(0)->Arg(1)->Arg(2)->ArgName("isa")->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Variogram3d)->Apply(sizes);
 BENCHMARK(BM_Variogram6d)->Apply(sizes);
+BENCHMARK(BM_Variogram3dAlpha)->Apply(sizes);
+BENCHMARK(BM_Variogram6dAxis)->Apply(sizes);

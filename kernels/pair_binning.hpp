@@ -10,6 +10,8 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+
+#include "pair_direction.hpp"
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -211,10 +213,12 @@ inline constexpr std::size_t kLagBlock = 256;
 /// `values` is row-major N x K. With `Subsample`, a pair is kept only when
 /// pair_hash(seed, i, j) < keep_below. K_FIXED > 0 fixes K at compile time.
 /// Any Location/Metric: the lag is metric(x_i, x_j). Cost: one metric call per pair; no allocation.
+/// A non-null `cone` drops the pairs whose separation is outside it (pair_direction.hpp).
 template <PairStatistic S, bool Subsample, int K_FIXED, class L, class M>
 void bin_pair_rows(const L* locations, const double* values, int components, const M& metric,
                    const BinLayout& bins, std::uint64_t seed, std::uint64_t keep_below,
-                   std::size_t row_begin, std::size_t row_end, PairSums out) noexcept {
+                   std::size_t row_begin, std::size_t row_end, PairSums out,
+                   const DirectionCone* cone = nullptr) noexcept {
   alignas(64) double h[detail::kLagBlock];
   alignas(64) double w[detail::kLagBlock];
   alignas(64) std::int32_t code[detail::kLagBlock];
@@ -223,6 +227,7 @@ void bin_pair_rows(const L* locations, const double* values, int components, con
     for (std::size_t j0 = 0; j0 < i; j0 += detail::kLagBlock) {
       const std::size_t m = i - j0 < detail::kLagBlock ? i - j0 : detail::kLagBlock;
       for (std::size_t t = 0; t < m; ++t) h[t] = metric(li, locations[j0 + t]);
+      if (cone != nullptr) mask_directions(*cone, i, j0, m, h);
       if constexpr (K_FIXED == 1) detail::scalar_statistics<S>(values[i], values + j0, m, w);
       detail::accumulate_lags<S, Subsample, K_FIXED>(i, j0, m, h, w, code, values, components,
                                                      bins, seed, keep_below, out);
@@ -238,7 +243,8 @@ template <PairStatistic S, bool Subsample, int K_FIXED, int D_FIXED>
 void bin_pair_rows_euclidean(const double* coordinates, std::size_t n, int dimension,
                              const double* values, int components, const BinLayout& bins,
                              std::uint64_t seed, std::uint64_t keep_below, std::size_t row_begin,
-                             std::size_t row_end, PairSums out) noexcept {
+                             std::size_t row_end, PairSums out,
+                             const DirectionCone* cone = nullptr) noexcept {
   const std::size_t D = static_cast<std::size_t>(D_FIXED > 0 ? D_FIXED : dimension);
   alignas(64) double h[detail::kLagBlock];
   alignas(64) double w[detail::kLagBlock];
@@ -265,6 +271,7 @@ void bin_pair_rows_euclidean(const double* coordinates, std::size_t n, int dimen
         }
       }
       detail::sqrt_block(h, m);
+      if (cone != nullptr) mask_directions(*cone, i, j0, m, h);
       if constexpr (K_FIXED == 1) detail::scalar_statistics<S>(values[i], values + j0, m, w);
       detail::accumulate_lags<S, Subsample, K_FIXED>(i, j0, m, h, w, code, values, components,
                                                      bins, seed, keep_below, out);
@@ -280,7 +287,8 @@ template <bool Subsample, class L, class M>
 void store_pair_differences(const L* locations, const double* values, int components,
                             const M& metric, const BinLayout& bins, std::uint64_t seed,
                             std::uint64_t keep_below, std::size_t row_begin, std::size_t row_end,
-                            std::uint64_t* cursor, double* out) noexcept {
+                            std::uint64_t* cursor, double* out,
+                            const DirectionCone* cone = nullptr) noexcept {
   const std::size_t K = static_cast<std::size_t>(components);
   for (std::size_t i = row_begin; i < row_end; ++i) {
     const double* zi = values + i * K;
@@ -288,7 +296,9 @@ void store_pair_differences(const L* locations, const double* values, int compon
       if constexpr (Subsample) {
         if (pair_hash(seed, i, j) >= keep_below) continue;
       }
-      const std::ptrdiff_t k = find_bin(metric(locations[i], locations[j]), bins);
+      double h = metric(locations[i], locations[j]);
+      if (cone != nullptr) mask_directions(*cone, i, j, 1, &h);
+      const std::ptrdiff_t k = find_bin(h, bins);
       if (k < 0) continue;
       const double* zj = values + j * K;
       double* o = out + cursor[k]++ * K;

@@ -332,17 +332,18 @@ void bin_pair_rows_euclidean_avx512(const double* coordinates, std::size_t n, in
 
 /// bin_pair_rows_euclidean with the instruction set `isa` (which the CPU must support, see
 /// kernel_isa_supported): the AVX2 / AVX-512 path when the case is one they cover (K = 1, no
-/// subsampling, uniform bins, at most kSimdMaxBins bins and kSimdMaxPoints points), the baseline
+/// subsampling, no direction cone, uniform bins, at most kSimdMaxBins bins and kSimdMaxPoints points), the baseline
 /// kernel otherwise. Same sums either way, bit for bit.
 template <PairStatistic S, bool Subsample, int K_FIXED, int D_FIXED>
 void bin_pair_rows_euclidean_isa(KernelIsa isa, const double* coordinates, std::size_t n,
                                  int dimension, const double* values, int components,
                                  const BinLayout& bins, std::uint64_t seed,
                                  std::uint64_t keep_below, std::size_t row_begin,
-                                 std::size_t row_end, PairSums out) noexcept {
+                                 std::size_t row_end, PairSums out,
+                                 const DirectionCone* cone = nullptr) noexcept {
 #if ERRFIELD_KERNELS_HAVE_X86_SIMD
   if constexpr (!Subsample && K_FIXED == 1) {
-    if (isa != KernelIsa::Baseline && bins.uniform && bins.bins <= kSimdMaxBins &&
+    if (isa != KernelIsa::Baseline && cone == nullptr && bins.uniform && bins.bins <= kSimdMaxBins &&
         n <= kSimdMaxPoints) {
       if (isa == KernelIsa::Avx512)
         bin_pair_rows_euclidean_avx512<S, D_FIXED>(coordinates, n, dimension, values, bins,
@@ -358,7 +359,7 @@ void bin_pair_rows_euclidean_isa(KernelIsa isa, const double* coordinates, std::
 #endif
   bin_pair_rows_euclidean<S, Subsample, K_FIXED, D_FIXED>(coordinates, n, dimension, values,
                                                           components, bins, seed, keep_below,
-                                                          row_begin, row_end, out);
+                                                          row_begin, row_end, out, cone);
 }
 
 }  // namespace errfield::kernels

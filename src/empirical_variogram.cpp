@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <numbers>
 #include <string>
 
 #include "errfield/csv_table.hpp"
@@ -152,6 +153,31 @@ void check_variogram_values(const Eigen::MatrixXd& values, std::size_t n_locatio
         throw InputError("empirical variogram: value row " + std::to_string(i) + ", component " +
                          std::to_string(c) + " is " + format_number(values(i, c)) +
                          "; expected a finite number");
+}
+
+kernels::DirectionCone variogram_direction_cone(const VariogramDirection& direction,
+                                                const double* coordinates, std::size_t n,
+                                                int dimension) {
+  constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+  kernels::DirectionCone c;
+  c.coordinates = coordinates;
+  c.n = n;
+  c.dimension = dimension;
+  if (direction.kind() == VariogramDirection::Kind::Gstat) {
+    c.gstat = true;
+    c.check_hor = direction.tol_hor_deg() < 90.0;
+    c.hor_x = std::sin(direction.alpha_deg() * kRadPerDeg);
+    c.hor_y = std::cos(direction.alpha_deg() * kRadPerDeg);
+    c.cos_tol_hor = std::cos(direction.tol_hor_deg() * kRadPerDeg);
+    c.check_ver = direction.tol_ver_deg() < 90.0;
+    c.ver_xy = std::cos(direction.beta_deg() * kRadPerDeg);
+    c.ver_z = std::sin(direction.beta_deg() * kRadPerDeg);
+    c.cos_tol_ver = std::cos(direction.tol_ver_deg() * kRadPerDeg);
+  } else {
+    c.axis = direction.unit().data();  // owned by the options, which outlive the pair loop
+    c.cos_tol = std::cos(direction.tol_deg() * kRadPerDeg);
+  }
+  return c;
 }
 
 void throw_bad_coordinate(std::size_t row, int coordinate, double value) {

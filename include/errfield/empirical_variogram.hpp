@@ -25,6 +25,10 @@
 /// result is bit-identical for any thread count. For one value component, Euclidean lags and
 /// equal-width bins the pair loop runs an AVX2 or AVX-512 kernel when the CPU has it
 /// (kernels/pair_binning_simd.hpp, chosen at run time), bit-identical to the portable one.
+///
+/// Directional variograms (gstat's alpha/tol.hor, per-coordinate): options.direction keeps only
+/// the pairs whose separation points along a direction (variogram_direction.hpp); the others
+/// fall in no bin. Same single pass, plus one angle test per pair, no SIMD kernel.
 
 #include <cstddef>
 #include <cstdint>
@@ -37,6 +41,7 @@
 #include "errfield/concepts.hpp"
 #include "errfield/error.hpp"
 #include "errfield/metrics.hpp"
+#include "errfield/variogram_direction.hpp"
 
 namespace errfield {
 
@@ -101,6 +106,9 @@ struct EmpiricalVariogramOptions {
   /// empirical_variogram throws ResourceError before allocating, naming the bin count (use fewer
   /// bins). 1 GiB allows ~700,000 bins for one component (`--bins 0:1e7:1` asked for 15 GB).
   std::uint64_t max_accumulator_bytes = std::uint64_t{1} << 30;
+  /// Only the pairs whose separation points along this direction (variogram_direction.hpp);
+  /// default: every pair. Checked against the location dimension by empirical_variogram.
+  VariogramDirection direction;
   /// Throws ArgumentError naming the offending field.
   void validate() const;
 };
@@ -123,6 +131,7 @@ struct EmpiricalVariogram {
   VariogramEstimator estimator = VariogramEstimator::Matheron;
   BinConvention convention = BinConvention::HalfOpen;
   double pair_fraction = 1.0;
+  VariogramDirection direction;  ///< the pairs' direction filter (default: all)
   int components() const noexcept { return static_cast<int>(component_gamma.cols()); }
 };
 

@@ -38,7 +38,10 @@ struct LikelihoodFitOptions {
   double simple_mean = 0.0;                 ///< Simple: the known mean
   bool fit_nugget = true;                   ///< estimate a nugget (else none)
   /// Ard: one range per coordinate (the model gets an Anisotropy::ard); needs the gradient path.
-  enum class Anisotropy { None, Ard } anisotropy = Anisotropy::None;
+  /// Rotated (2-D/3-D): gstat's anis, angle(s) and ratio(s) fitted too (the model gets an
+  /// Anisotropy::rotated): the ARD fit of rotated coordinates, the angles found around it by a
+  /// derivative-free profile search (a grid, then golden sections; ~20 ARD fits in 2-D, ~150 in 3-D).
+  enum class Anisotropy { None, Ard, Rotated } anisotropy = Anisotropy::None;
   /// mat: try each of these nu and keep the most likely (empty = the structure's nu, fixed).
   std::vector<double> matern_nu_choices;
   /// Gradient path: starting points screened by their likelihood before the local runs.
@@ -66,8 +69,15 @@ struct LikelihoodFitResult {
   /// Ranges along each coordinate (one entry when isotropic) in the coordinate unit, and their
   /// standard errors from the observed information of the profiled likelihood (delta method on
   /// log ranges); NaN when not available (BOBYQA path, or a singular information matrix).
+  /// Rotated: the ranges along the principal axes (major, then minor 1 [, minor 2]), with standard
+  /// errors at the fitted angles (not counting the angles' uncertainty).
   std::vector<double> ranges;
   std::vector<double> range_standard_errors;
+  /// Rotated only: the angles of gstat's anis (2-D: the major axis, degrees clockwise from +y, in
+  /// [0, 180); 3-D: azimuth, dip, rotation) and their standard errors from the curvature of the
+  /// profile likelihood (NaN where it is not convex).
+  std::vector<double> angles_deg;
+  std::vector<double> angle_standard_errors_deg;
 };
 
 /// The (restricted) negative log-likelihood above for `model` at samples given as the rows of

@@ -1,6 +1,7 @@
 // `errfield fit-variogram`: fits a variogram model to the CSV that `errfield variogram` writes
 // (weighted least squares), or by maximum likelihood (ML/REML) to the samples themselves.
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <iostream>
@@ -89,7 +90,9 @@ void run_likelihood_fit(const FitArgs& a) {
   LikelihoodFitOptions o;
   o.restricted = restricted;
   if (a.anisotropy == "ard") o.anisotropy = LikelihoodFitOptions::Anisotropy::Ard;
-  else if (a.anisotropy != "none") throw ArgumentError("--anisotropy: '" + a.anisotropy + "'; expected none or ard");
+  else if (a.anisotropy == "rotated" || a.anisotropy == "anis") o.anisotropy = LikelihoodFitOptions::Anisotropy::Rotated;
+  else if (a.anisotropy != "none")
+    throw ArgumentError("--anisotropy: '" + a.anisotropy + "'; expected none, ard or rotated (anis)");
   if (a.kind == "ordinary") o.kind = KrigingKind::Ordinary;
   else if (a.kind == "universal1" || a.kind == "universal2") {
     o.kind = KrigingKind::Universal;
@@ -128,11 +131,25 @@ void run_likelihood_fit(const FitArgs& a) {
   std::cout << "AIC = " << format_number(r.aic) << ", BIC = " << format_number(r.bic) << " (" << r.parameters
             << " covariance parameters)\n";
   nlohmann::json ranges = nlohmann::json::array(), errors = nlohmann::json::array();
+  const bool rotated = !r.angles_deg.empty();
+  static const char* const kAxes[] = {"the major axis", "minor axis 1", "minor axis 2"};
   for (std::size_t k = 0; k < r.ranges.size(); ++k) {
-    std::cout << "  range" << (r.ranges.size() > 1 ? " along " + coord_names[k] : std::string()) << " = "
+    const std::string along = rotated ? std::string(r.ranges.size() == 2 && k == 1 ? "the minor axis" : kAxes[std::min<std::size_t>(k, 2)])
+                                      : coord_names[k];
+    std::cout << "  range" << (r.ranges.size() > 1 ? " along " + along : std::string()) << " = "
               << format_number(r.ranges[k]) << " +- " << format_number(r.range_standard_errors[k]) << " (standard error)\n";
     ranges.push_back(r.ranges[k]);
     errors.push_back(std::isfinite(r.range_standard_errors[k]) ? nlohmann::json(r.range_standard_errors[k]) : nlohmann::json());
+  }
+  nlohmann::json angles = nlohmann::json::array(), angle_errors = nlohmann::json::array();
+  static const char* const kAngles3[] = {"azimuth", "dip", "rotation"};
+  for (std::size_t k = 0; k < r.angles_deg.size(); ++k) {
+    std::cout << "  " << (r.angles_deg.size() == 1 ? "angle" : kAngles3[k]) << " = " << format_number(r.angles_deg[k])
+              << " deg +- " << format_number(r.angle_standard_errors_deg[k])
+              << " (standard error, from the profile likelihood's curvature)\n";
+    angles.push_back(r.angles_deg[k]);
+    angle_errors.push_back(std::isfinite(r.angle_standard_errors_deg[k]) ? nlohmann::json(r.angle_standard_errors_deg[k])
+                                                                          : nlohmann::json());
   }
   if (!a.out.empty()) {
     nlohmann::json j = r.model;
@@ -153,6 +170,10 @@ void run_likelihood_fit(const FitArgs& a) {
                 {"status", r.converged ? "converged" : "not_converged"},
                 {"message", r.message},
                 {"input", a.input}};
+    if (rotated) {
+      j["fit"]["angles_deg"] = angles;
+      j["fit"]["angle_standard_errors_deg"] = angle_errors;
+    }
     write_file_atomically(a.out, j.dump(2) + "\n");
   }
   if (!r.converged) std::cerr << "errfield fit-variogram: warning: " << r.message << "\n";
@@ -259,7 +280,9 @@ void add_fit_variogram_command(CLI::App& app) {
                   "ml/reml: the value column, e.g. dL, or several (ex,ey,ez): one model shared by the components, "
                   "the sum of their log-likelihoods");
   cmd->add_option("--anisotropy", args->anisotropy,
-                  "ml/reml: none (default, one range) or ard (one range per --coords column; the model gets @ard(...))")
+                  "ml/reml: none (default, one range), ard (one range per --coords column; the model gets @ard(...)) "
+                  "or rotated (alias anis; 2 or 3 --coords: gstat's anis, angle(s) and ratio(s) fitted too; the model "
+                  "gets @anis(...))")
       ->each([args](const std::string&) { args->anisotropy_given = true; });
   cmd->add_option("--kind", args->kind,
                   "ml/reml: the kriging whose mean the likelihood profiles out: ordinary (default), universal1, "

@@ -1,5 +1,7 @@
 // `errfield variogram`: empirical variogram of one or several value columns over any number of
-// coordinate columns, written as CSV lag_lo,lag_hi,lag_mean,gamma,pairs.
+// coordinate columns, written as CSV lag_lo,lag_hi,lag_mean,gamma,pairs; directional variograms
+// (--alpha/--beta as gstat, --per-coordinate) add one block of rows per direction and a column
+// naming it.
 
 #include <charconv>
 #include <cmath>
@@ -9,6 +11,7 @@
 #include "cli/command_registry.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
+#include "errfield/variogram_direction.hpp"
 
 namespace errfield::cli {
 namespace {
@@ -20,7 +23,58 @@ struct VariogramArgs {
   std::uint64_t seed = 0;
   int threads = 0;
   std::uint64_t max_stored = 25'000'000;
+  std::string alpha, beta;
+  double tol_hor = std::nan(""), tol_ver = std::nan(""), tol_axis = 45.0;
+  bool per_coordinate = false;
 };
+
+std::vector<double> parse_angles(const std::string& text, const char* option) {
+  std::vector<double> out;
+  for (const auto& item : split_list(text, option)) {
+    double v = 0.0;
+    const auto res = std::from_chars(item.data(), item.data() + item.size(), v);
+    if (item.empty() || res.ec != std::errc() || res.ptr != item.data() + item.size() || !std::isfinite(v))
+      throw ArgumentError(std::string(option) + ": '" + item + "' in '" + text +
+                          "' is not a finite angle in degrees; expected e.g. 0,45,90,135");
+    out.push_back(v);
+  }
+  return out;
+}
+
+/// One variogram per direction, with the label of its block of rows.
+struct DirectionalRun {
+  VariogramDirection direction;
+  std::string alpha, beta, coordinate;
+};
+
+std::vector<DirectionalRun> directions(const VariogramArgs& a, const std::vector<std::string>& coords) {
+  const bool gstat = !a.alpha.empty() || !a.beta.empty();
+  if (a.per_coordinate && gstat)
+    throw ArgumentError("--per-coordinate cannot be combined with --alpha/--beta; run them separately");
+  if (!gstat && (!std::isnan(a.tol_hor) || !std::isnan(a.tol_ver)))
+    throw ArgumentError("--tol-hor/--tol-ver need --alpha or --beta");
+  std::vector<DirectionalRun> runs;
+  if (a.per_coordinate) {
+    const int d = static_cast<int>(coords.size());
+    for (int k = 0; k < d; ++k)
+      naming_options([&] { runs.push_back({VariogramDirection::axis(k, d, a.tol_axis), "", "", coords[static_cast<std::size_t>(k)]}); },
+                     {{"variogram direction: tol", "--tol-axis"}});
+    return runs;
+  }
+  if (!gstat) return {DirectionalRun{}};
+  // gstat's defaults: tol.hor = 90 / length(alpha), tol.ver = 90 / length(beta).
+  const std::vector<double> alphas = a.alpha.empty() ? std::vector<double>{0.0} : parse_angles(a.alpha, "--alpha");
+  const std::vector<double> betas = a.beta.empty() ? std::vector<double>{0.0} : parse_angles(a.beta, "--beta");
+  const double tol_hor = !std::isnan(a.tol_hor) ? a.tol_hor : a.alpha.empty() ? 90.0 : 90.0 / static_cast<double>(alphas.size());
+  const double tol_ver = !std::isnan(a.tol_ver) ? a.tol_ver : a.beta.empty() ? 90.0 : 90.0 / static_cast<double>(betas.size());
+  for (double al : alphas)
+    for (double be : betas)
+      naming_options([&] { runs.push_back({VariogramDirection::gstat(al, tol_hor, be, tol_ver),
+                                           a.alpha.empty() ? "" : format_number(al),
+                                           a.beta.empty() ? "" : format_number(be), ""}); },
+                     {{"variogram direction: tol_hor", "--tol-hor"}, {"variogram direction: tol_ver", "--tol-ver"}});
+  return runs;
+}
 
 double parse_bins_number(std::string_view text, std::string_view spec) {
   double v = 0.0;
@@ -80,41 +134,54 @@ void run_variogram(const VariogramArgs& a) {
     throw InputError(a.input + ": " + std::to_string(table.row_count()) +
                          " data row(s); the variogram needs at least 2 points",
                      a.input);
+  const std::vector<DirectionalRun> runs = directions(a, coord_names);
   const Eigen::MatrixXd x = table.numeric_columns(coord_names);
   const Eigen::MatrixXd z = table.numeric_columns(value_names);
-  EmpiricalVariogram v;
-  naming_options([&] { v = empirical_variogram(x, z, bins, options); },
-                 {{"max_stored_differences", "--max-stored"}, {"pair_fraction (--subsample)", "--subsample"}});
+  std::vector<std::string> lo, hi, mean, gamma, pairs, alpha, beta, coordinate;
+  std::vector<std::vector<std::string>> per_component(value_names.size());
+  std::uint64_t total = 0;
+  for (const DirectionalRun& run : runs) {
+    options.direction = run.direction;
+    EmpiricalVariogram v;
+    naming_options([&] { v = empirical_variogram(x, z, bins, options); },
+                   {{"max_stored_differences", "--max-stored"}, {"pair_fraction (--subsample)", "--subsample"},
+                    {"variogram direction: alpha/beta", "--alpha/--beta"},
+                    {"variogram direction: tol_ver", "--tol-ver"}});
+    for (std::size_t b = 0; b < v.bins.size(); ++b) {
+      const VariogramBin& bin = v.bins[b];
+      lo.push_back(format_number(bin.lag_lo));
+      hi.push_back(format_number(bin.lag_hi));
+      mean.push_back(cell(bin.lag_mean));
+      gamma.push_back(cell(bin.gamma));
+      pairs.push_back(std::to_string(bin.pairs));
+      alpha.push_back(run.alpha);
+      beta.push_back(run.beta);
+      coordinate.push_back(run.coordinate);
+      for (int c = 0; c < v.components(); ++c)
+        per_component[static_cast<std::size_t>(c)].push_back(cell(v.component_gamma(static_cast<Eigen::Index>(b), c)));
+      total += bin.pairs;
+    }
+  }
 
   OutputTable out;
-  std::vector<std::string> lo, hi, mean, gamma, pairs;
-  for (const auto& b : v.bins) {
-    lo.push_back(format_number(b.lag_lo));
-    hi.push_back(format_number(b.lag_hi));
-    mean.push_back(cell(b.lag_mean));
-    gamma.push_back(cell(b.gamma));
-    pairs.push_back(std::to_string(b.pairs));
-  }
   out.add_column("lag_lo", lo);
   out.add_column("lag_hi", hi);
   out.add_column("lag_mean", mean);
   out.add_column("gamma", gamma);
   out.add_column("pairs", pairs);
-  if (a.per_component) {
-    for (int c = 0; c < v.components(); ++c) {
-      std::vector<std::string> g;
-      for (Eigen::Index b = 0; b < v.component_gamma.rows(); ++b) g.push_back(cell(v.component_gamma(b, c)));
-      out.add_column("gamma_" + value_names[static_cast<std::size_t>(c)], g);
-    }
-  }
+  if (a.per_component)
+    for (std::size_t c = 0; c < value_names.size(); ++c) out.add_column("gamma_" + value_names[c], per_component[c]);
+  if (!a.alpha.empty()) out.add_column("direction", alpha);
+  if (!a.beta.empty()) out.add_column("dip", beta);
+  if (a.per_coordinate) out.add_column("coordinate", coordinate);
   if (a.out.empty()) {
     std::cout << out.to_csv();
   } else {
     out.write(a.out);
-    std::uint64_t total = 0;
-    for (const auto& b : v.bins) total += b.pairs;
     std::cerr << "variogram: " << table.row_count() << " points, " << total << " pairs in "
-              << bins.size() << " bins written to " << a.out << "\n";
+              << bins.size() << " bins";
+    if (runs.size() > 1) std::cerr << " x " << runs.size() << " directions";
+    std::cerr << " written to " << a.out << "\n";
   }
 }
 
@@ -154,13 +221,35 @@ void add_variogram_command(CLI::App& app) {
                   "use a deterministic fraction of the pairs, in (0,1] (default 1: all pairs)");
   cmd->add_option("--seed", args->seed, "seed of --subsample (default 0)")->check(kUnsignedInteger);
   cmd->add_option("--threads", args->threads, "OpenMP threads (default: all); the result does not depend on it");
+  cmd->add_option("--alpha", args->alpha,
+                  "directional variogram(s), as gstat's alpha: horizontal direction(s) in degrees "
+                  "clockwise from +y (2nd coordinate) towards +x (1st), e.g. 0,45,90,135; 2 or 3 "
+                  "coordinates. Adds a `direction` column, one block of rows per direction");
+  cmd->add_option("--tol-hor", args->tol_hor,
+                  "angular tolerance of --alpha in degrees (default 90/number of alphas, gstat's); a "
+                  "pair counts when its horizontal angle to alpha (either sense) is <= it");
+  cmd->add_option("--beta", args->beta,
+                  "dip(s) in degrees up from the x-y plane (3 coordinates), as gstat's beta; adds a "
+                  "`dip` column");
+  cmd->add_option("--tol-ver", args->tol_ver,
+                  "angular tolerance of --beta in degrees (default 90/number of betas)");
+  cmd->add_flag("--per-coordinate", args->per_coordinate,
+                "one variogram along each coordinate axis (any number of coordinates): the pairs whose "
+                "separation is within --tol-axis of the axis. Adds a `coordinate` column");
+  cmd->add_option("--tol-axis", args->tol_axis,
+                  "angular tolerance of --per-coordinate in degrees (default 45: the pairs whose squared "
+                  "separation along the axis is at least half the total; the cones are then disjoint)");
   cmd->add_option("--out", args->out, "output CSV (written atomically); default: standard output");
   cmd->footer(
       "Example:\n"
       "  errfield variogram --input errors.csv --coords x,y,z --value dL --bins 0:2200:200 "
       "--out vario.csv\n"
       "  errfield variogram --input errors.csv --coords q1,q2,q3,q4,q5,q6 --value dx,dy,dz "
-      "--bins 0,10,20,50,100 --per-component");
+      "--bins 0,10,20,50,100 --per-component\n"
+      "  errfield variogram --input errors.csv --coords x,y --value dL --bins 0:2200:200 "
+      "--alpha 0,45,90,135 --tol-hor 22.5\n"
+      "  errfield variogram --input errors.csv --coords q1,q2,q3,q4,q5,q6 --value dx,dy,dz "
+      "--bins 0:100:10 --per-coordinate");
   cmd->callback([args] { run_variogram(*args); });
 }
 

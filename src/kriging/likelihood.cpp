@@ -11,6 +11,7 @@
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
 #include "kriging/likelihood_profile.hpp"
+#include "kriging/likelihood_rotated.hpp"
 #include "optim/bobyqa.hpp"
 
 namespace errfield {
@@ -189,7 +190,7 @@ LikelihoodFitResult fit_likelihood_checked(const Eigen::MatrixXd& coordinates, c
   std::vector<ModelComponent> non_nugget;
   for (const auto& c : structure)
     if (c.kind != ModelKind::Nugget) non_nugget.push_back(c);
-  const bool ard = options.anisotropy == LikelihoodFitOptions::Anisotropy::Ard;
+  const bool ard = options.anisotropy != LikelihoodFitOptions::Anisotropy::None;
   if (non_nugget.size() == 1 && non_nugget[0].kind == ModelKind::Matern && !options.matern_nu_choices.empty()) {
     LikelihoodFitResult best;
     bool have = false;
@@ -215,7 +216,9 @@ LikelihoodFitResult fit_likelihood_checked(const Eigen::MatrixXd& coordinates, c
     if (f.cols() >= coordinates.rows())
       throw InputError("likelihood: " + std::to_string(coordinates.rows()) + " samples for " +
                        std::to_string(f.cols()) + " drift terms");
-    LikelihoodFitResult r = detail::fit_profiled_likelihood(coordinates, z, f, non_nugget[0], options);
+    LikelihoodFitResult r = options.anisotropy == LikelihoodFitOptions::Anisotropy::Rotated
+                                ? detail::fit_rotated_likelihood(coordinates, z, f, non_nugget[0], options)
+                                : detail::fit_profiled_likelihood(coordinates, z, f, non_nugget[0], options);
     // Report the likelihood of the model as written, by the plain formula (a check of the profile).
     r.negative_log_likelihood = nll_of_model(coordinates, z, f, r.model, options.restricted);
     if (!std::isfinite(r.negative_log_likelihood))
@@ -226,7 +229,7 @@ LikelihoodFitResult fit_likelihood_checked(const Eigen::MatrixXd& coordinates, c
     return r;
   }
   if (ard)
-    throw ArgumentError("likelihood: ARD fits one structure of sph, exp, gau, wen or mat with nu 0.5, 1.5 or 2.5 "
+    throw ArgumentError("likelihood: ARD and rotated anisotropy fit one structure of sph, exp, gau, wen or mat with nu 0.5, 1.5 or 2.5 "
                         "(plus a nugget); got " + std::to_string(non_nugget.size()) + " structure(s)" +
                         (non_nugget.size() == 1 ? " '" + std::string(model_kind_name(non_nugget[0].kind)) + "'" : ""));
   return fit_bobyqa(coordinates, values, structure, options);

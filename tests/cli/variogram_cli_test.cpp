@@ -211,7 +211,7 @@ TEST_F(VariogramCli, FitVariogramByLikelihoodMatchesTheLibraryAndRefusesWhatDoes
   EXPECT_EQ(vj["fit"]["ranges"].size(), 3u);
   bad = run("fit-variogram --method ml --input " + path("in.csv") + " --coords x,y,z --value dL --model exp --anisotropy diag");
   EXPECT_EQ(bad.exit_code, 2);
-  EXPECT_NE(bad.err.find("none or ard"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("none, ard or rotated"), std::string::npos) << bad.err;
   bad = run("fit-variogram --input " + path("in.csv") + " --model exp --anisotropy ard");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("--anisotropy applies to --method ml or reml"), std::string::npos) << bad.err;

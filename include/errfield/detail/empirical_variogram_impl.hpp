@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "pair_binning.hpp"
+#include "pair_direction.hpp"
 #include "pair_binning_simd.hpp"
 
 namespace errfield {
@@ -40,6 +41,11 @@ EmpiricalVariogram finalize_variogram(const LagBins& bins, const EmpiricalVariog
                                       const std::vector<std::uint64_t>& count,
                                       const std::vector<double>& lag,
                                       const std::vector<double>& stat);
+/// The kernel's cone for `direction` over axis-major coordinates (dimension x n); `unit` keeps
+/// the vector a Vector cone points into alive.
+kernels::DirectionCone variogram_direction_cone(const VariogramDirection& direction,
+                                                const double* coordinates, std::size_t n,
+                                                int dimension);
 [[noreturn]] void throw_bad_coordinate(std::size_t row, int coordinate, double value);
 [[noreturn]] void throw_dimension_mismatch(std::size_t row, int dimension, int expected);
 
@@ -58,6 +64,7 @@ struct VariogramJob {
   std::uint64_t seed;
   std::uint64_t keep_below;
   kernels::KernelIsa isa;  ///< instruction set of the Euclidean fast path (same result either way)
+  const kernels::DirectionCone* cone;  ///< null: every direction
 };
 
 template <kernels::PairStatistic S, bool Sub, int K, class L, class M>
@@ -65,13 +72,14 @@ void run_variogram_chunk_k(const VariogramJob<L, M>& job, std::size_t r0, std::s
                            kernels::PairSums out) {
   if (job.soa == nullptr) {
     kernels::bin_pair_rows<S, Sub, K>(job.locations, job.values, job.components, *job.metric,
-                                      job.layout, job.seed, job.keep_below, r0, r1, out);
+                                      job.layout, job.seed, job.keep_below, r0, r1, out, job.cone);
     return;
   }
   auto euclid = [&]<int D>() {
     kernels::bin_pair_rows_euclidean_isa<S, Sub, K, D>(job.isa, job.soa, job.n, job.dimension,
                                                        job.values, job.components, job.layout,
-                                                       job.seed, job.keep_below, r0, r1, out);
+                                                       job.seed, job.keep_below, r0, r1, out,
+                                                       job.cone);
   };
   switch (job.dimension) {
     case 1: euclid.template operator()<1>(); break;
@@ -127,6 +135,7 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
       if (!std::isfinite(x)) detail::throw_bad_coordinate(i, c, x);
     }
   }
+  options.direction.check_dimension(dim);
   const int K = static_cast<int>(values.cols());
   const std::size_t Ks = static_cast<std::size_t>(K);
   std::vector<double> z(n * Ks);  // row-major copy: one row per location
@@ -156,9 +165,23 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
           soa[static_cast<std::size_t>(a) * n + i] = LocationTraits<L>::coordinate(locations[i], a);
     }
   }
+  // A direction filter reads coordinate differences, whatever the metric: axis-major copy.
+  std::vector<double> cone_coordinates;
+  kernels::DirectionCone cone;
+  if (!options.direction.is_all()) {
+    if (soa.empty()) {
+      cone_coordinates.resize(n * static_cast<std::size_t>(dim));
+      for (std::size_t i = 0; i < n; ++i)
+        for (int a = 0; a < dim; ++a)
+          cone_coordinates[static_cast<std::size_t>(a) * n + i] = LocationTraits<L>::coordinate(locations[i], a);
+    }
+    cone = detail::variogram_direction_cone(options.direction,
+                                            soa.empty() ? cone_coordinates.data() : soa.data(), n, dim);
+  }
+  const kernels::DirectionCone* cone_ptr = options.direction.is_all() ? nullptr : &cone;
   const detail::VariogramJob<L, M> job{locations.data(), &metric, soa.empty() ? nullptr : soa.data(),
                                        n, dim, z.data(), K, layout, options.seed, keep_below,
-                                       kernels::best_kernel_isa()};
+                                       kernels::best_kernel_isa(), cone_ptr};
   const std::ptrdiff_t chunks = static_cast<std::ptrdiff_t>(C);
   auto run = [&](std::ptrdiff_t c) {
     const std::size_t cu = static_cast<std::size_t>(c);
@@ -174,6 +197,7 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
     for (std::ptrdiff_t c = 0; c < chunks; ++c) run(c);
   }
   EmpiricalVariogram result = detail::finalize_variogram(bins, options, K, C, count, lag, stat);
+  result.direction = options.direction;
   if (options.estimator == VariogramEstimator::Dowd) {
     // Second pass: every binned difference goes to its bin's region; chunk c writes after the
     // chunks before it, so the stored multiset (and its median) does not depend on threads.
@@ -185,11 +209,11 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
       if (subsample)
         kernels::store_pair_differences<true>(locations.data(), z.data(), K, metric, layout,
                                               options.seed, keep_below, rows[cu], rows[cu + 1],
-                                              cursor.data() + cu * B, stored.data());
+                                              cursor.data() + cu * B, stored.data(), cone_ptr);
       else
         kernels::store_pair_differences<false>(locations.data(), z.data(), K, metric, layout,
                                                options.seed, keep_below, rows[cu], rows[cu + 1],
-                                               cursor.data() + cu * B, stored.data());
+                                               cursor.data() + cu * B, stored.data(), cone_ptr);
     };
     if (options.threads > 0) {
 #pragma omp parallel for schedule(dynamic, 1) num_threads(options.threads)
