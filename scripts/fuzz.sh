@@ -60,6 +60,12 @@ for t in "${TARGETS[@]}"; do
     failed+=("$t")
     echo "fuzz: $t FAILED; last lines of $BUILD_DIR/fuzz_$t.log:"
     tail -n 40 "$BUILD_DIR/fuzz_$t.log"
+  elif ! grep -q '^stat::number_of_executed_units' "$BUILD_DIR/fuzz_$t.log"; then
+    # -print_final_stats=1 always ends a finished run with these lines: without them the process
+    # did not finish its run (the cli target once did, silently: tests/fuzz/fuzz_cli.cpp).
+    failed+=("$t")
+    echo "fuzz: $t ended without libFuzzer's final stats; last lines of $BUILD_DIR/fuzz_$t.log:"
+    tail -n 40 "$BUILD_DIR/fuzz_$t.log"
   else
     grep -E '^stat::number_of_executed_units|^stat::new_units_added' "$BUILD_DIR/fuzz_$t.log" | tr '\n' ' '
     echo
