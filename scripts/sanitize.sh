@@ -14,8 +14,8 @@
 #
 # Test sources at -O0 (-DERRFIELD_TEST_COMPILE_OPTIONS=-O0; the library and the CLI stay at -O1):
 # nearly all of this stage is compiling, and ASan+UBSan codegen at -O1 of a gtest-heavy test file
-# costs about twice -O0 (CPU s, gcc 12: kriging_test.cpp 46 vs 24, kriging_cli_test.cpp 13 vs 7;
-# -Og 31). Nothing is left uninstrumented: the test code keeps both sanitizers, and at -O0 no UB in
+# costs about twice -O0 (CPU s, gcc 12: kriging_test.cpp 47.6 vs 25.0,
+# kriging_cli_test.cpp 13.8 vs 7.5; -Og 32.2). Nothing is left uninstrumented: the test code keeps both sanitizers, and at -O0 no UB in
 # it is optimised away. Cost: the test bodies themselves run slower; most tests spend their time in
 # the library or the CLI they call (docs/reliability.md, "CI time budget", has the measured ctest time).
 #
