@@ -7,7 +7,7 @@
 #
 #   scripts/fuzz.sh [--seconds N] [--jobs J] [target ...]     e.g. scripts/fuzz.sh --seconds 3600 csv
 #
-# CI runs `scripts/fuzz.sh --seconds 60`. For a long campaign see docs/reliability.md.
+# CI (.ci/run) runs every target for 45 s. For a long campaign see docs/reliability.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS_PER_TARGET=60
