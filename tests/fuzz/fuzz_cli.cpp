@@ -38,16 +38,17 @@ void remove_scratch() {
 // finds libFuzzer's handlers in place and keeps them (its rule for a handler the caller set).
 void make_scratch_outputs_once() {
   static const bool done = [] {
+    // No CLI output may come before this point: SIGALRM is libFuzzer's (an SA_SIGINFO handler),
+    // or at its default with -timeout=0, never the CLI's plain handler. Fail loudly, not at the
+    // next timer tick.
+    struct sigaction alarm {};
+    ERRFIELD_FUZZ_CHECK(::sigaction(SIGALRM, nullptr, &alarm) == 0);
+    ERRFIELD_FUZZ_CHECK((alarm.sa_flags & SA_SIGINFO) || alarm.sa_handler == SIG_DFL);
     for (const auto& command : errfield::fuzz::kCliScratchCommands) {
       std::vector<const char*> argv;
       for (const auto& a : command) argv.push_back(a.c_str());
       if (errfield::cli::run_cli(static_cast<int>(argv.size()), argv.data()) != 0) std::abort();
     }
-    // libFuzzer's SIGALRM handler must still be there (it is an SA_SIGINFO handler; the CLI's is
-    // not). Without it the process dies silently at the next timer tick; fail now instead.
-    struct sigaction alarm {};
-    ERRFIELD_FUZZ_CHECK(::sigaction(SIGALRM, nullptr, &alarm) == 0);
-    ERRFIELD_FUZZ_CHECK((alarm.sa_flags & SA_SIGINFO) || alarm.sa_handler == SIG_DFL);
     return true;
   }();
   (void)done;
