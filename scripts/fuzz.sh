@@ -7,7 +7,7 @@
 #
 #   scripts/fuzz.sh [--seconds N] [--jobs J] [target ...]     e.g. scripts/fuzz.sh --seconds 3600 csv
 #
-# CI runs `scripts/fuzz.sh --seconds 60`. For a long campaign see docs/reliability.md.
+# CI (.ci/run) runs every target for 45 s. For a long campaign see docs/reliability.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SECONDS_PER_TARGET=60
@@ -59,6 +59,12 @@ for t in "${TARGETS[@]}"; do
       >"$BUILD_DIR/fuzz_$t.log" 2>&1; then
     failed+=("$t")
     echo "fuzz: $t FAILED; last lines of $BUILD_DIR/fuzz_$t.log:"
+    tail -n 40 "$BUILD_DIR/fuzz_$t.log"
+  elif ! grep -q '^stat::number_of_executed_units' "$BUILD_DIR/fuzz_$t.log"; then
+    # -print_final_stats=1 always ends a finished run with these lines: without them the process
+    # did not finish its run (the cli target once did, silently: tests/fuzz/fuzz_cli.cpp).
+    failed+=("$t")
+    echo "fuzz: $t ended without libFuzzer's final stats; last lines of $BUILD_DIR/fuzz_$t.log:"
     tail -n 40 "$BUILD_DIR/fuzz_$t.log"
   else
     grep -E '^stat::number_of_executed_units|^stat::new_units_added' "$BUILD_DIR/fuzz_$t.log" | tr '\n' ' '
