@@ -68,6 +68,16 @@ py::dict result_dict(const CalibrationResult& result, const MdhModel& identified
   return out;
 }
 
+CalibrationOptions calibration_options(bool robust, double k0, double k1, double max_condition) {
+  CalibrationOptions options;
+  options.robust.enabled = robust;
+  options.robust.k0 = k0;
+  options.robust.k1 = k1;
+  options.max_condition_number = max_condition;
+  options.validate();
+  return options;
+}
+
 py::dict calibrate_positions_py(const MdhModel& nominal, const py::object& q, const py::object& measured, bool robust,
                                 double k0, double k1, double max_condition) {
   const MatrixArg joints = matrix_arg(q, "q", ArraySpec{2, 2, kJointCount, 1});
@@ -76,12 +86,7 @@ py::dict calibrate_positions_py(const MdhModel& nominal, const py::object& q, co
     throw ArgumentError("measured: " + std::to_string(m.data.rows()) + " positions for " +
                         std::to_string(joints.data.rows()) + " joint vectors; expected one per row of q");
   check_joint_limits(joints.data, nominal, "q");
-  CalibrationOptions options;
-  options.robust.enabled = robust;
-  options.robust.k0 = k0;
-  options.robust.k1 = k1;
-  options.max_condition_number = max_condition;
-  options.validate();
+  const CalibrationOptions options = calibration_options(robust, k0, k1, max_condition);
   std::vector<PositionMeasurement> data;
   for (Eigen::Index i = 0; i < joints.data.rows(); ++i)
     data.push_back({joints.data.row(i).transpose(), m.data.row(i).transpose()});
@@ -106,12 +111,7 @@ py::dict calibrate_distances_py(const py::object& robot, const py::object& data,
                                 bool robust, double k0, double k1, double max_condition) {
   const MdhModel nominal = robot_arg(robot);
   const CsvTable table = table_arg(data, "data");
-  CalibrationOptions options;
-  options.robust.enabled = robust;
-  options.robust.k0 = k0;
-  options.robust.k1 = k1;
-  options.max_condition_number = max_condition;
-  options.validate();
+  const CalibrationOptions options = calibration_options(robust, k0, k1, max_condition);
   std::vector<Eigen::Vector3d> fixed;
   if (!base_points.is_none()) {
     const Eigen::MatrixXd b = matrix_arg(base_points, "base_points", ArraySpec{1, 2, 3, 1, true, true}).data;
