@@ -322,7 +322,9 @@ void bind_variogram(py::module_& m) {
         const ScalarSamples s = scalar_samples(coords, values);
         auto o = likelihood_options(method, kind, drift_order, mean, nugget);
         if (anisotropy == "ard") o.anisotropy = LikelihoodFitOptions::Anisotropy::Ard;
-        else if (anisotropy != "none") throw ArgumentError("anisotropy: '" + anisotropy + "'; expected 'none' or 'ard'");
+        else if (anisotropy == "rotated" || anisotropy == "anis") o.anisotropy = LikelihoodFitOptions::Anisotropy::Rotated;
+        else if (anisotropy != "none")
+          throw ArgumentError("anisotropy: '" + anisotropy + "'; expected 'none', 'ard' or 'rotated' ('anis')");
         o.validate();
         const auto structure = structure_arg(model, nu);
         LikelihoodFitResult r;
@@ -341,6 +343,8 @@ void bind_variogram(py::module_& m) {
         d["aic"] = r.aic;
         d["bic"] = r.bic;
         d["parameters"] = r.parameters;
+        d["angles_deg"] = to_numpy(r.angles_deg);
+        d["angle_standard_errors_deg"] = to_numpy(r.angle_standard_errors_deg);
         return d;
       },
       py::arg("coords"), py::arg("values"), py::arg("model"), py::kw_only(), py::arg("method") = "reml",
@@ -351,9 +355,12 @@ void bind_variogram(py::module_& m) {
       "coords: (N, D); values: (N,) scalar. model: a bounded kind or model text (see fit_variogram).\n"
       "method: 'reml' | 'ml'. kind: 'simple' (known mean) | 'ordinary' | 'universal' (drift_order 0-2).\n"
       "nugget: fit a nugget (True) or none. O(N^3) per evaluation: meant for N up to a few thousand.\n"
-      "anisotropy: 'none' | 'ard' (one range per coordinate: the model gets '@ard(s_1,...,s_D)').\n"
+      "anisotropy: 'none' | 'ard' (one range per coordinate: the model gets '@ard(s_1,...,s_D)') |\n"
+      "'rotated' or 'anis' (2-D/3-D, gstat's anis: angles and ratios fitted too, '@anis(...)').\n"
       "Returns a dict: model, negative_log_likelihood, evaluations, converged, message, ranges (one per\n"
-      "coordinate with ard, in the coordinates' unit), range_standard_errors, aic, bic, parameters.");
+      "coordinate with ard, along the principal axes with rotated, in the coordinates' unit),\n"
+      "range_standard_errors, aic, bic, parameters, angles_deg and angle_standard_errors_deg (rotated;\n"
+      "empty otherwise).");
 
   m.def(
       "negative_log_likelihood",

@@ -94,7 +94,7 @@ def fit_likelihood(
     mean: float = 0.0,
     nugget: bool = True,
     nu: float | None = None,
-    anisotropy: Literal["none", "ard"] = "none",
+    anisotropy: Literal["none", "ard", "rotated", "anis"] = "none",
 ) -> dict[str, Any]: ...
 def negative_log_likelihood(
     coords: ArrayLike,

@@ -60,9 +60,27 @@ def test_reml_ard_fit_matches_cli_and_kriges_alike(tmp_path):
     assert str(errfield.VariogramModel(str(r["model"]))) == str(r["model"])
 
 
+def test_reml_rotated_fit_matches_cli(tmp_path):
+    rng = np.random.default_rng(5)
+    x = rng.uniform(0, 1000, size=(50, 2))
+    # decorrelates fastest across the direction 30 deg clockwise from +y
+    u = x[:, 0] * np.cos(np.radians(30)) - x[:, 1] * np.sin(np.radians(30))
+    z = np.sin(u / 120.0) + 0.02 * rng.standard_normal(50)
+    s = write_csv(tmp_path / "s.csv", {"x": x[:, 0], "y": x[:, 1], "v": z})
+    run_cli("fit-variogram", "--method", "reml", "--anisotropy", "rotated", "--input", s, "--coords", "x,y",
+            "--value", "v", "--model", "exp", "--out", tmp_path / "m.json")
+    cli = json.loads((tmp_path / "m.json").read_text())["fit"]
+    r = errfield.fit_likelihood(x, z, "exp", method="reml", anisotropy="rotated")
+    assert "@anis(" in str(r["model"])
+    assert r["negative_log_likelihood"] == cli["negative_log_likelihood"]
+    assert same(r["angles_deg"], np.array(cli["angles_deg"]))
+    assert same(r["ranges"], np.array(cli["ranges"]))
+    assert r["angles_deg"].shape == (1,) and r["angle_standard_errors_deg"].shape == (1,)
+
+
 def test_anisotropy_errors():
     x, z, _ = field(n=10)
-    with pytest.raises(errfield.ArgumentError, match="anisotropy: 'geometric'; expected 'none' or 'ard'"):
+    with pytest.raises(errfield.ArgumentError, match="anisotropy: 'geometric'; expected 'none', 'ard' or 'rotated'"):
         errfield.fit_likelihood(x, z, "exp", anisotropy="geometric")
     with pytest.raises(errfield.ArgumentError):
         errfield.Kriging(x, z, "exp(sill=1,range=100)@ard(1,2,3)")  # 3 scales for 2-D coordinates
