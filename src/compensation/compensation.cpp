@@ -7,6 +7,7 @@
 #include "errfield/compensation/error_fields.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/kinematics.hpp"
+#include "robot/json_fields.hpp"
 
 namespace errfield::compensation {
 
@@ -194,20 +195,6 @@ namespace {
   throw InputError(source + ": " + what, source);
 }
 
-// A robot nested in a model file: its errors keep InputError::file() the plain path, as every other
-// reader's, and put the member path in the message and column ("m.json: command_model.links[2].a_mm:
-// expected a number").
-MdhModel nested_robot(const nlohmann::json& j, const std::string& member, const std::string& source) {
-  try {
-    return MdhModel::from_json(j[member], source);
-  } catch (const InputError& e) {
-    std::string what = e.what();
-    const std::string prefix = source + ": ";
-    if (what.rfind(prefix, 0) == 0) what.erase(0, prefix.size());
-    throw InputError(prefix + member + (e.column().empty() ? ": " : ".") + what, source, e.row(),
-                     e.column().empty() ? member : member + "." + e.column());
-  }
-}
 }  // namespace
 
 CompensationModel CompensationModel::from_json(const nlohmann::json& j, const std::string& source) {
@@ -224,7 +211,7 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
     fail_model(source, std::string("member \"method\": ") + e.what());
   }
   if (!j.contains("command_model")) fail_model(source, "member \"command_model\" is missing");
-  MdhModel command = nested_robot(j, "command_model", source);
+  MdhModel command = robot::detail::json_nested_model(j, "command_model", source);
   auto field = error_field_from_json(j.contains("field") ? j["field"] : nlohmann::json(nullptr), source);
   // A method that corrects through a field, without one, would send uncorrected joints as "ok".
   const bool needs_field = method != CompensationMethod::none && method != CompensationMethod::kinematic;
@@ -237,7 +224,7 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
                            "\" has no error field, yet the model carries one; refit the model with 'errfield fit'");
   CompensationModel model(method, std::move(command), std::move(field));
   if (j.contains("nominal_model"))
-    model.nominal_model_ = nested_robot(j, "nominal_model", source);
+    model.nominal_model_ = robot::detail::json_nested_model(j, "nominal_model", source);
   model.registration_ = compensation::find_registration(j, source);
   if (j.contains("credible_range")) {
     const auto& c = j["credible_range"];

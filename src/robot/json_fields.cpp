@@ -62,4 +62,16 @@ nlohmann::json pose_json(const Eigen::Isometry3d& t) {
           {"rx_deg", p.rx_deg}, {"ry_deg", p.ry_deg}, {"rz_deg", p.rz_deg}};
 }
 
+MdhModel json_nested_model(const nlohmann::json& parent, const std::string& member, const std::string& source) {
+  try {
+    return MdhModel::from_json(parent[member], source);
+  } catch (const InputError& e) {
+    std::string what = e.what();
+    const std::string prefix = source + ": ";
+    if (what.rfind(prefix, 0) == 0) what.erase(0, prefix.size());
+    throw InputError(prefix + member + (e.column().empty() ? ": " : ".") + what, source, e.row(),
+                     e.column().empty() ? member : member + "." + e.column());
+  }
+}
+
 }  // namespace errfield::robot::detail

@@ -9,6 +9,8 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "errfield/robot/mdh_model.hpp"
+
 namespace errfield::robot::detail {
 
 [[noreturn]] void json_fail(const std::string& source, const std::string& field, const std::string& what);
@@ -24,6 +26,11 @@ void json_check_keys(const nlohmann::json& obj, std::initializer_list<const char
 /// {x_mm, y_mm, z_mm, rx_deg, ry_deg, rz_deg} (each optional, default 0) as a transform.
 Eigen::Isometry3d json_pose(const nlohmann::json& j, const std::string& path, const std::string& source);
 nlohmann::json pose_json(const Eigen::Isometry3d& t);
+
+/// The robot nested at parent[member] (a compensation model's command_model, a simulation set-up's
+/// robot). Its errors keep InputError::file() the plain path, as every other reader's, and carry the
+/// member path in the message and column ("m.json: command_model.links[2].a_mm: expected a number").
+MdhModel json_nested_model(const nlohmann::json& parent, const std::string& member, const std::string& source);
 
 /// An array of exactly N finite numbers.
 template <std::size_t N>

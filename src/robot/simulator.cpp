@@ -105,7 +105,7 @@ SimulatorConfig SimulatorConfig::from_json(const nlohmann::json& j, const std::s
     if (!j["seed"].is_number_unsigned()) json_fail(source, "seed", "expected a non-negative integer, got " + j["seed"].dump());
     c.seed = j["seed"].get<std::uint64_t>();
   }
-  if (j.contains("robot")) c.nominal = MdhModel::from_json(j["robot"], source + ": robot");
+  if (j.contains("robot")) c.nominal = detail::json_nested_model(j, "robot", source);
   if (j.contains("geometry")) {
     const auto& g = j["geometry"];
     if (!g.is_object()) json_fail(source, "geometry", "expected an object");

@@ -250,6 +250,20 @@ TEST(SimulatorConfig, JsonRoundTripAndFieldErrors) {
   expect_error({{"geometry", {{"links", {{{"a_mm", "x"}}, {}, {}, {}, {}, {}}}}}}, "geometry.links[0].a_mm");
 }
 
+TEST(SimulatorConfig, NestedRobotErrorNamesFileAndMemberPath) {
+  // Found by fuzz_json_inputs: the nested robot's error named the file "sim.json: robot".
+  nlohmann::json j = SimulatorConfig::paper_default().to_json();
+  j["robot"]["links"][2]["a_mm"] = "x";
+  try {
+    SimulatorConfig::from_json(j, "sim.json");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "sim.json");
+    EXPECT_EQ(e.column(), "robot.links[2].a_mm");
+    EXPECT_EQ(std::string(e.what()).rfind("sim.json: robot.links[2].a_mm: expected a number", 0), 0u) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace errfield::robot
 
