@@ -26,6 +26,7 @@ ARCHER=$(ls /usr/lib/llvm-*/lib/libarcher.so 2>/dev/null | sort -V | tail -n 1 |
 [ -n "$ARCHER" ] || { echo "tsan: libarcher.so not found (apt-get install libomp-14-dev)"; exit 1; }
 
 cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_UNITY_BUILD="${ERRFIELD_UNITY_BUILD:-ON}" \
   -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g" -DERRFIELD_SANITIZE_THREAD=ON \
   -DERRFIELD_BUILD_BENCHMARKS=OFF -DERRFIELD_BUILD_EXAMPLES=OFF >/dev/null
 # shellcheck disable=SC2086  # TARGETS is a space-separated list

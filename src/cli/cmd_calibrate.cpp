@@ -167,7 +167,7 @@ void add_calibrate_command(CLI::App& app) {
   cmd->callback([args] { run_calibrate(*args); });
 }
 
-Registration reg{"calibrate", 63, &add_calibrate_command};
+Registration register_calibrate{"calibrate", 63, &add_calibrate_command};
 
 }  // namespace
 }  // namespace errfield::cli

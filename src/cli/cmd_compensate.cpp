@@ -111,7 +111,7 @@ void add_compensate_command(CLI::App& app) {
   cmd->callback([a] { run_compensate(*a); });
 }
 
-Registration reg{"compensate", 72, &add_compensate_command};
+Registration register_compensate{"compensate", 72, &add_compensate_command};
 
 }  // namespace
 }  // namespace errfield::cli

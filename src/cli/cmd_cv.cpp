@@ -214,7 +214,7 @@ void add_cv_command(CLI::App& app) {
   cmd->callback([args, handles, owners] { run_cv(*args, *handles, *owners); });
 }
 
-Registration reg{"cv", 35, &add_cv_command};
+Registration register_cv{"cv", 35, &add_cv_command};
 
 }  // namespace
 }  // namespace errfield::cli

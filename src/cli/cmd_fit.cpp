@@ -134,7 +134,7 @@ void add_fit_command(CLI::App& app) {
   cmd->callback([a] { run_fit(*a); });
 }
 
-Registration reg{"fit", 71, &add_fit_command};
+Registration register_fit{"fit", 71, &add_fit_command};
 
 }  // namespace
 }  // namespace errfield::cli

@@ -18,7 +18,7 @@
 namespace errfield::cli {
 namespace {
 
-struct FitArgs {
+struct FitVariogramArgs {
   std::string input, model, nugget = "free", weights = "nj_h2", out;
   std::string method = "wls", coords, value, anisotropy = "none", kind = "ordinary";
   bool weights_given = false, range_max_given = false, anisotropy_given = false, kind_given = false;
@@ -36,7 +36,7 @@ std::size_t find_column(const CsvTable& t, const char* ours, const char* gstat) 
   return t.column_index(gstat);
 }
 
-ModelComponent structure_from(const FitArgs& a) {
+ModelComponent structure_from(const FitVariogramArgs& a) {
   ModelComponent structure;
   structure.kind = model_kind_from_name(a.model);
   if (structure.kind == ModelKind::Nugget)
@@ -80,7 +80,7 @@ constexpr std::size_t kMaxLikelihoodSamples = 3000;
 /// ML/REML on the samples (kriging_likelihood.hpp): the likelihood of kriging of --kind (the mean
 /// or drift profiled out), nugget free or none, isotropic or ARD, one value or a vector sharing one
 /// model.
-void run_likelihood_fit(const FitArgs& a) {
+void run_likelihood_fit(const FitVariogramArgs& a) {
   const bool restricted = a.method == "reml";
   if (a.coords.empty() || a.value.empty())
     throw ArgumentError("--method " + a.method + " fits the samples themselves: give --coords and --value "
@@ -179,7 +179,7 @@ void run_likelihood_fit(const FitArgs& a) {
   if (!r.converged) std::cerr << "errfield fit-variogram: warning: " << r.message << "\n";
 }
 
-void run_fit(const FitArgs& a) {
+void run_fit_variogram(const FitVariogramArgs& a) {
   if (a.method == "ml" || a.method == "reml") return run_likelihood_fit(a);
   if (a.method != "wls") throw ArgumentError("--method: '" + a.method + "'; expected wls, ml or reml");
   if (a.anisotropy_given) throw ArgumentError("--anisotropy applies to --method ml or reml");
@@ -260,7 +260,7 @@ void run_fit(const FitArgs& a) {
 }
 
 void add_fit_variogram_command(CLI::App& app) {
-  auto args = std::make_shared<FitArgs>();
+  auto args = std::make_shared<FitVariogramArgs>();
   auto* cmd = app.add_subcommand(
       "fit-variogram",
       "Fit a variogram model to an empirical variogram by weighted least squares (as gstat's\n"
@@ -309,10 +309,10 @@ void add_fit_variogram_command(CLI::App& app) {
       "  errfield fit-variogram --method reml --input errors.csv --coords x,y,z --value dL --model exp --out model.json\n"
       "  errfield fit-variogram --method reml --anisotropy ard --input res.csv --coords q1,q2,q3,q4,q5,q6 \\\n"
       "      --value ex,ey,ez --model mat --nu 2.5 --out model.json   (then --model model.json)");
-  cmd->callback([args] { run_fit(*args); });
+  cmd->callback([args] { run_fit_variogram(*args); });
 }
 
-Registration reg{"fit-variogram", 11, &add_fit_variogram_command};
+Registration register_fit_variogram{"fit-variogram", 11, &add_fit_variogram_command};
 
 }  // namespace
 }  // namespace errfield::cli

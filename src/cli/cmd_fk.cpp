@@ -82,7 +82,7 @@ void add_fk_command(CLI::App& app) {
   cmd->callback([args] { run_fk(*args); });
 }
 
-Registration reg{"fk", 60, &add_fk_command};
+Registration register_fk{"fk", 60, &add_fk_command};
 
 }  // namespace
 }  // namespace errfield::cli

@@ -144,7 +144,7 @@ void add_ik_command(CLI::App& app) {
   cmd->callback([args] { run_ik(*args); });
 }
 
-Registration reg{"ik", 61, &add_ik_command};
+Registration register_ik{"ik", 61, &add_ik_command};
 
 }  // namespace
 }  // namespace errfield::cli

@@ -105,7 +105,7 @@ void add_import_urdf_command(CLI::App& app) {
   cmd->callback([args] { run_import_urdf(*args); });
 }
 
-Registration reg{"import-urdf", 55, &add_import_urdf_command};
+Registration register_import_urdf{"import-urdf", 55, &add_import_urdf_command};
 
 }  // namespace
 }  // namespace errfield::cli

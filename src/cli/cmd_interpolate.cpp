@@ -157,7 +157,7 @@ void add_interpolate_command(CLI::App& app) {
   cmd->callback([args, handles, owners] { run_interpolate(*args, *handles, *owners); });
 }
 
-Registration reg{"interpolate", 30, &add_interpolate_command};
+Registration register_interpolate{"interpolate", 30, &add_interpolate_command};
 
 }  // namespace
 }  // namespace errfield::cli

@@ -142,7 +142,7 @@ void add_plan_command(CLI::App& app) {
   cmd->callback([a] { run_plan(*a); });
 }
 
-Registration reg{"plan", 70, &add_plan_command};
+Registration register_plan{"plan", 70, &add_plan_command};
 
 }  // namespace
 }  // namespace errfield::cli

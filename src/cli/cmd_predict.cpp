@@ -52,7 +52,7 @@ void add_predict_command(CLI::App& app) {
   cmd->callback([a] { run_predict(*a); });
 }
 
-Registration reg{"predict", 74, &add_predict_command};
+Registration register_predict{"predict", 74, &add_predict_command};
 
 }  // namespace
 }  // namespace errfield::cli

@@ -76,7 +76,7 @@ void add_reproduce_command(CLI::App& app) {
   });
 }
 
-Registration reg{"reproduce", 90, &add_reproduce_command};
+Registration register_reproduce{"reproduce", 90, &add_reproduce_command};
 
 }  // namespace
 }  // namespace errfield::cli

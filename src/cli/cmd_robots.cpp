@@ -63,7 +63,7 @@ void add_robots_command(CLI::App& app) {
   cmd->callback([args] { run_robots(*args); });
 }
 
-Registration reg{"robots", 59, &add_robots_command};
+Registration register_robots{"robots", 59, &add_robots_command};
 
 }  // namespace
 }  // namespace errfield::cli

@@ -440,7 +440,7 @@ void add_simulate_command(CLI::App& app) {
   cmd->callback([args] { run_simulate(*args); });
 }
 
-Registration reg{"simulate", 62, &add_simulate_command};
+Registration register_simulate{"simulate", 62, &add_simulate_command};
 
 }  // namespace
 }  // namespace errfield::cli

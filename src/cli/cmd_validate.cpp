@@ -96,7 +96,7 @@ void add_validate_command(CLI::App& app) {
   cmd->callback([a] { run_validate(*a); });
 }
 
-Registration reg{"validate", 73, &add_validate_command};
+Registration register_validate{"validate", 73, &add_validate_command};
 
 }  // namespace
 }  // namespace errfield::cli

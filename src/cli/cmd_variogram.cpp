@@ -253,7 +253,7 @@ void add_variogram_command(CLI::App& app) {
   cmd->callback([args] { run_variogram(*args); });
 }
 
-Registration reg{"variogram", 10, &add_variogram_command};
+Registration register_variogram{"variogram", 10, &add_variogram_command};
 
 }  // namespace
 }  // namespace errfield::cli

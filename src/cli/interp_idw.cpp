@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "cli/interpolation_methods.hpp"
+#include "cli/value_rows.hpp"
 #include "errfield/error.hpp"
 #include "errfield/cross_validation.hpp"
 #include "errfield/grid_idw.hpp"
@@ -13,25 +14,6 @@
 
 namespace errfield::cli {
 namespace {
-
-template <class V>
-std::vector<V> rows_as_values(const Eigen::MatrixXd& m) {
-  std::vector<V> v(static_cast<std::size_t>(m.rows()));
-  for (Eigen::Index i = 0; i < m.rows(); ++i) {
-    if constexpr (std::is_same_v<V, double>) v[static_cast<std::size_t>(i)] = m(i, 0);
-    else v[static_cast<std::size_t>(i)] = m.row(i).transpose();
-  }
-  return v;
-}
-
-template <class V>
-Eigen::MatrixXd values_as_rows(const std::vector<V>& v) {
-  constexpr int C = ValueTraits<V>::kComponents;
-  Eigen::MatrixXd m(static_cast<Eigen::Index>(v.size()), C);
-  for (std::size_t i = 0; i < v.size(); ++i)
-    for (int c = 0; c < C; ++c) m(static_cast<Eigen::Index>(i), c) = ValueTraits<V>::component(v[i], c);
-  return m;
-}
 
 InterpolationResult interpolate_grid(const InterpolationRequest& r) {
   if (r.coord_columns.size() != 3)
@@ -78,12 +60,6 @@ InterpolationResult interpolate_grid(const InterpolationRequest& r) {
     result.pred = values_as_rows(out);
     return result;
   });
-}
-
-std::vector<Eigen::VectorXd> rows_as_points(const Eigen::MatrixXd& m) {
-  std::vector<Eigen::VectorXd> p(static_cast<std::size_t>(m.rows()));
-  for (Eigen::Index i = 0; i < m.rows(); ++i) p[static_cast<std::size_t>(i)] = m.row(i).transpose();
-  return p;
 }
 
 ScatteredIdwOptions scattered_options(const SharedInterpolationOptions& shared) {

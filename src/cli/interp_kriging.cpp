@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "cli/interpolation_methods.hpp"
+#include "cli/value_rows.hpp"
 #include "errfield/cross_validation.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
@@ -59,31 +60,6 @@ void add_kriging_options(CLI::App& cmd) {
   cmd.add_option("--measurement-variance", o.measurement_variance,
                  "Column of the samples file with each sample's measurement variance (value unit^2)")
       ->group(group);
-}
-
-template <class V>
-std::vector<V> rows_as_values(const Eigen::MatrixXd& m) {
-  std::vector<V> v(static_cast<std::size_t>(m.rows()));
-  for (Eigen::Index i = 0; i < m.rows(); ++i) {
-    if constexpr (std::is_same_v<V, double>) v[static_cast<std::size_t>(i)] = m(i, 0);
-    else v[static_cast<std::size_t>(i)] = m.row(i).transpose();
-  }
-  return v;
-}
-
-template <class V>
-Eigen::MatrixXd values_as_rows(const std::vector<V>& v) {
-  constexpr int C = ValueTraits<V>::kComponents;
-  Eigen::MatrixXd m(static_cast<Eigen::Index>(v.size()), C);
-  for (std::size_t i = 0; i < v.size(); ++i)
-    for (int c = 0; c < C; ++c) m(static_cast<Eigen::Index>(i), c) = ValueTraits<V>::component(std::as_const(v[i]), c);
-  return m;
-}
-
-std::vector<Eigen::VectorXd> rows_as_points(const Eigen::MatrixXd& m) {
-  std::vector<Eigen::VectorXd> p(static_cast<std::size_t>(m.rows()));
-  for (Eigen::Index i = 0; i < m.rows(); ++i) p[static_cast<std::size_t>(i)] = m.row(i).transpose();
-  return p;
 }
 
 // gstat's defaults for variogram(): cutoff one third of the bounding-box diagonal, 15 bins.

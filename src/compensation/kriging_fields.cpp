@@ -327,15 +327,15 @@ KrigingFieldFit fit_vector_kriging_field(const FieldSamples& samples, std::vecto
 
 namespace {
 
-[[noreturn]] void bad(const std::string& source, const std::string& what) { throw InputError(source + ": " + what, source); }
+[[noreturn]] void bad_field(const std::string& source, const std::string& what) { throw InputError(source + ": " + what, source); }
 
 template <int N>
 Eigen::Matrix<double, N, 1> read_vec(const nlohmann::json& j, const std::string& source, const std::string& name) {
   if (!j.is_array() || j.size() != N)
-    bad(source, "member \"" + name + "\": expected an array of " + std::to_string(N) + " numbers");
+    bad_field(source, "member \"" + name + "\": expected an array of " + std::to_string(N) + " numbers");
   Eigen::Matrix<double, N, 1> v;
   for (int i = 0; i < N; ++i) {
-    if (!j[i].is_number()) bad(source, "member \"" + name + "\"[" + std::to_string(i) + "]: expected a number");
+    if (!j[i].is_number()) bad_field(source, "member \"" + name + "\"[" + std::to_string(i) + "]: expected a number");
     v[i] = j[i].get<double>();
   }
   return v;
@@ -373,11 +373,11 @@ std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& 
     // internal error to the CLI, for e.g. "nugget_is_measurement_error": "yes".
     auto optional = [&](const char* key, bool (nlohmann::json::*is_type)() const noexcept, const char* expected) {
       if (j.contains(key) && !(j[key].*is_type)())
-        bad(source, std::string("member \"field.") + key + "\": expected " + expected + ", got " + j[key].dump());
+        bad_field(source, std::string("member \"field.") + key + "\": expected " + expected + ", got " + j[key].dump());
       return j.contains(key);
     };
     if (optional("space", &nlohmann::json::is_string, "a string")) o.space = field_space_from_name(j["space"].get<std::string>());
-    if (!j.contains("model") || !j["model"].is_string()) bad(source, "member \"field.model\": expected a model string");
+    if (!j.contains("model") || !j["model"].is_string()) bad_field(source, "member \"field.model\": expected a model string");
     o.model = VariogramModel::parse(j["model"].get<std::string>());
     if (optional("nugget_is_measurement_error", &nlohmann::json::is_boolean, "true or false"))
       o.nugget_is_measurement_error = j["nugget_is_measurement_error"].get<bool>();
@@ -386,19 +386,19 @@ std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& 
     if (optional("region_margin_deg", &nlohmann::json::is_number, "a number"))
       o.region_margin_deg = j["region_margin_deg"].get<double>();
     const std::string kk = j.value("kriging_kind", std::string("ordinary"));
-    if (kk != "ordinary" && kk != "universal") bad(source, "member \"field.kriging_kind\": '" + kk + "'; expected ordinary or universal");
+    if (kk != "ordinary" && kk != "universal") bad_field(source, "member \"field.kriging_kind\": '" + kk + "'; expected ordinary or universal");
     o.kind = kk == "universal" ? KrigingKind::Universal : KrigingKind::Ordinary;
     if (optional("drift_order", &nlohmann::json::is_number_integer, "an integer"))
       o.drift_order = j["drift_order"].get<int>();
-    if (!j.contains("samples") || !j.contains("values")) bad(source, "member \"field\": needs \"samples\" and \"values\"");
+    if (!j.contains("samples") || !j.contains("values")) bad_field(source, "member \"field\": needs \"samples\" and \"values\"");
     if (!j["samples"].is_object())
-      bad(source, "member \"field.samples\": expected an object {position_mm, joints_deg}, got " + j["samples"].dump());
+      bad_field(source, "member \"field.samples\": expected an object {position_mm, joints_deg}, got " + j["samples"].dump());
     const auto& pos = j["samples"].value("position_mm", nlohmann::json::array());
     const auto& joints = j["samples"].value("joints_deg", nlohmann::json::array());
     const auto& vals = j["values"];
     if (!pos.is_array() || !joints.is_array() || !vals.is_array() || pos.size() != vals.size() ||
         joints.size() != vals.size())
-      bad(source, "member \"field.samples\": position_mm, joints_deg and values must be arrays of equal length");
+      bad_field(source, "member \"field.samples\": position_mm, joints_deg and values must be arrays of equal length");
     FieldSamples s;
     for (std::size_t i = 0; i < pos.size(); ++i) {
       s.position_mm.push_back(read_vec<3>(pos[i], source, "samples.position_mm[" + std::to_string(i) + "]"));
@@ -407,17 +407,17 @@ std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& 
     if (kind == "distance-kriging") {
       std::vector<double> v;
       for (std::size_t i = 0; i < vals.size(); ++i) {
-        if (!vals[i].is_number()) bad(source, "member \"values\"[" + std::to_string(i) + "]: expected a number");
+        if (!vals[i].is_number()) bad_field(source, "member \"values\"[" + std::to_string(i) + "]: expected a number");
         v.push_back(vals[i].get<double>());
       }
-      if (!j.contains("base_point_mm")) bad(source, "member \"base_point_mm\" is missing");
+      if (!j.contains("base_point_mm")) bad_field(source, "member \"base_point_mm\" is missing");
       return make_distance_kriging_field(s, std::move(v), read_vec<3>(j["base_point_mm"], source, "base_point_mm"), o);
     }
     std::vector<Eigen::Vector3d> v;
     for (std::size_t i = 0; i < vals.size(); ++i) v.push_back(read_vec<3>(vals[i], source, "values[" + std::to_string(i) + "]"));
     return make_vector_kriging_field(s, std::move(v), o);
   } catch (const ArgumentError& e) {
-    bad(source, std::string("member \"field\": ") + e.what());
+    bad_field(source, std::string("member \"field\": ") + e.what());
   }
 }
 

@@ -50,7 +50,7 @@ bool has_all(const CsvTable& t, const std::vector<std::string>& cols) {
 }
 
 /// (N, 6) joints (deg) or a dict with q1..q6.
-std::vector<JointVector> joints_arg(const py::object& o, const std::string& name) {
+std::vector<JointVector> joint_vectors_arg(const py::object& o, const std::string& name) {
   if (is_columns(o)) {
     const CsvTable t = table_arg(o, name);
     if (!has_all(t, kJointCols)) throw InputError(name + ": needs columns q1..q6 (deg)", name);
@@ -137,7 +137,7 @@ PyModel fit_py(const py::object& data, const py::object& robot, const std::strin
 }
 
 py::dict predict_py(const PyModel& m, const py::object& joints) {
-  const std::vector<JointVector> q = joints_arg(joints, "joints");
+  const std::vector<JointVector> q = joint_vectors_arg(joints, "joints");
   std::optional<StepColumns> step;
   {
     py::gil_scoped_release release;
@@ -162,7 +162,7 @@ py::dict compensate_py(const PyModel& m, const py::object& targets, const py::ob
     else if (has_all(table, kPoseCols)) t.poses = columns_matrix(table, kPoseCols);
     else throw InputError("targets: need columns q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg)", "targets");
   } else {
-    t.joints_deg = joints_arg(targets, "targets");
+    t.joints_deg = joint_vectors_arg(targets, "targets");
   }
   std::optional<StepColumns> step;
   {

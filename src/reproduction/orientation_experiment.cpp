@@ -40,7 +40,7 @@ void OrientationExperimentOptions::validate() const {
 
 namespace {
 
-enum Stream : std::uint64_t {
+enum OrientationStream : std::uint64_t {
   kTrainingPositions = 1,
   kValidationPositions = 2,
   kTrainingOrientations = 3,

@@ -63,7 +63,7 @@ namespace {
 
 
 // Random-stream identifiers (one stream per purpose, so changing one experiment leaves the others).
-enum Stream : std::uint64_t {
+enum ReproductionStream : std::uint64_t {
   kVariogramConfigs = 1,
   kVariogramMoves = 2,
   kGridStepHeldout = 3,

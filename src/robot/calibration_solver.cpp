@@ -1,4 +1,5 @@
 #include "robot/calibration_solver.hpp"
+#include "robot/degrees.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -15,7 +16,6 @@ namespace errfield::robot::detail {
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
 /// IGG3 weights are considered settled when no weight moves by more than this in a round.
 constexpr double kWeightsSettled = 1e-3;
 

@@ -1,4 +1,5 @@
 #include "errfield/robot/inverse_kinematics.hpp"
+#include "robot/degrees.hpp"
 
 #include <array>
 #include <cmath>
@@ -13,7 +14,6 @@ namespace errfield::robot {
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 using Vector6 = Eigen::Matrix<double, 6, 1>;
 using Matrix6 = Eigen::Matrix<double, 6, 6>;

@@ -1,4 +1,5 @@
 #include "errfield/robot/kinematics.hpp"
+#include "robot/degrees.hpp"
 
 #include <cmath>
 #include <numbers>
@@ -9,7 +10,6 @@ namespace errfield::robot {
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 // One link step: (R, p) <- (R, p) · [Rc · Rz(theta0 + q), (a, 0, 0) + d · Rc e_z].
 // cos/sin(theta0 + q) come from the precomputed cos/sin(theta0) by the addition formulas, so the

@@ -1,4 +1,5 @@
 #include "errfield/robot/mdh_model.hpp"
+#include "robot/degrees.hpp"
 
 #include <cmath>
 #include <fstream>
@@ -16,7 +17,6 @@ namespace errfield::robot {
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 std::string fmt(double v) {
   std::ostringstream s;

@@ -1,4 +1,5 @@
 #include "errfield/robot/pose.hpp"
+#include "robot/degrees.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +8,6 @@
 namespace errfield::robot {
 
 namespace {
-constexpr double kDeg = std::numbers::pi / 180.0;
 }
 
 Eigen::Matrix3d rotation_from_rpy_deg(double rx_deg, double ry_deg, double rz_deg) {

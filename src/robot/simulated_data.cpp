@@ -1,4 +1,5 @@
 #include "errfield/robot/simulated_data.hpp"
+#include "robot/degrees.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +11,6 @@
 namespace errfield::robot {
 
 namespace {
-constexpr double kDeg = std::numbers::pi / 180.0;
 }
 
 Eigen::Vector3d random_unit_vector(SimulationRng& rng) {

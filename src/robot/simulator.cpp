@@ -1,4 +1,5 @@
 #include "robot/rigid_fit.hpp"
+#include "robot/degrees.hpp"
 #include "errfield/robot/simulator.hpp"
 
 #include <cmath>
@@ -18,7 +19,6 @@ namespace errfield::robot {
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 Eigen::Isometry3d from_six(const std::array<double, 6>& v) { return to_isometry({v[0], v[1], v[2], v[3], v[4], v[5]}); }
 

@@ -1,4 +1,5 @@
 // URDF parsing (urdfdom) and extraction of the base -> tip chain; see urdf_import.hpp.
+#include "robot/degrees.hpp"
 
 #include "errfield/robot/urdf_import.hpp"
 
@@ -21,7 +22,6 @@ namespace errfield::robot {
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
 // URDF files print axes with a few digits ("0.7071 0.7071 0" has length 0.99999...); anything
 // further from 1 is a mistake, not rounding. Accepted axes are normalized, as KDL and ROS do.
 constexpr double kAxisLengthTolerance = 1e-6;

@@ -1,4 +1,5 @@
 // URDF chain -> modified D-H model, and the FK check between the two; see urdf_import.hpp and
+#include "robot/degrees.hpp"
 // docs/robot.md ("Importing a URDF").
 
 #include <algorithm>
@@ -17,7 +18,6 @@ namespace errfield::robot {
 
 namespace {
 
-constexpr double kDeg = std::numbers::pi / 180.0;
 // Consecutive axes closer to parallel than this (sine of the angle) get the parallel treatment
 // (alpha 0 or 180 plus Hayati beta, exact for any tilt): their common normal would lie ~ offset /
 // angle away along the axes, and FK through such a distant point loses the 1e-9 mm the import
