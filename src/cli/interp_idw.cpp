@@ -5,8 +5,8 @@
 #include <cmath>
 
 #include "cli/interpolation_methods.hpp"
-#include "cli/value_rows.hpp"
 #include "errfield/error.hpp"
+#include "errfield/value_rows.hpp"
 #include "errfield/cross_validation.hpp"
 #include "errfield/grid_idw.hpp"
 #include "errfield/interpolation_options.hpp"

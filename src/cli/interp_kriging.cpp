@@ -9,10 +9,10 @@
 #include <limits>
 
 #include "cli/interpolation_methods.hpp"
-#include "cli/value_rows.hpp"
 #include "errfield/cross_validation.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
+#include "errfield/value_rows.hpp"
 #include "errfield/interpolation_options.hpp"
 #include "errfield/kriging.hpp"
 #include "errfield/kriging_likelihood.hpp"

@@ -18,6 +18,7 @@
 #include "errfield/interpolation_options.hpp"
 #include "errfield/kriging.hpp"
 #include "errfield/scattered_idw.hpp"
+#include "errfield/value_rows.hpp"
 #include "python/arrays.hpp"
 #include "python/bindings.hpp"
 #include "python/options.hpp"
@@ -25,32 +26,6 @@
 namespace errfield::python {
 
 namespace {
-
-template <class V>
-std::vector<V> rows_as_values(const Eigen::MatrixXd& m) {
-  std::vector<V> v(static_cast<std::size_t>(m.rows()));
-  for (Eigen::Index i = 0; i < m.rows(); ++i) {
-    if constexpr (std::is_same_v<V, double>) v[static_cast<std::size_t>(i)] = m(i, 0);
-    else v[static_cast<std::size_t>(i)] = m.row(i).transpose();
-  }
-  return v;
-}
-
-template <class V>
-Eigen::MatrixXd values_as_rows(const std::vector<V>& v) {
-  constexpr int C = ValueTraits<V>::kComponents;
-  Eigen::MatrixXd m(static_cast<Eigen::Index>(v.size()), C);
-  for (std::size_t i = 0; i < v.size(); ++i)
-    for (int c = 0; c < C; ++c) m(static_cast<Eigen::Index>(i), c) = ValueTraits<V>::component(std::as_const(v[i]), c);
-  return m;
-}
-
-template <class M>
-std::vector<Eigen::VectorXd> rows_as_points(const M& m) {
-  std::vector<Eigen::VectorXd> p(static_cast<std::size_t>(m.rows()));
-  for (Eigen::Index i = 0; i < m.rows(); ++i) p[static_cast<std::size_t>(i)] = m.row(i).transpose();
-  return p;
-}
 
 /// Samples checked once for every estimator: coords (N, D), values (N,) or (N, K), K in 1..3.
 struct Samples {

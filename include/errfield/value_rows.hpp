@@ -1,6 +1,6 @@
 #pragma once
-// Between the CLI's table form (one row per sample, one column per component) and the estimators'
-// vectors of values or points. Shared by the IDW and kriging method runners.
+// Between a table of samples (an Eigen matrix, one row per sample, one column per coordinate or
+// component) and the estimators' vectors of points and values (errfield/concepts.hpp Value).
 
 #include <cstddef>
 #include <type_traits>
@@ -11,8 +11,9 @@
 
 #include "errfield/concepts.hpp"
 
-namespace errfield::cli {
+namespace errfield {
 
+/// One value per row (V = double reads column 0; a vector type reads the whole row).
 template <class V>
 std::vector<V> rows_as_values(const Eigen::MatrixXd& m) {
   std::vector<V> v(static_cast<std::size_t>(m.rows()));
@@ -23,6 +24,7 @@ std::vector<V> rows_as_values(const Eigen::MatrixXd& m) {
   return v;
 }
 
+/// One row per value, one column per component.
 template <class V>
 Eigen::MatrixXd values_as_rows(const std::vector<V>& v) {
   constexpr int C = ValueTraits<V>::kComponents;
@@ -32,10 +34,12 @@ Eigen::MatrixXd values_as_rows(const std::vector<V>& v) {
   return m;
 }
 
-inline std::vector<Eigen::VectorXd> rows_as_points(const Eigen::MatrixXd& m) {
+/// One point per row, for matrices of any storage order.
+template <class M>
+std::vector<Eigen::VectorXd> rows_as_points(const M& m) {
   std::vector<Eigen::VectorXd> p(static_cast<std::size_t>(m.rows()));
   for (Eigen::Index i = 0; i < m.rows(); ++i) p[static_cast<std::size_t>(i)] = m.row(i).transpose();
   return p;
 }
 
-}  // namespace errfield::cli
+}  // namespace errfield
