@@ -70,7 +70,8 @@ Correlation correlation_of(const ModelComponent& c) {
 constexpr double kFailed = 1e300;
 
 // W = (L L^T)^-1 from the Cholesky factor L (lower triangle of `factor`): its lower triangle and
-// diagonal, the upper part left zero. The gradient needs W at every evaluation, and forming it was
+// diagonal (each 64-column block is written from its diagonal row down, so the upper part is zero
+// except inside the diagonal blocks; callers read the lower triangle only). The gradient needs W at every evaluation, and forming it was
 // ~3n^3 flops on one core (a full triangular solve against the identity, then a general product):
 // most of a REML fit's time. Here, in fixed blocks of 64 columns, L^-1's zeros above the diagonal are
 // skipped (n^3/3 + 2n^3/3 flops) and the blocks run on the OpenMP threads. Every block is the same
