@@ -18,7 +18,7 @@
 #include "errfield/variogram_model.hpp"
 
 namespace errfield {
-namespace {
+namespace anisotropy_test {
 
 Eigen::VectorXd mapped(const Anisotropy& a, const Eigen::VectorXd& v) {
   Eigen::VectorXd out(v.size());

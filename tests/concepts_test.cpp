@@ -9,7 +9,7 @@
 #include "errfield/metrics.hpp"
 
 namespace errfield {
-namespace {
+namespace concepts_test {
 
 // Positive and negative checks of the three contracts: a wrong type must be rejected at compile
 // time with the concept's name, not deep inside an estimator.
@@ -60,7 +60,7 @@ TEST(ValueTraits, ComponentsAndNorms) {
 }  // namespace errfield
 
 namespace errfield {
-namespace {
+namespace concepts_test {
 
 TEST(ValueTraits, ComponentAccessOnMutableAndConstScalars) {
   // Both overloads must be callable on a plain variable without ambiguity.

@@ -11,7 +11,7 @@
 #include "errfield/scattered_idw.hpp"
 
 namespace errfield {
-namespace {
+namespace cross_validation_test {
 
 std::vector<Eigen::Vector3d> random_points(std::size_t n, unsigned seed) {
   std::mt19937_64 rng(seed);

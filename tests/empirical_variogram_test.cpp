@@ -14,7 +14,7 @@
 #include "pair_binning_simd.hpp"
 
 namespace errfield {
-namespace {
+namespace empirical_variogram_test {
 
 using Vec3 = Eigen::Vector3d;
 using Vec6 = Eigen::Matrix<double, 6, 1>;

@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 namespace errfield {
-namespace {
+namespace grid_idw_test {
 
 using ::testing::HasSubstr;
 

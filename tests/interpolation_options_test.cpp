@@ -8,7 +8,7 @@
 #include "errfield/error.hpp"
 
 namespace errfield {
-namespace {
+namespace interpolation_options_test {
 
 std::string message_of(const KrigingOptionText& t, const OptionNames& n = {}) {
   try {

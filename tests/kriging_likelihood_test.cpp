@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 namespace errfield {
-namespace {
+namespace kriging_likelihood_test {
 
 struct Field {
   Eigen::MatrixXd x;  // N x 3

@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 
 namespace errfield {
-namespace {
+namespace kriging_test {
 
 using P3 = Eigen::Vector3d;
 

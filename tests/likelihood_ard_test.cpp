@@ -13,7 +13,7 @@
 #include "kriging/likelihood_profile.hpp"
 
 namespace errfield {
-namespace {
+namespace likelihood_ard_test {
 
 // SIMULATED: N points in [0,100]^D, C components of a Gaussian field with an ARD Matérn 5/2
 // covariance (ranges a_k) + white noise, drawn from the Cholesky factor written here.

@@ -15,7 +15,7 @@
 #include "errfield/kriging_likelihood.hpp"
 
 namespace errfield {
-namespace {
+namespace likelihood_rotated_test {
 
 constexpr double kRad = std::numbers::pi / 180.0;
 
@@ -53,7 +53,7 @@ double axis_difference(double a, double b) {
   return d;
 }
 
-TEST(LikelihoodRotated, RecoversAngleAndRatioIn2DWithinTheirStandardErrors) {
+TEST(LikelihoodRotatedStudy, RecoversAngleAndRatioIn2DWithinTheirStandardErrors) {
   const Truth truth{30.0, 40.0, 0.3, 1.0, 0.02};
   const int replicates = 8, n = 120;
   std::vector<double> angle, ratio, range, angle_se;
@@ -113,7 +113,7 @@ TEST(LikelihoodRotated, RecoversAngleAndRatioIn2DWithinTheirStandardErrors) {
 // as written (azimuth, dip, rotation, two ratios composed by the library; the frame re-sorted by
 // range, which inverts the library's rotation) is at least as likely as the truth, built by hand
 // as an ellipsoid with its major axis horizontal at azimuth 30.
-TEST(LikelihoodRotated, ThreeDimensionalFitIsAtLeastAsLikelyAsTheTruth) {
+TEST(LikelihoodRotatedStudy, ThreeDimensionalFitIsAtLeastAsLikelyAsTheTruth) {
   const int n = 60;
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> u(0.0, 100.0);

@@ -10,7 +10,7 @@
 #include "errfield/error.hpp"
 
 namespace errfield {
-namespace {
+namespace regular_grid_test {
 
 using ::testing::HasSubstr;
 

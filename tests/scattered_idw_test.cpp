@@ -8,7 +8,7 @@
 #include <gtest/gtest.h>
 
 namespace errfield {
-namespace {
+namespace scattered_idw_test {
 
 // Manhattan distance: a metric without a k-d tree, so ScatteredIdw falls back to brute force.
 struct ManhattanMetric {

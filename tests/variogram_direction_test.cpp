@@ -16,7 +16,7 @@
 #include "pair_direction.hpp"
 
 namespace errfield {
-namespace {
+namespace variogram_direction_test {
 
 constexpr double kDeg = 180.0 / std::numbers::pi;
 // Sums of up to ~10^5 same-sign terms in a different order: relative difference < 1e-11.

@@ -9,7 +9,7 @@
 #include "errfield/error.hpp"
 
 namespace errfield {
-namespace {
+namespace variogram_fit_test {
 
 struct Bins {
   std::vector<double> h, g;

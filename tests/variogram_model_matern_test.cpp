@@ -10,7 +10,7 @@
 #include "errfield/variogram_model.hpp"
 
 namespace errfield {
-namespace {
+namespace variogram_model_matern_test {
 
 double matern_gamma(double nu, double r) {
   return VariogramModel({{ModelKind::Matern, 1.0, 1.0, nu}}).gamma(r);

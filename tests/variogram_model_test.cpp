@@ -8,7 +8,7 @@
 #include "errfield/error.hpp"
 
 namespace errfield {
-namespace {
+namespace variogram_model_test {
 
 TEST(VariogramModel, ClosedFormsAtZeroRangeAndBeyond) {
   const auto sph = VariogramModel::parse("sph(sill=2,range=100)");

@@ -13,7 +13,7 @@
 #include "support/cli_test_common.hpp"
 
 namespace errfield {
-namespace {
+namespace cli_input_test {
 
 using namespace testing::cli_common;
 

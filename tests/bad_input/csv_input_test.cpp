@@ -10,7 +10,7 @@
 #include "support/cli_test_common.hpp"
 
 namespace errfield {
-namespace {
+namespace csv_input_test {
 
 using namespace testing::cli_common;
 

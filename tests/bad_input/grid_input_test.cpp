@@ -11,7 +11,7 @@
 #include "support/cli_test_common.hpp"
 
 namespace errfield {
-namespace {
+namespace grid_input_test {
 
 using namespace testing::cli_common;
 

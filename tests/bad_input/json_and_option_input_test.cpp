@@ -22,7 +22,7 @@
 #include "support/cli_test_common.hpp"
 
 namespace errfield {
-namespace {
+namespace json_and_option_input_test {
 
 using namespace testing::cli_common;
 namespace fs = std::filesystem;

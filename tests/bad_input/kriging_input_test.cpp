@@ -14,7 +14,7 @@
 #include "support/cli_test_common.hpp"
 
 namespace errfield {
-namespace {
+namespace kriging_input_test {
 
 using namespace testing::cli_common;
 using P3 = Eigen::Vector3d;

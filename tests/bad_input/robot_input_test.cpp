@@ -20,7 +20,7 @@
 #include "support/cli_test_common.hpp"
 
 namespace errfield {
-namespace {
+namespace robot_input_test {
 
 using namespace testing::cli_common;
 

@@ -16,7 +16,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield {
-namespace {
+namespace cv_cli_test {
 
 using ::testing::HasSubstr;
 

@@ -8,7 +8,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield {
-namespace {
+namespace exit_status_cli_test {
 
 using ::testing::HasSubstr;
 

@@ -16,7 +16,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield {
-namespace {
+namespace interpolate_cli_test {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;

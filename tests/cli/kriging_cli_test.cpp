@@ -21,7 +21,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield {
-namespace {
+namespace kriging_cli_test {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;

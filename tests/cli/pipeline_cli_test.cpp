@@ -16,7 +16,7 @@
 
 namespace errfield::robot {
 using namespace errfield::compensation;
-namespace {
+namespace pipeline_cli_test {
 
 namespace fs = std::filesystem;
 using errfield::testing::CliResult;
@@ -65,7 +65,9 @@ Outcome execute(const SimulatedRobot& sim, const MdhModel& nominal, const CsvTab
   return o;
 }
 
-void pipeline_reduces_errors(const std::string& robot_json, const MdhModel& nominal, const std::string& d) {
+/// One method through fit and compensate; the simulated robot then runs the compensated joints.
+void pipeline_reduces_errors(const std::string& robot_json, const MdhModel& nominal, const std::string& d,
+                             const std::string& method) {
   // measure: the 125-point grid and 64 validation targets (one per cell), SIMULATED
   ASSERT_EQ(run("simulate --robot " + robot_json + " --sample grid --step 125 --out " + d + "/grid.csv").exit_code, 0);
   ASSERT_EQ(run("simulate --robot " + robot_json + " --sample cells --step 125 --seed 9 --out " + d + "/cells.csv").exit_code, 0);
@@ -82,8 +84,7 @@ void pipeline_reduces_errors(const std::string& robot_json, const MdhModel& nomi
   const Eigen::Vector3d base_nominal = m.base_nominal_mm[0];
   const Outcome none = execute(sim, nominal, cells, "q", reg, q_base, base_nominal);
   ASSERT_EQ(none.ok, 64u);
-  for (const std::string method : {"distance-idw", "position-idw", "distance-kriging", "vector-kriging", "kinematic",
-                                   "kinematic+kriging"}) {
+  {
     SCOPED_TRACE(method);
     const CliResult fit = run("fit --robot " + robot_json + " --data " + d + "/grid.csv --method " + method + " --out " + d +
                         "/" + method + ".json");
@@ -110,20 +111,43 @@ void pipeline_reduces_errors(const std::string& robot_json, const MdhModel& nomi
   }
 }
 
-TEST_F(PipelineCli, SimulateFitCompensateReducesTheErrorOnTheBuiltInRobot) {
+// One test per method (each a few seconds; as one loop they took 30 s and held up the -j2 suite).
+class PipelineMethod : public errfield::testing::CliTest, public ::testing::WithParamInterface<std::string> {};
+
+TEST_P(PipelineMethod, SimulateFitCompensateReducesTheErrorOnTheBuiltInRobot) {
   const MdhModel nominal = SimulatorConfig::paper_default().nominal;
   nominal.save(path("robot.json"));
-  pipeline_reduces_errors(path("robot.json"), nominal, dir().string());
+  pipeline_reduces_errors(path("robot.json"), nominal, dir().string(), GetParam());
 }
 
-TEST_F(PipelineCli, WorksOnAnotherRobotJson) {
+TEST_P(PipelineMethod, WorksOnAnotherRobotJson) {
   auto links = SimulatorConfig::paper_default().nominal.links();
   links[1].a_mm += 20.0;   // a longer shoulder offset
   links[3].d_mm -= 15.0;   // a shorter forearm
   links[2].a_mm -= 10.0;
   const MdhModel other = SimulatorConfig::paper_default().nominal.with_links(links).with_name("another 6R arm");
   other.save(path("other.json"));
-  // plan on it first: the grid must be reachable and its joints must be the other robot's
+  pipeline_reduces_errors(path("other.json"), other, dir().string(), GetParam());
+}
+
+INSTANTIATE_TEST_SUITE_P(PipelineCli, PipelineMethod,
+                         ::testing::Values("distance-idw", "position-idw", "distance-kriging", "vector-kriging",
+                                           "kinematic", "kinematic+kriging"),
+                         [](const auto& info) {
+                           std::string name = info.param;
+                           for (char& c : name)
+                             if (c == '-' || c == '+') c = '_';
+                           return name;
+                         });
+
+TEST_F(PipelineCli, PlanOnAnotherRobotJsonGivesItsJoints) {
+  auto links = SimulatorConfig::paper_default().nominal.links();
+  links[1].a_mm += 20.0;
+  links[3].d_mm -= 15.0;
+  links[2].a_mm -= 10.0;
+  const MdhModel other = SimulatorConfig::paper_default().nominal.with_links(links).with_name("another 6R arm");
+  other.save(path("other.json"));
+  // the grid must be reachable and its joints must be the other robot's
   const CliResult plan = run("plan --robot " + path("other.json") + " --cube 750,-250,350,500 --step 125 --out " +
                        path("plan.csv") + " --samples-out " + path("samples.csv"));
   ASSERT_EQ(plan.exit_code, 0) << plan.output();
@@ -136,7 +160,6 @@ TEST_F(PipelineCli, WorksOnAnotherRobotJson) {
                               std::stod(p.row(r)[p.column_index("z")]));
     EXPECT_LT((forward_position(other, q) - xyz).norm(), 1e-6);
   }
-  pipeline_reduces_errors(path("other.json"), other, dir().string());
 }
 
 TEST_F(PipelineCli, BadInputGetsClearErrors) {

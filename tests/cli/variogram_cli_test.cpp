@@ -20,7 +20,7 @@
 #include <nlohmann/json.hpp>
 
 namespace errfield {
-namespace {
+namespace variogram_cli_test {
 
 namespace fs = std::filesystem;
 

@@ -15,7 +15,7 @@
 #include <nlohmann/json.hpp>
 
 namespace errfield {
-namespace {
+namespace variogram_direction_cli_test {
 
 class VariogramDirectionCli : public testing::CliTest {};
 

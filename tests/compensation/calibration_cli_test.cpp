@@ -17,7 +17,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield::compensation {
-namespace {
+namespace calibration_cli_test {
 
 using namespace errfield::robot;
 

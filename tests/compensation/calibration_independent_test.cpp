@@ -18,7 +18,7 @@
 #include "errfield/robot/random.hpp"
 
 namespace errfield::compensation {
-namespace {
+namespace calibration_independent_test {
 
 using namespace errfield::robot;
 

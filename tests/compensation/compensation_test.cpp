@@ -11,7 +11,7 @@
 
 namespace errfield::compensation {
 using namespace errfield::robot;
-namespace {
+namespace compensation_test {
 
 TEST(CompensationMethod, NamesRoundTrip) {
   for (auto m : all_methods()) EXPECT_EQ(method_from_name(method_name(m)), m);

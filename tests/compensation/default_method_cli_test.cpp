@@ -20,9 +20,9 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield::compensation {
-namespace {
+namespace default_method_cli_test {
 
-class DefaultMethodCli : public errfield::testing::CliTest {
+class DefaultMethodStudy : public errfield::testing::CliTest {
  protected:
   /// Splits `all` into `train` (base rows and the first n_train targets) and `hold` (base rows and
   /// the rest), keeping the SIMULATED comment lines in both.
@@ -63,7 +63,7 @@ double rms_over(const std::map<std::string, double>& e, const std::set<std::stri
   return std::sqrt(ss / static_cast<double>(points.size()));
 }
 
-TEST_F(DefaultMethodCli, PositionsDefaultIsWithinFivePercentOfTheBestHandPickedMethod) {
+TEST_F(DefaultMethodStudy, PositionsDefaultIsWithinFivePercentOfTheBestHandPickedMethod) {
   ASSERT_EQ(run("simulate --robot ur5e --seed 11 --sample scattered:330 --orientation-spread 30 --joint-decimals 2 "
                 "--tool-offset random:20 --measure positions --robot-out r.json --out all.csv")
                 .exit_code,
@@ -116,7 +116,7 @@ std::set<std::string> true_outliers(const std::string& file) {
 // they spread into their neighbourhood. The default must find exactly the simulated ones and score,
 // on the clean held-out points, as well as the same method fitted on data with the outliers removed
 // by hand (the oracle), and far better than keeping them.
-TEST_F(DefaultMethodCli, GrossOutliersAreExcludedAsAnOracleWould) {
+TEST_F(DefaultMethodStudy, GrossOutliersAreExcludedAsAnOracleWould) {
   ASSERT_EQ(run("simulate --robot ur5e --seed 13 --sample scattered:330 --orientation-spread 30 --joint-decimals 2 "
                 "--tool-offset random:20 --outliers 0.04:3 --truth-columns --measure positions --robot-out r.json "
                 "--out all.csv")
@@ -166,7 +166,7 @@ TEST_F(DefaultMethodCli, GrossOutliersAreExcludedAsAnOracleWould) {
   EXPECT_LT(mine, 0.6 * naive);
 }
 
-TEST_F(DefaultMethodCli, DistancesOnlyDefaultIsTheKinematicCalibration) {
+TEST_F(DefaultMethodStudy, DistancesOnlyDefaultIsTheKinematicCalibration) {
   ASSERT_EQ(run("simulate --robot ur5e --seed 12 --sample scattered:200 --orientation-spread 30 --joint-decimals 2 "
                 "--tool-offset random:20 --measure distances --robot-out r.json --out all.csv")
                 .exit_code,

@@ -17,7 +17,7 @@
 
 namespace errfield::compensation {
 using namespace errfield::robot;
-namespace {
+namespace model_fitting_test {
 
 // The paper's cube on a 250 mm grid (27 points), measured by the simulated tracker from a base
 // point at the cube's corner.

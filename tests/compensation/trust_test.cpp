@@ -19,7 +19,7 @@
 
 namespace errfield::compensation {
 using namespace errfield::robot;
-namespace {
+namespace trust_test {
 
 struct CubeData {
   MdhModel nominal = SimulatorConfig::paper_default().nominal;

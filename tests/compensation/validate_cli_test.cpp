@@ -19,7 +19,7 @@
 
 namespace errfield::compensation {
 using namespace errfield::robot;
-namespace {
+namespace validate_cli_test {
 
 using errfield::testing::CliResult;
 

@@ -20,7 +20,7 @@
 #include "fuzz/fuzz_json_checks.hpp"
 
 namespace errfield::fuzz {
-namespace {
+namespace fuzz_replay_test {
 
 namespace fs = std::filesystem;
 

@@ -5,7 +5,7 @@
 #include "errfield/error.hpp"
 
 namespace errfield {
-namespace {
+namespace csv_table_test {
 
 TEST(CsvTable, ReadsBomCrlfSemicolonsCommentsAndUnits) {
   const auto t = CsvTable::parse("\xEF\xBB\xBFx [mm];y (mm);v\r\n# comment\r\n\r\n1;2;3\r\n4; 5 ;6\r\n", "mem.csv");

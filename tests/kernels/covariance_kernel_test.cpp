@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 namespace errfield {
-namespace {
+namespace covariance_kernel_test {
 
 TEST(CovarianceKernel, BlockEqualsModelCovariance) {
   std::mt19937 rng(5);

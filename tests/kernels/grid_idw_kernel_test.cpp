@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 
 namespace errfield::kernels {
-namespace {
+namespace grid_idw_kernel_test {
 
 struct Case {
   GridIdwGeometry g{};

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 namespace errfield {
-namespace {
+namespace lower_triangular_solve_test {
 
 TEST(LowerTriangularSolve, EqualsNaiveForwardSubstitution) {
   std::mt19937 rng(3);

@@ -9,7 +9,7 @@
 
 #include "errfield/error.hpp"
 
-namespace {
+namespace bobyqa_test {
 
 using errfield::detail::Bobyqa;
 

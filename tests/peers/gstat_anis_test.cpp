@@ -16,7 +16,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield {
-namespace {
+namespace gstat_anis_test {
 
 using testing::run_errfield;
 using testing::ScratchDir;

@@ -21,7 +21,7 @@
 #include "errfield/empirical_variogram.hpp"
 
 namespace errfield {
-namespace {
+namespace gstat_direction_test {
 
 namespace fs = std::filesystem;
 

@@ -18,7 +18,7 @@
 #include "errfield/scattered_idw.hpp"
 
 namespace errfield {
-namespace {
+namespace gstat_idw_test {
 
 namespace fs = std::filesystem;
 

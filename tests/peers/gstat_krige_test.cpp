@@ -21,7 +21,7 @@
 #include "errfield/kriging.hpp"
 
 namespace errfield {
-namespace {
+namespace gstat_krige_test {
 
 namespace fs = std::filesystem;
 using P3 = Eigen::Vector3d;

@@ -19,7 +19,7 @@
 #include "errfield/variogram_fit.hpp"
 
 namespace errfield {
-namespace {
+namespace gstat_variogram_test {
 
 namespace fs = std::filesystem;
 

@@ -21,7 +21,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield {
-namespace {
+namespace scipy_likelihood_test {
 
 using testing::run_errfield;
 using testing::ScratchDir;

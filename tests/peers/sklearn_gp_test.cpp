@@ -25,7 +25,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield {
-namespace {
+namespace sklearn_gp_test {
 
 using testing::run_errfield;
 using testing::ScratchDir;

@@ -26,7 +26,7 @@
 #include "support/cli_test_common.hpp"
 
 namespace errfield {
-namespace {
+namespace atomic_output_test {
 
 using namespace testing::cli_common;
 using ::testing::ElementsAre;

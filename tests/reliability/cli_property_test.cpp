@@ -30,7 +30,7 @@
 #include "support/cli_test_common.hpp"
 
 namespace errfield {
-namespace {
+namespace cli_property_test {
 
 using namespace testing::cli_common;
 namespace fs = std::filesystem;

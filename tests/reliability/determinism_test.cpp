@@ -14,7 +14,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield {
-namespace {
+namespace determinism_test {
 
 using testing::ScratchDir;
 

@@ -29,7 +29,7 @@
 #include "support/cli_test_common.hpp"
 
 namespace errfield {
-namespace {
+namespace output_targets_test {
 
 using namespace testing::cli_common;
 using ::testing::ElementsAre;

@@ -16,7 +16,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield {
-namespace {
+namespace resource_bounds_test {
 
 using ::testing::AllOf;
 using ::testing::HasSubstr;

@@ -22,7 +22,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield {
-namespace {
+namespace resource_budget_test {
 
 using ::testing::AllOf;
 using ::testing::HasSubstr;

@@ -18,7 +18,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield {
-namespace {
+namespace silent_results_test {
 
 using ::testing::AllOf;
 using ::testing::HasSubstr;

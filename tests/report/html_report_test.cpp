@@ -15,7 +15,7 @@
 #include "support/chromium_render.hpp"
 
 namespace errfield::report {
-namespace {
+namespace html_report_test {
 
 namespace fs = std::filesystem;
 

@@ -9,7 +9,7 @@
 #include "errfield/error.hpp"
 
 namespace errfield::report {
-namespace {
+namespace svg_plot_test {
 
 std::size_t count(const std::string& s, const std::string& what) {
   std::size_t n = 0;

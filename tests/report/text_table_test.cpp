@@ -7,7 +7,7 @@
 #include "errfield/error.hpp"
 
 namespace errfield::report {
-namespace {
+namespace text_table_test {
 
 TEST(TextTable, AlignsColumnsAndPrintsUnits) {
   TextTable t({{"method", "", Align::Left}, {"max", "mm"}, {"mean", "mm"}});

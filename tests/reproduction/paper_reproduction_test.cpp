@@ -19,7 +19,7 @@
 
 namespace errfield::reproduction {
 using namespace errfield::robot;
-namespace {
+namespace paper_reproduction_test {
 
 namespace fs = std::filesystem;
 

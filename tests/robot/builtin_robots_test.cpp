@@ -18,7 +18,7 @@
 #include "errfield/robot/simulator.hpp"
 
 namespace errfield::robot {
-namespace {
+namespace builtin_robots_test {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 

@@ -14,7 +14,7 @@
 #include "errfield/robot/simulator.hpp"
 
 namespace errfield::robot {
-namespace {
+namespace calibration_identifiability_test {
 
 JointVector rounded(const JointVector& q, int decimals) {
   if (decimals < 0) return q;

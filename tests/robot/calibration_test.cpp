@@ -11,7 +11,7 @@
 #include "errfield/robot/simulator.hpp"
 
 namespace errfield::robot {
-namespace {
+namespace calibration_test {
 
 // A "true" robot: the ER20-C10 with the paper ball as tool, every MD-H parameter, the tool and
 // the base perturbed (purely geometric, so a perfect calibration exists).

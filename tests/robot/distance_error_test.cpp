@@ -8,7 +8,7 @@
 #include "errfield/error.hpp"
 
 namespace errfield::robot {
-namespace {
+namespace distance_error_test {
 
 Eigen::Vector3d random_vector(std::mt19937_64& rng, double scale) {
   std::normal_distribution<double> n(0.0, scale);

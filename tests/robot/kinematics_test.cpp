@@ -11,7 +11,7 @@
 #include "errfield/robot/inverse_kinematics.hpp"
 
 namespace errfield::robot {
-namespace {
+namespace kinematics_test {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 

@@ -10,7 +10,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield::robot {
-namespace {
+namespace misuse_cli_test {
 
 class Misuse : public errfield::testing::CliTest {
  protected:

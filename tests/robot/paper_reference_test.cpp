@@ -7,7 +7,7 @@
 #include "errfield/csv_table.hpp"
 
 namespace errfield::robot::paper {
-namespace {
+namespace paper_reference_test {
 
 namespace fs = std::filesystem;
 

@@ -15,7 +15,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield::robot {
-namespace {
+namespace robot_cli_test {
 
 namespace fs = std::filesystem;
 

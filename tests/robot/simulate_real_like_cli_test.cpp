@@ -14,7 +14,7 @@
 #include "support/cli_harness.hpp"
 
 namespace errfield::robot {
-namespace {
+namespace simulate_real_like_cli_test {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 

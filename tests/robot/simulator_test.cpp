@@ -15,7 +15,7 @@
 #include "errfield/compensation/model_fitting.hpp"
 
 namespace errfield::robot {
-namespace {
+namespace simulator_test {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
@@ -268,7 +268,7 @@ TEST(SimulatorConfig, NestedRobotErrorNamesFileAndMemberPath) {
 }  // namespace errfield::robot
 
 namespace errfield::robot {
-namespace {
+namespace simulator_test {
 
 // ---- real-looking data (simulated_data.hpp) ----------------------------------------------------
 

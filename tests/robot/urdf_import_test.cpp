@@ -17,7 +17,7 @@
 #include "support/urdf_writer.hpp"
 
 namespace errfield::robot {
-namespace {
+namespace urdf_import_test {
 
 using ::testing::HasSubstr;
 using testing::TestUrdfJoint;
