@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <iostream>
+#include <string>
 #include <random>
 
 #include <Eigen/Dense>
@@ -91,6 +93,22 @@ TEST(PredictiveUncertainty, NinetyFivePercentRadiusHoldsNewReadingsOfASimulatedF
             << "), mean NEES " << mean_nees << " on " << c.points << " held-out readings\n";
   // Without the nugget the region is far too small: the check above has teeth.
   EXPECT_LT(c.within_field_only / c.points, 0.95 - 10.0 * se) << c.within_field_only / c.points;
+}
+
+// fit's readable variogram line: the lag where each structure reaches 95 % of its sill, per
+// coordinate (closed forms: gau a sqrt(ln 20), exp a ln 20), ARD multipliers applied.
+TEST(DescribeFieldModel, RangesPerJointInDegrees) {
+  const VariogramModel m = VariogramModel::parse("gau(sill=0.02,range=100)+nug(0.0004)@ard(1,0.5,2,10,0.25,1)");
+  const std::string s = describe_field_model(m, FieldSpace::joint);
+  const double r = 100.0 * std::sqrt(std::log(20.0));  // 173.1
+  char want[64];
+  std::snprintf(want, sizeof want, "q1 %.3g, q2 %.3g, q3 %.3g", r, 0.5 * r, 2.0 * r);
+  EXPECT_NE(s.find(want), std::string::npos) << s << " lacks " << want;
+  EXPECT_NE(s.find("sill 0.02 mm², nugget 0.0004 mm²"), std::string::npos) << s;
+  EXPECT_NE(s.find(" deg"), std::string::npos) << s;
+  const std::string t = describe_field_model(VariogramModel::parse("exp(sill=1,range=50)"), FieldSpace::task);
+  std::snprintf(want, sizeof want, "at %.3g mm", 50.0 * std::log(20.0));  // 149.8
+  EXPECT_NE(t.find(want), std::string::npos) << t << " lacks " << want;
 }
 
 }  // namespace
