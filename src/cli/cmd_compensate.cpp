@@ -91,9 +91,10 @@ void add_compensate_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "compensate",
       "Joints to send for each target from a fitted model: predicted error (pred_dx..dz, pred_dl for distance\n"
-      "models), kriging variance var_mm2 and the probability p_inside of being within ±tolerance where the\n"
-      "model has a variance, the corrected command cmd_x..z and the compensated joints cq1..cq6 (IK, orientation\n"
-      "kept). Targets: q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg). Targets outside the modelled\n"
+      "models), where the model has a variance: var_mm2 (a new reading at the target: field + nugget),\n"
+      "var_field_mm2 (field only), r95_mm (95 % radius, vector fields) and p_inside, the probability that the\n"
+      "3-D error (distance error for distance models) is within --tolerance; the corrected command cmd_x..z and\n"
+      "the compensated joints cq1..cq6 (IK, orientation kept). Targets: q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg). Targets outside the modelled\n"
       "region are refused (status outside-region, no joints), never extrapolated; so are predictions far beyond\n"
       "the model's range of errors (not-credible) and pose targets whose IK left the data's branch\n"
       "(branch-change: solved from the nearest training sample, or --seed, along the pose path).\n"
@@ -101,7 +102,7 @@ void add_compensate_command(CLI::App& app) {
   cmd->add_option("--robot", a->robot, "nominal robot JSON or built-in name (er20-c10, kr16, ur5e; default: the model's command model)");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();
   cmd->add_option("--targets", a->targets, "targets CSV")->required();
-  cmd->add_option("--tolerance", a->tolerance, "tolerance for p_inside (± mm)")->capture_default_str();
+  cmd->add_option("--tolerance", a->tolerance, "tolerance for p_inside: radius of the 3-D error (mm; distance models: |distance error|)")->capture_default_str();
   cmd->add_option("--seed", a->seed,
                   "Q1,...,Q6 (deg): solve pose targets from these joints (default: the model's nearest training "
                   "sample), on their branch");

@@ -24,8 +24,11 @@ void run_predict(const PredictArgs& a) {
   const bool tracker = model.registration().has_value();
   const compensation::StepColumns step = compensation::predict_columns(model, q);
   const std::size_t refused = step.refused;
-  bool any_variance = false;
-  for (const auto& c : step.columns) any_variance = any_variance || c.name == "var_mm2";
+  bool any_variance = false, any_radius = false;
+  for (const auto& c : step.columns) {
+    any_variance = any_variance || c.name == "var_mm2";
+    any_radius = any_radius || c.name == "r95_mm";
+  }
   OutputTable out;
   out.add_all_columns(table);
   add_step_columns(out, step);
@@ -34,7 +37,9 @@ void run_predict(const PredictArgs& a) {
             << a.model;
   if (refused) std::cout << "; " << refused << " refused (status column): no position written for them";
   std::cout << "\n  columns px,py,pz (robot frame)" << (tracker ? ", tx,ty,tz (tracker frame, stored registration)" : "")
-            << (any_variance ? ", var_mm2" : "") << "\n  written to " << a.out << "\n";
+            << (any_variance ? ", var_mm2 (a new reading: field + nugget), var_field_mm2 (field only)" : "")
+            << (any_radius ? ", r95_mm (95 % radius of a new reading around the prediction)" : "") << "\n  written to "
+            << a.out << "\n";
 }
 
 void add_predict_command(CLI::App& app) {
@@ -43,8 +48,10 @@ void add_predict_command(CLI::App& app) {
       "predict",
       "Where the tool point goes at given joints, according to a model: px,py,pz (robot frame, mm) = command\n"
       "model FK + the error field's predicted error; tx,ty,tz (tracker frame) when the model holds a\n"
-      "registration; var_mm2 (kriging variance of the 3-D error) where the model has one; status ok,\n"
-      "outside-region or not-credible (refused rows get no position).\n"
+      "registration; where the model has a variance (kriging): var_mm2, the variance of a new tracker reading\n"
+      "at those joints (field + nugget, summed over x,y,z), var_field_mm2, the field's part alone, and r95_mm,\n"
+      "the radius around the predicted point that holds a new reading with 95 % probability (vector fields);\n"
+      "status ok, outside-region or not-credible (refused rows get no position).\n"
       "Example: errfield predict --model model.json --joints joints.csv --out predicted.csv");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit' or robot JSON from 'errfield calibrate'")->required();
   cmd->add_option("--joints", a->joints, "CSV with columns q1..q6 (deg); other columns are carried through")->required();

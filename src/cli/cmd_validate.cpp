@@ -80,7 +80,10 @@ void add_validate_command(CLI::App& app) {
       "Score a model on measurements it was not fitted on. Default (prediction mode): at each row's joints\n"
       "q1..q6 the model predicts where the tool point is (command model FK + error field); the tracker reading\n"
       "mx,my,mz is mapped with the model's stored registration (never re-registered on these rows) and\n"
-      "distances dist_bK are compared frame-free. 'before' is the nominal robot, 'after' the model.\n"
+      "distances dist_bK are compared frame-free. 'before' is the nominal robot with its own registration\n"
+      "(as fit --method none stores it), 'after' the model; the summary says which registration each uses.\n"
+      "Kriging models: coverage95 (share of points within the predicted 95 % radius r95) and the mean of\n"
+      "|e|^2/sigma^2 (3 expected) check the predictive variance (field + nugget).\n"
       "--targets: the validation run after compensation; rows carry the intended target (nx,ny,nz or x,y,z)\n"
       "and optionally run=before|after; error = measured - target.\n"
       "Writes per-point errors (--out), summary JSON (--summary-out) and an HTML report (--report).\n"
@@ -90,8 +93,10 @@ void add_validate_command(CLI::App& app) {
   cmd->add_option("--robot", a->robot, "nominal robot JSON for the 'before' baseline (default: the model's nominal robot)");
   cmd->add_option("--base-point", a->base_points, "X,Y,Z of fixed base point bK when the data have no base rows");
   cmd->add_flag("--targets", a->targets, "validation-run mode: error = measured - intended target");
-  cmd->add_option("--out", a->out, "per-point CSV: point,status,before_mm,after_mm and the error components");
-  cmd->add_option("--summary-out", a->summary_out, "summary JSON (points, refused, position/distance before/after)");
+  cmd->add_option("--out", a->out, "per-point CSV: point,status,before_mm,after_mm, the error components and, for "
+                  "kriging models, var_mm2, var_field_mm2, r95_mm, nees");
+  cmd->add_option("--summary-out", a->summary_out, "summary JSON (points, refused, position/distance before/after, "
+                  "the registrations used, uncertainty: coverage95, mean_nees)");
   cmd->add_option("--report", a->report, "HTML report with histograms and per-point errors before/after");
   cmd->callback([a] { run_validate(*a); });
 }

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "compensation/fit_checks.hpp"
+#include "errfield/compensation/error_ball.hpp"
 #include "errfield/error.hpp"
 #include "errfield/compensation/error_fields.hpp"
 #include "errfield/robot/calibration.hpp"
@@ -106,7 +107,11 @@ CompensatedTarget CompensationModel::compensate_joints(const MdhModel& nominal_m
       out.command_position_mm = p_nominal;
       return out;
     }
-    if (tolerance_mm > 0.0) out.p_within_tolerance = probability_within(tolerance_mm, out.prediction.variance_mm2);
+    // Of a new reading (field + nugget): the figure a tracker check of the target will show.
+    if (tolerance_mm > 0.0)
+      out.p_within_tolerance = out.prediction.axis_variance_mm2.allFinite()
+                                   ? probability_within_radius(tolerance_mm, out.prediction.axis_variance_mm2)
+                                   : probability_within(tolerance_mm, out.prediction.predictive_variance_mm2());
   }
   out.command_position_mm = p_nominal - out.prediction.position_error_mm;
   if (method_ == CompensationMethod::none) return out;
@@ -149,6 +154,21 @@ CompensationModel CompensationModel::with_registration(std::optional<compensatio
   m.registration_ = std::move(r);
   return m;
 }
+CompensationModel CompensationModel::with_excluded_rows(std::vector<std::string> points) const {
+  CompensationModel m = *this;
+  m.excluded_rows_ = std::move(points);
+  return m;
+}
+CompensationModel CompensationModel::with_notes(std::vector<std::string> notes) const {
+  CompensationModel m = *this;
+  m.notes_ = std::move(notes);
+  return m;
+}
+CompensationModel CompensationModel::with_nominal_registration(std::optional<compensation::Registration> r) const {
+  CompensationModel m = *this;
+  m.nominal_registration_ = std::move(r);
+  return m;
+}
 CompensationModel CompensationModel::with_nominal_model(MdhModel nominal) const {
   CompensationModel m = *this;
   m.nominal_model_ = std::move(nominal);
@@ -181,12 +201,15 @@ nlohmann::json CompensationModel::to_json() const {
   j["field"] = field_ ? field_->to_json() : nlohmann::json(nullptr);
   if (nominal_model_) j["nominal_model"] = nominal_model_->to_json();
   if (registration_) j["registration"] = compensation::registration_to_json(*registration_);
+  if (nominal_registration_) j["nominal_registration"] = compensation::registration_to_json(*nominal_registration_);
   if (credible_) j["credible_range"] = {{"center_mm", credible_->center_mm}, {"radius_mm", credible_->radius_mm}};
   if (!data_joints_.empty()) {
     nlohmann::json q = nlohmann::json::array();
     for (const JointVector& v : data_joints_) q.push_back({v[0], v[1], v[2], v[3], v[4], v[5]});
     j["data_joints_deg"] = q;
   }
+  if (!notes_.empty()) j["notes"] = notes_;
+  if (!excluded_rows_.empty()) j["excluded_rows"] = excluded_rows_;
   return j;
 }
 
@@ -226,6 +249,29 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
   if (j.contains("nominal_model"))
     model.nominal_model_ = robot::detail::json_nested_model(j, "nominal_model", source);
   model.registration_ = compensation::find_registration(j, source);
+  // Informative members: read back so a model loaded and saved again keeps them.
+  auto strings = [&](const char* key, std::vector<std::string>& into) {
+    if (!j.contains(key)) return;
+    if (!j[key].is_array()) fail_model(source, std::string("member \"") + key + "\": expected an array of strings");
+    for (std::size_t i = 0; i < j[key].size(); ++i) {
+      if (!j[key][i].is_string())
+        fail_model(source, std::string("member \"") + key + "\"[" + std::to_string(i) + "]: expected a string, got " +
+                               j[key][i].dump());
+      into.push_back(j[key][i].get<std::string>());
+    }
+  };
+  strings("notes", model.notes_);
+  strings("excluded_rows", model.excluded_rows_);
+  if (j.contains("nominal_registration")) {
+    try {
+      model.nominal_registration_ = compensation::registration_from_json(j["nominal_registration"], source);
+    } catch (const InputError& e) {
+      // The reader names "registration.<member>"; this is the other one.
+      std::string what = e.what();
+      if (const auto at = what.find("\"registration"); at != std::string::npos) what.insert(at + 1, "nominal_");
+      throw InputError(what, source);
+    }
+  }
   if (j.contains("credible_range")) {
     const auto& c = j["credible_range"];
     CredibleRange r;

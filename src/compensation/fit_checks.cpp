@@ -119,6 +119,13 @@ FitResult attach_artifacts(FitResult fit, const MdhModel& nominal, const Measure
     if (fit.registration->points == 0) fit.registration->points = d.measured_mm.size();
     m = m.with_registration(fit.registration);
   }
+  // The nominal robot's own registration on the same rows (what --method none stores): validate's
+  // "before" uses it, so a calibrated model's frame never flatters or spoils the baseline.
+  if (d.measured_mm.size() >= 3 && d.measured_mm.size() == d.q_deg.size()) {
+    std::vector<Eigen::Vector3d> fk(d.q_deg.size());
+    for (std::size_t i = 0; i < fk.size(); ++i) fk[i] = forward_position(nominal, d.q_deg[i]);
+    m = m.with_nominal_registration(fit_registration(d.measured_mm, fk));
+  }
   fit.model = std::move(m);
   return fit;
 }

@@ -287,6 +287,7 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       note_factorization(out, fit, *ko.model);
       if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
       out.notes.push_back("variogram model " + ko.model->to_string() + "; base point b" + std::to_string(o.base));
+      out.notes.push_back("variogram: " + describe_field_model(*ko.model, o.space));
       return out;
     }
     case CompensationMethod::vector_kriging: {
@@ -322,6 +323,7 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       out.model = CompensationModel(method, robot, fit.field);
       out.cross_validation = kriging_report(fit, o.space, o);
       out.notes.push_back("variogram model " + ko.model->to_string() + " (shared by the 3 components)");
+      out.notes.push_back("variogram per component: " + describe_field_model(*ko.model, o.space));
       note_factorization(out, fit, *ko.model);
       if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
       return out;
@@ -352,6 +354,7 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       out.model = CompensationModel(method, kin.model, fit.field);
       out.cross_validation = kriging_report(fit, o.space, o);
       out.notes.push_back("residuals after calibration kriged with " + ko.model->to_string());
+      out.notes.push_back("variogram per component: " + describe_field_model(*ko.model, o.space));
       note_factorization(out, fit, *ko.model);
       if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
       return out;
@@ -408,10 +411,12 @@ MeasurementSet without_rows(const MeasurementSet& d, const std::vector<std::size
   return out;
 }
 
-std::string point_list(const MeasurementSet& d, const std::vector<std::size_t>& rows) {
+/// The points of `rows`, the first `limit` of them (0: all).
+std::string point_list(const MeasurementSet& d, const std::vector<std::size_t>& rows, std::size_t limit = 0) {
   std::string s;
-  for (std::size_t k = 0; k < rows.size() && k < 10; ++k) s += (k ? ", " : "") + d.id[rows[k]];
-  if (rows.size() > 10) s += ", ... (" + std::to_string(rows.size() - 10) + " more)";
+  const std::size_t shown = limit == 0 ? rows.size() : std::min(limit, rows.size());
+  for (std::size_t k = 0; k < shown; ++k) s += (k ? ", " : "") + d.id[rows[k]];
+  if (rows.size() > shown) s += ", ... (" + std::to_string(rows.size() - shown) + " more)";
   return s;
 }
 
@@ -443,7 +448,7 @@ FitResult fit_compensation_model(const robot::MdhModel& robot, const Measurement
     if (rows.size() * 5 > d.q_deg.size()) {
       out.warnings.push_back(std::to_string(rows.size()) + " of " + std::to_string(d.q_deg.size()) +
                              " rows have a residual beyond " + format_number(o.outlier_limit) +
-                             " robust sigma after calibration (" + point_list(d, rows) +
+                             " robust sigma after calibration (" + point_list(d, rows, 10) +
                              "): too many to be a few gross outliers, so all were kept; check the data (a wrong "
                              "robot or tool, a moved tracker)");
       break;
@@ -458,7 +463,11 @@ FitResult fit_compensation_model(const robot::MdhModel& robot, const Measurement
                            point_list(d, excluded);
   out.notes.insert(out.notes.begin(), what);
   out.warnings.push_back(what + "; look at their measurements");
-  return attach_artifacts(std::move(out), robot, kept);
+  std::vector<std::string> points;
+  for (std::size_t row : excluded) points.push_back(d.id[row]);
+  out = attach_artifacts(std::move(out), robot, kept);
+  out.model = out.model.with_excluded_rows(std::move(points));
+  return out;
 }
 
 }  // namespace errfield::compensation

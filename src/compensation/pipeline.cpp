@@ -7,6 +7,7 @@
 #include <limits>
 #include <optional>
 
+#include "errfield/compensation/error_ball.hpp"
 #include "errfield/compensation/prediction.hpp"
 #include "errfield/compensation/registration.hpp"
 #include "errfield/compensation/target_ik.hpp"
@@ -82,6 +83,8 @@ TableFit fit_table(const robot::MdhModel& robot, const CsvTable& table, const Fi
   }
   TableFit fit{fit_compensation_model(robot, data, o), data.q_deg.size()};
   if (chosen) fit.result.notes.insert(fit.result.notes.begin(), *chosen);
+  // The file says what fit noted (docs/robot.md): the rows it excluded, the method and why.
+  fit.result.model = fit.result.model.with_notes(fit.result.notes);
   const FitResult& r = fit.result;
   if (r.registration)
     robot::check_registration_residual(r.registration->residual_rms_mm, data.measured_mm.size(), table.source(),
@@ -92,9 +95,9 @@ TableFit fit_table(const robot::MdhModel& robot, const CsvTable& table, const Fi
 StepColumns predict_columns(const CompensationModel& model, std::span<const robot::JointVector> q) {
   const std::size_t n = q.size();
   const bool tracker = model.registration().has_value();
-  std::vector<std::vector<double>> cols(7, std::vector<double>(n, kNaN));
+  std::vector<std::vector<double>> cols(9, std::vector<double>(n, kNaN));  // see `names` below
   std::vector<std::string> status(n);
-  bool any_variance = false;
+  bool any_variance = false, any_radius = false;
   StepColumns out;
   for (std::size_t i = 0; i < n; ++i) {
     const PointPrediction p = predict_position(model, q[i]);
@@ -106,13 +109,17 @@ StepColumns predict_columns(const CompensationModel& model, std::span<const robo
     for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(k)][i] = p.position_mm[k];
     if (p.tracker_mm)
       for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(3 + k)][i] = (*p.tracker_mm)[k];
-    cols[6][i] = p.error.variance_mm2;
+    cols[6][i] = p.error.predictive_variance_mm2();
+    cols[7][i] = p.error.variance_mm2;
+    cols[8][i] = radius_with_probability(0.95, p.error.axis_variance_mm2);
     any_variance = any_variance || std::isfinite(p.error.variance_mm2);
+    any_radius = any_radius || std::isfinite(cols[8][i]);
   }
-  const char* names[] = {"px", "py", "pz", "tx", "ty", "tz", "var_mm2"};
-  for (std::size_t c = 0; c < 7; ++c) {
+  const char* names[] = {"px", "py", "pz", "tx", "ty", "tz", "var_mm2", "var_field_mm2", "r95_mm"};
+  for (std::size_t c = 0; c < 9; ++c) {
     if (c >= 3 && c < 6 && !tracker) continue;
-    if (c == 6 && !any_variance) continue;
+    if ((c == 6 || c == 7) && !any_variance) continue;
+    if (c == 8 && !any_radius) continue;
     out.columns.push_back(numbers(names[c], std::move(cols[c])));
   }
   out.columns.push_back(words("status", std::move(status)));
@@ -147,7 +154,7 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
       ik_status[i] = ik.branch_changed ? "branch-change" : ik.ik.ok() ? "" : to_string(ik.ik.status);
     }
   }
-  std::vector<std::vector<double>> cols(24, std::vector<double>(n, kNaN));  // see `names` below
+  std::vector<std::vector<double>> cols(26, std::vector<double>(n, kNaN));  // see `names` below
   std::vector<std::string> status(n);
   StepColumns out;
   for (std::size_t i = 0; i < n; ++i) {
@@ -162,8 +169,10 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
     for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(6 + k)][i] = p[k];
     for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(9 + k)][i] = c.prediction.position_error_mm[k];
     cols[12][i] = c.prediction.distance_error_mm;
-    cols[13][i] = c.prediction.variance_mm2;
+    cols[13][i] = c.prediction.predictive_variance_mm2();
     cols[14][i] = c.p_within_tolerance;
+    cols[24][i] = c.prediction.variance_mm2;
+    cols[25][i] = radius_with_probability(0.95, c.prediction.axis_variance_mm2);
     for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(15 + k)][i] = c.command_position_mm[k];
     if (c.prediction.inside_region && !(c.prediction.position_error_mm.allFinite() && c.command_position_mm.allFinite())) {
       // The field gave no number here (e.g. an overflow): never an IK failure's name, never ok.
@@ -184,8 +193,8 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
   }
   const char* names[] = {"nq1", "nq2", "nq3", "nq4", "nq5", "nq6", "nx", "ny", "nz", "pred_dx", "pred_dy", "pred_dz",
                          "pred_dl", "var_mm2", "p_inside", "cmd_x", "cmd_y", "cmd_z", "cq1", "cq2", "cq3", "cq4",
-                         "cq5", "cq6"};
-  for (std::size_t c = 0; c < 24; ++c) out.columns.push_back(numbers(names[c], std::move(cols[c])));
+                         "cq5", "cq6", "var_field_mm2", "r95_mm"};
+  for (std::size_t c = 0; c < 26; ++c) out.columns.push_back(numbers(names[c], std::move(cols[c])));
   out.columns.push_back(words("status", std::move(status)));
   return out;
 }
@@ -225,6 +234,21 @@ StepColumns validation_point_columns(const ValidationReport& r) {
     out.columns.push_back(numbers("before_dl_b" + std::to_string(k), std::move(db)));
     out.columns.push_back(numbers("after_dl_b" + std::to_string(k), std::move(da)));
   }
+  // The predictive uncertainty where the model has one (kriging fields).
+  std::vector<std::vector<double>> unc(4, std::vector<double>(n, kNaN));
+  bool any_variance = false, any_nees = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& p = r.points[i];
+    unc[0][i] = p.var_mm2;
+    unc[1][i] = p.var_field_mm2;
+    unc[2][i] = p.r95_mm;
+    unc[3][i] = p.nees;
+    any_variance = any_variance || std::isfinite(p.var_mm2);
+    any_nees = any_nees || std::isfinite(p.nees);
+  }
+  const char* unc_names[] = {"var_mm2", "var_field_mm2", "r95_mm", "nees"};
+  for (std::size_t c = 0; c < 4; ++c)
+    if (c < 2 ? any_variance : any_nees) out.columns.push_back(numbers(unc_names[c], std::move(unc[c])));
   for (const auto& p : r.points) out.refused += p.status != "ok";
   return out;
 }

@@ -7,7 +7,9 @@
 
 #include <nlohmann/json.hpp>
 
+#include "errfield/compensation/error_ball.hpp"
 #include "errfield/compensation/prediction.hpp"
+#include "errfield/compensation/registration.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/kinematics.hpp"
 
@@ -92,7 +94,16 @@ void summarize(ValidationReport& r, bool has_before_positions, bool has_before_d
 nlohmann::json ValidationReport::summary_json() const {
   nlohmann::json j = {{"mode", mode}, {"points", points.size()}, {"refused", refused}};
   j["position"] = position ? block_json(*position) : nlohmann::json(nullptr);
+  if (position) {
+    if (!before_registration.empty()) j["position"]["before_registration"] = before_registration;
+    if (!after_registration.empty()) j["position"]["after_registration"] = after_registration;
+  }
   if (distance) j["distance"] = block_json(*distance);
+  auto num = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  j["uncertainty"] = uncertainty ? nlohmann::json{{"points", uncertainty->points},
+                                                  {"coverage95", num(uncertainty->coverage95)},
+                                                  {"mean_nees", num(uncertainty->mean_nees)}}
+                                 : nlohmann::json(nullptr);
   j["notes"] = notes;
   return j;
 }
@@ -100,14 +111,21 @@ nlohmann::json ValidationReport::summary_json() const {
 std::string ValidationReport::summary_text() const {
   std::string s = "  " + std::to_string(points.size()) + " points, " + std::to_string(refused) + " refused (" + mode +
                   " mode)\n";
-  auto block = [&](const std::string& name, const std::optional<BeforeAfter>& b) {
+  auto block = [&](const std::string& name, const std::optional<BeforeAfter>& b, const std::string& before_frame,
+                   const std::string& after_frame) {
     if (!b) return;
     s += "  " + name + " error:\n";
     if (b->before) s += stats_line("before", *b->before);
+    if (b->before && !before_frame.empty()) s += "      (" + before_frame + ")\n";
     s += stats_line("after ", b->after);
+    if (!after_frame.empty()) s += "      (" + after_frame + ")\n";
   };
-  block("3-D position", position);
-  block("distance", distance);
+  block("3-D position", position, before_registration, after_registration);
+  block("distance", distance, "", "");
+  if (uncertainty)
+    s += "  predictive uncertainty (field + nugget) on " + std::to_string(uncertainty->points) +
+         " points: " + fmt(100.0 * uncertainty->coverage95) + " % within the 95 % radius r95 (95 expected), mean " +
+         "|e|^2/sigma^2 " + fmt(uncertainty->mean_nees) + " (3 expected)\n";
   for (const auto& n : notes) s += "  note: " + n + "\n";
   return s;
 }
@@ -119,9 +137,28 @@ ValidationReport validate_predictions(const CompensationModel& model, const Meas
   if (!d.measured_mm.empty() && !positions)
     r.notes.push_back("positions not scored: the model holds no tracker registration (fit or calibrate it from data "
                       "with mx,my,mz); held-out rows are never registered on themselves");
-  if (positions)
-    r.notes.push_back("tracker readings mapped with the model's stored registration (fitted on " +
-                      std::to_string(model.registration()->points) + " training points)");
+  // "before": the nominal robot in its own best frame (docs/robot.md, step 5 "Validate"), never the
+  // calibrated model's, which put a 0.66 mm robot at 1.23 mm on real data.
+  std::optional<Registration> before_registration;
+  const bool kinematic =
+      model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging;
+  if (positions) {
+    r.after_registration = "the model's stored registration, fitted on " + std::to_string(model.registration()->points) +
+                           " training points";
+    if (model.nominal_registration()) {
+      before_registration = model.nominal_registration();
+      r.before_registration = "the nominal robot's own registration, fitted on " +
+                              std::to_string(model.nominal_registration()->points) + " training points";
+    } else if (!kinematic) {
+      before_registration = model.registration();  // fitted on the nominal robot's positions
+      r.before_registration = "the model's stored registration (its robot is the nominal one), fitted on " +
+                              std::to_string(model.registration()->points) + " training points";
+    } else if (d.measured_mm.size() >= 3) {
+      before_registration = fit_registration(d.measured_mm, d.nominal_mm);
+      r.before_registration = "the nominal robot registered on these " + std::to_string(d.measured_mm.size()) +
+                              " held-out rows (the model file stores no nominal registration; refit to get one)";
+    }
+  }
   // Distances: frame-free, measured − predicted distance to each base point.
   r.distance_columns = d.distance_mm.size();
   std::vector<std::optional<Eigen::Vector3d>> base_pred(d.distance_mm.size());
@@ -157,8 +194,15 @@ ValidationReport validate_predictions(const CompensationModel& model, const Meas
     }
     if (positions) {
       const Eigen::Vector3d m = model.registration()->robot_from_tracker * d.measured_mm[i];
-      p.before_mm = m - d.nominal_mm[i];
+      if (before_registration) p.before_mm = before_registration->robot_from_tracker * d.measured_mm[i] - d.nominal_mm[i];
       p.after_mm = m - pr.position_mm;
+    }
+    p.var_mm2 = pr.error.predictive_variance_mm2();
+    p.var_field_mm2 = pr.error.variance_mm2;
+    const Eigen::Vector3d& axis = pr.error.axis_variance_mm2;
+    if (positions && axis.allFinite() && (axis.array() > 0.0).all()) {
+      p.r95_mm = radius_with_probability(0.95, axis);
+      p.nees = (p.after_mm.array().square() / axis.array()).sum();
     }
     for (std::size_t k = 0; k < d.distance_mm.size(); ++k) {
       const double measured = d.distance_mm[k][i];
@@ -172,7 +216,20 @@ ValidationReport validate_predictions(const CompensationModel& model, const Meas
     }
     r.points.push_back(std::move(p));
   }
-  summarize(r, true, true);
+  summarize(r, before_registration.has_value() || !positions, true);
+  UncertaintyCheck u;
+  double within = 0.0, nees = 0.0;
+  for (const ValidatedPoint& p : r.points) {
+    if (!p.ok() || !std::isfinite(p.nees)) continue;
+    ++u.points;
+    within += p.after_mm.norm() <= p.r95_mm ? 1.0 : 0.0;
+    nees += p.nees;
+  }
+  if (u.points > 0) {
+    u.coverage95 = within / static_cast<double>(u.points);
+    u.mean_nees = nees / static_cast<double>(u.points);
+    r.uncertainty = u;
+  }
   return r;
 }
 

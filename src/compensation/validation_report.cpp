@@ -85,6 +85,13 @@ std::string validation_report_html(const ValidationReport& r, const std::string&
   add_rows(t, "3-D position", r.position);
   add_rows(t, "distance", r.distance);
   html.add_table(t);
+  if (!r.before_registration.empty()) html.add_paragraph("Before: tracker readings mapped with " + r.before_registration + ".");
+  if (!r.after_registration.empty()) html.add_paragraph("After: tracker readings mapped with " + r.after_registration + ".");
+  if (r.uncertainty)
+    html.add_paragraph("Predictive uncertainty (field + nugget) on " + std::to_string(r.uncertainty->points) +
+                       " points: " + num(100.0 * r.uncertainty->coverage95) +
+                       " % within the predicted 95 % radius (95 expected); mean |e|²/σ² " +
+                       num(r.uncertainty->mean_nees) + " (3 expected).");
   for (const auto& n : r.notes) html.add_paragraph("Note: " + n);
   std::vector<double> pb, pa, db, da;
   for (const ValidatedPoint& p : r.points) {

@@ -235,17 +235,20 @@ void bind_pipeline(py::module_& m) {
         "CLI does (kinematic+kriging in joint space with tracker positions, kinematic from distances). The fit's warnings are RuntimeWarnings. Releases the GIL.");
   m.def("predict", &predict_py, py::arg("model"), py::arg("joints"),
         "`errfield predict`: where the tool goes at joints ((N, 6) deg or a dict with q1..q6). Returns a dict:\n"
-        "px,py,pz (robot frame, mm), tx,ty,tz (tracker frame; models with a registration), var_mm2 (where the\n"
-        "model has a variance), status (ok | outside-region | not-credible; refused rows are NaN).");
+        "px,py,pz (robot frame, mm), tx,ty,tz (tracker frame; models with a registration), where the model has a\n"
+        "variance var_mm2 (a new reading: field + nugget, mm²), var_field_mm2 (field only) and r95_mm (95 % radius\n"
+        "of a new reading, vector fields), status (ok | outside-region | not-credible; refused rows are NaN).");
   m.def("compensate", &compensate_py, py::arg("model"), py::arg("targets"), py::kw_only(),
         py::arg("robot") = py::none(), py::arg("tolerance") = 0.25, py::arg("seed") = py::none(),
         "`errfield compensate`: joints to send. targets: (N, 6) nominal joints (deg) or a dict with q1..q6 or\n"
-        "x,y,z,rx,ry,rz (mm, deg). Returns a dict: nq1..nq6, nx,ny,nz, pred_dx..dz, pred_dl, var_mm2, p_inside\n"
-        "(P(|error| <= tolerance mm)), cmd_x..z, cq1..cq6 (NaN for refused targets: nothing to send) and status.");
+        "x,y,z,rx,ry,rz (mm, deg). Returns a dict: nq1..nq6, nx,ny,nz, pred_dx..dz, pred_dl, var_mm2 (new reading:\n"
+        "field + nugget), p_inside (P(|3-D error| <= tolerance mm) of a new reading; distance models: the distance\n"
+        "error), cmd_x..z, cq1..cq6 (NaN for refused targets: nothing to send), var_field_mm2, r95_mm and status.");
   m.def("validate", &validate_py, py::arg("model"), py::arg("data"), py::kw_only(), py::arg("robot") = py::none(),
         py::arg("base_points") = py::none(), py::arg("targets") = false,
         "`errfield validate` on held-out measurements (dict of columns). Returns a dict: points (the columns of\n"
-        "--out: point, status, before_mm, after_mm, before_dx.., after_dx.., before_dl_bK, after_dl_bK; mm),\n"
+        "--out: point, status, before_mm, after_mm, before_dx.., after_dx.., before_dl_bK, after_dl_bK; mm; kriging\n"
+        "models: var_mm2, var_field_mm2, r95_mm, nees),\n"
         "summary (dict) and summary_json (the text of --summary-out), text (the printed summary).");
 }
 

@@ -144,6 +144,17 @@ TEST_F(DefaultMethodStudy, GrossOutliersAreExcludedAsAnOracleWould) {
   const std::string listed = f.err.substr(at, f.err.find('\n', at) - at);
   for (const auto& id : train_bad) EXPECT_NE(listed.find(" " + id), std::string::npos) << id << " not in: " << listed;
   EXPECT_NE(f.err.find(std::to_string(train_bad.size()) + " row(s) excluded"), std::string::npos) << f.err;
+  EXPECT_EQ(listed.find("more)"), std::string::npos) << "the list is cut short: " << listed;
+  // The model file lists them all, by point name, and carries fit's notes (docs/robot.md).
+  const nlohmann::json model = nlohmann::json::parse(read("m.json"));
+  ASSERT_TRUE(model.contains("excluded_rows")) << "no excluded_rows in m.json";
+  std::set<std::string> in_file;
+  for (const auto& id : model["excluded_rows"]) in_file.insert(id.get<std::string>());
+  EXPECT_EQ(in_file, train_bad);
+  ASSERT_TRUE(model.contains("notes") && model["notes"].is_array());
+  bool noted = false;
+  for (const auto& n : model["notes"]) noted = noted || n.get<std::string>().find("gross outliers") != std::string::npos;
+  EXPECT_TRUE(noted) << model["notes"].dump();
 
   const errfield::testing::CliResult o = run("fit --robot r.json --data oracle.csv --out oracle.json");
   ASSERT_EQ(o.exit_code, 0) << o.output();

@@ -212,6 +212,114 @@ TEST_F(ValidateCli, EveryMethodIsScoredAndNoneChangesNothing) {
   }
 }
 
+// "before" is the nominal robot in its own registration (what `fit --method none` stores), the same
+// for a calibrated model as for the uncorrected one, never the calibrated model's frame (issue 19).
+TEST_F(ValidateCli, BeforeIsTheNominalRobotInItsOwnRegistration) {
+  ASSERT_EQ(run("simulate --seed 1 --sample grid --step 125 --robot-out robot.json --out train.csv").exit_code, 0);
+  ASSERT_EQ(run("simulate --seed 2 --sample cells --step 125 --out holdout.csv").exit_code, 0);
+  ASSERT_EQ(run("fit --robot robot.json --data train.csv --method none --out none.json").exit_code, 0);
+  ASSERT_EQ(run("fit --robot robot.json --data train.csv --method kinematic --out kin.json").exit_code, 0);
+  ASSERT_EQ(run("validate --model none.json --data holdout.csv --summary-out none_s.json").exit_code, 0);
+  const CliResult v = run("validate --model kin.json --data holdout.csv --summary-out kin_s.json");
+  ASSERT_EQ(v.exit_code, 0) << v.output();
+  const nlohmann::json none = json("none_s.json"), kin = json("kin_s.json");
+  // the uncorrected robot's "after" is the nominal robot in its own registration
+  for (const char* k : {"mean_mm", "rms_mm", "p95_mm", "max_mm"})
+    EXPECT_NEAR(kin["position"]["before"][k].get<double>(), none["position"]["after"][k].get<double>(), 1e-9) << k;
+  // and that registration is Horn's fit of the training readings onto the nominal FK
+  const MdhModel robot = MdhModel::load(path("robot.json"));
+  const Rows train = read_rows(path("train.csv"));
+  std::vector<Eigen::Vector3d> tm, fk;
+  for (std::size_t i = 0; i < train.q.size(); ++i)
+    if (train.kind[i] == "target") {
+      tm.push_back(train.m[i]);
+      fk.push_back(forward_position(robot, train.q[i]));
+    }
+  const Eigen::Isometry3d reg = horn(tm, fk);
+  const nlohmann::json mj = json("kin.json");
+  ASSERT_TRUE(mj.contains("nominal_registration"));
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 4; ++k)
+      EXPECT_NEAR(mj["nominal_registration"]["robot_from_tracker"][i][k].get<double>(), reg.matrix()(i, k), 1e-9);
+  // the summary says which registration each figure uses
+  EXPECT_NE(kin["position"]["before_registration"].get<std::string>().find("nominal robot's own"), std::string::npos);
+  EXPECT_NE(kin["position"]["after_registration"].get<std::string>().find("model's stored"), std::string::npos);
+  EXPECT_NE(v.out.find("nominal robot's own registration"), std::string::npos) << v.out;
+  // a model file without it (written before it was stored): the nominal robot registered on the
+  // held-out rows, said so
+  nlohmann::json old = mj;
+  old.erase("nominal_registration");
+  write("old.json", old.dump());
+  ASSERT_EQ(run("validate --model old.json --data holdout.csv --summary-out old_s.json").exit_code, 0);
+  EXPECT_NE(json("old_s.json")["position"]["before_registration"].get<std::string>().find("held-out rows"),
+            std::string::npos);
+}
+
+// The uncertainty columns and figures of validate and predict follow from each other as documented:
+// per-axis variance var_mm2/3 (one model for the 3 components), r95 = sqrt(chi2_3(0.95) var/3),
+// var_mm2 - var_field_mm2 = 3 x the nugget, coverage95 and mean_nees over the points.
+TEST_F(ValidateCli, UncertaintyFiguresFollowFromThePointColumns) {
+  ASSERT_EQ(run("simulate --seed 1 --sample grid --step 125 --robot-out robot.json --out train.csv").exit_code, 0);
+  ASSERT_EQ(run("simulate --seed 2 --sample cells --step 125 --out holdout.csv").exit_code, 0);
+  ASSERT_EQ(run("fit --robot robot.json --data train.csv --method vector-kriging --space task --model "
+                "\"sph(sill=0.5,range=600)+nug(0.001)\" --out model.json").exit_code, 0);
+  const CliResult v = run("validate --model model.json --data holdout.csv --out points.csv --summary-out s.json");
+  ASSERT_EQ(v.exit_code, 0) << v.output();
+  const CsvTable t = CsvTable::read(path("points.csv"));
+  const double chi2_95 = 7.814727903251178;  // scipy.stats.chi2.ppf(0.95, 3)
+  double within = 0, nees_sum = 0, n = 0;
+  for (std::size_t i = 0; i < t.row_count(); ++i) {
+    if (t.row(i)[t.column_index("status")] != "ok") continue;
+    auto num = [&](const char* c) { return t.numeric_cell(i, t.column_index(c)); };
+    const double var = num("var_mm2"), axis = var / 3.0;
+    EXPECT_NEAR(var - num("var_field_mm2"), 3.0 * 0.001, 1e-12);
+    EXPECT_NEAR(num("r95_mm"), std::sqrt(chi2_95 * axis), 1e-9);
+    const double e2 = num("after_dx") * num("after_dx") + num("after_dy") * num("after_dy") + num("after_dz") * num("after_dz");
+    EXPECT_NEAR(num("nees"), e2 / axis, 1e-9 * (1.0 + e2 / axis));
+    within += num("after_mm") <= num("r95_mm");
+    nees_sum += num("nees");
+    n += 1;
+  }
+  ASSERT_EQ(n, 64.0);
+  const nlohmann::json u = json("s.json")["uncertainty"];
+  ASSERT_TRUE(u.is_object()) << json("s.json").dump();
+  EXPECT_EQ(u["points"].get<double>(), n);
+  EXPECT_NEAR(u["coverage95"].get<double>(), within / n, 1e-12);
+  EXPECT_NEAR(u["mean_nees"].get<double>(), nees_sum / n, 1e-9);
+  EXPECT_NE(v.out.find("within the 95 % radius"), std::string::npos) << v.out;
+
+  // predict writes the same three figures for the same joints
+  ASSERT_EQ(run("predict --model model.json --joints holdout.csv --out p.csv").exit_code, 0);
+  const CsvTable p = CsvTable::read(path("p.csv"));
+  for (std::size_t i = 0; i < p.row_count(); ++i) {
+    if (p.row(i)[p.column_index("status")] != "ok") continue;
+    const double var = p.numeric_cell(i, p.column_index("var_mm2"));
+    EXPECT_NEAR(var - p.numeric_cell(i, p.column_index("var_field_mm2")), 0.003, 1e-12);
+    EXPECT_NEAR(p.numeric_cell(i, p.column_index("r95_mm")), std::sqrt(chi2_95 * var / 3.0), 1e-9);
+  }
+  // compensate's p_inside: P(|e| <= tol) of the 3-D error, chi-square with 3 degrees of freedom in
+  // tol² / (var/3) (its CDF by Simpson integration of the density written here)
+  ASSERT_EQ(run("compensate --model model.json --targets holdout.csv --tolerance 0.05 --out c.csv").exit_code, 0);
+  const CsvTable c = CsvTable::read(path("c.csv"));
+  std::size_t checked = 0;
+  for (std::size_t i = 0; i < c.row_count(); ++i) {
+    if (c.row(i)[c.column_index("status")] != "ok") continue;
+    const double axis = c.numeric_cell(i, c.column_index("var_mm2")) / 3.0;
+    const double tmax = 0.05 / std::sqrt(axis);  // integrate over t = |e| / sigma
+    const int steps = 2000;
+    double cdf = 0.0;
+    for (int k = 0; k <= steps; ++k) {
+      const double t = tmax * k / steps;
+      const double w = (k == 0 || k == steps) ? 1.0 : (k % 2 ? 4.0 : 2.0);
+      cdf += w * std::sqrt(2.0 / M_PI) * t * t * std::exp(-0.5 * t * t);  // density of |Z| for Z ~ N(0, I3)
+    }
+    cdf *= tmax / steps / 3.0;
+    EXPECT_NEAR(c.numeric_cell(i, c.column_index("p_inside")), cdf, 1e-10);
+    ++checked;
+  }
+  EXPECT_GT(checked, 60u);
+}
+
 TEST_F(ValidateCli, PredictWritesRobotAndTrackerPositions) {
   ASSERT_EQ(run("simulate --seed 1 --sample grid --step 125 --robot-out robot.json --out train.csv").exit_code, 0);
   ASSERT_EQ(run("fit --robot robot.json --data train.csv --method vector-kriging --space task --model "

@@ -85,7 +85,7 @@ def test_predict_matches_cli(sim, fitted, tmp_path):
     data = read_measurements(sim / "hold.csv")
     from_dict = errfield.predict(fitted, data)
     check_columns(from_dict, tmp_path / "p.csv")
-    assert set(from_dict) == {"px", "py", "pz", "tx", "ty", "tz", "var_mm2", "status"}
+    assert set(from_dict) == {"px", "py", "pz", "tx", "ty", "tz", "var_mm2", "var_field_mm2", "r95_mm", "status"}
     q = np.column_stack([data[f"q{j}"] for j in range(1, 7)])
     from_array = errfield.predict(fitted, q)
     for name in from_dict:

@@ -59,9 +59,21 @@ struct ErrorPrediction {
   Eigen::Vector3d position_error_mm = Eigen::Vector3d::Zero();
   /// Predicted distance error to the base point (mm), for distance-based fields; NaN otherwise.
   double distance_error_mm = std::numeric_limits<double>::quiet_NaN();
-  /// Prediction variance (mm²) of the predicted quantity (distance error, or the sum over the three
-  /// components for vector fields); NaN when the method has none (IDW).
+  /// Field variance (mm²): the kriging variance of the predicted error itself (distance error, or
+  /// the sum over the three components for vector fields), without measurement noise; NaN when the
+  /// method has none (IDW). The `var_field_mm2` column.
   double variance_mm2 = std::numeric_limits<double>::quiet_NaN();
+  /// Variance (mm²) that one new reading adds to the same quantity: the fitted nugget when the field
+  /// treats it as measurement error (tracker noise and repeatability; for vector fields the sum of
+  /// the three components' nuggets), 0 when the nugget is micro-scale variation (then it is part of
+  /// variance_mm2); NaN without a variance.
+  double noise_variance_mm2 = std::numeric_limits<double>::quiet_NaN();
+  /// Vector fields: the predictive variance of a new reading per robot-frame axis x, y, z (mm²),
+  /// field plus nugget; what r95_mm and p_inside are computed from (error_ball.hpp). NaN otherwise.
+  Eigen::Vector3d axis_variance_mm2 = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  /// Variance of a new reading of the predicted quantity (mm²): variance_mm2 + noise_variance_mm2.
+  /// The `var_mm2` column of predict, compensate and validate.
+  double predictive_variance_mm2() const { return variance_mm2 + noise_variance_mm2; }
   /// False when the target lies outside the modelled region (then nothing is extrapolated:
   /// position_error_mm is zero and compensate() refuses the target).
   bool inside_region = true;
@@ -105,8 +117,9 @@ struct CompensatedTarget {
   robot::JointVector q_command_deg = robot::JointVector::Zero();   ///< joints to send (IK of the command model)
   robot::IkStatus ik_status = robot::IkStatus::converged;          ///< of the command IK (nominal IK if that failed)
   double ik_residual_mm = 0.0;
-  /// Probability that the remaining error along the predicted quantity lies within ±tolerance,
-  /// assuming a Gaussian prediction error with the kriging variance; NaN without a variance.
+  /// Probability that a new reading's error lies within the tolerance, under the predictive
+  /// distribution (field variance plus nugget): for vector fields P(|e| <= tol) of the 3-D error
+  /// (error_ball.hpp), for distance fields P(|e| <= tol) of the distance error; NaN without a variance.
   double p_within_tolerance = std::numeric_limits<double>::quiet_NaN();
   /// True when the target is inside the modelled region, the prediction is credible and both IK
   /// solves converged.
@@ -125,6 +138,11 @@ class CompensationModel {
   /// The tracker ↔ robot registration of the training data (fit stores it when the data have
   /// tracker positions): validate and predict map tracker readings with it.
   const std::optional<compensation::Registration>& registration() const noexcept { return registration_; }
+  /// The registration of the same training readings onto the nominal robot's FK (what `fit --method
+  /// none` stores): validate's "before" maps held-out readings with it, so the uncompensated robot
+  /// is scored in its own best frame, not in the calibrated model's. Empty in files written before
+  /// it was stored, and for data without tracker positions.
+  const std::optional<compensation::Registration>& nominal_registration() const noexcept { return nominal_registration_; }
   /// The nominal robot the model was fitted with (where it differs from command_model: the kinematic
   /// methods); the field is evaluated at this robot's FK of the joints.
   const robot::MdhModel& nominal_model() const noexcept { return nominal_model_ ? *nominal_model_ : command_model_; }
@@ -135,7 +153,15 @@ class CompensationModel {
   /// model has no field.
   const std::optional<CredibleRange>& credible_range() const noexcept { return credible_; }
 
+  /// The point names of the training rows `fit` excluded as gross outliers (FitOptions::outlier_limit),
+  /// in row order; written to the model file in full ("excluded_rows").
+  const std::vector<std::string>& excluded_rows() const noexcept { return excluded_rows_; }
+  /// What fit used and why, one sentence each (the notes fit prints), written as "notes".
+  const std::vector<std::string>& notes() const noexcept { return notes_; }
+  CompensationModel with_excluded_rows(std::vector<std::string> points) const;
+  CompensationModel with_notes(std::vector<std::string> notes) const;
   CompensationModel with_registration(std::optional<compensation::Registration> r) const;
+  CompensationModel with_nominal_registration(std::optional<compensation::Registration> r) const;
   CompensationModel with_nominal_model(robot::MdhModel nominal) const;
   CompensationModel with_data_joints(std::vector<robot::JointVector> q_deg) const;
   CompensationModel with_credible_range(std::optional<CredibleRange> range) const;
@@ -159,8 +185,9 @@ class CompensationModel {
 
   /// JSON form: {"format":"errfield-compensation-model","version":1,"method":...,
   /// "command_model":{robot JSON},"field":{...}|null} plus, when present, "nominal_model",
-  /// "registration" (registration.hpp), "data_joints_deg" [N][6] and "credible_range"
-  /// {"center_mm": [1 or 3], "radius_mm"}.
+  /// "registration" (registration.hpp), "nominal_registration" (same form), "data_joints_deg" [N][6] and "credible_range"
+  /// {"center_mm": [1 or 3], "radius_mm"}, and what fit noted: "notes" and "excluded_rows" (arrays
+  /// of strings; informative, ignored by every step that reads the model).
   nlohmann::json to_json() const;
   /// Reads the JSON form; throws InputError naming `source` and the field.
   static CompensationModel from_json(const nlohmann::json& j, const std::string& source);
@@ -170,15 +197,18 @@ class CompensationModel {
   robot::MdhModel command_model_;
   std::shared_ptr<const ErrorField> field_;
   std::optional<compensation::Registration> registration_;
+  std::optional<compensation::Registration> nominal_registration_;
   std::optional<robot::MdhModel> nominal_model_;
   std::vector<robot::JointVector> data_joints_;
   std::optional<CredibleRange> credible_;
+  std::vector<std::string> excluded_rows_, notes_;
 };
 
 /// Unit direction m = (p − base)/|p − base| of eq. 22. Precondition: p != base.
 Eigen::Vector3d radial_direction(const Eigen::Vector3d& p_mm, const Eigen::Vector3d& base_mm);
 
-/// P(|e| <= tol) for e ~ N(0, variance) (both in mm / mm²); NaN for a NaN or negative variance.
+/// P(|e| <= tol) for a scalar e ~ N(0, variance) (both in mm / mm²); NaN for a NaN or negative
+/// variance. One-dimensional: for a 3-D error use probability_within_radius (error_ball.hpp).
 double probability_within(double tolerance_mm, double variance_mm2);
 
 }  // namespace errfield::compensation

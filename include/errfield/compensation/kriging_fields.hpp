@@ -106,7 +106,9 @@ KrigingFieldFit fit_vector_kriging_field(const FieldSamples& samples, std::vecto
 
 /// The variogram model the fields estimate when none is given: empirical variogram of the values
 /// over the samples' lags (10 bins up to 60% of the largest lag) and the best-fitting of sph/exp/gau
-/// with a free nugget. `values` is N x K (K = 1 or 3).
+/// with a free nugget. `values` is N x K (K = 1 or 3). The model is that of one component (the
+/// empirical gamma, a sum over the K components, is divided by K before the fit), as the fields and
+/// the likelihood fit use it: a vector field's sill and nugget are per component.
 VariogramModel estimate_field_variogram(const FieldSamples& samples, const Eigen::MatrixXd& values, FieldSpace space);
 
 /// The model a field uses when none is given, and why. Joint space: choose_likelihood_model
@@ -115,6 +117,13 @@ VariogramModel estimate_field_variogram(const FieldSamples& samples, const Eigen
 /// task space: estimate_field_variogram.
 VariogramModel choose_field_model(const FieldSamples& samples, const Eigen::MatrixXd& values,
                                   const KrigingFieldOptions& options, std::string& reason);
+
+/// The field's variogram model for people: sill and nugget (mm², per component for vector fields) and, for each
+/// bounded structure, the lag at which it reaches 95 % of its partial sill along each coordinate
+/// (x, y, z in mm in task space; q1..q6 in deg in joint space; ARD multipliers applied), e.g.
+/// "sill 0.0021 mm², nugget 4.1e-05 mm²; gau reaches 95 % of its sill at q1 4.33e+05,
+/// q2 186, ... deg". A range far beyond the joint's travel means no decay along that joint.
+std::string describe_field_model(const VariogramModel& model, FieldSpace space);
 
 /// Reads a kriging field from JSON (called by error_field_from_json for kinds "distance-kriging" and
 /// "vector-kriging"); nullptr for another kind.

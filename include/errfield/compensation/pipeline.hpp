@@ -83,7 +83,9 @@ struct TableFit {
 TableFit fit_table(const robot::MdhModel& robot, const CsvTable& table, const FitTableOptions& options);
 
 /// `errfield predict`: columns px,py,pz (robot frame), tx,ty,tz (tracker frame; only with a stored
-/// registration), var_mm2 (only when some row has a variance), status, one row per joint vector.
+/// registration), var_mm2 (variance of a new reading: field + nugget) and var_field_mm2 (field only)
+/// when some row has a variance, r95_mm (radius around the predicted point holding a new reading
+/// with 95 %, error_ball.hpp; vector fields) when some row has one, status; one row per joint vector.
 StepColumns predict_columns(const CompensationModel& model, std::span<const robot::JointVector> q_deg);
 
 /// Targets of `errfield compensate`: nominal joints q1..q6 (deg), or poses x,y,z,rx,ry,rz (mm, deg)
@@ -94,14 +96,16 @@ struct CompensationTargets {
   std::optional<robot::JointVector> seed_deg;
 };
 
-/// `errfield compensate`: columns nq1..nq6, nx,ny,nz, pred_dx..dz, pred_dl, var_mm2, p_inside,
-/// cmd_x..z, cq1..cq6, status. `tolerance_mm` > 0 (ArgumentError otherwise). A refused target
+/// `errfield compensate`: columns nq1..nq6, nx,ny,nz, pred_dx..dz, pred_dl, var_mm2 (new reading:
+/// field + nugget), p_inside (CompensatedTarget::p_within_tolerance), cmd_x..z, cq1..cq6,
+/// var_field_mm2 (field only), r95_mm (vector fields), status. `tolerance_mm` > 0 (ArgumentError otherwise). A refused target
 /// (unreachable, branch-change, outside-region, not-credible, no-prediction, ik-*) has no joints.
 StepColumns compensate_columns(const CompensationModel& model, const robot::MdhModel& nominal,
                                const CompensationTargets& targets, double tolerance_mm);
 
 /// The per-point columns of `errfield validate --out`: point, status, before_mm, after_mm,
-/// before_dx..dz, after_dx..dz, before_dl_bK / after_dl_bK.
+/// before_dx..dz, after_dx..dz, before_dl_bK / after_dl_bK; then, for models with a variance,
+/// var_mm2 and var_field_mm2, and where 3-D errors were scored against one, r95_mm and nees.
 StepColumns validation_point_columns(const ValidationReport& report);
 
 }  // namespace errfield::compensation

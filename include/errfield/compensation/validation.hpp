@@ -4,9 +4,19 @@
 /// Prediction mode (validate_predictions): at each held-out row's commanded joints the model
 /// predicts where the tool point is (prediction.hpp); the measurement is mapped into the robot frame
 /// through the model's own stored registration — never re-registered on the held-out rows, which
-/// would absorb part of the error being scored. "before" is the nominal robot's FK (no
-/// compensation), "after" the model's prediction; error = measured − predicted. Distances to base
-/// points (dist_bK) are scored frame-free: measured − predicted distance.
+/// would absorb part of the error being scored. "after" is the model's prediction; "before" the
+/// nominal robot's FK (no compensation) with the nominal robot's own registration, as `fit --method
+/// none` stores it (the model's "nominal_registration"): a calibrated model's registration would
+/// put the nominal robot in a frame that is not its best (on real data 1.23 mm instead of 0.66).
+/// Model files without it: non-kinematic models use their stored registration (fitted on the
+/// nominal robot); kinematic ones and robot JSONs register the nominal robot on the held-out rows
+/// themselves (noted). error = measured − predicted. Distances to base points (dist_bK) are scored
+/// frame-free: measured − predicted distance.
+///
+/// Predictive uncertainty (models with a variance): per point the variance of a new reading
+/// (field + nugget), its field part, for vector fields the 95 % radius r95 (error_ball.hpp) and
+/// NEES = sum over the axes of e_i² / var_i (3 expected); the summary gives the share of points
+/// within r95 (coverage95, 0.95 expected) and the mean NEES.
 ///
 /// Targets mode (validate_targets): the validation run on the robot after compensation. Rows were
 /// commanded with compensated joints (run = after) — and optionally the same targets with nominal
@@ -54,7 +64,18 @@ struct ValidatedPoint {
   Eigen::Vector3d before_mm = Eigen::Vector3d::Constant(kNaN);  ///< position error vector, robot frame
   Eigen::Vector3d after_mm = Eigen::Vector3d::Constant(kNaN);
   std::vector<double> distance_before_mm, distance_after_mm;  ///< per base point K (signed)
+  /// Prediction mode, models with a variance: of a new reading (field + nugget) and of the field
+  /// alone (mm², ErrorPrediction); vector fields with scored positions: the 95 % radius (mm) and
+  /// NEES = sum_i after_i² / var_i (3 expected).
+  double var_mm2 = kNaN, var_field_mm2 = kNaN, r95_mm = kNaN, nees = kNaN;
   bool ok() const { return status == "ok"; }
+};
+
+/// How well the predictive variance held on the scored points (prediction mode, vector fields).
+struct UncertaintyCheck {
+  std::size_t points = 0;  ///< points with a 3-D error and a variance
+  double coverage95 = std::numeric_limits<double>::quiet_NaN();  ///< share with |e| <= r95 (0.95 expected)
+  double mean_nees = std::numeric_limits<double>::quiet_NaN();   ///< mean of NEES (3 expected)
 };
 
 struct ValidationReport {
@@ -64,9 +85,13 @@ struct ValidationReport {
   std::optional<BeforeAfter> position;
   std::optional<BeforeAfter> distance;  ///< pooled over the base points
   std::size_t distance_columns = 0;
+  /// Which registration maps the tracker readings of each position figure (one sentence each).
+  std::string before_registration, after_registration;
+  std::optional<UncertaintyCheck> uncertainty;
   std::vector<std::string> notes;
 
-  /// {"mode","points","refused","position":{"before":{...}|null,"after":{...}},"distance":...,"notes"}
+  /// {"mode","points","refused","position":{"before":{...}|null,"after":{...},"before_registration",
+  /// "after_registration"},"distance":...,"uncertainty":{"points","coverage95","mean_nees"}|null,"notes"}
   /// with {"count","mean_mm","max_mm","rms_mm","p95_mm"} per block; "distance" only with distances.
   nlohmann::json summary_json() const;
   /// The console summary (the same figures).
