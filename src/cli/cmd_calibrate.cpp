@@ -78,10 +78,12 @@ void run_calibrate(const CalibrateArgs& a) {
     }
     // Registration first (tracker <- robot base and reflector offset), then the full model in the
     // tracker frame; the output is expressed back in the registered robot frame.
-    const CalibrationResult reg = with_source(a.data, [&] { return register_tracker(nominal, data, options); });
-    check_registration_residual(reg.after.rms_mm, data.size(), a.data,
-                                "registration tracker -> robot (with the reflector offset)", a.max_registration_rms,
-                                true);
+    // The check fit, validate, predict and compensate run too (robot/input_checks.hpp).
+    const CalibrationResult reg = with_source(a.data, [&] {
+      const auto checked = check_tracker_registration(nominal, data, a.data, {!a.robot.empty(), ""},
+                                                      a.max_registration_rms, options);
+      return checked ? *checked : register_tracker(nominal, data, options);
+    });
     text << "== registration (tracker <- robot base, reflector offset) ==\n" << reg.report();
     const PoseXyzRpy t = to_xyz_rpy(reg.model.base());
     text << "tracker <- robot base: x " << t.x_mm << " y " << t.y_mm << " z " << t.z_mm << " mm, rx " << t.rx_deg
