@@ -60,7 +60,15 @@ void run_calibrate(const CalibrateArgs& a) {
                        a.data, table.line_of_row(i), col);
     }
   warn_if_metres(table, nominal, "calibrate", a.model == "position" ? kMeasuredXyz : kDistances);
-  if (a.model == "distance") check_distance_columns(table);
+  if (a.model == "distance") {
+    // 0 is accepted only at a base point itself (the paper's P0 as a grid vertex; such pairs are skipped).
+    std::vector<Eigen::Vector3d> points;
+    for (const auto& b : a.base_points) {
+      const auto v = parse_numbers(b, 3, "--base-point");
+      points.emplace_back(v[0], v[1], v[2]);
+    }
+    check_distance_columns(table, &nominal, points);
+  }
   std::ostringstream text;
   CalibrationResult result;
   MdhModel identified = nominal;

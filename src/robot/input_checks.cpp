@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
@@ -218,10 +219,10 @@ std::string likely_registration_cause(const MdhModel& model, const std::vector<P
   const std::string robot = "'" + model.name() + "'" + (origin.given ? " (" + (origin.what.empty() ? std::string("--robot") : origin.what) + ")" : "");
   // Radians read as degrees: every joint within +-2 pi.
   bool small = true;
-  for (const auto& d : data) small = small && d.q_deg.cwiseAbs().maxCoeff() <= 2.0 * M_PI + 1e-9;
+  for (const auto& d : data) small = small && d.q_deg.cwiseAbs().maxCoeff() <= 2.0 * std::numbers::pi + 1e-9;
   if (small) {
     std::vector<PositionMeasurement> deg = data;
-    for (auto& d : deg) d.q_deg *= 180.0 / M_PI;
+    for (auto& d : deg) d.q_deg *= 180.0 / std::numbers::pi;
     const double rms = registration_rms(model, deg);
     if (rms <= limit_mm)
       return "the joints q1..q6 are in radians (times 180/pi they register to " + mm(rms) +

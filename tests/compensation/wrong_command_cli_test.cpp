@@ -336,6 +336,9 @@ TEST_F(WrongCommand, BasePointThatIsGridVertexZero) {
   with_dist("0", vertex0);
   const auto b = run("fit --robot kr16 --data " + path("zero.csv") + " --method distance-idw --out " + path("b.json"));
   EXPECT_EQ(b.exit_code, 0) << b.err;
+  // Calibration from the distances skips that pair (no direction) instead of refusing the file.
+  const auto cal = run("calibrate --robot kr16 --data " + path("zero.csv") + " --out " + path("cal.json"));
+  EXPECT_EQ(cal.exit_code, 0) << cal.err;
   // Both models compensate the grid's targets (the one at the base point itself has no direction:
   // refused, never ok).
   for (const char* m : {"a.json", "b.json"}) {
