@@ -38,11 +38,8 @@ Field simulate(int n, const VariogramModel& truth, unsigned seed) {
 }
 
 // Independent reference: explicit K^-1 and log|det| from a full-pivot LU; F = [1] or [1 x y z].
-double reference_nll(const Field& f, const VariogramModel& m, bool restricted, int drift_order) {
+double reference_nll_of(const Field& f, const Eigen::MatrixXd& k, bool restricted, int drift_order) {
   const Eigen::Index n = f.x.rows();
-  Eigen::MatrixXd k(n, n);
-  for (Eigen::Index i = 0; i < n; ++i)
-    for (Eigen::Index j = 0; j < n; ++j) k(i, j) = m.covariance((f.x.row(i) - f.x.row(j)).norm());
   Eigen::MatrixXd fm(n, drift_order == 0 ? 1 : 4);
   fm.col(0).setOnes();
   if (drift_order == 1) fm.rightCols(3) = f.x;
@@ -62,6 +59,44 @@ double reference_nll(const Field& f, const VariogramModel& m, bool restricted, i
     out += static_cast<double>(n) * std::log(2.0 * std::numbers::pi);
   }
   return 0.5 * out;
+}
+
+double reference_nll(const Field& f, const VariogramModel& m, bool restricted, int drift_order) {
+  const Eigen::Index n = f.x.rows();
+  Eigen::MatrixXd k(n, n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < n; ++j) k(i, j) = m.covariance((f.x.row(i) - f.x.row(j)).norm());
+  return reference_nll_of(f, k, restricted, drift_order);
+}
+
+TEST(KrigingLikelihood, RepeatedLocationsWithANuggetHaveAFiniteLikelihood) {
+  // A pose measured twice (issue 18): two readings at one location share the continuous part of
+  // the covariance, and each has its own noise (the nugget) on the diagonal only. Reference written
+  // here: exponential covariance s exp(-h / a) (gstat's exp) for every pair, the nugget on i == j.
+  const double s = 1.0, a = 20.0, nugget = 0.05;
+  Field f = simulate(30, VariogramModel::parse("exp(sill=1,range=20)+nug(0.05)"), 3);
+  f.x.conservativeResize(32, 3);
+  f.z.conservativeResize(32);
+  f.x.row(30) = f.x.row(4);
+  f.z[30] = f.z[4] + 0.03;
+  f.x.row(31) = f.x.row(17);
+  f.z[31] = f.z[17] - 0.02;
+  Eigen::MatrixXd k(32, 32);
+  for (Eigen::Index i = 0; i < 32; ++i)
+    for (Eigen::Index j = 0; j < 32; ++j)
+      k(i, j) = s * std::exp(-(f.x.row(i) - f.x.row(j)).norm() / a) + (i == j ? nugget : 0.0);
+  const auto m = VariogramModel::parse("exp(sill=1,range=20)+nug(0.05)");
+  LikelihoodFitOptions o;
+  for (bool reml : {false, true}) {
+    o.restricted = reml;
+    const double nll = negative_log_likelihood(f.x, f.z, m, o);
+    EXPECT_TRUE(std::isfinite(nll)) << reml;
+    EXPECT_NEAR(nll, reference_nll_of(f, k, reml, 0), 1e-8) << reml;
+  }
+  // And the fit of the nugget works on them (it failed "singular" before).
+  o.restricted = true;
+  const LikelihoodFitResult r = fit_likelihood(f.x, f.z, {VariogramModel::parse("exp(sill=1,range=10)").components()[0]}, o);
+  EXPECT_TRUE(std::isfinite(r.negative_log_likelihood));
 }
 
 TEST(KrigingLikelihood, NegativeLogLikelihoodEqualsExplicitFormula) {

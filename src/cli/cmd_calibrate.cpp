@@ -60,7 +60,15 @@ void run_calibrate(const CalibrateArgs& a) {
                        a.data, table.line_of_row(i), col);
     }
   warn_if_metres(table, nominal, "calibrate", a.model == "position" ? kMeasuredXyz : kDistances);
-  if (a.model == "distance") check_distance_columns(table);
+  if (a.model == "distance") {
+    // 0 is accepted only at a base point itself (the paper's P0 as a grid vertex; such pairs are skipped).
+    std::vector<Eigen::Vector3d> points;
+    for (const auto& b : a.base_points) {
+      const auto v = parse_numbers(b, 3, "--base-point");
+      points.emplace_back(v[0], v[1], v[2]);
+    }
+    check_distance_columns(table, &nominal, points);
+  }
   std::ostringstream text;
   CalibrationResult result;
   MdhModel identified = nominal;
@@ -78,10 +86,12 @@ void run_calibrate(const CalibrateArgs& a) {
     }
     // Registration first (tracker <- robot base and reflector offset), then the full model in the
     // tracker frame; the output is expressed back in the registered robot frame.
-    const CalibrationResult reg = with_source(a.data, [&] { return register_tracker(nominal, data, options); });
-    check_registration_residual(reg.after.rms_mm, data.size(), a.data,
-                                "registration tracker -> robot (with the reflector offset)", a.max_registration_rms,
-                                true);
+    // The check fit, validate, predict and compensate run too (robot/input_checks.hpp).
+    const CalibrationResult reg = with_source(a.data, [&] {
+      const auto checked = check_tracker_registration(nominal, data, a.data, {!a.robot.empty(), ""},
+                                                      a.max_registration_rms, options);
+      return checked ? *checked : register_tracker(nominal, data, options);
+    });
     text << "== registration (tracker <- robot base, reflector offset) ==\n" << reg.report();
     const PoseXyzRpy t = to_xyz_rpy(reg.model.base());
     text << "tracker <- robot base: x " << t.x_mm << " y " << t.y_mm << " z " << t.z_mm << " mm, rx " << t.rx_deg

@@ -8,10 +8,12 @@
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
+#include "cli/interpolation_methods.hpp"
 #include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/compensation/target_ik.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/input_checks.hpp"
 #include "errfield/compensation/compensation.hpp"
 #include "errfield/json_file.hpp"
 #include "errfield/robot/kinematics.hpp"
@@ -22,7 +24,7 @@ namespace {
 
 struct CompensateArgs {
   std::string robot, model, targets, out, seed;
-  double tolerance = 0.25;
+  double tolerance = 0.25, max_registration_rms = robot::kRegistrationRmsLimitMm;
   bool strict = false;
 };
 
@@ -54,7 +56,13 @@ void run_compensate(const CompensateArgs& a) {
                      a.targets);
   const std::size_t n = t.row_count();
   if (joints) {
+    // Targets that carry measurements must be of this robot (the check of fit and validate).
+    check_table_fits_robot(t, nominal,
+                           {true, a.robot.empty() ? "the command model of " + a.model : "--robot " + a.robot},
+                           a.max_registration_rms);
     targets.joints_deg = read_joint_columns(t);
+    if (const auto w = joints_outside_limits(targets.joints_deg, nominal, row_labels_of(t, "row")))
+      std::cerr << "errfield compensate: warning: " << *w << " (status outside-limits: no joints written)\n";
   } else {
     targets.poses = t.numeric_columns(pose_cols);
     warn_if_metres(t, nominal, "compensate", kNominalXyz);
@@ -106,6 +114,10 @@ void add_compensate_command(CLI::App& app) {
   cmd->add_option("--seed", a->seed,
                   "Q1,...,Q6 (deg): solve pose targets from these joints (default: the model's nearest training "
                   "sample), on their branch");
+  cmd->add_option("--max-registration-rms", a->max_registration_rms,
+                  "joint targets with x,y,z or mx,my,mz: refuse (exit 2) data that are not this robot's "
+                  "(registration RMS above this, mm; docs/robot.md)")
+      ->capture_default_str();
   cmd->add_flag("--strict", a->strict,
                 "if any target is refused: write nothing, name the refused rows and exit with status 1");
   cmd->add_option("--out", a->out, "output CSV (written atomically)")->required();

@@ -3,16 +3,19 @@
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
+#include "cli/interpolation_methods.hpp"
 #include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/compensation/prediction.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/input_checks.hpp"
 
 namespace errfield::cli {
 namespace {
 
 struct PredictArgs {
   std::string model, joints, out;
+  double max_registration_rms = robot::kRegistrationRmsLimitMm;
 };
 
 void run_predict(const PredictArgs& a) {
@@ -22,6 +25,11 @@ void run_predict(const PredictArgs& a) {
   const std::vector<robot::JointVector> q = read_joint_columns(table);
   const std::size_t n = q.size();
   const bool tracker = model.registration().has_value();
+  // Joints files that carry measurements (a held-out set) must be of the model's robot.
+  compensation::check_table_fits_robot(table, model.nominal_model(), {true, "the nominal robot of " + a.model},
+                                       a.max_registration_rms);
+  if (const auto w = robot::joints_outside_limits(q, model.nominal_model(), row_labels_of(table, "row")))
+    std::cerr << "errfield predict: warning: " << *w << " (status outside-limits: nothing predicted there)\n";
   const compensation::StepColumns step = compensation::predict_columns(model, q);
   const std::size_t refused = step.refused;
   bool any_variance = false, any_radius = false;
@@ -29,6 +37,12 @@ void run_predict(const PredictArgs& a) {
     any_variance = any_variance || c.name == "var_mm2";
     any_radius = any_radius || c.name == "r95_mm";
   }
+  // Nothing predicted is a failed job, as in cv: a script must not take an all-refused file for
+  // predictions.
+  if (n > 0 && refused == n)
+    throw Error("predict: none of the " + std::to_string(n) + " rows of " + a.joints + " could be predicted with " +
+                loaded.description + " from " + a.model + " (" + refusal_tally(status_words(step)) +
+                "); nothing written");
   OutputTable out;
   out.add_all_columns(table);
   add_step_columns(out, step);
@@ -55,6 +69,10 @@ void add_predict_command(CLI::App& app) {
       "Example: errfield predict --model model.json --joints joints.csv --out predicted.csv");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit' or robot JSON from 'errfield calibrate'")->required();
   cmd->add_option("--joints", a->joints, "CSV with columns q1..q6 (deg); other columns are carried through")->required();
+  cmd->add_option("--max-registration-rms", a->max_registration_rms,
+                  "when --joints has x,y,z or mx,my,mz: refuse (exit 2) data that are not the model's robot's "
+                  "(registration RMS above this, mm; docs/robot.md)")
+      ->capture_default_str();
   cmd->add_option("--out", a->out, "output CSV (written atomically)")->required();
   cmd->callback([a] { run_predict(*a); });
 }

@@ -7,6 +7,7 @@
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
+#include "cli/interpolation_methods.hpp"
 #include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/atomic_file.hpp"
@@ -14,6 +15,7 @@
 #include "errfield/compensation/prediction.hpp"
 #include "errfield/compensation/validation.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/input_checks.hpp"
 
 namespace errfield::cli {
 namespace {
@@ -22,6 +24,7 @@ struct ValidateArgs {
   std::string model, data, robot, out, summary_out, report;
   std::vector<std::string> base_points;
   bool targets = false;
+  double max_registration_rms = robot::kRegistrationRmsLimitMm;
 };
 
 /// A file written by `errfield simulate` says so in a leading comment; its report must too.
@@ -49,12 +52,26 @@ void run_validate(const ValidateArgs& a) {
     r = with_source(a.data, [&] { return compensation::validate_targets(table, model.registration(), fixed); });
   } else {
     const MdhModel nominal = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
+    // Data of another robot, or joints in radians, scored "after" errors of a metre (exit 0).
+    check_table_fits_robot(table, nominal,
+                           {true, a.robot.empty() ? "the nominal robot of " + a.model : "--robot " + a.robot},
+                           a.max_registration_rms);
     const MeasurementSet data = MeasurementSet::from_table(table, nominal, fixed);
     warn_if_metres(table, nominal, "validate");
+    if (const auto w = joints_outside_limits(read_joint_columns(table), model.nominal_model(), row_labels_of(table, "row")))
+      std::cerr << "errfield validate: warning: " << *w << " (status outside-limits: not scored)\n";
     r = with_source(a.data, [&] { return compensation::validate_predictions(model, data); });
     if (loaded.is_robot_json && a.robot.empty() && !table.has_column("x"))
       r.notes.push_back("no --robot and no x,y,z columns: 'before' is this robot's own FK; give the nominal robot "
                         "with --robot for an uncompensated baseline");
+  }
+  // Nothing scored is a failed job, as in cv ("80 points, 80 refused" exited 0).
+  if (!r.points.empty() && r.refused == r.points.size()) {
+    std::vector<std::string> status;
+    for (const auto& p : r.points) status.push_back(p.status);
+    throw Error("validate: none of the " + std::to_string(r.points.size()) + " points of " + a.data +
+                " could be scored with " + loaded.description + " from " + a.model + " (" + refusal_tally(status) +
+                "); nothing written");
   }
   const nlohmann::json summary = r.summary_json();
   AtomicFileSet outputs;
@@ -92,6 +109,10 @@ void add_validate_command(CLI::App& app) {
   cmd->add_option("--data", a->data, "held-out measurement CSV (or the validation run with --targets)")->required();
   cmd->add_option("--robot", a->robot, "nominal robot JSON for the 'before' baseline (default: the model's nominal robot)");
   cmd->add_option("--base-point", a->base_points, "X,Y,Z of fixed base point bK when the data have no base rows");
+  cmd->add_option("--max-registration-rms", a->max_registration_rms,
+                  "refuse (exit 2) data whose tracker readings mx,my,mz register to the robot with a larger RMS (mm): "
+                  "data of another robot, joints in radians, metres (docs/robot.md)")
+      ->capture_default_str();
   cmd->add_flag("--targets", a->targets, "validation-run mode: error = measured - intended target");
   cmd->add_option("--out", a->out, "per-point CSV: point,status,before_mm,after_mm, the error components and, for "
                   "kriging models, var_mm2, var_field_mm2, r95_mm, nees");

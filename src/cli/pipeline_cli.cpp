@@ -1,6 +1,8 @@
 #include "cli/pipeline_cli.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
@@ -37,6 +39,26 @@ void add_step_columns(OutputTable& out, const compensation::StepColumns& step) {
       if (std::isfinite(c.numbers[i])) cells[i] = format_number(c.numbers[i]);
     out.add_column(c.name, std::move(cells));
   }
+}
+
+std::string refusal_tally(const std::vector<std::string>& status) {
+  std::vector<std::pair<std::string, std::size_t>> counts;
+  for (const auto& s : status) {
+    if (s == "ok") continue;
+    auto it = std::find_if(counts.begin(), counts.end(), [&](const auto& c) { return c.first == s; });
+    if (it == counts.end()) counts.emplace_back(s, 1);
+    else ++it->second;
+  }
+  std::string text;
+  for (const auto& [word, count] : counts) text += (text.empty() ? "" : ", ") + word + " " + std::to_string(count);
+  return text;
+}
+
+const std::vector<std::string>& status_words(const compensation::StepColumns& step) {
+  static const std::vector<std::string> none;
+  for (const auto& c : step.columns)
+    if (c.name == "status") return c.words;
+  return none;
 }
 
 }  // namespace errfield::cli

@@ -7,6 +7,7 @@
 #include "errfield/error.hpp"
 #include "errfield/compensation/error_fields.hpp"
 #include "errfield/robot/calibration.hpp"
+#include "errfield/robot/input_checks.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "robot/json_fields.hpp"
 
@@ -218,6 +219,45 @@ namespace {
   throw InputError(source + ": " + what, source);
 }
 
+/// The field kind each method fits (model_fitting.cpp); "" for the methods without a field.
+std::string_view field_kind_of(CompensationMethod method) {
+  switch (method) {
+    case CompensationMethod::distance_idw: return "distance-idw";
+    case CompensationMethod::position_idw: return "position-idw";
+    case CompensationMethod::distance_kriging: return "distance-kriging";
+    case CompensationMethod::vector_kriging:
+    case CompensationMethod::kinematic_kriging: return "vector-kriging";
+    default: return "";
+  }
+}
+
+/// A kriging field's stored sample positions are the nominal robot's FK of its stored joints (the
+/// field is evaluated there): a command model of another robot than the samples' gave 126/126
+/// rows "ok", 779 mm off. Positions may come from the data's x,y,z columns, which fit checks to
+/// kNominalFkToleranceMm, so that is the limit here too.
+void check_stored_samples(const CompensationModel& model, const nlohmann::json& field, const std::string& source) {
+  if (!field.contains("samples")) return;
+  const auto& s = field["samples"];
+  const auto& pos = s["position_mm"];
+  const auto& joints = s["joints_deg"];
+  const MdhModel& robot = model.nominal_model();
+  for (std::size_t i = 0; i < pos.size(); ++i) {
+    JointVector q;
+    Eigen::Vector3d p;
+    for (int k = 0; k < 6; ++k) q[k] = joints[i][static_cast<std::size_t>(k)].get<double>();
+    for (int k = 0; k < 3; ++k) p[k] = pos[i][static_cast<std::size_t>(k)].get<double>();
+    const Eigen::Vector3d fk = forward_position(robot, q);
+    const double off = (fk - p).norm();
+    if (off <= kNominalFkToleranceMm) continue;
+    fail_model(source, "member \"field.samples\"[" + std::to_string(i) + "]: position_mm is " +
+                           format_number(std::round(off * 1000) / 1000) + " mm from the FK of its joints_deg by the " +
+                           (model.has_nominal_model() ? "\"nominal_model\"" : "\"command_model\"") + " '" +
+                           robot.name() + "' (limit " + format_number(kNominalFkToleranceMm) +
+                           " mm): the robot in the file is not the one the field was fitted on; refit the model "
+                           "with 'errfield fit'");
+  }
+}
+
 }  // namespace
 
 CompensationModel CompensationModel::from_json(const nlohmann::json& j, const std::string& source) {
@@ -245,6 +285,13 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
   if (!needs_field && field)
     fail_model(source, "member \"field\": method \"" + std::string(method_name(method)) +
                            "\" has no error field, yet the model carries one; refit the model with 'errfield fit'");
+  // The field's kind is the method's (a kinematic+kriging model carrying a distance-idw field was
+  // trusted and compensated along a radius it never fitted).
+  const std::string_view kind = field ? std::string_view(j["field"]["kind"].get_ref<const std::string&>()) : "";
+  if (field && kind != field_kind_of(method))
+    fail_model(source, "member \"field.kind\": \"" + std::string(kind) + "\", but method \"" +
+                           std::string(method_name(method)) + "\" fits a \"" + std::string(field_kind_of(method)) +
+                           "\" field; the file was edited or mixed from two models: refit it with 'errfield fit'");
   CompensationModel model(method, std::move(command), std::move(field));
   if (j.contains("nominal_model"))
     model.nominal_model_ = robot::detail::json_nested_model(j, "nominal_model", source);
@@ -285,8 +332,21 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
     r.radius_mm = c["radius_mm"].get<double>();
     if ((r.center_mm.size() != 1 && r.center_mm.size() != 3) || !(r.radius_mm >= 0.0))
       fail_model(source, "member \"credible_range\": expected 1 or 3 centre values and a radius >= 0");
+    const std::size_t dims = kind.starts_with("distance") ? 1 : 3;
+    if (model.field_ && r.center_mm.size() != dims)
+      fail_model(source, "member \"credible_range.center_mm\": " + std::to_string(r.center_mm.size()) +
+                             " values, but a \"" + std::string(kind) + "\" field predicts " + std::to_string(dims) +
+                             " (a " + (dims == 1 ? "distance error" : "3-D error") + ")");
+    for (double c : r.center_mm)
+      if (!std::isfinite(c)) fail_model(source, "member \"credible_range.center_mm\": not finite");
     model.credible_ = r;
+  } else if (model.field_) {
+    // Without it every prediction, however far beyond the fitted errors, would be "credible"
+    // (errfield fit always writes it).
+    fail_model(source, "member \"credible_range\" is missing: a model with a field must say which errors it was "
+                       "fitted on (errfield fit writes it); refit the model with 'errfield fit'");
   }
+  if (model.field_) check_stored_samples(model, j["field"], source);
   if (j.contains("data_joints_deg")) {
     const auto& q = j["data_joints_deg"];
     if (!q.is_array()) fail_model(source, "member \"data_joints_deg\": expected an array of 6-number arrays");

@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "errfield/error.hpp"
+#include "errfield/robot/input_checks.hpp"
 
 namespace errfield::compensation {
 
@@ -74,9 +75,12 @@ KinematicFit from_distances(const MdhModel& robot, const MeasurementSet& d, cons
   std::vector<DistanceMeasurement> dm;
   if (fixed_bases) {
     // Every fixed point's distances: their coordinates are identified with the robot.
+    // A row at the point itself (the paper's P0 as a grid vertex, distance 0) has no direction:
+    // skipped, as the robot-position bases' own rows are below.
     for (std::size_t k = 0; k < d.distance_mm.size(); ++k)
       for (std::size_t i = 0; i < d.q_deg.size(); ++i)
-        dm.push_back({d.q_deg[i], JointVector::Zero(), d.distance_mm[k][i], static_cast<int>(k)});
+        if ((d.nominal_mm[i] - d.base_nominal_mm[k]).norm() > kAtBasePointMm)
+          dm.push_back({d.q_deg[i], JointVector::Zero(), d.distance_mm[k][i], static_cast<int>(k)});
   } else {
     for (std::size_t i = 0; i < d.q_deg.size(); ++i)
       if ((d.nominal_mm[i] - d.base_nominal_mm[o.base]).norm() > 1.0)

@@ -451,8 +451,12 @@ std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& 
     const std::string kk = j.value("kriging_kind", std::string("ordinary"));
     if (kk != "ordinary" && kk != "universal") bad_field(source, "member \"field.kriging_kind\": '" + kk + "'; expected ordinary or universal");
     o.kind = kk == "universal" ? KrigingKind::Universal : KrigingKind::Ordinary;
-    if (optional("drift_order", &nlohmann::json::is_number_integer, "an integer"))
+    if (optional("drift_order", &nlohmann::json::is_number_integer, "an integer")) {
       o.drift_order = j["drift_order"].get<int>();
+      // Whatever the kind: 9 or -1 in an ordinary model is a file nobody wrote with errfield fit.
+      if (o.drift_order < 0 || o.drift_order > 2)
+        bad_field(source, "member \"field.drift_order\": " + std::to_string(o.drift_order) + "; expected 0, 1 or 2");
+    }
     if (!j.contains("samples") || !j.contains("values")) bad_field(source, "member \"field\": needs \"samples\" and \"values\"");
     if (!j["samples"].is_object())
       bad_field(source, "member \"field.samples\": expected an object {position_mm, joints_deg}, got " + j["samples"].dump());
@@ -480,6 +484,10 @@ std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& 
     for (std::size_t i = 0; i < vals.size(); ++i) v.push_back(read_vec<3>(vals[i], source, "values[" + std::to_string(i) + "]"));
     return make_vector_kriging_field(s, std::move(v), o);
   } catch (const ArgumentError& e) {
+    bad_field(source, std::string("member \"field\": ") + e.what());
+  } catch (const InputError& e) {
+    // e.g. fewer than 8 samples: the message names the field, not the file.
+    if (std::string(e.what()).starts_with(source + ":")) throw;
     bad_field(source, std::string("member \"field\": ") + e.what());
   }
 }

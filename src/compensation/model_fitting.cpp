@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "errfield/cross_validation.hpp"
 #include "errfield/error.hpp"
@@ -254,11 +255,34 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       need_base();
       const std::vector<double> dl = d.distance_errors(o.base);
       std::vector<std::size_t> order;
-      const RegularGrid3 grid = detect_grid(d, order);
+      // The paper's layout: the base point P0 is grid vertex 0, measured once as the base row. Its
+      // distance to itself is exactly 0, its distance error 0: it completes the grid (when the
+      // targets alone do not form one and the base row is a robot position).
+      std::vector<double> node_values = dl;
+      std::optional<RegularGrid3> found;
+      bool base_as_vertex = false;
+      try {
+        found = detect_grid(d, order);
+      } catch (const InputError&) {
+        if (o.base >= d.base_q_deg.size()) throw;
+        MeasurementSet with_base = d;
+        with_base.nominal_mm.push_back(d.base_nominal_mm[o.base]);
+        try {
+          found = detect_grid(with_base, order);
+        } catch (const InputError&) {
+        }
+        if (!found) throw;  // the targets' own grid error
+        node_values.push_back(0.0);
+        base_as_vertex = true;
+      }
+      const RegularGrid3 grid = *found;
       std::vector<double> node(order.size());
-      for (std::size_t n = 0; n < order.size(); ++n) node[n] = dl[order[n]];
+      for (std::size_t n = 0; n < order.size(); ++n) node[n] = node_values[order[n]];
       FitResult out{CompensationModel(method, robot, make_distance_idw_field(grid, node, d.base_nominal_mm[o.base], idw)),
                     std::nullopt, idw_cv(d.nominal_mm, dl, o.idw_power), {}, {}};
+      if (base_as_vertex)
+        out.notes.push_back("base point b" + std::to_string(o.base) +
+                            " is a grid vertex (the paper's layout): its distance error there is 0");
       out.notes.push_back("base point b" + std::to_string(o.base) + " at (" + std::to_string(d.base_nominal_mm[o.base].x()) +
                           ", " + std::to_string(d.base_nominal_mm[o.base].y()) + ", " +
                           std::to_string(d.base_nominal_mm[o.base].z()) + ") mm");

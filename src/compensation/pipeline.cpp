@@ -55,10 +55,32 @@ FitOptions fit_options_from_text(const FitOptionText& a) {
   return o;
 }
 
+void check_table_fits_robot(const CsvTable& table, const robot::MdhModel& robot, const robot::RobotOrigin& origin,
+                            double max_registration_rms_mm) {
+  const std::vector<std::string> q_cols{"q1", "q2", "q3", "q4", "q5", "q6"};
+  for (const auto& c : q_cols)
+    if (!table.has_column(c)) return;
+  robot::check_nominal_positions(table, robot, origin.given);
+  if (!table.has_column("mx") || !table.has_column("my") || !table.has_column("mz")) return;
+  const std::size_t mcol[3] = {table.column_index("mx"), table.column_index("my"), table.column_index("mz")};
+  std::vector<robot::PositionMeasurement> data;
+  for (std::size_t i = 0; i < table.row_count(); ++i) {
+    const auto& row = table.row(i);
+    if (row[mcol[0]].empty() || row[mcol[1]].empty() || row[mcol[2]].empty()) continue;
+    robot::PositionMeasurement m;
+    for (int k = 0; k < robot::kJointCount; ++k)
+      m.q_deg[k] = table.numeric_cell(i, table.column_index(q_cols[static_cast<std::size_t>(k)]));
+    for (int k = 0; k < 3; ++k) m.measured_mm[k] = table.numeric_cell(i, mcol[k]);
+    data.push_back(m);
+  }
+  (void)robot::check_tracker_registration(robot, data, table.source(), origin, max_registration_rms_mm);
+}
+
 TableFit fit_table(const robot::MdhModel& robot, const CsvTable& table, const FitTableOptions& options) {
   // Misuse is an error with a reason (robot/input_checks.hpp), before any fitting.
-  robot::check_distance_columns(table);
-  robot::check_nominal_positions(table, robot, options.robot_given);
+  robot::check_distance_columns(table, &robot, options.fixed_bases);
+  const robot::RobotOrigin origin{options.robot_given, ""};
+  robot::check_nominal_positions(table, robot, origin.given);
   const MeasurementSet data = MeasurementSet::from_table(table, robot, options.fixed_bases);
   if (options.on_measurements_read) options.on_measurements_read();
   FitOptions o = options.fit;
@@ -70,6 +92,17 @@ TableFit fit_table(const robot::MdhModel& robot, const CsvTable& table, const Fi
     o.choose_method = false;
     o.method = c.method;
     chosen = "method auto: " + std::string(method_name(c.method)) + " (" + c.reason + ")";
+  }
+  // The tracker readings must be this robot's positions (the check of calibrate, validate, predict
+  // and compensate), where the method uses them: a distance method ignores mx,my,mz.
+  const bool uses_readings =
+      o.method == CompensationMethod::position_idw || o.method == CompensationMethod::vector_kriging ||
+      o.method == CompensationMethod::kinematic_kriging ||
+      (o.method == CompensationMethod::kinematic && o.calibration_data != CalibrationData::distance);
+  if (uses_readings && !data.measured_mm.empty()) {
+    std::vector<robot::PositionMeasurement> readings;
+    for (std::size_t i = 0; i < data.q_deg.size(); ++i) readings.push_back({data.q_deg[i], data.measured_mm[i]});
+    (void)robot::check_tracker_registration(robot, readings, table.source(), origin, options.max_registration_rms_mm);
   }
   const bool from_distances = o.method == CompensationMethod::vector_kriging && data.distance_mm.size() >= 3;
   if (from_distances)
@@ -163,6 +196,11 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
       ++out.refused;
       continue;
     }
+    if (robot::joint_outside_limits(qn[i], nominal)) {
+      status[i] = std::string(status_name(PredictionStatus::outside_limits));  // a target the robot cannot take is not compensated
+      ++out.refused;
+      continue;
+    }
     const CompensatedTarget c = model.compensate_joints(nominal, qn[i], tolerance_mm);
     const Eigen::Vector3d p = forward_position(nominal, qn[i]);
     for (int k = 0; k < 6; ++k) cols[static_cast<std::size_t>(k)][i] = qn[i][k];
@@ -184,8 +222,9 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
     status[i] = !c.prediction.inside_region ? "outside-region"
                 : !c.prediction.credible ? "not-credible"
                 : c.ik_status != IkStatus::converged ? std::string("ik-") + to_string(c.ik_status)
-                                                     : "ok";
-    if (!c.ok()) {
+                : robot::joint_outside_limits(c.q_command_deg, model.command_model()) ? std::string(status_name(PredictionStatus::outside_limits))
+                                                                                       : "ok";
+    if (status[i] != "ok") {
       ++out.refused;
       continue;  // compensated joints stay empty: nothing is sent for a refused target
     }

@@ -8,6 +8,7 @@
 #include "errfield/error.hpp"
 #include "errfield/json_file.hpp"
 #include "errfield/robot/builtin_robots.hpp"
+#include "errfield/robot/input_checks.hpp"
 #include "errfield/robot/kinematics.hpp"
 
 namespace errfield::compensation {
@@ -19,12 +20,17 @@ std::string_view status_name(PredictionStatus s) {
     case PredictionStatus::ok: return "ok";
     case PredictionStatus::outside_region: return "outside-region";
     case PredictionStatus::not_credible: return "not-credible";
+    case PredictionStatus::outside_limits: return "outside-limits";
   }
   return "unknown";
 }
 
 PointPrediction predict_position(const CompensationModel& model, const JointVector& q_deg) {
   PointPrediction out;
+  if (robot::joint_outside_limits(q_deg, model.nominal_model())) {
+    out.status = PredictionStatus::outside_limits;
+    return out;
+  }
   out.error = model.predict_error(q_deg);
   if (!out.error.inside_region) {
     out.status = PredictionStatus::outside_region;

@@ -44,9 +44,14 @@ double nll(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const Eigen::Matr
   const Eigen::Index n = x.rows(), p = f.cols();
   const Eigen::MatrixXd xt = x.transpose();  // points as columns
   Eigen::MatrixXd k(n, n);
+  // The nugget is noise of each reading: it belongs on the diagonal only. Two readings at one
+  // location (a re-measured pose) share the continuous part, C(0) - nugget; with the whole C(0)
+  // off the diagonal too their rows were equal and every model "singular" despite its nugget.
+  const double shared_zero_lag = kernel.sill() - kernel.nugget();
   for (Eigen::Index j = 0; j < n; ++j)
     kernels::covariance_block(kernel, xt.col(j).data(), static_cast<std::size_t>(n - j), xt.col(j).data(), 1,
-                              static_cast<int>(xt.rows()), kernel.sill(), &k(j, j), static_cast<std::size_t>(n));
+                              static_cast<int>(xt.rows()), shared_zero_lag, &k(j, j), static_cast<std::size_t>(n));
+  k.diagonal().setConstant(kernel.sill());
   Eigen::LLT<Eigen::MatrixXd> llt(k);
   if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
   const auto& l = llt.matrixLLT();

@@ -29,9 +29,13 @@ double condition_number(const Eigen::MatrixXd& x, const VariogramModel& model) {
   }
   const kernels::CovarianceKernel kernel(model);
   Eigen::MatrixXd k(n, n);
+  // Nugget on the diagonal only, as in the likelihood (likelihood.cpp): repeated locations share
+  // C(0) - nugget.
   for (Eigen::Index j = 0; j < n; ++j)
     kernels::covariance_block(kernel, pts.col(j).data(), static_cast<std::size_t>(n - j), pts.col(j).data(), 1,
-                              static_cast<int>(d), kernel.sill(), &k(j, j), static_cast<std::size_t>(n));
+                              static_cast<int>(d), kernel.sill() - kernel.nugget(), &k(j, j),
+                              static_cast<std::size_t>(n));
+  k.diagonal().setConstant(kernel.sill());
   Eigen::LLT<Eigen::MatrixXd> llt(k);
   if (llt.info() != Eigen::Success) return std::numeric_limits<double>::infinity();
   const double rc = llt.rcond();
@@ -47,6 +51,7 @@ ModelChoice choose_among_candidates(const Eigen::MatrixXd& x, const Eigen::Matri
   const bool use_bic = o.criterion == ModelChoiceOptions::Criterion::Bic;
   LikelihoodFitOptions fit = o.fit;
   fit.fit_nugget = true;
+  std::string last_notes;  // why the last attempt's candidates were refused, for the message
   for (int attempt = 0; attempt < 4; ++attempt) {
     ModelChoice choice;
     int best = -1;
@@ -98,12 +103,16 @@ ModelChoice choose_among_candidates(const Eigen::MatrixXd& x, const Eigen::Matri
       if (attempt > 0) choice.reason += ", nugget floor raised to " + format_number(fit.min_nugget_ratio) + " x sill";
       return choice;
     }
+    last_notes.clear();
+    for (std::size_t i = 0; i < choice.candidates.size() && i < 3; ++i)
+      last_notes += (i ? "; " : "") + choice.candidates[i].note;
     // Every candidate ill-conditioned (or unfittable): raise the nugget floor. With nugget/sill
     // >= N / limit the 2-norm condition number of the correlation matrix is below ~limit.
     fit.min_nugget_ratio = std::max(fit.min_nugget_ratio * 100.0, static_cast<double>(x.rows()) / o.max_condition_number);
   }
   throw InputError("model choice: no candidate model gave a kriging system with condition number <= " +
-                   format_number(o.max_condition_number));
+                   format_number(o.max_condition_number) + " (the first candidates of the last attempt: " + last_notes +
+                   ")");
 }
 
 }  // namespace

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <numbers>
 
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
@@ -56,21 +58,26 @@ std::optional<std::string> distances_in_metres(const std::vector<double>& distan
          " mm: are these metres? errfield expects millimetres (multiply by 1000)";
 }
 
+std::optional<int> joint_outside_limits(const JointVector& q_deg, const MdhModel& model, double slack_deg) {
+  for (int j = 0; j < kJointCount; ++j) {
+    const MdhLink& l = model.link(j);
+    if (!(q_deg[j] >= l.q_min_deg - slack_deg && q_deg[j] <= l.q_max_deg + slack_deg)) return j;
+  }
+  return std::nullopt;
+}
+
 std::optional<std::string> joints_outside_limits(const std::vector<JointVector>& q_deg, const MdhModel& model,
                                                  const RowLabels& labels, double slack_deg) {
   const JointVector lo = model.q_min_deg(), hi = model.q_max_deg();
   std::size_t count = 0, first = 0;
   int first_joint = 0;
   for (std::size_t i = 0; i < q_deg.size(); ++i) {
-    for (int j = 0; j < kJointCount; ++j) {
-      if (q_deg[i][j] < lo[j] - slack_deg || q_deg[i][j] > hi[j] + slack_deg) {
-        if (count == 0) {
-          first = i;
-          first_joint = j;
-        }
-        ++count;
-        break;
+    if (const auto j = joint_outside_limits(q_deg[i], model, slack_deg)) {
+      if (count == 0) {
+        first = i;
+        first_joint = *j;
       }
+      ++count;
     }
   }
   if (count == 0) return std::nullopt;
@@ -192,21 +199,101 @@ void check_registration_residual(double rms_mm, std::size_t points, const std::s
                    source);
 }
 
-void check_distance_columns(const CsvTable& t) {
+namespace {
+
+/// The residual RMS (mm) of register_tracker on at most 60 evenly spread rows: enough to tell a
+/// fitting hypothesis (below the limit) from a wrong one (hundreds of mm), fast on any data size.
+double registration_rms(const MdhModel& model, const std::vector<PositionMeasurement>& data) {
+  std::vector<PositionMeasurement> few;
+  const std::size_t step = std::max<std::size_t>(1, data.size() / 60);
+  for (std::size_t i = 0; i < data.size(); i += step) few.push_back(data[i]);
+  try {
+    return register_tracker(model, few).after.rms_mm;
+  } catch (const Error&) {
+    return std::numeric_limits<double>::infinity();
+  }
+}
+
+std::string likely_registration_cause(const MdhModel& model, const std::vector<PositionMeasurement>& data,
+                                      const RobotOrigin& origin, double limit_mm) {
+  const std::string robot = "'" + model.name() + "'" + (origin.given ? " (" + (origin.what.empty() ? std::string("--robot") : origin.what) + ")" : "");
+  // Radians read as degrees: every joint within +-2 pi.
+  bool small = true;
+  for (const auto& d : data) small = small && d.q_deg.cwiseAbs().maxCoeff() <= 2.0 * std::numbers::pi + 1e-9;
+  if (small) {
+    std::vector<PositionMeasurement> deg = data;
+    for (auto& d : deg) d.q_deg *= 180.0 / std::numbers::pi;
+    const double rms = registration_rms(model, deg);
+    if (rms <= limit_mm)
+      return "the joints q1..q6 are in radians (times 180/pi they register to " + mm(rms) +
+             " mm): errfield expects degrees";
+  }
+  std::vector<PositionMeasurement> scaled = data;
+  for (auto& d : scaled) d.measured_mm *= 1000.0;
+  if (const double rms = registration_rms(model, scaled); rms <= limit_mm)
+    return "the tracker readings mx,my,mz are in metres (times 1000 they register to " + mm(rms) +
+           " mm): errfield expects millimetres";
+  for (const BuiltinRobot& b : builtin_robots()) {
+    if (b.model.name() == model.name()) continue;
+    if (const double rms = registration_rms(b.model, data); rms <= limit_mm)
+      return "the data are of another robot: they register to the built-in " + b.name + " to " + mm(rms) +
+             " mm, not to robot " + robot + (origin.given ? std::string() : "; no --robot was given, so the built-in "
+             "ER20-C10 was used") + ": give the robot the data come from (--robot " + b.name + " or its JSON)";
+  }
+  if (!origin.given)
+    return "no --robot was given, so the built-in ER20-C10 (no tool) was used: give the robot the data come from "
+           "(--robot R.json, or a built-in name: " + builtin_robot_names() + ")";
+  return "the data are not of robot " + robot + ": a wrong robot, joints in another convention (zero offsets, "
+         "signs, order), or readings not in the rows of their joints";
+}
+
+}  // namespace
+
+std::optional<CalibrationResult> check_tracker_registration(const MdhModel& model,
+                                                            const std::vector<PositionMeasurement>& data,
+                                                            const std::string& source, const RobotOrigin& origin,
+                                                            double limit_mm, const CalibrationOptions& options) {
+  if (data.size() < 6) return std::nullopt;
+  CalibrationResult reg = register_tracker(model, data, options);
+  if (reg.after.rms_mm <= limit_mm) return reg;
+  throw InputError(source + ": registration tracker -> robot '" + model.name() + "' (with a reflector offset) on " +
+                       std::to_string(data.size()) + " points leaves RMS " + mm(reg.after.rms_mm) +
+                       " mm, beyond the limit " + format_number(limit_mm) +
+                       " mm (--max-registration-rms): the readings are not this robot's positions at these joints. "
+                       "Likely cause: " + likely_registration_cause(model, data, origin, limit_mm),
+                   source);
+}
+
+void check_distance_columns(const CsvTable& t, const MdhModel* robot, const std::vector<Eigen::Vector3d>& fixed_bases) {
   const bool has_kind = t.has_column("kind");
   const std::size_t kind_col = has_kind ? t.column_index("kind") : 0;
   std::vector<std::size_t> base_rows;
   for (std::size_t i = 0; has_kind && i < t.row_count(); ++i)
     if (t.row(i)[kind_col] == "base") base_rows.push_back(i);
+  // Nominal positions of the rows and the base points, to recognise a row that is a base point.
+  std::vector<Eigen::Vector3d> nominal, bases;
+  const bool has_q = t.has_column("q1") && t.has_column("q2") && t.has_column("q3") && t.has_column("q4") &&
+                     t.has_column("q5") && t.has_column("q6");
+  if (robot && (has_xyz(t, "") || has_q)) {
+    if (has_xyz(t, "")) {
+      nominal = xyz_rows(t, "");
+    } else {
+      const Eigen::MatrixXd q = t.numeric_columns({"q1", "q2", "q3", "q4", "q5", "q6"});
+      for (Eigen::Index i = 0; i < q.rows(); ++i) nominal.push_back(forward_position(*robot, q.row(i).transpose()));
+    }
+    for (std::size_t r : base_rows) bases.push_back(nominal[r]);
+    if (bases.empty()) bases = fixed_bases;
+  }
   for (std::size_t k = 0; t.has_column("dist_b" + std::to_string(k)); ++k) {
     const std::string col = "dist_b" + std::to_string(k);
     const std::vector<double> d = t.numeric_column(col);
     for (std::size_t i = 0; i < d.size(); ++i) {
       const bool own_base = k < base_rows.size() && base_rows[k] == i;
-      if (d[i] > 0 || (own_base && d[i] >= 0)) continue;
+      const bool at_base = k < bases.size() && i < nominal.size() && (nominal[i] - bases[k]).norm() <= kAtBasePointMm;
+      if (d[i] > 0 || (own_base && d[i] >= 0) || (at_base && d[i] == 0.0)) continue;
       throw InputError(line_of(t, i) + ": column '" + col + "': " + format_number(d[i]) + " mm; expected a distance > 0 " +
                            (own_base ? "" : "from base point b" + std::to_string(k) + " ") +
-                           "(a tracker distance is never negative, and 0 only on the base row itself)",
+                           "(a tracker distance is never negative, and 0 only at the base point itself)",
                        t.source(), t.line_of_row(i), col);
     }
   }

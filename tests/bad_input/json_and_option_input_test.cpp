@@ -5,6 +5,7 @@
 // did not name file:line. Every case: the exit status `errfield --help` documents and the words
 // that point at what to fix. Robot data are SIMULATED (`errfield simulate`).
 
+#include <algorithm>
 #include <unistd.h>
 
 #include <filesystem>
@@ -162,13 +163,26 @@ TEST_F(RobotFiles, CompensateStrictWritesNothingNamesTheRowAndExitsOne) {
   const std::size_t header_end = plan.find('\n') + 1;
   std::string far = plan.substr(header_end, plan.find('\n', header_end) - header_end);
   // q1..q6 are the last six cells: turn the base joint by 90 degrees, out of the cube.
-  std::vector<std::string> cells;
-  for (std::size_t start = 0, comma; start <= far.size(); start = comma + 1) {
-    comma = far.find(',', start);
-    if (comma == std::string::npos) comma = far.size();
-    cells.push_back(far.substr(start, comma - start));
-  }
+  auto split = [](const std::string& line) {
+    std::vector<std::string> out;
+    for (std::size_t start = 0, comma; start <= line.size(); start = comma + 1) {
+      comma = line.find(',', start);
+      if (comma == std::string::npos) comma = line.size();
+      out.push_back(line.substr(start, comma - start));
+    }
+    return out;
+  };
+  std::vector<std::string> cells = split(far);
   cells[cells.size() - 6] = std::to_string(std::stod(cells[cells.size() - 6]) + 90.0);
+  // Its nominal x,y turn with it (90 deg about the base's z axis): the row stays the FK of its
+  // joints, which compensate checks (issue 18).
+  const std::vector<std::string> header = split(plan.substr(0, header_end - 1));
+  const auto col = [&](const std::string& name) {
+    return static_cast<std::size_t>(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  const std::string x = cells[col("x")], y = cells[col("y")];
+  cells[col("x")] = std::to_string(-std::stod(y));
+  cells[col("y")] = x;
   std::string row;
   for (const auto& c : cells) row += (row.empty() ? "" : ",") + c;
   write("strict.csv", plan.substr(0, header_end) + row + "\n" + plan.substr(header_end));

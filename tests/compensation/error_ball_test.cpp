@@ -10,7 +10,7 @@
 #include <random>
 
 namespace errfield::compensation {
-namespace {
+namespace error_ball_test {
 
 /// Composite Simpson rule of f on [a, b] with n (even) intervals.
 template <class F>

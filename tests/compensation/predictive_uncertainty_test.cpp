@@ -18,7 +18,7 @@
 #include "errfield/variogram_model.hpp"
 
 namespace errfield::compensation {
-namespace {
+namespace predictive_uncertainty_test {
 
 struct Coverage {
   double points = 0, within = 0, within_field_only = 0, nees = 0;

@@ -71,6 +71,15 @@ struct FitTableOptions {
   std::function<void()> on_measurements_read;
 };
 
+/// Data must fit the robot: the checks every command that reads measurements with a robot or model
+/// runs (fit, calibrate, validate, predict, compensate), one implementation - nominal x,y,z against
+/// the FK of q1..q6 (robot::check_nominal_positions, 5 mm) and the registration of the tracker
+/// readings mx,my,mz with a reflector offset (robot::check_tracker_registration, limit
+/// `max_registration_rms_mm`). Reads only the columns `table` has (rows with an empty mx cell are
+/// skipped); nothing happens without q1..q6. Throws InputError naming the file and the likely cause.
+void check_table_fits_robot(const CsvTable& table, const robot::MdhModel& robot, const robot::RobotOrigin& origin,
+                            double max_registration_rms_mm = robot::kRegistrationRmsLimitMm);
+
 /// A fit and the number of measured points (targets, not base rows) it was made from.
 struct TableFit {
   FitResult result;

@@ -5,8 +5,8 @@
 /// writes it per row; `errfield validate` compares it with held-out measurements.
 ///
 /// A prediction the model cannot vouch for is refused with a status, never given as a number:
-/// outside the modelled region, or not credible (beyond the range of errors the model was fitted
-/// on, CredibleRange in compensation.hpp).
+/// joints outside the robot's limits, outside the modelled region, or not credible (beyond the range
+/// of errors the model was fitted on, CredibleRange in compensation.hpp).
 /// Frames: robot frame (the model's world frame), mm; the tracker frame through the model's stored
 /// registration (registration.hpp).
 
@@ -20,8 +20,11 @@
 
 namespace errfield::compensation {
 
-enum class PredictionStatus { ok, outside_region, not_credible };
-/// "ok", "outside-region", "not-credible" (the status column of predict, validate, compensate).
+/// outside_limits: a joint beyond the nominal robot's limits (robot/input_checks.hpp) - radians, a
+/// wrong joint order or a typo; the robot cannot be there, whatever the field says.
+enum class PredictionStatus { ok, outside_region, not_credible, outside_limits };
+/// "ok", "outside-region", "not-credible", "outside-limits" (the status column of predict,
+/// validate, compensate).
 std::string_view status_name(PredictionStatus s);
 
 struct PointPrediction {

@@ -18,6 +18,7 @@
 #include <Eigen/Core>
 
 #include "errfield/csv_table.hpp"
+#include "errfield/robot/calibration.hpp"
 #include "errfield/robot/mdh_model.hpp"
 #include "errfield/row_labels.hpp"
 
@@ -61,6 +62,11 @@ std::optional<std::string> implausible_distance(double measured_mm, double nomin
 /// reading), and any fit to them is made up.
 std::optional<std::string> tracker_frozen(const Eigen::MatrixXd& measured_mm, const Eigen::MatrixXd& nominal_mm);
 
+/// The first joint (0-based) of `q_deg` outside the model's joint limits widened by `slack_deg`
+/// (a NaN is outside), or nothing. The one test behind joints_outside_limits and the status
+/// outside-limits of predict, compensate and validate.
+std::optional<int> joint_outside_limits(const JointVector& q_deg, const MdhModel& model, double slack_deg = 1e-9);
+
 /// A warning naming the first row (via `labels`), joint and value outside the model's joint
 /// limits, and how many rows are; nothing when all are within. `slack_deg` widens the limits.
 std::optional<std::string> joints_outside_limits(const std::vector<JointVector>& q_deg, const MdhModel& model,
@@ -95,10 +101,37 @@ void check_registration_residual(double rms_mm, std::size_t points, const std::s
                                  const std::string& what, double limit_mm = kRegistrationRmsLimitMm,
                                  bool fits_reflector_offset = false);
 
+/// Where the robot a command checks the data against came from, for the message's likely cause.
+struct RobotOrigin {
+  bool given = false;  ///< false: no --robot, the built-in ER20-C10 was used
+  std::string what;    ///< e.g. "--robot kr16", "the model's nominal robot (m.json)"; "" = "--robot"
+};
+
+/// The one data-fit-the-robot check of fit, calibrate, validate, predict and compensate (docs/robot.md
+/// "Checks on the input"): registers the tracker readings `data` to `model` with a reflector offset
+/// (register_tracker: 6 frame + 3 offset parameters, so a tool or reflector the robot JSON lacks does
+/// not count) and throws InputError when the RMS residual exceeds `limit_mm`, naming `source`, the
+/// residual, the limit and the likely cause, tried in this order on a subsample: joints in radians,
+/// readings in metres, data of another built-in robot, no --robot given (the built-in ER20-C10 was
+/// used), else a wrong robot or readings not in the rows of their joints. Returns the registration
+/// (options as given, e.g. robust weights), or nothing for fewer than 6 readings (too few to tell).
+std::optional<CalibrationResult> check_tracker_registration(const MdhModel& model,
+                                                            const std::vector<PositionMeasurement>& data,
+                                                            const std::string& source, const RobotOrigin& origin,
+                                                            double limit_mm = kRegistrationRmsLimitMm,
+                                                            const CalibrationOptions& options = {});
+
+/// How close (mm) a row's nominal position must be to a base point to be that point (the paper's
+/// layout: P0 is grid vertex 0, its distance to itself exactly 0).
+inline constexpr double kAtBasePointMm = 1.0;
+
 /// Throws InputError naming file:line and column when a distance column dist_b0, dist_b1, ... holds
-/// a value <= 0, except 0 (or more) on the K-th base row (kind=base) of dist_bK: its distance to
-/// itself. Non-finite cells are refused by CsvTable already.
-void check_distance_columns(const CsvTable& table);
+/// a value <= 0, except exactly 0 where the row is base point K itself: the K-th base row
+/// (kind=base) of dist_bK, or - when `robot` is given - a row whose nominal position (x,y,z, else
+/// the FK of q1..q6) lies within kAtBasePointMm of base point K (the K-th base row's, else
+/// `fixed_bases`[K]). Non-finite cells are refused by CsvTable already.
+void check_distance_columns(const CsvTable& table, const MdhModel* robot = nullptr,
+                            const std::vector<Eigen::Vector3d>& fixed_bases = {});
 
 /// Throws InputError when 3-D errors would be recovered from distances to robot-position base
 /// points (`robot_position_bases`: base rows with joints) and no tracker positions are available:

@@ -1,0 +1,361 @@
+// No silent wrong command (issue 18): every way a user can hand errfield the wrong robot, units or
+// model is caught before a joint is written. Each test failed on the code before the issue (exit 0,
+// rows "ok", or a fit that failed on routine data). All robot data here are SIMULATED, and not the
+// default set-up: a KR16 (and a UR5e for "another robot"), scattered joints, a tool offset the
+// robot JSON lacks, joints rounded as a controller records them.
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <functional>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "errfield/csv_table.hpp"
+#include "support/cli_harness.hpp"
+
+namespace errfield {
+namespace wrong_command_cli_test {
+
+// KR16 joints (deg) inside its limits (A1 +-185, A2 [-155, 35], A3 [-130, 154], A5 +-130).
+constexpr const char* kJointBox = "-30,30,-80,-40,10,50,-40,40,40,80,-40,40";
+// The same arm further round (q1 60..120 deg): outside the region of a field fitted in kJointBox.
+constexpr const char* kOtherBox = "60,120,-80,-40,10,50,-40,40,40,80,-40,40";
+
+class WrongCommand : public testing::CliTest {
+ protected:
+  static bool keep_all(const std::string&) { return true; }
+  /// `errfield simulate` of the KR16 (SIMULATED), scattered in a joint box, with a reflector 20 mm
+  /// off the robot JSON's tool and joints to 3 decimals; writes `out` (and r.json).
+  void simulate_kr16(const std::string& out, int n, const std::string& box = kJointBox, const std::string& extra = "") {
+    const auto r = run("simulate --robot kr16 --seed 7 --sample scattered:" + std::to_string(n) + " --joint-box " + box +
+                       " --tool-offset random:20 --joint-decimals 3 --measure positions --robot-out " + path("r.json") +
+                       " --out " + path(out) + " " + extra);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  /// Rewrites CSV `in` to `out`: `edit(table, row, cells)` on every data row; columns for which
+  /// `keep` is false are dropped.
+  void rewrite(const std::string& in, const std::string& out,
+               const std::function<void(const CsvTable&, std::size_t, std::vector<std::string>&)>& edit,
+               const std::function<bool(const std::string&)>& keep = keep_all,
+               const std::function<bool(std::size_t)>& keep_row = [](std::size_t) { return true; }) {
+    const CsvTable t = CsvTable::read(path(in));
+    std::string text;
+    auto line = [&](const std::vector<std::string>& cells) {
+      std::string l;
+      for (std::size_t c = 0; c < cells.size(); ++c)
+        if (keep(t.header()[c])) l += (l.empty() ? "" : ",") + cells[c];
+      text += l + "\n";
+    };
+    line(t.header());
+    for (std::size_t i = 0; i < t.row_count(); ++i) {
+      if (!keep_row(i)) continue;
+      std::vector<std::string> row = t.row(i);
+      edit(t, i, row);
+      line(row);
+    }
+    write(out, text);
+  }
+  static bool not_xyz(const std::string& c) { return c != "x" && c != "y" && c != "z"; }
+  void expect_refused(const testing::CliResult& r, int code, const std::vector<std::string>& words) {
+    EXPECT_EQ(r.exit_code, code) << r.out << r.err;
+    for (const auto& w : words) EXPECT_NE(r.err.find(w), std::string::npos) << "missing '" << w << "' in:\n" << r.err;
+  }
+  std::vector<std::string> column(const std::string& file, const std::string& name) {
+    const CsvTable t = CsvTable::read(path(file));
+    std::vector<std::string> v;
+    for (std::size_t i = 0; i < t.row_count(); ++i) v.push_back(t.row(i)[t.column_index(name)]);
+    return v;
+  }
+  nlohmann::json read_json(const std::string& file) { return nlohmann::json::parse(read(file)); }
+  void write_json(const std::string& file, const nlohmann::json& j) { write(file, j.dump(1)); }
+};
+
+// ---- item 6: nothing predicted is a failure -------------------------------------------------
+
+TEST_F(WrongCommand, PredictAndValidateWithEveryRowRefusedFail) {
+  simulate_kr16("train.csv", 40);
+  ASSERT_EQ(run("fit --robot " + path("r.json") + " --data " + path("train.csv") +
+                " --method kinematic+kriging --model \"gau(sill=0.05,range=60)+nug(0.001)\" --out " + path("m.json"))
+                .exit_code,
+            0);
+  // Held-out poses of the same arm further round: all outside the field's region.
+  simulate_kr16("far.csv", 12, kOtherBox);
+  const auto p = run("predict --model " + path("m.json") + " --joints " + path("far.csv") + " --out " + path("p.csv"));
+  // predict reads every row, the base row too (13); validate scores the 12 targets.
+  expect_refused(p, 1, {"none of the 13 rows", "outside-region 13", "nothing written"});
+  EXPECT_FALSE(std::filesystem::exists(path("p.csv")));
+  const auto v = run("validate --model " + path("m.json") + " --data " + path("far.csv") + " --out " + path("v.csv"));
+  expect_refused(v, 1, {"none of the 12 points", "outside-region 12", "nothing written"});
+  EXPECT_FALSE(std::filesystem::exists(path("v.csv")));
+  // One row inside is enough for a result.
+  simulate_kr16("near.csv", 5);
+  EXPECT_EQ(run("predict --model " + path("m.json") + " --joints " + path("near.csv") + " --out " + path("p.csv")).exit_code, 0);
+}
+
+// ---- item 4: joints beyond the limits are a status ------------------------------------------
+
+TEST_F(WrongCommand, JointsBeyondTheLimitsAreNeverOk) {
+  simulate_kr16("train.csv", 30);
+  // A calibrated robot (no field): before, predict and compensate answered anywhere.
+  ASSERT_EQ(run("fit --robot " + path("r.json") + " --data " + path("train.csv") + " --method kinematic --out " +
+                path("k.json")).exit_code,
+            0);
+  write("q.csv", "q1,q2,q3,q4,q5,q6\n10,-60,30,0,60,0\n400,-60,30,0,60,0\n1e300,-60,30,0,60,0\n10,-60,30,0,60,-351\n");
+  const auto p = run("predict --model " + path("k.json") + " --joints " + path("q.csv") + " --out " + path("p.csv"));
+  EXPECT_EQ(p.exit_code, 0) << p.err;
+  EXPECT_EQ(column("p.csv", "status"),
+            (std::vector<std::string>{"ok", "outside-limits", "outside-limits", "outside-limits"}));
+  // The warning names the row, the joint, its value and the limits (KR16 A1: +-185 deg).
+  for (const char* w : {"q.csv:3", "q1 = 400", "[-185, 185]", "3 rows"})
+    EXPECT_NE(p.err.find(w), std::string::npos) << w << " in " << p.err;
+
+  const auto c = run("compensate --model " + path("k.json") + " --targets " + path("q.csv") + " --out " + path("c.csv"));
+  EXPECT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_EQ(column("c.csv", "status"),
+            (std::vector<std::string>{"ok", "outside-limits", "outside-limits", "outside-limits"}));
+  EXPECT_EQ(column("c.csv", "cq1")[1], "");  // no joints sent
+
+  // validate: q1 + 360 deg is the same pose for the FK (so the data still fit the robot) but a
+  // joint value the KR16 cannot take. Row 0 is the base row; validate lists the 12 targets.
+  simulate_kr16("hold.csv", 12);
+  rewrite("hold.csv", "wrapped.csv", [](const CsvTable& t, std::size_t i, std::vector<std::string>& row) {
+    if (i == 4) row[t.column_index("q1")] = format_number(t.numeric_cell(i, t.column_index("q1")) + 360.0);
+  });
+  ASSERT_EQ(CsvTable::read(path("wrapped.csv")).row(0)[1], "base");
+  const auto v = run("validate --model " + path("k.json") + " --data " + path("wrapped.csv") + " --out " + path("v.csv"));
+  EXPECT_EQ(v.exit_code, 0) << v.err;
+  const auto status = column("v.csv", "status");
+  ASSERT_EQ(status.size(), 12u);
+  EXPECT_EQ(status[3], "outside-limits");
+  EXPECT_EQ(std::count(status.begin(), status.end(), "ok"), 11);
+  EXPECT_NE(v.err.find("wrapped.csv:" + std::to_string(CsvTable::read(path("wrapped.csv")).line_of_row(4))),
+            std::string::npos)
+      << v.err;
+}
+
+// ---- item 1: the data must fit the robot -----------------------------------------------------
+
+TEST_F(WrongCommand, FitWithoutRobotOnAnotherRobotsData) {
+  // Real tracker files have no nominal x,y,z: only the registration can tell.
+  simulate_kr16("d.csv", 40);
+  rewrite("d.csv", "nox.csv", [](const CsvTable&, std::size_t, std::vector<std::string>&) {}, not_xyz);
+  expect_refused(run("fit --data " + path("nox.csv") + " --out " + path("m.json")), 2,
+                 {"nox.csv", "registration", "beyond the limit 5 mm", "built-in kr16", "no --robot"});
+  EXPECT_FALSE(std::filesystem::exists(path("m.json")));
+  // With the right robot the default fit works; a limit raised on purpose lets the wrong one through.
+  EXPECT_EQ(run("fit --robot kr16 --method kinematic --data " + path("nox.csv") + " --out " + path("m.json")).exit_code, 0);
+  EXPECT_EQ(run("fit --method kinematic --max-registration-rms 100000 --data " + path("nox.csv") + " --out " +
+                path("m2.json")).exit_code,
+            0);
+}
+
+TEST_F(WrongCommand, JointsInRadiansAndReadingsInMetres) {
+  simulate_kr16("d.csv", 40);
+  rewrite(
+      "d.csv", "rad.csv",
+      [](const CsvTable& t, std::size_t i, std::vector<std::string>& row) {
+        for (const char* q : {"q1", "q2", "q3", "q4", "q5", "q6"})
+          row[t.column_index(q)] = format_number(t.numeric_cell(i, t.column_index(q)) * std::numbers::pi / 180.0);
+      },
+      not_xyz);
+  expect_refused(run("fit --robot " + path("r.json") + " --data " + path("rad.csv") + " --out " + path("m.json")), 2,
+                 {"rad.csv", "radians"});
+  rewrite(
+      "d.csv", "metres.csv",
+      [](const CsvTable& t, std::size_t i, std::vector<std::string>& row) {
+        for (const char* c : {"mx", "my", "mz"})
+          row[t.column_index(c)] = format_number(t.numeric_cell(i, t.column_index(c)) / 1000.0);
+      },
+      not_xyz);
+  expect_refused(run("fit --robot " + path("r.json") + " --method kinematic --data " + path("metres.csv") + " --out " +
+                     path("m.json")),
+                 2, {"metres.csv", "metres"});
+}
+
+TEST_F(WrongCommand, ValidateOnAnotherRobotOrRadiansIsRefused) {
+  simulate_kr16("train.csv", 30);
+  ASSERT_EQ(run("fit --robot " + path("r.json") + " --data " + path("train.csv") + " --method kinematic --out " +
+                path("k.json")).exit_code,
+            0);
+  // Held-out data of a UR5e: before, "after" errors of a metre and exit 0.
+  ASSERT_EQ(run("simulate --robot ur5e --sample scattered:20 --orientation-spread 20 --measure positions --out " +
+                path("ur.csv")).exit_code,
+            0);
+  rewrite("ur.csv", "ur_nox.csv", [](const CsvTable&, std::size_t, std::vector<std::string>&) {}, not_xyz);
+  expect_refused(run("validate --model " + path("k.json") + " --data " + path("ur_nox.csv")), 2,
+                 {"ur_nox.csv", "registration", "built-in ur5e"});
+  // The KR16's own held-out data in radians.
+  simulate_kr16("hold.csv", 20);
+  rewrite(
+      "hold.csv", "rad.csv",
+      [](const CsvTable& t, std::size_t i, std::vector<std::string>& row) {
+        for (const char* q : {"q1", "q2", "q3", "q4", "q5", "q6"})
+          row[t.column_index(q)] = format_number(t.numeric_cell(i, t.column_index(q)) * std::numbers::pi / 180.0);
+      },
+      not_xyz);
+  expect_refused(run("validate --model " + path("k.json") + " --data " + path("rad.csv")), 2, {"rad.csv", "radians"});
+  // predict on a joints file that carries readings runs the same check.
+  expect_refused(run("predict --model " + path("k.json") + " --joints " + path("ur_nox.csv") + " --out " + path("p.csv")),
+                 2, {"ur_nox.csv", "built-in ur5e"});
+  // The right data pass.
+  EXPECT_EQ(run("validate --model " + path("k.json") + " --data " + path("hold.csv")).exit_code, 0);
+}
+
+// ---- item 5: a model file is checked as a whole ----------------------------------------------
+
+TEST_F(WrongCommand, EditedModelFilesAreRefusedNamingTheMember) {
+  simulate_kr16("train.csv", 30);
+  ASSERT_EQ(run("fit --robot " + path("r.json") + " --data " + path("train.csv") +
+                " --method kinematic+kriging --model \"gau(sill=0.05,range=60)+nug(0.001)\" --out " + path("kk.json"))
+                .exit_code,
+            0);
+  ASSERT_EQ(run("simulate --robot kr16 --sample grid --step 250 --measure distances --out " + path("grid.csv")).exit_code,
+            0);
+  ASSERT_EQ(run("fit --robot kr16 --data " + path("grid.csv") + " --method distance-idw --out " + path("idw.json")).exit_code,
+            0);
+  simulate_kr16("q.csv", 5);
+  const nlohmann::json good = read_json("kk.json");
+  auto refused = [&](const std::string& name, const nlohmann::json& j, const std::vector<std::string>& words) {
+    write_json(name, j);
+    expect_refused(run("predict --model " + path(name) + " --joints " + path("q.csv") + " --out " + path("p.csv")), 2,
+                   words);
+  };
+  {
+    nlohmann::json j = good;
+    j["field"] = read_json("idw.json")["field"];
+    refused("kind.json", j, {"kind.json", "field.kind", "distance-idw", "kinematic+kriging"});
+  }
+  {
+    // The stored samples are of the KR16, the nominal robot now a UR5e.
+    ASSERT_EQ(run("simulate --robot ur5e --sample random:5 --robot-out " + path("ur.json") + " --out " + path("u.csv"))
+                  .exit_code,
+              0);
+    nlohmann::json j = good;
+    j["nominal_model"] = read_json("ur.json");
+    refused("robot.json", j, {"robot.json", "field.samples", "nominal_model"});
+  }
+  for (int order : {9, -1}) {
+    nlohmann::json j = good;
+    j["field"]["drift_order"] = order;
+    refused("drift.json", j, {"drift.json", "field.drift_order", std::to_string(order)});
+  }
+  {
+    nlohmann::json j = good;
+    j.erase("credible_range");
+    refused("credible.json", j, {"credible.json", "credible_range", "missing"});
+  }
+  {
+    nlohmann::json j = good;
+    j["credible_range"]["center_mm"] = {0.1};
+    refused("dims.json", j, {"dims.json", "credible_range.center_mm"});
+  }
+  {
+    nlohmann::json j = good;
+    for (const char* m : {"position_mm", "joints_deg"}) j["field"]["samples"][m] = nlohmann::json::array();
+    j["field"]["values"] = nlohmann::json::array();
+    refused("count.json", j, {"count.json", "field", "samples"});
+  }
+  // The file as fit wrote it is fine.
+  EXPECT_EQ(run("predict --model " + path("kk.json") + " --joints " + path("q.csv") + " --out " + path("p.csv")).exit_code, 0);
+}
+
+// ---- item 7: re-measured poses ----------------------------------------------------------------
+
+TEST_F(WrongCommand, RemeasuredPosesFitByDefault) {
+  simulate_kr16("d.csv", 40);
+  // Pose 12 measured again: same joints, a reading 0.05 mm away.
+  const CsvTable t = CsvTable::read(path("d.csv"));
+  std::string text = read("d.csv");
+  std::vector<std::string> again = t.row(12);
+  again[t.column_index("point")] += "b";
+  const std::size_t mx = t.column_index("mx");
+  again[mx] = format_number(t.numeric_cell(12, mx) + 0.05);
+  std::string line;
+  for (const auto& c : again) line += (line.empty() ? "" : ",") + c;
+  write("twice.csv", text + line + "\n");
+  const auto r = run("fit --robot " + path("r.json") + " --data " + path("twice.csv") + " --out " + path("m.json"));
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_EQ(r.err.find("singular"), std::string::npos) << r.err;
+
+  // REML and ML directly, on a scalar with one duplicated location.
+  std::string s = "q1,q2,q3,q4,q5,q6,e\n";
+  for (std::size_t i = 0; i < t.row_count(); ++i) {
+    for (const char* q : {"q1", "q2", "q3", "q4", "q5", "q6"}) s += t.row(i)[t.column_index(q)] + ",";
+    s += format_number(std::sin(0.05 * t.numeric_cell(i, t.column_index("q1"))) + 0.01 * static_cast<double>(i % 3)) + "\n";
+  }
+  for (const char* q : {"q1", "q2", "q3", "q4", "q5", "q6"}) s += t.row(3)[t.column_index(q)] + ",";
+  s += "0.5\n";
+  write("dup.csv", s);
+  for (const char* method : {"reml", "ml"}) {
+    const auto f = run(std::string("fit-variogram --method ") + method + " --input " + path("dup.csv") +
+                       " --coords q1,q2,q3,q4,q5,q6 --value e --model exp");
+    EXPECT_EQ(f.exit_code, 0) << method << ": " << f.err;
+  }
+}
+
+// ---- item 9: the paper's layout ---------------------------------------------------------------
+
+TEST_F(WrongCommand, BasePointThatIsGridVertexZero) {
+  // A KR16 grid (27 vertices) with the base point at the cube corner, vertex 0 (simulate writes
+  // the base row and the vertex-0 target row, both at that pose).
+  ASSERT_EQ(run("simulate --robot kr16 --sample grid --step 250 --measure distances --out " + path("grid.csv")).exit_code,
+            0);
+  const CsvTable t = CsvTable::read(path("grid.csv"));
+  const std::size_t kind = t.column_index("kind");
+  auto joints = [&](std::size_t i) {
+    std::string q;
+    for (const char* c : {"q1", "q2", "q3", "q4", "q5", "q6"}) q += t.row(i)[t.column_index(c)] + ",";
+    return q;
+  };
+  std::size_t base = t.row_count(), vertex0 = t.row_count();
+  for (std::size_t i = 0; i < t.row_count(); ++i)
+    if (t.row(i)[kind] == "base") base = i;
+  ASSERT_LT(base, t.row_count());
+  for (std::size_t i = 0; i < t.row_count() && vertex0 == t.row_count(); ++i)
+    if (i != base && joints(i) == joints(base)) vertex0 = i;
+  ASSERT_LT(vertex0, t.row_count()) << "the simulated grid has no vertex at its base point";
+
+  // Measured once, as the base row (the vertex-0 target row dropped): the base completes the grid.
+  rewrite("grid.csv", "once.csv", [](const CsvTable&, std::size_t, std::vector<std::string>&) {}, keep_all,
+          [&](std::size_t i) { return i != vertex0; });
+  const auto a = run("fit --robot kr16 --data " + path("once.csv") + " --method distance-idw --out " + path("a.json"));
+  EXPECT_EQ(a.exit_code, 0) << a.err;
+  EXPECT_NE(a.out.find("grid vertex"), std::string::npos) << a.out;
+  // Measured once, as the vertex-0 target with its distance to itself: exactly 0.
+  const std::size_t dist = t.column_index("dist_b0");
+  auto with_dist = [&](const std::string& value, std::size_t row) {
+    rewrite("grid.csv", "zero.csv", [&](const CsvTable&, std::size_t i, std::vector<std::string>& cells) {
+      if (i == row) cells[dist] = value;
+    });
+  };
+  with_dist("0", vertex0);
+  const auto b = run("fit --robot kr16 --data " + path("zero.csv") + " --method distance-idw --out " + path("b.json"));
+  EXPECT_EQ(b.exit_code, 0) << b.err;
+  // Calibration from the distances skips that pair (no direction) instead of refusing the file.
+  const auto cal = run("calibrate --robot kr16 --data " + path("zero.csv") + " --out " + path("cal.json"));
+  EXPECT_EQ(cal.exit_code, 0) << cal.err;
+  // Both models compensate the grid's targets (the one at the base point itself has no direction:
+  // refused, never ok).
+  for (const char* m : {"a.json", "b.json"}) {
+    const auto c = run(std::string("compensate --model ") + path(m) + " --targets " + path("grid.csv") + " --out " +
+                       path("c.csv"));
+    EXPECT_EQ(c.exit_code, 0) << m << ": " << c.err;
+    const auto status = column("c.csv", "status");
+    EXPECT_EQ(std::count(status.begin(), status.end(), "ok"), static_cast<long>(t.row_count()) - 2) << m;
+  }
+  // Still refused: a negative distance there, and 0 on a row that is not the base point.
+  with_dist("-0.5", vertex0);
+  expect_refused(run("fit --robot kr16 --data " + path("zero.csv") + " --method distance-idw --out " + path("c.json")), 2,
+                 {"zero.csv", "dist_b0"});
+  with_dist("0", vertex0 + 1);
+  expect_refused(run("fit --robot kr16 --data " + path("zero.csv") + " --method distance-idw --out " + path("c.json")), 2,
+                 {"zero.csv", "dist_b0", "expected a distance > 0"});
+}
+
+}  // namespace
+}  // namespace errfield
