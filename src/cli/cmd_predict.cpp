@@ -29,12 +29,13 @@ void run_predict(const PredictArgs& a) {
   OutputTable out;
   out.add_all_columns(table);
   add_step_columns(out, step);
-  out.write(a.out);
   std::cout << "predict: " << n - refused << " of " << n << " rows predicted with " << loaded.description << " from "
             << a.model;
   if (refused) std::cout << "; " << refused << " refused (status column): no position written for them";
   std::cout << "\n  columns px,py,pz (robot frame)" << (tracker ? ", tx,ty,tz (tracker frame, stored registration)" : "")
             << (any_variance ? ", var_mm2" : "") << "\n  written to " << a.out << "\n";
+  require_standard_output();  // before the commit: a failing run must not replace a.out
+  out.write(a.out);
 }
 
 void add_predict_command(CLI::App& app) {
