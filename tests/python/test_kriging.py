@@ -202,6 +202,6 @@ def test_thread_limit_is_the_clis():
         errfield.Kriging(x, z, MODEL, threads=10**9)
     with pytest.raises(errfield.ResourceError, match=limit):
         errfield.ScatteredIdw(x, z, threads=10**9)
-    g = np.array([[i, j] for i in range(3) for j in range(3)], dtype=float)
+    g = np.array([[i, j, k] for i in range(2) for j in range(2) for k in range(2)], dtype=float)
     with pytest.raises(errfield.ResourceError, match=limit):
-        errfield.GridIdw(g, np.arange(9.0), threads=10**9).predict(g)
+        errfield.GridIdw(g, np.arange(8.0), threads=10**9).predict(g)
