@@ -175,6 +175,11 @@ LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eig
                                    const std::vector<ModelComponent>& structure, const LikelihoodFitOptions& options) {
   options.validate();
   check_input(coordinates, values);
+  // Arguments before data: an unbounded structure is the caller's mistake whatever the values.
+  for (const auto& c : structure)
+    if (c.kind != ModelKind::Nugget && !c.bounded())
+      throw ArgumentError("likelihood: component '" + std::string(model_kind_name(c.kind)) +
+                          "' has no covariance (pow, lin); use nug, sph, exp, gau, mat or wen");
   if (coordinates.rows() < kMinLikelihoodSamples)
     throw InputError("likelihood: " + std::to_string(coordinates.rows()) + " samples; need at least " +
                      std::to_string(kMinLikelihoodSamples));
