@@ -8,6 +8,7 @@
 #include <iostream>
 #include <limits>
 
+#include "cli/cli_support.hpp"
 #include "cli/interpolation_methods.hpp"
 #include "errfield/cross_validation.hpp"
 #include "errfield/empirical_variogram.hpp"
@@ -152,7 +153,7 @@ Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const E
   if (o.model == "auto" && !((coords.colwise().maxCoeff() - coords.colwise().minCoeff()).norm() > 0.0))
     throw InputError("--model auto: all samples are at one location; cannot estimate a variogram");
   if (o.model == "auto" && opt.backend != KrigingBackend::Sparse && coords.rows() <= kMaxLikelihoodSamples) {
-    s.model = likelihood_auto_model(coords, values, opt, notes);
+    s.model = with_source(samples.source(), [&] { return likelihood_auto_model(coords, values, opt, notes); });
   } else {
     s.model = o.model == "auto" ? auto_model(coords, values, opt.backend == KrigingBackend::Sparse, notes)
                                 : load_variogram_model(o.model);

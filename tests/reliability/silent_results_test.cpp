@@ -362,6 +362,13 @@ TEST_F(SilentResults, LikelihoodFitOfConstantValuesIsRefused) {
     EXPECT_THAT(r.out, Not(HasSubstr("converged")));
     EXPECT_FALSE(exists("m.json"));
   }
+  // --model auto fits the same likelihood: the data's own reason, not "no candidate well conditioned".
+  write("t.csv", "x,y\n0.5,0.5\n");
+  const auto r = run("interpolate --method kriging --model auto --samples " + path("c.csv") + " --targets " +
+                     path("t.csv") + " --coords x,y --value v --out " + path("p.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("c.csv"), HasSubstr("no candidate model could be fitted"), HasSubstr("values are equal")));
+  EXPECT_FALSE(exists("p.csv"));
 }
 
 // Values of ~1e200 (or ~1e-200) said "not positive definite at any starting point".
