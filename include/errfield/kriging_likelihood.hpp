@@ -34,6 +34,10 @@ namespace errfield {
 /// Fewest samples fit_likelihood (and `errfield fit-variogram --method ml|reml`) accepts: a sill, a
 /// range, a nugget and a mean need more data than parameters.
 inline constexpr long kMinLikelihoodSamples = 4;
+/// Most samples fit_likelihood accepts (ResourceError beyond; the CLI and Python share it): every
+/// evaluation factorizes an N x N matrix, O(N^3), and a fit needs hundreds; beyond it fit the
+/// empirical variogram (fit_variogram) or a subsample.
+inline constexpr long kMaxLikelihoodSamples = 3000;
 
 /// The spread (max - min) of the values fit_likelihood accepts: outside it the likelihood's sums of
 /// squares overflow or underflow a double, so the values must be rescaled first.

@@ -75,7 +75,7 @@ void print_components(const VariogramModel& model) {
 
 // The likelihood is O(N^3) per evaluation and BOBYQA needs hundreds: beyond this the fit would
 // run for hours, so it is refused up front (exit 3) with the alternative named.
-constexpr std::size_t kMaxLikelihoodSamples = 3000;
+// kMaxLikelihoodSamples: errfield/kriging_likelihood.hpp (shared with the library and Python).
 
 /// ML/REML on the samples (kriging_likelihood.hpp): the likelihood of kriging of --kind (the mean
 /// or drift profiled out), nugget free or none, isotropic or ARD, one value or a vector sharing one
@@ -114,7 +114,7 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   const auto coord_names = split_column_list(a.coords, "--coords");
   const auto value_names = split_column_list(a.value, "--value");
   const CsvTable t = CsvTable::read(a.input);
-  if (t.row_count() > kMaxLikelihoodSamples)
+  if (t.row_count() > static_cast<std::size_t>(kMaxLikelihoodSamples))
     throw ResourceError(a.input + ": " + std::to_string(t.row_count()) + " samples; --method " + a.method +
                         " costs O(N^3) per evaluation and is limited to " + std::to_string(kMaxLikelihoodSamples) +
                         ": use --method wls on the empirical variogram ('errfield variogram'), or a subsample");

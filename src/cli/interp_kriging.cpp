@@ -107,7 +107,7 @@ VariogramModel auto_model(const Eigen::MatrixXd& coords, const Eigen::MatrixXd& 
 }
 
 // The likelihood is O(N^3) per evaluation; beyond this --model auto fits the empirical variogram.
-constexpr Eigen::Index kMaxLikelihoodSamples = 3000;
+// (kMaxLikelihoodSamples, errfield/kriging_likelihood.hpp: shared with fit-variogram and the library.)
 
 // --model auto on up to 3,000 samples: REML fits of sph/exp/gau/mat(1.5, 2.5) with a nugget,
 // isotropic and ARD, for the kriging kind asked; the smallest AIC among the well-conditioned ones

@@ -180,6 +180,12 @@ LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eig
     if (c.kind != ModelKind::Nugget && !c.bounded())
       throw ArgumentError("likelihood: component '" + std::string(model_kind_name(c.kind)) +
                           "' has no covariance (pow, lin); use nug, sph, exp, gau, mat or wen");
+  if (coordinates.rows() > kMaxLikelihoodSamples)
+    throw ResourceError("likelihood: " + std::to_string(coordinates.rows()) +
+                        " samples; a likelihood fit costs O(N^3) per evaluation and is limited to " +
+                        std::to_string(kMaxLikelihoodSamples) +
+                        " samples: fit the empirical variogram (fit_variogram, 'errfield fit-variogram --method wls') "
+                        "or a subsample");
   if (coordinates.rows() < kMinLikelihoodSamples)
     throw InputError("likelihood: " + std::to_string(coordinates.rows()) + " samples; need at least " +
                      std::to_string(kMinLikelihoodSamples));

@@ -163,3 +163,12 @@ def test_likelihood_sample_minimum_and_constant_values_are_the_clis(tmp_path):
         errfield.fit_likelihood(x[:3], z[:3], "exp")
     with pytest.raises(errfield.InputError, match="values are equal"):
         errfield.fit_likelihood(x, np.full(len(z), 2.5), "exp")
+
+
+def test_likelihood_sample_budget_is_the_clis():
+    """The CLI refused more than 3,000 samples for ML/REML (O(N^3) per evaluation, exit 3); Python
+    went ahead (N = 10^5 would allocate 80 GB per matrix). One limit, a ResourceError before any work."""
+    rng = np.random.default_rng(3)
+    x = rng.uniform(0, 100, size=(3001, 2))
+    with pytest.raises(errfield.ResourceError, match="limited to 3000 samples"):
+        errfield.fit_likelihood(x, rng.standard_normal(3001), "exp")
