@@ -1,5 +1,7 @@
 #include "errfield/empirical_variogram.hpp"
 
+#include "errfield/thread_count.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -98,9 +100,7 @@ void EmpiricalVariogramOptions::validate() const {
   if (!(pair_fraction > 0.0 && pair_fraction <= 1.0))
     throw ArgumentError("variogram options: pair_fraction = " + format_number(pair_fraction) +
                         "; expected 0 < pair_fraction <= 1");
-  if (threads < 0)
-    throw ArgumentError("variogram options: threads = " + std::to_string(threads) +
-                        "; expected >= 0 (0 = OpenMP default)");
+  check_thread_count("variogram options: threads", threads);
 }
 
 namespace detail {

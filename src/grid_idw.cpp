@@ -1,5 +1,7 @@
 #include "errfield/grid_idw.hpp"
 
+#include "errfield/thread_count.hpp"
+
 #include <cmath>
 
 #include "errfield/csv_table.hpp"
@@ -15,8 +17,7 @@ void GridIdwOptions::validate() const {
   if (!(boundary_tolerance >= 0.0 && boundary_tolerance <= 1e-2))
     throw ArgumentError("GridIdwOptions::boundary_tolerance is " + format_number(boundary_tolerance) +
                         "; expected a value in [0, 0.01] (a fraction of the grid step)");
-  if (threads < 0)
-    throw ArgumentError("GridIdwOptions::threads is " + std::to_string(threads) + "; expected >= 0 (0 = default)");
+  check_thread_count("GridIdwOptions::threads", threads);
 }
 
 std::string describe_outside_target(const Eigen::Vector3d& target, const std::string& name, const RegularGrid3& grid) {

@@ -1,5 +1,7 @@
 #include "errfield/scattered_idw.hpp"
 
+#include "errfield/thread_count.hpp"
+
 namespace errfield {
 
 namespace detail {
@@ -12,8 +14,7 @@ void validate_scattered_idw_options(double power, double radius, double exact_di
   if (!(exact_distance >= 0.0) || !std::isfinite(exact_distance))
     throw ArgumentError("ScatteredIdwOptions::exact_distance is " + format_number(exact_distance) +
                         "; expected a finite value >= 0");
-  if (threads < 0)
-    throw ArgumentError("ScatteredIdwOptions::threads is " + std::to_string(threads) + "; expected >= 0 (0 = default)");
+  check_thread_count("ScatteredIdwOptions::threads", threads);
 }
 }  // namespace detail
 

@@ -76,8 +76,10 @@ ModelComponent parse_component(std::string_view term) {
   c.range = 0.0;
   std::string_view args = term.substr(open + 1, term.size() - open - 2);
   // Positional order: sill, range (exponent for pow), nu.
-  const char* positional_names[] = {"sill", "range", "nu"};
+  const char* positional_names[] = {c.kind == ModelKind::Linear ? "slope" : "sill",
+                                     c.kind == ModelKind::Power ? "exponent" : "range", "nu"};
   bool seen[3] = {false, false, false};
+  std::string seen_as[3];  // the key that set each slot, for the message when another sets it again
   std::size_t position = 0;
   while (!trim(args).empty()) {
     const auto comma = args.find(',');
@@ -103,9 +105,13 @@ ModelComponent parse_component(std::string_view term) {
       throw ArgumentError("variogram model: unknown parameter '" + std::string(key) + "' in '" +
                           context + "'; known: sill, range, nu (exponent for pow, slope for lin)");
     if (seen[slot])
-      throw ArgumentError("variogram model: parameter '" + std::string(key) + "' given twice in '" +
-                          context + "'");
+      throw ArgumentError("variogram model: the " + std::string(positional_names[slot]) + " of '" + context +
+                          "' is given twice" +
+                          (seen_as[slot] == key ? std::string()
+                                                : " (as '" + seen_as[slot] + "' and as '" + std::string(key) +
+                                                      "', names of the same parameter)"));
     seen[slot] = true;
+    seen_as[slot] = std::string(key);
     const double v = parse_double(value, context);
     if (slot == 0) c.sill = v;
     else if (slot == 1) c.range = v;

@@ -12,6 +12,7 @@
 /// Bounds (so that a wrong file, `/dev/zero` or an endless pipe cannot hang the reader or eat the
 /// memory): at most kMaxColumns columns (InputError), at most kMaxInputBytes bytes per file
 /// (ResourceError, exit 3), and a NUL byte stops the reading at the first block that has one.
+/// The limits of every reader (CSV, JSON, URDF) are listed in docs/reliability.md, "Input limits".
 
 #include <cstddef>
 #include <string>

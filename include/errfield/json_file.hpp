@@ -20,7 +20,8 @@ namespace errfield {
 nlohmann::json parse_json_text(std::string_view text, const std::string& source);
 
 /// Reads and parses the file at `path` (see parse_json_text). `what` names the kind of file in the
-/// message for a path that cannot be opened ("robot description").
+/// messages ("robot description"). Input limits (docs/reliability.md, "Input limits"): at most
+/// 256 MiB, nested at most 100 levels (parse_json_text), and the top level must be an object (every errfield JSON file is one); InputError else.
 nlohmann::json read_json_file(const std::filesystem::path& path, const std::string& what);
 
 /// Runs `f()` (reading fields of a JSON document from `source`) and turns any nlohmann::json

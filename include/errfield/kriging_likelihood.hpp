@@ -31,6 +31,19 @@
 
 namespace errfield {
 
+/// Fewest samples fit_likelihood (and `errfield fit-variogram --method ml|reml`) accepts: a sill, a
+/// range, a nugget and a mean need more data than parameters.
+inline constexpr long kMinLikelihoodSamples = 4;
+/// Most samples fit_likelihood accepts (ResourceError beyond; the CLI and Python share it): every
+/// evaluation factorizes an N x N matrix, O(N^3), and a fit needs hundreds; beyond it fit the
+/// empirical variogram (fit_variogram) or a subsample.
+inline constexpr long kMaxLikelihoodSamples = 3000;
+
+/// The spread (max - min) of the values fit_likelihood accepts: outside it the likelihood's sums of
+/// squares overflow or underflow a double, so the values must be rescaled first.
+inline constexpr double kMinLikelihoodValueSpread = 1e-100;
+inline constexpr double kMaxLikelihoodValueSpread = 1e100;
+
 struct LikelihoodFitOptions {
   bool restricted = true;                   ///< REML (true) or ML (false)
   KrigingKind kind = KrigingKind::Ordinary; ///< which mean the likelihood profiles out
@@ -88,8 +101,12 @@ double negative_log_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::
 
 /// Maximizes the (restricted) likelihood over the partial sills and ranges of `structure` and a
 /// nugget (gradient path or BOBYQA, see above; BOBYQA starts from non-zero parameters of
-/// `structure`, else data-based defaults). Throws ArgumentError / InputError for bad input; the
-/// optimizer's outcome is in the result.
+/// `structure`, else data-based defaults). Throws ArgumentError / InputError for bad input (fewer
+/// than kMinLikelihoodSamples samples, values that are all equal, a value spread outside
+/// [kMinLikelihoodValueSpread, kMaxLikelihoodValueSpread]); the optimizer's outcome is in the result.
+/// A range that ends on its box bound (1e-4 or 1e3 times the samples' extent; with ARD: every range
+/// on the same bound) is reported as not converged, the message saying which bound and what it
+/// means; a single ARD range on a bound is only noted in the message.
 LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
                                    const std::vector<ModelComponent>& structure,
                                    const LikelihoodFitOptions& options = {});

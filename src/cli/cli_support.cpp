@@ -2,18 +2,19 @@
 
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
-#include <thread>
+#include <cstring>
+#include <iostream>
 
 namespace errfield::cli {
 
-void check_thread_count(const std::string& option, int threads) {
-  if (threads < 0)
-    throw ArgumentError(option + " is " + std::to_string(threads) + "; expected 0 (OpenMP's default) or a count >= 1");
-  if (threads > kMaxThreads)
-    throw ResourceError(option + " " + std::to_string(threads) + ": at most " + std::to_string(kMaxThreads) +
-                        " threads per job (this machine has " + std::to_string(std::thread::hardware_concurrency()) +
-                        " hardware threads); use 0 for OpenMP's default");
+void require_standard_output() {
+  std::cout.flush();
+  if (std::cout && std::fflush(stdout) == 0 && !std::ferror(stdout)) return;
+  const int err = errno;
+  throw Error("cannot write to standard output" + (err ? std::string(": ") + std::strerror(err) : std::string()) +
+              "; no output file written");
 }
 
 void OutputTable::write(const std::string& path) const {

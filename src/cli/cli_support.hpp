@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 
 #include "errfield/atomic_file.hpp"
+#include "errfield/thread_count.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
 
@@ -88,13 +89,13 @@ struct OutputTable {
   void write(const std::string& path) const;
 };
 
-/// Most threads a job may ask for: each costs a stack and a workspace, and OpenMP fails with its
-/// own message (exit 1) when it cannot create them (`--threads 1000000000`).
-inline constexpr int kMaxThreads = 1024;
+/// Flushes standard output and throws Error ("cannot write to standard output", exit 1) if what
+/// was printed did not get through (`> /dev/full`, a closed pipe). A command that prints its
+/// summary before committing its output file calls it between the two, so a failing run leaves
+/// the previous file in place (docs/reliability.md, "Atomic outputs").
+void require_standard_output();
 
-/// Checks a --threads value up front: negative is bad usage (ArgumentError), more than
-/// kMaxThreads a resource limit (ResourceError), both naming the option.
-void check_thread_count(const std::string& option, int threads);
+// kMaxThreads and check_thread_count (--threads): errfield/thread_count.hpp, shared with the library and Python.
 
 /// Prints "label: i/n (p%)" to stderr at most every 0.2 s, only when stderr is a terminal and the
 /// job has run for more than a second; finish() clears the line.

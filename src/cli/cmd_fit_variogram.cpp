@@ -75,7 +75,7 @@ void print_components(const VariogramModel& model) {
 
 // The likelihood is O(N^3) per evaluation and BOBYQA needs hundreds: beyond this the fit would
 // run for hours, so it is refused up front (exit 3) with the alternative named.
-constexpr std::size_t kMaxLikelihoodSamples = 3000;
+// kMaxLikelihoodSamples: errfield/kriging_likelihood.hpp (shared with the library and Python).
 
 /// ML/REML on the samples (kriging_likelihood.hpp): the likelihood of kriging of --kind (the mean
 /// or drift profiled out), nugget free or none, isotropic or ARD, one value or a vector sharing one
@@ -114,13 +114,13 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   const auto coord_names = split_column_list(a.coords, "--coords");
   const auto value_names = split_column_list(a.value, "--value");
   const CsvTable t = CsvTable::read(a.input);
-  if (t.row_count() > kMaxLikelihoodSamples)
+  if (t.row_count() > static_cast<std::size_t>(kMaxLikelihoodSamples))
     throw ResourceError(a.input + ": " + std::to_string(t.row_count()) + " samples; --method " + a.method +
                         " costs O(N^3) per evaluation and is limited to " + std::to_string(kMaxLikelihoodSamples) +
                         ": use --method wls on the empirical variogram ('errfield variogram'), or a subsample");
-  if (t.row_count() < 4)
+  if (t.row_count() < static_cast<std::size_t>(kMinLikelihoodSamples))
     throw InputError(a.input + ": " + std::to_string(t.row_count()) + " data row(s); the likelihood fit needs "
-                     "at least 4 samples", a.input);
+                     "at least " + std::to_string(kMinLikelihoodSamples) + " samples", a.input);
   const Eigen::MatrixXd x = t.numeric_columns(coord_names);
   const Eigen::MatrixXd z = t.numeric_columns(value_names);
   const LikelihoodFitResult r = with_source(a.input, [&] { return fit_likelihood(x, z, {structure}, o); });
@@ -214,6 +214,25 @@ void run_fit_variogram(const FitVariogramArgs& a) {
   const std::size_t c_lag = find_column(t, "lag_mean", "dist");
   const std::size_t c_gamma = t.column_index("gamma");
   const std::size_t c_pairs = find_column(t, "pairs", "np");
+  // A directional variogram (errfield variogram --alpha/--beta/--per-coordinate) holds one block of
+  // rows per direction; one isotropic fit over all of them would pool what the user separated.
+  for (const char* label : {"direction", "dip", "coordinate"}) {
+    if (!t.has_column(label)) continue;
+    const std::size_t c = t.column_index(label);
+    std::vector<std::string> seen;
+    for (std::size_t r = 0; r < t.row_count(); ++r)
+      if (std::find(seen.begin(), seen.end(), t.row(r)[c]) == seen.end()) seen.push_back(t.row(r)[c]);
+    if (seen.size() > 1) {
+      std::string list;
+      for (std::size_t k = 0; k < seen.size() && k < 8; ++k) list += (k ? ", " : "") + seen[k];
+      if (seen.size() > 8) list += ", ...";
+      throw InputError(a.input + ": column '" + label + "' holds " + std::to_string(seen.size()) +
+                           " directions (" + list + "); fit-variogram fits one isotropic model and would pool them. "
+                           "Fit one direction at a time (its rows only, e.g. from 'errfield variogram --alpha A'), "
+                           "or fit the anisotropy from the samples: --method reml --anisotropy rotated",
+                       a.input, 0, label);
+    }
+  }
   std::vector<double> h, g;
   std::vector<std::uint64_t> n;
   for (std::size_t r = 0; r < t.row_count(); ++r) {

@@ -46,7 +46,6 @@ void run_predict(const PredictArgs& a) {
   OutputTable out;
   out.add_all_columns(table);
   add_step_columns(out, step);
-  out.write(a.out);
   std::cout << "predict: " << n - refused << " of " << n << " rows predicted with " << loaded.description << " from "
             << a.model;
   if (refused) std::cout << "; " << refused << " refused (status column): no position written for them";
@@ -54,6 +53,8 @@ void run_predict(const PredictArgs& a) {
             << (any_variance ? ", var_mm2 (a new reading: field + nugget), var_field_mm2 (field only)" : "")
             << (any_radius ? ", r95_mm (95 % radius of a new reading around the prediction)" : "") << "\n  written to "
             << a.out << "\n";
+  require_standard_output();  // before the commit: a failing run must not replace a.out
+  out.write(a.out);
 }
 
 void add_predict_command(CLI::App& app) {

@@ -102,6 +102,13 @@ void run_simulate(const SimulateArgs& a) {
     } else {
       tool_offset = parse_vec3(a.tool_offset, "--tool-offset");
     }
+    // Beyond a 10 m tool the simulated positions are no robot's, and at ~1e150 mm squared distances
+    // overflow into "computed value is -inf" half-way through the job: refuse the option instead.
+    constexpr double kMaxToolOffset_mm = 1e4;
+    if (!(tool_offset.norm() <= kMaxToolOffset_mm))
+      throw ArgumentError("--tool-offset: '" + a.tool_offset + "' moves the tool point " +
+                          format_number(tool_offset.norm()) + " mm; expected at most " +
+                          format_number(kMaxToolOffset_mm) + " mm (a tool of at most 10 m)");
     config.tool_offset_mm += tool_offset;
   }
   double outlier_fraction = 0.0, outlier_mm = 0.0;

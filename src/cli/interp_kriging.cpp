@@ -8,6 +8,7 @@
 #include <iostream>
 #include <limits>
 
+#include "cli/cli_support.hpp"
 #include "cli/interpolation_methods.hpp"
 #include "errfield/cross_validation.hpp"
 #include "errfield/empirical_variogram.hpp"
@@ -106,7 +107,7 @@ VariogramModel auto_model(const Eigen::MatrixXd& coords, const Eigen::MatrixXd& 
 }
 
 // The likelihood is O(N^3) per evaluation; beyond this --model auto fits the empirical variogram.
-constexpr Eigen::Index kMaxLikelihoodSamples = 3000;
+// (kMaxLikelihoodSamples, errfield/kriging_likelihood.hpp: shared with fit-variogram and the library.)
 
 // --model auto on up to 3,000 samples: REML fits of sph/exp/gau/mat(1.5, 2.5) with a nugget,
 // isotropic and ARD, for the kriging kind asked; the smallest AIC among the well-conditioned ones
@@ -152,7 +153,7 @@ Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const E
   if (o.model == "auto" && !((coords.colwise().maxCoeff() - coords.colwise().minCoeff()).norm() > 0.0))
     throw InputError("--model auto: all samples are at one location; cannot estimate a variogram");
   if (o.model == "auto" && opt.backend != KrigingBackend::Sparse && coords.rows() <= kMaxLikelihoodSamples) {
-    s.model = likelihood_auto_model(coords, values, opt, notes);
+    s.model = with_source(samples.source(), [&] { return likelihood_auto_model(coords, values, opt, notes); });
   } else {
     s.model = o.model == "auto" ? auto_model(coords, values, opt.backend == KrigingBackend::Sparse, notes)
                                 : load_variogram_model(o.model);

@@ -361,8 +361,8 @@ Eigen::Matrix<double, N, 1> read_vec(const nlohmann::json& j, const std::string&
 
 VariogramModel choose_field_model(const FieldSamples& samples, const Eigen::MatrixXd& values,
                                   const KrigingFieldOptions& options, std::string& reason) {
-  constexpr std::size_t kMaxLikelihoodSamples = 3000;  // O(N^3) per evaluation beyond
-  if (options.space == FieldSpace::task || samples.joints_deg.size() > kMaxLikelihoodSamples) {
+  // O(N^3) per evaluation beyond kMaxLikelihoodSamples (kriging_likelihood.hpp)
+  if (options.space == FieldSpace::task || samples.joints_deg.size() > static_cast<std::size_t>(kMaxLikelihoodSamples)) {
     reason = options.space == FieldSpace::task
                  ? "empirical variogram, best weighted fit of sph/exp/gau with a nugget"
                  : "empirical variogram (more than 3,000 samples for a likelihood fit)";

@@ -22,7 +22,7 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 OutputColumn numbers(std::string name, std::vector<double> v) { return {std::move(name), std::move(v), {}}; }
-OutputColumn words(std::string name, std::vector<std::string> v) { return {std::move(name), {}, std::move(v)}; }
+OutputColumn words(std::string name, std::vector<std::string> v) { return {std::move(name), {}, std::move(v), true}; }
 
 }  // namespace
 

@@ -45,6 +45,25 @@ PointPrediction predict_position(const CompensationModel& model, const JointVect
   return out;
 }
 
+namespace {
+
+// Every error about a model file's content names the file: the field builders below it speak of
+// "vector-kriging field: 0 samples" and know no file name.
+template <class F>
+auto naming_model_file(const std::string& path, F f) {
+  const auto named = [&](const std::string& what) { return what.rfind(path, 0) == 0 ? what : path + ": " + what; };
+  try {
+    return f();
+  } catch (const InputError& e) {
+    if (!e.file().empty()) throw;
+    throw InputError(named(e.what()), path);
+  } catch (const ArgumentError& e) {
+    throw InputError(named(e.what()), path);
+  }
+}
+
+}  // namespace
+
 LoadedModel load_model(const std::string& path) {
   // A built-in robot's name, unless a file of that name exists (as for --robot elsewhere).
   if (const robot::BuiltinRobot* b = robot::builtin_robot_unless_file(path)) {
@@ -55,7 +74,8 @@ LoadedModel load_model(const std::string& path) {
   // naming the file, never an internal error.
   const nlohmann::json j = read_json_file(path, "model file");
   if (j.is_object() && j.contains("format")) {
-    CompensationModel m = with_json_source(path, [&] { return CompensationModel::from_json(j, path); });
+    CompensationModel m =
+        naming_model_file(path, [&] { return with_json_source(path, [&] { return CompensationModel::from_json(j, path); }); });
     const std::string what = std::string(method_name(m.method())) + " model";
     return {std::move(m), false, what};
   }

@@ -13,6 +13,8 @@ namespace {
 
 using json = nlohmann::json;
 
+constexpr std::size_t kMaxJsonDepth = 100;  // objects and arrays, nested
+
 // Iterator over the text that records how far the parser has read: the SAX key() event carries no
 // position, and a duplicate key's line is wanted.
 class CountingIterator {
@@ -59,6 +61,7 @@ class StrictSax : public nlohmann::json_sax<json> {
   bool string(string_t&) override { return value(); }
   bool binary(binary_t&) override { return value(); }
   bool start_object(std::size_t) override {
+    if (too_deep()) return false;
     frames_.push_back({true, {}, {}, 0});
     return true;
   }
@@ -75,6 +78,7 @@ class StrictSax : public nlohmann::json_sax<json> {
   }
   bool end_object() override { return end(); }
   bool start_array(std::size_t) override {
+    if (too_deep()) return false;
     frames_.push_back({false, {}, {}, 0});
     return true;
   }
@@ -115,6 +119,15 @@ class StrictSax : public nlohmann::json_sax<json> {
     std::string key;
     std::size_t index;
   };
+  // The parser is iterative, but dump(), comparisons and messages that quote a value recurse once
+  // per level: a 10^6-deep [[[...]]] would overflow the stack there.
+  bool too_deep() {
+    if (frames_.size() < kMaxJsonDepth) return false;
+    offset = consumed > 0 ? consumed - 1 : 0;
+    message = "nested more than " + std::to_string(kMaxJsonDepth) + " levels deep at " + path() +
+              " (errfield's JSON files nest ~5; the limit is in docs/reliability.md, \"Input limits\")";
+    return true;
+  }
   bool value() {
     if (!frames_.empty() && !frames_.back().object) ++frames_.back().index;
     return true;
@@ -163,7 +176,15 @@ nlohmann::json read_json_file(const std::filesystem::path& path, const std::stri
       throw InputError(name + ": larger than 256 MB; not a " + what + " errfield can read", name);
   }
   if (in.bad()) throw InputError(name + ": read error", name);
-  return parse_json_text(text, name);
+  nlohmann::json j = parse_json_text(text, name);
+  // Every errfield JSON file (model, robot description, simulation) is an object; say so here,
+  // once, rather than let a reader's first j["key"] on an array fail as an internal type error.
+  if (!j.is_object())
+    throw InputError(name + ": the top level is " +
+                         (j.is_null() ? std::string("null") : std::string(j.is_array() ? "an " : "a ") + j.type_name()) +
+                         "; a " + what + " must be a JSON object ({ \"key\": value, ... })",
+                     name, 1);
+  return j;
 }
 
 }  // namespace errfield

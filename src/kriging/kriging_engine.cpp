@@ -8,6 +8,7 @@
 #include <Eigen/SVD>
 #include <omp.h>
 
+#include "errfield/thread_count.hpp"
 #include "errfield/csv_table.hpp"
 #include "kriging/cholmod_factor.hpp"
 
@@ -75,7 +76,7 @@ void KrigingOptions::validate() const {
     fail("jitter_growth", format_number(jitter_growth), "a finite value > 1");
   if (!(max_condition_number > 1.0)) fail("max_condition_number", format_number(max_condition_number), "> 1");
   if (target_batch == 0) fail("target_batch", "0", ">= 1");
-  if (threads < 0) fail("threads", std::to_string(threads), ">= 0 (0 = OpenMP default)");
+  check_thread_count("kriging options: threads", threads);
 }
 
 namespace detail {

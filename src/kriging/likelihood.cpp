@@ -180,6 +180,30 @@ LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eig
                                    const std::vector<ModelComponent>& structure, const LikelihoodFitOptions& options) {
   options.validate();
   check_input(coordinates, values);
+  // Arguments before data: an unbounded structure is the caller's mistake whatever the values.
+  for (const auto& c : structure)
+    if (c.kind != ModelKind::Nugget && !c.bounded())
+      throw ArgumentError("likelihood: component '" + std::string(model_kind_name(c.kind)) +
+                          "' has no covariance (pow, lin); use nug, sph, exp, gau, mat or wen");
+  if (coordinates.rows() > kMaxLikelihoodSamples)
+    throw ResourceError("likelihood: " + std::to_string(coordinates.rows()) +
+                        " samples; a likelihood fit costs O(N^3) per evaluation and is limited to " +
+                        std::to_string(kMaxLikelihoodSamples) +
+                        " samples: fit the empirical variogram (fit_variogram, 'errfield fit-variogram --method wls') "
+                        "or a subsample");
+  if (coordinates.rows() < kMinLikelihoodSamples)
+    throw InputError("likelihood: " + std::to_string(coordinates.rows()) + " samples; need at least " +
+                     std::to_string(kMinLikelihoodSamples));
+  // A constant field has sill 0: the fit would "converge" on a sill of ~1e-34 that means nothing.
+  const double spread = (values.colwise().maxCoeff() - values.colwise().minCoeff()).maxCoeff();
+  if (!(spread > 0.0))
+    throw InputError("likelihood: all " + std::to_string(coordinates.rows()) + " values are equal (" +
+                     format_number(values(0, 0)) + "); a constant field has no variogram to fit");
+  if (spread < kMinLikelihoodValueSpread || spread > kMaxLikelihoodValueSpread)
+    throw InputError("likelihood: the values spread over " + format_number(spread) +
+                     " (max - min); the likelihood overflows or underflows a double beyond [" +
+                     format_number(kMinLikelihoodValueSpread) + ", " + format_number(kMaxLikelihoodValueSpread) +
+                     "]: rescale the values (e.g. to units where they are of order 1) and scale the sill back");
   LikelihoodFitResult res = fit_likelihood_checked(coordinates, values, structure, options);
   const double n = static_cast<double>(coordinates.rows() * values.cols());
   res.aic = 2.0 * res.negative_log_likelihood + 2.0 * res.parameters;

@@ -55,6 +55,8 @@ ModelChoice choose_among_candidates(const Eigen::MatrixXd& x, const Eigen::Matri
   for (int attempt = 0; attempt < 4; ++attempt) {
     ModelChoice choice;
     int best = -1;
+    std::string first_refusal;  // why the data could not be fitted, if no candidate could
+    int fitted = 0;
     std::vector<LikelihoodFitResult> fits;
     for (const ModelKind kind : o.kinds) {
       std::vector<double> nus{0.5};
@@ -72,11 +74,13 @@ ModelChoice choose_among_candidates(const Eigen::MatrixXd& x, const Eigen::Matri
           try {
             r = fit_likelihood(x, values, {c}, f);
           } catch (const InputError& e) {
+            if (first_refusal.empty()) first_refusal = e.what();
             cand.note = e.what();
             choice.candidates.push_back(std::move(cand));
             fits.emplace_back();
             continue;
           }
+          ++fitted;
           cand.model = r.model;
           cand.negative_log_likelihood = r.negative_log_likelihood;
           cand.criterion = use_bic ? r.bic : r.aic;
@@ -92,6 +96,10 @@ ModelChoice choose_among_candidates(const Eigen::MatrixXd& x, const Eigen::Matri
           fits.push_back(std::move(r));
         }
     }
+    // Every candidate refused the data itself (e.g. values that are all equal): a higher nugget
+    // floor cannot help, and the data's own reason is the message.
+    if (fitted == 0 && !first_refusal.empty())
+      throw InputError("model choice: no candidate model could be fitted: " + first_refusal);
     if (best >= 0) {
       const auto& w = choice.candidates[static_cast<std::size_t>(best)];
       choice.model = w.model;

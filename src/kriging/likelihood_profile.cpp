@@ -8,6 +8,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "errfield/csv_table.hpp"
 #include "optim/lbfgs.hpp"
 
 namespace errfield::detail {
@@ -321,7 +322,9 @@ LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eige
       best_outcome = out;
     }
   }
-  if (!(best < kFailed)) throw InputError("likelihood: the covariance is not positive definite at any starting point");
+  if (!(best < kFailed))
+    throw InputError("likelihood: the covariance is not positive definite at any starting point (values or "
+                     "coordinates of extreme magnitude? rescale them to units of order 1)");
   std::vector<double> se_log = log_range_errors(pr, best_theta);
   evaluations += np + 2;
   pr.evaluate(best_theta.data(), nullptr);
@@ -350,6 +353,36 @@ LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eige
   res.converged = best_outcome.converged;
   res.message = best_outcome.message + " (best of " + std::to_string(runs) + " L-BFGS runs from " +
                 std::to_string(starts.size()) + " screened starts)";
+  // A range on its box bound is no estimate: the likelihood still improved towards the bound. With
+  // one range (or all ARD ranges there) the fit has not found a model; one ARD range on its upper
+  // bound alone says the field hardly varies along that coordinate, which is an answer: noted only.
+  int at_upper = 0, at_lower = 0;
+  std::string notes;
+  for (int k = 0; k < nr; ++k) {
+    const bool upper = best_theta[k] >= ub[k] - 1e-6, lower = best_theta[k] <= lb[k] + 1e-6;
+    at_upper += upper;
+    at_lower += lower;
+    if (nr > 1 && (upper || lower))
+      notes += "; range " + std::to_string(k + 1) + " is on its " + (upper ? "upper" : "lower") + " bound (" +
+               format_number(std::exp(upper ? ub[k] : lb[k])) + ")";
+  }
+  const std::string which = nr > 1 ? "ranges all" : "range";
+  if (at_upper == nr) {
+    res.converged = false;
+    res.message = "the " + which + " ended on the upper bound (1000 x the samples' extent = " +
+                  format_number(std::exp(ub[0])) +
+                  "): the likelihood still rises as the range grows, so the data show no finite range (a trend, or "
+                  "a field that keeps growing over the sampled area); try a drift (--kind universal1) or an "
+                  "unbounded family (pow or lin via --method wls) [optimizer: " + res.message + "]";
+  } else if (at_lower == nr) {
+    res.converged = false;
+    res.message = "the " + which + " ended on the lower bound (1e-4 x the samples' extent = " +
+                  format_number(std::exp(lb[0])) +
+                  "): the samples show no spatial correlation at their spacing (a pure nugget effect) [optimizer: " +
+                  res.message + "]";
+  } else {
+    res.message += notes;
+  }
   res.parameters = np + 1;
   res.ranges = ranges;
   for (int k = 0; k < nr; ++k) res.range_standard_errors.push_back(ranges[k] * se_log[k]);

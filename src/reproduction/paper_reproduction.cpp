@@ -4,6 +4,8 @@
 // on which methods run.
 #include "errfield/reproduction/paper_reproduction.hpp"
 
+#include "errfield/thread_count.hpp"
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -38,7 +40,7 @@ using namespace errfield::compensation;
 
 void ReproductionOptions::validate() const {
   if (runs < 1) throw ArgumentError("reproduce: runs = " + std::to_string(runs) + "; expected >= 1");
-  if (threads < 0) throw ArgumentError("reproduce: threads = " + std::to_string(threads) + "; expected >= 0");
+  check_thread_count("reproduce: threads", threads);
   if (variogram_configurations < 10)
     throw ArgumentError("reproduce: variogram_configurations = " + std::to_string(variogram_configurations) +
                         "; expected >= 10");

@@ -4,8 +4,10 @@
 #include "errfield/robot/urdf_import.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
+#include <map>
 #include <numbers>
 #include <sstream>
 
@@ -87,7 +89,72 @@ std::mutex& console_mutex() {
   return m;
 }
 
+std::size_t line_of(const std::string& text, std::size_t offset) {
+  return 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(offset), '\n'));
+}
+
+// One linear pass over the markup before the recursive parser sees it: refuses a nesting deeper
+// than kMaxUrdfDepth (the parser would recurse once per level, in quadratic time, and overflow the
+// stack at ~100,000 levels) and a <!DOCTYPE> (urdfdom then finds no <robot> element and says only
+// that). Comments, CDATA and processing instructions are skipped; malformed markup is left to the parser.
+void check_markup(const std::string& xml, const std::string& source) {
+  int depth = 0;
+  std::size_t i = 0;
+  const auto skip_past = [&](const char* end) {
+    const std::size_t e = xml.find(end, i);
+    i = e == std::string::npos ? xml.size() : e + std::char_traits<char>::length(end);
+  };
+  while ((i = xml.find('<', i)) != std::string::npos) {
+    const std::size_t start = i;
+    if (xml.compare(i, 4, "<!--") == 0) {
+      skip_past("-->");
+    } else if (xml.compare(i, 9, "<![CDATA[") == 0) {
+      skip_past("]]>");
+    } else if (xml.compare(i, 2, "<?") == 0) {
+      skip_past("?>");
+    } else if (xml.compare(i, 2, "<!") == 0) {
+      std::string word = xml.substr(i + 2, 7);
+      std::transform(word.begin(), word.end(), word.begin(), [](unsigned char c) { return std::toupper(c); });
+      if (word == "DOCTYPE")
+        throw InputError(source + ":" + std::to_string(line_of(xml, start)) +
+                             ": a <!DOCTYPE> declaration is not supported in a URDF (urdfdom reads no DTD and would "
+                             "then find no <robot> element); remove it",
+                         source, line_of(xml, start));
+      skip_past(">");
+    } else if (xml.compare(i, 2, "</") == 0) {
+      --depth;
+      skip_past(">");
+    } else {
+      // A start tag: find its '>' outside quoted attribute values; "/>" closes it at once.
+      char quote = 0;
+      std::size_t j = i + 1;
+      for (; j < xml.size(); ++j) {
+        const char c = xml[j];
+        if (quote) {
+          if (c == quote) quote = 0;
+        } else if (c == '"' || c == '\'') {
+          quote = c;
+        } else if (c == '>') {
+          break;
+        }
+      }
+      if (j >= xml.size()) return;  // unterminated: the parser reports it
+      if (xml[j - 1] != '/' && ++depth > kMaxUrdfDepth)
+        throw InputError(source + ":" + std::to_string(line_of(xml, start)) + ": elements nested more than " +
+                             std::to_string(kMaxUrdfDepth) +
+                             " levels deep; a URDF nests ~5 (the limit is in docs/reliability.md, \"Input limits\")",
+                         source, line_of(xml, start));
+      i = j + 1;
+    }
+  }
+}
+
 urdf::ModelInterfaceSharedPtr parse_model(const std::string& xml, const std::string& source) {
+  if (xml.size() > kMaxUrdfBytes)
+    throw InputError(source + ": " + std::to_string(xml.size()) + " bytes; a URDF errfield reads is at most " +
+                         std::to_string(kMaxUrdfBytes >> 20) + " MiB (docs/reliability.md, \"Input limits\")",
+                     source);
+  check_markup(xml, source);
   CollectingHandler handler;
   urdf::ModelInterfaceSharedPtr model;
   {
@@ -147,6 +214,25 @@ UrdfJoint convert_joint(const urdf::Joint& j, const std::string& source) {
   out.parent_link = j.parent_link_name;
   out.child_link = j.child_link_name;
   const urdf::Pose& o = j.parent_to_joint_origin_transform;
+  {
+    double rpy[3];
+    o.rotation.getRPY(rpy[0], rpy[1], rpy[2]);
+    const double xyz[3] = {o.position.x, o.position.y, o.position.z};
+    for (int k = 0; k < 6; ++k) {
+      const double v = k < 3 ? xyz[k] : rpy[k - 3];
+      const std::string what = std::string(k < 3 ? "xyz" : "rpy") + " component " + std::to_string(k % 3 + 1) +
+                               " = " + fmt(v) + (k < 3 ? " m" : " rad");
+      if (!std::isfinite(v)) throw InputError(where + ": <origin> " + what + " is not finite", source);
+      if (v != 0.0 && std::abs(v) < kMinUrdfNonzeroOrigin)
+        throw InputError(where + ": <origin> " + what + " is neither 0 nor a physical size (|value| < " +
+                             fmt(kMinUrdfNonzeroOrigin) + "); write 0 if the offset is zero",
+                         source);
+      if (k < 3 && std::abs(v) > kMaxUrdfOriginOffset_m)
+        throw InputError(where + ": <origin> " + what + " is beyond " + fmt(kMaxUrdfOriginOffset_m) +
+                             " m; URDF lengths are in metres (a value in mm?)",
+                         source);
+    }
+  }
   out.origin.linear() = Eigen::Quaterniond(o.rotation.w, o.rotation.x, o.rotation.y, o.rotation.z)
                             .normalized()
                             .toRotationMatrix();
@@ -181,6 +267,11 @@ UrdfJoint convert_joint(const urdf::Joint& j, const std::string& source) {
   out.axis = axis / len;
   out.revolute = true;
   if (!j.limits) throw InputError(where + " has no <limit>; revolute joints need lower and upper limits", source);
+  if (!(std::abs(j.limits->lower) <= kMaxUrdfJointLimit_rad && std::abs(j.limits->upper) <= kMaxUrdfJointLimit_rad))
+    throw InputError(where + ": <limit lower=\"" + fmt(j.limits->lower) + "\" upper=\"" + fmt(j.limits->upper) +
+                         "\"> is beyond +-" + fmt(kMaxUrdfJointLimit_rad) +
+                         " rad (about 16 turns); URDF limits are in radians: give the joint's real travel",
+                     source);
   out.lower_deg = j.limits->lower / kDeg;
   out.upper_deg = j.limits->upper / kDeg;
   if (!std::isfinite(out.lower_deg) || !std::isfinite(out.upper_deg) || !(out.lower_deg < out.upper_deg))
@@ -195,6 +286,18 @@ UrdfJoint convert_joint(const urdf::Joint& j, const std::string& source) {
 UrdfChain parse_urdf_chain(const std::string& urdf_xml, const std::string& base_link, const std::string& tip_link,
                            const std::string& source) {
   const urdf::ModelInterfaceSharedPtr model = parse_model(urdf_xml, source);
+  // urdfdom keeps only one parent joint per link and drops the other silently: refuse a link that
+  // is the child of two joints (the file is then a graph, not a kinematic tree).
+  {
+    std::map<std::string, std::string> parent_joint_of;  // child link -> joint
+    for (const auto& [name, joint] : model->joints_) {
+      const auto [it, fresh] = parent_joint_of.emplace(joint->child_link_name, name);
+      if (!fresh)
+        throw InputError(source + ": link '" + joint->child_link_name + "' is the child of two joints, '" + it->second +
+                             "' and '" + name + "'; a URDF is a tree (each link has at most one parent joint)",
+                         source);
+    }
+  }
   const auto base = model->getLink(base_link);
   if (!base)
     throw InputError(source + ": --base: no link named '" + base_link + "' (links: " + link_list(*model) + ")", source);
@@ -256,11 +359,23 @@ UrdfChain parse_urdf_chain(const std::string& urdf_xml, const std::string& base_
 
 UrdfChain read_urdf_chain(const std::filesystem::path& path, const std::string& base_link,
                           const std::string& tip_link) {
+  const std::string name = path.string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(name + ": is a directory, not a URDF file", name);
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("cannot open URDF file '" + path.string() + "'", path.string());
-  std::ostringstream s;
-  s << in.rdbuf();
-  return parse_urdf_chain(s.str(), base_link, tip_link, path.string());
+  if (!in) throw InputError("cannot open URDF file '" + name + "'", name);
+  // Bounded read: the limit is checked before the file (or a device such as /dev/zero) is in memory.
+  std::string text;
+  char chunk[65536];
+  while (in.read(chunk, sizeof chunk) || in.gcount() > 0) {
+    text.append(chunk, static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxUrdfBytes)
+      throw InputError(name + ": larger than " + std::to_string(kMaxUrdfBytes >> 20) +
+                           " MiB; a URDF errfield reads is at most that (docs/reliability.md, \"Input limits\")",
+                       name);
+  }
+  if (in.bad()) throw InputError(name + ": read error", name);
+  return parse_urdf_chain(text, base_link, tip_link, name);
 }
 
 }  // namespace errfield::robot

@@ -6,6 +6,8 @@
 // that point at what to fix. Robot data are SIMULATED (`errfield simulate`).
 
 #include <algorithm>
+#include <fcntl.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -155,6 +157,81 @@ TEST_F(RobotFiles, ModelJsonWithWrongTypesExitsTwoNamingTheKey) {
   EXPECT_FALSE(fs::exists(path("o.csv")));
 }
 
+// Issue 20: predict/validate --model and fk --robot ended in "internal error: type_error.307" (exit
+// 70) on a JSON file whose top level is not an object, where fit, calibrate, plan... said exit 2.
+TEST_F(RobotFiles, JsonWhoseTopLevelIsNotAnObjectExitsTwoNamingTheFile) {
+  struct Case {
+    const char* text;
+    const char* kind;
+  };
+  for (const Case& c : {Case{"[1,2,3]", "an array"}, Case{"[]", "an array"}, Case{"\"x\"", "a string"},
+                        Case{"null", "null"}, Case{"5", "a number"}}) {
+    write("top.json", c.text);
+    for (const std::vector<std::string>& args :
+         {std::vector<std::string>{"predict", "--model", "top.json", "--joints", "t.csv", "--out", "o.csv"},
+          std::vector<std::string>{"validate", "--model", "top.json", "--data", "g.csv"},
+          std::vector<std::string>{"fk", "--robot", "top.json", "--input", "t.csv", "--out", "o.csv"},
+          std::vector<std::string>{"compensate", "--model", "top.json", "--targets", "t.csv", "--out", "o.csv"}}) {
+      const auto r = run(args);
+      EXPECT_EQ(r.exit_code, 2) << args[0] << " " << c.text << ": " << r.err;
+      EXPECT_THAT(r.err, AllOf(HasSubstr("top.json"), HasSubstr(std::string("the top level is ") + c.kind),
+                               HasSubstr("must be a JSON object")))
+          << args[0] << " " << c.text;
+    }
+  }
+  EXPECT_FALSE(fs::exists(path("o.csv")));
+}
+
+// Issue 20 (input limits): a robot JSON nesting 100,000 arrays. The parser is iterative, but dump()
+// (messages quote values) and comparisons recurse once per level: refused while parsing.
+TEST_F(RobotFiles, DeeplyNestedJsonIsRefusedNamingTheLimit) {
+  write("deep.json", "{\"links\": " + std::string(100000, '[') + std::string(100000, ']') + "}");
+  const auto r = run({"fk", "--robot", "deep.json", "--input", "t.csv", "--out", "o.csv"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("deep.json:1"), HasSubstr("nested more than 100 levels")));
+  EXPECT_FALSE(fs::exists(path("o.csv")));
+}
+
+// Issue 20: "vector-kriging field: 0 samples; need at least 8" named no file.
+TEST_F(RobotFiles, ModelFileErrorsNameTheFile) {
+  auto model = nlohmann::json::parse(read("m.json"));
+  model["field"]["samples"]["joints_deg"] = nlohmann::json::array();
+  model["field"]["samples"]["position_mm"] = nlohmann::json::array();
+  model["field"]["values"] = nlohmann::json::array();
+  write("empty_field.json", model.dump(1));
+  const auto r = run({"predict", "--model", "empty_field.json", "--joints", "t.csv", "--out", "o.csv"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("empty_field.json: "), HasSubstr("0 samples")));
+  EXPECT_FALSE(fs::exists(path("o.csv")));
+}
+
+// Issue 20: `predict --out p.csv > /dev/full` replaced p.csv, then exited 1.
+TEST_F(RobotFiles, PredictToAFullStandardOutputKeepsThePreviousFile) {
+  write("p.csv", "previous\n");
+  const std::string err_file = path("stderr.txt");
+  const std::vector<std::string> args{"predict", "--model", path("m.json"), "--joints", path("t.csv"), "--out",
+                                      path("p.csv")};
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int full = ::open("/dev/full", O_WRONLY);
+    const int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (full < 0 || err < 0) ::_exit(126);
+    ::dup2(full, 1);
+    ::dup2(err, 2);
+    std::vector<char*> argv{const_cast<char*>(ERRFIELD_CLI_PATH)};
+    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+    argv.push_back(nullptr);
+    ::execv(ERRFIELD_CLI_PATH, argv.data());
+    ::_exit(127);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 1);
+  EXPECT_THAT(read("stderr.txt"), HasSubstr("cannot write to standard output"));
+  EXPECT_EQ(read("p.csv"), "previous\n") << "a run that failed replaced its output";
+}
+
 // ---- compensate --strict -----------------------------------------------------------------------
 
 TEST_F(RobotFiles, CompensateStrictWritesNothingNamesTheRowAndExitsOne) {
@@ -239,6 +316,31 @@ TEST(OptionValues, FitVariogramRangeMaxAndNu) {
   EXPECT_THAT(r.err, AllOf(HasSubstr("--nu"), HasSubstr("mat")));
   r = run_errfield({"fit-variogram", "--input", "v.csv", "--model", "sph", "--range-max", "10"}, dir.path());
   EXPECT_EQ(r.exit_code, 0) << r.output();
+}
+
+// Issue 20: `simulate --tool-offset 1e300,0,0` exited 1 ("computed value is -inf").
+TEST(OptionValues, SimulateToolOffsetBeyondAToolIsBadUsage) {
+  ScratchDir dir;
+  for (const char* v : {"1e300,0,0", "0,-2e4,0", "random:1e300"}) {
+    const auto r = run_errfield({"simulate", "--step", "500", "--tool-offset", v, "--out", "o.csv"}, dir.path());
+    EXPECT_EQ(r.exit_code, 2) << v << ": " << r.err;
+    EXPECT_THAT(r.err, AllOf(HasSubstr("--tool-offset"), HasSubstr("at most 10000 mm"))) << v;
+  }
+  EXPECT_FALSE(fs::exists(dir.path() / "o.csv"));
+  const auto ok = run_errfield({"simulate", "--step", "500", "--tool-offset", "1,2,3", "--out", "o.csv"}, dir.path());
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+}
+
+// Issue 20: `pow(range=...)` with the exponent also given said "'exponent' given twice".
+TEST(OptionMessages, PowerModelParameterGivenTwiceNamesBothSpellings) {
+  ScratchDir dir;
+  dir.write("g.csv", kUnitCubeGrid);
+  const auto r = run_errfield({"cv", "--method", "kriging", "--samples", "g.csv", "--coords", "x,y,z", "--value", "v",
+                               "--model", "pow(sill=1,range=1.5,exponent=1)"},
+                              dir.path());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("the exponent of 'pow(sill=1,range=1.5,exponent=1)' is given twice"),
+                           HasSubstr("'range' and as 'exponent'")));
 }
 
 // ---- messages that named internals -------------------------------------------------------------

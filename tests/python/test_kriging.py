@@ -191,3 +191,17 @@ def test_kriging_option_words_refused_alike_by_cli_and_python(tmp_path, extra, c
     with pytest.raises(errfield.ArgumentError) as e:
         errfield.Kriging(x, z, MODEL, **extra)
     assert message.format(p="") in str(e.value)
+
+
+def test_thread_limit_is_the_clis():
+    """Issue 20: threads=10**9 reached OpenMP, which aborted the interpreter; the estimators refuse it
+    as the CLI's --threads does (one shared check, errfield/thread_count.hpp)."""
+    x, z, t = data(n=20, m=3)
+    limit = "at most 1024 threads per job"
+    with pytest.raises(errfield.ResourceError, match=limit):
+        errfield.Kriging(x, z, MODEL, threads=10**9)
+    with pytest.raises(errfield.ResourceError, match=limit):
+        errfield.ScatteredIdw(x, z, threads=10**9)
+    g = np.array([[i, j, k] for i in range(2) for j in range(2) for k in range(2)], dtype=float)
+    with pytest.raises(errfield.ResourceError, match=limit):
+        errfield.GridIdw(g, np.arange(8.0), threads=10**9).predict(g)

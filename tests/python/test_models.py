@@ -148,3 +148,27 @@ def test_fit_from_a_model_text_improves_on_its_start():
     # the given parameters are one of the starting points, so the fit is at least as good
     assert fit["weighted_sse"] <= start_sse
     np.testing.assert_allclose(fit["weighted_sse"], np.sum(n * (g - fit["model"].gamma(h)) ** 2), rtol=1e-9)
+
+
+def test_likelihood_sample_minimum_and_constant_values_are_the_clis(tmp_path):
+    """Issue 20: Python said "need at least 3" samples where the CLI says 4; and values that are all
+    equal "converged" to a sill of 8e-34. Both are refused, with one shared minimum."""
+    from conftest import run_cli_status
+    x, z = sample_field(n=20)
+    samples = write_csv(tmp_path / "s.csv", {"x": x[:3, 0], "y": x[:3, 1], "v": z[:3]})
+    status, _, stderr = run_cli_status("fit-variogram", "--input", samples, "--method", "reml", "--coords", "x,y",
+                                       "--value", "v", "--model", "exp")
+    assert status == 2 and "at least 4 samples" in stderr
+    with pytest.raises(errfield.InputError, match="need at least 4"):
+        errfield.fit_likelihood(x[:3], z[:3], "exp")
+    with pytest.raises(errfield.InputError, match="values are equal"):
+        errfield.fit_likelihood(x, np.full(len(z), 2.5), "exp")
+
+
+def test_likelihood_sample_budget_is_the_clis():
+    """The CLI refused more than 3,000 samples for ML/REML (O(N^3) per evaluation, exit 3); Python
+    went ahead (N = 10^5 would allocate 80 GB per matrix). One limit, a ResourceError before any work."""
+    rng = np.random.default_rng(3)
+    x = rng.uniform(0, 100, size=(3001, 2))
+    with pytest.raises(errfield.ResourceError, match="limited to 3000 samples"):
+        errfield.fit_likelihood(x, rng.standard_normal(3001), "exp")

@@ -101,6 +101,15 @@ def test_predict_matches_cli(sim, fitted, tmp_path):
     assert same(one["px"], from_dict["px"][3:4])
 
 
+def test_predict_on_no_rows_gives_empty_float_columns(fitted):
+    """Issue 20: on 0 rows the position columns came back as string arrays."""
+    r = errfield.predict(fitted, np.zeros((0, 6)))
+    assert {"px", "py", "pz", "status"} <= set(r)
+    for name in set(r) - {"status"}:
+        assert r[name].dtype == np.float64 and r[name].shape == (0,), name
+    assert r["status"].dtype.kind == "U" and r["status"].shape == (0,)
+
+
 def test_compensate_matches_cli(sim, fitted, tmp_path):
     run_cli("compensate", "--model", sim / "vk.json", "--targets", sim / "hold.csv", "--tolerance", "0.3",
             "--out", tmp_path / "c.csv")

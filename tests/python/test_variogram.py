@@ -98,3 +98,21 @@ def test_library_messages_are_the_clis(tmp_path):
     with pytest.raises(errfield.ArgumentError) as e:
         errfield.variogram(x, z, [0.0, 5.0, 5.0])
     assert str(e.value) == stderr[len(prefix):].strip()
+
+
+def test_thread_limit_is_the_clis(tmp_path):
+    """Issue 20: threads=10**9 killed the interpreter (libgomp: Out of memory allocating 224 GB). The
+    library's options refuse what the CLI's --threads refuses, with the same limit (ResourceError)."""
+    from conftest import run_cli_status
+    x, z = field(n=10, dims=1)
+    samples = write_csv(tmp_path / "s.csv", {"x": x[:, 0], "v": z[:, 0]})
+    status, _, stderr = run_cli_status("variogram", "--input", samples, "--coords", "x", "--value", "v",
+                                       "--bins", "0,100,200", "--threads", str(10**9))
+    assert status == 3
+    limit = "at most 1024 threads per job"
+    assert limit in stderr
+    with pytest.raises(errfield.ResourceError, match=limit):
+        errfield.variogram(x, z, [0.0, 100.0, 200.0], threads=10**9)
+    with pytest.raises(errfield.ArgumentError, match="threads is -1"):
+        errfield.variogram(x, z, [0.0, 100.0, 200.0], threads=-1)
+    assert errfield.variogram(x, z, [0.0, 100.0, 200.0], threads=1024).pairs.sum() > 0

@@ -341,5 +341,80 @@ TEST_F(SilentResults, IdwWithAHugePowerIsTheNearestVertexNotAnEmptyPrediction) {
   }
 }
 
+// ---- issue 20: likelihood fits and fits that say "converged" without an estimate ---------------
+
+// Samples on a 6 x 5 grid (unit spacing) with the value `f(x, y)`, as the CSV fit-variogram reads.
+std::string grid_samples(double (*f)(double, double)) {
+  std::string s = "x,y,v\n";
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 5; ++j) s += std::to_string(i) + "," + std::to_string(j) + "," + format_number(f(i, j)) + "\n";
+  return s;
+}
+
+// ML/REML on values that are all equal reported "converged" with a sill of 8e-34.
+TEST_F(SilentResults, LikelihoodFitOfConstantValuesIsRefused) {
+  write("c.csv", grid_samples([](double, double) { return 2.5; }));
+  for (const std::string method : {"ml", "reml"}) {
+    const auto r = run("fit-variogram --method " + method + " --input " + path("c.csv") +
+                       " --coords x,y --value v --model exp --out " + path("m.json"));
+    EXPECT_EQ(r.exit_code, 2) << method << ": " << r.err;
+    EXPECT_THAT(r.err, AllOf(HasSubstr("c.csv"), HasSubstr("values are equal"), HasSubstr("constant")));
+    EXPECT_THAT(r.out, Not(HasSubstr("converged")));
+    EXPECT_FALSE(exists("m.json"));
+  }
+  // --model auto fits the same likelihood: the data's own reason, not "no candidate well conditioned".
+  write("t.csv", "x,y\n0.5,0.5\n");
+  const auto r = run("interpolate --method kriging --model auto --samples " + path("c.csv") + " --targets " +
+                     path("t.csv") + " --coords x,y --value v --out " + path("p.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("c.csv"), HasSubstr("no candidate model could be fitted"), HasSubstr("values are equal")));
+  EXPECT_FALSE(exists("p.csv"));
+}
+
+// Values of ~1e200 (or ~1e-200) said "not positive definite at any starting point".
+TEST_F(SilentResults, LikelihoodFitOfExtremeMagnitudesSaysRescale) {
+  write("big.csv", grid_samples([](double x, double y) { return 1e200 * (1.0 + std::sin(x) * std::cos(y)); }));
+  write("tiny.csv", grid_samples([](double x, double y) { return 1e-200 * (1.0 + std::sin(x) * std::cos(y)); }));
+  for (const std::string f : {"big.csv", "tiny.csv"}) {
+    const auto r = run("fit-variogram --method reml --input " + path(f) + " --coords x,y --value v --model exp");
+    EXPECT_EQ(r.exit_code, 2) << f << ": " << r.err;
+    EXPECT_THAT(r.err, AllOf(HasSubstr(f), HasSubstr("rescale the values")));
+  }
+}
+
+// On the Meuse data (log zinc) REML exp ran the range to its upper bound and said "converged". A
+// plane (a pure trend) drives the range to the bound the same way: the variogram grows without
+// levelling off over the sampled area.
+TEST_F(SilentResults, LikelihoodFitWithTheRangeOnItsBoundSaysSo) {
+  write("trend.csv", grid_samples([](double x, double y) { return 0.5 * x + 0.3 * y + 0.01 * std::sin(7 * x + 3 * y); }));
+  const auto r = run("fit-variogram --method reml --input " + path("trend.csv") +
+                     " --coords x,y --value v --model exp --out " + path("m.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, AllOf(HasSubstr("status not converged"), HasSubstr("upper bound"), HasSubstr("no finite range")));
+  EXPECT_THAT(r.err, HasSubstr("upper bound"));
+  const auto j = nlohmann::json::parse(read("m.json"));
+  EXPECT_EQ(j["fit"]["status"], "not_converged");
+  // The reported range is the bound: 1000 x the samples' extent (the diagonal of the 5 x 4 grid).
+  const double bound = 1000.0 * std::hypot(5.0, 4.0);
+  EXPECT_NEAR(j["fit"]["ranges"][0].get<double>(), bound, 1e-6 * bound);
+}
+
+// fit-variogram on a directional variogram pooled all directions into one isotropic fit, exit 0.
+TEST_F(SilentResults, FitVariogramRefusesSeveralDirectionsPooled) {
+  const std::string header = "lag_lo,lag_hi,lag_mean,gamma,pairs,direction\n";
+  const std::string rows0 = "0,1,0.5,0.1,30,0\n1,2,1.5,0.2,40,0\n2,3,2.5,0.3,50,0\n3,4,3.5,0.32,50,0\n";
+  const std::string rows90 = "0,1,0.5,0.2,30,90\n1,2,1.5,0.4,40,90\n2,3,2.5,0.5,50,90\n3,4,3.5,0.52,50,90\n";
+  write("dir.csv", header + rows0 + rows90);
+  const auto r = run("fit-variogram --input " + path("dir.csv") + " --model sph --out " + path("m.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("dir.csv"), HasSubstr("column 'direction'"), HasSubstr("2 directions (0, 90)"),
+                           HasSubstr("one direction at a time"), HasSubstr("--anisotropy rotated")));
+  EXPECT_FALSE(exists("m.json"));
+  // One direction's rows alone are one variogram: fitted.
+  write("one.csv", header + rows90);
+  const auto ok = run("fit-variogram --input " + path("one.csv") + " --model sph --out " + path("m.json"));
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+}
+
 }  // namespace
 }  // namespace errfield

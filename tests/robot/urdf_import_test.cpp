@@ -2,6 +2,7 @@
 // (support/urdf_writer: 4x4 products from the URDF definitions), the ER20-C10 round trip, the
 // conventions the docs promise, and the refusals through the CLI (exit 2, message names the joint).
 
+#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -309,6 +310,80 @@ TEST_F(UrdfImportCli, RefusesMalformedFiles) {
                      path("robot.json"));
   EXPECT_EQ(t.exit_code, 2);
   EXPECT_THAT(t.err, HasSubstr("--tool"));
+}
+
+// ---- issue 20: adversarial inputs ---------------------------------------------------------------
+
+// 100,000 nested elements (700 kB) segfaulted urdfdom's recursive parser after 5.8 s; parse time grew
+// quadratically with depth. Refused before parsing, naming the limit.
+TEST_F(UrdfImportCli, RefusesDeepNestingBeforeParsing) {
+  std::string deep = "<robot name=\"deep\">";
+  for (int i = 0; i < 100000; ++i) deep += "<a>";
+  for (int i = 0; i < 100000; ++i) deep += "</a>";
+  deep += "</robot>\n";
+  const auto start = std::chrono::steady_clock::now();
+  const auto r = import_text(deep);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  expect_refused(r, {"arm.urdf", "nested more than " + std::to_string(kMaxUrdfDepth), "Input limits"});
+  EXPECT_LT(seconds, 2.0);  // a linear scan; the parser took 5.8 s here before crashing
+  // The limit counts elements, not comments, CDATA or self-closing tags.
+  std::string xml = urdf_xml("a", messy_arm());
+  std::string flat = "<!-- <a><a><a> -->";
+  for (int i = 0; i < kMaxUrdfDepth + 10; ++i) flat += "<x/>";
+  xml.insert(xml.find("</robot>"), flat);
+  EXPECT_EQ(import_text(xml).exit_code, 0);
+}
+
+// A 100 MB URDF took 11 s and 2.2 GB before it was rejected; now its size is refused as it is read.
+TEST_F(UrdfImportCli, RefusesAFileBeyondTheByteLimit) {
+  std::string xml = urdf_xml("a", messy_arm());
+  xml.insert(xml.find("</robot>"), "<!--" + std::string(kMaxUrdfBytes, ' ') + "-->");
+  const auto r = import_text(xml);
+  expect_refused(r, {"arm.urdf", std::to_string(kMaxUrdfBytes >> 20) + " MiB"});
+}
+
+// A <!DOCTYPE> gave "Could not find the 'robot' element".
+TEST_F(UrdfImportCli, RefusesDoctypeSayingSo) {
+  std::string xml = urdf_xml("a", messy_arm());
+  xml.insert(xml.find("<robot"), "<!DOCTYPE robot [ <!ENTITY len \"0.5\"> ]>\n");
+  expect_refused(import_text(xml), {"arm.urdf:2", "<!DOCTYPE>", "not supported"});
+}
+
+// A link that is the child of two joints was accepted (urdfdom kept one parent silently).
+TEST_F(UrdfImportCli, RefusesALinkWithTwoParentJoints) {
+  auto js = messy_arm();
+  TestUrdfJoint twin{"j3_twin", "base_link", "l3", "fixed"};
+  js.push_back(twin);
+  expect_refused(import_text(urdf_xml("a", js)), {"link 'l3'", "two joints", "'j3'", "'j3_twin'", "tree"});
+}
+
+// Joint limits of +-1e300 rad were accepted (and became +-5.7e301 deg in the robot JSON).
+TEST_F(UrdfImportCli, RefusesAbsurdJointLimits) {
+  auto js = messy_arm();
+  joint(js, "j2").lower_rad = -1e300, joint(js, "j2").upper_rad = 1e300;
+  expect_refused(import_text(urdf_xml("a", js)), {"joint 'j2'", "beyond +-100 rad"});
+  js = messy_arm();
+  joint(js, "j2").lower_rad = -kMaxUrdfJointLimit_rad, joint(js, "j2").upper_rad = kMaxUrdfJointLimit_rad;
+  EXPECT_EQ(import_text(urdf_xml("a", js)).exit_code, 0);  // at the bound: accepted
+}
+
+// An offset of 1e-300 m (neither 0 nor physical) was accepted; 0 (coincident axes) must stay legal,
+// and so must the rounding residue of a printed angle (6e-17).
+TEST_F(UrdfImportCli, RefusesDenormalOffsetsButAcceptsZeroAndRoundingResidue) {
+  auto js = messy_arm();
+  joint(js, "j4").xyz_m = {1e-300, 0.0, 0.0};
+  expect_refused(import_text(urdf_xml("a", js)), {"joint 'j4'", "xyz component 1", "neither 0 nor a physical size"});
+  js = messy_arm();
+  joint(js, "j4").rpy_rad.x() = 1e-300;
+  expect_refused(import_text(urdf_xml("a", js)), {"joint 'j4'", "rpy component 1"});
+  js = messy_arm();
+  joint(js, "j4").xyz_m = {2e3, 0.0, 0.0};
+  expect_refused(import_text(urdf_xml("a", js)), {"joint 'j4'", "beyond 1000 m"});
+  js = messy_arm();
+  joint(js, "j4").xyz_m = {0.0, 0.0, 0.0};
+  joint(js, "j5").xyz_m = {6.123233995736766e-17, 0.0, 0.1};
+  const auto ok = import_text(urdf_xml("a", js));
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
 }
 
 TEST_F(UrdfImportCli, DocsExample) {

@@ -23,12 +23,14 @@
 
 namespace errfield::compensation {
 
-/// One output column: numbers (NaN = an empty cell) or, when `words` is not empty, text (status).
+/// One output column: numbers (NaN = an empty cell) or, when `text`, words (status).
 struct OutputColumn {
   std::string name;
   std::vector<double> numbers;
   std::vector<std::string> words;
-  bool is_words() const { return !words.empty() || numbers.empty(); }
+  /// Says the kind even when the column has no rows (a 0-row prediction still has float columns).
+  bool text = false;
+  bool is_words() const { return text; }
 };
 
 /// The columns a step adds to its input table, in the CLI's order, and the rows it refused (no

@@ -6,7 +6,10 @@
 ///     the joints on the path base link -> tip link, in mm. Refuses, naming the joint or link, what a
 ///     6R MD-H model cannot hold: prismatic, continuous, planar or floating joints and mimic joints on
 ///     the path, a moving joint branching off a link between base and tip, an axis that is not a unit
-///     vector, and any number of revolute joints other than six.
+///     vector, and any number of revolute joints other than six. Also refuses what is no model at
+///     all: a file over kMaxUrdfBytes or nested deeper than kMaxUrdfDepth (before parsing), a
+///     <!DOCTYPE>, a link that is the child of two joints (not a tree), joint limits beyond
+///     kMaxUrdfJointLimit_rad and origin values outside the rule of kMinUrdfNonzeroOrigin.
 ///  2. mdh_from_urdf_chain: the equivalent modified D-H table (common normals between consecutive
 ///     joint axes), with what is left over in the model's base and tool transforms. Joint angles map
 ///     1:1: q_i of the model is the URDF joint position of the i-th revolute joint, in degrees.
@@ -16,6 +19,7 @@
 /// The conversion rules (which frame gets which offset, the Hayati beta for nearly parallel axes)
 /// are in docs/robot.md ("Importing a URDF").
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -49,6 +53,20 @@ struct UrdfChain {
   /// The revolute joints in chain order (joint i of the MD-H model is revolute()[i - 1]).
   std::vector<const UrdfJoint*> revolute() const;
 };
+
+/// Input limits of the URDF reader (docs/reliability.md, "Input limits"). A real arm's URDF is a
+/// few hundred kB at most and nests elements ~5 deep; the parser (TinyXML via urdfdom) recurses once
+/// per level and slows down quadratically with depth, so both are checked before it runs.
+inline constexpr std::size_t kMaxUrdfBytes = std::size_t{16} << 20;  ///< 16 MiB per file
+inline constexpr int kMaxUrdfDepth = 64;                                ///< element nesting levels
+/// Largest |joint limit| accepted, in radians (about 16 turns): beyond it a limit is a stand-in for
+/// "unlimited" or a unit mistake, and the sampled verification and planning would be meaningless.
+inline constexpr double kMaxUrdfJointLimit_rad = 100.0;
+/// An origin coordinate (metres or radians) is 0 or at least this in magnitude, and at most
+/// kMaxUrdfOriginOffset_m for xyz. Below 1e-30 a value is neither an exact zero nor physics nor the
+/// rounding residue of a printed angle (~1e-17): a corrupted or generated-by-mistake number.
+inline constexpr double kMinUrdfNonzeroOrigin = 1e-30;
+inline constexpr double kMaxUrdfOriginOffset_m = 1000.0;
 
 /// True when this build can parse URDF files (urdfdom found at configure time).
 bool urdf_support_available() noexcept;
