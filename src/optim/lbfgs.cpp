@@ -7,14 +7,14 @@
 namespace errfield::detail {
 namespace {
 
-struct Call {
+struct LbfgsCall {
   GradientObjective f;
   void* data;
   int evaluations = 0;
 };
 
-double trampoline(unsigned, const double* x, double* grad, void* call) {
-  auto* c = static_cast<Call*>(call);
+double lbfgs_trampoline(unsigned, const double* x, double* grad, void* call) {
+  auto* c = static_cast<LbfgsCall*>(call);
   ++c->evaluations;
   return c->f(x, grad, c->data);
 }
@@ -27,12 +27,12 @@ LbfgsOutcome minimize_lbfgs(GradientObjective f, void* data, std::vector<double>
     throw Error("minimize_lbfgs: box and start of different sizes");
   nlopt_opt opt = nlopt_create(NLOPT_LD_LBFGS, static_cast<unsigned>(x.size()));
   if (!opt) throw Error("minimize_lbfgs: NLopt could not create an L-BFGS optimizer");
-  Call call{f, data};
+  LbfgsCall call{f, data};
   nlopt_set_lower_bounds(opt, lower.data());
   nlopt_set_upper_bounds(opt, upper.data());
   nlopt_set_ftol_rel(opt, ftol_rel);
   nlopt_set_maxeval(opt, max_evaluations);
-  nlopt_set_min_objective(opt, &trampoline, &call);
+  nlopt_set_min_objective(opt, &lbfgs_trampoline, &call);
   LbfgsOutcome out;
   const nlopt_result r = nlopt_optimize(opt, x.data(), &out.objective);
   nlopt_destroy(opt);
