@@ -125,9 +125,12 @@ void add_fit_command(CLI::App& app) {
                   "condition number is below this")
       ->capture_default_str();
   cmd->add_option("--outlier-limit", a->outlier_limit,
-                  "kinematic methods from positions: refit without rows whose residual after calibration is beyond this "
-                  "many robust sigmas (gross outliers: a lost reflector, a wrong row; listed in a warning); 0 keeps "
-                  "every row")
+                  "kinematic methods from positions: refit without gross outliers (a lost reflector, a wrong row; all "
+                  "listed in a warning and the model file): kinematic+kriging drops a row whose reading is beyond this "
+                  "many robust sigmas from what its neighbours in the field predict (leave-one-out against the "
+                  "predictive sigma, nugget included), so rows where the robot departs smoothly from its kinematic "
+                  "model are kept; kinematic drops a row whose residual after calibration is; 0 keeps every row; "
+                  "docs/robot.md says which data decided the default")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--out", a->out, "model JSON (written atomically)")->required();

@@ -209,6 +209,21 @@ class KrigingField final : public ErrorField {
 
   const KrigingReport& factorization() const { return kriging_.report(); }
 
+  /// Per-sample leave-one-out (vector fields without merged duplicates; else empty).
+  std::vector<SampleHoldOut> hold_out_by_sample() const {
+    if constexpr (!std::is_same_v<V, Eigen::Vector3d>) {
+      return {};
+    } else {
+      const KrigingCrossValidation<V> cv = kriging_.leave_one_out();
+      if ((cv.status != KrigingStatus::Ok && cv.status != KrigingStatus::IllConditioned) ||
+          cv.residual.size() != values_.size() || cv.variance.size() != values_.size())
+        return {};
+      std::vector<SampleHoldOut> out(values_.size());
+      for (std::size_t i = 0; i < out.size(); ++i) out[i] = {cv.residual[i], cv.variance[i]};
+      return out;
+    }
+  }
+
   std::string describe() const override {
     return kind_ + " (" + std::string(field_space_name(options_.space)) + " space, " + std::to_string(values_.size()) +
            " samples, model " + model_.to_string() + ")";
@@ -306,6 +321,14 @@ KrigingFieldFit vector_field(const FieldSamples& samples, std::vector<Eigen::Vec
 }
 
 }  // namespace
+
+std::vector<SampleHoldOut> leave_one_out_by_sample(const ErrorField& field) {
+  if (const auto* f = dynamic_cast<const KrigingField<JointVector, Eigen::Vector3d, JointSpaceMetric>*>(&field))
+    return f->hold_out_by_sample();
+  if (const auto* f = dynamic_cast<const KrigingField<Eigen::Vector3d, Eigen::Vector3d, EuclideanMetric>*>(&field))
+    return f->hold_out_by_sample();
+  return {};
+}
 
 VariogramModel estimate_field_variogram(const FieldSamples& samples, const Eigen::MatrixXd& values, FieldSpace space) {
   EmpiricalVariogram ev = space == FieldSpace::task ? empirical_of(samples.position_mm, values, EuclideanMetric{})

@@ -15,6 +15,7 @@
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/distance_error.hpp"
 #include "errfield/compensation/error_fields.hpp"
+#include "errfield/compensation/kriging_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/scattered_idw.hpp"
 #include "compensation/fit_checks.hpp"
@@ -397,20 +398,64 @@ FitResult fit_checked(const MdhModel& robot, const MeasurementSet& d, const FitO
   });
 }
 
-/// Rows of `d` (all of them, also those a previous round excluded) whose residual after the fitted
-/// calibration is a gross outlier (FitOptions::outlier_limit).
-std::vector<std::size_t> gross_outliers(const FitResult& fit, const MeasurementSet& d, double limit) {
-  std::vector<double> r(d.q_deg.size());
-  for (std::size_t i = 0; i < r.size(); ++i)
-    r[i] = (fit.registration->robot_from_tracker * d.measured_mm[i] - forward_position(fit.model.command_model(), d.q_deg[i]))
-               .norm();
-  std::vector<double> sorted = r;
+/// Rows whose u = (|r| / σ) / (median |r| / σ over the rows / 1.5382) / √3 is above `limit`: the
+/// robust scale of IGG3 for 3-D residuals, applied to residuals standardized by their own σ.
+std::vector<std::size_t> beyond_robust_limit(const std::vector<double>& standardized, double limit) {
+  std::vector<double> sorted = standardized;
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
   const double sigma0 = sorted[sorted.size() / 2] / 1.5382;  // median of a 3-D Gaussian residual's norm
   std::vector<std::size_t> rows;
-  for (std::size_t i = 0; i < r.size(); ++i)
-    if (r[i] > limit * std::sqrt(3.0) * sigma0) rows.push_back(i);
+  for (std::size_t i = 0; i < standardized.size(); ++i)
+    if (standardized[i] > limit * std::sqrt(3.0) * sigma0) rows.push_back(i);
   return rows;
+}
+
+/// How gross outliers were judged: against the field's held-out prediction (kinematic+kriging) or
+/// against the calibrated model alone (kinematic, or a field without per-row leave-one-out).
+enum class OutlierCriterion { held_out_field, calibration_residual };
+
+/// Rows of `d` (all of them, also those a previous round excluded: `excluded`, sorted) that are
+/// gross outliers (FitOptions::outlier_limit). With a kriging field, a row is judged by how far its
+/// reading is from what its neighbours in the field's space predict, in units of the predictive σ
+/// (nugget included): the leave-one-out residual for the rows the field holds, the field's
+/// prediction for excluded rows. A row at the edge of the data, or in a corner where the robot
+/// departs smoothly from its kinematic model, has a large σ or neighbours that agree with it, so it
+/// is kept; a reading off among consistent neighbours is not. The residual after calibration alone
+/// took real behaviour at the workspace extremes for outliers (issue 19: 11 real rows at
+/// |q1| > 110 deg dropped, held-out maximum 3-4x worse). Without a field: the calibration residual.
+std::vector<std::size_t> gross_outliers(const FitResult& fit, const MeasurementSet& d,
+                                        const std::vector<std::size_t>& excluded, double limit,
+                                        OutlierCriterion& criterion) {
+  const std::size_t n = d.q_deg.size();
+  std::vector<double> r(n);
+  for (std::size_t i = 0; i < n; ++i)
+    r[i] = (fit.registration->robot_from_tracker * d.measured_mm[i] - forward_position(fit.model.command_model(), d.q_deg[i]))
+               .norm();
+  criterion = OutlierCriterion::calibration_residual;
+  const ErrorField* field = fit.model.field();
+  if (!field) return beyond_robust_limit(r, limit);
+  const std::vector<SampleHoldOut> loo = leave_one_out_by_sample(*field);
+  if (loo.size() + excluded.size() != n) return beyond_robust_limit(r, limit);
+  std::vector<double> standardized(n);
+  std::size_t next_excluded = 0, next_kept = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (next_excluded < excluded.size() && excluded[next_excluded] == i) {
+      ++next_excluded;
+      // Not in the field: its held-out prediction is the field's own.
+      const Eigen::Vector3d p = forward_position(fit.model.nominal_model(), d.q_deg[i]);
+      const ErrorPrediction e = field->predict(p, d.q_deg[i]);
+      const double variance = e.predictive_variance_mm2() / 3.0;  // per component
+      const Eigen::Vector3d residual = fit.registration->robot_from_tracker * d.measured_mm[i] -
+                                       forward_position(fit.model.command_model(), d.q_deg[i]) - e.position_error_mm;
+      // Outside the field's region nothing is predicted there: no evidence against the row.
+      standardized[i] = e.inside_region && variance > 0 ? residual.norm() / std::sqrt(variance) : 0.0;
+      continue;
+    }
+    const SampleHoldOut& h = loo[next_kept++];
+    standardized[i] = h.variance_mm2 > 0 ? h.residual_mm.norm() / std::sqrt(h.variance_mm2) : 0.0;
+  }
+  criterion = OutlierCriterion::held_out_field;
+  return beyond_robust_limit(standardized, limit);
 }
 
 MeasurementSet without_rows(const MeasurementSet& d, const std::vector<std::size_t>& rows) {
@@ -466,13 +511,14 @@ FitResult fit_compensation_model(const robot::MdhModel& robot, const Measurement
   // of 5 mm tracker errors made the joint-space default 2.3x worse on clean held-out points.
   std::vector<std::size_t> excluded;
   MeasurementSet kept;
+  OutlierCriterion criterion = OutlierCriterion::calibration_residual;
   for (int round = 0; round < 3; ++round) {
-    const std::vector<std::size_t> rows = gross_outliers(out, d, o.outlier_limit);
+    const std::vector<std::size_t> rows = gross_outliers(out, d, excluded, o.outlier_limit, criterion);
     if (rows == excluded) break;
     if (rows.size() * 5 > d.q_deg.size()) {
       out.warnings.push_back(std::to_string(rows.size()) + " of " + std::to_string(d.q_deg.size()) +
-                             " rows have a residual beyond " + format_number(o.outlier_limit) +
-                             " robust sigma after calibration (" + point_list(d, rows, 10) +
+                             " rows are beyond " + format_number(o.outlier_limit) + " robust sigma (" +
+                             point_list(d, rows, 10) +
                              "): too many to be a few gross outliers, so all were kept; check the data (a wrong "
                              "robot or tool, a moved tracker)");
       break;
@@ -482,9 +528,13 @@ FitResult fit_compensation_model(const robot::MdhModel& robot, const Measurement
     out = fit_checked(robot, kept, o);
   }
   if (excluded.empty()) return attach_artifacts(std::move(out), robot, d);
-  const std::string what = std::to_string(excluded.size()) + " row(s) excluded as gross outliers (residual after "
-                           "calibration beyond " + format_number(o.outlier_limit) + " robust sigma; --outlier-limit): " +
-                           point_list(d, excluded);
+  const std::string how = criterion == OutlierCriterion::held_out_field
+                              ? "reading beyond " + format_number(o.outlier_limit) +
+                                    " robust sigma from what its neighbours in the field predict (leave-one-out, "
+                                    "in units of the predictive sigma, nugget included)"
+                              : "residual after calibration beyond " + format_number(o.outlier_limit) + " robust sigma";
+  const std::string what = std::to_string(excluded.size()) + " row(s) excluded as gross outliers (" + how +
+                           "; --outlier-limit): " + point_list(d, excluded);
   out.notes.insert(out.notes.begin(), what);
   out.warnings.push_back(what + "; look at their measurements");
   std::vector<std::string> points;

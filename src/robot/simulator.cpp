@@ -86,6 +86,9 @@ void SimulatorConfig::validate() const {
     nonneg(compliance.stiffness_nm_per_rad[k], "compliance.stiffness_nm_per_rad[" + std::to_string(i) + "]");
     nonneg(compliance.link_mass_kg[k], "compliance.link_mass_kg[" + std::to_string(i) + "]");
     nonneg(transmission.amplitude_deg[k], "transmission.amplitude_deg[" + std::to_string(i) + "]");
+    nonneg(end_range.onset_deg[k], "end_range.onset_deg[" + std::to_string(i) + "]");
+    if (!std::isfinite(end_range.error_at_limit_deg[k]))
+      throw ArgumentError("SimulatorConfig: end_range.error_at_limit_deg[" + std::to_string(i) + "] is not finite");
   }
   nonneg(compliance.payload_kg, "compliance.payload_kg");
   if (!tool_offset_mm.allFinite()) throw ArgumentError("SimulatorConfig: tool_offset_mm has a non-finite entry");
@@ -99,7 +102,7 @@ SimulatorConfig SimulatorConfig::from_json(const nlohmann::json& j, const std::s
   SimulatorConfig c = paper_default();
   if (!j.is_object()) json_fail(source, "(top level)", "expected a JSON object");
   json_check_keys(j, {"comment", "seed", "robot", "geometry", "tool_offset_mm", "compliance", "transmission",
-                      "repeatability_sigma_mm", "tracker"},
+                      "end_range", "repeatability_sigma_mm", "tracker"},
                   "", source);
   if (j.contains("seed")) {
     if (!j["seed"].is_number_unsigned()) json_fail(source, "seed", "expected a non-negative integer, got " + j["seed"].dump());
@@ -157,6 +160,13 @@ SimulatorConfig SimulatorConfig::from_json(const nlohmann::json& j, const std::s
     if (g.contains("harmonic")) c.transmission.harmonic = json_array<6>(g["harmonic"], "transmission.harmonic", source);
     if (g.contains("phase_deg")) c.transmission.phase_deg = json_array<6>(g["phase_deg"], "transmission.phase_deg", source);
   }
+  if (j.contains("end_range")) {
+    const auto& g = j["end_range"];
+    json_check_keys(g, {"onset_deg", "error_at_limit_deg"}, "end_range.", source);
+    if (g.contains("onset_deg")) c.end_range.onset_deg = json_array<6>(g["onset_deg"], "end_range.onset_deg", source);
+    if (g.contains("error_at_limit_deg"))
+      c.end_range.error_at_limit_deg = json_array<6>(g["error_at_limit_deg"], "end_range.error_at_limit_deg", source);
+  }
   if (j.contains("repeatability_sigma_mm"))
     c.repeatability_sigma_mm = json_number(j, "repeatability_sigma_mm", "", source, nullptr);
   if (j.contains("tracker")) {
@@ -200,6 +210,7 @@ nlohmann::json SimulatorConfig::to_json() const {
        {{"amplitude_deg", transmission.amplitude_deg},
         {"harmonic", transmission.harmonic},
         {"phase_deg", transmission.phase_deg}}},
+      {"end_range", {{"onset_deg", end_range.onset_deg}, {"error_at_limit_deg", end_range.error_at_limit_deg}}},
       {"repeatability_sigma_mm", repeatability_sigma_mm},
       {"tracker",
        {{"tracker_from_world", detail::pose_json(tracker.tracker_from_world)},
@@ -267,6 +278,15 @@ JointVector SimulatedRobot::joint_deflection_deg(const JointVector& q_cmd_deg) c
   for (int j = 0; j < kJointCount; ++j) {
     const auto k = static_cast<std::size_t>(j);
     dq[j] += t.amplitude_deg[k] * std::sin(t.harmonic[k] * q_cmd_deg[j] * kDeg + t.phase_deg[k] * kDeg);
+  }
+  const EndRangeErrorModel& e = config_.end_range;
+  for (int j = 0; j < kJointCount; ++j) {
+    const auto k = static_cast<std::size_t>(j);
+    const double q = q_cmd_deg[j], onset = e.onset_deg[k];
+    const double limit = q >= 0 ? config_.nominal.link(j).q_max_deg : -config_.nominal.link(j).q_min_deg;
+    if (e.error_at_limit_deg[k] == 0.0 || std::abs(q) <= onset || limit <= onset) continue;
+    const double t = (std::abs(q) - onset) / (limit - onset);
+    dq[j] += (q >= 0 ? 1.0 : -1.0) * e.error_at_limit_deg[k] * t * t;
   }
   return dq;
 }

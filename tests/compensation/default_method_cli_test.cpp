@@ -41,6 +41,10 @@ class DefaultMethodStudy : public errfield::testing::CliTest {
     write(hold, comments + header + base_rows + hold_rows);
   }
 
+  /// Simulates with `simulate` (+ truth columns, positions), splits at `n_train` targets and checks
+  /// fit's default outlier screen against the oracle (the same fit without the true outliers).
+  void expect_screen_as_an_oracle(const std::string& simulate, std::size_t n_train);
+
   /// Fits with `options`, validates on hold.csv; returns after_mm per point that was accepted.
   std::map<std::string, double> held_out_errors(const std::string& options, std::string* fit_output = nullptr) {
     const errfield::testing::CliResult f = run("fit --robot r.json --data train.csv " + options + " --out m.json");
@@ -112,17 +116,14 @@ std::set<std::string> true_outliers(const std::string& file) {
   return s;
 }
 
-// Gross tracker outliers (4 % of rows, 3 mm) among 0.1 mm errors: kriged as if they were the field
-// they spread into their neighbourhood. The default must find exactly the simulated ones and score,
-// on the clean held-out points, as well as the same method fitted on data with the outliers removed
-// by hand (the oracle), and far better than keeping them.
-TEST_F(DefaultMethodStudy, GrossOutliersAreExcludedAsAnOracleWould) {
-  ASSERT_EQ(run("simulate --robot ur5e --seed 13 --sample scattered:330 --orientation-spread 30 --joint-decimals 2 "
-                "--tool-offset random:20 --outliers 0.04:3 --truth-columns --measure positions --robot-out r.json "
-                "--out all.csv")
-                .exit_code,
-            0);
-  split("all.csv", 220, "train.csv", "hold.csv");
+// Gross tracker outliers among 0.1-0.3 mm errors: kriged as if they were the field they spread into
+// their neighbourhood. The default must find exactly the simulated ones and score, on the clean
+// held-out points, as well as the same method fitted on data with the outliers removed by hand (the
+// oracle: RMS within 5 %, max within 10 %, no held-out point refused that the oracle predicts), and
+// far better than keeping them.
+void DefaultMethodStudy::expect_screen_as_an_oracle(const std::string& simulate, std::size_t n_train) {
+  ASSERT_EQ(run(simulate + " --truth-columns --measure positions --robot-out r.json --out all.csv").exit_code, 0);
+  split("all.csv", n_train, "train.csv", "hold.csv");
   const std::set<std::string> train_bad = true_outliers(path("train.csv")), hold_bad = true_outliers(path("hold.csv"));
   ASSERT_GE(train_bad.size(), 4u);
   // the oracle's training file: the same rows without the simulated outliers
@@ -166,15 +167,40 @@ TEST_F(DefaultMethodStudy, GrossOutliersAreExcludedAsAnOracleWould) {
       oracle[op.row(i)[op.column_index("point")]] = op.numeric_cell(i, op.column_index("after_mm"));
 
   std::set<std::string> clean;
+  std::size_t held_out = 0;
+  for (const auto& [p, e] : oracle) held_out += hold_bad.count(p) ? 0 : 1;
   for (const auto& [p, e] : by_default)
     if (!hold_bad.count(p) && kept_all.count(p) && oracle.count(p)) clean.insert(p);
   ASSERT_GE(clean.size(), 90u);
+  EXPECT_EQ(clean.size(), held_out) << "the default refused held-out points the oracle predicted";
   const double mine = rms_over(by_default, clean), oracle_rms = rms_over(oracle, clean),
                naive = rms_over(kept_all, clean);
-  std::cout << "clean held-out 3-D RMS on " << clean.size() << " points: default " << mine << " mm, oracle "
-            << oracle_rms << " mm, outliers kept " << naive << " mm\n";
+  double mine_max = 0, oracle_max = 0;
+  for (const auto& p : clean) {
+    mine_max = std::max(mine_max, by_default.at(p));
+    oracle_max = std::max(oracle_max, oracle.at(p));
+  }
+  std::cout << "clean held-out 3-D RMS on " << clean.size() << " points: default " << mine << " mm (max " << mine_max
+            << "), oracle " << oracle_rms << " mm (max " << oracle_max << "), outliers kept " << naive << " mm\n";
   EXPECT_LE(mine, 1.05 * oracle_rms);
-  EXPECT_LT(mine, 0.6 * naive);
+  EXPECT_LE(mine_max, 1.1 * oracle_max);
+  EXPECT_LT(mine, 0.8 * naive);
+}
+
+TEST_F(DefaultMethodStudy, GrossOutliersAreExcludedAsAnOracleWould) {
+  expect_screen_as_an_oracle("simulate --robot ur5e --seed 13 --sample scattered:330 --orientation-spread 30 "
+                             "--joint-decimals 2 --tool-offset random:20 --outliers 0.04:3",
+                             220);
+}
+
+// The same with systematic effects that grow at the ends of q1's and q5's travel (issue 19): the
+// screen on the calibration residual dropped 17 rows here (5 outliers and 12 real rows at
+// |q1| > 110 deg), refused 2 held-out points there and doubled the held-out maximum.
+TEST_F(DefaultMethodStudy, GrossOutliersAmongRealisticSystematicEffectsAreExcludedAsAnOracleWould) {
+  expect_screen_as_an_oracle("simulate --robot kr16 --seed 3 --sample scattered:400 --joint-box "
+                             "-150,150,-130,-30,70,150,-90,90,-110,110,-180,180 --systematic realistic "
+                             "--outliers 0.02:3",
+                             280);
 }
 
 TEST_F(DefaultMethodStudy, DistancesOnlyDefaultIsTheKinematicCalibration) {

@@ -104,6 +104,20 @@ KrigingFieldFit fit_distance_kriging_field(const FieldSamples& samples, std::vec
 KrigingFieldFit fit_vector_kriging_field(const FieldSamples& samples, std::vector<Eigen::Vector3d> position_error_mm,
                                          const KrigingFieldOptions& options = {});
 
+/// One sample's leave-one-out residual in a vector kriging field: observed − predicted from all the
+/// other samples (mm, robot frame) and the variance of that residual per component (mm²: kriging
+/// variance plus the nugget when it is measurement error), so |residual|² / variance ~ χ²₃.
+struct SampleHoldOut {
+  Eigen::Vector3d residual_mm = Eigen::Vector3d::Zero();
+  double variance_mm2 = 0.0;
+};
+
+/// The leave-one-out residual of every sample of a vector kriging field, in the order the samples
+/// were given, from the field's factorization (what fit's outlier screen judges rows by). Empty
+/// when `field` is not a vector kriging field, when samples at the same location were merged
+/// (leave-one-out then leaves out a location, not a row) or when the leave-one-out failed.
+std::vector<SampleHoldOut> leave_one_out_by_sample(const ErrorField& field);
+
 /// The variogram model the fields estimate when none is given: empirical variogram of the values
 /// over the samples' lags (10 bins up to 60% of the largest lag) and the best-fitting of sph/exp/gau
 /// with a free nugget. `values` is N x K (K = 1 or 3). The model is that of one component (the

@@ -7,6 +7,8 @@
 ///  - joint compliance under gravity and payload: each joint yields by torque / stiffness, with
 ///    link masses as point masses halfway between consecutive frame origins,
 ///  - a small periodic transmission error per joint, amplitude · sin(harmonic · q + phase),
+///  - an end-of-travel error per joint that sets in beyond an onset angle and grows towards the
+///    joint limit (cable and hose drag, a counterbalance spring: EndRangeErrorModel),
 ///  - repeatability noise at every move (isotropic Gaussian on the position),
 /// and a laser tracker measures positions in its own frame with noise growing with range
 /// (SPEC section 7). Everything is deterministic for a given seed (SimulationRng).
@@ -56,6 +58,17 @@ struct TransmissionErrorModel {
   std::array<double, kJointCount> phase_deg{};
 };
 
+/// Joint errors that set in near the ends of a joint's travel — a dress pack or hose that drags
+/// the axis, a counterbalance spring — and that a kinematic model cannot express:
+/// dq_j = sign(q_j) · error_at_limit_deg_j · ((|q_j| − onset_deg_j) / (limit_j − onset_deg_j))²
+/// for |q_j| > onset_deg_j, where limit_j is the nominal joint limit on q_j's side (q_max_deg for
+/// q_j > 0, −q_min_deg for q_j < 0). Quadratic, so it starts smoothly (zero slope at the onset):
+/// real robot behaviour at the workspace extremes, not an outlier. 0 = none.
+struct EndRangeErrorModel {
+  std::array<double, kJointCount> onset_deg{};
+  std::array<double, kJointCount> error_at_limit_deg{};
+};
+
 /// Laser tracker: where it is and how noisy. Per-axis noise sigma at range r (m) is
 /// `sigma_constant_mm + sigma_per_m_mm · r`.
 struct TrackerModel {
@@ -78,6 +91,7 @@ struct SimulatorConfig {
   Eigen::Vector3d tool_offset_mm = Eigen::Vector3d::Zero();
   ComplianceModel compliance;
   TransmissionErrorModel transmission;
+  EndRangeErrorModel end_range;
   /// Repeatability: per-axis Gaussian sigma of the position at each move (mm). 0.02 mm per axis
   /// puts 99.7% of moves within ±0.06 mm per axis (the ER20-C10's ±0.06 mm).
   double repeatability_sigma_mm = 0.02;
@@ -107,7 +121,7 @@ class SimulatedRobot {
   /// The true geometry (nominal + deviations, rigid part absorbed).
   const MdhModel& true_geometry() const noexcept { return true_geometry_; }
 
-  /// Joint deflection (deg) at commanded joints: compliance + transmission error.
+  /// Joint deflection (deg) at commanded joints: compliance + transmission error + end-range error.
   JointVector joint_deflection_deg(const JointVector& q_cmd_deg) const;
   /// Where the robot really goes (world frame), without repeatability noise.
   Eigen::Isometry3d true_pose(const JointVector& q_cmd_deg, EndFrame frame = EndFrame::tool) const;
