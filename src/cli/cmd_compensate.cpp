@@ -25,6 +25,7 @@ namespace {
 struct CompensateArgs {
   std::string robot, model, targets, out, seed;
   double tolerance = 0.25, max_registration_rms = robot::kRegistrationRmsLimitMm;
+  double max_correction = 0.0;  // 0: compensation::default_max_correction_mm
   bool strict = false;
 };
 
@@ -67,7 +68,10 @@ void run_compensate(const CompensateArgs& a) {
     targets.poses = t.numeric_columns(pose_cols);
     warn_if_metres(t, nominal, "compensate", kNominalXyz);
   }
-  const StepColumns step = compensate_columns(model, nominal, targets, a.tolerance);
+  if (!(std::isfinite(a.max_correction) && a.max_correction >= 0.0))
+    throw ArgumentError("--max-correction: " + format_number(a.max_correction) +
+                        "; expected a ceiling > 0 (mm), or 0 for the default");
+  const StepColumns step = compensate_columns(model, nominal, targets, a.tolerance, a.max_correction);
   const std::size_t refused = step.refused, no_prediction = step.no_prediction;
   const std::vector<std::string>& status = step.columns.back().words;
   OutputTable out;
@@ -88,6 +92,17 @@ void run_compensate(const CompensateArgs& a) {
   std::cout << "compensate: " << n - refused << " of " << n << " targets compensated with " << method_name(model.method())
             << (refused ? "; " + std::to_string(refused) + " refused (status column): no joints written for them" : "")
             << "\n  written to " << a.out << "\n";
+  std::cout << "  tool point moved by at most " << format_number(step.max_correction_mm) << " mm ("
+            << (a.max_correction > 0.0 ? std::string("--max-correction")
+                                       : "default: " + format_number(kMaxCorrectionFactor) +
+                                             " x the largest correction at the model's training poses, at least " +
+                                             format_number(kMaxCorrectionFloorMm) + " mm")
+            << "; column move_mm)\n";
+  if (step.too_large)
+    std::cerr << "errfield compensate: warning: " << step.too_large << " target(s) would move the tool point by more "
+              << "than " << format_number(step.max_correction_mm)
+              << " mm (status correction-too-large, no joints written): far beyond the corrections the model "
+                 "predicts on its own data; check the robot, tool and model (or raise --max-correction)\n";
   if (no_prediction)
     std::cerr << "errfield compensate: warning: " << no_prediction
               << " target(s) got no finite prediction from the model's field (status no-prediction); no joints "
@@ -102,7 +117,8 @@ void add_compensate_command(CLI::App& app) {
       "models), where the model has a variance: var_mm2 (a new reading at the target: field + nugget),\n"
       "var_field_mm2 (field only), r95_mm (95 % radius, vector fields) and p_inside, the probability that the\n"
       "3-D error (distance error for distance models) is within --tolerance; the corrected command cmd_x..z and\n"
-      "the compensated joints cq1..cq6 (IK, orientation kept). Targets: q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg). Targets outside the modelled\n"
+      "the compensated joints cq1..cq6 (IK, orientation kept), the whole predicted error of the tool point\n"
+      "(total_dx..dz, total_mm: calibration + field) and how far the joints move it (move_mm). Targets: q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg). Targets outside the modelled\n"
       "region are refused (status outside-region, no joints), never extrapolated; so are predictions far beyond\n"
       "the model's range of errors (not-credible) and pose targets whose IK left the data's branch\n"
       "(branch-change: solved from the nearest training sample, or --seed, along the pose path).\n"
@@ -117,6 +133,11 @@ void add_compensate_command(CLI::App& app) {
   cmd->add_option("--max-registration-rms", a->max_registration_rms,
                   "joint targets with x,y,z or mx,my,mz: refuse (exit 2) data that are not this robot's "
                   "(registration RMS above this, mm; docs/robot.md)")
+      ->capture_default_str();
+  cmd->add_option("--max-correction", a->max_correction,
+                  "MM: refuse targets whose compensated joints move the tool point by more than this (status "
+                  "correction-too-large; column move_mm). Default (0): 3 x the largest total correction the model "
+                  "predicts at its own training poses, at least 1 mm (docs/robot.md)")
       ->capture_default_str();
   cmd->add_flag("--strict", a->strict,
                 "if any target is refused: write nothing, name the refused rows and exit with status 1");

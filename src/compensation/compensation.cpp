@@ -1,5 +1,6 @@
 #include "errfield/compensation/compensation.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "compensation/fit_checks.hpp"
@@ -54,6 +55,13 @@ std::vector<CompensationMethod> all_methods() {
   for (const auto& m : kMethods) out.push_back(m.method);
   return out;
 }
+
+namespace {
+/// The methods whose command model is a calibrated robot (used through compensated_joints).
+bool is_calibrated(CompensationMethod method) {
+  return method == CompensationMethod::kinematic || method == CompensationMethod::kinematic_kriging;
+}
+}  // namespace
 
 Eigen::Vector3d radial_direction(const Eigen::Vector3d& p_mm, const Eigen::Vector3d& base_mm) {
   return (p_mm - base_mm).normalized();
@@ -115,18 +123,50 @@ CompensatedTarget CompensationModel::compensate_joints(const MdhModel& nominal_m
                                    : probability_within(tolerance_mm, out.prediction.predictive_variance_mm2());
   }
   out.command_position_mm = p_nominal - out.prediction.position_error_mm;
-  if (method_ == CompensationMethod::none) return out;
+  const bool calibrated = is_calibrated(method_);
+  // The calibration's share of the error: where the calibrated model puts the tool point at the
+  // nominal joints (pred_dx..dz leave it out; the joints move by both).
+  out.total_error_mm = out.prediction.position_error_mm;
+  if (calibrated)
+    out.total_error_mm += forward_kinematics(command_model_, q_nominal_deg, ik.frame).translation() - p_nominal;
+  if (method_ == CompensationMethod::none) {
+    out.move_mm = 0.0;
+    return out;
+  }
   pose.translation() = out.command_position_mm;
   // A calibrated model is used through compensated_joints (its orientation parameters are weakly
   // determined by position/distance data, so full-pose IK of it would follow them).
-  const bool calibrated =
-      method_ == CompensationMethod::kinematic || method_ == CompensationMethod::kinematic_kriging;
   const IkResult cmd = calibrated ? compensated_joints(nominal_model, command_model_, pose, q_nominal_deg)
                                   : inverse_kinematics(command_model_, pose, q_nominal_deg, ik);
   out.ik_status = cmd.status;
   out.ik_residual_mm = cmd.position_residual_mm;
-  if (cmd.ok()) out.q_command_deg = cmd.q_deg;
+  if (cmd.ok()) {
+    out.q_command_deg = cmd.q_deg;
+    out.move_mm = (forward_kinematics(nominal_model, cmd.q_deg, ik.frame).translation() - p_nominal).norm();
+  }
   return out;
+}
+
+Eigen::Vector3d CompensationModel::total_error(const MdhModel& nominal_model, const JointVector& q_deg) const {
+  const Eigen::Vector3d p_nominal = forward_position(nominal_model, q_deg);
+  Eigen::Vector3d e = Eigen::Vector3d::Zero();
+  if (field_) {
+    ErrorPrediction p = has_nominal_model() ? predict_error(q_deg) : field_->predict(p_nominal, q_deg);
+    if (!has_nominal_model() && credible_ && p.inside_region) p.credible = credible_->contains(p);
+    if (!p.inside_region || !p.credible) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    e = p.position_error_mm;
+  }
+  if (is_calibrated(method_)) e += forward_position(command_model_, q_deg) - p_nominal;
+  return e;
+}
+
+double CompensationModel::largest_training_correction_mm() const {
+  double largest = 0.0;
+  for (const JointVector& q : data_joints_) {
+    const double e = total_error(nominal_model(), q).norm();
+    if (std::isfinite(e)) largest = std::max(largest, e);
+  }
+  return largest;
 }
 
 bool CredibleRange::contains(const ErrorPrediction& p) const {

@@ -3,6 +3,7 @@
 
 #include "errfield/compensation/pipeline.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -159,12 +160,20 @@ StepColumns predict_columns(const CompensationModel& model, std::span<const robo
   return out;
 }
 
+double default_max_correction_mm(const CompensationModel& model) {
+  return std::max(kMaxCorrectionFactor * model.largest_training_correction_mm(), kMaxCorrectionFloorMm);
+}
+
 StepColumns compensate_columns(const CompensationModel& model, const robot::MdhModel& nominal,
-                               const CompensationTargets& targets, double tolerance_mm) {
+                               const CompensationTargets& targets, double tolerance_mm, double max_correction_mm) {
   using namespace robot;
   // p_inside is P(|error| <= tolerance): 0, a negative or a NaN tolerance makes it meaningless.
   if (!(std::isfinite(tolerance_mm) && tolerance_mm > 0.0))
     throw ArgumentError("tolerance: " + format_number(tolerance_mm) + "; expected a finite tolerance > 0 (mm)");
+  if (!(std::isfinite(max_correction_mm) && max_correction_mm >= 0.0))
+    throw ArgumentError("max-correction: " + format_number(max_correction_mm) +
+                        "; expected a finite ceiling > 0 (mm), or 0 for the default");
+  const double ceiling = max_correction_mm > 0.0 ? max_correction_mm : default_max_correction_mm(model);
   const bool joints = !targets.joints_deg.empty() || targets.poses.rows() == 0;
   if (!joints && targets.poses.cols() != 6)
     throw ArgumentError("poses: " + std::to_string(targets.poses.cols()) + " columns; expected x,y,z,rx,ry,rz");
@@ -187,9 +196,10 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
       ik_status[i] = ik.branch_changed ? "branch-change" : ik.ik.ok() ? "" : to_string(ik.ik.status);
     }
   }
-  std::vector<std::vector<double>> cols(26, std::vector<double>(n, kNaN));  // see `names` below
+  std::vector<std::vector<double>> cols(31, std::vector<double>(n, kNaN));  // see `names` below
   std::vector<std::string> status(n);
   StepColumns out;
+  out.max_correction_mm = ceiling;
   for (std::size_t i = 0; i < n; ++i) {
     if (!ik_ok[i]) {
       status[i] = ik_status[i] == "branch-change" ? "branch-change" : "unreachable";
@@ -212,6 +222,9 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
     cols[24][i] = c.prediction.variance_mm2;
     cols[25][i] = radius_with_probability(0.95, c.prediction.axis_variance_mm2);
     for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(15 + k)][i] = c.command_position_mm[k];
+    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(26 + k)][i] = c.total_error_mm[k];
+    cols[29][i] = c.total_error_mm.norm();
+    cols[30][i] = c.move_mm;
     if (c.prediction.inside_region && !(c.prediction.position_error_mm.allFinite() && c.command_position_mm.allFinite())) {
       // The field gave no number here (e.g. an overflow): never an IK failure's name, never ok.
       status[i] = "no-prediction";
@@ -223,7 +236,11 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
                 : !c.prediction.credible ? "not-credible"
                 : c.ik_status != IkStatus::converged ? std::string("ik-") + to_string(c.ik_status)
                 : robot::joint_outside_limits(c.q_command_deg, model.command_model()) ? std::string(status_name(PredictionStatus::outside_limits))
-                                                                                       : "ok";
+                // A move far beyond what the model ever predicted on its own data is a wrong robot,
+                // tool or model, not a correction (NaN: no move known, never ok either).
+                : !(c.move_mm <= ceiling) ? "correction-too-large"
+                                          : "ok";
+    out.too_large += status[i] == "correction-too-large";
     if (status[i] != "ok") {
       ++out.refused;
       continue;  // compensated joints stay empty: nothing is sent for a refused target
@@ -232,8 +249,9 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
   }
   const char* names[] = {"nq1", "nq2", "nq3", "nq4", "nq5", "nq6", "nx", "ny", "nz", "pred_dx", "pred_dy", "pred_dz",
                          "pred_dl", "var_mm2", "p_inside", "cmd_x", "cmd_y", "cmd_z", "cq1", "cq2", "cq3", "cq4",
-                         "cq5", "cq6", "var_field_mm2", "r95_mm"};
-  for (std::size_t c = 0; c < 26; ++c) out.columns.push_back(numbers(names[c], std::move(cols[c])));
+                         "cq5", "cq6", "var_field_mm2", "r95_mm", "total_dx", "total_dy", "total_dz", "total_mm",
+                         "move_mm"};
+  for (std::size_t c = 0; c < 31; ++c) out.columns.push_back(numbers(names[c], std::move(cols[c])));
   out.columns.push_back(words("status", std::move(status)));
   return out;
 }

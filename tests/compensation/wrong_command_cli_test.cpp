@@ -16,6 +16,8 @@
 #include <nlohmann/json.hpp>
 
 #include "errfield/csv_table.hpp"
+#include "errfield/robot/kinematics.hpp"
+#include "errfield/robot/mdh_model.hpp"
 #include "support/cli_harness.hpp"
 
 namespace errfield {
@@ -357,5 +359,112 @@ TEST_F(WrongCommand, BasePointThatIsGridVertexZero) {
                  {"zero.csv", "dist_b0", "expected a distance > 0"});
 }
 
-}  // namespace
+// ---- item 3: the total correction, and a ceiling on it --------------------------------------
+
+/// Joints in columns `prefix`1..6 of row `i` (empty cells: NaN).
+robot::JointVector joints_of(const CsvTable& t, std::size_t i, const std::string& prefix) {
+  robot::JointVector q;
+  for (int k = 0; k < 6; ++k) {
+    const std::string& cell = t.row(i)[t.column_index(prefix + std::to_string(k + 1))];
+    q[k] = cell.empty() ? std::nan("") : std::stod(cell);
+  }
+  return q;
+}
+double cell_of(const CsvTable& t, std::size_t i, const std::string& column) {
+  const std::string& cell = t.row(i)[t.column_index(column)];
+  return cell.empty() ? std::nan("") : std::stod(cell);
+}
+
+TEST_F(WrongCommand, CompensateWritesTheTotalCorrectionAndRefusesMovesBeyondTheCeiling) {
+  // A calibrated KR16 (SIMULATED, scattered joints, reflector 2.7 mm off the JSON's tool: the same
+  // point as far as the tool goes): pred_dx..dz are empty of the calibration, total_* and move_mm
+  // are not. Checked against the FK of the model file's own calibrated and nominal robots.
+  ASSERT_EQ(run("simulate --robot kr16 --seed 11 --sample scattered:60 --joint-box " + std::string(kJointBox) +
+                " --tool-offset 1,-2,1.5 --joint-decimals 3 --measure positions --robot-out " + path("r.json") +
+                " --out " + path("train.csv")).exit_code,
+            0);
+  ASSERT_EQ(run("fit --robot " + path("r.json") + " --data " + path("train.csv") + " --method kinematic --out " +
+                path("k.json")).exit_code,
+            0);
+  ASSERT_EQ(run("simulate --robot kr16 --seed 12 --sample scattered:25 --joint-box " + std::string(kJointBox) +
+                " --measure positions --out " + path("held.csv")).exit_code,
+            0);
+  rewrite("held.csv", "q.csv", [](const CsvTable&, std::size_t, std::vector<std::string>&) {},
+          [](const std::string& c) { return c.size() == 2 && c[0] == 'q'; });
+  const auto c = run("compensate --model " + path("k.json") + " --targets " + path("q.csv") + " --out " + path("c.csv"));
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const nlohmann::json model = read_json("k.json");
+  const robot::MdhModel calibrated = robot::MdhModel::from_json(model["command_model"]);
+  const robot::MdhModel nominal = robot::MdhModel::load(path("r.json"));
+  // The default ceiling: 3 x the largest calibration correction at the training joints, >= 1 mm.
+  double largest = 0.0;
+  for (const auto& q : model["data_joints_deg"]) {
+    robot::JointVector v;
+    for (int k = 0; k < 6; ++k) v[k] = q[static_cast<std::size_t>(k)].get<double>();
+    largest = std::max(largest, (robot::forward_position(calibrated, v) - robot::forward_position(nominal, v)).norm());
+  }
+  ASSERT_GT(largest, 0.3);  // the simulated robot's errors are worth correcting
+  const double ceiling = std::max(3.0 * largest, 1.0);
+  EXPECT_NE(c.out.find("at most " + format_number(ceiling) + " mm"), std::string::npos) << c.out;
+  const CsvTable out = CsvTable::read(path("c.csv"));
+  std::vector<double> moves;
+  for (std::size_t i = 0; i < out.row_count(); ++i) {
+    ASSERT_EQ(out.row(i)[out.column_index("status")], "ok") << "row " << i;
+    const robot::JointVector nq = joints_of(out, i, "nq"), cq = joints_of(out, i, "cq");
+    const Eigen::Vector3d total = robot::forward_position(calibrated, nq) - robot::forward_position(nominal, nq);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(cell_of(out, i, std::string("total_d") + "xyz"[k]), total[k], 1e-6) << "row " << i;
+      EXPECT_NEAR(cell_of(out, i, std::string("pred_d") + "xyz"[k]), 0.0, 1e-12);  // the field's part: none
+    }
+    EXPECT_NEAR(cell_of(out, i, "total_mm"), total.norm(), 1e-6);
+    const double move = (robot::forward_position(nominal, cq) - robot::forward_position(nominal, nq)).norm();
+    EXPECT_NEAR(cell_of(out, i, "move_mm"), move, 1e-6) << "row " << i;
+    // The joints move the tool by the correction (to first order in its size).
+    EXPECT_NEAR(move, total.norm(), 0.02 * total.norm() + 1e-3) << "row " << i;
+    EXPECT_LE(move, ceiling);
+    moves.push_back(move);
+  }
+
+  // A ceiling below some moves: exactly those rows are refused, with no joints.
+  std::vector<double> sorted = moves;
+  std::sort(sorted.begin(), sorted.end());
+  const double limit = sorted[sorted.size() / 2];
+  const auto low = run("compensate --model " + path("k.json") + " --targets " + path("q.csv") + " --max-correction " +
+                       format_number(limit) + " --out " + path("low.csv"));
+  ASSERT_EQ(low.exit_code, 0) << low.err;
+  EXPECT_NE(low.err.find("correction-too-large"), std::string::npos) << low.err;
+  const CsvTable capped = CsvTable::read(path("low.csv"));
+  std::size_t refused = 0;
+  for (std::size_t i = 0; i < capped.row_count(); ++i) {
+    const bool over = moves[i] > limit;
+    refused += over;
+    EXPECT_EQ(capped.row(i)[capped.column_index("status")], over ? "correction-too-large" : "ok") << "row " << i;
+    EXPECT_EQ(capped.row(i)[capped.column_index("cq1")].empty(), over) << "row " << i;
+  }
+  EXPECT_GT(refused, 5u);
+
+  // The wrong tool at compensate time (30 mm along the flange z): every target would move the tool
+  // point ~30 mm; before, all rows came back ok. Now every one is refused.
+  nlohmann::json wrong = read_json("r.json");
+  wrong["tool"]["z_mm"] = wrong["tool"].value("z_mm", 0.0) + 30.0;
+  write_json("wrong.json", wrong);
+  const auto w = run("compensate --robot " + path("wrong.json") + " --model " + path("k.json") + " --targets " +
+                     path("q.csv") + " --out " + path("w.csv"));
+  ASSERT_EQ(w.exit_code, 0) << w.err;
+  // Rows the calibrated model cannot reach with that tool are refused by IK; none is ok.
+  const auto status = column("w.csv", "status"), move = column("w.csv", "move_mm");
+  EXPECT_EQ(std::count(status.begin(), status.end(), "ok"), 0);
+  EXPECT_GT(std::count(status.begin(), status.end(), "correction-too-large"), 20);
+  for (std::size_t i = 0; i < status.size(); ++i)
+    if (!move[i].empty()) {
+      EXPECT_GT(std::stod(move[i]), 20.0) << "row " << i;
+      EXPECT_EQ(status[i], "correction-too-large") << "row " << i;
+    }
+  // A negative ceiling is an argument error.
+  EXPECT_EQ(run("compensate --model " + path("k.json") + " --targets " + path("q.csv") +
+                " --max-correction -1 --out " + path("x.csv")).exit_code,
+            2);
+}
+
+}  // namespace wrong_command_cli_test
 }  // namespace errfield
