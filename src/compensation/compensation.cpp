@@ -127,8 +127,9 @@ CompensatedTarget CompensationModel::compensate_joints(const MdhModel& nominal_m
   // The calibration's share of the error: where the calibrated model puts the tool point at the
   // nominal joints (pred_dx..dz leave it out; the joints move by both).
   out.total_error_mm = out.prediction.position_error_mm;
-  if (calibrated)
-    out.total_error_mm += forward_kinematics(command_model_, q_nominal_deg, ik.frame).translation() - p_nominal;
+  // The tool point, not the reflector the data measured (when the model knows both).
+  const MdhModel aimed = calibrated ? aimed_model() : command_model_;
+  if (calibrated) out.total_error_mm += forward_kinematics(aimed, q_nominal_deg, ik.frame).translation() - p_nominal;
   if (method_ == CompensationMethod::none) {
     out.move_mm = 0.0;
     return out;
@@ -136,7 +137,7 @@ CompensatedTarget CompensationModel::compensate_joints(const MdhModel& nominal_m
   pose.translation() = out.command_position_mm;
   // A calibrated model is used through compensated_joints (its orientation parameters are weakly
   // determined by position/distance data, so full-pose IK of it would follow them).
-  const IkResult cmd = calibrated ? compensated_joints(nominal_model, command_model_, pose, q_nominal_deg)
+  const IkResult cmd = calibrated ? compensated_joints(nominal_model, aimed, pose, q_nominal_deg)
                                   : inverse_kinematics(command_model_, pose, q_nominal_deg, ik);
   out.ik_status = cmd.status;
   out.ik_residual_mm = cmd.position_residual_mm;
@@ -156,7 +157,7 @@ Eigen::Vector3d CompensationModel::total_error(const MdhModel& nominal_model, co
     if (!p.inside_region || !p.credible) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
     e = p.position_error_mm;
   }
-  if (is_calibrated(method_)) e += forward_position(command_model_, q_deg) - p_nominal;
+  if (is_calibrated(method_)) e += forward_position(aimed_model(), q_deg) - p_nominal;
   return e;
 }
 
@@ -220,6 +221,21 @@ CompensationModel CompensationModel::with_data_joints(std::vector<JointVector> q
   m.data_joints_ = std::move(q_deg);
   return m;
 }
+CompensationModel CompensationModel::with_tool_point(std::optional<Eigen::Vector3d> tool_point,
+                                                     std::optional<Eigen::Vector3d> reflector) const {
+  CompensationModel m = *this;
+  m.tool_point_ = std::move(tool_point);
+  m.reflector_ = std::move(reflector);
+  return m;
+}
+
+MdhModel CompensationModel::aimed_model() const {
+  if (!tool_point_) return command_model_;
+  Eigen::Isometry3d tool = command_model_.tool();
+  tool.translation() = *tool_point_;
+  return command_model_.with_tool(tool);
+}
+
 CompensationModel CompensationModel::with_credible_range(std::optional<CredibleRange> range) const {
   CompensationModel m = *this;
   m.credible_ = std::move(range);
@@ -249,6 +265,8 @@ nlohmann::json CompensationModel::to_json() const {
     for (const JointVector& v : data_joints_) q.push_back({v[0], v[1], v[2], v[3], v[4], v[5]});
     j["data_joints_deg"] = q;
   }
+  if (tool_point_) j["tool_point_mm"] = {tool_point_->x(), tool_point_->y(), tool_point_->z()};
+  if (reflector_) j["reflector_mm"] = {reflector_->x(), reflector_->y(), reflector_->z()};
   if (!notes_.empty()) j["notes"] = notes_;
   if (!excluded_rows_.empty()) j["excluded_rows"] = excluded_rows_;
   return j;
@@ -387,6 +405,21 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
                        "fitted on (errfield fit writes it); refit the model with 'errfield fit'");
   }
   if (model.field_) check_stored_samples(model, j["field"], source);
+  // The tool point compensate aims and the reflector measured (flange frame).
+  auto point = [&](const char* key) -> std::optional<Eigen::Vector3d> {
+    if (!j.contains(key)) return std::nullopt;
+    const auto& v = j[key];
+    if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
+      fail_model(source, std::string("member \"") + key + "\": expected 3 numbers (mm, flange frame)");
+    const Eigen::Vector3d p(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+    if (!p.allFinite()) fail_model(source, std::string("member \"") + key + "\": not finite");
+    return p;
+  };
+  model.tool_point_ = point("tool_point_mm");
+  model.reflector_ = point("reflector_mm");
+  if (model.tool_point_ && method != CompensationMethod::kinematic && method != CompensationMethod::kinematic_kriging)
+    fail_model(source, "member \"tool_point_mm\": only calibrated models (kinematic, kinematic+kriging) aim a tool "
+                       "point on their calibrated flange; method \"" + std::string(method_name(method)) + "\" has none");
   if (j.contains("data_joints_deg")) {
     const auto& q = j["data_joints_deg"];
     if (!q.is_array()) fail_model(source, "member \"data_joints_deg\": expected an array of 6-number arrays");

@@ -466,5 +466,69 @@ TEST_F(WrongCommand, CompensateWritesTheTotalCorrectionAndRefusesMovesBeyondTheC
             2);
 }
 
+// ---- item 2: the tool point and the reflector are two points --------------------------------
+
+TEST_F(WrongCommand, ReflectorFarFromTheToolIsRefusedOrAimsTheToolPoint) {
+  // A KR16 (SIMULATED, scattered joints) measured at a reflector 150 mm from its tool point (a second
+  // nest), the robot JSON carrying the tool point. Before: fit said nothing and compensate aimed the
+  // reflector at the tool point's targets (rows ok, joints moving the tool ~150 mm).
+  ASSERT_EQ(run("simulate --robot kr16 --seed 21 --sample scattered:60 --joint-box " + std::string(kJointBox) +
+                " --tool-offset 0,150,0 --joint-decimals 3 --measure positions --robot-out " + path("r.json") +
+                " --out " + path("train.csv")).exit_code,
+            0);
+  const std::string fit = "fit --robot " + path("r.json") + " --data " + path("train.csv") + " --method kinematic --out " +
+                          path("k.json");
+  expect_refused(run(fit), 2, {"train.csv", "reflector", "mm from the robot JSON's tool point", "--reflector-far-ok"});
+  EXPECT_FALSE(std::filesystem::exists(path("k.json")));
+  const auto f = run(fit + " --reflector-far-ok");
+  ASSERT_EQ(f.exit_code, 0) << f.err;
+  EXPECT_NE(f.err.find("every 0.01 deg of flange orientation error"), std::string::npos) << f.err;
+
+  // The model stores both points: the reflector as identified (the command model's tool, what
+  // predict and validate score) and the tool point compensate aims (the robot JSON's tool).
+  const nlohmann::json model = read_json("k.json");
+  const robot::MdhModel calibrated = robot::MdhModel::from_json(model["command_model"]);
+  const robot::MdhModel nominal = robot::MdhModel::load(path("r.json"));
+  ASSERT_EQ(model["reflector_mm"].size(), 3u);
+  ASSERT_EQ(model["tool_point_mm"].size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_DOUBLE_EQ(model["reflector_mm"][static_cast<std::size_t>(k)].get<double>(), calibrated.tool().translation()[k]);
+    EXPECT_DOUBLE_EQ(model["tool_point_mm"][static_cast<std::size_t>(k)].get<double>(), nominal.tool().translation()[k]);
+  }
+  EXPECT_NEAR((calibrated.tool().translation() - nominal.tool().translation()).norm(), 150.0, 2.0);
+
+  ASSERT_EQ(run("simulate --robot kr16 --seed 22 --sample scattered:20 --joint-box " + std::string(kJointBox) +
+                " --measure positions --out " + path("held.csv")).exit_code,
+            0);
+  rewrite("held.csv", "q.csv", [](const CsvTable&, std::size_t, std::vector<std::string>&) {},
+          [](const std::string& c) { return c.size() == 2 && c[0] == 'q'; });
+  const auto c = run("compensate --model " + path("k.json") + " --targets " + path("q.csv") + " --out " + path("c.csv"));
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  // Independent: the calibrated flange carrying the robot JSON's tool lands on each target; the
+  // calibrated reflector does not (it stays ~150 mm away); the joints move the tool by millimetres.
+  Eigen::Isometry3d tool = calibrated.tool();
+  tool.translation() = nominal.tool().translation();
+  const robot::MdhModel calibrated_tool = calibrated.with_tool(tool);
+  const CsvTable out = CsvTable::read(path("c.csv"));
+  for (std::size_t i = 0; i < out.row_count(); ++i) {
+    ASSERT_EQ(out.row(i)[out.column_index("status")], "ok") << "row " << i;
+    const robot::JointVector nq = joints_of(out, i, "nq"), cq = joints_of(out, i, "cq");
+    const Eigen::Vector3d target = robot::forward_position(nominal, nq);
+    EXPECT_LT((robot::forward_position(calibrated_tool, cq) - target).norm(), 1e-3) << "row " << i;
+    EXPECT_GT((robot::forward_position(calibrated, cq) - target).norm(), 100.0) << "row " << i;
+    EXPECT_LT(cell_of(out, i, "move_mm"), 10.0) << "row " << i;
+  }
+  // A tool-less robot JSON for data measured at a tool 150 mm out is the same mistake.
+  nlohmann::json bare = read_json("r.json");
+  bare.erase("tool");
+  write_json("bare.json", bare);
+  ASSERT_EQ(run("simulate --robot kr16 --seed 23 --sample scattered:40 --joint-box " + std::string(kJointBox) +
+                " --tool-offset 0,0,150 --measure positions --out " + path("tooled.csv")).exit_code,
+            0);
+  expect_refused(run("fit --robot " + path("bare.json") + " --data " + path("tooled.csv") +
+                     " --method kinematic+kriging --out " + path("b.json")),
+                 2, {"tooled.csv", "reflector", "--reflector-far-ok"});
+}
+
 }  // namespace wrong_command_cli_test
 }  // namespace errfield

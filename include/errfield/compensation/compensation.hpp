@@ -174,6 +174,17 @@ class CompensationModel {
   CompensationModel with_nominal_model(robot::MdhModel nominal) const;
   CompensationModel with_data_joints(std::vector<robot::JointVector> q_deg) const;
   CompensationModel with_credible_range(std::optional<CredibleRange> range) const;
+  /// Calibrated models fitted from positions: the point compensate aims (flange frame, mm: the robot
+  /// JSON's tool, or the reflector when the two are one point, model_fitting.hpp kReflectorAtToolMm)
+  /// and the reflector the data measured (the command model's tool: what predict and validate
+  /// score). Empty in other models and older files: then the command model's tool is aimed.
+  const std::optional<Eigen::Vector3d>& tool_point_mm() const noexcept { return tool_point_; }
+  const std::optional<Eigen::Vector3d>& reflector_mm() const noexcept { return reflector_; }
+  CompensationModel with_tool_point(std::optional<Eigen::Vector3d> tool_point_mm,
+                                    std::optional<Eigen::Vector3d> reflector_mm) const;
+  /// The model compensate aims with: the command model, with its tool translation set to
+  /// tool_point_mm() where the model has one.
+  robot::MdhModel aimed_model() const;
 
   /// The field's prediction at joints `q_deg` (evaluated at nominal_model()'s FK), with the credible
   /// range applied; zero prediction, inside the region, when the model has no field.
@@ -219,6 +230,7 @@ class CompensationModel {
   std::optional<robot::MdhModel> nominal_model_;
   std::vector<robot::JointVector> data_joints_;
   std::optional<CredibleRange> credible_;
+  std::optional<Eigen::Vector3d> tool_point_, reflector_;
   std::vector<std::string> excluded_rows_, notes_;
 };
 
