@@ -2,6 +2,7 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -66,6 +67,20 @@ void run_compensate(const CompensateArgs& a) {
       std::cerr << "errfield compensate: warning: " << *w << " (status outside-limits: no joints written)\n";
   } else {
     targets.poses = t.numeric_columns(pose_cols);
+    // Per-row seeds (e.g. the taught joints): solved from, and kept on, their arm configuration.
+    const std::vector<std::string> seed_cols{"sq1", "sq2", "sq3", "sq4", "sq5", "sq6"};
+    if (t.has_column("sq1")) {
+      std::vector<std::size_t> col;
+      for (const auto& c : seed_cols) col.push_back(t.column_index(c));
+      for (std::size_t i = 0; i < n; ++i) {
+        JointVector q = JointVector::Constant(std::numeric_limits<double>::quiet_NaN());  // empty: no seed
+        bool empty = true;
+        for (std::size_t k = 0; k < 6; ++k) empty = empty && t.row(i)[col[k]].empty();
+        if (!empty)
+          for (std::size_t k = 0; k < 6; ++k) q[static_cast<Eigen::Index>(k)] = t.numeric_cell(i, col[k]);
+        targets.seed_rows_deg.push_back(q);
+      }
+    }
     warn_if_metres(t, nominal, "compensate", kNominalXyz);
   }
   if (!(std::isfinite(a.max_correction) && a.max_correction >= 0.0))
@@ -121,7 +136,10 @@ void add_compensate_command(CLI::App& app) {
       "(total_dx..dz, total_mm: calibration + field) and how far the joints move it (move_mm). Targets: q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg). Targets outside the modelled\n"
       "region are refused (status outside-region, no joints), never extrapolated; so are predictions far beyond\n"
       "the model's range of errors (not-credible) and pose targets whose IK left the data's branch\n"
-      "(branch-change: solved from the nearest training sample, or --seed, along the pose path).\n"
+      "(branch-change: solved from the nearest training sample, or --seed, along the pose path). Pose targets\n"
+      "may carry seed joints sq1..sq6 per row (e.g. the taught joints); a solution on another arm configuration\n"
+      "than the seed's (or the training sample's, or given joints') is refused (config-change); columns nconfig,\n"
+      "config (s+e+w- style, docs/robot.md).\n"
       "Example: errfield compensate --model model.json --targets targets.csv --out joints.csv");
   cmd->add_option("--robot", a->robot, "nominal robot JSON or built-in name (er20-c10, kr16, ur5e; default: the model's command model)");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();

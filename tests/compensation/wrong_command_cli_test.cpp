@@ -18,6 +18,7 @@
 #include "errfield/csv_table.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/mdh_model.hpp"
+#include "errfield/robot/pose.hpp"
 #include "support/cli_harness.hpp"
 
 namespace errfield {
@@ -528,6 +529,78 @@ TEST_F(WrongCommand, ReflectorFarFromTheToolIsRefusedOrAimsTheToolPoint) {
   expect_refused(run("fit --robot " + path("bare.json") + " --data " + path("tooled.csv") +
                      " --method kinematic+kriging --out " + path("b.json")),
                  2, {"tooled.csv", "reflector", "--reflector-far-ok"});
+}
+
+// ---- item 8: the arm configuration is explicit ------------------------------------------------
+
+TEST_F(WrongCommand, PoseTargetsKeepTheirSeedsArmConfiguration) {
+  // A calibrated KR16 (SIMULATED) with wrists bent both ways (q5 in +-100 deg); pose targets are
+  // the FK of taught joints, each given twice: seeded with the taught joints, and with the other
+  // wrist solution of the same pose (q4 + 180, -q5, q6 + 180). Before: no seed per row and no
+  // configuration in the output; 7 of 60 such targets came back ok with the wrist flipped.
+  const std::string box = "-40,40,-80,-30,0,60,-90,90,-100,100,-90,90";
+  ASSERT_EQ(run("simulate --robot kr16 --seed 31 --sample scattered:60 --joint-box " + box +
+                " --measure positions --robot-out " + path("r.json") + " --out " + path("train.csv")).exit_code,
+            0);
+  ASSERT_EQ(run("fit --robot " + path("r.json") + " --data " + path("train.csv") + " --method kinematic --out " +
+                path("k.json")).exit_code,
+            0);
+  const robot::MdhModel nominal = robot::MdhModel::load(path("r.json"));
+  // Taught joints well away from the wrist singularity (|q5| >= 20 deg), deterministic.
+  std::vector<robot::JointVector> taught;
+  for (int i = 0; i < 12; ++i) {
+    robot::JointVector q;
+    q << -30.0 + 5.0 * i, -60.0 + 2.0 * (i % 5), 20.0 + 3.0 * (i % 4), -70.0 + 13.0 * i, (i % 2 ? 1 : -1) * (25.0 + 5.0 * i),
+        -60.0 + 11.0 * i;
+    taught.push_back(q);
+  }
+  std::string text = "x,y,z,rx,ry,rz,sq1,sq2,sq3,sq4,sq5,sq6\n";
+  auto row = [&](const robot::JointVector& pose_q, const robot::JointVector& seed) {
+    const robot::PoseXyzRpy p = robot::to_xyz_rpy(robot::forward_kinematics(nominal, pose_q));
+    std::string l;
+    for (double v : {p.x_mm, p.y_mm, p.z_mm, p.rx_deg, p.ry_deg, p.rz_deg}) l += format_number(v) + ",";
+    for (int k = 0; k < 6; ++k) l += format_number(seed[k]) + (k < 5 ? "," : "\n");
+    text += l;
+  };
+  std::vector<robot::JointVector> seeds;
+  for (const auto& q : taught) {
+    robot::JointVector flipped = q;
+    flipped[3] += q[3] > 0 ? -180.0 : 180.0;
+    flipped[4] = -q[4];
+    flipped[5] += q[5] > 0 ? -180.0 : 180.0;
+    row(q, q);
+    row(q, flipped);  // the same pose
+    seeds.push_back(q);
+    seeds.push_back(flipped);
+  }
+  write("poses.csv", text);
+  const auto c = run("compensate --model " + path("k.json") + " --targets " + path("poses.csv") + " --out " +
+                     path("c.csv"));
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const CsvTable out = CsvTable::read(path("c.csv"));
+  ASSERT_EQ(out.row_count(), seeds.size());
+  std::size_t ok = 0;
+  for (std::size_t i = 0; i < out.row_count(); ++i) {
+    const std::string status = out.row(i)[out.column_index("status")];
+    if (status != "ok") continue;
+    ++ok;
+    const robot::JointVector cq = joints_of(out, i, "cq");
+    // Independent of errfield's flags: the solution is the seed's (a flipped wrist would put q5's
+    // sign the other way and q4, q6 ~180 deg off), and it is a solution of the row's pose.
+    EXPECT_EQ(cq[4] > 0, seeds[i][4] > 0) << "row " << i << ": q5 " << cq[4] << " vs seed " << seeds[i][4];
+    for (int k : {0, 3, 5}) EXPECT_LT(std::abs(cq[k] - seeds[i][k]), 20.0) << "row " << i << " q" << k + 1;
+    // The configuration column says so: the two rows of one pose differ in the wrist flag only.
+    const std::string config = out.row(i)[out.column_index("config")];
+    ASSERT_EQ(config.size(), 6u) << config;
+    EXPECT_EQ(config, out.row(i)[out.column_index("nconfig")]);
+  }
+  EXPECT_GE(ok, 20u);
+  for (std::size_t i = 0; i + 1 < out.row_count(); i += 2) {
+    const std::string a = out.row(i)[out.column_index("nconfig")], b = out.row(i + 1)[out.column_index("nconfig")];
+    if (a.empty() || b.empty()) continue;
+    EXPECT_EQ(a.substr(0, 4), b.substr(0, 4)) << "rows " << i << ", " << i + 1;
+    EXPECT_NE(a[5], b[5]) << "rows " << i << ", " << i + 1 << ": " << a << " " << b;
+  }
 }
 
 }  // namespace wrong_command_cli_test

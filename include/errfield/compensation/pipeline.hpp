@@ -118,14 +118,21 @@ struct CompensationTargets {
   std::vector<robot::JointVector> joints_deg;  ///< set: joint targets
   Eigen::MatrixXd poses;                       ///< else N x 6 poses
   std::optional<robot::JointVector> seed_deg;
+  /// Pose targets: per-row seed joints (sq1..sq6, e.g. the taught positions), solved from and kept
+  /// on their arm configuration; empty = none, a row with a NaN = none for that row (then seed_deg or
+  /// the nearest training sample).
+  std::vector<robot::JointVector> seed_rows_deg;
 };
 
 /// `errfield compensate`: columns nq1..nq6, nx,ny,nz, pred_dx..dz, pred_dl, var_mm2 (new reading:
 /// field + nugget), p_inside (CompensatedTarget::p_within_tolerance), cmd_x..z, cq1..cq6,
 /// var_field_mm2 (field only), r95_mm (vector fields), total_dx..dz and total_mm (the whole predicted
 /// error of the tool point, calibration + field), move_mm (how far the compensated joints move the
-/// tool point), status. `tolerance_mm` > 0 (ArgumentError otherwise). A refused target (unreachable,
-/// branch-change, outside-region, not-credible, no-prediction, ik-*, correction-too-large: move_mm
+/// tool point), nconfig and config (robot/arm_configuration.hpp: of the nominal and of the
+/// compensated joints), status. `tolerance_mm` > 0 (ArgumentError otherwise). A refused target (unreachable,
+/// branch-change, config-change: the nominal or compensated joints on another arm configuration than
+/// the row's seed, --seed, the training sample a pose target was solved from, or given nominal joints,
+/// outside-region, not-credible, no-prediction, ik-*, correction-too-large: move_mm
 /// above `max_correction_mm`; 0 = default_max_correction_mm) has no joints.
 StepColumns compensate_columns(const CompensationModel& model, const robot::MdhModel& nominal,
                                const CompensationTargets& targets, double tolerance_mm, double max_correction_mm = 0.0);
