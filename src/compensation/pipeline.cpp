@@ -208,7 +208,7 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
       ik_status[i] = ik.branch_changed ? "branch-change" : ik.ik.ok() ? "" : to_string(ik.ik.status);
       if (seed) wanted[i] = arm_configuration(nominal, *seed);
       else if (ik.start_sample) wanted[i] = arm_configuration(nominal, reference[*ik.start_sample]);
-      if (ik_ok[i] && wanted[i] && arm_configuration(nominal, qn[i]) != *wanted[i]) {
+      if (ik_ok[i] && wanted[i] && !arm_configuration(nominal, qn[i]).compatible_with(*wanted[i])) {
         ik_ok[i] = false;
         ik_status[i] = "config-change";
       }
@@ -260,7 +260,7 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
                 // A move far beyond what the model ever predicted on its own data is a wrong robot,
                 // tool or model, not a correction (NaN: no move known, never ok either).
                 : !(c.move_mm <= ceiling) ? "correction-too-large"
-                : wanted[i] && arm_configuration(nominal, c.q_command_deg) != *wanted[i] ? "config-change"
+                : wanted[i] && !arm_configuration(nominal, c.q_command_deg).compatible_with(*wanted[i]) ? "config-change"
                                                                                           : "ok";
     out.too_large += status[i] == "correction-too-large";
     if (status[i] != "ok") {

@@ -1,11 +1,18 @@
 #include "errfield/robot/arm_configuration.hpp"
 
+#include <cmath>
+#include <numbers>
+
 #include "errfield/robot/kinematics.hpp"
 
 namespace errfield::robot {
 
 namespace {
-int sign_of(double v) { return v > 0.0 ? 1 : (v < 0.0 ? -1 : 0); }
+// The sign of `sine`, 0 within the band (and for NaN).
+int sign_of(double sine) {
+  const double band = std::sin(kConfigurationBandDeg * std::numbers::pi / 180.0);
+  return sine > band ? 1 : (sine < -band ? -1 : 0);
+}
 char sign_char(int s) { return s > 0 ? '+' : (s < 0 ? '-' : '0'); }
 }  // namespace
 
@@ -20,8 +27,10 @@ ArmConfiguration arm_configuration(const MdhModel& model, const JointVector& q_d
   auto z_axis = [&](int i) -> Eigen::Vector3d { return f.frames[static_cast<std::size_t>(i)].linear().col(2); };
   const Eigen::Vector3d wrist_centre = origin(5);
   ArmConfiguration c;
-  c.shoulder = sign_of((f.frames[1].inverse() * wrist_centre).x());
-  c.elbow = sign_of(z_axis(2).dot((origin(3) - origin(2)).cross(wrist_centre - origin(3))));
+  const Eigen::Vector3d in_frame1 = f.frames[1].inverse() * wrist_centre;
+  c.shoulder = sign_of(in_frame1.x() / in_frame1.norm());
+  const Eigen::Vector3d upper = origin(3) - origin(2), fore = wrist_centre - origin(3);
+  c.elbow = sign_of(z_axis(2).dot(upper.cross(fore)) / (upper.norm() * fore.norm()));
   c.wrist = sign_of(z_axis(5).dot(z_axis(4).cross(z_axis(6))));
   return c;
 }

@@ -537,7 +537,8 @@ TEST_F(WrongCommand, PoseTargetsKeepTheirSeedsArmConfiguration) {
   // A calibrated KR16 (SIMULATED) with wrists bent both ways (q5 in +-100 deg); pose targets are
   // the FK of taught joints, each given twice: seeded with the taught joints, and with the other
   // wrist solution of the same pose (q4 + 180, -q5, q6 + 180). Before: no seed per row and no
-  // configuration in the output; 7 of 60 such targets came back ok with the wrist flipped.
+  // configuration in the output (on 60 held-out poses of this set-up without seeds, 7 came back ok
+  // on the other wrist solution than the taught one: the nearest training sample's).
   const std::string box = "-40,40,-80,-30,0,60,-90,90,-100,100,-90,90";
   ASSERT_EQ(run("simulate --robot kr16 --seed 31 --sample scattered:60 --joint-box " + box +
                 " --measure positions --robot-out " + path("r.json") + " --out " + path("train.csv")).exit_code,
@@ -595,6 +596,20 @@ TEST_F(WrongCommand, PoseTargetsKeepTheirSeedsArmConfiguration) {
     EXPECT_EQ(config, out.row(i)[out.column_index("nconfig")]);
   }
   EXPECT_GE(ok, 20u);
+  // Joint targets near the wrist singularity (q5 = +-0.2 deg): a compensation that crosses q5 = 0
+  // by a fraction of a degree keeps the configuration (the flag is undetermined there).
+  std::string near = "q1,q2,q3,q4,q5,q6\n";
+  for (std::size_t i = 0; i < 6; ++i) {
+    robot::JointVector q = taught[i];
+    q[4] = i % 2 ? 0.2 : -0.2;
+    for (int k = 0; k < 6; ++k) near += format_number(q[k]) + (k < 5 ? "," : "\n");
+  }
+  write("near.csv", near);
+  ASSERT_EQ(run("compensate --model " + path("k.json") + " --targets " + path("near.csv") + " --out " + path("n.csv"))
+                .exit_code,
+            0);
+  for (const auto& st : column("n.csv", "status")) EXPECT_NE(st, "config-change");
+  for (const auto& cfg : column("n.csv", "nconfig")) EXPECT_EQ(cfg.substr(4), "w0") << cfg;
   for (std::size_t i = 0; i + 1 < out.row_count(); i += 2) {
     const std::string a = out.row(i)[out.column_index("nconfig")], b = out.row(i + 1)[out.column_index("nconfig")];
     if (a.empty() || b.empty()) continue;

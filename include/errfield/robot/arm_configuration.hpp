@@ -12,8 +12,11 @@
 ///    to the wrist centre w) turns from the upper arm (axis 2 to axis 3), about axis 2.
 ///  - wrist: the sign of z5 · (z4 × z6): the sense in which axis 6 is bent away from axis 4, about
 ///    axis 5; 0 at the wrist singularity (axes 4 and 6 aligned).
-/// Two solutions of the same pose on different configurations differ in at least one flag; a flag
-/// changes only where its expression passes 0 (a singular configuration of spherical-wrist arms).
+/// Each expression is taken as the sine of an angle (normalized by the lengths involved; the
+/// shoulder's by the wrist centre's distance from frame 1's origin); within kConfigurationBandDeg of
+/// its boundary a flag is 0, undetermined: joints that cross a boundary by a fraction of a degree
+/// (a compensation near the wrist singularity) have not changed configuration.
+/// Two solutions of the same pose on different configurations differ in at least one flag.
 
 #include <string>
 
@@ -21,11 +24,19 @@
 
 namespace errfield::robot {
 
+/// Half-width (deg) of the band around each flag's boundary where the flag is 0 (undetermined).
+inline constexpr double kConfigurationBandDeg = 1.0;
+
 struct ArmConfiguration {
-  int shoulder = 0, elbow = 0, wrist = 0;  ///< +1, −1, or 0 exactly at the flag's boundary
-  /// "s+e+w-" style: one letter and sign per flag ("0" at a boundary).
+  int shoulder = 0, elbow = 0, wrist = 0;  ///< +1, −1, or 0 within the band around the boundary
+  /// "s+e+w-" style: one letter and sign per flag ("0" when undetermined).
   std::string to_string() const;
   bool operator==(const ArmConfiguration&) const = default;
+  /// False when some flag is +1 in one and −1 in the other (an undetermined flag matches either):
+  /// the two are different solutions, not the same one near a boundary.
+  bool compatible_with(const ArmConfiguration& other) const {
+    return shoulder * other.shoulder >= 0 && elbow * other.elbow >= 0 && wrist * other.wrist >= 0;
+  }
 };
 
 /// The configuration of joints `q_deg` on `model`. ~3 FK evaluations' cost; no allocation.
