@@ -36,7 +36,7 @@ std::string summary(const CalibrationResult& cal, std::size_t count, const std::
          (robust ? "igg3 (" + std::to_string(cal.rejected) + " rejected)" : std::string("none")) + "; " + cal.message;
 }
 
-std::string xyz(const Eigen::Vector3d& v) {
+std::string flange_point_text(const Eigen::Vector3d& v) {
   return "(" + short_number(v.x()) + ", " + short_number(v.y()) + ", " + short_number(v.z()) + ")";
 }
 
@@ -48,9 +48,9 @@ void tool_and_reflector(KinematicFit& out, const MdhModel& robot, const Eigen::V
   const Eigen::Vector3d tool = robot.tool().translation();
   const double apart = (reflector - tool).norm();
   out.reflector_mm = reflector;
-  const std::string where = "the reflector found from the data is at " + xyz(reflector) +
+  const std::string where = "the reflector found from the data is at " + flange_point_text(reflector) +
                             " mm in the flange frame, " + short_number(apart) +
-                            " mm from the robot JSON's tool point " + xyz(tool) + " mm";
+                            " mm from the robot JSON's tool point " + flange_point_text(tool) + " mm";
   if (apart <= kReflectorAtToolMm) {
     out.tool_point_mm = reflector;
     out.notes.push_back(where + ": taken as the same point (within " + short_number(kReflectorAtToolMm) +

@@ -9,15 +9,15 @@ namespace errfield::robot {
 
 namespace {
 // The sign of `sine`, 0 within the band (and for NaN).
-int sign_of(double sine) {
+int configuration_sign(double sine) {
   const double band = std::sin(kConfigurationBandDeg * std::numbers::pi / 180.0);
   return sine > band ? 1 : (sine < -band ? -1 : 0);
 }
-char sign_char(int s) { return s > 0 ? '+' : (s < 0 ? '-' : '0'); }
+char configuration_sign_char(int s) { return s > 0 ? '+' : (s < 0 ? '-' : '0'); }
 }  // namespace
 
 std::string ArmConfiguration::to_string() const {
-  return std::string{'s', sign_char(shoulder), 'e', sign_char(elbow), 'w', sign_char(wrist)};
+  return std::string{'s', configuration_sign_char(shoulder), 'e', configuration_sign_char(elbow), 'w', configuration_sign_char(wrist)};
 }
 
 ArmConfiguration arm_configuration(const MdhModel& model, const JointVector& q_deg) {
@@ -28,10 +28,10 @@ ArmConfiguration arm_configuration(const MdhModel& model, const JointVector& q_d
   const Eigen::Vector3d wrist_centre = origin(5);
   ArmConfiguration c;
   const Eigen::Vector3d in_frame1 = f.frames[1].inverse() * wrist_centre;
-  c.shoulder = sign_of(in_frame1.x() / in_frame1.norm());
+  c.shoulder = configuration_sign(in_frame1.x() / in_frame1.norm());
   const Eigen::Vector3d upper = origin(3) - origin(2), fore = wrist_centre - origin(3);
-  c.elbow = sign_of(z_axis(2).dot(upper.cross(fore)) / (upper.norm() * fore.norm()));
-  c.wrist = sign_of(z_axis(5).dot(z_axis(4).cross(z_axis(6))));
+  c.elbow = configuration_sign(z_axis(2).dot(upper.cross(fore)) / (upper.norm() * fore.norm()));
+  c.wrist = configuration_sign(z_axis(5).dot(z_axis(4).cross(z_axis(6))));
   return c;
 }
 
