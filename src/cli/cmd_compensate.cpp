@@ -2,6 +2,7 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -25,6 +26,7 @@ namespace {
 struct CompensateArgs {
   std::string robot, model, targets, out, seed;
   double tolerance = 0.25, max_registration_rms = robot::kRegistrationRmsLimitMm;
+  double max_correction = 0.0;  // 0: compensation::default_max_correction_mm
   bool strict = false;
 };
 
@@ -65,9 +67,26 @@ void run_compensate(const CompensateArgs& a) {
       std::cerr << "errfield compensate: warning: " << *w << " (status outside-limits: no joints written)\n";
   } else {
     targets.poses = t.numeric_columns(pose_cols);
+    // Per-row seeds (e.g. the taught joints): solved from, and kept on, their arm configuration.
+    const std::vector<std::string> seed_cols{"sq1", "sq2", "sq3", "sq4", "sq5", "sq6"};
+    if (t.has_column("sq1")) {
+      std::vector<std::size_t> col;
+      for (const auto& c : seed_cols) col.push_back(t.column_index(c));
+      for (std::size_t i = 0; i < n; ++i) {
+        JointVector q = JointVector::Constant(std::numeric_limits<double>::quiet_NaN());  // empty: no seed
+        bool empty = true;
+        for (std::size_t k = 0; k < 6; ++k) empty = empty && t.row(i)[col[k]].empty();
+        if (!empty)
+          for (std::size_t k = 0; k < 6; ++k) q[static_cast<Eigen::Index>(k)] = t.numeric_cell(i, col[k]);
+        targets.seed_rows_deg.push_back(q);
+      }
+    }
     warn_if_metres(t, nominal, "compensate", kNominalXyz);
   }
-  const StepColumns step = compensate_columns(model, nominal, targets, a.tolerance);
+  if (!(std::isfinite(a.max_correction) && a.max_correction >= 0.0))
+    throw ArgumentError("--max-correction: " + format_number(a.max_correction) +
+                        "; expected a ceiling > 0 (mm), or 0 for the default");
+  const StepColumns step = compensate_columns(model, nominal, targets, a.tolerance, a.max_correction);
   const std::size_t refused = step.refused, no_prediction = step.no_prediction;
   const std::vector<std::string>& status = step.columns.back().words;
   OutputTable out;
@@ -88,6 +107,17 @@ void run_compensate(const CompensateArgs& a) {
   std::cout << "compensate: " << n - refused << " of " << n << " targets compensated with " << method_name(model.method())
             << (refused ? "; " + std::to_string(refused) + " refused (status column): no joints written for them" : "")
             << "\n  written to " << a.out << "\n";
+  std::cout << "  tool point moved by at most " << format_number(step.max_correction_mm) << " mm ("
+            << (a.max_correction > 0.0 ? std::string("--max-correction")
+                                       : "default: " + format_number(kMaxCorrectionFactor) +
+                                             " x the largest correction at the model's training poses, at least " +
+                                             format_number(kMaxCorrectionFloorMm) + " mm")
+            << "; column move_mm)\n";
+  if (step.too_large)
+    std::cerr << "errfield compensate: warning: " << step.too_large << " target(s) would move the tool point by more "
+              << "than " << format_number(step.max_correction_mm)
+              << " mm (status correction-too-large, no joints written): far beyond the corrections the model "
+                 "predicts on its own data; check the robot, tool and model (or raise --max-correction)\n";
   if (no_prediction)
     std::cerr << "errfield compensate: warning: " << no_prediction
               << " target(s) got no finite prediction from the model's field (status no-prediction); no joints "
@@ -102,10 +132,14 @@ void add_compensate_command(CLI::App& app) {
       "models), where the model has a variance: var_mm2 (a new reading at the target: field + nugget),\n"
       "var_field_mm2 (field only), r95_mm (95 % radius, vector fields) and p_inside, the probability that the\n"
       "3-D error (distance error for distance models) is within --tolerance; the corrected command cmd_x..z and\n"
-      "the compensated joints cq1..cq6 (IK, orientation kept). Targets: q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg). Targets outside the modelled\n"
+      "the compensated joints cq1..cq6 (IK, orientation kept), the whole predicted error of the tool point\n"
+      "(total_dx..dz, total_mm: calibration + field) and how far the joints move it (move_mm). Targets: q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg). Targets outside the modelled\n"
       "region are refused (status outside-region, no joints), never extrapolated; so are predictions far beyond\n"
       "the model's range of errors (not-credible) and pose targets whose IK left the data's branch\n"
-      "(branch-change: solved from the nearest training sample, or --seed, along the pose path).\n"
+      "(branch-change: solved from the nearest training sample, or --seed, along the pose path). Pose targets\n"
+      "may carry seed joints sq1..sq6 per row (e.g. the taught joints); a solution on another arm configuration\n"
+      "than the seed's (or the training sample's, or given joints') is refused (config-change); columns nconfig,\n"
+      "config (s+e+w- style, docs/robot.md).\n"
       "Example: errfield compensate --model model.json --targets targets.csv --out joints.csv");
   cmd->add_option("--robot", a->robot, "nominal robot JSON or built-in name (er20-c10, kr16, ur5e; default: the model's command model)");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();
@@ -117,6 +151,11 @@ void add_compensate_command(CLI::App& app) {
   cmd->add_option("--max-registration-rms", a->max_registration_rms,
                   "joint targets with x,y,z or mx,my,mz: refuse (exit 2) data that are not this robot's "
                   "(registration RMS above this, mm; docs/robot.md)")
+      ->capture_default_str();
+  cmd->add_option("--max-correction", a->max_correction,
+                  "MM: refuse targets whose compensated joints move the tool point by more than this (status "
+                  "correction-too-large; column move_mm). Default (0): 3 x the largest total correction the model "
+                  "predicts at its own training poses, at least 1 mm (docs/robot.md)")
       ->capture_default_str();
   cmd->add_flag("--strict", a->strict,
                 "if any target is refused: write nothing, name the refused rows and exit with status 1");

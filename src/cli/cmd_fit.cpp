@@ -24,6 +24,7 @@ struct FitArgs {
   double power = 1.0, max_registration_rms = robot::kRegistrationRmsLimitMm;
   std::optional<double> region_margin;
   std::size_t base = 0;
+  bool reflector_far_ok = false;
 };
 
 void run_fit(const FitArgs& a) {
@@ -40,6 +41,7 @@ void run_fit(const FitArgs& a) {
   const CsvTable table = CsvTable::read(a.data);
   FitTableOptions fo;
   fo.fit = o;
+  fo.fit.reflector_far_ok = a.reflector_far_ok;
   fo.fixed_bases = fixed;
   fo.robot_given = !a.robot.empty();
   fo.max_registration_rms_mm = a.max_registration_rms;
@@ -133,6 +135,10 @@ void add_fit_command(CLI::App& app) {
                   "docs/robot.md says which data decided the default")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  cmd->add_flag("--reflector-far-ok", a->reflector_far_ok,
+                "kinematic methods from positions: accept a reflector found more than 50 mm from --robot's tool "
+                "point (a second nest, a tool-less robot JSON on purpose); compensate still aims the tool point "
+                "(docs/robot.md)");
   cmd->add_option("--out", a->out, "model JSON (written atomically)")->required();
   cmd->callback([a] { run_fit(*a); });
 }

@@ -1,5 +1,6 @@
 #include "errfield/compensation/compensation.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "compensation/fit_checks.hpp"
@@ -54,6 +55,13 @@ std::vector<CompensationMethod> all_methods() {
   for (const auto& m : kMethods) out.push_back(m.method);
   return out;
 }
+
+namespace {
+/// The methods whose command model is a calibrated robot (used through compensated_joints).
+bool is_calibrated(CompensationMethod method) {
+  return method == CompensationMethod::kinematic || method == CompensationMethod::kinematic_kriging;
+}
+}  // namespace
 
 Eigen::Vector3d radial_direction(const Eigen::Vector3d& p_mm, const Eigen::Vector3d& base_mm) {
   return (p_mm - base_mm).normalized();
@@ -115,18 +123,51 @@ CompensatedTarget CompensationModel::compensate_joints(const MdhModel& nominal_m
                                    : probability_within(tolerance_mm, out.prediction.predictive_variance_mm2());
   }
   out.command_position_mm = p_nominal - out.prediction.position_error_mm;
-  if (method_ == CompensationMethod::none) return out;
+  const bool calibrated = is_calibrated(method_);
+  // The calibration's share of the error: where the calibrated model puts the tool point at the
+  // nominal joints (pred_dx..dz leave it out; the joints move by both).
+  out.total_error_mm = out.prediction.position_error_mm;
+  // The tool point, not the reflector the data measured (when the model knows both).
+  const MdhModel aimed = calibrated ? aimed_model() : command_model_;
+  if (calibrated) out.total_error_mm += forward_kinematics(aimed, q_nominal_deg, ik.frame).translation() - p_nominal;
+  if (method_ == CompensationMethod::none) {
+    out.move_mm = 0.0;
+    return out;
+  }
   pose.translation() = out.command_position_mm;
   // A calibrated model is used through compensated_joints (its orientation parameters are weakly
   // determined by position/distance data, so full-pose IK of it would follow them).
-  const bool calibrated =
-      method_ == CompensationMethod::kinematic || method_ == CompensationMethod::kinematic_kriging;
-  const IkResult cmd = calibrated ? compensated_joints(nominal_model, command_model_, pose, q_nominal_deg)
+  const IkResult cmd = calibrated ? compensated_joints(nominal_model, aimed, pose, q_nominal_deg)
                                   : inverse_kinematics(command_model_, pose, q_nominal_deg, ik);
   out.ik_status = cmd.status;
   out.ik_residual_mm = cmd.position_residual_mm;
-  if (cmd.ok()) out.q_command_deg = cmd.q_deg;
+  if (cmd.ok()) {
+    out.q_command_deg = cmd.q_deg;
+    out.move_mm = (forward_kinematics(nominal_model, cmd.q_deg, ik.frame).translation() - p_nominal).norm();
+  }
   return out;
+}
+
+Eigen::Vector3d CompensationModel::total_error(const MdhModel& nominal_model, const JointVector& q_deg) const {
+  const Eigen::Vector3d p_nominal = forward_position(nominal_model, q_deg);
+  Eigen::Vector3d e = Eigen::Vector3d::Zero();
+  if (field_) {
+    ErrorPrediction p = has_nominal_model() ? predict_error(q_deg) : field_->predict(p_nominal, q_deg);
+    if (!has_nominal_model() && credible_ && p.inside_region) p.credible = credible_->contains(p);
+    if (!p.inside_region || !p.credible) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+    e = p.position_error_mm;
+  }
+  if (is_calibrated(method_)) e += forward_position(aimed_model(), q_deg) - p_nominal;
+  return e;
+}
+
+double CompensationModel::largest_training_correction_mm() const {
+  double largest = 0.0;
+  for (const JointVector& q : data_joints_) {
+    const double e = total_error(nominal_model(), q).norm();
+    if (std::isfinite(e)) largest = std::max(largest, e);
+  }
+  return largest;
 }
 
 bool CredibleRange::contains(const ErrorPrediction& p) const {
@@ -180,6 +221,21 @@ CompensationModel CompensationModel::with_data_joints(std::vector<JointVector> q
   m.data_joints_ = std::move(q_deg);
   return m;
 }
+CompensationModel CompensationModel::with_tool_point(std::optional<Eigen::Vector3d> tool_point,
+                                                     std::optional<Eigen::Vector3d> reflector) const {
+  CompensationModel m = *this;
+  m.tool_point_ = std::move(tool_point);
+  m.reflector_ = std::move(reflector);
+  return m;
+}
+
+MdhModel CompensationModel::aimed_model() const {
+  if (!tool_point_) return command_model_;
+  Eigen::Isometry3d tool = command_model_.tool();
+  tool.translation() = *tool_point_;
+  return command_model_.with_tool(tool);
+}
+
 CompensationModel CompensationModel::with_credible_range(std::optional<CredibleRange> range) const {
   CompensationModel m = *this;
   m.credible_ = std::move(range);
@@ -209,6 +265,8 @@ nlohmann::json CompensationModel::to_json() const {
     for (const JointVector& v : data_joints_) q.push_back({v[0], v[1], v[2], v[3], v[4], v[5]});
     j["data_joints_deg"] = q;
   }
+  if (tool_point_) j["tool_point_mm"] = {tool_point_->x(), tool_point_->y(), tool_point_->z()};
+  if (reflector_) j["reflector_mm"] = {reflector_->x(), reflector_->y(), reflector_->z()};
   if (!notes_.empty()) j["notes"] = notes_;
   if (!excluded_rows_.empty()) j["excluded_rows"] = excluded_rows_;
   return j;
@@ -347,6 +405,21 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
                        "fitted on (errfield fit writes it); refit the model with 'errfield fit'");
   }
   if (model.field_) check_stored_samples(model, j["field"], source);
+  // The tool point compensate aims and the reflector measured (flange frame).
+  auto point = [&](const char* key) -> std::optional<Eigen::Vector3d> {
+    if (!j.contains(key)) return std::nullopt;
+    const auto& v = j[key];
+    if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
+      fail_model(source, std::string("member \"") + key + "\": expected 3 numbers (mm, flange frame)");
+    const Eigen::Vector3d p(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+    if (!p.allFinite()) fail_model(source, std::string("member \"") + key + "\": not finite");
+    return p;
+  };
+  model.tool_point_ = point("tool_point_mm");
+  model.reflector_ = point("reflector_mm");
+  if (model.tool_point_ && method != CompensationMethod::kinematic && method != CompensationMethod::kinematic_kriging)
+    fail_model(source, "member \"tool_point_mm\": only calibrated models (kinematic, kinematic+kriging) aim a tool "
+                       "point on their calibrated flange; method \"" + std::string(method_name(method)) + "\" has none");
   if (j.contains("data_joints_deg")) {
     const auto& q = j["data_joints_deg"];
     if (!q.is_array()) fail_model(source, "member \"data_joints_deg\": expected an array of 6-number arrays");

@@ -1,5 +1,6 @@
 #include "compensation/kinematic_fit.hpp"
 
+#include <numbers>
 #include <sstream>
 
 #include "errfield/error.hpp"
@@ -35,6 +36,45 @@ std::string summary(const CalibrationResult& cal, std::size_t count, const std::
          (robust ? "igg3 (" + std::to_string(cal.rejected) + " rejected)" : std::string("none")) + "; " + cal.message;
 }
 
+std::string flange_point_text(const Eigen::Vector3d& v) {
+  return "(" + short_number(v.x()) + ", " + short_number(v.y()) + ", " + short_number(v.z()) + ")";
+}
+
+// The reflector is the point measured; the robot JSON's tool is the point to compensate. Close
+// together they are one point (the data locate it better than the JSON); apart, compensate aims
+// the JSON's tool on the calibrated flange, which the data only see through the reflector.
+void tool_and_reflector(KinematicFit& out, const MdhModel& robot, const Eigen::Vector3d& reflector,
+                        const MeasurementSet& d, const FitOptions& o) {
+  const Eigen::Vector3d tool = robot.tool().translation();
+  const double apart = (reflector - tool).norm();
+  out.reflector_mm = reflector;
+  const std::string where = "the reflector found from the data is at " + flange_point_text(reflector) +
+                            " mm in the flange frame, " + short_number(apart) +
+                            " mm from the robot JSON's tool point " + flange_point_text(tool) + " mm";
+  if (apart <= kReflectorAtToolMm) {
+    out.tool_point_mm = reflector;
+    out.notes.push_back(where + ": taken as the same point (within " + short_number(kReflectorAtToolMm) +
+                        " mm); compensate aims it as identified");
+    return;
+  }
+  if (apart > kReflectorFarMm && !o.reflector_far_ok)
+    throw InputError(d.source + ": " + where + " (limit " + short_number(kReflectorFarMm) +
+                         " mm): the robot JSON's tool cannot be the point measured. Give --robot the tool that "
+                         "carries the reflector (or measure at the tool point); if the reflector really sits that far "
+                         "from the tool point (a second nest), say so with --reflector-far-ok",
+                     d.source, 0, "mx");
+  out.tool_point_mm = tool;
+  // What the lever costs: an orientation error of the calibrated flange moves the tool point by
+  // apart x angle more than the reflector, and the data see only the reflector.
+  const double per_hundredth_deg = apart * 0.01 * std::numbers::pi / 180.0;
+  out.warnings.push_back(where + ": compensate aims the tool point on the calibrated flange, measured only through "
+                         "the reflector; every 0.01 deg of flange orientation error the calibration leaves moves "
+                         "the tool point " + short_number(per_hundredth_deg) +
+                         " mm more than it moves the reflector, and an error in the tool's own offset is not seen "
+                         "at all. Measure at the tool point for its accuracy");
+  out.notes.push_back(where + ": compensate aims the robot JSON's tool point on the calibrated flange");
+}
+
 // Registration (tracker ← robot base and the reflector offset, MD-H fixed), then the full model in
 // the tracker frame; the result is expressed back in the robot's world frame (the nominal
 // model's base frame), and the registration maps tracker readings into it.
@@ -59,6 +99,7 @@ KinematicFit from_positions(const MdhModel& robot, const MeasurementSet& d, cons
   out.notes.push_back(summary(cal, pm.size(), "positions (tracker frame)", o.calibration.robust.enabled));
   if (!reg.converged) out.warnings.push_back("the tracker registration did not converge: " + reg.message);
   if (!cal.converged) out.warnings.push_back("the kinematic calibration did not converge: " + cal.message);
+  tool_and_reflector(out, robot, cal.model.tool().translation(), d, o);
   return out;
 }
 

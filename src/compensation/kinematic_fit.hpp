@@ -15,6 +15,8 @@ struct KinematicFit {
   robot::MdhModel model;  ///< identified, in the nominal robot's world frame
   std::optional<Registration> registration;  ///< robot ← tracker, from position calibration
   std::vector<std::string> notes, warnings;
+  /// From positions: the identified reflector and the tool point compensate aims (flange frame, mm).
+  std::optional<Eigen::Vector3d> reflector_mm, tool_point_mm;
 };
 
 KinematicFit fit_kinematic(const robot::MdhModel& robot, const MeasurementSet& data, const FitOptions& options);

@@ -356,8 +356,9 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
     case CompensationMethod::kinematic:
     case CompensationMethod::kinematic_kriging: {
       const KinematicFit kin = fit_kinematic(robot, d, o);
-      FitResult out{CompensationModel(CompensationMethod::kinematic, kin.model, nullptr), kin.registration,
-                    std::nullopt, kin.notes, kin.warnings};
+      FitResult out{CompensationModel(CompensationMethod::kinematic, kin.model, nullptr)
+                        .with_tool_point(kin.tool_point_mm, kin.reflector_mm),
+                    kin.registration, std::nullopt, kin.notes, kin.warnings};
       if (method == CompensationMethod::kinematic) return out;
       if (d.measured_mm.empty())
         throw InputError(d.source + ": kinematic+kriging needs measured positions (mx,my,mz) for the residuals",
@@ -376,7 +377,7 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
       ko.model = chosen_model(o, samples, flat, ko, model_reason);
       const KrigingFieldFit fit = fit_vector_kriging_field(samples, residual, ko);
-      out.model = CompensationModel(method, kin.model, fit.field);
+      out.model = CompensationModel(method, kin.model, fit.field).with_tool_point(kin.tool_point_mm, kin.reflector_mm);
       out.cross_validation = kriging_report(fit, o.space, o);
       out.notes.push_back("residuals after calibration kriged with " + ko.model->to_string());
       out.notes.push_back("variogram per component: " + describe_field_model(*ko.model, o.space));

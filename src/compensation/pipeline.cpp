@@ -3,6 +3,7 @@
 
 #include "errfield/compensation/pipeline.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -12,6 +13,7 @@
 #include "errfield/compensation/registration.hpp"
 #include "errfield/compensation/target_ik.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/arm_configuration.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/pose.hpp"
 
@@ -159,12 +161,20 @@ StepColumns predict_columns(const CompensationModel& model, std::span<const robo
   return out;
 }
 
+double default_max_correction_mm(const CompensationModel& model) {
+  return std::max(kMaxCorrectionFactor * model.largest_training_correction_mm(), kMaxCorrectionFloorMm);
+}
+
 StepColumns compensate_columns(const CompensationModel& model, const robot::MdhModel& nominal,
-                               const CompensationTargets& targets, double tolerance_mm) {
+                               const CompensationTargets& targets, double tolerance_mm, double max_correction_mm) {
   using namespace robot;
   // p_inside is P(|error| <= tolerance): 0, a negative or a NaN tolerance makes it meaningless.
   if (!(std::isfinite(tolerance_mm) && tolerance_mm > 0.0))
     throw ArgumentError("tolerance: " + format_number(tolerance_mm) + "; expected a finite tolerance > 0 (mm)");
+  if (!(std::isfinite(max_correction_mm) && max_correction_mm >= 0.0))
+    throw ArgumentError("max-correction: " + format_number(max_correction_mm) +
+                        "; expected a finite ceiling > 0 (mm), or 0 for the default");
+  const double ceiling = max_correction_mm > 0.0 ? max_correction_mm : default_max_correction_mm(model);
   const bool joints = !targets.joints_deg.empty() || targets.poses.rows() == 0;
   if (!joints && targets.poses.cols() != 6)
     throw ArgumentError("poses: " + std::to_string(targets.poses.cols()) + " columns; expected x,y,z,rx,ry,rz");
@@ -172,27 +182,48 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
   // The branch pose targets are solved on: the model's training joints (older model files have
   // none: multistart).
   const std::vector<JointVector>& reference = model.data_joints();
+  if (!targets.seed_rows_deg.empty() && (joints || targets.seed_rows_deg.size() != n))
+    throw ArgumentError("seed rows: " + std::to_string(targets.seed_rows_deg.size()) + " for " + std::to_string(n) +
+                        (joints ? " joint targets; only pose targets take seeds" : " pose targets"));
   std::vector<JointVector> qn(n);
   std::vector<bool> ik_ok(n, true);
   std::vector<std::string> ik_status(n);
+  // The arm configuration each row must keep: its seed's, or the training sample's its pose path
+  // started from, or that of the given nominal joints. A solver may land on another solution of the
+  // same pose (the wrist flipped: q4, q6 180 deg away, q5 negated) without crossing a singularity
+  // on its path; a robot sent those joints would flip its wrist between moves.
+  std::vector<std::optional<ArmConfiguration>> wanted(n);
   if (joints) {
     qn = targets.joints_deg;
+    for (std::size_t i = 0; i < n; ++i)
+      if (qn[i].allFinite()) wanted[i] = arm_configuration(nominal, qn[i]);
   } else {
     for (std::size_t i = 0; i < n; ++i) {
       const auto r = targets.poses.row(static_cast<Eigen::Index>(i));
-      const BranchIkResult ik =
-          solve_on_branch(nominal, to_isometry({r[0], r[1], r[2], r[3], r[4], r[5]}), reference, targets.seed_deg);
+      std::optional<JointVector> seed = targets.seed_deg;
+      if (!targets.seed_rows_deg.empty() && targets.seed_rows_deg[i].allFinite()) seed = targets.seed_rows_deg[i];
+      const BranchIkResult ik = solve_on_branch(nominal, to_isometry({r[0], r[1], r[2], r[3], r[4], r[5]}), reference, seed);
       qn[i] = ik.ik.q_deg;
       ik_ok[i] = ik.ok();
       ik_status[i] = ik.branch_changed ? "branch-change" : ik.ik.ok() ? "" : to_string(ik.ik.status);
+      if (seed) wanted[i] = arm_configuration(nominal, *seed);
+      else if (ik.start_sample) wanted[i] = arm_configuration(nominal, reference[*ik.start_sample]);
+      if (ik_ok[i] && wanted[i] && !arm_configuration(nominal, qn[i]).compatible_with(*wanted[i])) {
+        ik_ok[i] = false;
+        ik_status[i] = "config-change";
+      }
     }
   }
-  std::vector<std::vector<double>> cols(26, std::vector<double>(n, kNaN));  // see `names` below
+  std::vector<std::string> nconfig(n), config(n);
+  for (std::size_t i = 0; i < n; ++i)
+    if (ik_ok[i] || ik_status[i] == "config-change") nconfig[i] = arm_configuration(nominal, qn[i]).to_string();
+  std::vector<std::vector<double>> cols(31, std::vector<double>(n, kNaN));  // see `names` below
   std::vector<std::string> status(n);
   StepColumns out;
+  out.max_correction_mm = ceiling;
   for (std::size_t i = 0; i < n; ++i) {
     if (!ik_ok[i]) {
-      status[i] = ik_status[i] == "branch-change" ? "branch-change" : "unreachable";
+      status[i] = ik_status[i] == "branch-change" || ik_status[i] == "config-change" ? ik_status[i] : "unreachable";
       ++out.refused;
       continue;
     }
@@ -212,6 +243,9 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
     cols[24][i] = c.prediction.variance_mm2;
     cols[25][i] = radius_with_probability(0.95, c.prediction.axis_variance_mm2);
     for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(15 + k)][i] = c.command_position_mm[k];
+    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(26 + k)][i] = c.total_error_mm[k];
+    cols[29][i] = c.total_error_mm.norm();
+    cols[30][i] = c.move_mm;
     if (c.prediction.inside_region && !(c.prediction.position_error_mm.allFinite() && c.command_position_mm.allFinite())) {
       // The field gave no number here (e.g. an overflow): never an IK failure's name, never ok.
       status[i] = "no-prediction";
@@ -223,17 +257,26 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
                 : !c.prediction.credible ? "not-credible"
                 : c.ik_status != IkStatus::converged ? std::string("ik-") + to_string(c.ik_status)
                 : robot::joint_outside_limits(c.q_command_deg, model.command_model()) ? std::string(status_name(PredictionStatus::outside_limits))
-                                                                                       : "ok";
+                // A move far beyond what the model ever predicted on its own data is a wrong robot,
+                // tool or model, not a correction (NaN: no move known, never ok either).
+                : !(c.move_mm <= ceiling) ? "correction-too-large"
+                : wanted[i] && !arm_configuration(nominal, c.q_command_deg).compatible_with(*wanted[i]) ? "config-change"
+                                                                                          : "ok";
+    out.too_large += status[i] == "correction-too-large";
     if (status[i] != "ok") {
       ++out.refused;
       continue;  // compensated joints stay empty: nothing is sent for a refused target
     }
     for (int k = 0; k < 6; ++k) cols[static_cast<std::size_t>(18 + k)][i] = c.q_command_deg[k];
+    config[i] = arm_configuration(nominal, c.q_command_deg).to_string();
   }
   const char* names[] = {"nq1", "nq2", "nq3", "nq4", "nq5", "nq6", "nx", "ny", "nz", "pred_dx", "pred_dy", "pred_dz",
                          "pred_dl", "var_mm2", "p_inside", "cmd_x", "cmd_y", "cmd_z", "cq1", "cq2", "cq3", "cq4",
-                         "cq5", "cq6", "var_field_mm2", "r95_mm"};
-  for (std::size_t c = 0; c < 26; ++c) out.columns.push_back(numbers(names[c], std::move(cols[c])));
+                         "cq5", "cq6", "var_field_mm2", "r95_mm", "total_dx", "total_dy", "total_dz", "total_mm",
+                         "move_mm"};
+  for (std::size_t c = 0; c < 31; ++c) out.columns.push_back(numbers(names[c], std::move(cols[c])));
+  out.columns.push_back(words("nconfig", std::move(nconfig)));
+  out.columns.push_back(words("config", std::move(config)));
   out.columns.push_back(words("status", std::move(status)));
   return out;
 }

@@ -277,6 +277,7 @@ def fit(
     max_condition: float = 1e3,
     max_registration_rms: float = 5.0,
     outlier_limit: float = 5.0,
+    reflector_far_ok: bool = False,
 ) -> CompensationModel: ...
 def predict(model: CompensationModel, joints: ArrayLike | Columns) -> dict[str, Any]: ...
 def compensate(

@@ -203,9 +203,13 @@ TEST(CalibrationIndependent, FitKinematicMatchesPlainLeastSquaresOnAnotherGeomet
   }
   FitOptions o;
   o.method = CompensationMethod::kinematic;
+  // The reflector is 77 mm from the tool-less nominal's tool point, on purpose: this compares the
+  // calibrations of the measured point (the command model), not the tool point compensate aims.
+  o.reflector_far_ok = true;
   const FitResult fit = fit_compensation_model(arm.nominal, data, o);
   ASSERT_TRUE(fit.registration.has_value());
-  for (const auto& w : fit.warnings) ADD_FAILURE() << w;
+  for (const auto& w : fit.warnings)
+    if (w.find("the reflector found from the data") == std::string::npos) ADD_FAILURE() << w;
   const MdhModel identified = fit.model.command_model();
   const Eigen::Isometry3d tracker_from_robot = fit.registration->robot_from_tracker.inverse();
 

@@ -16,6 +16,9 @@
 #include <nlohmann/json.hpp>
 
 #include "errfield/csv_table.hpp"
+#include "errfield/robot/kinematics.hpp"
+#include "errfield/robot/mdh_model.hpp"
+#include "errfield/robot/pose.hpp"
 #include "support/cli_harness.hpp"
 
 namespace errfield {
@@ -357,5 +360,263 @@ TEST_F(WrongCommand, BasePointThatIsGridVertexZero) {
                  {"zero.csv", "dist_b0", "expected a distance > 0"});
 }
 
-}  // namespace
+// ---- item 3: the total correction, and a ceiling on it --------------------------------------
+
+/// Joints in columns `prefix`1..6 of row `i` (empty cells: NaN).
+robot::JointVector joints_of(const CsvTable& t, std::size_t i, const std::string& prefix) {
+  robot::JointVector q;
+  for (int k = 0; k < 6; ++k) {
+    const std::string& cell = t.row(i)[t.column_index(prefix + std::to_string(k + 1))];
+    q[k] = cell.empty() ? std::nan("") : std::stod(cell);
+  }
+  return q;
+}
+double cell_of(const CsvTable& t, std::size_t i, const std::string& column) {
+  const std::string& cell = t.row(i)[t.column_index(column)];
+  return cell.empty() ? std::nan("") : std::stod(cell);
+}
+
+TEST_F(WrongCommand, CompensateWritesTheTotalCorrectionAndRefusesMovesBeyondTheCeiling) {
+  // A calibrated KR16 (SIMULATED, scattered joints, reflector 2.7 mm off the JSON's tool: the same
+  // point as far as the tool goes): pred_dx..dz are empty of the calibration, total_* and move_mm
+  // are not. Checked against the FK of the model file's own calibrated and nominal robots.
+  ASSERT_EQ(run("simulate --robot kr16 --seed 11 --sample scattered:60 --joint-box " + std::string(kJointBox) +
+                " --tool-offset 1,-2,1.5 --joint-decimals 3 --measure positions --robot-out " + path("r.json") +
+                " --out " + path("train.csv")).exit_code,
+            0);
+  ASSERT_EQ(run("fit --robot " + path("r.json") + " --data " + path("train.csv") + " --method kinematic --out " +
+                path("k.json")).exit_code,
+            0);
+  ASSERT_EQ(run("simulate --robot kr16 --seed 12 --sample scattered:25 --joint-box " + std::string(kJointBox) +
+                " --measure positions --out " + path("held.csv")).exit_code,
+            0);
+  rewrite("held.csv", "q.csv", [](const CsvTable&, std::size_t, std::vector<std::string>&) {},
+          [](const std::string& c) { return c.size() == 2 && c[0] == 'q'; });
+  const auto c = run("compensate --model " + path("k.json") + " --targets " + path("q.csv") + " --out " + path("c.csv"));
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const nlohmann::json model = read_json("k.json");
+  const robot::MdhModel calibrated = robot::MdhModel::from_json(model["command_model"]);
+  const robot::MdhModel nominal = robot::MdhModel::load(path("r.json"));
+  // The default ceiling: 3 x the largest calibration correction at the training joints, >= 1 mm.
+  double largest = 0.0;
+  for (const auto& q : model["data_joints_deg"]) {
+    robot::JointVector v;
+    for (int k = 0; k < 6; ++k) v[k] = q[static_cast<std::size_t>(k)].get<double>();
+    largest = std::max(largest, (robot::forward_position(calibrated, v) - robot::forward_position(nominal, v)).norm());
+  }
+  ASSERT_GT(largest, 0.3);  // the simulated robot's errors are worth correcting
+  const double ceiling = std::max(3.0 * largest, 1.0);
+  EXPECT_NE(c.out.find("at most " + format_number(ceiling) + " mm"), std::string::npos) << c.out;
+  const CsvTable out = CsvTable::read(path("c.csv"));
+  std::vector<double> moves;
+  for (std::size_t i = 0; i < out.row_count(); ++i) {
+    ASSERT_EQ(out.row(i)[out.column_index("status")], "ok") << "row " << i;
+    const robot::JointVector nq = joints_of(out, i, "nq"), cq = joints_of(out, i, "cq");
+    const Eigen::Vector3d total = robot::forward_position(calibrated, nq) - robot::forward_position(nominal, nq);
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(cell_of(out, i, std::string("total_d") + "xyz"[k]), total[k], 1e-6) << "row " << i;
+      EXPECT_NEAR(cell_of(out, i, std::string("pred_d") + "xyz"[k]), 0.0, 1e-12);  // the field's part: none
+    }
+    EXPECT_NEAR(cell_of(out, i, "total_mm"), total.norm(), 1e-6);
+    const double move = (robot::forward_position(nominal, cq) - robot::forward_position(nominal, nq)).norm();
+    EXPECT_NEAR(cell_of(out, i, "move_mm"), move, 1e-6) << "row " << i;
+    // The joints move the tool by the correction (to first order in its size).
+    EXPECT_NEAR(move, total.norm(), 0.02 * total.norm() + 1e-3) << "row " << i;
+    EXPECT_LE(move, ceiling);
+    moves.push_back(move);
+  }
+
+  // A ceiling below some moves: exactly those rows are refused, with no joints.
+  std::vector<double> sorted = moves;
+  std::sort(sorted.begin(), sorted.end());
+  const double limit = sorted[sorted.size() / 2];
+  const auto low = run("compensate --model " + path("k.json") + " --targets " + path("q.csv") + " --max-correction " +
+                       format_number(limit) + " --out " + path("low.csv"));
+  ASSERT_EQ(low.exit_code, 0) << low.err;
+  EXPECT_NE(low.err.find("correction-too-large"), std::string::npos) << low.err;
+  const CsvTable capped = CsvTable::read(path("low.csv"));
+  std::size_t refused = 0;
+  for (std::size_t i = 0; i < capped.row_count(); ++i) {
+    const bool over = moves[i] > limit;
+    refused += over;
+    EXPECT_EQ(capped.row(i)[capped.column_index("status")], over ? "correction-too-large" : "ok") << "row " << i;
+    EXPECT_EQ(capped.row(i)[capped.column_index("cq1")].empty(), over) << "row " << i;
+  }
+  EXPECT_GT(refused, 5u);
+
+  // The wrong tool at compensate time (30 mm along the flange z): every target would move the tool
+  // point ~30 mm; before, all rows came back ok. Now every one is refused.
+  nlohmann::json wrong = read_json("r.json");
+  wrong["tool"]["z_mm"] = wrong["tool"].value("z_mm", 0.0) + 30.0;
+  write_json("wrong.json", wrong);
+  const auto w = run("compensate --robot " + path("wrong.json") + " --model " + path("k.json") + " --targets " +
+                     path("q.csv") + " --out " + path("w.csv"));
+  ASSERT_EQ(w.exit_code, 0) << w.err;
+  // Rows the calibrated model cannot reach with that tool are refused by IK; none is ok.
+  const auto status = column("w.csv", "status"), move = column("w.csv", "move_mm");
+  EXPECT_EQ(std::count(status.begin(), status.end(), "ok"), 0);
+  EXPECT_GT(std::count(status.begin(), status.end(), "correction-too-large"), 20);
+  for (std::size_t i = 0; i < status.size(); ++i)
+    if (!move[i].empty()) {
+      EXPECT_GT(std::stod(move[i]), 20.0) << "row " << i;
+      EXPECT_EQ(status[i], "correction-too-large") << "row " << i;
+    }
+  // A negative ceiling is an argument error.
+  EXPECT_EQ(run("compensate --model " + path("k.json") + " --targets " + path("q.csv") +
+                " --max-correction -1 --out " + path("x.csv")).exit_code,
+            2);
+}
+
+// ---- item 2: the tool point and the reflector are two points --------------------------------
+
+TEST_F(WrongCommand, ReflectorFarFromTheToolIsRefusedOrAimsTheToolPoint) {
+  // A KR16 (SIMULATED, scattered joints) measured at a reflector 150 mm from its tool point (a second
+  // nest), the robot JSON carrying the tool point. Before: fit said nothing and compensate aimed the
+  // reflector at the tool point's targets (rows ok, joints moving the tool ~150 mm).
+  ASSERT_EQ(run("simulate --robot kr16 --seed 21 --sample scattered:60 --joint-box " + std::string(kJointBox) +
+                " --tool-offset 0,150,0 --joint-decimals 3 --measure positions --robot-out " + path("r.json") +
+                " --out " + path("train.csv")).exit_code,
+            0);
+  const std::string fit = "fit --robot " + path("r.json") + " --data " + path("train.csv") + " --method kinematic --out " +
+                          path("k.json");
+  expect_refused(run(fit), 2, {"train.csv", "reflector", "mm from the robot JSON's tool point", "--reflector-far-ok"});
+  EXPECT_FALSE(std::filesystem::exists(path("k.json")));
+  const auto f = run(fit + " --reflector-far-ok");
+  ASSERT_EQ(f.exit_code, 0) << f.err;
+  EXPECT_NE(f.err.find("every 0.01 deg of flange orientation error"), std::string::npos) << f.err;
+
+  // The model stores both points: the reflector as identified (the command model's tool, what
+  // predict and validate score) and the tool point compensate aims (the robot JSON's tool).
+  const nlohmann::json model = read_json("k.json");
+  const robot::MdhModel calibrated = robot::MdhModel::from_json(model["command_model"]);
+  const robot::MdhModel nominal = robot::MdhModel::load(path("r.json"));
+  ASSERT_EQ(model["reflector_mm"].size(), 3u);
+  ASSERT_EQ(model["tool_point_mm"].size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_DOUBLE_EQ(model["reflector_mm"][static_cast<std::size_t>(k)].get<double>(), calibrated.tool().translation()[k]);
+    EXPECT_DOUBLE_EQ(model["tool_point_mm"][static_cast<std::size_t>(k)].get<double>(), nominal.tool().translation()[k]);
+  }
+  EXPECT_NEAR((calibrated.tool().translation() - nominal.tool().translation()).norm(), 150.0, 2.0);
+
+  ASSERT_EQ(run("simulate --robot kr16 --seed 22 --sample scattered:20 --joint-box " + std::string(kJointBox) +
+                " --measure positions --out " + path("held.csv")).exit_code,
+            0);
+  rewrite("held.csv", "q.csv", [](const CsvTable&, std::size_t, std::vector<std::string>&) {},
+          [](const std::string& c) { return c.size() == 2 && c[0] == 'q'; });
+  const auto c = run("compensate --model " + path("k.json") + " --targets " + path("q.csv") + " --out " + path("c.csv"));
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  // Independent: the calibrated flange carrying the robot JSON's tool lands on each target; the
+  // calibrated reflector does not (it stays ~150 mm away); the joints move the tool by millimetres.
+  Eigen::Isometry3d tool = calibrated.tool();
+  tool.translation() = nominal.tool().translation();
+  const robot::MdhModel calibrated_tool = calibrated.with_tool(tool);
+  const CsvTable out = CsvTable::read(path("c.csv"));
+  for (std::size_t i = 0; i < out.row_count(); ++i) {
+    ASSERT_EQ(out.row(i)[out.column_index("status")], "ok") << "row " << i;
+    const robot::JointVector nq = joints_of(out, i, "nq"), cq = joints_of(out, i, "cq");
+    const Eigen::Vector3d target = robot::forward_position(nominal, nq);
+    EXPECT_LT((robot::forward_position(calibrated_tool, cq) - target).norm(), 1e-3) << "row " << i;
+    EXPECT_GT((robot::forward_position(calibrated, cq) - target).norm(), 100.0) << "row " << i;
+    EXPECT_LT(cell_of(out, i, "move_mm"), 10.0) << "row " << i;
+  }
+  // A tool-less robot JSON for data measured at a tool 150 mm out is the same mistake.
+  nlohmann::json bare = read_json("r.json");
+  bare.erase("tool");
+  write_json("bare.json", bare);
+  ASSERT_EQ(run("simulate --robot kr16 --seed 23 --sample scattered:40 --joint-box " + std::string(kJointBox) +
+                " --tool-offset 0,0,150 --measure positions --out " + path("tooled.csv")).exit_code,
+            0);
+  expect_refused(run("fit --robot " + path("bare.json") + " --data " + path("tooled.csv") +
+                     " --method kinematic+kriging --out " + path("b.json")),
+                 2, {"tooled.csv", "reflector", "--reflector-far-ok"});
+}
+
+// ---- item 8: the arm configuration is explicit ------------------------------------------------
+
+TEST_F(WrongCommand, PoseTargetsKeepTheirSeedsArmConfiguration) {
+  // A calibrated KR16 (SIMULATED) with wrists bent both ways (q5 in +-100 deg); pose targets are
+  // the FK of taught joints, each given twice: seeded with the taught joints, and with the other
+  // wrist solution of the same pose (q4 + 180, -q5, q6 + 180). Before: no seed per row and no
+  // configuration in the output (on 60 held-out poses of this set-up without seeds, 7 came back ok
+  // on the other wrist solution than the taught one: the nearest training sample's).
+  const std::string box = "-40,40,-80,-30,0,60,-90,90,-100,100,-90,90";
+  ASSERT_EQ(run("simulate --robot kr16 --seed 31 --sample scattered:60 --joint-box " + box +
+                " --measure positions --robot-out " + path("r.json") + " --out " + path("train.csv")).exit_code,
+            0);
+  ASSERT_EQ(run("fit --robot " + path("r.json") + " --data " + path("train.csv") + " --method kinematic --out " +
+                path("k.json")).exit_code,
+            0);
+  const robot::MdhModel nominal = robot::MdhModel::load(path("r.json"));
+  // Taught joints well away from the wrist singularity (|q5| >= 20 deg), deterministic.
+  std::vector<robot::JointVector> taught;
+  for (int i = 0; i < 12; ++i) {
+    robot::JointVector q;
+    q << -30.0 + 5.0 * i, -60.0 + 2.0 * (i % 5), 20.0 + 3.0 * (i % 4), -70.0 + 13.0 * i, (i % 2 ? 1 : -1) * (25.0 + 5.0 * i),
+        -60.0 + 11.0 * i;
+    taught.push_back(q);
+  }
+  std::string text = "x,y,z,rx,ry,rz,sq1,sq2,sq3,sq4,sq5,sq6\n";
+  auto row = [&](const robot::JointVector& pose_q, const robot::JointVector& seed) {
+    const robot::PoseXyzRpy p = robot::to_xyz_rpy(robot::forward_kinematics(nominal, pose_q));
+    std::string l;
+    for (double v : {p.x_mm, p.y_mm, p.z_mm, p.rx_deg, p.ry_deg, p.rz_deg}) l += format_number(v) + ",";
+    for (int k = 0; k < 6; ++k) l += format_number(seed[k]) + (k < 5 ? "," : "\n");
+    text += l;
+  };
+  std::vector<robot::JointVector> seeds;
+  for (const auto& q : taught) {
+    robot::JointVector flipped = q;
+    flipped[3] += q[3] > 0 ? -180.0 : 180.0;
+    flipped[4] = -q[4];
+    flipped[5] += q[5] > 0 ? -180.0 : 180.0;
+    row(q, q);
+    row(q, flipped);  // the same pose
+    seeds.push_back(q);
+    seeds.push_back(flipped);
+  }
+  write("poses.csv", text);
+  const auto c = run("compensate --model " + path("k.json") + " --targets " + path("poses.csv") + " --out " +
+                     path("c.csv"));
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const CsvTable out = CsvTable::read(path("c.csv"));
+  ASSERT_EQ(out.row_count(), seeds.size());
+  std::size_t ok = 0;
+  for (std::size_t i = 0; i < out.row_count(); ++i) {
+    const std::string status = out.row(i)[out.column_index("status")];
+    if (status != "ok") continue;
+    ++ok;
+    const robot::JointVector cq = joints_of(out, i, "cq");
+    // Independent of errfield's flags: the solution is the seed's (a flipped wrist would put q5's
+    // sign the other way and q4, q6 ~180 deg off), and it is a solution of the row's pose.
+    EXPECT_EQ(cq[4] > 0, seeds[i][4] > 0) << "row " << i << ": q5 " << cq[4] << " vs seed " << seeds[i][4];
+    for (int k : {0, 3, 5}) EXPECT_LT(std::abs(cq[k] - seeds[i][k]), 20.0) << "row " << i << " q" << k + 1;
+    // The configuration column says so: the two rows of one pose differ in the wrist flag only.
+    const std::string config = out.row(i)[out.column_index("config")];
+    ASSERT_EQ(config.size(), 6u) << config;
+    EXPECT_EQ(config, out.row(i)[out.column_index("nconfig")]);
+  }
+  EXPECT_GE(ok, 20u);
+  // Joint targets near the wrist singularity (q5 = +-0.2 deg): a compensation that crosses q5 = 0
+  // by a fraction of a degree keeps the configuration (the flag is undetermined there).
+  std::string near = "q1,q2,q3,q4,q5,q6\n";
+  for (std::size_t i = 0; i < 6; ++i) {
+    robot::JointVector q = taught[i];
+    q[4] = i % 2 ? 0.2 : -0.2;
+    for (int k = 0; k < 6; ++k) near += format_number(q[k]) + (k < 5 ? "," : "\n");
+  }
+  write("near.csv", near);
+  ASSERT_EQ(run("compensate --model " + path("k.json") + " --targets " + path("near.csv") + " --out " + path("n.csv"))
+                .exit_code,
+            0);
+  for (const auto& st : column("n.csv", "status")) EXPECT_NE(st, "config-change");
+  for (const auto& cfg : column("n.csv", "nconfig")) EXPECT_EQ(cfg.substr(4), "w0") << cfg;
+  for (std::size_t i = 0; i + 1 < out.row_count(); i += 2) {
+    const std::string a = out.row(i)[out.column_index("nconfig")], b = out.row(i + 1)[out.column_index("nconfig")];
+    if (a.empty() || b.empty()) continue;
+    EXPECT_EQ(a.substr(0, 4), b.substr(0, 4)) << "rows " << i << ", " << i + 1;
+    EXPECT_NE(a[5], b[5]) << "rows " << i << ", " << i + 1 << ": " << a << " " << b;
+  }
+}
+
+}  // namespace wrong_command_cli_test
 }  // namespace errfield

@@ -121,6 +121,15 @@ struct CompensatedTarget {
   /// distribution (field variance plus nugget): for vector fields P(|e| <= tol) of the 3-D error
   /// (error_ball.hpp), for distance fields P(|e| <= tol) of the distance error; NaN without a variance.
   double p_within_tolerance = std::numeric_limits<double>::quiet_NaN();
+  /// The robot's whole predicted position error of the tool point at the nominal joints (robot frame,
+  /// mm): calibration (the calibrated tool point's FK minus the nominal FK) plus the field. The
+  /// correction is its negative. For methods without calibration it equals prediction.position_error_mm.
+  /// NaN where nothing was predicted (outside the region, not credible, nominal IK failed).
+  Eigen::Vector3d total_error_mm = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  /// How far the compensated joints move the tool point from where the nominal joints put it, by the
+  /// nominal model's FK: |FK(q_command) − FK(q_nominal)| (mm). What the robot will actually do
+  /// differently; NaN when the command IK failed.
+  double move_mm = std::numeric_limits<double>::quiet_NaN();
   /// True when the target is inside the modelled region, the prediction is credible and both IK
   /// solves converged.
   bool ok() const { return prediction.inside_region && prediction.credible && ik_status == robot::IkStatus::converged; }
@@ -165,10 +174,30 @@ class CompensationModel {
   CompensationModel with_nominal_model(robot::MdhModel nominal) const;
   CompensationModel with_data_joints(std::vector<robot::JointVector> q_deg) const;
   CompensationModel with_credible_range(std::optional<CredibleRange> range) const;
+  /// Calibrated models fitted from positions: the point compensate aims (flange frame, mm: the robot
+  /// JSON's tool, or the reflector when the two are one point, model_fitting.hpp kReflectorAtToolMm)
+  /// and the reflector the data measured (the command model's tool: what predict and validate
+  /// score). Empty in other models and older files: then the command model's tool is aimed.
+  const std::optional<Eigen::Vector3d>& tool_point_mm() const noexcept { return tool_point_; }
+  const std::optional<Eigen::Vector3d>& reflector_mm() const noexcept { return reflector_; }
+  CompensationModel with_tool_point(std::optional<Eigen::Vector3d> tool_point_mm,
+                                    std::optional<Eigen::Vector3d> reflector_mm) const;
+  /// The model compensate aims with: the command model, with its tool translation set to
+  /// tool_point_mm() where the model has one.
+  robot::MdhModel aimed_model() const;
 
   /// The field's prediction at joints `q_deg` (evaluated at nominal_model()'s FK), with the credible
   /// range applied; zero prediction, inside the region, when the model has no field.
   ErrorPrediction predict_error(const robot::JointVector& q_deg) const;
+
+  /// The robot's whole predicted error of the tool point at nominal joints `q_deg` (CompensatedTarget::
+  /// total_error_mm: calibration + field), with `nominal_model` giving the nominal tool point; NaN
+  /// outside the field's region or beyond its credible range.
+  Eigen::Vector3d total_error(const robot::MdhModel& nominal_model, const robot::JointVector& q_deg) const;
+  /// The largest |total_error| over the training joints (data_joints()), with the robot the model was
+  /// fitted with (nominal_model()), not a caller's: a wrong --robot must not raise its own ceiling.
+  /// 0 without training joints. What `compensate --max-correction` scales its default from.
+  double largest_training_correction_mm() const;
 
   /// Compensates a target pose (robot frame, tool point). `nominal_model` gives the nominal joints
   /// (IK seeded at `seed_deg`); the field is evaluated there; the command is solved on
@@ -201,6 +230,7 @@ class CompensationModel {
   std::optional<robot::MdhModel> nominal_model_;
   std::vector<robot::JointVector> data_joints_;
   std::optional<CredibleRange> credible_;
+  std::optional<Eigen::Vector3d> tool_point_, reflector_;
   std::vector<std::string> excluded_rows_, notes_;
 };
 

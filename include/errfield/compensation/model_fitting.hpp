@@ -50,6 +50,15 @@ struct MeasurementSet {
 // Registration and fit_registration (robot ← tracker, the frame in which measured positions become
 // position errors; fit stores it in the model it writes): compensation/registration.hpp.
 
+/// Reflector and tool point closer than this (mm, flange frame) are one point as far as the data
+/// can tell: the tool point compensate aims is the reflector as identified, which corrects the tool's
+/// own error (a robot JSON tool a few mm off, a ball's centre). Further apart they are two points:
+/// compensate aims the robot JSON's tool on the calibrated flange, and fit warns what that costs.
+inline constexpr double kReflectorAtToolMm = 10.0;
+/// Further apart than this (mm) the robot JSON's tool must be the wrong one (a second reflector nest,
+/// a tool-less robot JSON): fit refuses unless FitOptions::reflector_far_ok.
+inline constexpr double kReflectorFarMm = 50.0;
+
 /// What the kinematic methods calibrate from.
 enum class CalibrationData {
   automatic,  ///< positions when the data have them (mx,my,mz), else distances
@@ -94,6 +103,10 @@ struct FitOptions {
   /// 2 % × 3 mm outliers it dropped exactly the outliers and matched the oracle (docs/robot.md,
   /// "Gross outliers in fit").
   double outlier_limit = 5.0;
+  /// Kinematic methods from positions: the reflector (the measured point, found from the data) and
+  /// the robot's tool point (the robot JSON's tool, the point compensated) are two points. Further
+  /// apart than kReflectorFarMm is refused as a wrong tool (InputError) unless this is set.
+  bool reflector_far_ok = false;
   /// Called before each long stage (variogram, factorization, leave-one-out, calibration) with what
   /// it is about to do, for progress output; empty = silent.
   std::function<void(const std::string& stage)> on_stage;

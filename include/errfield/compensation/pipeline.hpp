@@ -40,7 +40,22 @@ struct StepColumns {
   std::size_t refused = 0;
   /// compensate: rows whose field gave no finite number (status no-prediction).
   std::size_t no_prediction = 0;
+  /// compensate: the ceiling on move_mm that was applied (mm), and the rows refused for it
+  /// (status correction-too-large).
+  double max_correction_mm = 0.0;
+  std::size_t too_large = 0;
 };
+
+/// `compensate --max-correction` by default: this many times the largest total correction the model
+/// predicts at its own training poses (CompensationModel::largest_training_correction_mm) ...
+inline constexpr double kMaxCorrectionFactor = 3.0;
+/// ... and never below this (mm): a model fitted on a very accurate robot still corrects by up to 1 mm,
+/// but not by the tens of mm of a wrong tool or robot.
+inline constexpr double kMaxCorrectionFloorMm = 1.0;
+/// The default ceiling for `model`: max(kMaxCorrectionFactor x largest training correction,
+/// kMaxCorrectionFloorMm), on the robot the model was fitted with. Models without training joints
+/// (files written before they were stored) get the floor.
+double default_max_correction_mm(const CompensationModel& model);
 
 /// The options of `errfield fit` as words (the CLI's spelling; Python passes the same words).
 struct FitOptionText {
@@ -105,14 +120,24 @@ struct CompensationTargets {
   std::vector<robot::JointVector> joints_deg;  ///< set: joint targets
   Eigen::MatrixXd poses;                       ///< else N x 6 poses
   std::optional<robot::JointVector> seed_deg;
+  /// Pose targets: per-row seed joints (sq1..sq6, e.g. the taught positions), solved from and kept
+  /// on their arm configuration; empty = none, a row with a NaN = none for that row (then seed_deg or
+  /// the nearest training sample).
+  std::vector<robot::JointVector> seed_rows_deg;
 };
 
 /// `errfield compensate`: columns nq1..nq6, nx,ny,nz, pred_dx..dz, pred_dl, var_mm2 (new reading:
 /// field + nugget), p_inside (CompensatedTarget::p_within_tolerance), cmd_x..z, cq1..cq6,
-/// var_field_mm2 (field only), r95_mm (vector fields), status. `tolerance_mm` > 0 (ArgumentError otherwise). A refused target
-/// (unreachable, branch-change, outside-region, not-credible, no-prediction, ik-*) has no joints.
+/// var_field_mm2 (field only), r95_mm (vector fields), total_dx..dz and total_mm (the whole predicted
+/// error of the tool point, calibration + field), move_mm (how far the compensated joints move the
+/// tool point), nconfig and config (robot/arm_configuration.hpp: of the nominal and of the
+/// compensated joints), status. `tolerance_mm` > 0 (ArgumentError otherwise). A refused target (unreachable,
+/// branch-change, config-change: the nominal or compensated joints on another arm configuration than
+/// the row's seed, --seed, the training sample a pose target was solved from, or given nominal joints,
+/// outside-region, not-credible, no-prediction, ik-*, correction-too-large: move_mm
+/// above `max_correction_mm`; 0 = default_max_correction_mm) has no joints.
 StepColumns compensate_columns(const CompensationModel& model, const robot::MdhModel& nominal,
-                               const CompensationTargets& targets, double tolerance_mm);
+                               const CompensationTargets& targets, double tolerance_mm, double max_correction_mm = 0.0);
 
 /// The per-point columns of `errfield validate --out`: point, status, before_mm, after_mm,
 /// before_dx..dz, after_dx..dz, before_dl_bK / after_dl_bK; then, for models with a variance,
