@@ -46,7 +46,13 @@ std::string samples_csv(std::size_t n, double extent = 2000.0, unsigned seed = 5
 // These bounds only tell a hang or a quadratic blow-up (minutes) from the intended behaviour
 // (about a second): speed itself is measured by the benchmarks. Instrumented builds run several
 // times slower, so the seconds they take are scaled down before the comparison.
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+// GCC says so with __SANITIZE_*__, clang (the sanitizer stage's compiler) with __has_feature.
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define ERRFIELD_TEST_INSTRUMENTED 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__) || defined(ERRFIELD_TEST_INSTRUMENTED)
 constexpr double kInstrumentationSlowdown = 10.0;
 #else
 constexpr double kInstrumentationSlowdown = 1.0;
