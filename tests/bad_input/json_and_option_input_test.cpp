@@ -6,8 +6,6 @@
 // that point at what to fix. Robot data are SIMULATED (`errfield simulate`).
 
 #include <algorithm>
-#include <fcntl.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <filesystem>
@@ -208,27 +206,12 @@ TEST_F(RobotFiles, ModelFileErrorsNameTheFile) {
 // Issue 20: `predict --out p.csv > /dev/full` replaced p.csv, then exited 1.
 TEST_F(RobotFiles, PredictToAFullStandardOutputKeepsThePreviousFile) {
   write("p.csv", "previous\n");
-  const std::string err_file = path("stderr.txt");
   const std::vector<std::string> args{"predict", "--model", path("m.json"), "--joints", path("t.csv"), "--out",
                                       path("p.csv")};
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const int full = ::open("/dev/full", O_WRONLY);
-    const int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (full < 0 || err < 0) ::_exit(126);
-    ::dup2(full, 1);
-    ::dup2(err, 2);
-    std::vector<char*> argv{const_cast<char*>(ERRFIELD_CLI_PATH)};
-    for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-    argv.push_back(nullptr);
-    ::execv(ERRFIELD_CLI_PATH, argv.data());
-    ::_exit(127);
-  }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 1);
-  EXPECT_THAT(read("stderr.txt"), HasSubstr("cannot write to standard output"));
+  const CliResult r = testing::run_errfield_to_full_stdout(args, dir_);
+  ASSERT_EQ(r.signal, 0);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("cannot write to standard output"));
   EXPECT_EQ(read("p.csv"), "previous\n") << "a run that failed replaced its output";
 }
 

@@ -202,25 +202,10 @@ TEST_F(SilentResults, AFullStandardOutputIsAFailedJob) {
       {"cv", "--method", "idw", "--samples", path("s.csv"), "--coords", "x,y,z", "--value", "v"},
   };
   for (const auto& args : commands) {
-    const std::string err_file = path("stderr.txt");
-    const pid_t pid = ::fork();
-    if (pid == 0) {
-      const int full = ::open("/dev/full", O_WRONLY);
-      const int err = ::open(err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-      if (full < 0 || err < 0) ::_exit(126);
-      ::dup2(full, 1);
-      ::dup2(err, 2);
-      std::vector<char*> argv{const_cast<char*>(ERRFIELD_CLI_PATH)};
-      for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-      argv.push_back(nullptr);
-      ::execv(ERRFIELD_CLI_PATH, argv.data());
-      ::_exit(127);
-    }
-    int status = 0;
-    ::waitpid(pid, &status, 0);
-    ASSERT_TRUE(WIFEXITED(status));
-    EXPECT_EQ(WEXITSTATUS(status), 1) << testing::command_line(args);
-    EXPECT_THAT(read("stderr.txt"), HasSubstr("cannot write to standard output")) << testing::command_line(args);
+    const auto r = testing::run_errfield_to_full_stdout(args, dir());
+    ASSERT_EQ(r.signal, 0) << testing::command_line(args);
+    EXPECT_EQ(r.exit_code, 1) << testing::command_line(args);
+    EXPECT_THAT(r.err, HasSubstr("cannot write to standard output")) << testing::command_line(args);
   }
 }
 

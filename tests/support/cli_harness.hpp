@@ -87,8 +87,10 @@ struct CliProcess {
 /// Starts `errfield args...` in `cwd` with extra environment entries ("NAME=value"); stdout and
 /// stderr go to files of their own in the temporary directory (not in `cwd`, so tests listing
 /// their outputs see only what the command wrote, and parallel runs sharing a `cwd` don't mix).
+/// `stdout_to`, when given, replaces the stdout file (e.g. "/dev/full" for a standard output that
+/// cannot be written; the result's `out` is then empty).
 inline CliProcess start_errfield(const std::vector<std::string>& args, const fs::path& cwd,
-                                 const std::vector<std::string>& env = {}) {
+                                 const std::vector<std::string>& env = {}, const fs::path& stdout_to = {}) {
   static int counter = 0;
   const std::string stem = "errfield_cli_" + std::to_string(::getpid()) + "_" + std::to_string(counter++);
   CliProcess p;
@@ -97,7 +99,8 @@ inline CliProcess start_errfield(const std::vector<std::string>& args, const fs:
   p.pid = ::fork();
   if (p.pid == 0) {
     if (::chdir(cwd.c_str()) != 0) ::_exit(127);
-    const int out = ::open(p.out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int out = stdout_to.empty() ? ::open(p.out_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644)
+                                      : ::open(stdout_to.c_str(), O_WRONLY);
     const int err = ::open(p.err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     ::dup2(out, 1);
     ::dup2(err, 2);
@@ -129,6 +132,12 @@ inline CliResult wait_errfield(const CliProcess& p) {
 inline CliResult run_errfield(const std::vector<std::string>& args, const fs::path& cwd,
                               const std::vector<std::string>& env = {}) {
   return wait_errfield(start_errfield(args, cwd, env));
+}
+
+/// Runs `errfield args...` in `cwd` with its standard output on /dev/full (every write fails with
+/// ENOSPC): the way to check that a command treats its console output as output.
+inline CliResult run_errfield_to_full_stdout(const std::vector<std::string>& args, const fs::path& cwd) {
+  return wait_errfield(start_errfield(args, cwd, {}, "/dev/full"));
 }
 
 /// Splits a command line the way a POSIX shell would for plain words, "double" and 'single'
