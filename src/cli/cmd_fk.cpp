@@ -9,6 +9,7 @@
 #include "errfield/compensation/prediction.hpp"
 #include "errfield/robot/input_checks.hpp"
 #include "errfield/robot/kinematics.hpp"
+#include "errfield/robot/pose.hpp"
 
 namespace errfield::cli {
 namespace {
@@ -36,6 +37,7 @@ void run_fk(const FkArgs& a) {
     std::cerr << "errfield fk: warning: " << *warning << "\n";
   std::vector<double> x(n), y(n), z(n), tx(n), ty(n), tz(n);
   std::vector<std::vector<double>> r(9, std::vector<double>(n));
+  std::vector<double> rx(n), ry(n), rz(n);  // the same orientation as every pose input takes it
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Isometry3d t = robot::forward_kinematics(model, joints[i], frame);
     x[i] = t.translation().x();
@@ -48,6 +50,10 @@ void run_fk(const FkArgs& a) {
       tz[i] = p.z();
     }
     for (int k = 0; k < 9; ++k) r[static_cast<std::size_t>(k)][i] = t.linear()(k / 3, k % 3);
+    const Eigen::Vector3d rpy = robot::rpy_deg_from_rotation(t.linear());
+    rx[i] = rpy.x();
+    ry[i] = rpy.y();
+    rz[i] = rpy.z();
   }
   OutputTable out;
   out.add_all_columns(table);
@@ -55,6 +61,9 @@ void run_fk(const FkArgs& a) {
   out.add_numeric_column("y", y);
   out.add_numeric_column("z", z);
   for (int k = 0; k < 9; ++k) out.add_numeric_column(rotation_column_names()[static_cast<std::size_t>(k)], r[static_cast<std::size_t>(k)]);
+  out.add_numeric_column("rx", rx);
+  out.add_numeric_column("ry", ry);
+  out.add_numeric_column("rz", rz);
   if (registration) {
     out.add_numeric_column("tx", tx);
     out.add_numeric_column("ty", ty);
@@ -70,7 +79,8 @@ void add_fk_command(CLI::App& app) {
       "fk",
       "Forward kinematics: joint angles -> tool or flange poses.\n"
       "Input columns q1..q6 (degrees); output keeps the input columns and adds x,y,z (mm, world frame)\n"
-      "and the rotation matrix r11,r12,r13,r21,r22,r23,r31,r32,r33; with a stored tracker registration (robot\n"
+      "and the rotation matrix r11,r12,r13,r21,r22,r23,r31,r32,r33, also as rx,ry,rz (deg, R = Rz(rz) Ry(ry) Rx(rx),\n"
+      "ry in [-90, 90]: the form ik and compensate take pose targets in); with a stored tracker registration (robot\n"
       "JSON from 'calibrate --model position', or a model from 'fit') also tx,ty,tz (tracker frame, mm).\n"
       "Example: errfield fk --input joints.csv --robot robot.json --frame tool --out poses.csv");
   cmd->add_option("--input", args->input, "CSV with columns q1..q6 (deg)")->required();

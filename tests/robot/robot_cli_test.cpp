@@ -1,5 +1,6 @@
 // End-to-end tests of the robot subcommands through the real `errfield` executable.
 
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -73,6 +74,57 @@ TEST_F(RobotCli, FkThenIkRoundTripsWithUserRobotJson) {
     const Eigen::Isometry3d want = forward_kinematics(m, qs[i], EndFrame::tool);
     EXPECT_LT((t.translation() - want.translation()).norm(), 1e-6);
     EXPECT_LT((t.linear() - want.linear()).cwiseAbs().maxCoeff(), 1e-9);
+  }
+}
+
+// Issue 19: fk wrote only a rotation matrix while every pose input takes rx,ry,rz. Its rx,ry,rz
+// must compose, as R = Rz(rz) Ry(ry) Rx(rx) written out here, to its own r11..r33, and ik must take
+// fk's x,y,z,rx,ry,rz alone (no matrix) back to joints whose FK is that pose.
+TEST_F(RobotCli, FkWritesRxRyRzThatIkTakesBack) {
+  const MdhModel m = MdhModel::er20_c10().with_tool(to_isometry({5, -3, 120, 0, 30, 0}));
+  m.save(path("robot.json"));
+  std::string csv = "q1,q2,q3,q4,q5,q6\n";
+  const std::vector<std::array<double, 6>> qs{
+      {10, -95, -15, 20, -60, 30}, {-35, -80, -30, -50, -40, 120}, {60, -110, 5, 90, -85, -150}, {0, -90, 0, 0, -89.5, 0}};
+  for (const auto& q : qs) {
+    for (int k = 0; k < 6; ++k) csv.append(k ? "," : "").append(format_number(q[static_cast<std::size_t>(k)]));
+    csv += "\n";
+  }
+  write("joints.csv", csv);
+  auto r = run("fk --input " + path("joints.csv") + " --robot " + path("robot.json") + " --out " + path("poses.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CsvTable poses = CsvTable::read(path("poses.csv"));
+  const double d = std::acos(-1.0) / 180.0;
+  std::string targets = "x,y,z,rx,ry,rz\n";
+  for (std::size_t i = 0; i < poses.row_count(); ++i) {
+    const double a = poses.numeric_column("rx")[i] * d, b = poses.numeric_column("ry")[i] * d,
+                 c = poses.numeric_column("rz")[i] * d;
+    EXPECT_LE(std::abs(poses.numeric_column("ry")[i]), 90.0);
+    // Rz(c) Ry(b) Rx(a), row by row
+    const double want[9] = {std::cos(c) * std::cos(b), std::cos(c) * std::sin(b) * std::sin(a) - std::sin(c) * std::cos(a),
+                            std::cos(c) * std::sin(b) * std::cos(a) + std::sin(c) * std::sin(a),
+                            std::sin(c) * std::cos(b), std::sin(c) * std::sin(b) * std::sin(a) + std::cos(c) * std::cos(a),
+                            std::sin(c) * std::sin(b) * std::cos(a) - std::cos(c) * std::sin(a),
+                            -std::sin(b), std::cos(b) * std::sin(a), std::cos(b) * std::cos(a)};
+    const char* names[9] = {"r11", "r12", "r13", "r21", "r22", "r23", "r31", "r32", "r33"};
+    for (int k = 0; k < 9; ++k) EXPECT_NEAR(poses.numeric_column(names[k])[i], want[k], 1e-12) << names[k] << " row " << i;
+    for (const char* col : {"x", "y", "z", "rx", "ry", "rz"})
+      targets.append(col[0] == 'x' ? "" : ",").append(format_number(poses.numeric_column(col)[i]));
+    targets += "\n";
+  }
+  write("targets.csv", targets);
+  r = run("ik --input " + path("targets.csv") + " --robot " + path("robot.json") + " --out " + path("ik.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CsvTable ik = CsvTable::read(path("ik.csv"));
+  const Eigen::MatrixXd q = ik.numeric_columns({"q1", "q2", "q3", "q4", "q5", "q6"});
+  for (std::size_t i = 0; i < qs.size(); ++i) {
+    EXPECT_EQ(ik.row(i)[ik.column_index("status")], "converged") << "row " << i;
+    const JointVector got = q.row(static_cast<Eigen::Index>(i)).transpose();
+    const JointVector given(qs[i].data());
+    const Eigen::Isometry3d t = forward_kinematics(m, got, EndFrame::tool);
+    const Eigen::Isometry3d want_pose = forward_kinematics(m, given, EndFrame::tool);
+    EXPECT_LT((t.translation() - want_pose.translation()).norm(), 1e-6) << "row " << i;
+    EXPECT_LT((t.linear() - want_pose.linear()).cwiseAbs().maxCoeff(), 1e-9) << "row " << i;
   }
 }
 
