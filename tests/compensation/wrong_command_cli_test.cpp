@@ -40,29 +40,6 @@ class WrongCommand : public testing::CliTest {
                        " --out " + path(out) + " " + extra);
     ASSERT_EQ(r.exit_code, 0) << r.err;
   }
-  /// Rewrites CSV `in` to `out`: `edit(table, row, cells)` on every data row; columns for which
-  /// `keep` is false are dropped.
-  void rewrite(const std::string& in, const std::string& out,
-               const std::function<void(const CsvTable&, std::size_t, std::vector<std::string>&)>& edit,
-               const std::function<bool(const std::string&)>& keep = keep_all,
-               const std::function<bool(std::size_t)>& keep_row = [](std::size_t) { return true; }) {
-    const CsvTable t = CsvTable::read(path(in));
-    std::string text;
-    auto line = [&](const std::vector<std::string>& cells) {
-      std::string l;
-      for (std::size_t c = 0; c < cells.size(); ++c)
-        if (keep(t.header()[c])) l += (l.empty() ? "" : ",") + cells[c];
-      text += l + "\n";
-    };
-    line(t.header());
-    for (std::size_t i = 0; i < t.row_count(); ++i) {
-      if (!keep_row(i)) continue;
-      std::vector<std::string> row = t.row(i);
-      edit(t, i, row);
-      line(row);
-    }
-    write(out, text);
-  }
   static bool not_xyz(const std::string& c) { return c != "x" && c != "y" && c != "z"; }
   void expect_refused(const testing::CliResult& r, int code, const std::vector<std::string>& words) {
     EXPECT_EQ(r.exit_code, code) << r.out << r.err;

@@ -14,27 +14,6 @@ namespace misuse_cli_test {
 
 class Misuse : public errfield::testing::CliTest {
  protected:
-  // Rewrites `in` to `out` with `edit(column name, row, cell)` applied to every cell; drops
-  // columns for which `keep` says false.
-  void rewrite(const std::string& in, const std::string& out,
-               const std::function<void(const CsvTable&, std::size_t, std::vector<std::string>&)>& edit,
-               const std::function<bool(const std::string&)>& keep = [](const std::string&) { return true; }) {
-    const CsvTable t = CsvTable::read(path(in));
-    std::string text;
-    auto line = [&](const std::vector<std::string>& cells) {
-      std::string l;
-      for (std::size_t c = 0; c < cells.size(); ++c)
-        if (keep(t.header()[c])) l += (l.empty() ? "" : ",") + cells[c];
-      text += l + "\n";
-    };
-    line(t.header());
-    for (std::size_t i = 0; i < t.row_count(); ++i) {
-      std::vector<std::string> row = t.row(i);
-      edit(t, i, row);
-      line(row);
-    }
-    write(out, text);
-  }
   void expect_refused(const errfield::testing::CliResult& r, const std::vector<std::string>& words) {
     EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
     for (const auto& w : words) EXPECT_NE(r.err.find(w), std::string::npos) << "missing '" << w << "' in:\n" << r.err;

@@ -13,12 +13,15 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "errfield/csv_table.hpp"
 
 namespace errfield::testing {
 
@@ -186,6 +189,30 @@ class CliTest : public ::testing::Test {
     return run_errfield_line(line, scratch_.path(), env);
   }
   const fs::path& dir() const { return scratch_.path(); }
+  /// Rewrites CSV `in` to `out` (both in the scratch directory): `edit(table, row, cells)` on every
+  /// data row that `keep_row` keeps; columns for which `keep_column` is false are dropped. For
+  /// tests that hand a command deliberately altered data (units, another robot, missing columns).
+  void rewrite(const std::string& in, const std::string& out,
+               const std::function<void(const CsvTable&, std::size_t, std::vector<std::string>&)>& edit,
+               const std::function<bool(const std::string&)>& keep_column = [](const std::string&) { return true; },
+               const std::function<bool(std::size_t)>& keep_row = [](std::size_t) { return true; }) const {
+    const CsvTable t = CsvTable::read(path(in));
+    std::string text;
+    auto line = [&](const std::vector<std::string>& cells) {
+      std::string l;
+      for (std::size_t c = 0; c < cells.size(); ++c)
+        if (keep_column(t.header()[c])) l += (l.empty() ? "" : ",") + cells[c];
+      text += l + "\n";
+    };
+    line(t.header());
+    for (std::size_t i = 0; i < t.row_count(); ++i) {
+      if (!keep_row(i)) continue;
+      std::vector<std::string> row = t.row(i);
+      edit(t, i, row);
+      line(row);
+    }
+    write(out, text);
+  }
 
   ScratchDir scratch_;
 };
