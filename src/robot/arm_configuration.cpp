@@ -29,8 +29,13 @@ ArmConfiguration arm_configuration(const MdhModel& model, const JointVector& q_d
   ArmConfiguration c;
   const Eigen::Vector3d in_frame1 = f.frames[1].inverse() * wrist_centre;
   c.shoulder = configuration_sign(in_frame1.x() / in_frame1.norm());
-  const Eigen::Vector3d upper = origin(3) - origin(2), fore = wrist_centre - origin(3);
-  c.elbow = configuration_sign(z_axis(2).dot(upper.cross(fore)) / (upper.norm() * fore.norm()));
+  // The elbow bends the forearm up to frame 4's origin: the wrist centre of a spherical wrist, and for
+  // an offset wrist (UR) the end of the planar two-link arm its analytic IK solves, whose elbow choice
+  // is then the sign of q3. Both arms projected on the plane of the elbow's motion (normal to axis 2).
+  const Eigen::Vector3d z2 = z_axis(2);
+  auto in_plane = [&](const Eigen::Vector3d& v) -> Eigen::Vector3d { return v - v.dot(z2) * z2; };
+  const Eigen::Vector3d upper = in_plane(origin(3) - origin(2)), fore = in_plane(origin(4) - origin(3));
+  c.elbow = configuration_sign(z2.dot(upper.cross(fore)) / (upper.norm() * fore.norm()));
   c.wrist = configuration_sign(z_axis(5).dot(z_axis(4).cross(z_axis(6))));
   return c;
 }

@@ -8,8 +8,11 @@
 ///  - shoulder: the sign of the x coordinate of frame 5's origin (the wrist centre of a spherical
 ///    wrist) in link frame 1, which turns with joint 1: + when the wrist centre is on the side of
 ///    axis 1 that x1 points to, − behind it. 0 exactly on the plane through axis 1 normal to x1.
-///  - elbow: the sign of z2 · ((o3 − o2) × (w − o3)): the sense in which the forearm (from axis 3
-///    to the wrist centre w) turns from the upper arm (axis 2 to axis 3), about axis 2.
+///  - elbow: the sign of z2 · ((o3 − o2) × (o4 − o3)), both vectors projected on the plane normal to
+///    z2: the sense in which the forearm (from axis 3 to frame 4's origin o4 - the wrist centre of a
+///    spherical wrist) turns from the upper arm (axis 2 to axis 3), about axis 2. For an offset wrist
+///    (UR) o4 ends the planar two-link arm that its analytic IK solves, so the flag is UR's elbow
+///    choice, the sign of q3.
 ///  - wrist: the sign of z5 · (z4 × z6): the sense in which axis 6 is bent away from axis 4, about
 ///    axis 5; 0 at the wrist singularity (axes 4 and 6 aligned).
 /// Each expression is taken as the sine of an angle (normalized by the lengths involved; the
