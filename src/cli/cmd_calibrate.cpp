@@ -22,14 +22,14 @@ namespace errfield::cli {
 namespace {
 
 struct CalibrateArgs {
-  std::string robot, data, model = "distance", out, report, robust;
+  std::string robot, data, model = "distance", out, report, robust, robot_out;
   std::vector<std::string> base_points;
   double k0 = 1.5, k1 = 3.0, max_condition = 1e3, max_registration_rms = robot::kRegistrationRmsLimitMm;
   bool no_robust = false;
 };
 
 void run_calibrate(const CalibrateArgs& a) {
-  refuse_same_output({{"--out", &a.out}, {"--report", &a.report}});
+  refuse_same_output({{"--out", &a.out}, {"--report", &a.report}, {"--robot-out", &a.robot_out}});
   using namespace robot;
   const MdhModel nominal = load_robot_or_default(a.robot);
   CalibrationOptions options;
@@ -136,6 +136,32 @@ void run_calibrate(const CalibrateArgs& a) {
   if (registration) model_json["registration"] = compensation::registration_to_json(*registration);
   outputs.add(a.out, model_json.dump(2) + "\n");
   if (!a.report.empty()) outputs.add(a.report, text.str());
+  if (!a.robot_out.empty()) {
+    // The nominal robot with the reflector offset the data found as its tool point (the nominal tool's
+    // orientation kept): what scores `--method none` or fits a field on this reflector without the
+    // calibrated links, instead of a robot JSON edited by hand.
+    const Eigen::Vector3d reflector =
+        registration ? *registration->reflector_offset_mm : Eigen::Vector3d(identified.tool().translation());
+    Eigen::Isometry3d tool = nominal.tool();
+    tool.translation() = reflector;
+    nlohmann::json nominal_json =
+        nominal.with_tool(tool).with_name(nominal.name() + " (nominal, reflector offset from " + a.data + ")").to_json();
+    if (registration) {
+      // The registration found with the nominal links (tracker -> robot base, the frame the calibrated
+      // model is expressed in too), with the residual the nominal links leave.
+      compensation::Registration own = *registration;
+      double ss = 0.0;
+      const Eigen::MatrixXd m = table.numeric_columns({"mx", "my", "mz"});
+      const MdhModel with_reflector = nominal.with_tool(tool);
+      for (std::size_t i = 0; i < q.size(); ++i)
+        ss += (own.robot_from_tracker * Eigen::Vector3d(m.row(static_cast<Eigen::Index>(i)).transpose()) -
+               forward_position(with_reflector, q[i]))
+                  .squaredNorm();
+      own.residual_rms_mm = std::sqrt(ss / static_cast<double>(q.size()));
+      nominal_json["registration"] = compensation::registration_to_json(own);
+    }
+    outputs.add(a.robot_out, nominal_json.dump(2) + "\n");
+  }
   outputs.commit();
   std::cerr << "calibrate: identified model written to " << a.out << "\n";
 }
@@ -174,6 +200,10 @@ void add_calibrate_command(CLI::App& app) {
                   "(mm; default 5): a wrong robot or mixed-up rows");
   cmd->add_option("--report", args->report, "also write the report to this text file (with --out, all or none)");
   cmd->add_option("--out", args->out, "identified robot JSON (written atomically)")->required();
+  cmd->add_option("--robot-out", args->robot_out,
+                  "also write the NOMINAL robot with the reflector offset found in the data as its tool point (and, "
+                  "--model position, its own tracker registration): the robot to score --method none or fit "
+                  "vector-kriging with, instead of editing JSON by hand");
   cmd->callback([args] { run_calibrate(*args); });
 }
 

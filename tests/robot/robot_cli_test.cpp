@@ -288,5 +288,51 @@ TEST_F(RobotCli, CalibrateRejectsDataWithoutBasePoints) {
   EXPECT_FALSE(fs::exists(path("o.json")));
 }
 
+// calibrate --robot-out: the nominal robot with the reflector offset the data found (issue 19: users
+// edited JSON by hand to score --method none). SIMULATED KR16, scattered joints, a reflector
+// (12, -8, 30) mm off the nominal tool, which the written robot must carry as its tool point.
+TEST_F(RobotCli, CalibrateRobotOutIsTheNominalRobotWithTheFoundReflector) {
+  auto r = run("simulate --robot kr16 --seed 3 --sample scattered:80 --joint-box -30,30,-80,-40,10,50,-40,40,40,80,-40,40"
+               " --tool-offset 12,-8,30 --measure positions --robot-out " + path("r.json") + " --out " + path("d.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run("calibrate --robot " + path("r.json") + " --data " + path("d.csv") + " --model position --out " +
+          path("cal.json") + " --robot-out " + path("nominal.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const MdhModel nominal = MdhModel::load(path("r.json")), written = MdhModel::load(path("nominal.json"));
+  for (int i = 0; i < kJointCount; ++i) {  // the nominal links, untouched
+    EXPECT_EQ(written.link(i).a_mm, nominal.link(i).a_mm) << i;
+    EXPECT_EQ(written.link(i).d_mm, nominal.link(i).d_mm) << i;
+    EXPECT_EQ(written.link(i).theta0_deg, nominal.link(i).theta0_deg) << i;
+    EXPECT_EQ(written.link(i).alpha_deg, nominal.link(i).alpha_deg) << i;
+  }
+  const auto j = nlohmann::json::parse(read("nominal.json"));
+  const auto c = nlohmann::json::parse(read("cal.json"));
+  ASSERT_TRUE(j.contains("registration"));
+  // The tool point is exactly the reflector offset the registration found (stored with cal.json) ...
+  for (int k = 0; k < 3; ++k)
+    EXPECT_EQ(written.tool().translation()[k], c["registration"]["reflector_offset_mm"][k].get<double>()) << k;
+  // ... which is the simulated reflector, not the nominal tool point: the nominal links' own errors
+  // shift a registration by a few mm, the offset is 36 mm.
+  const Eigen::Vector3d truth(12.0, -8.0, 30.0);
+  EXPECT_LT((written.tool().translation() - truth).norm(), 0.25 * truth.norm()) << written.tool().translation().transpose();
+  // It carries its own registration, whose residual is that of the nominal links (larger than the
+  // calibrated model's).
+  EXPECT_GT(j["registration"]["residual_rms_mm"].get<double>(), c["registration"]["residual_rms_mm"].get<double>());
+  // Scoring the nominal robot with it works without an edit of the robot: validate reads it as a
+  // model (the data's x,y,z, the FK with the robot JSON's tool, are dropped: errfield computes them).
+  rewrite("d.csv", "d_noxyz.csv", [](const CsvTable&, std::size_t, std::vector<std::string>&) {},
+          [](const std::string& c) { return c != "x" && c != "y" && c != "z"; });
+  r = run("validate --model " + path("nominal.json") + " --data " + path("d_noxyz.csv") + " --summary-out " +
+          path("s.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // Its "after" is the nominal links' error: larger than the calibrated model's on the same rows.
+  r = run("validate --model " + path("cal.json") + " --data " + path("d_noxyz.csv") + " --summary-out " +
+          path("sc.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto nominal_summary = nlohmann::json::parse(read("s.json")), cal_summary = nlohmann::json::parse(read("sc.json"));
+  EXPECT_GT(nominal_summary["position"]["after"]["rms_mm"].get<double>(),
+            1.5 * cal_summary["position"]["after"]["rms_mm"].get<double>());
+}
+
 }  // namespace
 }  // namespace errfield::robot
