@@ -68,19 +68,7 @@ void run_compensate(const CompensateArgs& a) {
   } else {
     targets.poses = t.numeric_columns(pose_cols);
     // Per-row seeds (e.g. the taught joints): solved from, and kept on, their arm configuration.
-    const std::vector<std::string> seed_cols{"sq1", "sq2", "sq3", "sq4", "sq5", "sq6"};
-    if (t.has_column("sq1")) {
-      std::vector<std::size_t> col;
-      for (const auto& c : seed_cols) col.push_back(t.column_index(c));
-      for (std::size_t i = 0; i < n; ++i) {
-        JointVector q = JointVector::Constant(std::numeric_limits<double>::quiet_NaN());  // empty: no seed
-        bool empty = true;
-        for (std::size_t k = 0; k < 6; ++k) empty = empty && t.row(i)[col[k]].empty();
-        if (!empty)
-          for (std::size_t k = 0; k < 6; ++k) q[static_cast<Eigen::Index>(k)] = t.numeric_cell(i, col[k]);
-        targets.seed_rows_deg.push_back(q);
-      }
-    }
+    targets.seed_rows_deg = seed_rows_of(t);
     warn_if_metres(t, nominal, "compensate", kNominalXyz);
   }
   if (!(std::isfinite(a.max_correction) && a.max_correction >= 0.0))

@@ -165,6 +165,22 @@ double default_max_correction_mm(const CompensationModel& model) {
   return std::max(kMaxCorrectionFactor * model.largest_training_correction_mm(), kMaxCorrectionFloorMm);
 }
 
+std::vector<robot::JointVector> seed_rows_of(const CsvTable& table) {
+  std::vector<robot::JointVector> seeds;
+  if (!table.has_column("sq1")) return seeds;
+  std::vector<std::size_t> col;
+  for (const char* c : {"sq1", "sq2", "sq3", "sq4", "sq5", "sq6"}) col.push_back(table.column_index(c));
+  for (std::size_t i = 0; i < table.row_count(); ++i) {
+    robot::JointVector q = robot::JointVector::Constant(std::numeric_limits<double>::quiet_NaN());  // no seed
+    bool empty = true;
+    for (std::size_t k = 0; k < col.size(); ++k) empty = empty && table.row(i)[col[k]].empty();
+    if (!empty)  // numeric_cell names row and column of an empty or non-numeric cell
+      for (std::size_t k = 0; k < col.size(); ++k) q[static_cast<Eigen::Index>(k)] = table.numeric_cell(i, col[k]);
+    seeds.push_back(q);
+  }
+  return seeds;
+}
+
 StepColumns compensate_columns(const CompensationModel& model, const robot::MdhModel& nominal,
                                const CompensationTargets& targets, double tolerance_mm, double max_correction_mm) {
   using namespace robot;

@@ -148,7 +148,7 @@ py::dict predict_py(const PyModel& m, const py::object& joints) {
 }
 
 py::dict compensate_py(const PyModel& m, const py::object& targets, const py::object& robot, double tolerance,
-                       const py::object& seed) {
+                       const py::object& seed, double max_correction) {
   const CompensationModel& model = m.loaded.model;
   const bool kinematic =
       model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging;
@@ -160,15 +160,21 @@ py::dict compensate_py(const PyModel& m, const py::object& targets, const py::ob
   if (is_columns(targets)) {
     const CsvTable table = table_arg(targets, "targets");
     if (has_all(table, kJointCols)) t.joints_deg = joints_of(columns_matrix(table, kJointCols));
-    else if (has_all(table, kPoseCols)) t.poses = columns_matrix(table, kPoseCols);
-    else throw InputError("targets: need columns q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg)", "targets");
+    else if (has_all(table, kPoseCols)) {
+      t.poses = columns_matrix(table, kPoseCols);
+      // Per-row seeds (the CLI's sq1..sq6): each row solved from, and kept on, its seed's configuration.
+      t.seed_rows_deg = seed_rows_of(table);
+    } else throw InputError("targets: need columns q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg)", "targets");
   } else {
     t.joints_deg = joint_vectors_arg(targets, "targets");
   }
+  if (!(std::isfinite(max_correction) && max_correction >= 0.0))
+    throw ArgumentError("max_correction: " + format_number(max_correction) +
+                        "; expected a ceiling > 0 (mm), or 0 for the default");
   std::optional<StepColumns> step;
   {
     py::gil_scoped_release release;
-    step = compensate_columns(model, nominal, t, tolerance);
+    step = compensate_columns(model, nominal, t, tolerance, max_correction);
   }
   return columns_dict(*step);
 }
@@ -242,8 +248,10 @@ void bind_pipeline(py::module_& m) {
         "of a new reading, vector fields), status (ok | outside-region | not-credible; refused rows are NaN).");
   m.def("compensate", &compensate_py, py::arg("model"), py::arg("targets"), py::kw_only(),
         py::arg("robot") = py::none(), py::arg("tolerance") = 0.25, py::arg("seed") = py::none(),
+        py::arg("max_correction") = 0.0,
         "`errfield compensate`: joints to send. targets: (N, 6) nominal joints (deg) or a dict with q1..q6 or\n"
-        "x,y,z,rx,ry,rz (mm, deg). Returns a dict: nq1..nq6, nx,ny,nz, pred_dx..dz, pred_dl, var_mm2 (new reading:\n"
+        "x,y,z,rx,ry,rz (mm, deg), optionally with per-row seed joints sq1..sq6 (deg; a row of NaN = none) whose arm\n"
+        "configuration the solution keeps. max_correction: ceiling (mm) on move_mm, 0 = the CLI's default. Returns a dict: nq1..nq6, nx,ny,nz, pred_dx..dz, pred_dl, var_mm2 (new reading:\n"
         "field + nugget), p_inside (P(|3-D error| <= tolerance mm) of a new reading; distance models: the distance\n"
         "error), cmd_x..z, cq1..cq6 (NaN for refused targets: nothing to send), var_field_mm2, r95_mm and status.");
   m.def("validate", &validate_py, py::arg("model"), py::arg("data"), py::kw_only(), py::arg("robot") = py::none(),

@@ -287,6 +287,7 @@ def compensate(
     robot: RobotLike = None,
     tolerance: float = 0.25,
     seed: ArrayLike | None = None,
+    max_correction: float = 0.0,
 ) -> dict[str, Any]: ...
 def validate(
     model: CompensationModel,

@@ -34,14 +34,15 @@ def run_cli_status(*args):
 
 
 def write_csv(path, columns):
-    """columns: dict name -> 1-D array; numbers written with repr (shortest round trip)."""
+    """columns: dict name -> 1-D array; numbers written with repr (shortest round trip), NaN as an
+    empty cell (the CLI's "no value")."""
     names = list(columns)
     n = len(columns[names[0]])
     with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(names)
         for i in range(n):
-            w.writerow([repr(float(columns[c][i])) for c in names])
+            w.writerow(["" if math.isnan(float(columns[c][i])) else repr(float(columns[c][i])) for c in names])
     return path
 
 

@@ -130,6 +130,35 @@ def test_compensate_matches_cli(sim, fitted, tmp_path):
     assert (by_pose["status"] == "ok").sum() > 20
 
 
+def test_compensate_seeds_and_ceiling_match_cli(sim, fitted, tmp_path):
+    # Pose targets with per-row seeds sq1..sq6 (a row without a seed left empty: NaN in Python) and a
+    # ceiling on the move: the same columns as the CLI's, and the ceiling refuses what exceeds it.
+    data = read_measurements(sim / "hold.csv")
+    n = len(data["x"])
+    poses = {"x": data["x"], "y": data["y"], "z": data["z"], "rx": np.full(n, 180.0), "ry": np.zeros(n),
+             "rz": np.zeros(n)}
+    for k in range(1, 7):
+        seed = data[f"q{k}"].copy()
+        seed[::3] = math.nan  # every third row: no seed of its own
+        poses[f"sq{k}"] = seed
+    write_csv(tmp_path / "poses.csv", poses)
+    default = errfield.compensate(fitted, poses, robot=str(sim / "robot.json"))
+    assert (default["status"] == "ok").sum() > 10
+    # A ceiling at the median move of the default run: about half the rows refused for it.
+    ceiling = float(np.median(default["move_mm"][default["status"] == "ok"]))
+    for given in (0.0, ceiling):
+        run_cli("compensate", "--model", sim / "vk.json", "--robot", sim / "robot.json", "--targets",
+                tmp_path / "poses.csv", "--max-correction", repr(given), "--out", tmp_path / "c.csv")
+        out = errfield.compensate(fitted, poses, robot=str(sim / "robot.json"), max_correction=given)
+        check_columns(out, tmp_path / "c.csv")
+        if given:
+            ok = out["status"] == "ok"
+            assert ok.sum() > 0 and (out["move_mm"][ok] <= ceiling).all()
+            assert (out["status"] == "correction-too-large").sum() > 0
+    with pytest.raises(errfield.ArgumentError, match="max_correction"):
+        errfield.compensate(fitted, poses, robot=str(sim / "robot.json"), max_correction=-1.0)
+
+
 def test_validate_matches_cli(sim, fitted, tmp_path):
     run_cli("validate", "--model", sim / "vk.json", "--robot", sim / "robot.json", "--data", sim / "hold.csv",
             "--out", tmp_path / "v.csv", "--summary-out", tmp_path / "s.json")

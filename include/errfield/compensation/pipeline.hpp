@@ -126,6 +126,11 @@ struct CompensationTargets {
   std::vector<robot::JointVector> seed_rows_deg;
 };
 
+/// The per-row seed joints of pose targets, columns sq1..sq6 (deg), as CompensationTargets::seed_rows_deg
+/// holds them: empty when `table` has no sq1 column; a row whose six cells are all empty is NaN (no seed
+/// for that row); a row with some cells empty is an InputError naming the row and column.
+std::vector<robot::JointVector> seed_rows_of(const CsvTable& table);
+
 /// `errfield compensate`: columns nq1..nq6, nx,ny,nz, pred_dx..dz, pred_dl, var_mm2 (new reading:
 /// field + nugget), p_inside (CompensatedTarget::p_within_tolerance), cmd_x..z, cq1..cq6,
 /// var_field_mm2 (field only), r95_mm (vector fields), total_dx..dz and total_mm (the whole predicted
