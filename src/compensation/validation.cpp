@@ -185,6 +185,7 @@ ValidationReport validate_predictions(const CompensationModel& model, const Meas
   for (std::size_t i = 0; i < d.q_deg.size(); ++i) {
     ValidatedPoint p;
     p.point = d.id[i];
+    p.q_deg = d.q_deg[i];
     const PointPrediction pr = predict_position(model, d.q_deg[i]);
     if (!pr.ok()) {
       p.status = std::string(status_name(pr.status));
@@ -284,6 +285,14 @@ ValidationReport validate_targets(const CsvTable& t, const std::optional<Registr
                          std::to_string(bases.size()) + " base points (rows with kind=base, or --base-point X,Y,Z)",
                      t.source());
   r.distance_columns = dist_cols;
+  // The joints of each point, for the report's per-joint view: the nominal joints compensate wrote, else q1..q6.
+  std::vector<std::size_t> joints;
+  for (const char* prefix : {"nq", "q"}) {
+    if (!joints.empty()) break;
+    for (int k = 1; k <= 6; ++k)
+      if (t.has_column(prefix + std::to_string(k))) joints.push_back(t.column_index(prefix + std::to_string(k)));
+    if (joints.size() != 6) joints.clear();
+  }
   std::map<std::string, std::size_t> index;  // point name -> entry in r.points
   bool any_before = false;
   for (std::size_t i = 0; i < t.row_count(); ++i) {
@@ -306,6 +315,11 @@ ValidationReport validate_targets(const CsvTable& t, const std::optional<Registr
     }
     ValidatedPoint& p = r.points[it->second];
     const bool before = which == "before";
+    if (!joints.empty() && !before)
+      for (int k = 0; k < 6; ++k) {
+        const std::string& cell = t.row(i)[joints[static_cast<std::size_t>(k)]];
+        p.q_deg[k] = cell.empty() ? NAN : t.numeric_cell(i, joints[static_cast<std::size_t>(k)]);
+      }
     any_before = any_before || before;
     if (!before && status && t.row(i)[*status] != "ok") {
       p.status = "refused";  // compensate sent nothing for it

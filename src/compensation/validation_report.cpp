@@ -36,11 +36,10 @@ BarChart histogram(const std::string& title, const std::vector<double>& before, 
   const std::size_t bins = static_cast<std::size_t>(std::floor(hi / step)) + 1;
   BarChart c;
   c.title = title;
-  c.category_label = "|error| bin [mm]";
+  // Each bin is labelled by its lower edge: "0.05–0.1" labels ran into each other at 12 bins.
+  c.category_label = "|error| [mm], bins of " + report::tick_label(step, step) + " mm from the value shown";
   c.y_axis = report::AxisSpec("points", "", 0.0);
-  for (std::size_t b = 0; b < bins; ++b)
-    c.categories.push_back(report::tick_label(static_cast<double>(b) * step, step) + "–" +
-                           report::tick_label(static_cast<double>(b + 1) * step, step));
+  for (std::size_t b = 0; b < bins; ++b) c.categories.push_back(report::tick_label(static_cast<double>(b) * step, step));
   auto counts = [&](const std::vector<double>& v) {
     std::vector<double> n(bins, 0.0);
     for (double e : v)
@@ -69,6 +68,39 @@ LinePlot per_point(const std::string& title, const std::vector<double>& before, 
   for (double v : b) any_before = any_before || std::isfinite(v);
   if (any_before) p.series.push_back(Series{"before", x, b, SeriesStyle::Points, ""});
   p.series.push_back(Series{"after", x, a, SeriesStyle::Points, ""});
+  return p;
+}
+
+/// Where the errors are: |error| after compensation against joint `j` (0-based) for the scored
+/// points, and the refused points (drawn at 0 mm) - large errors and refusals at a joint's extremes
+/// show up as a cloud at one end of the axis. Empty when no point has joints.
+std::optional<LinePlot> against_joint(const ValidationReport& r, int j) {
+  Series scored{"after (scored)", {}, {}, SeriesStyle::Points, ""};
+  Series refused{"refused (drawn at 0)", {}, {}, SeriesStyle::Points, "#b00020"};
+  for (const ValidatedPoint& p : r.points) {
+    const double q = p.q_deg[j];
+    if (!std::isfinite(q)) continue;
+    if (!p.ok()) {
+      refused.x.push_back(q);
+      refused.y.push_back(0.0);
+      continue;
+    }
+    const double e = r.position ? p.after_mm.norm() : NAN;
+    double d = 0.0;
+    for (double v : p.distance_after_mm) d = std::isfinite(v) ? std::max(d, std::abs(v)) : d;
+    scored.x.push_back(q);
+    scored.y.push_back(std::isfinite(e) ? e : d);
+  }
+  if (scored.x.empty() && refused.x.empty()) return std::nullopt;
+  LinePlot p;
+  p.title = "q" + std::to_string(j + 1);
+  p.x_axis = report::AxisSpec("q" + std::to_string(j + 1), "deg");
+  p.y_axis = report::AxisSpec(r.position ? "3-D error after" : "max |distance error| after", "mm", std::nullopt,
+                              std::nullopt, true);
+  p.width_px = 380;
+  p.height_px = 260;
+  if (!scored.x.empty()) p.series.push_back(std::move(scored));
+  if (!refused.x.empty()) p.series.push_back(std::move(refused));
   return p;
 }
 
@@ -114,6 +146,17 @@ std::string validation_report_html(const ValidationReport& r, const std::string&
     html.add_heading("Distance error");
     html.add_figure(histogram("Histogram of |distance error|", db, da));
     html.add_figure(per_point("|distance error| per point and base point", db, da));
+  }
+  std::vector<LinePlot> joint_views;
+  for (int j = 0; j < 6; ++j)
+    if (auto v = against_joint(r, j)) joint_views.push_back(std::move(*v));
+  if (!joint_views.empty()) {
+    html.add_heading("Where: errors and refusals against each joint");
+    html.add_paragraph("Each point's error after compensation against its joint angles; refused points (not "
+                       "scored: outside the region, not credible, outside the limits, ...) in red at 0 mm. Large "
+                       "errors or refusals gathered at one end of an axis are a part of the workspace the model "
+                       "covers badly: measure more there, or keep targets away from it.");
+    for (const LinePlot& v : joint_views) html.add_figure(v);
   }
   return html.to_html();
 }

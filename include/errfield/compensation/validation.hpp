@@ -68,6 +68,10 @@ struct ValidatedPoint {
   /// alone (mm², ErrorPrediction); vector fields with scored positions: the 95 % radius (mm) and
   /// NEES = sum_i after_i² / var_i (3 expected).
   double var_mm2 = kNaN, var_field_mm2 = kNaN, r95_mm = kNaN, nees = kNaN;
+  /// The point's joints (deg): the held-out row's (prediction mode), the run's q1..q6 or nominal
+  /// nq1..nq6 (targets mode, when the file has them); NaN when unknown. For the report's view of
+  /// where large errors and refusals are.
+  Eigen::Matrix<double, 6, 1> q_deg = Eigen::Matrix<double, 6, 1>::Constant(kNaN);
   bool ok() const { return status == "ok"; }
 };
 
