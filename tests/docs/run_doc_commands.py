@@ -4,10 +4,11 @@
 The convention (docs/reliability.md, "Docs that are tested"):
 - In README.md and docs/*.md, every fenced code block whose info string is `sh` is run: each command
   (a line, joined with the next while it ends in a backslash; blank and `#` comment lines skipped)
-  runs with `bash -o pipefail` in one temporary directory per document, in the document's order,
-  so an earlier command makes the files a later one reads. OMP_NUM_THREADS is 1 unless set. `errfield` is the built binary (first on
-  PATH, and `build/errfield`); `scripts/` and `data/` are the source tree's (symlinks), so commands
-  written from the repository root work as written. A line `NAME=value` (a shell variable) is
+  runs with `bash -c` (as typed: no pipefail, so `grep | head` is fine) in one temporary directory
+  per document, in the document's order, so an earlier command makes the files a later one reads.
+  OMP_NUM_THREADS is 1 unless set. `errfield` is the built binary (first on PATH, and
+  `build/errfield`); `scripts/` and `data/` are the source tree's (symlinks), so commands written
+  from the repository root work as written. A line `NAME=value` (a shell variable) is
   prepended to the document's later commands.
 - A block is not run only when the line just before its fence is `<!-- not-run: REASON -->`; one
   command is not run only when it ends in `# not-run: REASON`. REASON must not be empty. A REASON
@@ -222,7 +223,7 @@ def run_commands(commands, directory, env, ran, skipped, failures, timing, inclu
             script = "\n".join(prelude + [c.text])
         t0 = time.monotonic()
         try:
-            p = subprocess.run(["bash", "-o", "pipefail", "-c", script], cwd=directory, env=env,
+            p = subprocess.run(["bash", "-c", script], cwd=directory, env=env,
                                capture_output=True, text=True, timeout=COMMAND_TIMEOUT_S)
             status, err = p.returncode, p.stderr
         except subprocess.TimeoutExpired as e:
