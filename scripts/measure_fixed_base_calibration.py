@@ -21,7 +21,35 @@ OFFSET = [(0.8, -0.5, 1.1), (-1.2, 0.4, 0.6), (0.3, 0.9, -0.7)]
 
 
 def run(args):
-    return subprocess.run(args, check=True, capture_output=True, text=True).stdout
+    p = subprocess.run(args, capture_output=True, text=True)
+    if p.returncode != 0:
+        sys.exit(f"measure_fixed_base_calibration: {' '.join(args)} failed (exit {p.returncode}):\n{p.stderr}")
+    return p.stdout
+
+
+NUMBER = r"(-?[0-9]+(?:\.[0-9]*)?(?:[eE][-+]?[0-9]+)?)"
+
+
+def report_field(report, pattern, what):
+    """The first group of pattern in calibrate's report; a clear error (not a traceback) when the
+    report's wording changed, so the docs test that runs this script names what to update."""
+    m = re.search(pattern, report, re.MULTILINE)
+    if not m:
+        sys.exit(f"measure_fixed_base_calibration: calibrate's report has no {what} (pattern {pattern!r}); "
+                 f"update this script. The report:\n{report}")
+    return m.group(1)
+
+
+def identified_points(report, count):
+    """Identified coordinates of the fixed points from the report lines 'fixed base point k ...: x V ... y V ... z V'."""
+    points = []
+    for k in range(count):
+        line = report_field(report, rf"^(fixed base point {k}\b.*)$", f"line for fixed base point {k}")
+        xyz = re.search(rf"\bx\s+{NUMBER}.*?\by\s+{NUMBER}.*?\bz\s+{NUMBER}", line)
+        if not xyz:
+            sys.exit(f"measure_fixed_base_calibration: cannot read x, y, z from: {line}")
+        points.append(np.array([float(v) for v in xyz.groups()]))
+    return points
 
 
 def read_csv(path):
@@ -65,8 +93,7 @@ def main():
             cal += ["--base-point", ",".join(f"{t + o:g}" for t, o in zip(TRUE[k], OFFSET[k]))]
         run(sim)
         report = run(cal)
-        ident = [np.array([float(v) for v in re.findall(r"[xyz] (-?[0-9.]+)", line)[:3]])
-                 for line in report.splitlines() if line.startswith("fixed base point")]
+        ident = identified_points(report, count)
         nominal_pts = [np.array(TRUE[k]) + np.array(OFFSET[k]) for k in range(count)]
         for name, model, pts in (("nominal", f"{wd}/robot.json", nominal_pts), ("calibrated", f"{wd}/cal{count}.json", ident)):
             p = predict(model)
@@ -75,10 +102,13 @@ def main():
                                  for k in range(count)])
             print(f"| {count} | {name} | {np.sqrt(np.mean(e3**2)):.3f} / {e3.max():.3f} | "
                   f"{np.sqrt(np.mean(ed**2)):.3f} / {np.abs(ed).max():.3f} |")
-        kept = re.search(r"identified parameters \((\d+)\)", report).group(1)
-        removed = re.search(r"removed candidates \((\d+)\)", report).group(1)
-        cond = re.search(r"condition number of the scaled identification Jacobian: ([0-9.]+)", report).group(1)
-        print(f"|   | ({count} point(s): {kept} robot parameters kept, {removed} removed, condition {cond}) | | |")
+        kept = report_field(report, r"identified parameters \((\d+)\)", "'identified parameters (N)'")
+        removed = report_field(report, r"removed candidates \((\d+)\)", "'removed candidates (N)'")
+        removed_points = len(re.findall(r"^\s+base point \d+ [xyz]:", report, re.MULTILINE))
+        cond = report_field(report, rf"^condition number.*:\s*{NUMBER}\s*$", "'condition number ...: C' line")
+        status = report_field(report, r"^status:\s*(.*)$", "'status:' line")
+        print(f"|   | ({count} point(s): {kept} robot parameters + {3 * count - removed_points} point coordinates kept, "
+              f"{removed} candidates removed, condition {float(cond):.0f}; {status}) | | |")
 
 
     # Reference: the paper's protocol (base point = the robot position at the cube corner).

@@ -197,7 +197,7 @@ void add_cv_command(CLI::App& app) {
       "residual and abs_residual (vector values: pred_<col>, residual_<col>; abs_residual is the norm).\n\n"
       "Methods: " + method_names(true) + "\n\n"
       "Example:\n"
-      "  errfield cv --method idw --samples samples.csv --coords x,y,z --value dL --neighbors 8 --folds 10 \\\n"
+      "  errfield cv --method idw --samples scattered.csv --coords x,y,z --value dL --neighbors 8 --folds 10 \\\n"
       "      --seed 42 --out cv_points.csv\n");
   cmd->add_option("--method", args->method, "Method to validate: " + method_names(true))->required();
   cmd->add_option("--samples", args->samples, "CSV with the samples (coordinates and values)")->required();

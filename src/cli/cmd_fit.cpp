@@ -84,7 +84,7 @@ void add_fit_command(CLI::App& app) {
       "Default (auto): kinematic+kriging in joint space when the data have tracker positions, kinematic from\n"
       "distances otherwise: the most accurate on held-out points of the data in docs/robot.md.\n"
       "Example: errfield fit --robot robot.json --data measured.csv --out model.json\n"
-      "Example: errfield fit --data grid.csv --method distance-idw --out model.json   (the paper's method)");
+      "Example: errfield fit --robot robot.json --data grid.csv --method distance-idw --out model.json   # the paper's method");
   cmd->add_option("--robot", a->robot,
                   "nominal robot JSON or built-in name (er20-c10, kr16, ur5e); default: built-in ER20-C10, no tool. "
                   "x,y,z that are not its FK (within 5 mm) are refused with the likely cause");

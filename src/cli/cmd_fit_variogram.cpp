@@ -326,8 +326,9 @@ void add_fit_variogram_command(CLI::App& app) {
       "  errfield variogram --input errors.csv --coords x,y,z --value dL --bins 0:2200:200 --out vario.csv\n"
       "  errfield fit-variogram --input vario.csv --model sph --nugget free --weights nj_h2 --out model.json\n"
       "  errfield fit-variogram --method reml --input errors.csv --coords x,y,z --value dL --model exp --out model.json\n"
-      "  errfield fit-variogram --method reml --anisotropy ard --input res.csv --coords q1,q2,q3,q4,q5,q6 \\\n"
-      "      --value ex,ey,ez --model mat --nu 2.5 --out model.json   (then --model model.json)");
+      "  errfield fit-variogram --method reml --anisotropy ard --input residuals.csv --coords q1,q2,q3,q4,q5,q6 \\\n"
+      "      --value ex,ey,ez --model mat --nu 2.5 --out model.json   # then fit/interpolate --model model.json\n"
+      "(errors.csv, residuals.csv: SIMULATED examples from scripts/make_example_error_field.py, see README.md)");
   cmd->callback([args] { run_fit_variogram(*args); });
 }
 

@@ -132,7 +132,9 @@ void add_ik_command(CLI::App& app) {
       "each row starts from the previous row's solution (first row: a few standard postures).\n"
       "Output: the input columns (seeds replaced) plus q1..q6 (deg), status (converged, joint_limits,\n"
       "unreachable, max_iterations), residual_mm and residual_deg.\n"
-      "Example: errfield ik --input targets.csv --robot robot.json --out joints.csv");
+      "Example: errfield fk --input targets.csv --robot robot.json --out poses.csv   # poses: x,y,z,rx,ry,rz\n"
+      "         errfield ik --input poses.csv --robot robot.json --out joints.csv\n"
+      "Example: errfield ik --input targets.csv --robot robot.json --position-only --out joints.csv   # x,y,z only");
   cmd->add_option("--input", args->input, "CSV with x,y,z and r11..r33 or rx,ry,rz")->required();
   cmd->add_option("--robot", args->robot,
                   "robot description JSON (docs/robot.md) or built-in name (er20-c10, kr16, ur5e; errfield robots); "

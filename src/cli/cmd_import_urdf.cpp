@@ -96,7 +96,7 @@ void add_import_urdf_command(CLI::App& app) {
       "Robot JSON (modified D-H table, limits, base, tool) from the chain BASE_LINK -> TIP_LINK of a URDF.\n"
       "The chain must have exactly six revolute joints (fixed joints are absorbed). The result is checked:\n"
       "its FK must equal the URDF chain's to 1e-9 mm at 1000 joint vectors, else nothing is written (exit 1).\n"
-      "Example: errfield import-urdf --urdf arm.urdf --base base_link --tip tool0 --out robot.json");
+      "Example: errfield import-urdf --urdf arm.urdf --base base_link --tip tool0 --out arm.json");
   cmd->add_option("--urdf", args->urdf, "URDF file (metres, radians)")->required();
   cmd->add_option("--base", args->base, "base link of the chain (the robot JSON's world frame)")->required();
   cmd->add_option("--tip", args->tip, "tip link of the chain (the flange; the tool is relative to it)")->required();

@@ -137,8 +137,9 @@ void add_interpolate_command(CLI::App& app) {
       }() +
       "\nThe output has every column of the targets file plus 'pred' (for --value dx,dy,dz: pred_dx,pred_dy,pred_dz);\n"
       "a target without a prediction gets empty cells. The output is written atomically.\n\n"
-      "Example (the paper's method: distance errors measured on a 125 mm grid, interpolated to targets):\n"
-      "  errfield interpolate --method idw-grid --samples grid.csv --targets targets.csv \\\n"
+      "Example (errors.csv, scattered.csv, targets.csv: SIMULATED, from scripts/make_example_error_field.py):\n"
+      "  # the paper's method: distance errors measured on a 125 mm grid, interpolated to targets\n"
+      "  errfield interpolate --method idw-grid --samples errors.csv --targets targets.csv \\\n"
       "      --coords x,y,z --value dL --out predicted.csv\n"
       "  errfield interpolate --method idw --samples scattered.csv --targets targets.csv \\\n"
       "      --coords x,y,z --value dx,dy,dz --neighbors 8 --power 2 --out predicted.csv\n");

@@ -125,7 +125,7 @@ void add_plan_command(CLI::App& app) {
       "base point(s) (kind=base rows first), optionally one random validation sample per cell. Refuses\n"
       "unreachable points with a list. --step auto recommends a step from a variogram: the largest step\n"
       "dividing the cube whose cell diagonal keeps gamma <= --gamma-max (the paper's reasoning).\n"
-      "Example: errfield plan --robot R.json --cube 750,-250,350,500 --step 125 --orientation 180,0,0 \\\n"
+      "Example: errfield plan --robot robot.json --cube 750,-250,350,500 --step 125 --orientation 180,0,0 \\\n"
       "           --base-point 750,-250,350 --out plan.csv --samples-out samples.csv");
   cmd->add_option("--robot", a->robot, "robot JSON or built-in name (er20-c10, kr16, ur5e; default: built-in ER20-C10, no tool)");
   cmd->add_option("--cube", a->cube, "X0,Y0,Z0,SIZE: lower corner and side (mm)")->required();

@@ -29,7 +29,8 @@ void add_reproduce_command(CLI::App& app) {
   cmd->add_option("--seed", args->seed, "master seed; the same seed gives the same numbers")
       ->check(kUnsignedInteger)
       ->capture_default_str();
-  cmd->add_option("--runs", args->runs, "independent simulated robots for Table 6 (>= 1)")->capture_default_str();
+  cmd->add_option("--runs", args->runs, "repetitions of Table 6 (>= 1): each draws new samples, measurement noise and repeatability on the same "
+                  "simulated robot and refits every method")->capture_default_str();
   cmd->add_option("--threads", args->threads, "OpenMP threads (0 = default)")->capture_default_str();
   cmd->callback([args] {
     reproduction::ReproductionOptions options;
@@ -38,12 +39,12 @@ void add_reproduce_command(CLI::App& app) {
     options.threads = args->threads;
     check_thread_count("--threads", args->threads);  // naming the option, before validate() does
     options.validate();
-    // Each run is a simulated robot, its measurements and six fitted methods (about a second and
-    // a few MB while it lasts); 2e9 runs exhausted the memory before the first finished.
+    // Each run is new samples and measurements of the same simulated robot and six fitted methods
+    // (a few ms and a few MB while it lasts); 2e9 runs exhausted the memory before the first finished.
     constexpr int kMaxRuns = 10000;
     if (args->runs > kMaxRuns)
       throw ResourceError("--runs " + std::to_string(args->runs) + ": at most " + std::to_string(kMaxRuns) +
-                          " runs per job (each simulates and fits a robot, about a second each; the paper uses 20); "
+                          " runs per job (each simulates the measurements and refits every method; the paper uses 20); "
                           "use a smaller --runs");
     // Options first, then an --out that can never become a directory: both fail now, not after
     // minutes of work. (Nothing is created yet: an interrupted run leaves no empty directory.)

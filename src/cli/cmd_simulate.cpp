@@ -483,11 +483,11 @@ void add_simulate_command(CLI::App& app) {
       "--systematic realistic (gravity compliance of joints 2-3, errors growing near the ends of q1's\n"
       "and q5's travel, cyclic joint errors), refined by --compliance and --end-range-error.\n"
       "Example: errfield simulate --sample grid --step 125 --out grid.csv --truth-out true_robot.json\n"
-      "Example: errfield simulate --robot ur5e --sample scattered:80 --orientation-spread 30 --joint-decimals 2\n"
-      "         --tool-offset random:20 --outliers 0.03:5 --robot-out ur5e.json --out real_like.csv\n"
-      "Example: errfield simulate --robot kr16 --sample scattered:300 --joint-box\n"
-      "         -150,150,-130,-30,70,150,-90,90,-110,110,-180,180 --systematic realistic --outliers 0.02:3\n"
-      "         --truth-columns --robot-out kr16.json --out extremes.csv");
+      "Example: errfield simulate --robot ur5e --sample scattered:80 --orientation-spread 30 --joint-decimals 2 \\\n"
+      "           --tool-offset random:20 --outliers 0.03:5 --robot-out ur5e.json --out real_like.csv\n"
+      "Example: errfield simulate --robot kr16 --sample scattered:300 --joint-box \\\n"
+      "           -150,150,-130,-30,70,150,-90,90,-110,110,-180,180 --systematic realistic --outliers 0.02:3 \\\n"
+      "           --truth-columns --robot-out kr16.json --out extremes.csv");
   cmd->add_option("--config", args->config, "simulation JSON (docs/robot.md); default: the paper's set-up");
   cmd->add_option("--robot", args->robot,
                   "nominal robot: a built-in name (er20-c10, kr16, ur5e; errfield robots) or a robot JSON; overrides "

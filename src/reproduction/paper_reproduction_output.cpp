@@ -345,7 +345,8 @@ std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& 
   }
   html.add_heading("Table 6: compensation accuracy");
   html.add_paragraph("Median over " + std::to_string(r.table6.runs) +
-                     " independent simulated robots and sample sets, with the 25%–75% range in brackets.");
+                     " runs (new samples, measurement noise and repeatability on the same simulated robot), with the "
+                     "25%–75% range in brackets.");
   for (const auto& note : r.table6.notes) html.add_paragraph(note);
   for (const char* m : kMetrics) html.add_table(table6_table(r.table6, m, std::string(m) == "distance"), metric_title(m));
   for (const char* which : {"distance", "position"}) {

@@ -391,10 +391,15 @@ TEST_F(UrdfImportCli, DocsExample) {
   const std::string doc = read_text(ERRFIELD_SOURCE_DIR "/docs/robot.md");
   const auto section = doc.find("### `errfield import-urdf`");
   ASSERT_NE(section, std::string::npos);
-  const auto begin = doc.find("```xml\n", section);
-  ASSERT_NE(begin, std::string::npos);
-  const auto end = doc.find("```", begin + 7);
-  write("demo.urdf", doc.substr(begin + 7, end - begin - 7));
+  // The fence is "```xml file=demo.urdf" (tests/docs/run_doc_commands.py writes the block to that file).
+  const auto fence = doc.find("```xml", section);
+  ASSERT_NE(fence, std::string::npos);
+  const auto begin = doc.find('\n', fence) + 1;
+  const auto end = doc.find("```", begin);
+  write("demo.urdf", doc.substr(begin, end - begin));
+  // README.md's --help examples read data/demo_6r.urdf: the same text, so the two cannot drift.
+  EXPECT_EQ(read_text(ERRFIELD_SOURCE_DIR "/data/demo_6r.urdf"), doc.substr(begin, end - begin))
+      << "data/demo_6r.urdf differs from the URDF block in docs/robot.md";
   const auto r = run("import-urdf --urdf " + path("demo.urdf") + " --base base_link --tip tool0 --out " + path("demo.json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const MdhModel m = MdhModel::load(path("demo.json"));
