@@ -71,6 +71,15 @@ struct OutputTable {
       put_column(input.header()[c], std::move(cells));  // the input's own text, as it was
     }
   }
+  /// Copies every column of `input`, rows `rows` only, in that order (a selection of the input's rows).
+  void add_all_columns(const CsvTable& input, const std::vector<std::size_t>& rows) {
+    for (std::size_t c = 0; c < input.header().size(); ++c) {
+      std::vector<std::string> cells;
+      cells.reserve(rows.size());
+      for (std::size_t r : rows) cells.push_back(input.row(r)[c]);
+      put_column(input.header()[c], std::move(cells));
+    }
+  }
   std::string to_csv() const {
     std::string out;
     for (std::size_t c = 0; c < header.size(); ++c) out += (c ? "," : "") + header[c];

@@ -1,14 +1,23 @@
 // `errfield plan`: the measurement plan (step 1 of plan → measure → fit → compensate).
 #include <iostream>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
+#include "cli/interpolation_methods.hpp"
 #include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/cube_budget.hpp"
 #include "errfield/compensation/measurement_plan.hpp"
+#include "errfield/compensation/pose_selection.hpp"
+#include "errfield/json_file.hpp"
+#include "errfield/robot/input_checks.hpp"
 #include "errfield/robot/pose.hpp"
 #include "errfield/variogram_fit.hpp"
 
@@ -20,7 +29,112 @@ struct PlanArgs {
   std::vector<std::string> bases;
   double gamma_max = 0.01;
   std::uint64_t seed = 1;
+  // Choosing from a pool of candidate poses (issue 21).
+  std::string candidates, model, data, summary_out;
+  std::size_t count = 0;
+  double target_rms = 0.0;
 };
+
+std::string three_digits(double v) {
+  std::ostringstream s;
+  s.precision(3);
+  s << v;
+  return s.str();
+}
+
+/// `plan --candidates`: the next poses to measure from a pool, with the predicted RMS (stopping rule).
+void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
+  using namespace robot;
+  using namespace compensation;
+  for (const char* grid_only : {"--cube", "--base-point", "--samples-out", "--variogram", "--variogram-model"})
+    if (cmd->count(grid_only))
+      throw ArgumentError(std::string(grid_only) + " plans a grid; --candidates chooses from a pool: give one or the other");
+  if (a.count == 0) throw ArgumentError("--count: how many poses to choose from --candidates (at least 1)");
+  if (cmd->count("--target-rms") && !(a.target_rms > 0.0 && std::isfinite(a.target_rms)))
+    throw ArgumentError("--target-rms: " + format_number(a.target_rms) + "; expected a finite RMS > 0 (mm)");
+  if (cmd->count("--target-rms") && a.model.empty())
+    throw ArgumentError("--target-rms needs --model: the predicted RMS comes from a fitted model's field");
+  refuse_same_output({{"--out", &a.out}, {"--summary-out", &a.summary_out}});
+  std::optional<CompensationModel> model;
+  if (!a.model.empty()) {
+    const nlohmann::json j = read_json_file(a.model, "model file");
+    model.emplace(with_json_source(a.model, [&] { return CompensationModel::from_json(j, a.model); }));
+  }
+  const MdhModel robot = !a.robot.empty() || !model ? load_robot_or_default(a.robot)
+                         : model->has_nominal_model() ? model->nominal_model() : model->command_model();
+  const CsvTable pool = CsvTable::read(a.candidates);
+  const std::vector<JointVector> pool_q = read_joint_columns(pool);
+  if (const auto w = joints_outside_limits(pool_q, robot, row_labels_of(pool, "row")))
+    throw InputError(a.candidates + ": " + *w + "; check units (degrees), joint order and --robot", a.candidates);
+  // Measured so far: conditioned on, and never chosen again (matched by `point`).
+  std::vector<JointVector> measured;
+  std::set<std::string> measured_points;
+  if (!a.data.empty()) {
+    const CsvTable d = CsvTable::read(a.data);
+    measured = read_joint_columns(d);
+    if (d.has_column("point"))
+      for (std::size_t i = 0; i < d.row_count(); ++i) measured_points.insert(d.row(i)[d.column_index("point")]);
+  }
+  if (!measured_points.empty() && !pool.has_column("point"))
+    throw InputError(a.candidates + ": no column 'point', so the poses of --data (matched by point) cannot be left out",
+                     a.candidates, 0, "point");
+  std::vector<std::size_t> rows;  // pool rows still to choose from
+  std::vector<JointVector> open;
+  for (std::size_t i = 0; i < pool.row_count(); ++i) {
+    if (!measured_points.empty() && measured_points.count(pool.row(i)[pool.column_index("point")])) continue;
+    rows.push_back(i);
+    open.push_back(pool_q[i]);
+  }
+  if (open.size() < a.count)
+    throw InputError(a.candidates + ": " + std::to_string(open.size()) + " candidate poses not yet measured, --count " +
+                         std::to_string(a.count),
+                     a.candidates);
+  PoseSelectionOptions o;
+  o.count = a.count;
+  if (cmd->count("--target-rms")) o.target_rms_mm = a.target_rms;
+  PoseSelection sel;
+  naming_options([&] { sel = select_poses(open, measured, model ? &*model : nullptr, o); },
+                 {{"PoseSelectionOptions::count", "--count"}, {"PoseSelectionOptions::target_rms_mm", "--target-rms"}});
+  OutputTable out;
+  std::vector<std::size_t> picked;
+  for (std::size_t k : sel.chosen) picked.push_back(rows[k]);
+  out.add_all_columns(pool, picked);
+  nlohmann::json summary = {{"candidates", pool.row_count()}, {"measured", measured.size()},
+                            {"chosen", sel.chosen.size()}, {"design", sel.design}};
+  std::ostringstream text;
+  text << "plan: " << sel.chosen.size() << " of " << open.size() << " candidate poses chosen, in measuring order ("
+       << sel.design << ")\n";
+  if (!sel.predicted_rms_mm.empty()) {
+    const double now = sel.predicted_rms_mm.front(), after = sel.predicted_rms_mm[std::min(a.count, sel.predicted_rms_mm.size() - 1)];
+    text << "  predicted 3-D RMS of a new reading over the pool: " << three_digits(now) << " mm with the "
+         << sel.conditioned_on << " poses measured, " << three_digits(after) << " mm after these " << a.count
+         << " (the field's own variance with its nugget; calibration and registration uncertainty not included)\n";
+    summary["predicted_rms_mm"] = {{"now", now}, {"after", after}, {"by_pose", sel.predicted_rms_mm}};
+    if (o.target_rms_mm) {
+      summary["target_rms_mm"] = *o.target_rms_mm;
+      if (sel.poses_for_target) {
+        summary["poses_for_target"] = *sel.poses_for_target;
+        if (*sel.poses_for_target == 0)
+          text << "  target " << format_number(*o.target_rms_mm) << " mm: reached (predicted) with the poses measured so far\n";
+        else
+          text << "  target " << format_number(*o.target_rms_mm) << " mm: about " << *sel.poses_for_target
+               << " more poses chosen this way (" << (*sel.poses_for_target <= a.count ? "within" : "beyond")
+               << " this batch)\n";
+      } else {
+        summary["poses_for_target"] = nullptr;
+        text << "  target " << format_number(*o.target_rms_mm) << " mm: not reached within "
+             << sel.predicted_rms_mm.size() - 1 << " more poses of this pool (predicted "
+             << three_digits(sel.predicted_rms_mm.back()) << " mm at the end): a finer model, a larger pool or "
+             << "less measurement noise is needed\n";
+      }
+    }
+  }
+  AtomicFileSet outputs;
+  outputs.add(a.out, out.to_csv());
+  if (!a.summary_out.empty()) outputs.add(a.summary_out, summary.dump(2) + "\n");
+  outputs.commit();
+  std::cout << text.str() << "  written to " << a.out << "\n";
+}
 
 /// Best of sph/exp/gau/pow (free nugget, N_j weights) fitted to an `errfield variogram` CSV.
 VariogramModel model_from_variogram_csv(const std::string& path) {
@@ -49,7 +163,11 @@ VariogramModel model_from_variogram_csv(const std::string& path) {
   return best;
 }
 
-void run_plan(const PlanArgs& a) {
+void run_plan(const PlanArgs& a, CLI::App* cmd) {
+  if (!a.candidates.empty()) return run_plan_from_candidates(a, cmd);
+  for (const char* pool_only : {"--count", "--model", "--data", "--target-rms", "--summary-out"})
+    if (cmd->count(pool_only)) throw ArgumentError(std::string(pool_only) + " is for choosing from --candidates");
+  if (a.cube.empty()) throw ArgumentError("--cube X0,Y0,Z0,SIZE (a grid plan) or --candidates POOL.csv --count K is required");
   refuse_same_output({{"--out", &a.out}, {"--samples-out", &a.samples_out}});
   using namespace robot;
   using namespace compensation;
@@ -126,9 +244,19 @@ void add_plan_command(CLI::App& app) {
       "unreachable points with a list. --step auto recommends a step from a variogram: the largest step\n"
       "dividing the cube whose cell diagonal keeps gamma <= --gamma-max (the paper's reasoning).\n"
       "Example: errfield plan --robot robot.json --cube 750,-250,350,500 --step 125 --orientation 180,0,0 \\\n"
-      "           --base-point 750,-250,350 --out plan.csv --samples-out samples.csv");
+      "           --base-point 750,-250,350 --out plan.csv --samples-out samples.csv\n"
+      "Or choose the next poses from a pool of candidates (columns point, q1..q6 deg; all columns kept):\n"
+      "without --model, maximin in joint space (the first batch); with --model (errfield fit,\n"
+      "kinematic+kriging or vector-kriging) and --data (the poses measured so far), the poses that most\n"
+      "reduce the field's predicted error over the pool, and the predicted 3-D RMS now and after them;\n"
+      "--target-rms MM says how many more poses the prediction needs to reach MM.\n"
+      "Example (pool.csv: SIMULATED poses already measured, README's example inputs):\n"
+      "  errfield plan --robot kr16 --candidates pool.csv --count 40 --out batch1.csv\n"
+      "  errfield fit --robot kr16 --data batch1.csv --out m1.json\n"
+      "  errfield plan --candidates pool.csv --count 40 --model m1.json --data batch1.csv \\\n"
+      "    --target-rms 0.09 --out batch2.csv");
   cmd->add_option("--robot", a->robot, "robot JSON or built-in name (er20-c10, kr16, ur5e; default: built-in ER20-C10, no tool)");
-  cmd->add_option("--cube", a->cube, "X0,Y0,Z0,SIZE: lower corner and side (mm)")->required();
+  cmd->add_option("--cube", a->cube, "X0,Y0,Z0,SIZE: lower corner and side (mm); a grid plan");
   cmd->add_option("--step", a->step, "grid step (mm, divides SIZE) or auto")->capture_default_str();
   cmd->add_option("--orientation", a->orientation, "RX,RY,RZ tool orientation (deg, fixed axes XYZ)")->capture_default_str();
   cmd->add_option("--base-point", a->bases, "X,Y,Z of a base point (robot position, mm), repeatable");
@@ -138,8 +266,26 @@ void add_plan_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--samples-out", a->samples_out, "also write one random validation point per cell here");
   cmd->add_option("--seed", a->seed, "seed of the validation samples")->check(kUnsignedInteger)->capture_default_str();
-  cmd->add_option("--out", a->out, "plan CSV: point,kind,x,y,z,rx,ry,rz,q1..q6 (written atomically)")->required();
-  cmd->callback([a] { run_plan(*a); });
+  cmd->add_option("--candidates", a->candidates,
+                  "pool of candidate poses (CSV: point, q1..q6 deg, any other columns carried through): choose "
+                  "--count of them instead of a grid");
+  cmd->add_option("--count", a->count, "--candidates: how many poses to choose (in measuring order)");
+  cmd->add_option("--model", a->model,
+                  "--candidates: a model of errfield fit (kinematic+kriging or vector-kriging): choose the poses that "
+                  "most reduce its predicted error, and predict the RMS; without it, maximin in joint space");
+  cmd->add_option("--data", a->data,
+                  "--candidates: the poses measured so far (CSV with point, q1..q6): never chosen again (matched by "
+                  "point), and the choice is conditioned on them");
+  cmd->add_option("--target-rms", a->target_rms,
+                  "--candidates with --model: the 3-D RMS wanted (mm); says whether the prediction reaches it and "
+                  "roughly how many more poses it needs");
+  cmd->add_option("--summary-out", a->summary_out,
+                  "--candidates: also write the design and predicted RMS (now, after, per pose) as JSON");
+  cmd->add_option("--out", a->out,
+                  "plan CSV: point,kind,x,y,z,rx,ry,rz,q1..q6 (a grid), or the chosen pool rows with all their "
+                  "columns (--candidates); written atomically")
+      ->required();
+  cmd->callback([a, cmd] { run_plan(*a, cmd); });
 }
 
 Registration register_plan{"plan", 70, &add_plan_command};

@@ -1,0 +1,59 @@
+#pragma once
+/// Which poses to measure next, from a pool of candidate joint vectors (issue 21): the robot side of
+/// sampling_design.hpp. Tracker time is the cost of a compensation, and which poses are measured
+/// matters as much as how many.
+///
+///  - Without a model (the first batch): maximin in joint space, each joint scaled by its spread
+///    over the pool, so the batch covers the joint space the model will live in and spreads the
+///    postures a kinematic calibration needs.
+///  - With a fitted model whose field is vector kriging (`kinematic+kriging`, the default, or
+///    `vector-kriging`): the poses that most reduce the field's predictive variance over the pool
+///    (integrated variance reduction under the fitted variogram, conditioned on the poses already
+///    measured), and the 3-D RMS error a new reading will have, predicted over the pool, now and
+///    after each further pose: the stopping rule. The prediction is the field's: it leaves out the
+///    calibration's and the registration's own uncertainty (small beside the field's with a few
+///    hundred poses; docs/robot.md says what held-out data showed).
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "errfield/compensation/compensation.hpp"
+#include "errfield/robot/mdh_model.hpp"
+
+namespace errfield::compensation {
+
+struct PoseSelectionOptions {
+  std::size_t count = 0;  ///< poses to choose
+  /// With a model: keep choosing (beyond count, for the prediction only) until the predicted 3-D RMS
+  /// reaches this (mm), at most max_lookahead more poses. Empty: predict for `count` only.
+  std::optional<double> target_rms_mm;
+  std::size_t max_lookahead = 600;
+  std::size_t max_references = 1000;  ///< see VarianceReductionOptions
+  /// Throws ArgumentError naming the field.
+  void validate() const;
+};
+
+struct PoseSelection {
+  std::vector<std::size_t> chosen;  ///< indices into the candidates, in measuring order
+  std::string design;               ///< for people: which design and why
+  /// Model-based only: predicted 3-D RMS (mm) of a new reading over the pool, [0] with the poses
+  /// measured so far, [k] after the first k chosen (and lookahead) poses.
+  std::vector<double> predicted_rms_mm;
+  /// With target_rms_mm: how many poses (counted from now) the prediction needs to reach it; empty
+  /// when not reached within count + max_lookahead poses of this pool.
+  std::optional<std::size_t> poses_for_target;
+  std::size_t conditioned_on = 0;  ///< measured poses the model-based choice was conditioned on
+};
+
+/// Chooses `options.count` of `candidates` (joints, deg). `measured` are the poses measured so far
+/// (excluded from nothing here - the caller drops pool rows already measured - but conditioned on
+/// and kept away from). `model` may be null (maximin); with a model, its field must be vector
+/// kriging (ArgumentError naming the method otherwise; a `kinematic` model has no field to plan
+/// for) and the field's own training poses are conditioned on too.
+PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
+                           const std::vector<robot::JointVector>& measured, const CompensationModel* model,
+                           const PoseSelectionOptions& options);
+
+}  // namespace errfield::compensation

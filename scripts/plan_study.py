@@ -1,0 +1,133 @@
+#!/usr/bin/python3
+"""Measurement-plan study (issue 21): held-out 3-D RMS against the number of measured poses for
+random, maximin (space-filling) and adaptive (`errfield plan --model`) selection, with the RMS
+`plan` predicted beside the one achieved. All data SIMULATED by `errfield simulate`.
+
+usage: scripts/plan_study.py ERRFIELD_BINARY WORKDIR [--robot kr16] [--seed 3] [--pool 2000]
+       [--holdout 300] [--batch 40] [--batches 6] [--extra "simulate options"]
+Prints one table row per (design, count); writes WORKDIR/plan_study.csv.
+"""
+import argparse
+import csv
+import json
+import os
+import random
+import subprocess
+import sys
+
+
+def run(cmd):
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        sys.exit(f"failed ({r.returncode}): {' '.join(cmd)}\n{r.stderr}")
+    return r
+
+
+def read(path):
+    with open(path, newline="") as f:
+        lines = [l for l in f if not l.startswith("#")]
+    rows = list(csv.reader(lines))
+    return rows[0], rows[1:]
+
+
+def write(path, header, rows):
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(header)
+        w.writerows(rows)
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("errfield")
+    ap.add_argument("workdir")
+    ap.add_argument("--robot", default="kr16")
+    ap.add_argument("--seed", default="3")
+    ap.add_argument("--pool", type=int, default=2000)
+    ap.add_argument("--holdout", type=int, default=300)
+    ap.add_argument("--batch", type=int, default=40)
+    ap.add_argument("--batches", type=int, default=6)
+    ap.add_argument("--designs", default="random,maximin,adaptive")
+    ap.add_argument("--extra", default="--joint-box -150,150,-130,-30,70,150,-90,90,-110,110,-180,180 "
+                                        "--systematic realistic --orientation-spread 30 --joint-decimals 3")
+    a = ap.parse_args()
+    E, W = a.errfield, a.workdir
+    os.makedirs(W, exist_ok=True)
+    robot = os.path.join(W, "robot.json")
+    allcsv = os.path.join(W, "all.csv")
+    if not os.path.exists(allcsv):
+        run([E, "simulate", "--robot", a.robot, "--seed", a.seed, "--sample", f"scattered:{a.pool + a.holdout}",
+             *a.extra.split(), "--measure", "positions", "--robot-out", robot, "--out", allcsv])
+    header, rows = read(allcsv)
+    kind = header.index("kind")
+    targets = [r for r in rows if r[kind] == "target"]
+    pool, hold = targets[: a.pool], targets[a.pool:]
+    write(os.path.join(W, "pool.csv"), header, pool)
+    write(os.path.join(W, "hold.csv"), header, hold)
+    point = header.index("point")
+    by_point = {r[point]: r for r in pool}
+    out_rows = []
+
+    def score(tag, chosen, predicted=None, predicted_by_own=None):
+        data = os.path.join(W, f"{tag}.csv")
+        write(data, header, [by_point[p] for p in chosen])
+        model = os.path.join(W, f"{tag}.json")
+        run([E, "fit", "--robot", robot, "--data", data, "--out", model])
+        s = os.path.join(W, f"{tag}_s.json")
+        run([E, "validate", "--model", model, "--data", os.path.join(W, "hold.csv"), "--summary-out", s])
+        summary = json.load(open(s))
+        rms = summary["position"]["after"]["rms_mm"]
+        row = {"design": tag.split("_")[0], "poses": len(chosen), "heldout_rms_mm": rms,
+               "heldout_max_mm": summary["position"]["after"]["max_mm"],
+               "refused": summary.get("refused", 0), "predicted_before_mm": predicted,
+               "predicted_by_own_model_mm": predicted_by_own}
+        out_rows.append(row)
+        print(f"{row['design']:9s} {row['poses']:4d}  held-out RMS {rms:.4f} mm  max {row['heldout_max_mm']:.3f}"
+              f"  refused {row['refused']}" + (f"  predicted before {predicted:.4f} mm" if predicted else ""), flush=True)
+        return model, row
+
+    designs = a.designs.split(",")
+    counts = [a.batch * (k + 1) for k in range(a.batches)]
+    if "random" in designs:
+        order = [r[point] for r in pool]
+        random.Random(int(a.seed)).shuffle(order)
+        for n in counts:
+            score(f"random_{n}", order[:n])
+    if "maximin" in designs:
+        nxt = os.path.join(W, "maximin_order.csv")
+        run([E, "plan", "--robot", robot, "--candidates", os.path.join(W, "pool.csv"), "--count", str(counts[-1]),
+             "--out", nxt])
+        order = [r[header.index("point")] for r in read(nxt)[1]]
+        for n in counts:
+            score(f"maximin_{n}", order[:n])
+    if "adaptive" in designs:
+        chosen = []
+        model, predicted = None, None
+        for n in counts:
+            nxt = os.path.join(W, f"adaptive_next_{n}.csv")
+            cmd = [E, "plan", "--robot", robot, "--candidates", os.path.join(W, "pool.csv"), "--count", str(a.batch),
+                   "--out", nxt]
+            if model:
+                summ = os.path.join(W, f"adaptive_plan_{n}.json")
+                cmd += ["--model", model, "--data", os.path.join(W, f"adaptive_{n - a.batch}.csv"),
+                        "--summary-out", summ]
+            run(cmd)
+            if model:
+                predicted = json.load(open(summ))["predicted_rms_mm"]["after"]
+            chosen += [r[header.index("point")] for r in read(nxt)[1]]
+            model, row = score(f"adaptive_{n}", chosen, predicted)
+            # What the model fitted on these poses predicts for itself (plan's "now").
+            own = os.path.join(W, f"adaptive_own_{n}.json")
+            run([E, "plan", "--robot", robot, "--candidates", os.path.join(W, "pool.csv"), "--count", "1",
+                 "--model", model, "--data", os.path.join(W, f"adaptive_{n}.csv"), "--summary-out", own,
+                 "--out", os.path.join(W, "own_next.csv")])
+            row["predicted_by_own_model_mm"] = json.load(open(own))["predicted_rms_mm"]["now"]
+            print(f"          predicted by its own model {row['predicted_by_own_model_mm']:.4f} mm", flush=True)
+    with open(os.path.join(W, "plan_study.csv"), "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(out_rows[0]))
+        w.writeheader()
+        w.writerows(out_rows)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,96 @@
+#include "errfield/compensation/pose_selection.hpp"
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
+#include "errfield/robot/kinematics.hpp"
+#include "errfield/sampling_design.hpp"
+
+namespace errfield::compensation {
+
+void PoseSelectionOptions::validate() const {
+  if (count == 0) throw ArgumentError("PoseSelectionOptions::count: expected at least 1 pose to choose");
+  if (target_rms_mm && !(*target_rms_mm > 0.0 && std::isfinite(*target_rms_mm)))
+    throw ArgumentError("PoseSelectionOptions::target_rms_mm: " + format_number(*target_rms_mm) +
+                        "; expected a finite RMS > 0 (mm)");
+  if (max_references == 0) throw ArgumentError("PoseSelectionOptions::max_references: expected at least 1");
+}
+
+namespace {
+
+Eigen::MatrixXd joint_rows(const std::vector<robot::JointVector>& q) {
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(q.size()), robot::kJointCount);
+  for (std::size_t i = 0; i < q.size(); ++i) x.row(static_cast<Eigen::Index>(i)) = q[i].transpose();
+  return x;
+}
+
+Eigen::MatrixXd position_rows(const std::vector<robot::JointVector>& q, const robot::MdhModel& model) {
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(q.size()), 3);
+  for (std::size_t i = 0; i < q.size(); ++i)
+    x.row(static_cast<Eigen::Index>(i)) = robot::forward_position(model, q[i]).transpose();
+  return x;
+}
+
+}  // namespace
+
+PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
+                           const std::vector<robot::JointVector>& measured, const CompensationModel* model,
+                           const PoseSelectionOptions& options) {
+  options.validate();
+  PoseSelection out;
+  if (!model || !model->field()) {
+    if (model)
+      throw ArgumentError("a " + std::string(method_name(model->method())) +
+                          " model has no error field to plan for; plan without --model (maximin) or fit "
+                          "kinematic+kriging first");
+    MaximinOptions mo;
+    mo.count = options.count;
+    out.chosen = select_maximin(joint_rows(candidates), joint_rows(measured), mo);
+    out.design = "maximin in joint space (each joint scaled by its spread over the pool), away from the " +
+                 std::to_string(measured.size()) + " poses measured so far: no model yet";
+    return out;
+  }
+  const nlohmann::json field = model->field()->to_json();
+  const std::string kind = field.value("kind", std::string());
+  if (kind != "vector-kriging")
+    throw ArgumentError(std::string("planning with a model needs a vector-kriging field (kinematic+kriging or "
+                                    "vector-kriging); this ") +
+                        std::string(method_name(model->method())) + " model's field is " + (kind.empty() ? "unnamed" : kind));
+  const VariogramModel vm = VariogramModel::parse(field.at("model").get<std::string>());
+  const bool joint = field.value("space", std::string("task")) == "joint";
+  // Conditioned on the field's own training poses and on the measured ones it has not seen yet.
+  std::vector<robot::JointVector> known = measured;
+  for (const auto& q : field.at("samples").at("joints_deg")) {
+    robot::JointVector v;
+    for (int k = 0; k < robot::kJointCount; ++k) v[k] = q.at(static_cast<std::size_t>(k)).get<double>();
+    bool seen = false;
+    for (const auto& m : measured) seen = seen || (m - v).cwiseAbs().maxCoeff() < 1e-9;
+    if (!seen) known.push_back(v);
+  }
+  out.conditioned_on = known.size();
+  const robot::MdhModel& where = model->has_nominal_model() ? model->nominal_model() : model->command_model();
+  const Eigen::MatrixXd pool = joint ? joint_rows(candidates) : position_rows(candidates, where);
+  const Eigen::MatrixXd done = joint ? joint_rows(known) : position_rows(known, where);
+  VarianceReductionOptions vo;
+  vo.count = options.count;
+  vo.lookahead = options.target_rms_mm ? options.max_lookahead : 0;
+  vo.max_references = options.max_references;
+  const VarianceReductionPlan plan = select_by_variance_reduction(pool, done, vm, vo);
+  out.chosen = plan.chosen;
+  // The field's variogram is that of one component; a reading's 3-D error sums three.
+  for (double mse : plan.predicted_mse) out.predicted_rms_mm.push_back(std::sqrt(3.0 * mse));
+  if (options.target_rms_mm)
+    for (std::size_t k = 0; k < out.predicted_rms_mm.size(); ++k)
+      if (out.predicted_rms_mm[k] <= *options.target_rms_mm) {
+        out.poses_for_target = k;
+        break;
+      }
+  out.design = std::string("integrated variance reduction under the model's field (") + (joint ? "joint" : "task") +
+               " space), conditioned on " + std::to_string(known.size()) +
+               " measured poses; predicted RMS over " + std::to_string(plan.references) + " pool poses";
+  return out;
+}
+
+}  // namespace errfield::compensation

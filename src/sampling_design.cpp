@@ -1,0 +1,229 @@
+#include "errfield/sampling_design.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include <Eigen/Cholesky>
+
+#include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
+
+namespace errfield {
+
+namespace {
+
+void check_locations(const Eigen::MatrixXd& x, const char* what) {
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    for (Eigen::Index k = 0; k < x.cols(); ++k)
+      if (!std::isfinite(x(i, k)))
+        throw ArgumentError(std::string(what) + " row " + std::to_string(i) + ", coordinate " + std::to_string(k) +
+                            ": " + format_number(x(i, k)) + "; expected a finite number");
+}
+
+void check_columns(const Eigen::MatrixXd& candidates, const Eigen::MatrixXd& measured) {
+  if (measured.rows() > 0 && measured.cols() != candidates.cols())
+    throw ArgumentError("measured locations have " + std::to_string(measured.cols()) + " coordinates, the candidates " +
+                        std::to_string(candidates.cols()));
+  check_locations(candidates, "candidate");
+  check_locations(measured, "measured location");
+}
+
+/// Rows of `x` divided by the per-axis scale (its standard deviation over `x` by default).
+Eigen::RowVectorXd axis_scales(const Eigen::MatrixXd& x, const std::vector<double>& given) {
+  Eigen::RowVectorXd s(x.cols());
+  if (!given.empty()) {
+    if (static_cast<Eigen::Index>(given.size()) != x.cols())
+      throw ArgumentError("axis_scale: " + std::to_string(given.size()) + " scales for " + std::to_string(x.cols()) +
+                          " coordinates");
+    for (Eigen::Index k = 0; k < x.cols(); ++k) {
+      if (!(given[static_cast<std::size_t>(k)] > 0.0 && std::isfinite(given[static_cast<std::size_t>(k)])))
+        throw ArgumentError("axis_scale[" + std::to_string(k) + "]: " + format_number(given[static_cast<std::size_t>(k)]) +
+                            "; expected a finite scale > 0");
+      s[k] = given[static_cast<std::size_t>(k)];
+    }
+    return s;
+  }
+  for (Eigen::Index k = 0; k < x.cols(); ++k) {
+    const double mean = x.col(k).mean();
+    const double sd = x.rows() > 1 ? std::sqrt((x.col(k).array() - mean).square().sum() / static_cast<double>(x.rows() - 1)) : 0.0;
+    s[k] = sd > 0.0 ? sd : 1.0;
+  }
+  return s;
+}
+
+/// Greedy farthest-point order on already scaled rows; `start_distance2` (squared distance of each
+/// row to the measured set) may be empty, then the first pick is the row nearest the centroid.
+std::vector<std::size_t> farthest_points(const Eigen::MatrixXd& z, Eigen::VectorXd nearest2, std::size_t count) {
+  const Eigen::Index n = z.rows();
+  std::vector<std::size_t> order;
+  count = std::min<std::size_t>(count, static_cast<std::size_t>(n));
+  if (count == 0) return order;
+  std::vector<char> taken(static_cast<std::size_t>(n), 0);
+  auto take = [&](Eigen::Index i) {
+    order.push_back(static_cast<std::size_t>(i));
+    taken[static_cast<std::size_t>(i)] = 1;
+    nearest2 = nearest2.cwiseMin((z.rowwise() - z.row(i)).rowwise().squaredNorm());
+  };
+  if (nearest2.size() == 0) {
+    // Nothing measured: start at the row nearest the centroid (a deterministic, central start).
+    const Eigen::RowVectorXd centroid = z.colwise().mean();
+    Eigen::Index first = 0;
+    (z.rowwise() - centroid).rowwise().squaredNorm().minCoeff(&first);
+    nearest2 = Eigen::VectorXd::Constant(n, std::numeric_limits<double>::infinity());
+    take(first);
+  }
+  while (order.size() < count) {
+    Eigen::Index best = -1;
+    double best_d = -1.0;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!taken[static_cast<std::size_t>(i)] && nearest2[i] > best_d) best_d = nearest2[i], best = i;
+    take(best);
+  }
+  return order;
+}
+
+Eigen::VectorXd squared_distance_to_set(const Eigen::MatrixXd& z, const Eigen::MatrixXd& set) {
+  Eigen::VectorXd d = Eigen::VectorXd::Constant(z.rows(), std::numeric_limits<double>::infinity());
+  for (Eigen::Index j = 0; j < set.rows(); ++j) d = d.cwiseMin((z.rowwise() - set.row(j)).rowwise().squaredNorm());
+  return d;
+}
+
+/// The locations mapped by the model's anisotropy, so that the lag is a plain Euclidean distance.
+Eigen::MatrixXd mapped(const Eigen::MatrixXd& x, const Anisotropy& a) {
+  if (a.isotropic()) return x;
+  if (a.dimension() != x.cols())
+    throw ArgumentError("the model's anisotropy " + a.to_string() + " is for " + std::to_string(a.dimension()) +
+                        " coordinates, the locations have " + std::to_string(x.cols()));
+  Eigen::MatrixXd out(x.rows(), x.cols());
+  Eigen::VectorXd in(x.cols()), o(x.cols());
+  for (Eigen::Index i = 0; i < x.rows(); ++i) {
+    in = x.row(i).transpose();
+    a.apply(in.data(), o.data(), static_cast<int>(x.cols()));
+    out.row(i) = o.transpose();
+  }
+  return out;
+}
+
+/// Prior covariance of the field plus the constant mean's variance, between the rows of a and b.
+struct PriorCovariance {
+  VariogramModel isotropic;
+  double field_variance = 0.0;  ///< structured sill (nugget excluded): C(0) of the noise-free field
+  double mean_variance = 0.0;
+  double operator()(double h) const {
+    return mean_variance + (h > 0.0 ? isotropic.sill() - isotropic.gamma(h) : field_variance);
+  }
+  Eigen::MatrixXd between(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) const {
+    Eigen::MatrixXd k(a.rows(), b.rows());
+    for (Eigen::Index j = 0; j < b.rows(); ++j)
+      for (Eigen::Index i = 0; i < a.rows(); ++i) k(i, j) = (*this)((a.row(i) - b.row(j)).norm());
+    return k;
+  }
+};
+
+}  // namespace
+
+std::vector<std::size_t> select_maximin(const Eigen::MatrixXd& candidates, const Eigen::MatrixXd& measured,
+                                        const MaximinOptions& options) {
+  check_columns(candidates, measured);
+  if (candidates.rows() == 0) return {};
+  const Eigen::RowVectorXd s = axis_scales(candidates, options.axis_scale);
+  const Eigen::MatrixXd z = candidates.array().rowwise() / s.array();
+  Eigen::VectorXd nearest2;
+  if (measured.rows() > 0) nearest2 = squared_distance_to_set(z, measured.array().rowwise() / s.array());
+  return farthest_points(z, nearest2, options.count);
+}
+
+VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candidates, const Eigen::MatrixXd& measured,
+                                                   const VariogramModel& model,
+                                                   const VarianceReductionOptions& options) {
+  check_columns(candidates, measured);
+  if (!model.bounded())
+    throw ArgumentError("variance reduction needs a bounded variogram model (a covariance), got " + model.to_string());
+  if (!(options.mean_variance_factor > 0.0 && std::isfinite(options.mean_variance_factor)))
+    throw ArgumentError("mean_variance_factor: " + format_number(options.mean_variance_factor) + "; expected > 0");
+  if (options.max_references == 0) throw ArgumentError("max_references: expected at least 1");
+  VarianceReductionPlan plan;
+  const Eigen::Index C = candidates.rows();
+  if (C == 0) return plan;
+  const double nugget = model.nugget();
+  PriorCovariance k{model.isotropic_part(), model.sill() - nugget, 0.0};
+  if (!(k.field_variance > 0.0)) throw ArgumentError("the model has no structured variance (a pure nugget): " + model.to_string());
+  k.mean_variance = options.mean_variance_factor * k.field_variance;
+  // A measurement's noise; a nugget-free model gets a relative jitter so the systems stay solvable.
+  const double noise = nugget > 0.0 ? nugget : 1e-10 * k.field_variance;
+
+  const Eigen::MatrixXd xc = mapped(candidates, model.anisotropy());
+  const Eigen::MatrixXd xd = mapped(measured, model.anisotropy());
+  // References: every candidate, or an evenly spread subset (maximin in the mapped coordinates).
+  std::vector<std::size_t> ref_rows;
+  if (static_cast<std::size_t>(C) <= options.max_references) {
+    for (Eigen::Index i = 0; i < C; ++i) ref_rows.push_back(static_cast<std::size_t>(i));
+  } else {
+    MaximinOptions mo;
+    mo.count = options.max_references;
+    mo.axis_scale.assign(static_cast<std::size_t>(xc.cols()), 1.0);
+    ref_rows = select_maximin(xc, Eigen::MatrixXd(0, xc.cols()), mo);
+    std::sort(ref_rows.begin(), ref_rows.end());
+  }
+  const Eigen::Index R = static_cast<Eigen::Index>(ref_rows.size());
+  plan.references = ref_rows.size();
+  constexpr double kMaxBytes = 4.0 * 1024 * 1024 * 1024;
+  if (static_cast<double>(R) * static_cast<double>(C) * 8.0 > kMaxBytes)
+    throw ResourceError("variance reduction over " + std::to_string(R) + " references x " + std::to_string(C) +
+                        " candidates needs more than 4 GiB; lower max_references or the number of candidates");
+  Eigen::MatrixXd xr(R, xc.cols());
+  for (Eigen::Index i = 0; i < R; ++i) xr.row(i) = xc.row(static_cast<Eigen::Index>(ref_rows[static_cast<std::size_t>(i)]));
+
+  // Posterior after the measured locations: Σ(a,b) = k(a,b) − W_a' W_b, W = L⁻¹ K_D·, L L' = K_DD + noise I.
+  Eigen::MatrixXd cross = k.between(xr, xc);                 // Σ(R, C), updated in place
+  Eigen::VectorXd var_c = Eigen::VectorXd::Constant(C, k(0.0));  // Σ(c, c)
+  Eigen::VectorXd var_r = Eigen::VectorXd::Constant(R, k(0.0));  // Σ(r, r)
+  Eigen::MatrixXd w_c;  // M x C, kept for the candidate-candidate covariances of later picks
+  if (xd.rows() > 0) {
+    Eigen::MatrixXd kdd = k.between(xd, xd);
+    kdd.diagonal().array() += noise;
+    const Eigen::LLT<Eigen::MatrixXd> llt(kdd);
+    if (llt.info() != Eigen::Success)
+      throw ArgumentError("the measured locations' covariance is not positive definite under " + model.to_string());
+    w_c = llt.matrixL().solve(k.between(xd, xc));
+    const Eigen::MatrixXd w_r = llt.matrixL().solve(k.between(xd, xr));
+    cross.noalias() -= w_r.transpose() * w_c;
+    var_c -= w_c.colwise().squaredNorm().transpose();
+    var_r -= w_r.colwise().squaredNorm().transpose();
+  }
+  plan.predicted_mse.push_back(xd.rows() > 0 ? var_r.mean() + nugget : std::numeric_limits<double>::quiet_NaN());
+
+  const std::size_t total = std::min<std::size_t>(options.count + options.lookahead, static_cast<std::size_t>(C));
+  std::vector<char> taken(static_cast<std::size_t>(C), 0);
+  std::vector<Eigen::VectorXd> u_c;  // the picks' rank-one updates over the candidates
+  for (std::size_t pick = 0; pick < total; ++pick) {
+    const Eigen::VectorXd reduction = cross.colwise().squaredNorm().transpose();
+    Eigen::Index best = -1;
+    double best_score = -1.0;
+    for (Eigen::Index c = 0; c < C; ++c) {
+      if (taken[static_cast<std::size_t>(c)]) continue;
+      const double score = reduction[c] / (std::max(var_c[c], 0.0) + noise);
+      if (score > best_score) best_score = score, best = c;
+    }
+    taken[static_cast<std::size_t>(best)] = 1;
+    (pick < options.count ? plan.chosen : plan.lookahead_rows).push_back(static_cast<std::size_t>(best));
+    // Σ(C, best): prior, minus the measured locations' part, minus the earlier picks' parts.
+    Eigen::VectorXd col(C);
+    for (Eigen::Index c = 0; c < C; ++c) col[c] = k((xc.row(c) - xc.row(best)).norm());
+    if (w_c.size()) col.noalias() -= w_c.transpose() * w_c.col(best);
+    for (const Eigen::VectorXd& u : u_c) col -= u[best] * u;
+    const double denominator = std::sqrt(std::max(var_c[best], 0.0) + noise);
+    const Eigen::VectorXd uc = col / denominator;
+    const Eigen::VectorXd ur = cross.col(best) / denominator;
+    cross.noalias() -= ur * uc.transpose();
+    var_c -= uc.cwiseAbs2();
+    var_r -= ur.cwiseAbs2();
+    u_c.push_back(uc);
+    plan.predicted_mse.push_back(var_r.cwiseMax(0.0).mean() + nugget);
+  }
+  return plan;
+}
+
+}  // namespace errfield

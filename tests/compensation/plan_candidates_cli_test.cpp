@@ -1,0 +1,156 @@
+// `errfield plan --candidates` (issue 21): the next poses to measure from a pool, with and without a
+// fitted model, on SIMULATED data of a KR16 (scattered joints, not the built-in grid set-up).
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "errfield/csv_table.hpp"
+#include "support/cli_harness.hpp"
+
+namespace errfield {
+namespace plan_candidates_cli_test {
+
+constexpr const char* kBox = "-60,60,-100,-40,20,110,-90,90,30,100,-90,90";
+
+class PlanCandidates : public testing::CliTest {
+ protected:
+  /// A SIMULATED pool of `n` KR16 poses (already "measured": mx,my,mz), a first batch of it in
+  /// first.csv (rows 1..k), and held-out poses of the same robot in hold.csv.
+  void make_pool(int n) {
+    const auto r = run("simulate --robot kr16 --seed 5 --sample scattered:" + std::to_string(n) + " --joint-box " + kBox +
+                       " --measure positions --joint-decimals 3 --robot-out r.json --out all.csv");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  void take_rows(const std::string& in, const std::string& out, std::size_t from, std::size_t to) {
+    rewrite(in, out, [](const CsvTable&, std::size_t, std::vector<std::string>&) {}, [](const std::string&) { return true; },
+            [from, to](std::size_t i) { return i >= from && i < to; });
+  }
+  std::vector<std::string> points(const std::string& file) {
+    const CsvTable t = CsvTable::read(path(file));
+    std::vector<std::string> p;
+    for (std::size_t i = 0; i < t.row_count(); ++i) p.push_back(t.row(i)[t.column_index("point")]);
+    return p;
+  }
+};
+
+TEST_F(PlanCandidates, WithoutAModelChoosesSpreadPosesNeverMeasuredKeepingEveryColumn) {
+  make_pool(160);
+  take_rows("all.csv", "pool.csv", 1, 161);  // the targets (row 0 is the base point)
+  take_rows("all.csv", "measured.csv", 1, 21);
+  const auto r = run("plan --robot r.json --candidates pool.csv --count 30 --data measured.csv --out next.csv");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("maximin"), std::string::npos) << r.out;
+  const CsvTable pool = CsvTable::read(path("pool.csv")), next = CsvTable::read(path("next.csv"));
+  ASSERT_EQ(next.row_count(), 30u);
+  EXPECT_EQ(next.header(), pool.header());  // all the pool's columns, as they were
+  const auto measured = points("measured.csv");
+  const std::set<std::string> done(measured.begin(), measured.end());
+  std::set<std::string> chosen;
+  for (const auto& p : points("next.csv")) {
+    EXPECT_FALSE(done.count(p)) << p << " was measured already";
+    EXPECT_TRUE(chosen.insert(p).second) << p << " chosen twice";
+  }
+  // Each chosen row is the pool's row of that point, cell for cell.
+  for (std::size_t i = 0; i < next.row_count(); ++i) {
+    bool found = false;
+    for (std::size_t j = 0; j < pool.row_count() && !found; ++j) found = pool.row(j) == next.row(i);
+    EXPECT_TRUE(found) << "row " << i;
+  }
+  // Spread: the smallest distance between two chosen poses, each joint in units of its standard
+  // deviation over the candidates not yet measured (what the design scales by), is larger than in
+  // a random batch of the same size (the pool's order is random: scattered sampling).
+  std::vector<std::vector<double>> open;
+  for (std::size_t i = 0; i < pool.row_count(); ++i)
+    if (!done.count(pool.row(i)[pool.column_index("point")])) {
+      std::vector<double> v;
+      for (int k = 1; k <= 6; ++k) v.push_back(pool.numeric_cell(i, pool.column_index("q" + std::to_string(k))));
+      open.push_back(v);
+    }
+  std::vector<double> sd(6);
+  for (int k = 0; k < 6; ++k) {
+    double m = 0.0, ss = 0.0;
+    for (const auto& v : open) m += v[k] / static_cast<double>(open.size());
+    for (const auto& v : open) ss += (v[k] - m) * (v[k] - m);
+    sd[static_cast<std::size_t>(k)] = std::sqrt(ss / static_cast<double>(open.size() - 1));
+  }
+  auto min_distance = [&](const CsvTable& t) {
+    double best = 1e300;
+    for (std::size_t i = 0; i < t.row_count(); ++i)
+      for (std::size_t j = i + 1; j < t.row_count(); ++j) {
+        double d = 0.0;
+        for (int k = 1; k <= 6; ++k) {
+          const std::size_t c = t.column_index("q" + std::to_string(k));
+          const double x = (t.numeric_cell(i, c) - t.numeric_cell(j, c)) / sd[static_cast<std::size_t>(k - 1)];
+          d += x * x;
+        }
+        best = std::min(best, std::sqrt(d));
+      }
+    return best;
+  };
+  take_rows("pool.csv", "random30.csv", 20, 50);  // 30 rows not measured, in the pool's random order
+  EXPECT_GT(min_distance(next), 1.5 * min_distance(CsvTable::read(path("random30.csv"))));
+  // Deterministic.
+  ASSERT_EQ(run("plan --robot r.json --candidates pool.csv --count 30 --data measured.csv --out again.csv").exit_code, 0);
+  EXPECT_EQ(read("again.csv"), read("next.csv"));
+}
+
+TEST_F(PlanCandidates, WithAModelPredictsTheRmsAndAnswersATarget) {
+  make_pool(200);
+  take_rows("all.csv", "pool.csv", 1, 201);
+  take_rows("all.csv", "measured.csv", 1, 81);
+  ASSERT_EQ(run("fit --robot r.json --data measured.csv --out m.json").exit_code, 0);
+  const auto r = run("plan --candidates pool.csv --count 20 --model m.json --data measured.csv --target-rms 1000 "
+                     "--summary-out s.json --out next.csv");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("variance reduction"), std::string::npos) << r.out;
+  const auto s = nlohmann::json::parse(read("s.json"));
+  const double now = s["predicted_rms_mm"]["now"].get<double>(), after = s["predicted_rms_mm"]["after"].get<double>();
+  EXPECT_GT(now, 0.0);
+  EXPECT_LT(after, now);  // 20 more readings never leave the prediction where it was
+  EXPECT_EQ(s["poses_for_target"].get<int>(), 0);  // 1 m is reached already
+  const auto measured = points("measured.csv");
+  for (const auto& p : points("next.csv")) EXPECT_EQ(std::count(measured.begin(), measured.end(), p), 0) << p;
+  // A target below the nugget is never reached: said, not a number made up.
+  const auto t = run("plan --candidates pool.csv --count 20 --model m.json --data measured.csv --target-rms 1e-6 "
+                     "--summary-out t.json --out next2.csv");
+  ASSERT_EQ(t.exit_code, 0) << t.err;
+  EXPECT_NE(t.out.find("not reached"), std::string::npos) << t.out;
+  EXPECT_TRUE(nlohmann::json::parse(read("t.json"))["poses_for_target"].is_null());
+}
+
+TEST_F(PlanCandidates, MisuseIsRefusedNamingTheOption) {
+  make_pool(40);
+  take_rows("all.csv", "pool.csv", 1, 41);
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {"plan --robot r.json --candidates pool.csv --out n.csv", "--count"},
+      {"plan --robot r.json --candidates pool.csv --count 5 --target-rms 0.1 --out n.csv", "--target-rms needs --model"},
+      {"plan --robot r.json --candidates pool.csv --count 5 --cube 0,0,0,100 --out n.csv", "--cube"},
+      {"plan --robot r.json --candidates pool.csv --count 50 --out n.csv", "--count 50"},
+      {"plan --robot r.json --count 5 --out n.csv", "--candidates"},
+      {"plan --robot r.json --candidates bad.csv --count 5 --out n.csv", "300"},
+  };
+  rewrite("pool.csv", "bad.csv", [](const CsvTable& t, std::size_t i, std::vector<std::string>& cells) {
+    if (i == 2) cells[t.column_index("q2")] = "300";  // beyond A2's [-155, 35]
+  });
+  for (const auto& [line, word] : cases) {
+    const auto r = run(line);
+    EXPECT_EQ(r.exit_code, 2) << line << "\n" << r.err;
+    EXPECT_NE(r.err.find(word), std::string::npos) << line << "\n" << r.err;
+    EXPECT_FALSE(std::filesystem::exists(path("n.csv"))) << line;
+  }
+  // A kinematic model has no field to plan for.
+  take_rows("all.csv", "measured.csv", 1, 31);
+  ASSERT_EQ(run("fit --robot r.json --data measured.csv --method kinematic --out k.json").exit_code, 0);
+  const auto k = run("plan --candidates pool.csv --count 5 --model k.json --data measured.csv --out n.csv");
+  EXPECT_EQ(k.exit_code, 2) << k.err;
+  EXPECT_NE(k.err.find("no error field"), std::string::npos) << k.err;
+}
+
+}  // namespace plan_candidates_cli_test
+}  // namespace errfield

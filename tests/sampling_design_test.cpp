@@ -1,0 +1,200 @@
+// Sampling designs (sampling_design.hpp) against independent computations written here: greedy
+// maximin by brute force, greedy variance reduction by refitting the Gaussian-process posterior
+// from scratch for every candidate, and the predicted mean squared error against the errors of an
+// ordinary-kriging predictor (Lagrange system, written here) on Gaussian fields drawn from the model.
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <gtest/gtest.h>
+
+#include "errfield/error.hpp"
+#include "errfield/sampling_design.hpp"
+
+namespace errfield {
+namespace sampling_design_test {
+
+Eigen::MatrixXd uniform_points(int n, int dim, double size, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, size);
+  Eigen::MatrixXd x(n, dim);
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < dim; ++k) x(i, k) = u(rng);
+  return x;
+}
+
+TEST(Maximin, EachPickIsTheFarthestFromEverythingBefore) {
+  const Eigen::MatrixXd pool = uniform_points(60, 2, 10.0, 1);
+  Eigen::MatrixXd measured = uniform_points(3, 2, 10.0, 2);
+  MaximinOptions o;
+  o.count = 12;
+  o.axis_scale = {1.0, 1.0};
+  const std::vector<std::size_t> picks = select_maximin(pool, measured, o);
+  ASSERT_EQ(picks.size(), 12u);
+  // Brute force: the min distance of every unpicked row to the measured and picked rows.
+  std::vector<Eigen::RowVectorXd> set;
+  for (int j = 0; j < measured.rows(); ++j) set.push_back(measured.row(j));
+  std::vector<bool> used(60, false);
+  for (std::size_t step = 0; step < picks.size(); ++step) {
+    int best = -1;
+    double best_d = -1;
+    for (int i = 0; i < 60; ++i) {
+      if (used[static_cast<std::size_t>(i)]) continue;
+      double d = std::numeric_limits<double>::infinity();
+      for (const auto& s : set) d = std::min(d, (pool.row(i) - s).norm());
+      if (d > best_d) best_d = d, best = i;
+    }
+    EXPECT_EQ(picks[step], static_cast<std::size_t>(best)) << "pick " << step;
+    used[static_cast<std::size_t>(best)] = true;
+    set.push_back(pool.row(best));
+  }
+}
+
+TEST(Maximin, DefaultScalesMakeUnitsIrrelevant) {
+  // The same pool in mm and in m along one axis: the default per-axis scale gives the same picks.
+  Eigen::MatrixXd pool = uniform_points(40, 3, 100.0, 4);
+  Eigen::MatrixXd metres = pool;
+  metres.col(1) /= 1000.0;
+  MaximinOptions o;
+  o.count = 10;
+  EXPECT_EQ(select_maximin(pool, Eigen::MatrixXd(0, 3), o), select_maximin(metres, Eigen::MatrixXd(0, 3), o));
+}
+
+TEST(Maximin, BadInputIsNamed) {
+  Eigen::MatrixXd pool = uniform_points(5, 2, 1.0, 1);
+  MaximinOptions o;
+  o.count = 2;
+  EXPECT_THROW(select_maximin(pool, Eigen::MatrixXd::Zero(2, 3), o), ArgumentError);
+  pool(3, 1) = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(select_maximin(pool, Eigen::MatrixXd(0, 2), o), ArgumentError);
+}
+
+/// Covariance of the test model exp(sill=1,range=2)+nug(0.1) with the mean's prior variance added,
+/// as the design defines it (sampling_design.hpp); h = 0 at distinct points counts as h > 0 here
+/// since the test's points are distinct.
+struct TestCovariance {
+  double field = 1.0, range = 2.0, nugget = 0.1, mean_variance = 100.0;
+  double operator()(const Eigen::RowVectorXd& a, const Eigen::RowVectorXd& b) const {
+    return mean_variance + field * std::exp(-(a - b).norm() / range);
+  }
+};
+
+/// Mean over `refs` of the posterior variance of a new reading given readings at `set`.
+double brute_force_mse(const Eigen::MatrixXd& refs, const std::vector<Eigen::RowVectorXd>& set, const TestCovariance& k) {
+  const int m = static_cast<int>(set.size());
+  Eigen::MatrixXd kss(m, m);
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j) kss(i, j) = k(set[static_cast<std::size_t>(i)], set[static_cast<std::size_t>(j)]) + (i == j ? k.nugget : 0.0);
+  const Eigen::MatrixXd inv = kss.inverse();
+  double sum = 0.0;
+  for (int r = 0; r < refs.rows(); ++r) {
+    Eigen::VectorXd kr(m);
+    for (int i = 0; i < m; ++i) kr[i] = k(refs.row(r), set[static_cast<std::size_t>(i)]);
+    sum += k(refs.row(r), refs.row(r)) - kr.dot(inv * kr);
+  }
+  return sum / static_cast<double>(refs.rows()) + k.nugget;
+}
+
+TEST(VarianceReduction, GreedyPicksAndPredictionsMatchABruteForcePosterior) {
+  const Eigen::MatrixXd pool = uniform_points(25, 2, 8.0, 7);
+  const Eigen::MatrixXd measured = uniform_points(4, 2, 8.0, 8);
+  const VariogramModel model = VariogramModel::parse("exp(sill=1,range=2)+nug(0.1)");
+  VarianceReductionOptions o;
+  o.count = 5;
+  o.lookahead = 2;
+  o.max_references = 100;  // every candidate is a reference
+  const VarianceReductionPlan plan = select_by_variance_reduction(pool, measured, model, o);
+  ASSERT_EQ(plan.chosen.size(), 5u);
+  ASSERT_EQ(plan.lookahead_rows.size(), 2u);
+  ASSERT_EQ(plan.predicted_mse.size(), 8u);
+  EXPECT_EQ(plan.references, 25u);
+  const TestCovariance k;
+  std::vector<Eigen::RowVectorXd> set;
+  for (int j = 0; j < measured.rows(); ++j) set.push_back(measured.row(j));
+  EXPECT_NEAR(plan.predicted_mse[0], brute_force_mse(pool, set, k), 1e-9);
+  std::vector<std::size_t> all = plan.chosen;
+  all.insert(all.end(), plan.lookahead_rows.begin(), plan.lookahead_rows.end());
+  std::vector<bool> used(25, false);
+  for (std::size_t step = 0; step < all.size(); ++step) {
+    // The candidate whose reading lowers the mean posterior variance most, found by refitting.
+    int best = -1;
+    double best_mse = std::numeric_limits<double>::infinity();
+    for (int c = 0; c < 25; ++c) {
+      if (used[static_cast<std::size_t>(c)]) continue;
+      auto with = set;
+      with.push_back(pool.row(c));
+      const double mse = brute_force_mse(pool, with, k);
+      if (mse < best_mse - 1e-12) best_mse = mse, best = c;
+    }
+    EXPECT_EQ(all[step], static_cast<std::size_t>(best)) << "pick " << step;
+    used[static_cast<std::size_t>(best)] = true;
+    set.push_back(pool.row(best));
+    EXPECT_NEAR(plan.predicted_mse[step + 1], best_mse, 1e-9) << "after pick " << step;
+  }
+  // More measurements never raise the prediction.
+  for (std::size_t i = 1; i < plan.predicted_mse.size(); ++i) EXPECT_LE(plan.predicted_mse[i], plan.predicted_mse[i - 1]);
+}
+
+TEST(VarianceReduction, PredictedErrorHoldsForOrdinaryKrigingOnDrawsOfTheModel) {
+  // Gaussian fields of the model with a constant mean the predictor does not know (5 mm), read
+  // with the nugget as noise; ordinary kriging (written here) predicts a new reading at each
+  // reference. The mean squared error over draws is what predicted_mse[0] claims. Its relative
+  // standard error over D independent draws is at most sqrt(2 / D) (a chi-square mean; the
+  // references of one draw are positively correlated, so pooling them does not lower it): with
+  // D = 1500, 3.7 %; the check allows 4 of them, and the large-mean-variance approximation of
+  // ordinary kriging (under 1 % here).
+  const Eigen::MatrixXd samples = uniform_points(20, 2, 8.0, 11), refs = uniform_points(30, 2, 8.0, 12);
+  const VariogramModel model = VariogramModel::parse("exp(sill=1,range=2)+nug(0.1)");
+  VarianceReductionOptions o;
+  o.count = 1;
+  const double predicted = select_by_variance_reduction(refs, samples, model, o).predicted_mse[0];
+  const int n = 20, r = 30;
+  Eigen::MatrixXd all(n + r, 2);
+  all << samples, refs;
+  auto cov = [&](int i, int j) { return std::exp(-(all.row(i) - all.row(j)).norm() / 2.0); };
+  Eigen::MatrixXd c(n + r, n + r);
+  for (int i = 0; i < n + r; ++i)
+    for (int j = 0; j < n + r; ++j) c(i, j) = cov(i, j);
+  const Eigen::MatrixXd l = Eigen::LLT<Eigen::MatrixXd>(c).matrixL();
+  // Ordinary kriging weights for each reference: [C_ss + nI, 1; 1', 0] [w; mu] = [c_sr; 1].
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  a.topLeftCorner(n, n) = c.topLeftCorner(n, n) + 0.1 * Eigen::MatrixXd::Identity(n, n);
+  a.block(0, n, n, 1).setOnes();
+  a.block(n, 0, 1, n).setOnes();
+  Eigen::MatrixXd rhs(n + 1, r);
+  rhs.topRows(n) = c.block(0, n, n, r);
+  rhs.row(n).setOnes();
+  const Eigen::MatrixXd w = a.partialPivLu().solve(rhs).topRows(n);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const int draws = 1500;
+  double sum = 0.0;
+  for (int d = 0; d < draws; ++d) {
+    Eigen::VectorXd z(n + r);
+    for (int i = 0; i < n + r; ++i) z[i] = g(rng);
+    Eigen::VectorXd field = (l * z).array() + 5.0;
+    Eigen::VectorXd readings(n + r);
+    for (int i = 0; i < n + r; ++i) readings[i] = field[i] + std::sqrt(0.1) * g(rng);
+    const Eigen::VectorXd prediction = w.transpose() * readings.head(n);
+    sum += (readings.tail(r) - prediction).squaredNorm() / r;
+  }
+  const double observed = sum / draws;
+  EXPECT_NEAR(observed / predicted, 1.0, 4.0 * std::sqrt(2.0 / draws) + 0.01) << observed << " vs " << predicted;
+}
+
+TEST(VarianceReduction, RefusesModelsWithoutACovariance) {
+  const Eigen::MatrixXd pool = uniform_points(5, 2, 1.0, 1);
+  VarianceReductionOptions o;
+  o.count = 1;
+  EXPECT_THROW(select_by_variance_reduction(pool, Eigen::MatrixXd(0, 2), VariogramModel::parse("lin(sill=1)"), o),
+               ArgumentError);
+  EXPECT_THROW(select_by_variance_reduction(pool, Eigen::MatrixXd(0, 2), VariogramModel::parse("nug(1)"), o),
+               ArgumentError);
+}
+
+}  // namespace sampling_design_test
+}  // namespace errfield
