@@ -48,6 +48,7 @@ def main():
     ap.add_argument("--batch", type=int, default=40)
     ap.add_argument("--batches", type=int, default=6)
     ap.add_argument("--designs", default="random,maximin,adaptive")
+    ap.add_argument("--local-scale", default="on")
     ap.add_argument("--extra", default="--joint-box -150,150,-130,-30,70,150,-90,90,-110,110,-180,180 "
                                         "--systematic realistic --orientation-spread 30 --joint-decimals 3")
     a = ap.parse_args()
@@ -110,7 +111,7 @@ def main():
             if model:
                 summ = os.path.join(W, f"adaptive_plan_{n}.json")
                 cmd += ["--model", model, "--data", os.path.join(W, f"adaptive_{n - a.batch}.csv"),
-                        "--summary-out", summ]
+                        "--summary-out", summ, "--local-scale", a.local_scale]
             run(cmd)
             if model:
                 predicted = json.load(open(summ))["predicted_rms_mm"]["after"]
@@ -120,6 +121,7 @@ def main():
             own = os.path.join(W, f"adaptive_own_{n}.json")
             run([E, "plan", "--robot", robot, "--candidates", os.path.join(W, "pool.csv"), "--count", "1",
                  "--model", model, "--data", os.path.join(W, f"adaptive_{n}.csv"), "--summary-out", own,
+                 "--local-scale", a.local_scale,
                  "--out", os.path.join(W, "own_next.csv")])
             row["predicted_by_own_model_mm"] = json.load(open(own))["predicted_rms_mm"]["now"]
             print(f"          predicted by its own model {row['predicted_by_own_model_mm']:.4f} mm", flush=True)

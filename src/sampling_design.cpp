@@ -169,6 +169,21 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
   }
   const Eigen::Index R = static_cast<Eigen::Index>(ref_rows.size());
   plan.references = ref_rows.size();
+  Eigen::VectorXd scale_c = Eigen::VectorXd::Ones(C);
+  if (!options.variance_scale.empty()) {
+    if (static_cast<Eigen::Index>(options.variance_scale.size()) != C)
+      throw ArgumentError("variance_scale: " + std::to_string(options.variance_scale.size()) + " values for " +
+                          std::to_string(C) + " candidates");
+    for (Eigen::Index c = 0; c < C; ++c) {
+      const double v = options.variance_scale[static_cast<std::size_t>(c)];
+      if (!(v >= 0.0 && std::isfinite(v)))
+        throw ArgumentError("variance_scale[" + std::to_string(c) + "]: " + format_number(v) + "; expected >= 0");
+      scale_c[c] = v;
+    }
+  }
+  Eigen::VectorXd scale_r(R);
+  for (Eigen::Index i = 0; i < R; ++i) scale_r[i] = scale_c[static_cast<Eigen::Index>(ref_rows[static_cast<std::size_t>(i)])];
+  const double scale_mean = scale_r.mean();
   constexpr double kMaxBytes = 4.0 * 1024 * 1024 * 1024;
   if (static_cast<double>(R) * static_cast<double>(C) * 8.0 > kMaxBytes)
     throw ResourceError("variance reduction over " + std::to_string(R) + " references x " + std::to_string(C) +
@@ -193,13 +208,15 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
     var_c -= w_c.colwise().squaredNorm().transpose();
     var_r -= w_r.colwise().squaredNorm().transpose();
   }
-  plan.predicted_mse.push_back(xd.rows() > 0 ? var_r.mean() + nugget : std::numeric_limits<double>::quiet_NaN());
+  // A new reading's error variance at r: (field + nugget) times the local scale.
+  auto mse = [&] { return (scale_r.array() * var_r.cwiseMax(0.0).array()).mean() + scale_mean * nugget; };
+  plan.predicted_mse.push_back(xd.rows() > 0 ? mse() : std::numeric_limits<double>::quiet_NaN());
 
   const std::size_t total = std::min<std::size_t>(options.count + options.lookahead, static_cast<std::size_t>(C));
   std::vector<char> taken(static_cast<std::size_t>(C), 0);
   std::vector<Eigen::VectorXd> u_c;  // the picks' rank-one updates over the candidates
   for (std::size_t pick = 0; pick < total; ++pick) {
-    const Eigen::VectorXd reduction = cross.colwise().squaredNorm().transpose();
+    const Eigen::VectorXd reduction = (cross.array().square().colwise() * scale_r.array()).colwise().sum().transpose();
     Eigen::Index best = -1;
     double best_score = -1.0;
     for (Eigen::Index c = 0; c < C; ++c) {
@@ -221,9 +238,49 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
     var_c -= uc.cwiseAbs2();
     var_r -= ur.cwiseAbs2();
     u_c.push_back(uc);
-    plan.predicted_mse.push_back(var_r.cwiseMax(0.0).mean() + nugget);
+    plan.predicted_mse.push_back(mse());
   }
   return plan;
+}
+
+std::vector<double> local_error_scale(const Eigen::MatrixXd& samples, const Eigen::MatrixXd& values,
+                                      const VariogramModel& model, const Eigen::MatrixXd& query,
+                                      std::size_t neighbours, double mean_variance_factor) {
+  check_columns(query, samples);
+  if (values.rows() != samples.rows() || values.cols() < 1)
+    throw ArgumentError("local_error_scale: " + std::to_string(values.rows()) + " value rows for " +
+                        std::to_string(samples.rows()) + " samples");
+  if (!model.bounded()) throw ArgumentError("local_error_scale needs a bounded variogram model, got " + model.to_string());
+  const Eigen::Index n = samples.rows();
+  std::vector<double> scale(static_cast<std::size_t>(query.rows()), 1.0);
+  if (n < 3 || neighbours == 0) return scale;
+  const double nugget = model.nugget();
+  PriorCovariance k{model.isotropic_part(), model.sill() - nugget, 0.0};
+  if (!(k.field_variance > 0.0)) return scale;
+  k.mean_variance = mean_variance_factor * k.field_variance;
+  const Eigen::MatrixXd xs = mapped(samples, model.anisotropy()), xq = mapped(query, model.anisotropy());
+  Eigen::MatrixXd kk = k.between(xs, xs);
+  kk.diagonal().array() += nugget > 0.0 ? nugget : 1e-10 * k.field_variance;
+  const Eigen::LLT<Eigen::MatrixXd> llt(kk);
+  if (llt.info() != Eigen::Success) return scale;
+  const Eigen::MatrixXd inverse = llt.solve(Eigen::MatrixXd::Identity(n, n));
+  const Eigen::MatrixXd alpha = inverse * values;
+  // Leave-one-out (Dubrule): residual_i = alpha_i / inv_ii, predictive variance 1 / inv_ii.
+  Eigen::VectorXd z2(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double d = inverse(i, i);
+    z2[i] = (alpha.row(i) / d).squaredNorm() * d / static_cast<double>(values.cols());
+  }
+  const std::size_t m = std::min<std::size_t>(neighbours, static_cast<std::size_t>(n));
+  std::vector<std::pair<double, Eigen::Index>> d(static_cast<std::size_t>(n));
+  for (Eigen::Index q = 0; q < xq.rows(); ++q) {
+    for (Eigen::Index i = 0; i < n; ++i) d[static_cast<std::size_t>(i)] = {(xs.row(i) - xq.row(q)).squaredNorm(), i};
+    std::partial_sort(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(m), d.end());
+    double sum = 0.0;
+    for (std::size_t j = 0; j < m; ++j) sum += z2[d[j].second];
+    scale[static_cast<std::size_t>(q)] = std::clamp(sum / static_cast<double>(m), 0.1, 10.0);
+  }
+  return scale;
 }
 
 }  // namespace errfield

@@ -3,6 +3,7 @@
 // from scratch for every candidate, and the predicted mean squared error against the errors of an
 // ordinary-kriging predictor (Lagrange system, written here) on Gaussian fields drawn from the model.
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -194,6 +195,69 @@ TEST(VarianceReduction, RefusesModelsWithoutACovariance) {
                ArgumentError);
   EXPECT_THROW(select_by_variance_reduction(pool, Eigen::MatrixXd(0, 2), VariogramModel::parse("nug(1)"), o),
                ArgumentError);
+}
+
+TEST(LocalErrorScale, IsTheNeighbourhoodMeanOfLeaveOneOutRatiosFoundByRefitting) {
+  // 12 samples with 2 components; query points; 3 neighbours. Each sample's leave-one-out residual
+  // and predictive variance computed by refitting the posterior without it (inverting the 11 x 11
+  // system), in the test's own covariance (TestCovariance: the model with the mean's variance).
+  const Eigen::MatrixXd samples = uniform_points(12, 2, 8.0, 21), query = uniform_points(5, 2, 8.0, 22);
+  Eigen::MatrixXd values(12, 2);
+  std::mt19937 rng(9);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (int i = 0; i < 12; ++i) values(i, 0) = 2.0 + g(rng), values(i, 1) = -1.0 + 3.0 * g(rng);
+  const VariogramModel model = VariogramModel::parse("exp(sill=1,range=2)+nug(0.1)");
+  const std::vector<double> scale = local_error_scale(samples, values, model, query, 3);
+  ASSERT_EQ(scale.size(), 5u);
+  const TestCovariance k;
+  std::vector<double> ratio(12);
+  for (int i = 0; i < 12; ++i) {
+    std::vector<int> rest;
+    for (int j = 0; j < 12; ++j)
+      if (j != i) rest.push_back(j);
+    Eigen::MatrixXd a(11, 11);
+    Eigen::VectorXd b(11);
+    for (int p = 0; p < 11; ++p) {
+      for (int q = 0; q < 11; ++q) a(p, q) = k(samples.row(rest[p]), samples.row(rest[q])) + (p == q ? k.nugget : 0.0);
+      b[p] = k(samples.row(i), samples.row(rest[p]));
+    }
+    const Eigen::VectorXd w = a.inverse() * b;
+    const double variance = k(samples.row(i), samples.row(i)) + k.nugget - b.dot(w);
+    double z2 = 0.0;
+    for (int c = 0; c < 2; ++c) {
+      double prediction = 0.0;
+      for (int p = 0; p < 11; ++p) prediction += w[p] * values(rest[p], c);
+      z2 += (values(i, c) - prediction) * (values(i, c) - prediction) / variance;
+    }
+    ratio[static_cast<std::size_t>(i)] = z2 / 2.0;
+  }
+  for (int q = 0; q < 5; ++q) {
+    std::vector<std::pair<double, int>> d;
+    for (int i = 0; i < 12; ++i) d.push_back({(samples.row(i) - query.row(q)).norm(), i});
+    std::sort(d.begin(), d.end());
+    const double expected = std::clamp((ratio[d[0].second] + ratio[d[1].second] + ratio[d[2].second]) / 3.0, 0.1, 10.0);
+    EXPECT_NEAR(scale[static_cast<std::size_t>(q)], expected, 1e-9 * expected) << "query " << q;
+  }
+}
+
+TEST(VarianceReduction, AVarianceScaleWeightsThePicksAndThePrediction) {
+  // Scaling every candidate's variance by 2 doubles the prediction and keeps the picks; scaling one
+  // half of the pool up draws the picks there.
+  const Eigen::MatrixXd pool = uniform_points(40, 2, 8.0, 31), measured = uniform_points(5, 2, 8.0, 32);
+  const VariogramModel model = VariogramModel::parse("exp(sill=1,range=2)+nug(0.1)");
+  VarianceReductionOptions o;
+  o.count = 6;
+  const VarianceReductionPlan plain = select_by_variance_reduction(pool, measured, model, o);
+  o.variance_scale.assign(40, 2.0);
+  const VarianceReductionPlan doubled = select_by_variance_reduction(pool, measured, model, o);
+  EXPECT_EQ(doubled.chosen, plain.chosen);
+  for (std::size_t i = 0; i < plain.predicted_mse.size(); ++i)
+    EXPECT_NEAR(doubled.predicted_mse[i], 2.0 * plain.predicted_mse[i], 1e-12);
+  for (int c = 0; c < 40; ++c) o.variance_scale[static_cast<std::size_t>(c)] = pool(c, 0) > 4.0 ? 10.0 : 0.1;
+  const VarianceReductionPlan right = select_by_variance_reduction(pool, measured, model, o);
+  int on_right = 0;
+  for (std::size_t c : right.chosen) on_right += pool(static_cast<Eigen::Index>(c), 0) > 4.0;
+  EXPECT_GE(on_right, 5);
 }
 
 }  // namespace sampling_design_test

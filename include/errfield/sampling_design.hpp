@@ -54,6 +54,11 @@ struct VarianceReductionOptions {
   /// that the variances are those of ordinary kriging to a few percent, small enough to keep the
   /// systems well conditioned.
   double mean_variance_factor = 100.0;
+  /// Per-candidate multiplier of the predictive variance (>= 0; empty = 1 everywhere): where the
+  /// model is known to under- or over-state the error (local_error_scale), the variance reduction
+  /// is weighted, and predicted_mse scaled, by it - a field whose errors grow at the workspace
+  /// edges is sampled more there.
+  std::vector<double> variance_scale;
 };
 
 struct VarianceReductionPlan {
@@ -72,6 +77,16 @@ struct VarianceReductionPlan {
 /// `model` are the measurement noise (added to every measurement, and to a new one in
 /// predicted_mse). `measured` may be empty. Throws ArgumentError on bad shapes, an unbounded model,
 /// or non-finite coordinates.
+/// How much larger the errors of `values` (N x K, rows at `samples`) are than the model says,
+/// locally, at each row of `query`: the leave-one-out squared residual of each sample divided by
+/// its leave-one-out predictive variance (nugget included; averaged over the K components), then
+/// averaged over the `neighbours` samples nearest each query point in the model's (anisotropy-
+/// mapped) coordinates, and clamped to [0.1, 10]. 1 where the model is right on average. Same
+/// covariance conventions as select_by_variance_reduction (the mean as a constant of large variance).
+std::vector<double> local_error_scale(const Eigen::MatrixXd& samples, const Eigen::MatrixXd& values,
+                                      const VariogramModel& model, const Eigen::MatrixXd& query,
+                                      std::size_t neighbours = 10, double mean_variance_factor = 100.0);
+
 VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candidates, const Eigen::MatrixXd& measured,
                                                    const VariogramModel& model,
                                                    const VarianceReductionOptions& options);

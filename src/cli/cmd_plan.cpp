@@ -33,6 +33,7 @@ struct PlanArgs {
   std::string candidates, model, data, summary_out;
   std::size_t count = 0;
   double target_rms = 0.0;
+  std::string local_scale = "on";
 };
 
 std::string three_digits(double v) {
@@ -91,6 +92,9 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
                      a.candidates);
   PoseSelectionOptions o;
   o.count = a.count;
+  if (a.local_scale != "on" && a.local_scale != "off")
+    throw ArgumentError("--local-scale: expected on or off, got '" + a.local_scale + "'");
+  o.local_scale = a.local_scale == "on";
   if (cmd->count("--target-rms")) o.target_rms_mm = a.target_rms;
   PoseSelection sel;
   naming_options([&] { sel = select_poses(open, measured, model ? &*model : nullptr, o); },
@@ -279,6 +283,11 @@ void add_plan_command(CLI::App& app) {
   cmd->add_option("--target-rms", a->target_rms,
                   "--candidates with --model: the 3-D RMS wanted (mm); says whether the prediction reaches it and "
                   "roughly how many more poses it needs");
+  cmd->add_option("--local-scale", a->local_scale,
+                  "--candidates with --model: on (default) weights the choice and the prediction by where the model's "
+                  "leave-one-out errors exceeded its variance (docs/robot.md, 'Which poses to measure'); off: the "
+                  "model's variance as it is")
+      ->capture_default_str();
   cmd->add_option("--summary-out", a->summary_out,
                   "--candidates: also write the design and predicted RMS (now, after, per pose) as JSON");
   cmd->add_option("--out", a->out,

@@ -74,6 +74,23 @@ PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
   const Eigen::MatrixXd pool = joint ? joint_rows(candidates) : position_rows(candidates, where);
   const Eigen::MatrixXd done = joint ? joint_rows(known) : position_rows(known, where);
   VarianceReductionOptions vo;
+  if (options.local_scale) {
+    // Where the model's own leave-one-out errors were larger than its variance said (e.g. the
+    // workspace edges of a robot whose errors grow there), weight the choice and the prediction.
+    const auto& fs = field.at("samples").at("joints_deg");
+    const auto& fv = field.at("values");
+    std::vector<robot::JointVector> sq;
+    for (const auto& q : fs) {
+      robot::JointVector v;
+      for (int k = 0; k < robot::kJointCount; ++k) v[k] = q.at(static_cast<std::size_t>(k)).get<double>();
+      sq.push_back(v);
+    }
+    Eigen::MatrixXd values(static_cast<Eigen::Index>(fv.size()), 3);
+    for (std::size_t i = 0; i < fv.size(); ++i)
+      for (int k = 0; k < 3; ++k) values(static_cast<Eigen::Index>(i), k) = fv.at(i).at(static_cast<std::size_t>(k)).get<double>();
+    const Eigen::MatrixXd xs = joint ? joint_rows(sq) : position_rows(sq, where);
+    vo.variance_scale = local_error_scale(xs, values, vm, pool);
+  }
   vo.count = options.count;
   vo.lookahead = options.target_rms_mm ? options.max_lookahead : 0;
   vo.max_references = options.max_references;

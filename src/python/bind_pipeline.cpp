@@ -16,6 +16,7 @@
 
 #include "errfield/atomic_file.hpp"
 #include "errfield/compensation/pipeline.hpp"
+#include "errfield/compensation/pose_selection.hpp"
 #include "errfield/compensation/prediction.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
@@ -206,6 +207,31 @@ py::dict validate_py(const PyModel& m, const py::object& data, const py::object&
   return d;
 }
 
+py::dict plan_py(const py::object& candidates, std::size_t count, const py::object& model, const py::object& measured,
+                 std::optional<double> target_rms, bool local_scale) {
+  const std::vector<JointVector> pool = joint_vectors_arg(candidates, "candidates");
+  const std::vector<JointVector> done =
+      measured.is_none() ? std::vector<JointVector>{} : joint_vectors_arg(measured, "measured");
+  const CompensationModel* cm = nullptr;
+  if (!model.is_none()) cm = &model.cast<const PyModel&>().loaded.model;
+  PoseSelectionOptions o;
+  o.count = count;
+  o.target_rms_mm = target_rms;
+  o.local_scale = local_scale;
+  PoseSelection sel;
+  {
+    py::gil_scoped_release release;
+    sel = select_poses(pool, done, cm, o);
+  }
+  py::dict d;
+  d["chosen"] = py::module_::import("numpy").attr("array")(py::cast(sel.chosen), "dtype"_a = "int64");
+  d["design"] = sel.design;
+  d["predicted_rms_mm"] = to_numpy(sel.predicted_rms_mm);
+  d["poses_for_target"] = sel.poses_for_target ? py::object(py::int_(*sel.poses_for_target)) : py::object(py::none());
+  d["conditioned_on"] = sel.conditioned_on;
+  return d;
+}
+
 }  // namespace
 
 void bind_pipeline(py::module_& m) {
@@ -254,6 +280,14 @@ void bind_pipeline(py::module_& m) {
         "configuration the solution keeps. max_correction: ceiling (mm) on move_mm, 0 = the CLI's default. Returns a dict: nq1..nq6, nx,ny,nz, pred_dx..dz, pred_dl, var_mm2 (new reading:\n"
         "field + nugget), p_inside (P(|3-D error| <= tolerance mm) of a new reading; distance models: the distance\n"
         "error), cmd_x..z, cq1..cq6 (NaN for refused targets: nothing to send), var_field_mm2, r95_mm and status.");
+  m.def("plan", &plan_py, py::arg("candidates"), py::kw_only(), py::arg("count"), py::arg("model") = py::none(),
+        py::arg("measured") = py::none(), py::arg("target_rms") = py::none(), py::arg("local_scale") = true,
+        "`errfield plan --candidates`: which poses to measure next. candidates: (N, 6) joints (deg) or a dict with\n"
+        "q1..q6 (drop the rows already measured first); measured: the poses measured so far (conditioned on, kept\n"
+        "away from). Without a model, maximin in joint space; with a CompensationModel (vector-kriging field), greedy\n"
+        "integrated variance reduction. Returns a dict: chosen (candidate rows, in measuring order), design,\n"
+        "predicted_rms_mm ([0] now, [k] after k more poses; model only), poses_for_target (target_rms given: poses\n"
+        "from now the prediction needs, None if not reached), conditioned_on. Releases the GIL.");
   m.def("validate", &validate_py, py::arg("model"), py::arg("data"), py::kw_only(), py::arg("robot") = py::none(),
         py::arg("base_points") = py::none(), py::arg("targets") = false,
         "`errfield validate` on held-out measurements (dict of columns). Returns a dict: points (the columns of\n"

@@ -289,6 +289,15 @@ def compensate(
     seed: ArrayLike | None = None,
     max_correction: float = 0.0,
 ) -> dict[str, Any]: ...
+def plan(
+    candidates: ArrayLike | Columns,
+    *,
+    count: int,
+    model: CompensationModel | None = None,
+    measured: ArrayLike | Columns | None = None,
+    target_rms: float | None = None,
+    local_scale: bool = True,
+) -> dict[str, Any]: ...
 def validate(
     model: CompensationModel,
     data: Columns,

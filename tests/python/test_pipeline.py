@@ -188,3 +188,38 @@ def test_pipeline_errors(sim, fitted):
     with pytest.raises(errfield.InputError) as e:
         errfield.fit(data)
     assert status == 2 and str(e.value).split(": ", 1)[1][:60] in err
+
+
+def test_plan_matches_cli(tmp_path):
+    # A SIMULATED KR16 pool; the first 40 rows measured: the same choice as `errfield plan`, with and
+    # without the model fitted on them, and the same predicted RMS.
+    run_cli("simulate", "--robot", "kr16", "--seed", "5", "--sample", "scattered:160", "--joint-box",
+            "-60,60,-100,-40,20,110,-90,90,30,100,-90,90", "--measure", "positions", "--out", tmp_path / "all.csv")
+    data = read_measurements(tmp_path / "all.csv")
+    targets = {k: v[1:] for k, v in data.items()}
+    measured = {k: v[:40] for k, v in targets.items()}
+    pool = {k: v[40:] for k, v in targets.items()}
+    write_csv(tmp_path / "measured.csv", {k: v for k, v in measured.items() if k not in ("point", "kind")})
+    # point columns for the CLI's matching by name
+    with open(tmp_path / "pool.csv", "w") as f:
+        names = ["point"] + [f"q{k}" for k in range(1, 7)]
+        f.write(",".join(names) + "\n")
+        for i in range(len(pool["q1"])):
+            f.write(",".join([pool["point"][i]] + [repr(float(pool[f"q{k}"][i])) for k in range(1, 7)]) + "\n")
+    run_cli("plan", "--robot", "kr16", "--candidates", tmp_path / "pool.csv", "--count", "12",
+            "--data", tmp_path / "measured.csv", "--out", tmp_path / "n.csv")
+    first = errfield.plan(pool, count=12, measured=measured)
+    assert list(read_csv(tmp_path / "n.csv")["point"]) == [pool["point"][i] for i in first["chosen"]]
+    assert first["poses_for_target"] is None and len(first["predicted_rms_mm"]) == 0
+    model = errfield.fit(measured, robot="kr16")
+    model.save(tmp_path / "m.json")
+    run_cli("plan", "--candidates", tmp_path / "pool.csv", "--count", "12", "--model", tmp_path / "m.json",
+            "--data", tmp_path / "measured.csv", "--target-rms", "0.01", "--summary-out", tmp_path / "s.json",
+            "--out", tmp_path / "n2.csv")
+    second = errfield.plan(pool, count=12, model=model, measured=measured, target_rms=0.01)
+    assert list(read_csv(tmp_path / "n2.csv")["point"]) == [pool["point"][i] for i in second["chosen"]]
+    s = json.loads((tmp_path / "s.json").read_text())
+    assert second["predicted_rms_mm"][0] == s["predicted_rms_mm"]["now"]
+    assert list(second["predicted_rms_mm"]) == s["predicted_rms_mm"]["by_pose"]
+    with pytest.raises(errfield.ArgumentError, match="count"):
+        errfield.plan(pool, count=0)

@@ -31,6 +31,9 @@ struct PoseSelectionOptions {
   std::optional<double> target_rms_mm;
   std::size_t max_lookahead = 600;
   std::size_t max_references = 1000;  ///< see VarianceReductionOptions
+  /// With a model: weight by where the model's leave-one-out errors exceeded its variance
+  /// (local_error_scale in sampling_design.hpp).
+  bool local_scale = true;
   /// Throws ArgumentError naming the field.
   void validate() const;
 };
