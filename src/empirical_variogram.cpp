@@ -44,6 +44,19 @@ BinConvention convention_from_name(std::string_view name) {
   throw ArgumentError("convention: unknown name '" + std::string(name) + "'; known: paper, gstat");
 }
 
+LagBins LagBins::gstat_default(const Eigen::MatrixXd& coordinates) {
+  double diagonal2 = 0.0;
+  if (coordinates.rows() > 0)
+    diagonal2 = (coordinates.colwise().maxCoeff() - coordinates.colwise().minCoeff()).squaredNorm();
+  // gstat's fraction is the constant 0.33333 (gl_fraction), not 1/3: its edges differ in the 6th digit.
+  constexpr double kGstatFraction = 0.33333;
+  const double cutoff = std::sqrt(diagonal2) * kGstatFraction;
+  if (!(cutoff > 0.0) || !std::isfinite(cutoff))
+    throw ArgumentError("lag bins: the locations span no distance (bounding-box diagonal " +
+                        format_number(std::sqrt(diagonal2)) + "); give the bins explicitly");
+  return uniform(0.0, cutoff, cutoff / 15.0);
+}
+
 LagBins LagBins::uniform(double lo, double max_lag, double width) {
   if (!std::isfinite(width) || !(width > 0.0))
     throw ArgumentError("lag bins: width = " + format_number(width) + "; expected a finite value > 0");

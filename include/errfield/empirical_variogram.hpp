@@ -75,6 +75,13 @@ class LagBins {
   /// Explicit edges e_0 < e_1 < ... (at least two, finite, e_0 >= 0). Throws ArgumentError
   /// naming the first offending edge by index.
   static LagBins from_edges(std::vector<double> edges);
+  /// R gstat's default when no bins are given: cutoff = 0.33333 x the diagonal of the
+  /// coordinates' bounding box (any number of columns, one location per row), 15 bins of width
+  /// cutoff / 15 from 0 - gstat's `variogram(z ~ 1, data)` in 2-D exactly (use
+  /// BinConvention::Gstat for its boundaries); in other dimensions the same rule over all
+  /// coordinates (gstat 2.1's own 3-D default is not). Throws ArgumentError when the locations do
+  /// not span a positive diagonal.
+  static LagBins gstat_default(const Eigen::MatrixXd& coordinates);
 
   const std::vector<double>& edges() const noexcept { return edges_; }
   std::size_t size() const noexcept { return edges_.size() - 1; }

@@ -17,7 +17,7 @@ namespace errfield::cli {
 namespace {
 
 struct VariogramArgs {
-  std::string input, coords, value, bins, estimator = "matheron", convention = "paper", out;
+  std::string input, coords, value, bins, estimator = "matheron", convention, out;  // convention "": see run_variogram
   bool per_component = false;
   double subsample = 1.0;
   std::uint64_t seed = 0;
@@ -116,10 +116,10 @@ std::string cell(double v) { return std::isnan(v) ? std::string() : format_numbe
 void run_variogram(const VariogramArgs& a) {
   const auto coord_names = split_column_list(a.coords, "--coords");
   const auto value_names = split_column_list(a.value, "--value");
-  const LagBins bins = parse_bins_option(a.bins);
   EmpiricalVariogramOptions options;
   options.estimator = estimator_from_name(a.estimator);
-  options.convention = convention_from_name(a.convention);
+  // Without --bins, gstat's default bins and, unless --convention says otherwise, its boundaries.
+  options.convention = convention_from_name(!a.convention.empty() ? a.convention : a.bins.empty() ? "gstat" : "paper");
   options.pair_fraction = a.subsample;
   options.seed = a.seed;
   check_thread_count("--threads", a.threads);
@@ -137,6 +137,11 @@ void run_variogram(const VariogramArgs& a) {
   const std::vector<DirectionalRun> runs = directions(a, coord_names);
   const Eigen::MatrixXd x = table.numeric_columns(coord_names);
   const Eigen::MatrixXd z = table.numeric_columns(value_names);
+  const LagBins bins = a.bins.empty() ? LagBins::gstat_default(x) : parse_bins_option(a.bins);
+  if (a.bins.empty())
+    std::cerr << "variogram: no --bins: gstat's default, 15 bins of " << format_number(bins.lag_hi(0))
+              << " up to " << format_number(bins.edges().back()) << " (a third of the data's bounding-box diagonal)"
+              << (options.convention == BinConvention::Gstat ? ", gstat's boundaries" : "") << "\n";
   std::vector<std::string> lo, hi, mean, gamma, pairs, alpha, beta, coordinate;
   std::vector<std::vector<std::string>> per_component(value_names.size());
   std::uint64_t total = 0;
@@ -205,8 +210,8 @@ void add_variogram_command(CLI::App& app) {
       ->required();
   cmd->add_option("--bins", args->bins,
                   "lo:max:width for bins [lo,lo+w), ... up to max (e.g. 0:2200:200), or explicit "
-                  "increasing edges e0,e1,... (e.g. 0,10,20,50)")
-      ->required();
+                  "increasing edges e0,e1,... (e.g. 0,10,20,50); default: gstat's, 15 bins up to a third of the "
+                  "bounding-box diagonal of --coords, with gstat's boundaries unless --convention is given");
   cmd->add_option("--estimator", args->estimator,
                   "matheron (default), cressie (Cressie-Hawkins) or dowd (median-based; stores the "
                   "binned differences, at most --max-stored of them)");
@@ -214,7 +219,8 @@ void add_variogram_command(CLI::App& app) {
                   "dowd only: budget of stored differences (8 bytes each; default 25000000)")
       ->check(kUnsignedInteger);
   cmd->add_option("--convention", args->convention,
-                  "paper (default): bins [lo,hi); gstat: [e0,e1], then (lo,hi] as R gstat's boundaries=");
+                  "paper (default with --bins): bins [lo,hi); gstat (default without --bins): [e0,e1], then (lo,hi] "
+                  "as R gstat's boundaries=");
   cmd->add_flag("--per-component", args->per_component,
                 "add a gamma_<column> column per value column");
   cmd->add_option("--subsample", args->subsample,

@@ -95,6 +95,31 @@ TEST_F(VariogramCli, VectorValueExplicitEdgesStdoutAndPerComponent) {
   }
 }
 
+TEST_F(VariogramCli, WithoutBinsUsesGstatsDefault) {
+  // No --bins: 15 bins up to 0.33333 x the bounding-box diagonal, gstat's boundaries - the same as
+  // the explicit bins written here from the data's extent (tests/peers/gstat_variogram_test.cpp
+  // compares the rule with R gstat itself).
+  Eigen::MatrixXd x, z;
+  write("in.csv", simulated_csv(200, 3, &x, &z));
+  const Eigen::MatrixXd xy = x.leftCols(2);
+  const double diagonal = (xy.colwise().maxCoeff() - xy.colwise().minCoeff()).norm();
+  const double cutoff = 0.33333 * diagonal, width = cutoff / 15.0;
+  const auto r = run("variogram --input in.csv --coords x,y --value dL --out default.csv");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("gstat's default"), std::string::npos) << r.err;
+  std::string edges;
+  for (int k = 0; k <= 15; ++k) edges += (k ? "," : "") + format_number(k * width);
+  ASSERT_EQ(run("variogram --input in.csv --coords x,y --value dL --bins " + edges +
+                " --convention gstat --out explicit.csv").exit_code,
+            0);
+  EXPECT_EQ(read("default.csv"), read("explicit.csv"));
+  EXPECT_EQ(CsvTable::read(path("default.csv")).row_count(), 15u);
+  // --convention still wins when given.
+  ASSERT_EQ(run("variogram --input in.csv --coords x,y --value dL --convention paper --out paper.csv").exit_code, 0);
+  ASSERT_EQ(run("variogram --input in.csv --coords x,y --value dL --bins " + edges + " --out paper2.csv").exit_code, 0);
+  EXPECT_EQ(read("paper.csv"), read("paper2.csv"));
+}
+
 TEST_F(VariogramCli, BadInputExitsNonZeroNamingWhereAndWritesNothing) {
   write("bad.csv", "x,y,v\n0,0,1\n1,0,abc\n2,0,3\n");
   auto r = run("variogram --input " + path("bad.csv") + " --coords x,y --value v --bins 0:5:1 --out " +

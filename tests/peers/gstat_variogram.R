@@ -6,6 +6,7 @@
 #
 # data.csv has columns x,y,z,v. Writes
 #   <out_prefix>_matheron.csv, <out_prefix>_cressie.csv : np,dist,gamma (gstat's non-empty bins)
+#   <out_prefix>_default.csv : the same for variogram(v ~ 1, d) on x, y only, gstat's default bins
 #   <out_prefix>_fit.csv : model,method,psill,range,nugget,sserr,singular — fit.variogram of the
 #                          Matheron variogram for Sph/Exp/Gau + nugget and fit.method 1, 2, 7.
 suppressPackageStartupMessages({ library(gstat); library(sp) })
@@ -22,6 +23,12 @@ fmt <- function(df) {  # every number with 17 significant digits, no padding
 vm <- variogram(v ~ 1, d, boundaries = b)
 write.csv(fmt(data.frame(np = vm$np, dist = vm$dist, gamma = vm$gamma)),
           paste0(prefix, "_matheron.csv"), row.names = FALSE, quote = FALSE)
+# gstat's default bins, in 2-D (x, y): cutoff = 0.33333 x the bounding-box diagonal, width = cutoff / 15.
+d2 <- read.csv(args[1])
+coordinates(d2) <- ~x + y
+vd <- variogram(v ~ 1, d2)
+write.csv(fmt(data.frame(np = vd$np, dist = vd$dist, gamma = vd$gamma)),
+          paste0(prefix, "_default.csv"), row.names = FALSE, quote = FALSE)
 vc <- variogram(v ~ 1, d, boundaries = b, cressie = TRUE)
 write.csv(fmt(data.frame(np = vc$np, dist = vc$dist, gamma = vc$gamma)),
           paste0(prefix, "_cressie.csv"), row.names = FALSE, quote = FALSE)
