@@ -82,7 +82,7 @@ struct CalibrationOptions {
   /// Distances: no parameter is removed for conditioning alone; every structurally identifiable one
   /// is kept and the fit is regularized toward nominal with the Tikhonov weight
   /// 0.1 · (largest singular value / this)² (CalibrationResult::regularization); parameters of
-  /// which less than 5 % is determined under that weight are removed as weakly identifiable.
+  /// which less than half is determined under that weight are removed as weakly identifiable.
   /// Removing parameters one by one made the rest absorb what they carried (a KR 16 at one
   /// orientation: tens of mm, held-out 3-D error 1.14x an independent least-squares calibration;
   /// docs/robot.md "Distances: regularized toward nominal").
