@@ -2,8 +2,9 @@
 // parameters it identifies must be the ones the data support, so that its held-out 3-D accuracy
 // matches an independent least-squares calibration written here (Gauss–Newton on every MD-H
 // parameter and the tool, finite-difference Jacobian, truncated-SVD minimum-norm steps toward
-// nominal). All data are SIMULATED here, by a truth written in this file (geometric deviations of
-// the MD-H table and tool, Gaussian noise on each distance), not by errfield's simulator.
+// nominal). All data are SIMULATED: by errfield's simulator with MD-H deviations drawn here plus
+// joint compliance and transmission error (cube_experiment), or by a purely geometric truth
+// written in this file with Gaussian noise on each distance (joint_box_experiment).
 
 #include <algorithm>
 #include <cmath>
