@@ -193,8 +193,9 @@ void add_calibrate_command(CLI::App& app) {
                   "docs/robot.md says which data decided the default");
   cmd->add_flag("--no-robust", args->no_robust, "the same as --robust none");
   cmd->add_option("--max-condition", args->max_condition,
-                  "remove weakly identifiable parameters until the physically scaled Jacobian's condition number "
-                  "(mm, and rad x the arm's reach) is below this (default 1000)");
+                  "--model position: remove weakly identifiable parameters until the physically scaled Jacobian's "
+                  "condition number (mm, and rad x the arm's reach) is below this; --model distance: directions "
+                  "weaker than largest/this are regularized toward nominal (docs/robot.md; default 1000)");
   cmd->add_option("--max-registration-rms", args->max_registration_rms,
                   "--model position: refuse (exit 2) when the registration (with reflector offset) leaves a larger RMS "
                   "(mm; default 5): a wrong robot or mixed-up rows");

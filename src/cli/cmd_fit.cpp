@@ -124,7 +124,8 @@ void add_fit_command(CLI::App& app) {
                   "gross outliers); docs/robot.md says which data decided the default");
   cmd->add_option("--max-condition", a->max_condition,
                   "kinematic methods: remove weakly identifiable parameters until the physically scaled Jacobian's "
-                  "condition number is below this")
+                  "condition number is below this (from positions); from distances, regularize directions weaker "
+                  "than largest/this toward nominal")
       ->capture_default_str();
   cmd->add_option("--outlier-limit", a->outlier_limit,
                   "kinematic methods from positions: refit without gross outliers (a lost reflector, a wrong row; all "

@@ -32,7 +32,11 @@ std::string summary(const CalibrationResult& cal, std::size_t count, const std::
   return "calibration on " + std::to_string(count) + " " + what + ": residual RMS " + short_number(cal.before.rms_mm) +
          " -> " + short_number(cal.after.rms_mm) + " mm, " + std::to_string(cal.parameters.size()) +
          " parameters identified, " + std::to_string(cal.removed.size()) + " removed, condition number " +
-         short_number(cal.condition_number) + " (physically scaled), robust weights " +
+         short_number(cal.condition_number) + " (physically scaled)" +
+         // From distances the weak directions are regularized, not removed: say so beside a large condition number.
+         (cal.regularization > 0 ? ", regularized toward nominal (Tikhonov weight " + short_number(cal.regularization) + ")"
+                                 : std::string()) +
+         ", robust weights " +
          (robust ? "igg3 (" + std::to_string(cal.rejected) + " rejected)" : std::string("none")) + "; " + cal.message;
 }
 

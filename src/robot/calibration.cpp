@@ -229,6 +229,11 @@ std::string CalibrationResult::report() const {
   s << "condition number of the identification Jacobian of the identified parameters (physically scaled: "
        "mm, and rad x reach "
     << reach_mm << " mm): " << condition_number << "\n";
+  if (regularization > 0) {
+    s.precision(6);
+    s << "regularized toward nominal (distances): Tikhonov weight " << regularization
+      << " mm^2 per physical mm^2 (0.1 x (largest singular value / max condition)^2)\n";
+  }
   s.precision(4);
   s << "residuals before: rms " << before.rms_mm << " mm, mean " << before.mean_abs_mm << " mm, max "
     << before.max_abs_mm << " mm (" << before.count << " measurements)\n";

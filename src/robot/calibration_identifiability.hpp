@@ -32,6 +32,8 @@ struct ParameterSelection {
   std::vector<int> kept;
   std::vector<RemovedParameter> removed;
   double condition_number = 1.0;  ///< of the physically scaled columns of `kept`
+  /// Tikhonov weight toward the initial values (mm² per physical mm²); 0: none.
+  double regularization = 0.0;
 };
 
 /// `jac` has one column per candidate, in the Jacobian's own units (mm/rad, mm/mm). In candidate
@@ -42,6 +44,17 @@ struct ParameterSelection {
 /// direction is removed as weakly identifiable.
 ParameterSelection select_parameters(const Eigen::MatrixXd& jac, const std::vector<int>& candidates, double reach_mm,
                                      double tolerance, double max_condition);
+
+/// Structural selection as select_parameters (no effect, redundant), then every structurally
+/// identifiable parameter is kept and solved with a Tikhonov penalty toward the initial values,
+/// weight 0.1 · (largest singular value / max_condition)² in physical units (`regularization`):
+/// directions much stronger than its square root are fitted as plain least squares, much weaker
+/// ones stay at the initial values. A parameter of which less than `min_participation` is
+/// determined (Σ_i f_i V_ji², the filter factors f_i = s_i² / (s_i² + weight) weighting its
+/// share in each singular direction) is removed, the least determined first, until none is left.
+ParameterSelection select_parameters_regularized(const Eigen::MatrixXd& jac, const std::vector<int>& candidates,
+                                                double reach_mm, double tolerance, double max_condition,
+                                                double min_participation);
 
 /// How many of `candidates` measurements of this kind identify at all on this robot: the
 /// redundancy selection on a generic, well-spread set of poses. Data with no more equations than

@@ -9,9 +9,12 @@
 /// Method (docs/robot.md "Calibration"): Levenberg–Marquardt on the identification Jacobian;
 /// identifiability judged on PHYSICALLY scaled columns (lengths in mm, angles in rad times the
 /// arm's reach, so every column says how many mm of measurement one mm of parameter moves):
-/// parameters with no effect, that are combinations of others, or that make the kept set worse
-/// conditioned than `max_condition_number` are removed automatically, with the reason — so
-/// rounding noise in the joints never makes a parameter identifiable; standard errors of the rest;
+/// parameters with no effect or that are combinations of others are removed automatically, with
+/// the reason; from positions, so are those that make the kept set worse conditioned than
+/// `max_condition_number`; from distances the rest are all kept and regularized toward nominal
+/// (Tikhonov, weight set by `max_condition_number`), and only parameters the data hardly
+/// determine at all are removed — so rounding noise in the joints never makes a parameter
+/// identifiable; standard errors of the rest;
 /// optional IGG3 robust reweighting (SPEC note) against gross outliers. Where consecutive axes are
 /// parallel (|alpha_{i-1}| < 1e-6 deg) the Hayati beta of that link is a candidate, as plain MD-H
 /// is singular there.
@@ -76,6 +79,13 @@ struct CalibrationOptions {
   /// (at 1e4 the cube's calibration moved link lengths by up to 200 mm). Over well-spread poses
   /// a wrist offset (e.g. link5.theta0, short lever) can sit just above 1e3 and is then removed;
   /// raise the cap for such data.
+  /// Distances: no parameter is removed for conditioning alone; every structurally identifiable one
+  /// is kept and the fit is regularized toward nominal with the Tikhonov weight
+  /// 0.1 · (largest singular value / this)² (CalibrationResult::regularization); parameters of
+  /// which less than half is determined under that weight are removed as weakly identifiable.
+  /// Removing parameters one by one made the rest absorb what they carried (a KR 16 at one
+  /// orientation: tens of mm, held-out 3-D error 1.14x an independent least-squares calibration;
+  /// docs/robot.md "Distances: regularized toward nominal").
   double max_condition_number = 1e3;
   /// LM iterations per round. Along a weakly determined direction whose cost is not quadratic LM
   /// converges linearly: a few hundred cheap iterations.
@@ -129,9 +139,15 @@ struct CalibrationResult {
   /// Fixed base points (calibrate_distances with fixed points), identified with the robot.
   std::vector<BasePointEstimate> base_points;
   /// Condition number of the physically scaled identification Jacobian of the identified (kept)
-  /// parameters at the initial model, where they were selected; at most
-  /// CalibrationOptions::max_condition_number.
+  /// parameters at the initial model, where they were selected. Positions: at most
+  /// CalibrationOptions::max_condition_number. Distances: may exceed it, the weak directions being
+  /// regularized toward nominal instead (`regularization`).
   double condition_number = 0.0;
+  /// Distances: the Tikhonov weight mu (mm² per physical mm², i.e. per mm of length or per
+  /// rad × reach of angle) of the penalty mu · Σ increment² toward the initial model,
+  /// 0.1 · (largest singular value of the physically scaled Jacobian / max_condition_number)².
+  /// 0 for positions.
+  double regularization = 0.0;
   /// The length (mm) that scales angular parameters for identifiability: Σ(|a| + |d|) + |tool|.
   double reach_mm = 0.0;
   ResidualSummary before, after;  ///< Per measurement: distance residual or 3-D residual norm.
