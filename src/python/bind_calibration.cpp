@@ -58,6 +58,7 @@ py::dict result_dict(const CalibrationResult& result, const MdhModel& identified
   out["parameters"] = parameters;
   out["removed"] = removed;
   out["condition_number"] = result.condition_number;
+  out["regularization"] = result.regularization;  // distances: the weight of the penalty toward nominal
   out["rms_before_mm"] = result.before.rms_mm;
   out["rms_after_mm"] = result.after.rms_mm;
   out["max_after_mm"] = result.after.max_abs_mm;
@@ -159,6 +160,7 @@ void bind_calibration(py::module_& m) {
         "robot: the nominal Robot. q: (N, 6) commanded joints, deg, within the limits. measured: (N, 3)\n"
         "tracker positions of the tool point, mm. Returns a dict: robot (identified, in the registered robot\n"
         "frame, as the CLI writes it), tracker_from_base (4, 4), parameters, removed, condition_number,\n"
+        "regularization (distances: the Tikhonov weight toward nominal, 0 for positions),\n"
         "rms_before_mm, rms_after_mm, max_after_mm, weights, rejected, converged, message, report (text).\n"
         "Check converged before using the robot.");
   m.def("calibrate_distances", &calibrate_distances_py, py::arg("robot"), py::arg("data"), py::kw_only(),

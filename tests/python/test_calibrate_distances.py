@@ -30,6 +30,7 @@ def test_base_rows_match_cli(sim, tmp_path):
     assert (r["robot"].to_json() + "\n").encode() == (tmp_path / "cli.json").read_bytes()
     assert r["converged"] and r["rms_after_mm"] < 0.2 * r["rms_before_mm"]
     assert r["fixed_bases"].shape == (0, 3)
+    assert r["regularization"] > 0  # distances: regularized toward nominal (docs/robot.md)
     # Distances are frame-free: the identified robot's distances between targets match the truth's
     # far better than the nominal robot's (SIMULATED truth from --truth-out).
     truth = errfield.Robot.load(sim / "truth.json")
