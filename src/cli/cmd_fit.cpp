@@ -97,7 +97,8 @@ void add_fit_command(CLI::App& app) {
   cmd->add_option("--power", a->power, "IDW power p (the paper: 1)")->capture_default_str();
   cmd->add_option("--model", a->model,
                   "kriging variogram model, e.g. \"gau(sill=0.05,range=400)+nug(0.001)\", or a model JSON file "
-                  "(fit-variogram --out); default (auto): in joint space the REML fit of sph/exp/gau/mat(1.5,2.5) "
+                  "(fit-variogram --out), or a family whose parameters are estimated: sph, exp, gau, mat, "
+                  "mat(2.5), wen, with @iso or @ard to fix the anisotropy (joint space); default (auto): in joint space the REML fit of sph/exp/gau/mat(1.5,2.5) "
                   "+ nugget, isotropic or ARD, with the smallest AIC among well-conditioned ones; in task space the "
                   "best weighted fit to the empirical variogram");
   cmd->add_option("--kind", a->kind,

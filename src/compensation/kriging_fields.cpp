@@ -88,14 +88,31 @@ EmpiricalVariogram empirical_of(const std::vector<L>& locations, const Eigen::Ma
                                    LagBins::uniform(0.0, 0.6 * max_lag, 0.06 * max_lag), o);
 }
 
-VariogramModel best_fit(const EmpiricalVariogram& ev) {
+VariogramModel best_fit(const EmpiricalVariogram& ev, const std::optional<FieldModelFamily>& family = std::nullopt) {
   VariogramFitOptions fo;
   fo.weighting = FitWeighting::NjOverH2;
   VariogramModel best;
   double best_sse = INFINITY;
+  std::vector<ModelComponent> candidates;
   for (ModelKind kind : {ModelKind::Spherical, ModelKind::Exponential, ModelKind::Gaussian}) {
     ModelComponent c;
     c.kind = kind;
+    candidates.push_back(c);
+  }
+  if (family) {
+    candidates.clear();
+    ModelComponent c;
+    c.kind = family->kind;
+    if (family->kind == ModelKind::Matern) {
+      for (double nu : family->nu ? std::vector<double>{*family->nu} : std::vector<double>{1.5, 2.5}) {
+        c.nu = nu;
+        candidates.push_back(c);
+      }
+    } else {
+      candidates.push_back(c);
+    }
+  }
+  for (const ModelComponent& c : candidates) {
     try {
       const VariogramFitResult fit = fit_variogram(ev, {c}, fo);
       if (fit.status != FitStatus::Failed && fit.weighted_sse < best_sse) {
@@ -330,7 +347,8 @@ std::vector<SampleHoldOut> leave_one_out_by_sample(const ErrorField& field) {
   return {};
 }
 
-VariogramModel estimate_field_variogram(const FieldSamples& samples, const Eigen::MatrixXd& values, FieldSpace space) {
+VariogramModel estimate_field_variogram(const FieldSamples& samples, const Eigen::MatrixXd& values, FieldSpace space,
+                                        const std::optional<FieldModelFamily>& family) {
   EmpiricalVariogram ev = space == FieldSpace::task ? empirical_of(samples.position_mm, values, EuclideanMetric{})
                                                     : empirical_of(samples.joints_deg, values, JointSpaceMetric{});
   // The empirical gamma of K components is their sum; the field's model is that of one component
@@ -338,7 +356,7 @@ VariogramModel estimate_field_variogram(const FieldSamples& samples, const Eigen
   // do not change (scale-free); the variances would otherwise be K times too large.
   const double k = static_cast<double>(values.cols());
   for (VariogramBin& b : ev.bins) b.gamma /= k;
-  return best_fit(ev);
+  return best_fit(ev, family);
 }
 
 std::shared_ptr<const ErrorField> make_distance_kriging_field(const FieldSamples& samples,
@@ -389,7 +407,8 @@ VariogramModel choose_field_model(const FieldSamples& samples, const Eigen::Matr
     reason = options.space == FieldSpace::task
                  ? "empirical variogram, best weighted fit of sph/exp/gau with a nugget"
                  : "empirical variogram (more than 3,000 samples for a likelihood fit)";
-    return estimate_field_variogram(samples, values, options.space);
+    if (options.family) reason = "empirical variogram, weighted fit of " + options.family->to_string() + " with a nugget";
+    return estimate_field_variogram(samples, values, options.space, options.family);
   }
   Eigen::MatrixXd x(static_cast<Eigen::Index>(samples.joints_deg.size()), 6);
   for (std::size_t i = 0; i < samples.joints_deg.size(); ++i) x.row(static_cast<Eigen::Index>(i)) = samples.joints_deg[i].transpose();
@@ -398,6 +417,14 @@ VariogramModel choose_field_model(const FieldSamples& samples, const Eigen::Matr
   mo.fit.drift_order = options.drift_order;
   mo.fit.starts = 4;
   mo.fit.local_runs = 1;
+  if (options.family) {  // the user's family (--model mat): estimated, not chosen
+    mo.kinds = {options.family->kind};
+    if (options.family->nu) mo.matern_nu = {*options.family->nu};
+    if (options.family->ard) {
+      mo.try_isotropic = !*options.family->ard;
+      mo.try_ard = *options.family->ard;
+    }
+  }
   const ModelChoice choice = choose_likelihood_model(x, values, mo);
   reason = choice.reason;
   return choice.model;

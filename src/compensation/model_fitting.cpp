@@ -196,6 +196,7 @@ KrigingFieldOptions field_options(const FitOptions& o) {
   ko.space = o.space;
   ko.kind = o.kind;
   ko.drift_order = o.drift_order;
+  ko.family = o.model_family;
   (o.space == FieldSpace::task ? ko.region_margin_mm : ko.region_margin_deg) +=
       o.region_margin.value_or(o.space == FieldSpace::joint ? 5.0 : 0.0);
   return ko;

@@ -38,7 +38,11 @@ FitOptions fit_options_from_text(const FitOptionText& a) {
   o.idw_power = a.power;
   o.base = a.base;
   o.region_margin = a.region_margin;
-  if (!a.model.empty() && a.model != "auto") o.model = load_variogram_model(a.model);
+  if (!a.model.empty() && a.model != "auto") {
+    // A bare family (--model mat) is estimated; anything else is a model given in full.
+    if (auto family = parse_field_model_family(a.model)) o.model_family = *family;
+    else o.model = load_variogram_model(a.model);
+  }
   if (!a.calibration.empty()) o.calibration_data = calibration_data_from_name(a.calibration);
   if (!a.robust.empty()) {
     if (a.robust != "none" && a.robust != "igg3")

@@ -28,6 +28,7 @@
 #include "errfield/cross_validation.hpp"
 #include "errfield/kriging.hpp"
 #include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/field_model_family.hpp"
 #include "errfield/variogram_model.hpp"
 
 namespace errfield::compensation {
@@ -48,6 +49,9 @@ struct KrigingFieldOptions {
   /// Variogram model of the values (mm², lag in mm or deg); empty = estimated from the samples
   /// (empirical variogram + best of sph/exp/gau with a free nugget, gstat's N_j/h² weights).
   std::optional<VariogramModel> model;
+  /// With `model` empty: estimate within this family only (field_model_family.hpp); empty = the
+  /// automatic choice.
+  std::optional<FieldModelFamily> family;
   /// The nugget stands for measurement noise (smoothing, gstat's Err) rather than micro-scale
   /// variation: predictions are of the noise-free error. Default true (tracker + repeatability).
   bool nugget_is_measurement_error = true;
@@ -123,7 +127,8 @@ std::vector<SampleHoldOut> leave_one_out_by_sample(const ErrorField& field);
 /// with a free nugget. `values` is N x K (K = 1 or 3). The model is that of one component (the
 /// empirical gamma, a sum over the K components, is divided by K before the fit), as the fields and
 /// the likelihood fit use it: a vector field's sill and nugget are per component.
-VariogramModel estimate_field_variogram(const FieldSamples& samples, const Eigen::MatrixXd& values, FieldSpace space);
+VariogramModel estimate_field_variogram(const FieldSamples& samples, const Eigen::MatrixXd& values, FieldSpace space,
+                                        const std::optional<FieldModelFamily>& family = std::nullopt);
 
 /// The model a field uses when none is given, and why. Joint space: choose_likelihood_model
 /// (REML with the field's kriging kind; sph/exp/gau/mat(1.5, 2.5) with a nugget, isotropic or

@@ -75,6 +75,8 @@ struct FitOptions {
   FieldSpace space = FieldSpace::task;  ///< kriging methods only
   double idw_power = 1.0;               ///< IDW methods (the paper: 1)
   std::optional<VariogramModel> model;  ///< kriging; empty = chosen (choose_field_model)
+  /// kriging, `model` empty: estimate within this family (`--model mat`); empty = the automatic choice.
+  std::optional<FieldModelFamily> model_family;
   KrigingKind kind = KrigingKind::Ordinary;  ///< kriging methods: ordinary or universal
   int drift_order = 1;                       ///< universal kriging: polynomial drift order
   std::size_t base = 0;                 ///< which base point the distance methods use
