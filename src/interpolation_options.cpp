@@ -63,6 +63,14 @@ KrigingOptions kriging_options_from_text(const KrigingOptionText& t, const Optio
       o.radius = *t.radius;
     }
   }
+  if (t.neighbour_metric) {
+    if (o.backend != KrigingBackend::Local)
+      throw ArgumentError(n.neighbour_metric + " chooses the neighbours of " + n.backend + " local (with " + n.neighbors +
+                          " or " + n.radius + ")");
+    if (*t.neighbour_metric == "model") o.neighbour_metric = NeighbourMetric::Model;
+    else if (*t.neighbour_metric == "euclidean") o.neighbour_metric = NeighbourMetric::Euclidean;
+    else throw ArgumentError(n.neighbour_metric + " is " + quoted(*t.neighbour_metric) + "; expected model or euclidean");
+  }
 
   if (t.nugget == "micro") o.nugget = NuggetTreatment::MicroScale;
   else if (t.nugget == "error") o.nugget = NuggetTreatment::MeasurementError;

@@ -24,6 +24,7 @@ struct OptionNames {
   std::string backend = "backend";
   std::string neighbors = "neighbors";
   std::string radius = "radius";
+  std::string neighbour_metric = "neighbour_metric";
   std::string nugget = "nugget";
   std::string duplicates = "duplicates";
   std::string power = "power";
@@ -44,6 +45,9 @@ struct KrigingOptionText {
   /// with the local back end, which needs at least one of them.
   std::optional<std::size_t> neighbors;
   std::optional<double> radius;
+  /// Local back end: model (default: neighbours by the model's lag) | euclidean (by the plain
+  /// distance of the coordinates, as gstat); see NeighbourMetric.
+  std::optional<std::string> neighbour_metric;
   /// micro (gstat's krige: exact at the samples) | error (the nugget is measurement error).
   std::string nugget = "micro";
   /// error | average (samples closer than duplicate_distance).

@@ -107,6 +107,17 @@ std::string_view kriging_backend_name(KrigingBackend backend);
 /// "dense" | "local" | "sparse"; throws ArgumentError listing the choices.
 KrigingBackend kriging_backend_from_name(std::string_view name);
 
+/// Local back end: by which distance the neighbours of a target are chosen (and `radius` measured).
+/// Model: the lag the variogram sees (the metric's weights and the model's anisotropy applied) -
+/// the neighbours that matter most to the model. Euclidean: the plain Euclidean distance of the
+/// coordinates as given, as R gstat does (its nmax/maxdist ignore anisotropy). Both are
+/// defensible; they give different neighbourhoods, and so different predictions, only with an
+/// anisotropic model or a weighted metric.
+enum class NeighbourMetric { Model, Euclidean };
+std::string_view neighbour_metric_name(NeighbourMetric metric);
+/// "model" | "euclidean"; throws ArgumentError listing the choices.
+NeighbourMetric neighbour_metric_from_name(std::string_view name);
+
 /// A user drift function of the sample coordinates (the Location's own coordinates, not the
 /// metric's embedding). Called once per sample and per target, never in a hot loop.
 using DriftFunction = std::function<double(std::span<const double> coordinates)>;
@@ -130,6 +141,8 @@ struct KrigingOptions {
   std::size_t neighbors = 0;
   /// Local: only samples at lag < radius (gstat's maxdist), lag unit; infinity = no limit.
   double radius = std::numeric_limits<double>::infinity();
+  /// Local: which distance chooses the neighbours and measures `radius` (NeighbourMetric).
+  NeighbourMetric neighbour_metric = NeighbourMetric::Model;
 
   bool compute_variance = true;
   /// Return the kriging weights of every target (dense: N per target; local: k per target).

@@ -27,6 +27,7 @@ struct KrigingCliOptions {
   std::string kind = "ordinary";
   double mean = std::numeric_limits<double>::quiet_NaN();  // NaN = not given
   std::string backend;
+  std::string neighbour_metric;  // "" = not given
   std::string nugget_as = "micro";
   std::string measurement_variance;
 };
@@ -53,6 +54,11 @@ void add_kriging_options(CLI::App& cmd) {
   cmd.add_option("--backend", o.backend,
                  "dense (one Cholesky of all samples; default unless --neighbors/--radius) | local (the --neighbors K "
                  "nearest and/or those within --radius per target; large N) | sparse (CHOLMOD; compact models sph/wen only)")
+      ->group(group);
+  cmd.add_option("--neighbour-metric", o.neighbour_metric,
+                 "local back end: model (default: the K nearest by the model's lag, anisotropy applied) | euclidean "
+                 "(by the plain distance of the coordinates, as R gstat's nmax/maxdist; --radius then in that "
+                 "distance). They differ only with an anisotropic model")
       ->group(group);
   cmd.add_option("--nugget-as", o.nugget_as,
                  "micro (default, gstat's krige: exact at the samples) | error (the nugget is measurement error, like "
@@ -144,6 +150,7 @@ Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const E
   if (!o.backend.empty()) text.backend = o.backend;
   text.neighbors = shared.neighbors;
   text.radius = shared.radius;
+  if (!o.neighbour_metric.empty()) text.neighbour_metric = o.neighbour_metric;
   text.nugget = o.nugget_as;
   s.options = kriging_options_from_text(text, cli_option_names());
   auto& opt = s.options;

@@ -69,6 +69,7 @@ OptionNames cli_option_names() {
   n.backend = "--backend";
   n.neighbors = "--neighbors";
   n.radius = "--radius";
+  n.neighbour_metric = "--neighbour-metric";
   n.nugget = "--nugget-as";
   n.duplicates = "--duplicates";
   n.power = "--power";

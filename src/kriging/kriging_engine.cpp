@@ -49,6 +49,16 @@ KrigingBackend kriging_backend_from_name(std::string_view name) {
   throw ArgumentError("kriging: unknown back end '" + std::string(name) + "'; expected dense, local or sparse");
 }
 
+std::string_view neighbour_metric_name(NeighbourMetric metric) {
+  return metric == NeighbourMetric::Model ? "model" : "euclidean";
+}
+
+NeighbourMetric neighbour_metric_from_name(std::string_view name) {
+  if (name == "model") return NeighbourMetric::Model;
+  if (name == "euclidean") return NeighbourMetric::Euclidean;
+  throw ArgumentError("neighbour metric: '" + std::string(name) + "'; expected model or euclidean");
+}
+
 void KrigingOptions::validate() const {
   auto fail = [](const std::string& field, const std::string& value, const std::string& expected) {
     throw ArgumentError("kriging options: " + field + " = " + value + "; expected " + expected);
@@ -121,6 +131,9 @@ KrigingEngine::KrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, Eige
   std::iota(original_index_.begin(), original_index_.end(), std::size_t{0});
   tree_ = std::make_unique<PointTree>(points_);
   merge_duplicates();
+  // gstat's neighbourhoods: the coordinates as given (raw_ is rebuilt by merge_duplicates).
+  if (options_.backend == KrigingBackend::Local && options_.neighbour_metric == NeighbourMetric::Euclidean)
+    search_tree_ = std::make_unique<PointTree>(raw_);
   set_observation_noise();
   observed_ = values_;
   if (options_.kind == KrigingKind::Simple) values_.rowwise() -= simple_mean_.transpose();

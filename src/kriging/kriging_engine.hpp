@@ -97,6 +97,8 @@ class KrigingEngine {
   Eigen::VectorXd drift_center_, drift_scale_;
   Eigen::MatrixXd f_;  // N x p
   std::unique_ptr<PointTree> tree_;
+  // Local back end with NeighbourMetric::Euclidean: neighbours by the raw coordinates (over raw_).
+  std::unique_ptr<PointTree> search_tree_;
   KrigingReport report_;
 
   // dense and sparse: global solution

@@ -116,15 +116,18 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
     ws.reserve(static_cast<Eigen::Index>(std::max<std::size_t>(k_query, 1)), p, comps, ceiling);
 #pragma omp for schedule(dynamic, 64)
     for (Eigen::Index t = 0; t < m; ++t) {
-      const double* target = embedded.col(t).data();
+      // Neighbours by the model's lag, or by the raw coordinates (NeighbourMetric::Euclidean).
+      const PointTree& tree = search_tree_ ? *search_tree_ : *tree_;
+      const double* target = embedded.col(t).data();  // covariances: always the model's lag
+      const double* query = search_tree_ ? raw.col(t).data() : target;
       const std::size_t self = leave_one_out ? static_cast<std::size_t>(t) : n_samples;
       ws.chosen.clear();
       if (k_max > 0) {
-        const std::size_t found = tree_->nearest(target, k_query, ws.index.data(), ws.d2.data());
+        const std::size_t found = tree.nearest(query, k_query, ws.index.data(), ws.d2.data());
         for (std::size_t a = 0; a < found && ws.chosen.size() < k_max; ++a)
           if (ws.index[a] != self && ws.d2[a] < r2) ws.chosen.push_back(ws.index[a]);
       } else {
-        tree_->within(target, r2, ws.hits);
+        tree.within(query, r2, ws.hits);
         for (const auto& h : ws.hits)
           if (h.first != self) ws.chosen.push_back(h.first);
       }

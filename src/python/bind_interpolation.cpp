@@ -177,7 +177,8 @@ class PyKriging {
             const std::optional<std::string>& backend, const py::object& mean, const std::optional<int>& drift_order,
             const std::string& nugget, const std::optional<std::size_t>& neighbors,
             const std::optional<double>& radius, const py::object& measurement_variance,
-            const std::string& duplicates, double duplicate_distance, int threads)
+            const std::string& duplicates, double duplicate_distance, int threads,
+            const std::optional<std::string>& neighbour_metric)
       : samples_(samples_arg(coords, values)) {
     const VariogramModel model = py::isinstance<py::str>(model_arg)
                                      ? VariogramModel::parse(model_arg.cast<std::string>())
@@ -192,6 +193,7 @@ class PyKriging {
     text.backend = backend;
     text.neighbors = neighbors;
     text.radius = radius;
+    text.neighbour_metric = neighbour_metric;
     text.nugget = nugget;
     text.duplicates = duplicates;
     KrigingOptions o = kriging_options_from_text(text);
@@ -427,12 +429,13 @@ void bind_interpolation(py::module_& m) {
       .def(py::init<const py::object&, const py::object&, const py::object&, const std::string&,
                     const std::optional<std::string>&, const py::object&, const std::optional<int>&, const std::string&,
                     const std::optional<std::size_t>&, const std::optional<double>&, const py::object&,
-                    const std::string&, double, int>(),
+                    const std::string&, double, int, const std::optional<std::string>&>(),
            py::arg("coords"), py::arg("values"), py::arg("model"), py::kw_only(), py::arg("kind") = "ordinary",
            py::arg("backend") = py::none(), py::arg("mean") = py::none(), py::arg("drift_order") = py::none(),
            py::arg("nugget") = "micro", py::arg("neighbors") = py::none(), py::arg("radius") = py::none(),
            py::arg("measurement_variance") = py::none(),
            py::arg("duplicates") = "error", py::arg("duplicate_distance") = 0.0, py::arg("threads") = 0,
+           py::arg("neighbour_metric") = py::none(),
            "coords: (N, D) sample locations (mm, deg, ...). values: (N,) or (N, K), K <= 3 (mm).\n"
            "model: VariogramModel or its text (sill mm^2, range in the coordinates' unit).\n"
            "kind: 'simple' (needs mean) | 'ordinary' | 'universal' (drift_order 0, 1, 2; default 1) | 'universal1' | 'universal2'.\n"
@@ -441,6 +444,7 @@ void bind_interpolation(py::module_& m) {
            "nugget: 'micro' (exact at the data, gstat's krige) | 'error' (measurement error, smoothing).\n"
            "measurement_variance: (N,) per-sample variances (value unit^2) or None.\n"
            "duplicates: 'error' | 'average' samples closer than duplicate_distance.\n"
+           "neighbour_metric (local back end): 'model' (default: neighbours by the model's lag) | 'euclidean' (gstat's).\n"
            "Raises errfield.Error when the covariance cannot be factored; warns (RuntimeWarning) when ill-conditioned.")
       .def("predict", &PyKriging::predict, py::arg("targets"),
            "Kriging mean and variance at targets (M, D): returns (mean, var), mean (M,) or (M, K) in the value unit,\n"

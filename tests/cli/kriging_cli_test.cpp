@@ -152,6 +152,12 @@ TEST_F(KrigingCli, BadInputIsRejectedWithAMessage) {
   r = run(base + " --model \"" + kModel + "\" --kind kriging");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_THAT(r.output(), HasSubstr("--kind"));
+  r = run(base + " --model \"" + kModel + "\" --neighbour-metric euclidean");  // dense: no neighbours to choose
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("--neighbour-metric"));
+  r = run(base + " --model \"" + kModel + "\" --neighbors 10 --neighbour-metric manhattan");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("expected model or euclidean"));
   EXPECT_FALSE(fs::exists(path("P.csv")));
   r = run("interpolate --method idw --samples " + path("S.csv") + " --targets " + path("T.csv") +
               " --coords x,y,z --value v --model auto --out " + path("P.csv"));
@@ -163,6 +169,21 @@ TEST_F(KrigingCli, HelpExplainsTheRangeConvention) {
   const auto r = run("interpolate --help");
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_THAT(r.output(), HasSubstr("scale parameter a, not the practical range"));
+}
+
+TEST_F(KrigingCli, NeighbourMetricMattersOnlyWithAnisotropy) {
+  // Isotropic model: the model's lag is the Euclidean distance, so both metrics choose the same
+  // neighbours and give identical output; an anisotropic model (tests/peers/gstat_anis_test.cpp
+  // compares 'euclidean' with gstat) generally does not.
+  const std::string base = "interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("T.csv") +
+                           " --coords x,y,z --value v --neighbors 12 ";
+  for (const std::string metric : {"model", "euclidean"})
+    ASSERT_EQ(run(base + "--model \"" + std::string(kModel) + "\" --neighbour-metric " + metric + " --out " + path(metric + ".csv")).exit_code, 0);
+  EXPECT_EQ(read("model.csv"), read("euclidean.csv"));
+  const std::string anis = "sph(sill=0.5,range=400)+nug(0.001)@anis(30,20,10,0.3,0.2)";
+  for (const std::string metric : {"model", "euclidean"})
+    ASSERT_EQ(run(base + "--model \"" + anis + "\" --neighbour-metric " + metric + " --out " + path("a" + metric + ".csv")).exit_code, 0);
+  EXPECT_NE(read("amodel.csv"), read("aeuclidean.csv"));
 }
 
 }  // namespace
