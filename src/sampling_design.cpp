@@ -91,7 +91,7 @@ Eigen::VectorXd squared_distance_to_set(const Eigen::MatrixXd& z, const Eigen::M
 }
 
 /// The locations mapped by the model's anisotropy, so that the lag is a plain Euclidean distance.
-Eigen::MatrixXd mapped(const Eigen::MatrixXd& x, const Anisotropy& a) {
+Eigen::MatrixXd mapped_by_anisotropy(const Eigen::MatrixXd& x, const Anisotropy& a) {
   if (a.isotropic()) return x;
   if (a.dimension() != x.cols())
     throw ArgumentError("the model's anisotropy " + a.to_string() + " is for " + std::to_string(a.dimension()) +
@@ -154,8 +154,8 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
   // A measurement's noise; a nugget-free model gets a relative jitter so the systems stay solvable.
   const double noise = nugget > 0.0 ? nugget : 1e-10 * k.field_variance;
 
-  const Eigen::MatrixXd xc = mapped(candidates, model.anisotropy());
-  const Eigen::MatrixXd xd = mapped(measured, model.anisotropy());
+  const Eigen::MatrixXd xc = mapped_by_anisotropy(candidates, model.anisotropy());
+  const Eigen::MatrixXd xd = mapped_by_anisotropy(measured, model.anisotropy());
   // References: every candidate, or an evenly spread subset (maximin in the mapped coordinates).
   std::vector<std::size_t> ref_rows;
   if (static_cast<std::size_t>(C) <= options.max_references) {
@@ -258,7 +258,7 @@ std::vector<double> local_error_scale(const Eigen::MatrixXd& samples, const Eige
   PriorCovariance k{model.isotropic_part(), model.sill() - nugget, 0.0};
   if (!(k.field_variance > 0.0)) return scale;
   k.mean_variance = mean_variance_factor * k.field_variance;
-  const Eigen::MatrixXd xs = mapped(samples, model.anisotropy()), xq = mapped(query, model.anisotropy());
+  const Eigen::MatrixXd xs = mapped_by_anisotropy(samples, model.anisotropy()), xq = mapped_by_anisotropy(query, model.anisotropy());
   Eigen::MatrixXd kk = k.between(xs, xs);
   kk.diagonal().array() += nugget > 0.0 ? nugget : 1e-10 * k.field_variance;
   const Eigen::LLT<Eigen::MatrixXd> llt(kk);
