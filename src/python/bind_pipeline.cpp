@@ -121,7 +121,7 @@ PyModel fit_py(const py::object& data, const py::object& robot, const std::strin
   const CsvTable table = table_arg(data, "data");
   FitTableOptions fo;
   fo.fit = fit_options_from_text({method, space, power, model.value_or(""), kind, base, region_margin,
-                                  calibration.value_or(""), robust.value_or(""), max_condition, outlier_limit});
+                                  calibration.value_or(""), robust.value_or(""), max_condition, outlier_limit, ""});
   fo.fit.reflector_far_ok = reflector_far_ok;
   fo.fixed_bases = base_points_arg(base_points);
   fo.robot_given = !robot.is_none();
