@@ -9,8 +9,9 @@ method is fitted with its defaults (plus EXTRA fit options) and scored with `err
 coverage95 and mean_nees from the summary; for distance-kriging, which has no 3-D variance, the share
 of distance errors (after_dl_b0) within 1.96 sqrt(var_mm2) and the mean z^2 (1 expected). Prints
 per seed and pooled over the seeds, with the pooled binomial standard error sqrt(0.95 * 0.05 / n).
-Usage: measure_predictive_coverage.py path/to/errfield [ROBOT] [N] [SEEDS] [EXTRA]
+Usage: measure_predictive_coverage.py path/to/errfield [ROBOT] [N] [SEEDS] [EXTRA] [SYSTEMATIC]
   e.g. measure_predictive_coverage.py build/errfield kr16 300 1,2,3,4,5 "--variance-calibration none"
+  SYSTEMATIC is simulate's --systematic (default realistic; config = the default simulation's effects)
 """
 import csv
 import json
@@ -33,6 +34,7 @@ def main():
     n_train = int(sys.argv[3]) if len(sys.argv) > 3 else 300
     seeds = [int(s) for s in (sys.argv[4] if len(sys.argv) > 4 else "1,2,3,4,5").split(",")]
     extra = sys.argv[5].split() if len(sys.argv) > 5 else []
+    systematic = sys.argv[6] if len(sys.argv) > 6 else "realistic"
     work = tempfile.mkdtemp(prefix="coverage_")
 
     def run(*args):
@@ -43,7 +45,7 @@ def main():
     pooled = {}
     for s in seeds:
         run("simulate", "--robot", robot, "--seed", str(1000 + s), "--sample", f"scattered:{n_train + 200}",
-            "--systematic", "realistic", "--orientation-spread", "30", "--joint-decimals", "2",
+            "--systematic", systematic, "--orientation-spread", "30", "--joint-decimals", "2",
             "--robot-out", "r.json", "--out", "all.csv")
         lines = open(os.path.join(work, "all.csv")).read().splitlines(True)
         comments = [l for l in lines if l.startswith("#")]
