@@ -323,7 +323,7 @@ VariogramModel scaled_model(const VariogramModel& model, double factor) {
   return VariogramModel(std::move(components), model.anisotropy());
 }
 
-/// The mean leave-one-out z² of a field make_field built, and the samples it is over.
+/// Per (merged) sample of a field make_field built, the leave-one-out z² (KrigingField::leave_one_out_squared_z).
 std::vector<double> squared_z_of(const ErrorField& field) {
   if (const auto* f = dynamic_cast<const KrigingField<JointVector, Eigen::Vector3d, JointSpaceMetric>*>(&field))
     return f->leave_one_out_squared_z();
