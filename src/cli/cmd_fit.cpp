@@ -18,7 +18,8 @@ namespace errfield::cli {
 namespace {
 
 struct FitArgs {
-  std::string robot, data, method = "auto", space = "auto", out, model, calibration, robust, kind = "ordinary";
+  std::string robot, data, method = "auto", space = "auto", out, model, calibration, robust, kind = "ordinary",
+      variance_calibration = "auto";
   double max_condition = 1e3, outlier_limit = 5.0;
   std::vector<std::string> base_points;
   double power = 1.0, max_registration_rms = robot::kRegistrationRmsLimitMm;
@@ -32,7 +33,8 @@ void run_fit(const FitArgs& a) {
   using namespace compensation;
   const MdhModel model = load_robot_or_default(a.robot);
   const FitOptions o = fit_options_from_text({a.method, a.space, a.power, a.model, a.kind, a.base, a.region_margin,
-                                              a.calibration, a.robust, a.max_condition, a.outlier_limit});
+                                              a.calibration, a.robust, a.max_condition, a.outlier_limit,
+                                              a.variance_calibration});
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.base_points) {
     const auto v = parse_numbers(b, 3, "--base-point");
@@ -98,9 +100,10 @@ void add_fit_command(CLI::App& app) {
   cmd->add_option("--model", a->model,
                   "kriging variogram model, e.g. \"gau(sill=0.05,range=400)+nug(0.001)\", or a model JSON file "
                   "(fit-variogram --out), or a family whose parameters are estimated: sph, exp, gau, mat, "
-                  "mat(2.5), wen, with @iso or @ard to fix the anisotropy (joint space); default (auto): in joint space the REML fit of sph/exp/gau/mat(1.5,2.5) "
-                  "+ nugget, isotropic or ARD, with the smallest AIC among well-conditioned ones; in task space the "
-                  "best weighted fit to the empirical variogram");
+                  "mat(2.5), wen, with @iso or @ard to fix the anisotropy; default (auto): the REML fit of "
+                  "sph/exp/gau/mat(1.5,2.5) + nugget, isotropic or ARD (over q1..q6 in joint space, x,y,z in task "
+                  "space), with the smallest AIC among well-conditioned ones; beyond 3000 points the weighted fit to "
+                  "the empirical variogram");
   cmd->add_option("--kind", a->kind,
                   "kriging methods: ordinary (default), universal1 or universal2 (linear / quadratic drift in the "
                   "field's coordinates)")
@@ -136,6 +139,13 @@ void add_fit_command(CLI::App& app) {
                   "model are kept; kinematic drops a row whose residual after calibration is; 0 keeps every row; "
                   "docs/robot.md says which data decided the default")
       ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--variance-calibration", a->variance_calibration,
+                  "kriging methods: auto (when the variogram is estimated, not given by --model), loo or none: scale "
+                  "the variogram's sill and nugget so that on the training data's leave-one-out the mean z^2 is at "
+                  "most 1 and at least 95 % fall in the 95 % region; the predicted errors are unchanged, var_mm2 "
+                  "and r95_mm hold on held-out readings (docs/robot.md, 'Predictive uncertainty'); stored in the "
+                  "model file")
       ->capture_default_str();
   cmd->add_flag("--reflector-far-ok", a->reflector_far_ok,
                 "kinematic methods from positions: accept a reflector found more than 50 mm from --robot's tool "

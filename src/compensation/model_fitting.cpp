@@ -122,6 +122,13 @@ MethodChoice choose_method(const MeasurementSet& d) {
                    d.source);
 }
 
+VarianceCalibrationChoice variance_calibration_from_name(std::string_view name) {
+  if (name == "auto") return VarianceCalibrationChoice::automatic;
+  if (name == "loo") return VarianceCalibrationChoice::leave_one_out;
+  if (name == "none") return VarianceCalibrationChoice::none;
+  throw ArgumentError("--variance-calibration: '" + std::string(name) + "'; expected auto, loo or none");
+}
+
 void FitOptions::validate() const {
   if (!(idw_power >= 0.0) || !std::isfinite(idw_power))
     throw ArgumentError("fit: idw power " + std::to_string(idw_power) + "; expected a finite value >= 0");
@@ -190,8 +197,12 @@ CrossValidationReport idw_cv(const std::vector<Eigen::Vector3d>& p, const std::v
                 "not defined)");
 }
 
-KrigingFieldOptions field_options(const FitOptions& o) {
+/// `model_estimated`: the variogram was chosen by fit (not given by the user), which is when
+/// VarianceCalibrationChoice::automatic calibrates the variance.
+KrigingFieldOptions field_options(const FitOptions& o, bool model_estimated) {
   KrigingFieldOptions ko;
+  ko.calibrate_variance = o.variance_calibration == VarianceCalibrationChoice::leave_one_out ||
+                          (o.variance_calibration == VarianceCalibrationChoice::automatic && model_estimated);
   ko.on_stage = o.on_stage;
   ko.space = o.space;
   ko.kind = o.kind;
@@ -223,7 +234,20 @@ RegularGrid3 detect_grid(const MeasurementSet& d, std::vector<std::size_t>& samp
 
 namespace {
 
-FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
+/// The variance calibration of a kriging field, as a note (fit prints it; the model JSON has the
+/// figures in field.variance_calibration).
+void note_variance_calibration(FitResult& out, const KrigingFieldFit& fit) {
+  if (!fit.variance_calibration) return;
+  const VarianceCalibration& c = *fit.variance_calibration;
+  out.notes.push_back("predictive variance calibrated by leave-one-out on the " + std::to_string(c.samples) +
+                      " samples: every sill and the nugget x " + format_number(c.factor) +
+                      " = max(mean z^2 per component " + format_number(c.mean_squared_z_before) +
+                      ", 95 % quantile of z^2 / chi2(0.95) " + format_number(c.tail_factor) +
+                      "), so the variance is too small neither on average nor in the tail; the predicted errors "
+                      "are unchanged (model before " + c.model_before + "; --variance-calibration none keeps it)");
+}
+
+FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o, bool model_estimated) {
   using detail::fit_kinematic;
   using detail::KinematicFit;
   std::string model_reason;
@@ -304,16 +328,17 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
     case CompensationMethod::distance_kriging: {
       need_base();
       const std::vector<double> dl = d.distance_errors(o.base);
-      KrigingFieldOptions ko = field_options(o);
+      KrigingFieldOptions ko = field_options(o, model_estimated);
       const Eigen::MatrixXd flat = Eigen::Map<const Eigen::VectorXd>(dl.data(), static_cast<Eigen::Index>(dl.size()));
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
       ko.model = chosen_model(o, samples, flat, ko, model_reason);
       const KrigingFieldFit fit = fit_distance_kriging_field(samples, dl, d.base_nominal_mm[o.base], ko);
       FitResult out{CompensationModel(method, robot, fit.field), std::nullopt, kriging_report(fit, o.space, o), {}, {}};
-      note_factorization(out, fit, *ko.model);
+      note_factorization(out, fit, fit.model);
       if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
-      out.notes.push_back("variogram model " + ko.model->to_string() + "; base point b" + std::to_string(o.base));
-      out.notes.push_back("variogram: " + describe_field_model(*ko.model, o.space));
+      out.notes.push_back("variogram model " + fit.model.to_string() + "; base point b" + std::to_string(o.base));
+      out.notes.push_back("variogram: " + describe_field_model(fit.model, o.space));
+      note_variance_calibration(out, fit);
       return out;
     }
     case CompensationMethod::vector_kriging: {
@@ -340,7 +365,7 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       } else {
         dp = registered_errors(out);
       }
-      KrigingFieldOptions ko = field_options(o);
+      KrigingFieldOptions ko = field_options(o, model_estimated);
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(dp.size()), 3);
       for (std::size_t i = 0; i < dp.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = dp[i].transpose();
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
@@ -348,10 +373,11 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       const KrigingFieldFit fit = fit_vector_kriging_field(samples, dp, ko);
       out.model = CompensationModel(method, robot, fit.field);
       out.cross_validation = kriging_report(fit, o.space, o);
-      out.notes.push_back("variogram model " + ko.model->to_string() + " (shared by the 3 components)");
-      out.notes.push_back("variogram per component: " + describe_field_model(*ko.model, o.space));
-      note_factorization(out, fit, *ko.model);
+      out.notes.push_back("variogram model " + fit.model.to_string() + " (shared by the 3 components)");
+      out.notes.push_back("variogram per component: " + describe_field_model(fit.model, o.space));
+      note_factorization(out, fit, fit.model);
       if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
+      note_variance_calibration(out, fit);
       return out;
     }
     case CompensationMethod::kinematic:
@@ -372,7 +398,7 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       std::vector<Eigen::Vector3d> residual(identified.size());
       for (std::size_t i = 0; i < residual.size(); ++i)
         residual[i] = reg.robot_from_tracker * d.measured_mm[i] - identified[i];
-      KrigingFieldOptions ko = field_options(o);
+      KrigingFieldOptions ko = field_options(o, model_estimated);
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(residual.size()), 3);
       for (std::size_t i = 0; i < residual.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = residual[i].transpose();
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
@@ -380,10 +406,11 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       const KrigingFieldFit fit = fit_vector_kriging_field(samples, residual, ko);
       out.model = CompensationModel(method, kin.model, fit.field).with_tool_point(kin.tool_point_mm, kin.reflector_mm);
       out.cross_validation = kriging_report(fit, o.space, o);
-      out.notes.push_back("residuals after calibration kriged with " + ko.model->to_string());
-      out.notes.push_back("variogram per component: " + describe_field_model(*ko.model, o.space));
-      note_factorization(out, fit, *ko.model);
+      out.notes.push_back("residuals after calibration kriged with " + fit.model.to_string());
+      out.notes.push_back("variogram per component: " + describe_field_model(fit.model, o.space));
+      note_factorization(out, fit, fit.model);
       if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
+      note_variance_calibration(out, fit);
       return out;
     }
   }
@@ -391,12 +418,13 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
 }
 
 FitResult fit_checked(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
-  FitResult out = fit_unchecked(robot, d, o);
+  const bool estimated = !o.model;
+  FitResult out = fit_unchecked(robot, d, o, estimated);
   // Judge the model before anyone writes it; an estimated variogram may be refitted with a nugget.
   return check_fitted_model(std::move(out), o, [&](const VariogramModel& m) {
     FitOptions again = o;
     again.model = m;
-    return fit_unchecked(robot, d, again);
+    return fit_unchecked(robot, d, again, estimated);
   });
 }
 

@@ -51,6 +51,7 @@ FitOptions fit_options_from_text(const FitOptionText& a) {
   }
   o.calibration.max_condition_number = a.max_condition;
   o.outlier_limit = a.outlier_limit;
+  if (!a.variance_calibration.empty()) o.variance_calibration = variance_calibration_from_name(a.variance_calibration);
   o.calibration.validate();
   if (a.kind == "universal1" || a.kind == "universal2") {
     o.kind = KrigingKind::Universal;

@@ -116,12 +116,13 @@ PyModel fit_py(const py::object& data, const py::object& robot, const std::strin
                double power, const std::optional<std::string>& model, const std::string& kind, std::size_t base,
                const py::object& base_points, std::optional<double> region_margin,
                const std::optional<std::string>& calibration, const std::optional<std::string>& robust,
-               double max_condition, double max_registration_rms, double outlier_limit, bool reflector_far_ok) {
+               double max_condition, double max_registration_rms, double outlier_limit, bool reflector_far_ok,
+               const std::string& variance_calibration) {
   const MdhModel nominal = robot_arg(robot);
   const CsvTable table = table_arg(data, "data");
   FitTableOptions fo;
   fo.fit = fit_options_from_text({method, space, power, model.value_or(""), kind, base, region_margin,
-                                  calibration.value_or(""), robust.value_or(""), max_condition, outlier_limit});
+                                  calibration.value_or(""), robust.value_or(""), max_condition, outlier_limit, variance_calibration});
   fo.fit.reflector_far_ok = reflector_far_ok;
   fo.fixed_bases = base_points_arg(base_points);
   fo.robot_given = !robot.is_none();
@@ -260,12 +261,12 @@ void bind_pipeline(py::module_& m) {
         py::arg("base_points") = py::none(), py::arg("region_margin") = py::none(), py::arg("calibration") = py::none(),
         py::arg("robust") = py::none(), py::arg("max_condition") = 1e3,
         py::arg("max_registration_rms") = robot::kRegistrationRmsLimitMm, py::arg("outlier_limit") = 5.0,
-        py::arg("reflector_far_ok") = false,
+        py::arg("reflector_far_ok") = false, py::arg("variance_calibration") = "auto",
         "`errfield fit`: a CompensationModel from measurements, a dict of columns named as the CLI's CSV\n"
         "(point, kind, q1..q6 deg, x,y,z mm, mx,my,mz mm, dist_b0.. mm). robot: None (built-in ER20-C10), a Robot,\n"
         "a built-in name or a robot JSON path. The options are the CLI's (--method, --space, --power, --model,\n"
         "--kind, --base, --base-point as base_points (K, 3) mm, --region-margin, --calibration, --robust,\n"
-        "--max-condition, --max-registration-rms mm, --outlier-limit, --reflector-far-ok); method='auto' chooses from the data as the\n"
+        "--max-condition, --max-registration-rms mm, --outlier-limit, --reflector-far-ok, --variance-calibration); method='auto' chooses from the data as the\n"
         "CLI does (kinematic+kriging in joint space with tracker positions, kinematic from distances). The fit's warnings are RuntimeWarnings. Releases the GIL.");
   m.def("predict", &predict_py, py::arg("model"), py::arg("joints"),
         "`errfield predict`: where the tool goes at joints ((N, 6) deg or a dict with q1..q6). Returns a dict:\n"

@@ -279,6 +279,7 @@ def fit(
     max_registration_rms: float = 5.0,
     outlier_limit: float = 5.0,
     reflector_far_ok: bool = False,
+    variance_calibration: Literal["auto", "loo", "none"] = "auto",
 ) -> CompensationModel: ...
 def predict(model: CompensationModel, joints: ArrayLike | Columns) -> dict[str, Any]: ...
 def compensate(

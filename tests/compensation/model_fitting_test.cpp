@@ -170,10 +170,12 @@ TEST(FitCompensationModel, AnnouncesEachLongStageInOrder) {
   o.method = CompensationMethod::vector_kriging;
   o.on_stage = [&](const std::string& s) { stages.push_back(s); };
   fit_compensation_model(sim.nominal(), data, o);
-  ASSERT_EQ(stages.size(), 3u);
+  ASSERT_EQ(stages.size(), 4u);
   EXPECT_EQ(stages[0], "estimating the variogram");
   EXPECT_EQ(stages[1].rfind("factoring the 27 x 27 covariance matrix", 0), 0u) << stages[1];
-  EXPECT_EQ(stages[2], "leave-one-out from the factorization");
+  // an estimated model's variance is calibrated (one more factorization), then the leave-one-out
+  EXPECT_EQ(stages[2], "calibrating the predictive variance by leave-one-out");
+  EXPECT_EQ(stages[3], "leave-one-out from the factorization");
   stages.clear();
   o.model = VariogramModel::parse("sph(sill=0.02,range=700)+nug(0.001)");  // given: nothing to estimate
   fit_compensation_model(sim.nominal(), data, o);

@@ -61,6 +61,22 @@ def test_fit_writes_the_cli_model_file(sim, tmp_path, method):
     assert loaded.method == method and loaded.fit_report is None
 
 
+@pytest.mark.parametrize("choice", ["none", "loo"])
+def test_fit_variance_calibration_is_the_clis(sim, tmp_path, choice):
+    # The same model file as `errfield fit --variance-calibration`; "none" writes no calibration,
+    # "loo" (here on a given model, which "auto" keeps as given) writes one with the model scaled.
+    given = "sph(sill=0.02,range=700)+nug(0.001)"
+    run_cli("fit", "--robot", sim / "robot.json", "--data", sim / "grid.csv", "--method", "vector-kriging",
+            "--model", given, "--variance-calibration", choice, "--out", tmp_path / "cli.json")
+    model = errfield.fit(read_measurements(sim / "grid.csv"), robot=str(sim / "robot.json"), method="vector-kriging",
+                         model=given, variance_calibration=choice)
+    assert model.to_json().encode() == (tmp_path / "cli.json").read_bytes()
+    field = json.loads(model.to_json())["field"]
+    assert ("variance_calibration" in field) == (choice == "loo")
+    with pytest.raises(errfield.ArgumentError, match="--variance-calibration"):
+        errfield.fit(read_measurements(sim / "grid.csv"), robot=str(sim / "robot.json"), variance_calibration="yes")
+
+
 def check_columns(result, csv_path):
     """Every column the binding returns equals the CLI's column of that name (numbers bit for bit)."""
     csv_ = read_csv(csv_path)

@@ -68,6 +68,17 @@ enum class CalibrationData {
 /// "position" / "distance" (CLI `--calibration`); throws ArgumentError naming the option otherwise.
 CalibrationData calibration_data_from_name(std::string_view name);
 
+/// Whether the kriging methods calibrate the predictive variance by leave-one-out
+/// (VarianceCalibration, kriging_fields.hpp: every sill × the mean leave-one-out z², predicted errors
+/// unchanged).
+enum class VarianceCalibrationChoice {
+  automatic,      ///< when the variogram is estimated; a model the user gives is kept as given
+  leave_one_out,  ///< always, also a given model
+  none,           ///< never: the variance is the model's as estimated or given
+};
+/// "auto" / "loo" / "none" (CLI `--variance-calibration`); throws ArgumentError otherwise.
+VarianceCalibrationChoice variance_calibration_from_name(std::string_view name);
+
 struct FitOptions {
   CompensationMethod method = CompensationMethod::distance_idw;
   /// Use choose_method(data) instead of `method` (`fit --method auto`, the CLI's default).
@@ -105,6 +116,9 @@ struct FitOptions {
   /// 2 % × 3 mm outliers it dropped exactly the outliers and matched the oracle (docs/robot.md,
   /// "Gross outliers in fit").
   double outlier_limit = 5.0;
+  /// Kriging methods: calibrate the predictive variance by leave-one-out (the variance the model
+  /// states for a held-out reading, var_mm2 and r95_mm; docs/robot.md "Predictive uncertainty").
+  VarianceCalibrationChoice variance_calibration = VarianceCalibrationChoice::automatic;
   /// Kinematic methods from positions: the reflector (the measured point, found from the data) and
   /// the robot's tool point (the robot JSON's tool, the point compensated) are two points. Further
   /// apart than kReflectorFarMm is refused as a wrong tool (InputError) unless this is set.

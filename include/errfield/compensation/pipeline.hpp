@@ -72,6 +72,7 @@ struct FitOptionText {
   std::string robust;                   ///< "" or none | igg3
   double max_condition = 1e3;
   double outlier_limit = 5.0;           ///< FitOptions::outlier_limit (0 = off)
+  std::string variance_calibration;     ///< "" or auto | loo | none (FitOptions::variance_calibration)
 };
 
 /// The FitOptions the words select, validated; ArgumentError naming the option (CLI spelling).
