@@ -397,7 +397,9 @@ TEST(RobotBadInput, MeasurementsInMetresWarnNamingFileAndColumnsAndStillRun) {
   for (const auto& c : cases) {
     const auto r = run_errfield(c.args, dir.path());
     EXPECT_EQ(r.exit_code, c.exit_code) << testing::command_line(c.args) << r.err;
-    if (c.exit_code == 2) EXPECT_THAT(r.err, HasSubstr("registration")) << testing::command_line(c.args);
+    if (c.exit_code == 2) {
+      EXPECT_THAT(r.err, HasSubstr("registration")) << testing::command_line(c.args);
+    }
     EXPECT_THAT(r.err, AllOf(HasSubstr("errfield " + c.args[0] + ": warning: " + c.words), HasSubstr("metres"),
                              HasSubstr("millimetres")))
         << testing::command_line(c.args);

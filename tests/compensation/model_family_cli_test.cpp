@@ -49,7 +49,9 @@ TEST_F(ModelFamily, TheFamilyIsKeptAndItsParametersEstimated) {
   const VariogramModel iso = field_model("iso.json");
   EXPECT_TRUE(iso.anisotropy().isotropic()) << iso.to_string();
   for (const auto& c : iso.components())
-    if (c.kind == ModelKind::Matern) EXPECT_EQ(c.nu, 2.5);
+    if (c.kind == ModelKind::Matern) {
+      EXPECT_EQ(c.nu, 2.5);
+    }
   ASSERT_EQ(run("fit --robot r.json --data d.csv --model gau@ard --out ard.json").exit_code, 0);
   const VariogramModel ard = field_model("ard.json");
   EXPECT_EQ(ard.anisotropy().type(), Anisotropy::Type::Ard) << ard.to_string();
