@@ -21,6 +21,9 @@ import subprocess
 import sys
 import tempfile
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from simulated_session import split_session  # noqa: E402
+
 METHODS = [("auto", []), ("kinematic+kriging task", ["--method", "kinematic+kriging", "--space", "task"]),
            ("vector-kriging joint", ["--method", "vector-kriging"]),
            ("vector-kriging task", ["--method", "vector-kriging", "--space", "task"]),
@@ -47,13 +50,7 @@ def main():
         run("simulate", "--robot", robot, "--seed", str(1000 + s), "--sample", f"scattered:{n_train + 200}",
             "--systematic", systematic, "--orientation-spread", "30", "--joint-decimals", "2",
             "--robot-out", "r.json", "--out", "all.csv")
-        lines = open(os.path.join(work, "all.csv")).read().splitlines(True)
-        comments = [l for l in lines if l.startswith("#")]
-        body = [l for l in lines if not l.startswith("#")]
-        base = [l for l in body[1:] if ",base," in l]
-        targets = [l for l in body[1:] if ",target," in l]
-        open(os.path.join(work, "train.csv"), "w").writelines(comments + body[:1] + base + targets[:n_train])
-        open(os.path.join(work, "hold.csv"), "w").writelines(comments + body[:1] + base + targets[n_train:])
+        split_session(work, n_train)
         for name, options in METHODS:
             run("fit", "--robot", "r.json", "--data", "train.csv", *options, *extra, "--out", "m.json")
             run("validate", "--model", "m.json", "--robot", "r.json", "--data", "hold.csv", "--summary-out", "s.json",

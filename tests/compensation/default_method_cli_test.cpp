@@ -18,6 +18,7 @@
 
 #include "errfield/csv_table.hpp"
 #include "support/cli_harness.hpp"
+#include "support/session_split.hpp"
 
 namespace errfield::compensation {
 namespace default_method_cli_test {
@@ -27,18 +28,10 @@ class DefaultMethodStudy : public errfield::testing::CliTest {
   /// Splits `all` into `train` (base rows and the first n_train targets) and `hold` (base rows and
   /// the rest), keeping the SIMULATED comment lines in both.
   void split(const std::string& all, std::size_t n_train, const std::string& train, const std::string& hold) {
-    std::istringstream in(read(all));
-    std::string line, header, comments, base_rows, train_rows, hold_rows;
-    std::size_t targets = 0;
-    while (std::getline(in, line)) {
-      if (line.rfind('#', 0) == 0) comments += line + "\n";
-      else if (header.empty()) header = line + "\n";
-      else if (line.find(",base,") != std::string::npos) base_rows += line + "\n";
-      else (targets++ < n_train ? train_rows : hold_rows) += line + "\n";
-    }
-    ASSERT_GT(targets, n_train);
-    write(train, comments + header + base_rows + train_rows);
-    write(hold, comments + header + base_rows + hold_rows);
+    const errfield::testing::SessionSplit parts = errfield::testing::split_session(read(all), n_train);
+    ASSERT_GT(parts.targets, n_train);
+    write(train, parts.train);
+    write(hold, parts.hold);
   }
 
   /// Simulates with `simulate` (+ truth columns, positions), splits at `n_train` targets and checks

@@ -15,6 +15,7 @@
 #include "errfield/compensation/kriging_fields.hpp"
 #include "errfield/csv_table.hpp"
 #include "support/cli_harness.hpp"
+#include "support/session_split.hpp"
 
 namespace errfield::compensation {
 namespace predictive_coverage_cli_test {
@@ -28,18 +29,10 @@ class PredictiveCoverage : public errfield::testing::CliTest {
   /// Splits `all` into train.csv (base rows and the first n_train targets) and hold.csv (base rows
   /// and the rest): one session, so both share the base point's reading, as a split data set does.
   void split(const std::string& all, std::size_t n_train) {
-    std::istringstream in(read(all));
-    std::string line, header, comments, base_rows, train_rows, hold_rows;
-    std::size_t targets = 0;
-    while (std::getline(in, line)) {
-      if (line.rfind('#', 0) == 0) comments += line + "\n";
-      else if (header.empty()) header = line + "\n";
-      else if (line.find(",base,") != std::string::npos) base_rows += line + "\n";
-      else (targets++ < n_train ? train_rows : hold_rows) += line + "\n";
-    }
-    ASSERT_GT(targets, n_train);
-    write("train.csv", comments + header + base_rows + train_rows);
-    write("hold.csv", comments + header + base_rows + hold_rows);
+    const errfield::testing::SessionSplit parts = errfield::testing::split_session(read(all), n_train);
+    ASSERT_GT(parts.targets, n_train);
+    write("train.csv", parts.train);
+    write("hold.csv", parts.hold);
   }
 
   /// SIMULATED KR 16 data that look real: scattered poses at orientations within 30 deg, joints
