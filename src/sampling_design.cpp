@@ -114,8 +114,10 @@ struct PriorCovariance {
   double operator()(double h) const {
     return mean_variance + (h > 0.0 ? isotropic.sill() - isotropic.gamma(h) : field_variance);
   }
+  // Columns in parallel: each entry is computed alone, so the result does not depend on the threads.
   Eigen::MatrixXd between(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) const {
     Eigen::MatrixXd k(a.rows(), b.rows());
+#pragma omp parallel for schedule(static)
     for (Eigen::Index j = 0; j < b.rows(); ++j)
       for (Eigen::Index i = 0; i < a.rows(); ++i) k(i, j) = (*this)((a.row(i) - b.row(j)).norm());
     return k;
@@ -216,7 +218,11 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
   std::vector<char> taken(static_cast<std::size_t>(C), 0);
   std::vector<Eigen::VectorXd> u_c;  // the picks' rank-one updates over the candidates
   for (std::size_t pick = 0; pick < total; ++pick) {
-    const Eigen::VectorXd reduction = (cross.array().square().colwise() * scale_r.array()).colwise().sum().transpose();
+    // The R x C work of a pick, one candidate column per iteration: each column's sum runs over the
+    // references in their order, whatever the thread count.
+    Eigen::VectorXd reduction(C);
+#pragma omp parallel for schedule(static)
+    for (Eigen::Index c = 0; c < C; ++c) reduction[c] = (cross.col(c).array().square() * scale_r.array()).sum();
     Eigen::Index best = -1;
     double best_score = -1.0;
     for (Eigen::Index c = 0; c < C; ++c) {
@@ -234,7 +240,8 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
     const double denominator = std::sqrt(std::max(var_c[best], 0.0) + noise);
     const Eigen::VectorXd uc = col / denominator;
     const Eigen::VectorXd ur = cross.col(best) / denominator;
-    cross.noalias() -= ur * uc.transpose();
+#pragma omp parallel for schedule(static)
+    for (Eigen::Index c = 0; c < C; ++c) cross.col(c) -= uc[c] * ur;
     var_c -= uc.cwiseAbs2();
     var_r -= ur.cwiseAbs2();
     u_c.push_back(uc);

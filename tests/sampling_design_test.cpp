@@ -12,6 +12,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include "errfield/error.hpp"
 #include "errfield/sampling_design.hpp"
@@ -258,6 +259,27 @@ TEST(VarianceReduction, AVarianceScaleWeightsThePicksAndThePrediction) {
   int on_right = 0;
   for (std::size_t c : right.chosen) on_right += pool(static_cast<Eigen::Index>(c), 0) > 4.0;
   EXPECT_GE(on_right, 5);
+}
+
+TEST(VarianceReduction, SamePicksAndPredictionsForOneAndTwoThreads) {
+  // The pick loop runs over candidate columns in parallel; each column's sums keep their order, so
+  // the plan must be bit-identical for any thread count (plan's output is compared byte for byte).
+  const Eigen::MatrixXd pool = uniform_points(300, 3, 10.0, 41), measured = uniform_points(20, 3, 10.0, 42);
+  const VariogramModel model = VariogramModel::parse("mat(sill=1,range=3,nu=2.5)+nug(sill=0.05)@ard(1,0.5,2)");
+  VarianceReductionOptions o;
+  o.count = 15;
+  o.lookahead = 10;
+  o.max_references = 120;
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(1);
+  const VarianceReductionPlan one = select_by_variance_reduction(pool, measured, model, o);
+  omp_set_num_threads(2);
+  const VarianceReductionPlan two = select_by_variance_reduction(pool, measured, model, o);
+  omp_set_num_threads(before);
+  EXPECT_EQ(one.chosen, two.chosen);
+  EXPECT_EQ(one.lookahead_rows, two.lookahead_rows);
+  ASSERT_EQ(one.predicted_mse.size(), two.predicted_mse.size());
+  for (std::size_t i = 0; i < one.predicted_mse.size(); ++i) EXPECT_EQ(one.predicted_mse[i], two.predicted_mse[i]) << i;
 }
 
 }  // namespace sampling_design_test

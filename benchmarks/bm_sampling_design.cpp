@@ -1,0 +1,73 @@
+// Choosing where to measure next (errfield/sampling_design.hpp; `errfield plan --candidates`,
+// docs/benchmarks.md, section "Sampling design"). SIMULATED joint-space poses: candidates and
+// measured poses uniform in a 6-D box of joint angles (degrees).
+//
+//   BM_SelectMaximin           : greedy maximin batch of 40 from {candidates}, {measured} already taken.
+//   BM_SelectByVarianceReduction: integrated variance reduction, batch of 40 (plus a look-ahead of
+//                                 200, as `plan --target-rms` uses) under an ARD Matérn 5/2 + nugget
+//                                 model, conditioned on {measured} poses, over {candidates};
+//                                 issue 21's case is {10000, 500} (target: under 10 s for the plan).
+//   BM_LocalErrorScale          : the leave-one-out local scale `plan --local-scale on` computes at
+//                                 every candidate from {measured} poses and their values.
+
+#include <cmath>
+#include <random>
+
+#include <benchmark/benchmark.h>
+
+#include "errfield/sampling_design.hpp"
+#include "errfield/variogram_model.hpp"
+
+namespace {
+
+Eigen::MatrixXd joint_poses(Eigen::Index n, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  const double half_range[6] = {150.0, 80.0, 100.0, 170.0, 110.0, 170.0};
+  Eigen::MatrixXd q(n, 6);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (int j = 0; j < 6; ++j) q(i, j) = std::uniform_real_distribution<double>(-half_range[j], half_range[j])(rng);
+  return q;
+}
+
+// A model like the ones `fit` estimates in joint space: Matérn 5/2 with one range per joint, a nugget.
+errfield::VariogramModel joint_space_model() {
+  return errfield::VariogramModel::parse("mat(sill=0.01,range=1,nu=2.5)+nug(sill=0.0004)@ard(60,45,50,200,150,400)");
+}
+
+void BM_SelectMaximin(benchmark::State& state) {
+  const Eigen::MatrixXd candidates = joint_poses(state.range(0), 1);
+  const Eigen::MatrixXd measured = joint_poses(state.range(1), 2);
+  errfield::MaximinOptions o;
+  o.count = 40;
+  for (auto _ : state) benchmark::DoNotOptimize(errfield::select_maximin(candidates, measured, o));
+}
+BENCHMARK(BM_SelectMaximin)->ArgNames({"candidates", "measured"})->Args({10000, 500})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_SelectByVarianceReduction(benchmark::State& state) {
+  const Eigen::MatrixXd candidates = joint_poses(state.range(0), 1);
+  const Eigen::MatrixXd measured = joint_poses(state.range(1), 2);
+  const errfield::VariogramModel model = joint_space_model();
+  errfield::VarianceReductionOptions o;
+  o.count = 40;
+  o.lookahead = 200;
+  for (auto _ : state) benchmark::DoNotOptimize(errfield::select_by_variance_reduction(candidates, measured, model, o));
+}
+BENCHMARK(BM_SelectByVarianceReduction)
+    ->ArgNames({"candidates", "measured"})
+    ->Args({2000, 300})
+    ->Args({10000, 500})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+void BM_LocalErrorScale(benchmark::State& state) {
+  const Eigen::MatrixXd candidates = joint_poses(state.range(0), 1);
+  const Eigen::MatrixXd measured = joint_poses(state.range(1), 2);
+  Eigen::MatrixXd values(measured.rows(), 3);
+  for (Eigen::Index i = 0; i < measured.rows(); ++i)
+    for (int k = 0; k < 3; ++k) values(i, k) = 0.1 * std::sin(measured(i, 1) / 40.0 + k) * std::cos(measured(i, 2) / 55.0);
+  const errfield::VariogramModel model = joint_space_model();
+  for (auto _ : state) benchmark::DoNotOptimize(errfield::local_error_scale(measured, values, model, candidates));
+}
+BENCHMARK(BM_LocalErrorScale)->ArgNames({"candidates", "measured"})->Args({10000, 500})->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
