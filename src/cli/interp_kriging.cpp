@@ -10,6 +10,7 @@
 
 #include "cli/cli_support.hpp"
 #include "cli/interpolation_methods.hpp"
+#include "errfield/conditional_simulation.hpp"
 #include "errfield/cross_validation.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
@@ -30,8 +31,16 @@ struct KrigingCliOptions {
   std::string neighbour_metric;  // "" = not given
   std::string nugget_as = "micro";
   std::string measurement_variance;
+  // interpolate only: conditional simulation
+  std::size_t simulations = 0;  // 0 = none
+  std::uint64_t seed = 1;
+  std::string simulation_method = "auto";
+  std::size_t simulation_neighbours = 30;
 };
 KrigingCliOptions cli_options;
+// interpolate's --seed, --simulation-method, --simulation-neighbours: refused without --simulations.
+// Kept apart from cli_options, which cv's registration resets after interpolate's.
+std::vector<CLI::Option*> simulation_only_options;
 
 void add_kriging_options(CLI::App& cmd) {
   auto& o = cli_options;
@@ -67,6 +76,27 @@ void add_kriging_options(CLI::App& cmd) {
   cmd.add_option("--measurement-variance", o.measurement_variance,
                  "Column of the samples file with each sample's measurement variance (value unit^2)")
       ->group(group);
+  if (cmd.get_name() != "interpolate") return;  // cv has its own --seed (the folds')
+  cmd.add_option("--simulations", o.simulations,
+                 "Conditional Gaussian simulation: also write N realisations of the field that honour the samples "
+                 "and the model (nugget and drift included), columns sim1..simN (sim<k>_<col> for vectors); their "
+                 "mean over draws is pred and their variance var. Conditioning by kriging: every back end")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{100000}))
+      ->group(group);
+  auto* seed = cmd.add_option("--seed", o.seed, "--simulations: random seed (default 1); the same seed gives the same "
+                                                   "draws, byte for byte, for any thread count")
+                      ->group(group);
+  auto* method = cmd.add_option("--simulation-method", o.simulation_method,
+                 "--simulations: how the unconditional field is drawn: auto (default: cholesky up to 2,000 distinct "
+                 "locations, samples + targets; sequential beyond) | cholesky (exact) | sequential (along a random "
+                 "path, each location from its --simulation-neighbours nearest earlier ones; large target sets)")
+      ->group(group);
+  auto* neighbours = cmd.add_option("--simulation-neighbours", o.simulation_neighbours,
+                 "--simulations with the sequential method: earlier-simulated locations each one is conditioned on "
+                 "(default 30)")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1000}))
+      ->group(group);
+  simulation_only_options = {seed, method, neighbours};
 }
 
 // gstat's defaults for variogram(): cutoff one third of the bounding-box diagonal, 15 bins.
@@ -205,6 +235,22 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
     if (r.targets->has_column(name))
       throw InputError(r.targets->source() + ": already has a column '" + name + "', which the output would repeat; rename it",
                        r.targets->source(), 1, name);
+  if (cli_options.simulations == 0)
+    for (const CLI::Option* o : simulation_only_options)
+      if (o->count()) throw ArgumentError(o->get_name() + " applies to --simulations N (conditional simulation); add it or drop " + o->get_name());
+  UnconditionalMethod simulation_method = UnconditionalMethod::Auto;
+  try {
+    simulation_method = unconditional_method_from_name(cli_options.simulation_method);
+  } catch (const ArgumentError& e) {
+    throw ArgumentError(std::string("--simulation-method: ") + e.what());
+  }
+  for (std::size_t k = 1; k <= cli_options.simulations; ++k)
+    for (std::size_t j = 0; j < c; ++j) {
+      const std::string name = "sim" + std::to_string(k) + (c == 1 ? std::string() : "_" + r.value_columns[j]);
+      if (r.targets->has_column(name))
+        throw InputError(r.targets->source() + ": already has a column '" + name + "', which the output would repeat; rename it",
+                         r.targets->source(), 1, name);
+    }
   with_value_type(c, [&]<class V>() {
     const auto values = rows_as_values<V>(r.sample_values);
     std::span<const double> meas(s.measurement_variance.data(), static_cast<std::size_t>(s.measurement_variance.size()));
@@ -214,7 +260,32 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
       throw Error(r.samples->source() + ": kriging failed: " + std::string(status_word(rep.status)) + ": " + rep.message);
     if (!rep.message.empty()) result.notes.push_back(std::string(status_word(rep.status)) + ": " + rep.message);
     if (rep.merged_duplicates) result.notes.push_back(std::to_string(rep.merged_duplicates) + " duplicate samples merged");
-    const auto pred = kriging.predict(targets);
+    KrigingPrediction<V> pred;
+    if (cli_options.simulations > 0) {
+      SimulationOptions so;
+      so.draws = cli_options.simulations;
+      so.seed = cli_options.seed;
+      so.method = simulation_method;
+      so.neighbours = cli_options.simulation_neighbours;
+      const auto sim = simulate_conditional<Eigen::VectorXd, V>(points, values, targets, s.model, s.options, so, {}, meas);
+      pred.status = sim.status;
+      pred.message = sim.message;
+      pred.mean = sim.mean;
+      pred.variance = sim.variance;
+      pred.failed_targets = sim.failed_targets;
+      for (std::size_t k = 0; k < sim.draws.size(); ++k) {
+        const Eigen::MatrixXd draw = values_as_rows(sim.draws[k]);
+        for (std::size_t j = 0; j < c; ++j) {
+          const std::string name = "sim" + std::to_string(k + 1) + (c == 1 ? std::string() : "_" + r.value_columns[j]);
+          const Eigen::VectorXd column = draw.col(static_cast<Eigen::Index>(j));
+          result.extra_columns.emplace_back(name, std::vector<double>(column.data(), column.data() + column.size()));
+        }
+      }
+      result.notes.push_back("simulation: " + std::to_string(sim.draws.size()) + " conditional draws (seed " +
+                             std::to_string(cli_options.seed) + "), unconditional field by " + sim.method);
+    } else {
+      pred = kriging.predict(targets);
+    }
     result.pred = values_as_rows(pred.mean);
     if (pred.failed_targets) {
       Eigen::Index first = 0;
@@ -223,7 +294,9 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
                              " targets could not be kriged (" + status_word(pred.status) + "; first: " +
                              r.target_labels(static_cast<std::size_t>(first)) + "); their cells are empty");
     }
-    for (const auto& name : var_names) result.extra_columns.emplace_back(name, pred.variance);
+    // var before the draws' columns
+    for (auto it = var_names.rbegin(); it != var_names.rend(); ++it)
+      result.extra_columns.emplace(result.extra_columns.begin(), *it, pred.variance);
     result.notes.push_back("kriging: " + std::string(kriging_kind_name(s.options.kind)) +
                            (s.options.kind == KrigingKind::Universal ? " (drift order " + std::to_string(s.options.drift_order) + ")" : std::string()) +
                            ", model " + s.model.to_string() + ", " + std::string(kriging_backend_name(s.options.backend)) +

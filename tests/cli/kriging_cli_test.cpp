@@ -16,6 +16,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "errfield/conditional_simulation.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/kriging.hpp"
 #include "support/cli_harness.hpp"
@@ -184,6 +185,49 @@ TEST_F(KrigingCli, NeighbourMetricMattersOnlyWithAnisotropy) {
   for (const std::string metric : {"model", "euclidean"})
     ASSERT_EQ(run(base + "--model \"" + anis + "\" --neighbour-metric " + metric + " --out " + path("a" + metric + ".csv")).exit_code, 0);
   EXPECT_NE(read("amodel.csv"), read("aeuclidean.csv"));
+}
+
+TEST_F(KrigingCli, SimulationsWriteTheLibrarysDraws) {
+  // --simulations N writes sim1..simN after pred and var: the library's draws for the same seed,
+  // and pred/var the plain kriging's.
+  for (const std::string extra : {"", " --neighbors 25 --simulation-method sequential --simulation-neighbours 12"}) {
+    const auto r = run("interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("T.csv") +
+                           " --coords x,y,z --value v --model \"" + kModel + "\" --simulations 3 --seed 5" + extra +
+                           " --out " + path("P.csv"));
+    ASSERT_EQ(r.exit_code, 0) << r.output();
+    const CsvTable out = CsvTable::read(path("P.csv"));
+    EXPECT_EQ(out.header(), (std::vector<std::string>{"id", "x", "y", "z", "pred", "var", "sim1", "sim2", "sim3"}));
+    KrigingOptions opt;
+    SimulationOptions so;
+    so.draws = 3;
+    so.seed = 5;
+    if (!extra.empty()) {
+      opt.backend = KrigingBackend::Local;
+      opt.neighbors = 25;
+      so.method = UnconditionalMethod::Sequential;
+      so.neighbours = 12;
+    }
+    const auto sim = simulate_conditional<P3, double>(pts_, vals_, targets_, VariogramModel::parse(kModel), opt, so);
+    const auto pred = Kriging<P3, double>(pts_, vals_, VariogramModel::parse(kModel), opt).predict(targets_);
+    const Eigen::MatrixXd got = out.numeric_columns({"pred", "var", "sim1", "sim2", "sim3"});
+    for (std::size_t t = 0; t < targets_.size(); ++t) {
+      const auto i = static_cast<Eigen::Index>(t);
+      EXPECT_NEAR(got(i, 0), pred.mean[t], 1e-12 * (1.0 + std::abs(pred.mean[t]))) << extra;
+      EXPECT_NEAR(got(i, 1), pred.variance[t], 1e-12) << extra;
+      for (int k = 0; k < 3; ++k) EXPECT_DOUBLE_EQ(got(i, 2 + k), sim.draws[static_cast<std::size_t>(k)][t]) << extra;
+    }
+  }
+  const std::string base = "interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("T.csv") +
+                           " --coords x,y,z --value v --model \"" + kModel + "\" --out " + path("Q.csv");
+  auto r = run(base + " --seed 4");  // a seed without draws is a mistake, not a no-op
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("--seed applies to --simulations"));
+  r = run(base + " --simulations 2 --simulation-method turning-bands");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("--simulation-method"));
+  r = run(base + " --simulations 0");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_FALSE(fs::exists(path("Q.csv")));
 }
 
 }  // namespace

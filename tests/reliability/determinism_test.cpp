@@ -138,6 +138,15 @@ std::vector<Case> cases() {
       {"interpolate_kriging_sparse", scattered(2000),
        with(interp, {"--method", "kriging", "--backend", "sparse", "--model", "wen(sill=0.5,range=150)+nug(0.0001)"}),
        {"p.csv"}},
+      // Conditional simulation: random numbers in one order, parallel loops over independent items.
+      {"interpolate_kriging_simulations_sequential", scattered(300),
+       with(interp, {"--method", "kriging", "--model", "sph(sill=0.5,range=400)+nug(0.0001)", "--simulations", "4",
+                     "--seed", "9", "--simulation-method", "sequential", "--simulation-neighbours", "20"}),
+       {"p.csv"}},
+      {"interpolate_kriging_simulations_local", scattered(600),
+       with(interp, {"--method", "kriging", "--backend", "local", "--neighbors", "16", "--model",
+                     "exp(sill=0.5,range=200)+nug(0.0001)", "--simulations", "3", "--seed", "9"}),
+       {"p.csv"}},
       {"interpolate_kriging_auto", scattered(200), with(interp, {"--method", "kriging", "--model", "auto"}), {"p.csv"}},
       // Universal kriging with a quadratic drift (10 terms) and N >= 1000 differed between 1 and
       // 2 threads (Eigen's own parallel products, blocked by thread count): dense and sparse,

@@ -1,0 +1,320 @@
+// Conditional Gaussian simulation by conditioning an unconditional realisation by kriging
+// (errfield/conditional_simulation.hpp; the mathematics: docs/kriging.md, "Conditional simulation").
+
+#include "errfield/conditional_simulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <random>
+
+#include <Eigen/Cholesky>
+
+#include "covariance_kernel.hpp"
+#include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
+#include "kriging/kd_tree.hpp"
+
+namespace errfield {
+
+std::string_view unconditional_method_name(UnconditionalMethod method) {
+  switch (method) {
+    case UnconditionalMethod::Auto: return "auto";
+    case UnconditionalMethod::Cholesky: return "cholesky";
+    case UnconditionalMethod::Sequential: return "sequential";
+  }
+  return "auto";
+}
+
+UnconditionalMethod unconditional_method_from_name(std::string_view name) {
+  if (name == "auto") return UnconditionalMethod::Auto;
+  if (name == "cholesky") return UnconditionalMethod::Cholesky;
+  if (name == "sequential") return UnconditionalMethod::Sequential;
+  throw ArgumentError("simulation method '" + std::string(name) + "': expected auto, cholesky or sequential");
+}
+
+void SimulationOptions::validate() const {
+  if (draws < 1) throw ArgumentError("simulation options: draws = 0; expected at least 1");
+  if (neighbours < 1) throw ArgumentError("simulation options: neighbours = 0; expected at least 1");
+  if (draws_per_path < 1) throw ArgumentError("simulation options: draws_per_path = 0; expected at least 1");
+  if (cholesky_limit > 20000)
+    throw ArgumentError("simulation options: cholesky_limit = " + std::to_string(cholesky_limit) +
+                        "; expected at most 20000 (the factor of 20,000 locations is 3.2 GB)");
+}
+
+namespace detail {
+
+namespace {
+
+// Distinct places (exactly equal columns are one place, so that they get one value): the index of
+// each column's place, and the places in order of first appearance.
+struct DistinctPlaces {
+  Eigen::MatrixXd points;            // D x U
+  std::vector<Eigen::Index> of;      // M entries in [0, U)
+};
+
+DistinctPlaces distinct_places(const Eigen::MatrixXd& places) {
+  const Eigen::Index m = places.cols();
+  std::vector<Eigen::Index> order(static_cast<std::size_t>(m));
+  std::iota(order.begin(), order.end(), Eigen::Index{0});
+  std::sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) {
+    for (Eigen::Index k = 0; k < places.rows(); ++k)
+      if (places(k, a) != places(k, b)) return places(k, a) < places(k, b);
+    return a < b;
+  });
+  // representative of each column: the first column (lowest index) with equal coordinates
+  std::vector<Eigen::Index> first(static_cast<std::size_t>(m));
+  for (std::size_t k = 0; k < order.size(); ++k)
+    first[static_cast<std::size_t>(order[k])] =
+        k > 0 && places.col(order[k]) == places.col(order[k - 1]) ? first[static_cast<std::size_t>(order[k - 1])] : order[k];
+  DistinctPlaces d;
+  d.of.assign(static_cast<std::size_t>(m), -1);
+  std::vector<Eigen::Index> columns;
+  for (Eigen::Index j = 0; j < m; ++j) {
+    const Eigen::Index f = first[static_cast<std::size_t>(j)];
+    if (f == j) {
+      d.of[static_cast<std::size_t>(j)] = static_cast<Eigen::Index>(columns.size());
+      columns.push_back(j);
+    } else {
+      d.of[static_cast<std::size_t>(j)] = d.of[static_cast<std::size_t>(f)];
+    }
+  }
+  d.points.resize(places.rows(), static_cast<Eigen::Index>(columns.size()));
+  for (std::size_t u = 0; u < columns.size(); ++u) d.points.col(static_cast<Eigen::Index>(u)) = places.col(columns[u]);
+  return d;
+}
+
+std::mt19937_64 generator(std::uint64_t seed, std::uint64_t stream) {
+  std::seed_seq s{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32),
+                  static_cast<std::uint32_t>(stream), static_cast<std::uint32_t>(stream >> 32)};
+  return std::mt19937_64(s);
+}
+
+// Exact: the covariance of the distinct places factored once (pivoted LDL', which also takes
+// the positive semi-definite matrices of nugget-free smooth models), x = P' L D^1/2 e.
+Eigen::MatrixXd cholesky_draws(const Eigen::MatrixXd& points, const kernels::CovarianceKernel& kernel, double zero_lag,
+                               std::size_t columns, std::uint64_t seed) {
+  const Eigen::Index u = points.cols();
+  const int d = static_cast<int>(points.rows());
+  Eigen::MatrixXd k(u, u);
+  kernels::covariance_block(kernel, points.data(), static_cast<std::size_t>(u), points.data(), static_cast<std::size_t>(u),
+                            d, zero_lag, k.data(), static_cast<std::size_t>(u));
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(k);
+  if (ldlt.info() != Eigen::Success) throw Error("simulation: the covariance of the locations could not be factored");
+  const Eigen::VectorXd root_d = ldlt.vectorD().cwiseMax(0.0).cwiseSqrt();
+  std::mt19937_64 rng = generator(seed, 0x43484f4cULL);
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd e(u, static_cast<Eigen::Index>(columns));
+  for (Eigen::Index c = 0; c < e.cols(); ++c)
+    for (Eigen::Index i = 0; i < u; ++i) e(i, c) = normal(rng);
+  Eigen::MatrixXd y = ldlt.matrixL() * (root_d.asDiagonal() * e);
+  return ldlt.transpositionsP().transpose() * y;
+}
+
+// One random path's conditioning: for the place at each position, the earlier places it is
+// conditioned on and their simple-kriging weights, and the standard deviation of its draw.
+struct PathStep {
+  std::vector<Eigen::Index> neighbour;
+  std::vector<double> weight;
+  double sd = 0.0;
+};
+
+std::vector<PathStep> path_steps(const Eigen::MatrixXd& points, const PointTree& tree, const std::vector<Eigen::Index>& path,
+                                 const kernels::CovarianceKernel& kernel, double zero_lag, std::size_t neighbours) {
+  const Eigen::Index u = points.cols();
+  const int d = static_cast<int>(points.rows());
+  std::vector<Eigen::Index> rank(static_cast<std::size_t>(u));
+  for (std::size_t t = 0; t < path.size(); ++t) rank[static_cast<std::size_t>(path[t])] = static_cast<Eigen::Index>(t);
+  std::vector<PathStep> steps(path.size());
+#pragma omp parallel
+  {
+    std::vector<std::size_t> index;
+    std::vector<double> d2;
+#pragma omp for schedule(dynamic, 64)
+    for (std::size_t t = 0; t < path.size(); ++t) {
+      PathStep& s = steps[t];
+      const std::size_t wanted = std::min<std::size_t>(neighbours, t);
+      if (wanted > 0) {
+        // The nearest earlier places: query enough nearest places that about `wanted` of them come
+        // earlier on the (random) path, and widen until they do.
+        const double* query = points.col(path[t]).data();
+        std::size_t k = std::min<std::size_t>(static_cast<std::size_t>(u),
+                                              wanted + 1 + 2 * wanted * static_cast<std::size_t>(u) / t);
+        for (;;) {
+          index.resize(k);
+          d2.resize(k);
+          const std::size_t found = tree.nearest(query, k, index.data(), d2.data());
+          s.neighbour.clear();
+          for (std::size_t j = 0; j < found && s.neighbour.size() < wanted; ++j)
+            if (rank[index[j]] < static_cast<Eigen::Index>(t)) s.neighbour.push_back(static_cast<Eigen::Index>(index[j]));
+          if (s.neighbour.size() == wanted || k >= static_cast<std::size_t>(u)) break;
+          k = std::min<std::size_t>(static_cast<std::size_t>(u), 2 * k);
+        }
+      }
+      const std::size_t n = s.neighbour.size();
+      if (n == 0) {
+        s.sd = std::sqrt(zero_lag);
+        continue;
+      }
+      Eigen::MatrixXd a(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+      Eigen::VectorXd b(static_cast<Eigen::Index>(n));
+      for (std::size_t i = 0; i < n; ++i) {
+        const double* pi = points.col(s.neighbour[i]).data();
+        b[static_cast<Eigen::Index>(i)] = kernel(kernels::column_distance(pi, points.col(path[t]).data(), d), zero_lag);
+        for (std::size_t j = 0; j <= i; ++j)
+          a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = a(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(i)) =
+              kernel(kernels::column_distance(pi, points.col(s.neighbour[j]).data(), d), zero_lag);
+      }
+      const Eigen::LDLT<Eigen::MatrixXd> ldlt(a);
+      const Eigen::VectorXd w = ldlt.solve(b);
+      s.weight.assign(w.data(), w.data() + w.size());
+      s.sd = std::sqrt(std::max(zero_lag - b.dot(w), 0.0));
+    }
+  }
+  return steps;
+}
+
+Eigen::MatrixXd sequential_draws(const Eigen::MatrixXd& points, const kernels::CovarianceKernel& kernel, double zero_lag,
+                                 std::size_t columns, const SimulationOptions& options) {
+  const Eigen::Index u = points.cols();
+  const PointTree tree(points);
+  Eigen::MatrixXd y(u, static_cast<Eigen::Index>(columns));
+  std::normal_distribution<double> normal;
+  for (std::size_t first = 0, group = 0; first < columns; first += options.draws_per_path, ++group) {
+    const std::size_t width = std::min(options.draws_per_path, columns - first);
+    std::mt19937_64 rng = generator(options.seed, 0x53475300ULL + group);
+    std::vector<Eigen::Index> path(static_cast<std::size_t>(u));
+    std::iota(path.begin(), path.end(), Eigen::Index{0});
+    for (std::size_t i = path.size(); i > 1; --i)  // Fisher-Yates with the generator's own integers
+      std::swap(path[i - 1], path[std::uniform_int_distribution<std::size_t>(0, i - 1)(rng)]);
+    const std::vector<PathStep> steps = path_steps(points, tree, path, kernel, zero_lag, options.neighbours);
+    for (std::size_t t = 0; t < path.size(); ++t) {
+      const PathStep& s = steps[t];
+      for (std::size_t c = first; c < first + width; ++c) {
+        double mean = 0.0;
+        for (std::size_t j = 0; j < s.neighbour.size(); ++j) mean += s.weight[j] * y(s.neighbour[j], static_cast<Eigen::Index>(c));
+        y(path[t], static_cast<Eigen::Index>(c)) = mean + s.sd * normal(rng);
+      }
+    }
+  }
+  return y;
+}
+
+}  // namespace
+
+Eigen::MatrixXd embed_columns(const Eigen::MatrixXd& raw, const std::vector<double>& scales, const Anisotropy& anisotropy) {
+  if (!anisotropy.isotropic() && anisotropy.dimension() != raw.rows())
+    throw ArgumentError("simulation: the model's anisotropy " + anisotropy.to_string() + " is for " +
+                        std::to_string(anisotropy.dimension()) + " coordinates but locations have " +
+                        std::to_string(raw.rows()));
+  if (!scales.empty() && static_cast<Eigen::Index>(scales.size()) != raw.rows())
+    throw ArgumentError("simulation: the metric has " + std::to_string(scales.size()) + " weights but locations have " +
+                        std::to_string(raw.rows()) + " coordinates");
+  Eigen::MatrixXd e = raw;
+  for (std::size_t k = 0; k < scales.size(); ++k) e.row(static_cast<Eigen::Index>(k)) *= scales[k];
+  if (anisotropy.isotropic()) return e;
+  Eigen::MatrixXd mapped(e.rows(), e.cols());
+  for (Eigen::Index j = 0; j < e.cols(); ++j)
+    anisotropy.apply(e.col(j).data(), mapped.col(j).data(), static_cast<int>(e.rows()));
+  return mapped;
+}
+
+Eigen::MatrixXd simulate_unconditional_embedded(const Eigen::MatrixXd& places, const VariogramModel& model,
+                                                double zero_lag_variance, std::size_t columns,
+                                                const SimulationOptions& options, std::string& method) {
+  options.validate();
+  const kernels::CovarianceKernel kernel(model);
+  const DistinctPlaces distinct = distinct_places(places);
+  const std::size_t u = static_cast<std::size_t>(distinct.points.cols());
+  const bool exact = options.method == UnconditionalMethod::Cholesky ||
+                     (options.method == UnconditionalMethod::Auto && u <= options.cholesky_limit);
+  if (options.method == UnconditionalMethod::Cholesky && u > 20000)
+    throw ResourceError("simulation: the Cholesky method over " + std::to_string(u) +
+                        " distinct locations needs more than 3.2 GB; use the sequential method");
+  Eigen::MatrixXd y;
+  if (exact) {
+    method = "cholesky (exact, " + std::to_string(u) + " distinct locations)";
+    y = u ? cholesky_draws(distinct.points, kernel, zero_lag_variance, columns, options.seed)
+          : Eigen::MatrixXd(0, static_cast<Eigen::Index>(columns));
+  } else {
+    method = "sequential (" + std::to_string(options.neighbours) + " neighbours, " +
+             std::to_string(options.draws_per_path) + " draws per random path, " + std::to_string(u) +
+             " distinct locations)";
+    y = sequential_draws(distinct.points, kernel, zero_lag_variance, columns, options);
+  }
+  Eigen::MatrixXd out(places.cols(), static_cast<Eigen::Index>(columns));
+  for (Eigen::Index j = 0; j < places.cols(); ++j) out.row(j) = y.row(distinct.of[static_cast<std::size_t>(j)]);
+  return out;
+}
+
+SimulationOutput simulate_conditional_embedded(Eigen::MatrixXd sample_embedded, Eigen::MatrixXd sample_raw,
+                                               Eigen::MatrixXd values, Eigen::VectorXd measurement_variance,
+                                               const Eigen::MatrixXd& target_embedded, const Eigen::MatrixXd& target_raw,
+                                               const VariogramModel& model, const KrigingOptions& kriging,
+                                               const SimulationOptions& options) {
+  options.validate();
+  const kernels::CovarianceKernel kernel(model);
+  const Eigen::Index n = sample_embedded.cols(), t = target_embedded.cols(), c = values.cols();
+  const auto draws = static_cast<Eigen::Index>(options.draws);
+  const double bytes = 3.0 * 8.0 * static_cast<double>(n + t) * static_cast<double>(draws) * static_cast<double>(c);
+  if (bytes > static_cast<double>(options.memory_budget_bytes))
+    throw ResourceError("simulation: " + std::to_string(draws) + " draws at " + std::to_string(n) + " samples + " +
+                        std::to_string(t) + " targets need about " + format_number(bytes / (1024.0 * 1024.0)) +
+                        " MiB, over the budget of " +
+                        format_number(static_cast<double>(options.memory_budget_bytes) / (1024.0 * 1024.0)) +
+                        " MiB; ask for fewer draws or split the targets");
+
+  // The unconditional field: the whole process with a micro-scale nugget (C(0) = total sill), the
+  // signal alone when the nugget is measurement error.
+  const bool nugget_is_noise = kriging.nugget == NuggetTreatment::MeasurementError;
+  const double zero_lag = nugget_is_noise ? kernel.sill() - kernel.nugget() : kernel.sill();
+  Eigen::MatrixXd places(sample_embedded.rows(), n + t);
+  places << sample_embedded, target_embedded;
+  SimulationOutput out;
+  const Eigen::MatrixXd y = simulate_unconditional_embedded(places, model, zero_lag, static_cast<std::size_t>(draws * c),
+                                                            options, out.method);
+
+  // The samples' observations of Y: plus each one's noise, as the data carry theirs.
+  Eigen::MatrixXd extended(n, c * (1 + draws));
+  extended.leftCols(c) = values;
+  extended.rightCols(c * draws) = y.topRows(n);
+  {
+    std::mt19937_64 rng = generator(options.seed, 0x4e4f4953ULL);
+    std::normal_distribution<double> normal;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double noise = (measurement_variance.size() ? measurement_variance[i] : 0.0) +
+                           (nugget_is_noise ? kernel.nugget() : 0.0);
+      const double sd = std::sqrt(std::max(noise, 0.0));
+      for (Eigen::Index j = c; j < extended.cols(); ++j) extended(i, j) += sd * normal(rng);
+    }
+  }
+  // Simple kriging subtracts the known mean from every column; Y has mean 0, so it is given with
+  // the mean added and taken back below.
+  Eigen::VectorXd shift = Eigen::VectorXd::Zero(c);
+  if (kriging.kind == KrigingKind::Simple && !kriging.simple_mean.empty())
+    for (Eigen::Index k = 0; k < c; ++k)
+      shift[k] = kriging.simple_mean.size() == 1 ? kriging.simple_mean[0] : kriging.simple_mean[static_cast<std::size_t>(k)];
+  for (Eigen::Index d = 0; d < draws; ++d)
+    for (Eigen::Index k = 0; k < c; ++k) extended.col(c + d * c + k).array() += shift[k];
+
+  const auto engine = make_kriging_engine(std::move(sample_embedded), std::move(sample_raw), std::move(extended),
+                                          std::move(measurement_variance), model, kriging);
+  KrigingOutput predicted = engine_predict(*engine, target_embedded, target_raw);
+  out.kriging.status = predicted.status;
+  out.kriging.message = predicted.message;
+  out.kriging.failed_targets = predicted.failed_targets;
+  out.kriging.variance = predicted.variance;
+  if (predicted.mean.rows() != t) return out;  // not usable: no predictions at all
+  out.kriging.mean = predicted.mean.leftCols(c);
+  for (Eigen::Index d = 0; d < draws; ++d) {
+    Eigen::MatrixXd draw(t, c);
+    for (Eigen::Index k = 0; k < c; ++k)
+      draw.col(k) = predicted.mean.col(k) + (y.col(d * c + k).tail(t).array() + shift[k]).matrix() -
+                    predicted.mean.col(c + d * c + k);
+    out.draws.push_back(std::move(draw));
+  }
+  return out;
+}
+
+}  // namespace detail
+}  // namespace errfield
