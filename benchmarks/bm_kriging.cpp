@@ -7,6 +7,10 @@
 //   local  : ordinary kriging, N = 100,000, k = 32, 100,000 targets with variance
 //   sparse : ordinary kriging, N = 100,000, sph range 45 mm (~30 samples per support ball);
 //            means at 100,000 targets; with variances at 1,000 targets
+//   simulation: conditional simulation (conditional_simulation.hpp), local back end (k = 20),
+//            sequential unconditional draws (60 neighbours, 10 draws per random path): issue 22's
+//            case is 10,000 targets x 100 draws from 2,000 samples (target: under 30 s);
+//            {N, targets, draws, threads}
 // Arguments: {N, targets, threads, variance 0/1}. Peak RSS of the process is reported as max_rss_MiB.
 
 #include <sys/resource.h>
@@ -17,6 +21,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include "errfield/conditional_simulation.hpp"
 #include "errfield/kriging.hpp"
 
 namespace {
@@ -133,6 +138,37 @@ BENCHMARK(BM_KrigingSparse)
     ->ArgNames({"N", "targets", "threads", "variance"})
     ->Args({100000, 100000, 2, 0})
     ->Args({100000, 1000, 2, 1})
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+
+void BM_ConditionalSimulationLocal(benchmark::State& state) {
+  const auto n = static_cast<std::size_t>(state.range(0));
+  const auto m = static_cast<std::size_t>(state.range(1));
+  errfield::KrigingOptions opt;
+  opt.backend = errfield::KrigingBackend::Local;
+  opt.neighbors = 20;
+  opt.threads = static_cast<int>(state.range(3));
+  errfield::SimulationOptions so;
+  so.draws = static_cast<std::size_t>(state.range(2));
+  so.method = errfield::UnconditionalMethod::Sequential;
+  const Data d = simulate(n, 1);
+  const auto targets = simulate_targets(m, 2);
+  const auto model = errfield::VariogramModel::parse("sph(sill=1,range=300)+nug(0.01)");
+  for (auto _ : state) {
+    const auto r = errfield::simulate_conditional<P3, double>(d.points, d.values, targets, model, opt, so);
+    if (!r.usable()) state.SkipWithError(r.message.c_str());
+    benchmark::DoNotOptimize(r.draws.data());
+  }
+  state.counters["samples"] = static_cast<double>(n);
+  state.counters["targets"] = static_cast<double>(m);
+  state.counters["draws"] = static_cast<double>(so.draws);
+  state.counters["max_rss_MiB"] = max_rss_mib();
+}
+BENCHMARK(BM_ConditionalSimulationLocal)
+    ->ArgNames({"N", "targets", "draws", "threads"})
+    ->Args({2000, 10000, 100, 2})
+    ->Args({2000, 10000, 100, 1})
     ->Iterations(1)
     ->Unit(benchmark::kSecond)
     ->UseRealTime();

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numeric>
 #include <random>
 
@@ -119,57 +120,67 @@ struct PathStep {
   double sd = 0.0;
 };
 
-std::vector<PathStep> path_steps(const Eigen::MatrixXd& points, const PointTree& tree, const std::vector<Eigen::Index>& path,
+// The conditioning of the place at path position t on its nearest earlier places. The earlier
+// places are found exactly, in two parts: a kd-tree over the places before a checkpoint (rebuilt at
+// checkpoints growing by a factor 1.25) and a scan of the few placed since. Every position between
+// two checkpoints sees the same tree, so they are computed in parallel; each step depends only on
+// the path, so the result does not depend on the thread count.
+std::vector<PathStep> path_steps(const Eigen::MatrixXd& points, const std::vector<Eigen::Index>& path,
                                  const kernels::CovarianceKernel& kernel, double zero_lag, std::size_t neighbours) {
-  const Eigen::Index u = points.cols();
   const int d = static_cast<int>(points.rows());
-  std::vector<Eigen::Index> rank(static_cast<std::size_t>(u));
-  for (std::size_t t = 0; t < path.size(); ++t) rank[static_cast<std::size_t>(path[t])] = static_cast<Eigen::Index>(t);
-  std::vector<PathStep> steps(path.size());
+  const std::size_t m = path.size();
+  std::vector<PathStep> steps(m);
+  constexpr std::size_t kScanOnly = 64;  // below this many places a scan beats a tree
+  for (std::size_t begin = 0; begin < m;) {
+    const std::size_t tree_size = begin < kScanOnly ? 0 : begin;
+    const std::size_t end =
+        begin < kScanOnly ? std::min(kScanOnly, m) : std::min(m, std::max(begin + 1, begin + begin / 4));
+    Eigen::MatrixXd tree_points(points.rows(), static_cast<Eigen::Index>(tree_size));
+    for (std::size_t j = 0; j < tree_size; ++j) tree_points.col(static_cast<Eigen::Index>(j)) = points.col(path[j]);
+    std::unique_ptr<PointTree> tree;
+    if (tree_size > 0) tree = std::make_unique<PointTree>(tree_points);
 #pragma omp parallel
-  {
-    std::vector<std::size_t> index;
-    std::vector<double> d2;
-#pragma omp for schedule(dynamic, 64)
-    for (std::size_t t = 0; t < path.size(); ++t) {
-      PathStep& s = steps[t];
-      const std::size_t wanted = std::min<std::size_t>(neighbours, t);
-      if (wanted > 0) {
-        // The nearest earlier places: query enough nearest places that about `wanted` of them come
-        // earlier on the (random) path, and widen until they do.
-        const double* query = points.col(path[t]).data();
-        std::size_t k = std::min<std::size_t>(static_cast<std::size_t>(u),
-                                              wanted + 1 + 2 * wanted * static_cast<std::size_t>(u) / t);
-        for (;;) {
-          index.resize(k);
-          d2.resize(k);
-          const std::size_t found = tree.nearest(query, k, index.data(), d2.data());
-          s.neighbour.clear();
-          for (std::size_t j = 0; j < found && s.neighbour.size() < wanted; ++j)
-            if (rank[index[j]] < static_cast<Eigen::Index>(t)) s.neighbour.push_back(static_cast<Eigen::Index>(index[j]));
-          if (s.neighbour.size() == wanted || k >= static_cast<std::size_t>(u)) break;
-          k = std::min<std::size_t>(static_cast<std::size_t>(u), 2 * k);
+    {
+      std::vector<std::size_t> index(neighbours);
+      std::vector<double> d2(neighbours);
+      std::vector<std::pair<double, std::size_t>> candidates;  // (squared distance, path position)
+#pragma omp for schedule(dynamic, 16)
+      for (std::size_t t = begin; t < end; ++t) {
+        PathStep& s = steps[t];
+        const double* here = points.col(path[t]).data();
+        candidates.clear();
+        if (tree) {
+          const std::size_t found = tree->nearest(here, std::min(neighbours, tree_size), index.data(), d2.data());
+          for (std::size_t j = 0; j < found; ++j) candidates.emplace_back(d2[j], index[j]);
         }
+        for (std::size_t j = tree_size; j < t; ++j) {
+          const double h = kernels::column_distance(points.col(path[j]).data(), here, d);
+          candidates.emplace_back(h * h, j);
+        }
+        const std::size_t n = std::min(neighbours, candidates.size());
+        std::partial_sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(n), candidates.end());
+        s.neighbour.resize(n);
+        for (std::size_t j = 0; j < n; ++j) s.neighbour[j] = path[candidates[j].second];
+        if (n == 0) {
+          s.sd = std::sqrt(zero_lag);
+          continue;
+        }
+        Eigen::MatrixXd a(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
+        Eigen::VectorXd b(static_cast<Eigen::Index>(n));
+        for (std::size_t i = 0; i < n; ++i) {
+          const double* pi = points.col(s.neighbour[i]).data();
+          b[static_cast<Eigen::Index>(i)] = kernel(kernels::column_distance(pi, here, d), zero_lag);
+          for (std::size_t j = 0; j <= i; ++j)
+            a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = a(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(i)) =
+                kernel(kernels::column_distance(pi, points.col(s.neighbour[j]).data(), d), zero_lag);
+        }
+        const Eigen::LDLT<Eigen::MatrixXd> ldlt(a);
+        const Eigen::VectorXd w = ldlt.solve(b);
+        s.weight.assign(w.data(), w.data() + w.size());
+        s.sd = std::sqrt(std::max(zero_lag - b.dot(w), 0.0));
       }
-      const std::size_t n = s.neighbour.size();
-      if (n == 0) {
-        s.sd = std::sqrt(zero_lag);
-        continue;
-      }
-      Eigen::MatrixXd a(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
-      Eigen::VectorXd b(static_cast<Eigen::Index>(n));
-      for (std::size_t i = 0; i < n; ++i) {
-        const double* pi = points.col(s.neighbour[i]).data();
-        b[static_cast<Eigen::Index>(i)] = kernel(kernels::column_distance(pi, points.col(path[t]).data(), d), zero_lag);
-        for (std::size_t j = 0; j <= i; ++j)
-          a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = a(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(i)) =
-              kernel(kernels::column_distance(pi, points.col(s.neighbour[j]).data(), d), zero_lag);
-      }
-      const Eigen::LDLT<Eigen::MatrixXd> ldlt(a);
-      const Eigen::VectorXd w = ldlt.solve(b);
-      s.weight.assign(w.data(), w.data() + w.size());
-      s.sd = std::sqrt(std::max(zero_lag - b.dot(w), 0.0));
     }
+    begin = end;
   }
   return steps;
 }
@@ -177,7 +188,6 @@ std::vector<PathStep> path_steps(const Eigen::MatrixXd& points, const PointTree&
 Eigen::MatrixXd sequential_draws(const Eigen::MatrixXd& points, const kernels::CovarianceKernel& kernel, double zero_lag,
                                  std::size_t columns, const SimulationOptions& options) {
   const Eigen::Index u = points.cols();
-  const PointTree tree(points);
   Eigen::MatrixXd y(u, static_cast<Eigen::Index>(columns));
   std::normal_distribution<double> normal;
   for (std::size_t first = 0, group = 0; first < columns; first += options.draws_per_path, ++group) {
@@ -187,7 +197,7 @@ Eigen::MatrixXd sequential_draws(const Eigen::MatrixXd& points, const kernels::C
     std::iota(path.begin(), path.end(), Eigen::Index{0});
     for (std::size_t i = path.size(); i > 1; --i)  // Fisher-Yates with the generator's own integers
       std::swap(path[i - 1], path[std::uniform_int_distribution<std::size_t>(0, i - 1)(rng)]);
-    const std::vector<PathStep> steps = path_steps(points, tree, path, kernel, zero_lag, options.neighbours);
+    const std::vector<PathStep> steps = path_steps(points, path, kernel, zero_lag, options.neighbours);
     for (std::size_t t = 0; t < path.size(); ++t) {
       const PathStep& s = steps[t];
       for (std::size_t c = first; c < first + width; ++c) {
