@@ -12,6 +12,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include "errfield/conditional_simulation.hpp"
 #include "errfield/cross_validation.hpp"
 #include "errfield/error.hpp"
 #include "errfield/grid_idw.hpp"
@@ -113,11 +114,20 @@ struct CvRaw {
   std::vector<double> variance;
 };
 
+struct SimulationRaw {
+  std::vector<Eigen::MatrixXd> draws;  // M x K each
+  std::string method;
+  KrigingStatus status = KrigingStatus::Ok;
+  std::string message;
+  std::size_t failed = 0;
+};
+
 struct KrigingBase {
   virtual ~KrigingBase() = default;
   virtual const KrigingReport& report() const = 0;
   virtual KrigingPrediction_ predict(const TargetRows& targets) const = 0;
   virtual CvRaw cross_validate(std::size_t folds, std::uint64_t seed) const = 0;
+  virtual SimulationRaw simulate(const TargetRows& targets, const SimulationOptions& options) const = 0;
 };
 
 template <class V>
@@ -126,12 +136,25 @@ struct KrigingImpl final : KrigingBase {
   std::vector<V> values;
   VariogramModel model;
   KrigingOptions options;
+  Eigen::VectorXd measurement_variance;
   std::unique_ptr<Kriging<Eigen::VectorXd, V>> kriging;
 
   KrigingImpl(const Samples& s, const VariogramModel& m, const KrigingOptions& o, const Eigen::VectorXd& meas)
-      : points(rows_as_points(s.x)), values(rows_as_values<V>(s.z)), model(m), options(o) {
+      : points(rows_as_points(s.x)), values(rows_as_values<V>(s.z)), model(m), options(o), measurement_variance(meas) {
     std::span<const double> mv(meas.data(), static_cast<std::size_t>(meas.size()));
     kriging = std::make_unique<Kriging<Eigen::VectorXd, V>>(points, values, model, options, EuclideanMetric{}, mv);
+  }
+  SimulationRaw simulate(const TargetRows& targets, const SimulationOptions& so) const override {
+    std::span<const double> mv(measurement_variance.data(), static_cast<std::size_t>(measurement_variance.size()));
+    const auto r = simulate_conditional<Eigen::VectorXd, V>(points, values, rows_as_points(targets), model, options, so,
+                                                            EuclideanMetric{}, mv);
+    SimulationRaw out;
+    for (const auto& d : r.draws) out.draws.push_back(values_as_rows(d));
+    out.method = r.method;
+    out.status = r.status;
+    out.message = r.message;
+    out.failed = r.failed_targets;
+    return out;
   }
   const KrigingReport& report() const override { return kriging->report(); }
   KrigingPrediction_ predict(const TargetRows& targets) const override {
@@ -248,6 +271,39 @@ class PyKriging {
       r = impl_->cross_validate(k, seed);
     }
     return make_cv(samples_.z, r.fold, r.pred, r.variance, samples_.scalar);
+  }
+
+  py::array_t<double> simulate(const py::object& targets, std::size_t n, std::uint64_t seed, const std::string& method,
+                               std::size_t neighbours, std::size_t draws_per_path) const {
+    const RowsArg t = targets_arg(targets, samples_.x.cols());
+    SimulationOptions so;
+    so.draws = n;
+    so.seed = seed;
+    so.method = unconditional_method_from_name(method);
+    so.neighbours = neighbours;
+    so.draws_per_path = draws_per_path;
+    so.validate();
+    SimulationRaw r;
+    {
+      py::gil_scoped_release release;
+      r = impl_->simulate(t.data, so);
+    }
+    if (r.failed) {
+      const std::string w = std::to_string(r.failed) + " of " + std::to_string(t.data.rows()) +
+                            " targets could not be kriged (" + std::string(kriging_status_name(r.status)) +
+                            "); their draws are NaN";
+      if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
+    }
+    const auto m = static_cast<py::ssize_t>(t.data.rows());
+    const auto k = static_cast<py::ssize_t>(samples_.z.cols());
+    py::array_t<double> out = samples_.scalar ? py::array_t<double>({static_cast<py::ssize_t>(n), m})
+                                              : py::array_t<double>({static_cast<py::ssize_t>(n), m, k});
+    double* data = out.mutable_data();
+    for (std::size_t d = 0; d < r.draws.size(); ++d)
+      for (py::ssize_t i = 0; i < m; ++i)
+        for (py::ssize_t c = 0; c < k; ++c)
+          data[(static_cast<py::ssize_t>(d) * m + i) * k + c] = r.draws[d](i, c);
+    return out;
   }
 
   py::dict report() const {
@@ -453,6 +509,13 @@ void bind_interpolation(py::module_& m) {
       .def("cross_validate", &PyKriging::cross_validate, py::arg("folds") = "loo", py::arg("seed") = 1,
            "Cross-validation as `errfield cv --method kriging`: folds='loo' (closed form for dense, one local solve\n"
            "per sample for local; sparse uses folds) or k >= 2 folds shuffled by seed. Returns CrossValidation.")
+      .def("simulate", &PyKriging::simulate, py::arg("targets"), py::arg("n"), py::kw_only(), py::arg("seed") = 1,
+           py::arg("method") = "auto", py::arg("neighbours") = 60, py::arg("draws_per_path") = 10,
+           "n conditional Gaussian realisations at targets (M, D), as `errfield interpolate --simulations n --seed S`:\n"
+           "shape (n, M) for scalar values, (n, M, K) for vectors; same seed, same draws for any thread count.\n"
+           "Their mean over draws is predict()'s mean and their variance its variance (conditioning by kriging).\n"
+           "method: 'auto' (exact Cholesky up to 2,000 distinct locations, samples + targets) | 'cholesky' |\n"
+           "'sequential' (random path, each location from its `neighbours` nearest earlier ones). docs/kriging.md.")
       .def_property_readonly("report", &PyKriging::report,
                              "dict: status, message, condition_number, jitter, samples_used, merged_duplicates, drift_terms")
       .def_property_readonly("model", &PyKriging::model);

@@ -144,6 +144,16 @@ class Kriging:
     ) -> None: ...
     def predict(self, targets: ArrayLike) -> tuple[F64, F64]: ...
     def cross_validate(self, folds: int | Literal["loo"] = "loo", seed: int = 1) -> CrossValidation: ...
+    def simulate(
+        self,
+        targets: ArrayLike,
+        n: int,
+        *,
+        seed: int = 1,
+        method: Literal["auto", "cholesky", "sequential"] = "auto",
+        neighbours: int = 60,
+        draws_per_path: int = 10,
+    ) -> F64: ...
     @property
     def report(self) -> dict[str, Any]: ...
     @property

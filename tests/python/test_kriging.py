@@ -205,3 +205,26 @@ def test_thread_limit_is_the_clis():
     g = np.array([[i, j, k] for i in range(2) for j in range(2) for k in range(2)], dtype=float)
     with pytest.raises(errfield.ResourceError, match=limit):
         errfield.GridIdw(g, np.arange(8.0), threads=10**9).predict(g)
+
+
+def test_simulate_matches_cli_and_the_kriging_moments(tmp_path):
+    # The draws are the CLI's for the same seed (the CSV holds shortest round-trip numbers), and
+    # over many draws their mean and variance are the kriging's (within 5 standard errors).
+    x, z, t = data(n=40, m=12)
+    s, tt, _ = write_samples(tmp_path, x, z, t)
+    k = errfield.Kriging(x, z, MODEL)
+    draws = k.simulate(t, 3, seed=4)
+    assert draws.shape == (3, 12)
+    run_cli("interpolate", "--method", "kriging", "--samples", s, "--targets", tt, "--coords", "x,y", "--value", "v",
+            "--model", MODEL, "--simulations", "3", "--seed", "4", "--out", tmp_path / "p.csv")
+    out = read_csv(tmp_path / "p.csv")
+    for d in range(3):
+        assert np.array_equal(numbers(out[f"sim{d + 1}"]), draws[d])
+    many = k.simulate(t, 800, seed=9)
+    mean, var = k.predict(t)
+    assert np.all(np.abs(many.mean(axis=0) - mean) <= 5 * np.sqrt(var / 800))
+    assert np.all(np.abs(many.var(axis=0, ddof=1) / var - 1) <= 5 * np.sqrt(2 / 799))
+    vec = errfield.Kriging(x, np.column_stack([z, 2 * z]), MODEL).simulate(t, 2, method="sequential", neighbours=10)
+    assert vec.shape == (2, 12, 2)
+    with pytest.raises(errfield.ArgumentError):
+        k.simulate(t, 2, method="turning-bands")
