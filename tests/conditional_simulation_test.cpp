@@ -290,3 +290,35 @@ TEST(ConditionalSimulationStudy, SequentialDefaultAgainstTheKrigingVariance) {
 
 }  // namespace conditional_simulation_test
 }  // namespace errfield
+
+namespace errfield {
+namespace conditional_simulation_test {
+
+TEST(ConditionalSimulation, ExternalDriftDrawsFollowTheKrigingWithCovariates) {
+  // Kriging with external drift: the covariate's drift is filtered by the weights, so the draws
+  // still have the kriging's mean and variance (the kriging with the covariates, not without).
+  const auto samples = random_points(30, 10.0, 17), targets = random_points(12, 10.0, 18);
+  auto covariate = [](const std::vector<Point>& p) {
+    Eigen::MatrixXd c(static_cast<Eigen::Index>(p.size()), 1);
+    for (std::size_t i = 0; i < p.size(); ++i) c(static_cast<Eigen::Index>(i), 0) = std::sqrt(p[i][0] + 1.0) * std::cos(p[i][1] / 5.0);
+    return c;
+  };
+  std::vector<double> values = field_values(samples);
+  const Eigen::MatrixXd cs = covariate(samples), ct = covariate(targets);
+  for (std::size_t i = 0; i < values.size(); ++i) values[i] += 3.0 * cs(static_cast<Eigen::Index>(i), 0);
+  KrigingOptions ko;
+  ko.covariates = {"c"};
+  SimulationOptions so;
+  so.draws = 600;
+  const VariogramModel model = VariogramModel::parse("exp(sill=0.4,range=3)+nug(sill=0.01)");
+  const auto r = simulate_conditional<Point, double>(samples, values, cs, targets, ct, model, ko, so);
+  const auto p = Kriging<Point, double>(samples, values, cs, model, ko).predict(targets, ct);
+  for (std::size_t t = 0; t < targets.size(); ++t) {
+    EXPECT_NEAR(r.mean[t], p.mean[t], 1e-10);
+    EXPECT_NEAR(r.variance[t], p.variance[t], 1e-12);
+  }
+  expect_draw_statistics(r);
+}
+
+}  // namespace conditional_simulation_test
+}  // namespace errfield

@@ -155,10 +155,13 @@ Eigen::MatrixXd simulate_unconditional(std::span<const L> locations, const Vario
 /// mean the same; with the local back end the conditioning uses each target's neighbourhood.
 /// Throws as Kriging's constructor does, and ResourceError beyond the memory budget; the kriging's
 /// numerical outcome is in the result's status.
+/// External drift (KrigingOptions::covariates): `sample_covariates` (N x k) and `target_covariates`
+/// (T x k) hold the covariates' values, as Kriging's constructor and predict take them.
 template <Location L, Value V, class M = EuclideanMetric>
   requires Metric<M, L> && EmbeddableMetric<M>
 SimulationResult<V> simulate_conditional(std::span<const L> samples, std::span<const V> values,
-                                         std::span<const L> targets, const VariogramModel& model,
+                                         const Eigen::MatrixXd& sample_covariates, std::span<const L> targets,
+                                         const Eigen::MatrixXd& target_covariates, const VariogramModel& model,
                                          const KrigingOptions& kriging = {}, const SimulationOptions& options = {},
                                          const M& metric = {}, std::span<const double> measurement_variance = {}) {
   kriging.validate();
@@ -174,7 +177,7 @@ SimulationResult<V> simulate_conditional(std::span<const L> samples, std::span<c
   const int dimension = LocationTraits<L>::size(samples[0]);
   const std::vector<double> scales = EuclideanEmbedding<M>::scales(metric);
   Eigen::MatrixXd sample_raw = detail::locations_as_columns(samples, dimension, "sample");
-  const Eigen::MatrixXd target_raw = detail::locations_as_columns(targets, dimension, "target");
+  Eigen::MatrixXd target_raw = detail::locations_as_columns(targets, dimension, "target");
   Eigen::MatrixXd value_matrix(static_cast<Eigen::Index>(values.size()), kComponents);
   for (std::size_t i = 0; i < values.size(); ++i)
     for (int c = 0; c < kComponents; ++c) {
@@ -188,6 +191,12 @@ SimulationResult<V> simulate_conditional(std::span<const L> samples, std::span<c
                                                            static_cast<Eigen::Index>(measurement_variance.size()));
   Eigen::MatrixXd sample_embedded = detail::embed_columns(sample_raw, scales, model.anisotropy());
   const Eigen::MatrixXd target_embedded = detail::embed_columns(target_raw, scales, model.anisotropy());
+  // The engine takes the covariates as rows after the coordinates (the drift's, not the lags').
+  if (!kriging.covariates.empty() || sample_covariates.size() > 0 || target_covariates.size() > 0) {
+    sample_raw = detail::append_covariates(std::move(sample_raw), sample_covariates, kriging, "sample",
+                                           &kriging.sample_labels);
+    target_raw = detail::append_covariates(std::move(target_raw), target_covariates, kriging, "target", nullptr);
+  }
   detail::SimulationOutput out = detail::simulate_conditional_embedded(
       std::move(sample_embedded), std::move(sample_raw), std::move(value_matrix), std::move(meas), target_embedded,
       target_raw, model, kriging, options);
@@ -212,6 +221,17 @@ SimulationResult<V> simulate_conditional(std::span<const L> samples, std::span<c
     result.draws.push_back(std::move(draw));
   }
   return result;
+}
+
+/// Without covariates.
+template <Location L, Value V, class M = EuclideanMetric>
+  requires Metric<M, L> && EmbeddableMetric<M>
+SimulationResult<V> simulate_conditional(std::span<const L> samples, std::span<const V> values,
+                                         std::span<const L> targets, const VariogramModel& model,
+                                         const KrigingOptions& kriging = {}, const SimulationOptions& options = {},
+                                         const M& metric = {}, std::span<const double> measurement_variance = {}) {
+  return simulate_conditional<L, V, M>(samples, values, Eigen::MatrixXd(), targets, Eigen::MatrixXd(), model, kriging,
+                                       options, metric, measurement_variance);
 }
 
 }  // namespace errfield

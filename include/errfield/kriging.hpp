@@ -5,6 +5,9 @@
 ///
 /// Variants (KrigingOptions::kind): simple (known mean), ordinary (unknown constant mean) and
 /// universal (polynomial drift of order 0, 1 or 2 in the coordinates plus user drift functions).
+/// External drift (KrigingOptions::covariates): covariate values given per sample and per target
+/// add drift columns; ordinary kriging with covariates is kriging with external drift (gstat's
+/// `krige(z ~ cov, ...)`), universal kriging with covariates has the polynomial drift plus them.
 /// Back ends (KrigingOptions::backend), one interface:
 ///   - Dense: one Cholesky factorization of the N x N covariance; any N whose matrix fits in
 ///     memory (N up to ~20,000; the memory budget is checked and a ResourceError names the others).
@@ -97,7 +100,8 @@ enum class KrigingStatus {
   Ok,
   IllConditioned,       ///< solved, but the condition number exceeded max_condition_number
   NotPositiveDefinite,  ///< covariance not positive definite even after the jitter retries
-  SingularDrift,        ///< drift terms linearly dependent at the samples (F'K^-1F singular)
+  SingularDrift,        ///< drift terms linearly dependent at the samples (F'K^-1F singular);
+                        ///< the message names the first covariate that is collinear, if any
   TooFewSamples,        ///< fewer samples (or neighbours) than drift terms, or none at all
 };
 
@@ -133,6 +137,12 @@ struct KrigingOptions {
   int drift_order = 1;
   /// Universal kriging: extra drift terms (added to the polynomial ones).
   std::vector<DriftFunction> drift_functions;
+  /// External drift: names of covariates whose values are known at every sample and target (e.g.
+  /// a distance to a river, a temperature), each one more drift column after the polynomial terms
+  /// and the drift_functions. Ordinary or universal kriging only (not simple). The values come
+  /// with the data: Kriging's constructor and predict() taking a covariates matrix (one row per
+  /// point, column j = covariates[j]); the names are used in messages.
+  std::vector<std::string> covariates;
   NuggetTreatment nugget = NuggetTreatment::MicroScale;
 
   KrigingBackend backend = KrigingBackend::Dense;
@@ -275,10 +285,17 @@ std::shared_ptr<const KrigingEngine> make_kriging_engine(Eigen::MatrixXd embedde
                                                          const VariogramModel& model,
                                                          const KrigingOptions& options);
 const KrigingReport& engine_report(const KrigingEngine& engine);
+const KrigingOptions& engine_options(const KrigingEngine& engine);
 KrigingOutput engine_predict(const KrigingEngine& engine, const Eigen::MatrixXd& embedded,
                              const Eigen::MatrixXd& raw);
 KrigingOutput engine_leave_one_out(const KrigingEngine& engine);
 KrigingOutput engine_k_fold(const KrigingEngine& engine, int folds, std::uint64_t seed);
+/// `raw` (D x M coordinates) with the covariates (M x k, k = options.covariates.size()) appended
+/// as rows D..D+k-1, as the engine takes them. Throws ArgumentError when the covariates' shape
+/// does not match and InputError naming the row (`labels`, or "<what> i") and the covariate when
+/// a value is not finite.
+Eigen::MatrixXd append_covariates(Eigen::MatrixXd raw, const Eigen::MatrixXd& covariates,
+                                  const KrigingOptions& options, const char* what, const RowLabels* labels);
 }  // namespace detail
 
 /// Kriging over samples of any Location type, Value type and Euclidean-embeddable Metric.
@@ -296,8 +313,16 @@ class Kriging {
   Kriging(std::span<const L> samples, std::span<const V> values, const VariogramModel& model,
           const KrigingOptions& options = {}, const M& metric = {},
           std::span<const double> measurement_variance = {})
+      : Kriging(samples, values, Eigen::MatrixXd(), model, options, metric, measurement_variance) {}
+
+  /// With external drift: covariates is N x k, row i the values at sample i of
+  /// options.covariates[0..k-1] (k = 0: as the constructor above).
+  Kriging(std::span<const L> samples, std::span<const V> values, const Eigen::MatrixXd& covariates,
+          const VariogramModel& model, const KrigingOptions& options = {}, const M& metric = {},
+          std::span<const double> measurement_variance = {})
       : scales_(EuclideanEmbedding<M>::scales(metric)), anisotropy_(model.anisotropy()) {
     options.validate();
+    covariate_count_ = options.covariates.size();
     if (samples.size() != values.size())
       throw ArgumentError("kriging: " + std::to_string(samples.size()) + " sample locations but " +
                           std::to_string(values.size()) + " values; expected one value per location");
@@ -324,6 +349,8 @@ class Kriging {
     Eigen::VectorXd meas = Eigen::Map<const Eigen::VectorXd>(
         measurement_variance.data(), static_cast<Eigen::Index>(measurement_variance.size()));
     Eigen::MatrixXd embedded = embed(raw);
+    if (covariate_count_ > 0 || covariates.size() > 0)
+      raw = detail::append_covariates(std::move(raw), covariates, options, "sample", &options.sample_labels);
     engine_ = detail::make_kriging_engine(std::move(embedded), std::move(raw), std::move(values_matrix),
                                           std::move(meas), model, options);
   }
@@ -334,8 +361,21 @@ class Kriging {
   /// Predicts at the targets. O(M N) for the means, plus O(M N^2) for dense variances; local
   /// O(M k^3). Throws ArgumentError when a target has the wrong dimension or a non-finite coordinate.
   KrigingPrediction<V> predict(std::span<const L> targets) const {
+    if (covariate_count_ > 0)
+      throw ArgumentError("kriging: the drift has " + std::to_string(covariate_count_) +
+                          " covariate(s); pass their values at the targets (predict(targets, covariates))");
     Eigen::MatrixXd raw = to_matrix(targets, "target");
     return convert_prediction(detail::engine_predict(*engine_, embed(raw), raw));
+  }
+
+  /// With external drift: covariates is M x k, row t the covariate values at target t. `labels`
+  /// (optional) names the targets in errors ("T.csv:9").
+  KrigingPrediction<V> predict(std::span<const L> targets, const Eigen::MatrixXd& covariates,
+                               const RowLabels& labels = {.source = {}, .lines = {}, .noun = "target"}) const {
+    Eigen::MatrixXd raw = to_matrix(targets, "target");
+    Eigen::MatrixXd embedded = embed(raw);
+    raw = detail::append_covariates(std::move(raw), covariates, engine_options(), "target", &labels);
+    return convert_prediction(detail::engine_predict(*engine_, embedded, raw));
   }
 
   /// Leave-one-out cross-validation: closed form for the dense back end (Dubrule 1983), one local
@@ -437,9 +477,12 @@ class Kriging {
     return cv;
   }
 
+  const KrigingOptions& engine_options() const { return detail::engine_options(*engine_); }
+
   std::vector<double> scales_;
   Anisotropy anisotropy_;
   int dimension_ = 0;
+  std::size_t covariate_count_ = 0;
   std::shared_ptr<const detail::KrigingEngine> engine_;
 };
 

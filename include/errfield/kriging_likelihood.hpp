@@ -5,7 +5,8 @@
 /// ML in the sill when a mean or drift is estimated.
 ///
 /// With K(theta) the covariance of the observations (the model's C(h), total sill on the
-/// diagonal), F the drift (ordinary: a column of ones; universal: the polynomial drift) and
+/// diagonal), F the drift (ordinary: a column of ones; universal: the polynomial drift; plus
+/// one column per covariate, LikelihoodFitOptions::covariates) and
 /// beta_hat = (F'K^-1F)^-1 F'K^-1 z, the negative log-likelihoods are
 ///   ML:   0.5 [ log det K + (z - F beta)'K^-1(z - F beta) + N log 2 pi ]
 ///   REML: 0.5 [ log det K + log det F'K^-1F + (z - F beta)'K^-1(z - F beta) + (N - p) log 2 pi ]
@@ -49,6 +50,11 @@ struct LikelihoodFitOptions {
   KrigingKind kind = KrigingKind::Ordinary; ///< which mean the likelihood profiles out
   int drift_order = 1;                      ///< Universal: 0, 1 or 2
   double simple_mean = 0.0;                 ///< Simple: the known mean
+  /// External drift: N x k covariate values at the samples (row i = sample i), each column one
+  /// more drift column of F after the polynomial terms (ordinary: F = [1, covariates], as kriging
+  /// with KrigingOptions::covariates). Empty = none. Not with Simple; the rows must match the
+  /// samples (choose_likelihood_model, which fits on a subset, does not take them).
+  Eigen::MatrixXd covariates;
   bool fit_nugget = true;                   ///< estimate a nugget (else none)
   /// Ard: one range per coordinate (the model gets an Anisotropy::ard); needs the gradient path.
   /// Rotated (2-D/3-D): gstat's anis, angle(s) and ratio(s) fitted too (the model gets an

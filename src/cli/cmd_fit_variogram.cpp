@@ -21,6 +21,7 @@ namespace {
 struct FitVariogramArgs {
   std::string input, model, nugget = "free", weights = "nj_h2", out;
   std::string method = "wls", coords, value, anisotropy = "none", kind = "ordinary";
+  std::string covariates;  // ml/reml: external-drift columns in F
   bool weights_given = false, range_max_given = false, anisotropy_given = false, kind_given = false;
   std::string nu_text;
   bool nu_given = false;
@@ -123,6 +124,12 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
                      "at least " + std::to_string(kMinLikelihoodSamples) + " samples", a.input);
   const Eigen::MatrixXd x = t.numeric_columns(coord_names);
   const Eigen::MatrixXd z = t.numeric_columns(value_names);
+  const auto covariate_names = a.covariates.empty() ? std::vector<std::string>{} : split_column_list(a.covariates, "--covariates");
+  if (!covariate_names.empty()) {
+    if (o.kind == KrigingKind::Simple)
+      throw ArgumentError("--covariates with --kind simple0; expected --kind ordinary (external drift) or universal1/2");
+    o.covariates = t.numeric_columns(covariate_names);
+  }
   const LikelihoodFitResult r = with_source(a.input, [&] { return fit_likelihood(x, z, {structure}, o); });
   print_components(r.model);
   std::cout << (restricted ? "REML" : "ML") << " negative log-likelihood = " << format_number(r.negative_log_likelihood)
@@ -158,6 +165,7 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
                 {"anisotropy", a.anisotropy},
                 {"kind", a.kind},
                 {"coords", coord_names},
+                {"covariates", covariate_names},
                 {"values", value_names},
                 {"ranges", ranges},
                 {"range_standard_errors", errors},
@@ -184,6 +192,9 @@ void run_fit_variogram(const FitVariogramArgs& a) {
   if (a.method != "wls") throw ArgumentError("--method: '" + a.method + "'; expected wls, ml or reml");
   if (a.anisotropy_given) throw ArgumentError("--anisotropy applies to --method ml or reml");
   if (a.kind_given) throw ArgumentError("--kind applies to --method ml or reml");
+  if (!a.covariates.empty())
+    throw ArgumentError("--covariates applies to --method ml or reml; for wls, fit the residual variogram of "
+                        "'errfield variogram --covariates'");
   if (!a.coords.empty() || !a.value.empty())
     throw ArgumentError("--coords/--value belong to --method ml or reml; --method wls reads an empirical variogram");
   VariogramFitOptions o;
@@ -307,6 +318,9 @@ void add_fit_variogram_command(CLI::App& app) {
                   "ml/reml: the kriging whose mean the likelihood profiles out: ordinary (default), universal1, "
                   "universal2, or simple0 (known mean 0, as scikit-learn's GaussianProcessRegressor)")
       ->each([args](const std::string&) { args->kind_given = true; });
+  cmd->add_option("--covariates", args->covariates,
+                  "ml/reml: columns COL[,COL...] of --input added to the drift F (with --kind ordinary: the "
+                  "likelihood of kriging with external drift, interpolate --method kriging --covariates)");
   cmd->add_option("--model", args->model, "sph, exp, gau, mat (needs --nu), wen, pow or lin")->required();
   cmd->add_option("--nu", args->nu_text,
                   "Matérn smoothness nu (gstat's kappa), fixed during the fit; ml/reml: 'auto' = the most likely of "

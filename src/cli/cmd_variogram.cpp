@@ -11,6 +11,7 @@
 #include "cli/command_registry.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
+#include "errfield/trend_residuals.hpp"
 #include "errfield/variogram_direction.hpp"
 
 namespace errfield::cli {
@@ -26,6 +27,7 @@ struct VariogramArgs {
   std::string alpha, beta;
   double tol_hor = std::nan(""), tol_ver = std::nan(""), tol_axis = 45.0;
   bool per_coordinate = false;
+  std::string covariates;  // --covariates: residuals of the OLS trend 1 + these columns
 };
 
 std::vector<double> parse_angles(const std::string& text, const char* option) {
@@ -136,7 +138,12 @@ void run_variogram(const VariogramArgs& a) {
                      a.input);
   const std::vector<DirectionalRun> runs = directions(a, coord_names);
   const Eigen::MatrixXd x = table.numeric_columns(coord_names);
-  const Eigen::MatrixXd z = table.numeric_columns(value_names);
+  Eigen::MatrixXd z = table.numeric_columns(value_names);
+  if (!a.covariates.empty()) {
+    // gstat's variogram(z ~ cov): the variogram of the residuals of the ordinary least-squares trend.
+    const auto covariate_names = split_column_list(a.covariates, "--covariates");
+    z = with_source(a.input, [&] { return ols_trend_residuals(z, table.numeric_columns(covariate_names), covariate_names); });
+  }
   const LagBins bins = a.bins.empty() ? LagBins::gstat_default(x) : parse_bins_option(a.bins);
   if (a.bins.empty())
     std::cerr << "variogram: no --bins: gstat's default, 15 bins of " << format_number(bins.lag_hi(0))
@@ -245,6 +252,10 @@ void add_variogram_command(CLI::App& app) {
   cmd->add_option("--tol-axis", args->tol_axis,
                   "angular tolerance of --per-coordinate in degrees (default 45: the pairs whose squared "
                   "separation along the axis is at least half the total; the cones are then disjoint)");
+  cmd->add_option("--covariates", args->covariates,
+                  "residual variogram: the variogram of z minus its ordinary least-squares trend 1 + these columns "
+                  "(COL[,COL...] of --input), as R gstat's variogram(z ~ COL); for kriging with external drift "
+                  "(interpolate --method kriging --covariates)");
   cmd->add_option("--out", args->out, "output CSV (written atomically); default: standard output");
   cmd->footer(
       "Example:\n"

@@ -31,6 +31,7 @@ struct KrigingCliOptions {
   std::string neighbour_metric;  // "" = not given
   std::string nugget_as = "micro";
   std::string measurement_variance;
+  std::vector<std::string> covariates;  // --covariates: external-drift columns
   // interpolate only: conditional simulation
   std::size_t simulations = 0;  // 0 = none
   std::uint64_t seed = 1;
@@ -75,6 +76,12 @@ void add_kriging_options(CLI::App& cmd) {
       ->group(group);
   cmd.add_option("--measurement-variance", o.measurement_variance,
                  "Column of the samples file with each sample's measurement variance (value unit^2)")
+      ->group(group);
+  cmd.add_option("--covariates", o.covariates,
+                 "External drift: columns COL[,COL...] present in the samples and the targets files, each one more "
+                 "drift term. With --kind ordinary this is kriging with external drift (gstat's krige(z ~ COL)); with "
+                 "universal1/2 the polynomial drift plus the covariates. Not with --kind simple")
+      ->delimiter(',')
       ->group(group);
   if (cmd.get_name() != "interpolate") return;  // cv has its own --seed (the folds')
   cmd.add_option("--simulations", o.simulations,
@@ -168,6 +175,7 @@ struct Setup {
   VariogramModel model;
   KrigingOptions options;
   Eigen::VectorXd measurement_variance;
+  Eigen::MatrixXd sample_covariates;  // N x k (k = options.covariates.size())
 };
 
 Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const Eigen::MatrixXd& values,
@@ -185,10 +193,18 @@ Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const E
   s.options = kriging_options_from_text(text, cli_option_names());
   auto& opt = s.options;
   opt.sample_labels = row_labels_of(samples, "sample");
+  opt.covariates = o.covariates;
+  if (!opt.covariates.empty()) {
+    opt.validate();  // names the kind when it is simple, before any file is read for them
+    s.sample_covariates = samples.numeric_columns(opt.covariates);
+  }
 
   if (o.model.empty()) throw ArgumentError("--method kriging needs --model, e.g. --model \"sph(sill=0.3,range=400)+nug(0.002)\" or --model auto");
   if (o.model == "auto" && !((coords.colwise().maxCoeff() - coords.colwise().minCoeff()).norm() > 0.0))
     throw InputError("--model auto: all samples are at one location; cannot estimate a variogram");
+  if (o.model == "auto" && !opt.covariates.empty())
+    throw ArgumentError("--model auto does not take --covariates yet; fit the residual variogram (errfield variogram "
+                        "--covariates, or fit-variogram --method reml --covariates) and pass it as --model");
   if (o.model == "auto" && opt.backend != KrigingBackend::Sparse && coords.rows() <= kMaxLikelihoodSamples) {
     s.model = with_source(samples.source(), [&] { return likelihood_auto_model(coords, values, opt, notes); });
   } else {
@@ -200,6 +216,50 @@ Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const E
 }
 
 const char* status_word(KrigingStatus s) { return kriging_status_name(s).data(); }
+
+// k-fold cross-validation with external drift: locations are the coordinates followed by the
+// covariates (first `dimension` entries, then k), so that cross_validate draws the folds exactly
+// as without covariates.
+template <class V>
+struct ExternalDriftEstimator {
+  VariogramModel model;
+  KrigingOptions options;
+  Eigen::Index dimension = 0;
+
+  HoldOutPrediction<V> fit_predict(std::span<const Eigen::VectorXd> locations, std::span<const V> values,
+                                   std::span<const Eigen::VectorXd> query) const {
+    auto split = [&](std::span<const Eigen::VectorXd> joined, std::vector<Eigen::VectorXd>& coords) {
+      const auto k = static_cast<Eigen::Index>(options.covariates.size());
+      Eigen::MatrixXd cov(static_cast<Eigen::Index>(joined.size()), k);
+      coords.clear();
+      for (std::size_t i = 0; i < joined.size(); ++i) {
+        coords.emplace_back(joined[i].head(dimension));
+        cov.row(static_cast<Eigen::Index>(i)) = joined[i].tail(k).transpose();
+      }
+      return cov;
+    };
+    std::vector<Eigen::VectorXd> train, test;
+    const Eigen::MatrixXd train_cov = split(locations, train);
+    const Eigen::MatrixXd test_cov = split(query, test);
+    const Kriging<Eigen::VectorXd, V> kriging(std::span<const Eigen::VectorXd>(train), values, train_cov, model, options);
+    HoldOutPrediction<V> out;
+    KrigingPrediction<V> p;
+    if (kriging.report().usable()) p = kriging.predict(std::span<const Eigen::VectorXd>(test), test_cov);
+    if (p.mean.size() != query.size()) {
+      V nan_value = ValueTraits<V>::zero();
+      double& (*writable)(V&, int) = &ValueTraits<V>::component;
+      for (int c = 0; c < ValueTraits<V>::kComponents; ++c) writable(nan_value, c) = std::numeric_limits<double>::quiet_NaN();
+      out.value.assign(query.size(), nan_value);
+      if (options.compute_variance) out.variance.assign(query.size(), std::numeric_limits<double>::quiet_NaN());
+      return out;
+    }
+    out.value = std::move(p.mean);
+    out.variance = std::move(p.variance);
+    if (options.nugget == NuggetTreatment::MeasurementError)
+      for (double& v : out.variance) v += model.nugget();
+    return out;
+  }
+};
 
 // k-fold kriges each fold from the other folds' samples alone, where a duplicate pair would be
 // named by its index within that subset ("samples 3 and 7"); checked on the whole file first, so
@@ -254,7 +314,7 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
   with_value_type(c, [&]<class V>() {
     const auto values = rows_as_values<V>(r.sample_values);
     std::span<const double> meas(s.measurement_variance.data(), static_cast<std::size_t>(s.measurement_variance.size()));
-    const Kriging<Eigen::VectorXd, V> kriging(points, values, s.model, s.options, {}, meas);
+    const Kriging<Eigen::VectorXd, V> kriging(points, values, s.sample_covariates, s.model, s.options, {}, meas);
     const auto& rep = kriging.report();
     if (!rep.usable())
       throw Error(r.samples->source() + ": kriging failed: " + std::string(status_word(rep.status)) + ": " + rep.message);
@@ -267,7 +327,10 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
       so.seed = cli_options.seed;
       so.method = simulation_method;
       so.neighbours = cli_options.simulation_neighbours;
-      const auto sim = simulate_conditional<Eigen::VectorXd, V>(points, values, targets, s.model, s.options, so, {}, meas);
+      const Eigen::MatrixXd target_covariates =
+          s.options.covariates.empty() ? Eigen::MatrixXd() : r.targets->numeric_columns(s.options.covariates);
+      const auto sim = simulate_conditional<Eigen::VectorXd, V>(points, values, s.sample_covariates, targets,
+                                                                target_covariates, s.model, s.options, so, {}, meas);
       pred.status = sim.status;
       pred.message = sim.message;
       pred.mean = sim.mean;
@@ -284,7 +347,9 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
       result.notes.push_back("simulation: " + std::to_string(sim.draws.size()) + " conditional draws (seed " +
                              std::to_string(cli_options.seed) + "), unconditional field by " + sim.method);
     } else {
-      pred = kriging.predict(targets);
+      pred = s.options.covariates.empty()
+                 ? kriging.predict(targets)
+                 : kriging.predict(targets, r.targets->numeric_columns(s.options.covariates), r.target_labels);
     }
     result.pred = values_as_rows(pred.mean);
     if (pred.failed_targets) {
@@ -299,6 +364,7 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
       result.extra_columns.emplace(result.extra_columns.begin(), *it, pred.variance);
     result.notes.push_back("kriging: " + std::string(kriging_kind_name(s.options.kind)) +
                            (s.options.kind == KrigingKind::Universal ? " (drift order " + std::to_string(s.options.drift_order) + ")" : std::string()) +
+                           (s.options.covariates.empty() ? std::string() : " with external drift (" + std::to_string(s.options.covariates.size()) + " covariate(s))") +
                            ", model " + s.model.to_string() + ", " + std::string(kriging_backend_name(s.options.backend)) +
                            " back end" +
                            (std::isfinite(rep.condition_number) ? ", condition number ~" + format_number(rep.condition_number) : std::string()));
@@ -318,7 +384,7 @@ CrossValidationOutput cross_validate_kriging(const CrossValidationRequest& r) {
       // Leave-one-out: closed form (dense) or one local solve per sample, from one set-up.
       std::span<const double> meas(s.measurement_variance.data(), static_cast<std::size_t>(s.measurement_variance.size()));
       auto options = s.options;
-      const Kriging<Eigen::VectorXd, V> kriging(points, values, s.model, options, {}, meas);
+      const Kriging<Eigen::VectorXd, V> kriging(points, values, s.sample_covariates, s.model, options, {}, meas);
       if (kriging.report().merged_duplicates)
         throw InputError(r.samples->source() + ": cv --method kriging: duplicate samples; remove them first",
                          r.samples->source());
@@ -336,11 +402,22 @@ CrossValidationOutput cross_validate_kriging(const CrossValidationRequest& r) {
       return;
     }
     if (s.options.duplicates == DuplicatePolicy::Error) refuse_duplicate_samples(r.sample_coords, s.options.sample_labels);
-    KrigingEstimator<Eigen::VectorXd, V> estimator{s.model, s.options, {}};
     CrossValidationOptions cvo;
     cvo.folds = r.folds;
     cvo.seed = r.seed;
-    const auto result = cross_validate(estimator, std::span<const Eigen::VectorXd>(points), std::span<const V>(values), cvo);
+    CrossValidationResult<V> result;
+    if (s.options.covariates.empty()) {
+      KrigingEstimator<Eigen::VectorXd, V> estimator{s.model, s.options, {}};
+      result = cross_validate(estimator, std::span<const Eigen::VectorXd>(points), std::span<const V>(values), cvo);
+    } else {
+      // The same folds as without covariates: each location carries its covariates after its
+      // coordinates, and the estimator splits them again.
+      Eigen::MatrixXd joined(r.sample_coords.rows(), r.sample_coords.cols() + s.sample_covariates.cols());
+      joined << r.sample_coords, s.sample_covariates;
+      const auto joined_points = rows_as_points(joined);
+      const ExternalDriftEstimator<V> estimator{s.model, s.options, static_cast<Eigen::Index>(r.sample_coords.cols())};
+      result = cross_validate(estimator, std::span<const Eigen::VectorXd>(joined_points), std::span<const V>(values), cvo);
+    }
     out.fold = result.fold;
     out.pred = values_as_rows(result.predicted);
     out.variance = result.variance;

@@ -65,6 +65,15 @@ void KrigingOptions::validate() const {
   };
   if (kind == KrigingKind::Universal && (drift_order < 0 || drift_order > 2))
     fail("drift_order", std::to_string(drift_order), "0, 1 or 2");
+  if (kind == KrigingKind::Simple && !covariates.empty())
+    fail("covariates", std::to_string(covariates.size()) + " covariate(s)",
+         "none with simple kriging (a known mean has no drift); use ordinary kriging (external drift) or universal");
+  for (std::size_t i = 0; i < covariates.size(); ++i) {
+    if (covariates[i].empty()) fail("covariates[" + std::to_string(i) + "]", "an empty name", "a name");
+    for (std::size_t j = 0; j < i; ++j)
+      if (covariates[j] == covariates[i])
+        fail("covariates[" + std::to_string(i) + "]", "'" + covariates[i] + "'", "a name not given twice");
+  }
   if (kind != KrigingKind::Universal && !drift_functions.empty())
     fail("drift_functions", std::to_string(drift_functions.size()) + " functions",
          "none unless kind is Universal");
@@ -104,6 +113,10 @@ KrigingEngine::KrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, Eige
       replicates_(std::move(replicates)) {
   options_.validate();
   dimension_ = static_cast<int>(points_.rows());
+  covariates_ = static_cast<int>(options_.covariates.size());
+  if (raw_.rows() != dimension_ + covariates_)
+    throw ArgumentError("kriging: " + std::to_string(raw_.rows() - dimension_) + " covariate rows for the " +
+                        std::to_string(covariates_) + " covariates of the options");
   components_ = static_cast<int>(values_.cols());
   const auto n = static_cast<std::size_t>(points_.cols());
   if (meas_.size() == 0) meas_ = Eigen::VectorXd::Zero(points_.cols());
@@ -132,8 +145,10 @@ KrigingEngine::KrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, Eige
   tree_ = std::make_unique<PointTree>(points_);
   merge_duplicates();
   // gstat's neighbourhoods: the coordinates as given (raw_ is rebuilt by merge_duplicates).
-  if (options_.backend == KrigingBackend::Local && options_.neighbour_metric == NeighbourMetric::Euclidean)
-    search_tree_ = std::make_unique<PointTree>(raw_);
+  if (options_.backend == KrigingBackend::Local && options_.neighbour_metric == NeighbourMetric::Euclidean) {
+    search_points_ = raw_.topRows(dimension_);  // without the covariates
+    search_tree_ = std::make_unique<PointTree>(search_points_);
+  }
   set_observation_noise();
   observed_ = values_;
   if (options_.kind == KrigingKind::Simple) values_.rowwise() -= simple_mean_.transpose();
@@ -226,7 +241,7 @@ void KrigingEngine::merge_duplicates() {
   }
   if (keep.size() == n) return;
   const auto m = static_cast<Eigen::Index>(keep.size());
-  Eigen::MatrixXd pts(dimension_, m), raw(dimension_, m), vals = Eigen::MatrixXd::Zero(m, components_);
+  Eigen::MatrixXd pts(dimension_, m), raw(raw_.rows(), m), vals = Eigen::MatrixXd::Zero(m, components_);
   Eigen::VectorXd meas = Eigen::VectorXd::Zero(m), reps = Eigen::VectorXd::Zero(m);
   for (Eigen::Index g = 0; g < m; ++g) {
     pts.col(g) = points_.col(static_cast<Eigen::Index>(keep[static_cast<std::size_t>(g)]));
@@ -279,13 +294,17 @@ void KrigingEngine::build_drift() {
                      static_cast<int>(options_.drift_functions.size());
       break;
   }
+  if (options_.kind != KrigingKind::Simple) drift_terms_ += covariates_;
   // Polynomial terms in centred, scaled coordinates: same span as the raw monomials (so the same
   // predictions), far better conditioned for coordinates in the thousands of mm.
-  drift_center_ = Eigen::VectorXd::Zero(d);
-  drift_scale_ = Eigen::VectorXd::Ones(d);
+  // Covariates too: an affine change of a drift column leaves its span with the constant, and so
+  // the predictions, unchanged.
+  const auto rows = raw_.rows();
+  drift_center_ = Eigen::VectorXd::Zero(rows);
+  drift_scale_ = Eigen::VectorXd::Ones(rows);
   if (raw_.cols() > 0) {
     drift_center_ = raw_.rowwise().mean();
-    for (int k = 0; k < d; ++k) {
+    for (Eigen::Index k = 0; k < rows; ++k) {
       const double s = (raw_.row(k).array() - drift_center_[k]).abs().maxCoeff();
       drift_scale_[k] = s > 0.0 ? s : 1.0;
     }
@@ -304,13 +323,25 @@ std::string KrigingEngine::drift_description() const {
         " quadratic terms)";
   if (!options_.drift_functions.empty())
     s += " plus " + std::to_string(options_.drift_functions.size()) + " drift function(s)";
+  if (covariates_ > 0) {
+    s += " plus the covariate" + std::string(covariates_ > 1 ? "s " : " ");
+    for (int j = 0; j < covariates_; ++j)
+      s += (j ? ", '" : "'") + options_.covariates[static_cast<std::size_t>(j)] + "'";
+  }
   return s;
 }
 
 std::string KrigingEngine::singular_drift_message(double rcond) const {
   // The geometry behind it: how many coordinate directions the samples span (singular values of
   // the centred, scaled coordinates, relative to the largest).
-  const Eigen::Index d = raw_.rows(), n = raw_.cols();
+  const Eigen::Index d = dimension_, n = raw_.cols();
+  if (covariates_ > 0) {
+    const std::string named = collinear_covariate_message();
+    if (!named.empty())
+      return "the " + std::to_string(drift_terms_) + " drift terms of the " + drift_description() +
+             " are (nearly) linearly dependent at the " + std::to_string(n) + " samples (reciprocal condition " +
+             format_number(rcond) + "): " + named;
+  }
   int spanned = 0;
   if (n > 1) {
     Eigen::MatrixXd c(d, n);
@@ -342,17 +373,54 @@ void KrigingEngine::drift_row(const double* raw_point, double* out) const {
   if (drift_terms_ == 0) return;
   int t = 0;
   out[t++] = 1.0;
-  if (options_.kind != KrigingKind::Universal) return;
   const int d = dimension_;
-  if (options_.drift_order >= 1)
-    for (int k = 0; k < d; ++k) out[t++] = (raw_point[k] - drift_center_[k]) / drift_scale_[k];
-  if (options_.drift_order >= 2)
-    for (int k = 0; k < d; ++k)
-      for (int l = k; l < d; ++l)
-        out[t++] = (raw_point[k] - drift_center_[k]) / drift_scale_[k] * (raw_point[l] - drift_center_[l]) /
-                   drift_scale_[l];
-  for (const auto& f : options_.drift_functions)
-    out[t++] = f(std::span<const double>(raw_point, static_cast<std::size_t>(d)));
+  if (options_.kind == KrigingKind::Universal) {
+    if (options_.drift_order >= 1)
+      for (int k = 0; k < d; ++k) out[t++] = (raw_point[k] - drift_center_[k]) / drift_scale_[k];
+    if (options_.drift_order >= 2)
+      for (int k = 0; k < d; ++k)
+        for (int l = k; l < d; ++l)
+          out[t++] = (raw_point[k] - drift_center_[k]) / drift_scale_[k] * (raw_point[l] - drift_center_[l]) /
+                     drift_scale_[l];
+    for (const auto& f : options_.drift_functions)
+      out[t++] = f(std::span<const double>(raw_point, static_cast<std::size_t>(d)));
+  }
+  // External drift: the covariates stored after the coordinates.
+  for (int j = 0; j < covariates_; ++j) out[t++] = (raw_point[d + j] - drift_center_[d + j]) / drift_scale_[d + j];
+}
+
+std::string KrigingEngine::collinear_covariate_message() const {
+  // Add the covariate columns one at a time to the drift terms before them; the first that does
+  // not raise the numerical rank of F is the culprit.
+  const Eigen::Index n = f_.rows(), p = f_.cols(), first = p - covariates_;
+  auto rank_of = [&](Eigen::Index cols) {
+    if (cols == 0) return Eigen::Index{0};
+    Eigen::MatrixXd f = f_.leftCols(cols);
+    for (Eigen::Index c = 0; c < cols; ++c) {
+      const double norm = f.col(c).norm();
+      if (norm > 0.0) f.col(c) /= norm;
+    }
+    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(f).singularValues();
+    Eigen::Index r = 0;
+    for (Eigen::Index k = 0; k < sv.size(); ++k) r += sv[k] > 1e-7 * sv[0] ? 1 : 0;
+    return r;
+  };
+  if (n == 0) return {};
+  Eigen::Index before = rank_of(first);
+  for (Eigen::Index j = 0; j < covariates_; ++j) {
+    const Eigen::Index after = rank_of(first + j + 1);
+    const std::string& name = options_.covariates[static_cast<std::size_t>(j)];
+    if (after == before) {
+      const auto row = static_cast<Eigen::Index>(dimension_ + j);
+      const bool constant = raw_.row(row).maxCoeff() == raw_.row(row).minCoeff();
+      return "the covariate '" + name + "' is " +
+             (constant ? "constant (" + format_number(raw_(row, 0)) + ") at the samples, like the mean term"
+                       : std::string("(nearly) a linear combination of the drift terms before it at the samples")) +
+             "; drop it, or use samples where it varies independently";
+    }
+    before = after;
+  }
+  return {};
 }
 
 Eigen::MatrixXd KrigingEngine::drift_matrix(const Eigen::MatrixXd& raw) const {
@@ -395,6 +463,9 @@ KrigingOutput KrigingEngine::predict(const Eigen::MatrixXd& embedded, const Eige
   if (embedded.rows() != dimension_)
     throw ArgumentError("kriging: targets have " + std::to_string(embedded.rows()) + " coordinates; samples have " +
                         std::to_string(dimension_));
+  if (raw.rows() != dimension_ + covariates_ || raw.cols() != embedded.cols())
+    throw ArgumentError("kriging: targets come with " + std::to_string(raw.rows() - dimension_) +
+                        " covariate values each; the drift has " + std::to_string(covariates_) + " covariates");
   if (!report_.usable()) return unusable_output();
   switch (options_.backend) {
     case KrigingBackend::Dense: return predict_dense(embedded, raw);
@@ -497,6 +568,35 @@ std::shared_ptr<const KrigingEngine> make_kriging_engine(Eigen::MatrixXd embedde
                                                std::move(measurement_variance), model, options);
 }
 const KrigingReport& engine_report(const KrigingEngine& engine) { return engine.report(); }
+const KrigingOptions& engine_options(const KrigingEngine& engine) { return engine.options(); }
+
+Eigen::MatrixXd append_covariates(Eigen::MatrixXd raw, const Eigen::MatrixXd& covariates, const KrigingOptions& options,
+                                  const char* what, const RowLabels* labels) {
+  const auto k = static_cast<Eigen::Index>(options.covariates.size());
+  const Eigen::Index m = raw.cols(), d = raw.rows();
+  if (covariates.cols() != k || (k > 0 && covariates.rows() != m))
+    throw ArgumentError("kriging: covariates given as a " + std::to_string(covariates.rows()) + " x " +
+                        std::to_string(covariates.cols()) + " matrix for " + std::to_string(m) + " " + what +
+                        "s; expected " + std::to_string(m) + " x " + std::to_string(k) + " (one row per " + what +
+                        ", one column per name in KrigingOptions::covariates)");
+  if (k == 0) return raw;
+  const bool labelled = labels != nullptr && labels->lines.size() == static_cast<std::size_t>(m) && !labels->source.empty();
+  for (Eigen::Index i = 0; i < m; ++i)
+    for (Eigen::Index j = 0; j < k; ++j) {
+      const double v = covariates(i, j);
+      if (std::isfinite(v)) continue;
+      const std::string& name = options.covariates[static_cast<std::size_t>(j)];
+      const auto row = static_cast<std::size_t>(i);
+      const std::string where = labelled ? (*labels)(row) + ": kriging: covariate '" + name + "'"
+                                         : std::string("kriging: covariate '") + name + "' of " + what + " " +
+                                               std::to_string(i);
+      throw InputError(where + " is " + format_number(v) + "; expected a finite number", labelled ? labels->source : "",
+                       labelled ? labels->line(row) : 0, name);
+    }
+  raw.conservativeResize(d + k, Eigen::NoChange);
+  raw.bottomRows(k) = covariates.transpose();
+  return raw;
+}
 KrigingOutput engine_predict(const KrigingEngine& engine, const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) {
   return engine.predict(embedded, raw);
 }

@@ -42,6 +42,7 @@ class KrigingEngine {
   KrigingEngine& operator=(const KrigingEngine&) = delete;
 
   const KrigingReport& report() const { return report_; }
+  const KrigingOptions& options() const { return options_; }
   KrigingOutput predict(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) const;
   KrigingOutput leave_one_out() const;
   KrigingOutput k_fold(int folds, std::uint64_t seed) const;
@@ -60,6 +61,9 @@ class KrigingEngine {
   std::string drift_description() const;
   // SingularDrift report message: the drift order and the sample geometry that makes it singular.
   std::string singular_drift_message(double rcond) const;
+  // Names the first covariate that adds nothing to the drift terms before it at the samples;
+  // empty when none does.
+  std::string collinear_covariate_message() const;
   Eigen::MatrixXd drift_matrix(const Eigen::MatrixXd& raw) const;  // p x M
   // C(0) on the target side: the total sill (micro-scale nugget) or without nugget (signal)
   double target_variance() const;
@@ -82,7 +86,8 @@ class KrigingEngine {
   VariogramModel model_;
   kernels::CovarianceKernel kernel_;
   Eigen::MatrixXd points_;     // D x N embedded coordinates
-  Eigen::MatrixXd raw_;        // D x N original coordinates (drift)
+  Eigen::MatrixXd raw_;        // (D + k) x N original coordinates (drift), then the k covariates
+  Eigen::MatrixXd search_points_;  // D x N coordinates for search_tree_
   Eigen::MatrixXd values_;     // N x C, simple kriging: mean subtracted
   Eigen::MatrixXd observed_;   // N x C as given (after merging), for cross-validation
   Eigen::VectorXd meas_;       // N (zeros when none given; after merging: variance of the mean)
@@ -94,6 +99,7 @@ class KrigingEngine {
   int dimension_ = 0;
   int components_ = 0;
   int drift_terms_ = 0;
+  int covariates_ = 0;  // k: external-drift covariates (rows D.. of raw_, last columns of f_)
   Eigen::VectorXd drift_center_, drift_scale_;
   Eigen::MatrixXd f_;  // N x p
   std::unique_ptr<PointTree> tree_;

@@ -33,6 +33,16 @@ Eigen::MatrixXd drift(const Eigen::MatrixXd& x, const LikelihoodFitOptions& o) {
   if (order >= 2)
     for (Eigen::Index k = 0; k < d; ++k)
       for (Eigen::Index l = k; l < d; ++l) cols.push_back(u.col(k).cwiseProduct(u.col(l)));
+  // External drift: one more column per covariate, centred and scaled like the coordinates.
+  const Eigen::MatrixXd& cov = o.covariates;
+  if (cov.cols() > 0 && cov.rows() != n)
+    throw ArgumentError("likelihood options: covariates has " + std::to_string(cov.rows()) + " rows for " +
+                        std::to_string(n) + " samples; expected one row per sample");
+  for (Eigen::Index j = 0; j < cov.cols(); ++j) {
+    const double mean = cov.col(j).mean();
+    const double spread = (cov.col(j).array() - mean).abs().maxCoeff();
+    cols.push_back((cov.col(j).array() - mean) / (spread > 0.0 ? spread : 1.0));
+  }
   Eigen::MatrixXd f(n, static_cast<Eigen::Index>(cols.size()));
   for (std::size_t c = 0; c < cols.size(); ++c) f.col(static_cast<Eigen::Index>(c)) = cols[c];
   return f;
@@ -153,6 +163,13 @@ void LikelihoodFitOptions::validate() const {
   if (kind == KrigingKind::Universal && (drift_order < 0 || drift_order > 2))
     throw ArgumentError("likelihood options: drift_order = " + std::to_string(drift_order) + "; expected 0, 1 or 2");
   if (!std::isfinite(simple_mean)) throw ArgumentError("likelihood options: simple_mean is not finite");
+  if (kind == KrigingKind::Simple && covariates.cols() > 0)
+    throw ArgumentError("likelihood options: covariates with kind simple; expected ordinary (external drift) or universal");
+  for (Eigen::Index i = 0; i < covariates.rows(); ++i)
+    for (Eigen::Index j = 0; j < covariates.cols(); ++j)
+      if (!std::isfinite(covariates(i, j)))
+        throw InputError("likelihood options: covariates(" + std::to_string(i) + ", " + std::to_string(j) + ") is " +
+                         format_number(covariates(i, j)) + "; expected a finite number");
   if (max_evaluations < 1) throw ArgumentError("likelihood options: max_evaluations = " + std::to_string(max_evaluations) + "; expected >= 1");
   if (!(relative_tolerance > 0.0)) throw ArgumentError("likelihood options: relative_tolerance must be > 0");
   if (starts < 1 || local_runs < 1) throw ArgumentError("likelihood options: starts and local_runs must be >= 1");
