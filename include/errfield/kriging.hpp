@@ -288,6 +288,10 @@ const KrigingReport& engine_report(const KrigingEngine& engine);
 const KrigingOptions& engine_options(const KrigingEngine& engine);
 KrigingOutput engine_predict(const KrigingEngine& engine, const Eigen::MatrixXd& embedded,
                              const Eigen::MatrixXd& raw);
+/// Block kriging: `embedded`/`raw` hold consecutive groups of `points_per_block` points, one group per
+/// block (the same offsets in every group); one prediction per block (dense and local back ends).
+KrigingOutput engine_predict_blocks(const KrigingEngine& engine, const Eigen::MatrixXd& embedded,
+                                    const Eigen::MatrixXd& raw, const Eigen::VectorXd& block_weights);
 KrigingOutput engine_leave_one_out(const KrigingEngine& engine);
 KrigingOutput engine_k_fold(const KrigingEngine& engine, int folds, std::uint64_t seed);
 /// `raw` (D x M coordinates) with the covariates (M x k, k = options.covariates.size()) appended
@@ -297,6 +301,24 @@ KrigingOutput engine_k_fold(const KrigingEngine& engine, int folds, std::uint64_
 Eigen::MatrixXd append_covariates(Eigen::MatrixXd raw, const Eigen::MatrixXd& covariates,
                                   const KrigingOptions& options, const char* what, const RowLabels* labels);
 }  // namespace detail
+
+/// Block kriging (gstat's `krige(..., block = c(dx, dy))`): the prediction of the average of the
+/// field over a block centred on each target, with that average's error variance. The block
+/// average is integrated by a product rule of points_per_axis points per coordinate: Gauss-Legendre
+/// (gstat's default, 4 per axis) or a regular grid at -size/2 + (i + 0.5) size / n with equal
+/// weights (gstat's `set = list(nblockdiscr = n)`). Covariances and drift terms are averaged over
+/// the points with the rule's weights, and the block-to-block covariance over all their pairs
+/// without the nugget (the micro-scale variation averages out over a block, as in gstat).
+struct BlockDiscretization {
+  std::vector<double> size;  ///< block extent along each coordinate, in the coordinates' unit (> 0)
+  int points_per_axis = 4;
+  enum class Rule { GaussLegendre, Regular } rule = Rule::GaussLegendre;
+  /// D x points_per_axis^D offsets from the block centre, and their weights (summing to 1). Throws
+  /// ArgumentError when `size` does not have `dimension` positive finite entries, points_per_axis
+  /// is not in [1, 64], or the block has more than 4,096 points.
+  Eigen::MatrixXd offsets(int dimension) const;
+  Eigen::VectorXd weights(int dimension) const;
+};
 
 /// Kriging over samples of any Location type, Value type and Euclidean-embeddable Metric.
 ///
@@ -376,6 +398,28 @@ class Kriging {
     Eigen::MatrixXd embedded = embed(raw);
     raw = detail::append_covariates(std::move(raw), covariates, engine_options(), "target", &labels);
     return convert_prediction(detail::engine_predict(*engine_, embedded, raw));
+  }
+
+  /// Block kriging at blocks centred on `centres` (see BlockDiscretization); with external drift,
+  /// `covariates` (M x k) holds each block's covariate values (the block's average, as gstat takes
+  /// them). Dense and local back ends (local: the neighbours of the block's centre). Throws
+  /// ArgumentError for the sparse back end or a bad block.
+  KrigingPrediction<V> predict_blocks(std::span<const L> centres, const BlockDiscretization& block,
+                                      const Eigen::MatrixXd& covariates = {},
+                                      const RowLabels& labels = {.source = {}, .lines = {}, .noun = "target"}) const {
+    const Eigen::MatrixXd offsets = block.offsets(dimension_);
+    const Eigen::Index g = offsets.cols(), m = static_cast<Eigen::Index>(centres.size());
+    const Eigen::MatrixXd centre_raw = to_matrix(centres, "target");
+    Eigen::MatrixXd raw(dimension_, m * g);
+    for (Eigen::Index t = 0; t < m; ++t) raw.middleCols(t * g, g) = offsets.colwise() + centre_raw.col(t);
+    const Eigen::MatrixXd embedded = embed(raw);
+    if (covariate_count_ > 0 || covariates.size() > 0) {
+      Eigen::MatrixXd with = detail::append_covariates(centre_raw, covariates, engine_options(), "target", &labels);
+      raw.conservativeResize(with.rows(), Eigen::NoChange);
+      for (Eigen::Index t = 0; t < m; ++t)
+        raw.block(dimension_, t * g, with.rows() - dimension_, g).colwise() = with.col(t).tail(with.rows() - dimension_);
+    }
+    return convert_prediction(detail::engine_predict_blocks(*engine_, embedded, raw, block.weights(dimension_)));
   }
 
   /// Leave-one-out cross-validation: closed form for the dense back end (Dubrule 1983), one local

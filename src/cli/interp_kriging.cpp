@@ -37,11 +37,16 @@ struct KrigingCliOptions {
   std::uint64_t seed = 1;
   std::string simulation_method = "auto";
   std::size_t simulation_neighbours = 60;
+  // interpolate only: block kriging
+  std::vector<double> block;  // empty = point kriging
+  int block_points = 4;
+  std::string block_rule = "gauss";
 };
 KrigingCliOptions cli_options;
 // interpolate's --seed, --simulation-method, --simulation-neighbours: refused without --simulations.
 // Kept apart from cli_options, which cv's registration resets after interpolate's.
 std::vector<CLI::Option*> simulation_only_options;
+std::vector<CLI::Option*> block_only_options;  // --block-points: refused without --block
 
 void add_kriging_options(CLI::App& cmd) {
   auto& o = cli_options;
@@ -84,6 +89,22 @@ void add_kriging_options(CLI::App& cmd) {
       ->delimiter(',')
       ->group(group);
   if (cmd.get_name() != "interpolate") return;  // cv has its own --seed (the folds')
+  cmd.add_option("--block", o.block,
+                 "Block kriging: predict the average over a block of size DX,DY[,DZ] (one size per --coords column, in "
+                 "their unit) centred on each target, and that average's error variance (gstat's krige(..., block = "
+                 "c(DX, DY))); dense and local back ends")
+      ->delimiter(',')
+      ->group(group);
+  auto* block_points = cmd.add_option("--block-points", o.block_points,
+                                      "--block: discretization points per axis (default 4, as gstat: 16 points in 2-D)")
+                           ->check(CLI::Range(1, 64))
+                           ->group(group);
+  auto* block_rule = cmd.add_option("--block-rule", o.block_rule,
+                                    "--block: how the block average is integrated: gauss (default, Gauss-Legendre "
+                                    "points and weights, gstat's default) | regular (an even grid of equal weights, "
+                                    "gstat's set = list(nblockdiscr = N))")
+                         ->check(CLI::IsMember({"gauss", "regular"}))
+                         ->group(group);
   cmd.add_option("--simulations", o.simulations,
                  "Conditional Gaussian simulation: also write N realisations of the field that honour the samples "
                  "and the model (nugget and drift included), columns sim1..simN (sim<k>_<col> for vectors); their "
@@ -104,6 +125,7 @@ void add_kriging_options(CLI::App& cmd) {
       ->check(CLI::Range(std::size_t{1}, std::size_t{1000}))
       ->group(group);
   simulation_only_options = {seed, method, neighbours};
+  block_only_options = {block_points, block_rule};
 }
 
 // gstat's defaults for variogram(): cutoff one third of the bounding-box diagonal, 15 bins.
@@ -298,6 +320,14 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
   if (cli_options.simulations == 0)
     for (const CLI::Option* o : simulation_only_options)
       if (o->count()) throw ArgumentError(o->get_name() + " applies to --simulations N (conditional simulation); add it or drop " + o->get_name());
+  if (cli_options.block.empty())
+    for (const CLI::Option* o : block_only_options)
+      if (o->count()) throw ArgumentError(o->get_name() + " applies to --block DX,DY[,DZ] (block kriging); add it or drop " + o->get_name());
+  if (!cli_options.block.empty() && cli_options.simulations > 0)
+    throw ArgumentError("--simulations draws at points; it does not combine with --block (block kriging)");
+  if (!cli_options.block.empty() && cli_options.block.size() != r.coord_columns.size())
+    throw ArgumentError("--block: " + std::to_string(cli_options.block.size()) + " sizes for " +
+                        std::to_string(r.coord_columns.size()) + " --coords columns; expected one size per coordinate");
   UnconditionalMethod simulation_method = UnconditionalMethod::Auto;
   try {
     simulation_method = unconditional_method_from_name(cli_options.simulation_method);
@@ -346,6 +376,21 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
       }
       result.notes.push_back("simulation: " + std::to_string(sim.draws.size()) + " conditional draws (seed " +
                              std::to_string(cli_options.seed) + "), unconditional field by " + sim.method);
+    } else if (!cli_options.block.empty()) {
+      BlockDiscretization block{cli_options.block, cli_options.block_points};
+      block.rule = cli_options.block_rule == "regular" ? BlockDiscretization::Rule::Regular
+                                                       : BlockDiscretization::Rule::GaussLegendre;
+      const Eigen::MatrixXd target_covariates =
+          s.options.covariates.empty() ? Eigen::MatrixXd() : r.targets->numeric_columns(s.options.covariates);
+      pred = kriging.predict_blocks(targets, block, target_covariates, r.target_labels);
+      result.notes.push_back("block kriging: blocks of " + format_number(cli_options.block[0]) +
+                             [&] {
+                               std::string t;
+                               for (std::size_t k = 1; k < cli_options.block.size(); ++k) t += " x " + format_number(cli_options.block[k]);
+                               return t;
+                             }() +
+                             " centred on the targets, " + std::to_string(block.offsets(static_cast<int>(cli_options.block.size())).cols()) +
+                             " " + cli_options.block_rule + " points each; pred and var are of the block averages");
     } else {
       pred = s.options.covariates.empty()
                  ? kriging.predict(targets)

@@ -83,12 +83,16 @@ void KrigingEngine::setup_dense() {
   llt_.matrixU().solveInPlace(alpha_);
 }
 
-KrigingOutput KrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) const {
-  const Eigen::Index n = points_.cols(), m = embedded.cols(), p = drift_terms_;
-  const Eigen::Index batch = static_cast<Eigen::Index>(options_.target_batch);
+KrigingOutput KrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
+                                           const Eigen::VectorXd& block_weights) const {
+  const Eigen::Index group = std::max<Eigen::Index>(1, block_weights.size());
+  const Eigen::Index n = points_.cols(), m = embedded.cols() / group, p = drift_terms_;
+  // blocks: a batch's block points share the workspace of a batch of points
+  const Eigen::Index batch = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(options_.target_batch) / group);
   const bool want_var = options_.compute_variance, want_w = options_.keep_weights;
-  const double c00 = target_variance();
-  const Eigen::MatrixXd f0_all = drift_matrix(raw);  // p x M (validated before the parallel region)
+  const double c00 = block_variance(embedded, block_weights);      // the target's own variance (a block's average)
+  const double zero_lag = target_variance();              // C(0) between a sample and a target point
+  const Eigen::MatrixXd f0_all = block_drift_matrix(raw, block_weights);  // p x M (validated before the parallel region)
   KrigingOutput out;
   out.status = report_.status;
   out.message = report_.message;
@@ -101,13 +105,21 @@ KrigingOutput KrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, cons
 #pragma omp parallel num_threads(thread_count())
   {
     // one workspace per thread, allocated once
-    Eigen::MatrixXd c0(n, batch), w, r, s;
+    Eigen::MatrixXd c0(n, batch), w, r, s, block_points;
     if (want_w) w.resize(n, batch);
+    if (group > 1) block_points.resize(n, batch * group);
 #pragma omp for schedule(dynamic, 1)
     for (Eigen::Index b = 0; b < batches; ++b) {
       const Eigen::Index start = b * batch, cnt = std::min(batch, m - start);
-      kernels::covariance_block(kernel_, points_.data(), static_cast<std::size_t>(n), embedded.col(start).data(),
-                                static_cast<std::size_t>(cnt), dimension_, c00, c0.data(), static_cast<std::size_t>(n));
+      if (group == 1) {
+        kernels::covariance_block(kernel_, points_.data(), static_cast<std::size_t>(n), embedded.col(start).data(),
+                                  static_cast<std::size_t>(cnt), dimension_, zero_lag, c0.data(), static_cast<std::size_t>(n));
+      } else {
+        kernels::covariance_block(kernel_, points_.data(), static_cast<std::size_t>(n), embedded.col(start * group).data(),
+                                  static_cast<std::size_t>(cnt * group), dimension_, zero_lag, block_points.data(),
+                                  static_cast<std::size_t>(n));
+        for (Eigen::Index t = 0; t < cnt; ++t) c0.col(t).noalias() = block_points.middleCols(t * group, group) * block_weights;
+      }
       auto c = c0.leftCols(cnt);
       auto f0 = f0_all.middleCols(start, cnt);
       out.mean.middleRows(start, cnt).noalias() = c.transpose() * alpha_;

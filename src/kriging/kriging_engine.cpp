@@ -423,6 +423,29 @@ std::string KrigingEngine::collinear_covariate_message() const {
   return {};
 }
 
+double KrigingEngine::block_variance(const Eigen::MatrixXd& embedded, const Eigen::VectorXd& block_weights) const {
+  const Eigen::Index group = block_weights.size();
+  if (group == 0 || embedded.cols() < group) return target_variance();
+  // The nugget is micro-scale variation (or noise): its average over a block's continuum is 0.
+  const double structured = kernel_.sill() - kernel_.nugget();
+  double sum = 0.0;
+  for (Eigen::Index j = 0; j < group; ++j)
+    for (Eigen::Index k = 0; k < group; ++k)
+      sum += block_weights[j] * block_weights[k] *
+             kernel_(kernels::column_distance(embedded.col(j).data(), embedded.col(k).data(), dimension_), structured);
+  return sum;
+}
+
+Eigen::MatrixXd KrigingEngine::block_drift_matrix(const Eigen::MatrixXd& raw, const Eigen::VectorXd& block_weights) const {
+  const Eigen::MatrixXd f = drift_matrix(raw);
+  const Eigen::Index group = block_weights.size();
+  if (group == 0) return f;
+  const Eigen::Index blocks = raw.cols() / group;
+  Eigen::MatrixXd mean(f.rows(), blocks);
+  for (Eigen::Index b = 0; b < blocks; ++b) mean.col(b) = f.middleCols(b * group, group) * block_weights;
+  return mean;
+}
+
 Eigen::MatrixXd KrigingEngine::drift_matrix(const Eigen::MatrixXd& raw) const {
   Eigen::MatrixXd f(drift_terms_, raw.cols());
   for (Eigen::Index j = 0; j < raw.cols(); ++j) {
@@ -459,17 +482,24 @@ void KrigingEngine::add_simple_mean(Eigen::MatrixXd& mean) const {
   if (options_.kind == KrigingKind::Simple) mean.rowwise() += simple_mean_.transpose();
 }
 
-KrigingOutput KrigingEngine::predict(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) const {
+KrigingOutput KrigingEngine::predict(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
+                                     const Eigen::VectorXd& block_weights) const {
+  const Eigen::Index group = std::max<Eigen::Index>(1, block_weights.size());
   if (embedded.rows() != dimension_)
     throw ArgumentError("kriging: targets have " + std::to_string(embedded.rows()) + " coordinates; samples have " +
                         std::to_string(dimension_));
   if (raw.rows() != dimension_ + covariates_ || raw.cols() != embedded.cols())
     throw ArgumentError("kriging: targets come with " + std::to_string(raw.rows() - dimension_) +
                         " covariate values each; the drift has " + std::to_string(covariates_) + " covariates");
+  if (group < 1 || embedded.cols() % group != 0)
+    throw ArgumentError("kriging: " + std::to_string(embedded.cols()) + " block points are not whole blocks of " +
+                        std::to_string(group));
+  if (group > 1 && options_.backend == KrigingBackend::Sparse)
+    throw ArgumentError("kriging: block kriging is offered by the dense and local back ends, not the sparse one");
   if (!report_.usable()) return unusable_output();
   switch (options_.backend) {
-    case KrigingBackend::Dense: return predict_dense(embedded, raw);
-    case KrigingBackend::Local: return predict_local(embedded, raw, false);
+    case KrigingBackend::Dense: return predict_dense(embedded, raw, block_weights);
+    case KrigingBackend::Local: return predict_local(embedded, raw, false, block_weights);
     case KrigingBackend::Sparse: return predict_sparse(embedded, raw);
   }
   return unusable_output();
@@ -600,10 +630,111 @@ Eigen::MatrixXd append_covariates(Eigen::MatrixXd raw, const Eigen::MatrixXd& co
 KrigingOutput engine_predict(const KrigingEngine& engine, const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) {
   return engine.predict(embedded, raw);
 }
+KrigingOutput engine_predict_blocks(const KrigingEngine& engine, const Eigen::MatrixXd& embedded,
+                                    const Eigen::MatrixXd& raw, const Eigen::VectorXd& block_weights) {
+  return engine.predict(embedded, raw, block_weights);
+}
 KrigingOutput engine_leave_one_out(const KrigingEngine& engine) { return engine.leave_one_out(); }
 KrigingOutput engine_k_fold(const KrigingEngine& engine, int folds, std::uint64_t seed) {
   return engine.k_fold(folds, seed);
 }
 }  // namespace detail
+
+namespace {
+
+// Nodes (on [-1, 1]) and weights (summing to 2) of the n-point Gauss-Legendre rule: Newton's method
+// on the Legendre polynomial from the usual cosine guesses.
+void gauss_legendre(int n, std::vector<double>& node, std::vector<double>& weight) {
+  node.assign(static_cast<std::size_t>(n), 0.0);
+  weight.assign(static_cast<std::size_t>(n), 0.0);
+  for (int i = 0; i < (n + 1) / 2; ++i) {
+    double x = std::cos(M_PI * (i + 0.75) / (n + 0.5)), dp = 0.0;
+    for (int iteration = 0; iteration < 100; ++iteration) {
+      double p0 = 1.0, p1 = 0.0;
+      for (int k = 1; k <= n; ++k) {  // P_k(x) by the three-term recurrence
+        const double p2 = p1;
+        p1 = p0;
+        p0 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p2) / k;
+      }
+      dp = n * (x * p0 - p1) / (x * x - 1.0);
+      const double step = p0 / dp;
+      x -= step;
+      if (std::abs(step) < 1e-16) break;
+    }
+    const double w = 2.0 / ((1.0 - x * x) * dp * dp);
+    node[static_cast<std::size_t>(i)] = -x;
+    node[static_cast<std::size_t>(n - 1 - i)] = x;
+    weight[static_cast<std::size_t>(i)] = weight[static_cast<std::size_t>(n - 1 - i)] = w;
+  }
+  if (n % 2 == 1) node[static_cast<std::size_t>(n / 2)] = 0.0;
+}
+
+void check_block(const BlockDiscretization& b, int dimension) {
+  if (static_cast<int>(b.size.size()) != dimension)
+    throw ArgumentError("block kriging: a block size with " + std::to_string(b.size.size()) + " entries for " +
+                        std::to_string(dimension) + " coordinates; expected one size per coordinate");
+  for (std::size_t k = 0; k < b.size.size(); ++k)
+    if (!(b.size[k] > 0.0 && std::isfinite(b.size[k])))
+      throw ArgumentError("block kriging: block size " + format_number(b.size[k]) + " along coordinate " +
+                          std::to_string(k) + "; expected a positive number (the coordinates' unit)");
+  if (b.points_per_axis < 1 || b.points_per_axis > 64)
+    throw ArgumentError("block kriging: " + std::to_string(b.points_per_axis) +
+                        " points per axis; expected 1 to 64 (gstat's default is 4)");
+  const double total = std::pow(static_cast<double>(b.points_per_axis), dimension);
+  if (total > 4096)
+    throw ArgumentError("block kriging: " + std::to_string(b.points_per_axis) + " points per axis in " +
+                        std::to_string(dimension) + " coordinates make " + format_number(total) +
+                        " points per block; at most 4096 (use fewer points per axis)");
+}
+
+// Per-axis nodes on [-1/2, 1/2] and weights summing to 1.
+void axis_rule(const BlockDiscretization& b, std::vector<double>& node, std::vector<double>& weight) {
+  const int n = b.points_per_axis;
+  if (b.rule == BlockDiscretization::Rule::GaussLegendre) {
+    gauss_legendre(n, node, weight);
+    for (double& x : node) x *= 0.5;
+    for (double& w : weight) w *= 0.5;
+  } else {
+    node.resize(static_cast<std::size_t>(n));
+    weight.assign(static_cast<std::size_t>(n), 1.0 / n);
+    for (int i = 0; i < n; ++i) node[static_cast<std::size_t>(i)] = -0.5 + (i + 0.5) / n;
+  }
+}
+
+}  // namespace
+
+Eigen::MatrixXd BlockDiscretization::offsets(int dimension) const {
+  check_block(*this, dimension);
+  std::vector<double> node, weight;
+  axis_rule(*this, node, weight);
+  const auto g = static_cast<Eigen::Index>(std::pow(static_cast<double>(points_per_axis), dimension) + 0.5);
+  Eigen::MatrixXd out(dimension, g);
+  for (Eigen::Index j = 0; j < g; ++j) {
+    Eigen::Index rest = j;
+    for (int k = 0; k < dimension; ++k) {
+      out(k, j) = size[static_cast<std::size_t>(k)] * node[static_cast<std::size_t>(rest % points_per_axis)];
+      rest /= points_per_axis;
+    }
+  }
+  return out;
+}
+
+Eigen::VectorXd BlockDiscretization::weights(int dimension) const {
+  check_block(*this, dimension);
+  std::vector<double> node, weight;
+  axis_rule(*this, node, weight);
+  const auto g = static_cast<Eigen::Index>(std::pow(static_cast<double>(points_per_axis), dimension) + 0.5);
+  Eigen::VectorXd out(g);
+  for (Eigen::Index j = 0; j < g; ++j) {
+    Eigen::Index rest = j;
+    double w = 1.0;
+    for (int k = 0; k < dimension; ++k) {
+      w *= weight[static_cast<std::size_t>(rest % points_per_axis)];
+      rest /= points_per_axis;
+    }
+    out[j] = w;
+  }
+  return out;
+}
 
 }  // namespace errfield

@@ -43,7 +43,13 @@ class KrigingEngine {
 
   const KrigingReport& report() const { return report_; }
   const KrigingOptions& options() const { return options_; }
-  KrigingOutput predict(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) const;
+  /// Non-empty `block_weights` (g weights summing to 1): block kriging. The columns come in
+  /// consecutive groups of g points that discretize one block each (the same offsets for every
+  /// block); each target is the block's weighted average: covariances and drift averaged over its
+  /// points, the block-to-block covariance from the first group (translation invariant) without
+  /// the nugget (micro-scale variation averages out over a block, as gstat has it). Dense and local.
+  KrigingOutput predict(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
+                        const Eigen::VectorXd& block_weights = Eigen::VectorXd()) const;
   KrigingOutput leave_one_out() const;
   KrigingOutput k_fold(int folds, std::uint64_t seed) const;
 
@@ -69,9 +75,15 @@ class KrigingEngine {
   double target_variance() const;
   double target_zero_covariance() const { return target_variance(); }
   // back ends
-  KrigingOutput predict_dense(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) const;
+  KrigingOutput predict_dense(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
+                              const Eigen::VectorXd& block_weights) const;
   KrigingOutput predict_local(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
-                              bool leave_one_out) const;
+                              bool leave_one_out, const Eigen::VectorXd& block_weights = Eigen::VectorXd()) const;
+  // Block kriging: the weighted mean over the first group's pairs of points of their covariance
+  // (the structured sill at coincident points), and the drift matrix averaged over each group
+  // (p x M/g). Without weights: the target's point variance and the plain drift matrix.
+  double block_variance(const Eigen::MatrixXd& embedded, const Eigen::VectorXd& block_weights) const;
+  Eigen::MatrixXd block_drift_matrix(const Eigen::MatrixXd& raw, const Eigen::VectorXd& block_weights) const;
   KrigingOutput predict_sparse(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) const;
   KrigingOutput loo_dense() const;
   KrigingOutput unusable_output() const;

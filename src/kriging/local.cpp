@@ -64,16 +64,28 @@ std::size_t neighbours_that_fit(double budget, int threads, double p, double com
 }  // namespace
 
 KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
-                                           bool leave_one_out) const {
-  const Eigen::Index m = embedded.cols(), p = drift_terms_, comps = components_;
+                                           bool leave_one_out, const Eigen::VectorXd& block_weights) const {
+  const Eigen::Index group = std::max<Eigen::Index>(1, block_weights.size());
+  const Eigen::Index m = embedded.cols() / group, p = drift_terms_, comps = components_;
   const bool want_var = options_.compute_variance || leave_one_out;
   const bool want_w = options_.keep_weights && !leave_one_out;
-  const double c00 = target_variance();
+  const double c00 = block_variance(embedded, block_weights);  // the target's own variance (a block's average)
+  const double zero_lag = target_variance();          // C(0) between a sample and a target point
+  // Blocks: the neighbours of the block's centre (the mean of its points), as gstat does.
+  Eigen::MatrixXd centre_embedded, centre_raw;
+  if (group > 1) {
+    centre_embedded.resize(embedded.rows(), m);
+    centre_raw.resize(raw.rows(), m);
+    for (Eigen::Index b = 0; b < m; ++b) {
+      centre_embedded.col(b) = embedded.middleCols(b * group, group).rowwise().mean();
+      centre_raw.col(b) = raw.middleCols(b * group, group).rowwise().mean();
+    }
+  }
   const double r2 = std::isfinite(options_.radius) ? options_.radius * options_.radius
                                                    : std::numeric_limits<double>::infinity();
   const std::size_t k_max = options_.neighbors;
   const std::size_t n_samples = static_cast<std::size_t>(points_.cols());
-  const Eigen::MatrixXd f0_all = drift_matrix(raw);  // validated before the parallel region
+  const Eigen::MatrixXd f0_all = block_drift_matrix(raw, block_weights);  // validated before the parallel region
   const double nan = std::numeric_limits<double>::quiet_NaN();
 
   // Memory budget, checked before any workspace exists: each thread holds one k x k system
@@ -118,8 +130,8 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
     for (Eigen::Index t = 0; t < m; ++t) {
       // Neighbours by the model's lag, or by the raw coordinates (NeighbourMetric::Euclidean).
       const PointTree& tree = search_tree_ ? *search_tree_ : *tree_;
-      const double* target = embedded.col(t).data();  // covariances: always the model's lag
-      const double* query = search_tree_ ? raw.col(t).data() : target;
+      const double* target = group > 1 ? centre_embedded.col(t).data() : embedded.col(t).data();  // the model's lag
+      const double* query = search_tree_ ? (group > 1 ? centre_raw.col(t).data() : raw.col(t).data()) : target;
       const std::size_t self = leave_one_out ? static_cast<std::size_t>(t) : n_samples;
       ws.chosen.clear();
       if (k_max > 0) {
@@ -181,7 +193,16 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
       auto y = ws.y.topRows(nn);
       for (Eigen::Index i = 0; i < nn; ++i) {
         const auto s = static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(i)]);
-        c0[i] = kernel_(kernels::column_distance(points_.col(s).data(), target, dimension_), c00);
+        if (group == 1) {
+          c0[i] = kernel_(kernels::column_distance(points_.col(s).data(), target, dimension_), zero_lag);
+        } else {
+          double sum = 0.0;
+          for (Eigen::Index j = 0; j < group; ++j)
+            sum += block_weights[j] * kernel_(kernels::column_distance(points_.col(s).data(),
+                                                                      embedded.col(t * group + j).data(), dimension_),
+                                              zero_lag);
+          c0[i] = sum;
+        }
         y.row(i) = values_.row(s);
       }
       lower.solveInPlace(c0);  // w

@@ -230,5 +230,34 @@ TEST_F(KrigingCli, SimulationsWriteTheLibrarysDraws) {
   EXPECT_FALSE(fs::exists(path("Q.csv")));
 }
 
+TEST_F(KrigingCli, BlockKrigingWritesTheLibrarysBlocks) {
+  const std::string base = "interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("T.csv") +
+                           " --coords x,y,z --value v --model \"" + kModel + "\" --out " + path("P.csv");
+  auto r = run(base + " --block 50,50,20 --block-points 3");
+  ASSERT_EQ(r.exit_code, 0) << r.output();
+  const auto blocks = Kriging<P3, double>(pts_, vals_, VariogramModel::parse(kModel))
+                          .predict_blocks(targets_, BlockDiscretization{{50.0, 50.0, 20.0}, 3});
+  const Eigen::MatrixXd got = CsvTable::read(path("P.csv")).numeric_columns({"pred", "var"});
+  for (std::size_t t = 0; t < targets_.size(); ++t) {
+    EXPECT_DOUBLE_EQ(got(static_cast<Eigen::Index>(t), 0), blocks.mean[t]);
+    EXPECT_DOUBLE_EQ(got(static_cast<Eigen::Index>(t), 1), blocks.variance[t]);
+  }
+  const std::string other = "interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("T.csv") +
+                            " --coords x,y,z --value v --model \"" + kModel + "\" --out " + path("Q.csv");
+  r = run(other + " --block 50,50");  // two sizes for three coordinates
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("one size per coordinate"));
+  r = run(other + " --block-points 3");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("--block-points applies to --block"));
+  r = run(other + " --block 50,50,20 --simulations 2");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("--block"));
+  r = run(other + " --block 50,50,20 --backend sparse");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("sparse"));
+  EXPECT_FALSE(fs::exists(path("Q.csv")));
+}
+
 }  // namespace
 }  // namespace errfield
