@@ -141,7 +141,8 @@ struct KrigingOptions {
   /// a distance to a river, a temperature), each one more drift column after the polynomial terms
   /// and the drift_functions. Ordinary or universal kriging only (not simple). The values come
   /// with the data: Kriging's constructor and predict() taking a covariates matrix (one row per
-  /// point, column j = covariates[j]); the names are used in messages.
+  /// point, column j = covariates[j]); the names are used in messages. Duplicates merged by
+  /// DuplicatePolicy::Average keep the covariates of their group's first sample.
   std::vector<std::string> covariates;
   NuggetTreatment nugget = NuggetTreatment::MicroScale;
 
