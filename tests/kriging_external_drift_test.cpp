@@ -118,6 +118,13 @@ TEST(KrigingExternalDrift, LeaveOneOutMatchesRefittingWithoutTheSample) {
     const Kriging<P2, double> k(d.points, d.values, d.covariates, kModel, o);
     const auto cv = k.leave_one_out();
     ASSERT_EQ(cv.prediction.size(), d.points.size()) << cv.message;
+    // k-fold with one sample per fold refits without each sample, covariates carried along.
+    const auto folds = k.k_fold(static_cast<int>(d.points.size()));
+    ASSERT_EQ(folds.prediction.size(), d.points.size()) << folds.message;
+    for (std::size_t i = 0; i < d.points.size(); ++i) {
+      EXPECT_NEAR(folds.prediction[i], cv.prediction[i], 1e-9) << kriging_backend_name(backend) << " sample " << i;
+      EXPECT_NEAR(folds.variance[i], cv.variance[i], 1e-9) << kriging_backend_name(backend) << " sample " << i;
+    }
     for (std::size_t i = 0; i < d.points.size(); i += 7) {
       Data rest;
       rest.covariates.resize(static_cast<Eigen::Index>(d.points.size() - 1), 2);

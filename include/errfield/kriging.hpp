@@ -141,7 +141,8 @@ struct KrigingOptions {
   /// a distance to a river, a temperature), each one more drift column after the polynomial terms
   /// and the drift_functions. Ordinary or universal kriging only (not simple). The values come
   /// with the data: Kriging's constructor and predict() taking a covariates matrix (one row per
-  /// point, column j = covariates[j]); the names are used in messages.
+  /// point, column j = covariates[j]); the names are used in messages. Duplicates merged by
+  /// DuplicatePolicy::Average keep the covariates of their group's first sample.
   std::vector<std::string> covariates;
   NuggetTreatment nugget = NuggetTreatment::MicroScale;
 
@@ -537,6 +538,7 @@ class Kriging {
 /// predicted (unusable factorization, failed local solve) get NaN, which cross_validate counts.
 /// For leave-one-out with the dense back end prefer Kriging::leave_one_out (closed form, one
 /// factorization instead of N).
+/// With external drift (options.covariates) use ExternalDriftKrigingEstimator below.
 template <Location L, Value V, class M = EuclideanMetric>
   requires Metric<M, L> && EmbeddableMetric<M>
 struct KrigingEstimator {
@@ -550,6 +552,51 @@ struct KrigingEstimator {
     KrigingPrediction<V> p = kriging.predict(query);
     HoldOutPrediction<V> out;
     if (!p.usable() && p.mean.size() != query.size()) {
+      V nan_value = ValueTraits<V>::zero();
+      double& (*writable)(V&, int) = &ValueTraits<V>::component;
+      for (int c = 0; c < ValueTraits<V>::kComponents; ++c) writable(nan_value, c) = std::numeric_limits<double>::quiet_NaN();
+      out.value.assign(query.size(), nan_value);
+      if (options.compute_variance) out.variance.assign(query.size(), std::numeric_limits<double>::quiet_NaN());
+      return out;
+    }
+    out.value = std::move(p.mean);
+    out.variance = std::move(p.variance);
+    if (options.nugget == NuggetTreatment::MeasurementError)
+      for (double& v : out.variance) v += model.nugget();
+    return out;
+  }
+};
+
+/// Kriging with external drift as a HoldOutEstimator for cross_validate: each location is the
+/// `dimension` coordinates followed by the values of options.covariates at that point, so that
+/// cross_validate draws the same folds as for KrigingEstimator on the coordinates alone (the
+/// covariates travel with their samples). fit_predict as KrigingEstimator's.
+template <Value V>
+struct ExternalDriftKrigingEstimator {
+  VariogramModel model;
+  KrigingOptions options;
+  Eigen::Index dimension = 0;
+
+  HoldOutPrediction<V> fit_predict(std::span<const Eigen::VectorXd> locations, std::span<const V> values,
+                                   std::span<const Eigen::VectorXd> query) const {
+    auto split = [&](std::span<const Eigen::VectorXd> joined, std::vector<Eigen::VectorXd>& coords) {
+      const auto k = static_cast<Eigen::Index>(options.covariates.size());
+      Eigen::MatrixXd cov(static_cast<Eigen::Index>(joined.size()), k);
+      coords.clear();
+      for (std::size_t i = 0; i < joined.size(); ++i) {
+        coords.emplace_back(joined[i].head(dimension));
+        cov.row(static_cast<Eigen::Index>(i)) = joined[i].tail(k).transpose();
+      }
+      return cov;
+    };
+    std::vector<Eigen::VectorXd> train, test;
+    const Eigen::MatrixXd train_cov = split(locations, train);
+    const Eigen::MatrixXd test_cov = split(query, test);
+    const Kriging<Eigen::VectorXd, V> kriging(std::span<const Eigen::VectorXd>(train), values, train_cov, model, options);
+    HoldOutPrediction<V> out;
+    KrigingPrediction<V> p;
+    if (kriging.report().usable()) p = kriging.predict(std::span<const Eigen::VectorXd>(test), test_cov);
+    if (p.mean.size() != query.size()) {
       V nan_value = ValueTraits<V>::zero();
       double& (*writable)(V&, int) = &ValueTraits<V>::component;
       for (int c = 0; c < ValueTraits<V>::kComponents; ++c) writable(nan_value, c) = std::numeric_limits<double>::quiet_NaN();

@@ -239,50 +239,6 @@ Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const E
 
 const char* status_word(KrigingStatus s) { return kriging_status_name(s).data(); }
 
-// k-fold cross-validation with external drift: locations are the coordinates followed by the
-// covariates (first `dimension` entries, then k), so that cross_validate draws the folds exactly
-// as without covariates.
-template <class V>
-struct ExternalDriftEstimator {
-  VariogramModel model;
-  KrigingOptions options;
-  Eigen::Index dimension = 0;
-
-  HoldOutPrediction<V> fit_predict(std::span<const Eigen::VectorXd> locations, std::span<const V> values,
-                                   std::span<const Eigen::VectorXd> query) const {
-    auto split = [&](std::span<const Eigen::VectorXd> joined, std::vector<Eigen::VectorXd>& coords) {
-      const auto k = static_cast<Eigen::Index>(options.covariates.size());
-      Eigen::MatrixXd cov(static_cast<Eigen::Index>(joined.size()), k);
-      coords.clear();
-      for (std::size_t i = 0; i < joined.size(); ++i) {
-        coords.emplace_back(joined[i].head(dimension));
-        cov.row(static_cast<Eigen::Index>(i)) = joined[i].tail(k).transpose();
-      }
-      return cov;
-    };
-    std::vector<Eigen::VectorXd> train, test;
-    const Eigen::MatrixXd train_cov = split(locations, train);
-    const Eigen::MatrixXd test_cov = split(query, test);
-    const Kriging<Eigen::VectorXd, V> kriging(std::span<const Eigen::VectorXd>(train), values, train_cov, model, options);
-    HoldOutPrediction<V> out;
-    KrigingPrediction<V> p;
-    if (kriging.report().usable()) p = kriging.predict(std::span<const Eigen::VectorXd>(test), test_cov);
-    if (p.mean.size() != query.size()) {
-      V nan_value = ValueTraits<V>::zero();
-      double& (*writable)(V&, int) = &ValueTraits<V>::component;
-      for (int c = 0; c < ValueTraits<V>::kComponents; ++c) writable(nan_value, c) = std::numeric_limits<double>::quiet_NaN();
-      out.value.assign(query.size(), nan_value);
-      if (options.compute_variance) out.variance.assign(query.size(), std::numeric_limits<double>::quiet_NaN());
-      return out;
-    }
-    out.value = std::move(p.mean);
-    out.variance = std::move(p.variance);
-    if (options.nugget == NuggetTreatment::MeasurementError)
-      for (double& v : out.variance) v += model.nugget();
-    return out;
-  }
-};
-
 // k-fold kriges each fold from the other folds' samples alone, where a duplicate pair would be
 // named by its index within that subset ("samples 3 and 7"); checked on the whole file first, so
 // the message names both rows as file:line like every row error.
@@ -460,7 +416,7 @@ CrossValidationOutput cross_validate_kriging(const CrossValidationRequest& r) {
       Eigen::MatrixXd joined(r.sample_coords.rows(), r.sample_coords.cols() + s.sample_covariates.cols());
       joined << r.sample_coords, s.sample_covariates;
       const auto joined_points = rows_as_points(joined);
-      const ExternalDriftEstimator<V> estimator{s.model, s.options, static_cast<Eigen::Index>(r.sample_coords.cols())};
+      const ExternalDriftKrigingEstimator<V> estimator{s.model, s.options, static_cast<Eigen::Index>(r.sample_coords.cols())};
       result = cross_validate(estimator, std::span<const Eigen::VectorXd>(joined_points), std::span<const V>(values), cvo);
     }
     out.fold = result.fold;

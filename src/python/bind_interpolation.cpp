@@ -48,6 +48,15 @@ Samples samples_arg(const py::object& coords, const py::object& values, Eigen::I
   return s;
 }
 
+/// Covariate values: (rows,) for one covariate or (rows, k).
+Eigen::MatrixXd covariates_arg(const py::object& a, const char* name, Eigen::Index rows) {
+  const MatrixArg m = matrix_arg(a, name, ArraySpec{1, 2, -1, 1});
+  if (m.data.rows() != rows)
+    throw ArgumentError(std::string(name) + ": " + std::to_string(m.data.rows()) + " rows for " + std::to_string(rows) +
+                        " points; expected one row of covariate values per point");
+  return m.data;
+}
+
 /// Read in place when C-contiguous float64 (the estimators copy them into their own points).
 RowsArg targets_arg(const py::object& targets, Eigen::Index dims) {
   return rows_arg(targets, "targets", ArraySpec{1, 2, dims, 0});
@@ -125,9 +134,10 @@ struct SimulationRaw {
 struct KrigingBase {
   virtual ~KrigingBase() = default;
   virtual const KrigingReport& report() const = 0;
-  virtual KrigingPrediction_ predict(const TargetRows& targets) const = 0;
+  virtual KrigingPrediction_ predict(const TargetRows& targets, const Eigen::MatrixXd& covariates) const = 0;
   virtual CvRaw cross_validate(std::size_t folds, std::uint64_t seed) const = 0;
-  virtual SimulationRaw simulate(const TargetRows& targets, const SimulationOptions& options) const = 0;
+  virtual SimulationRaw simulate(const TargetRows& targets, const Eigen::MatrixXd& covariates,
+                                 const SimulationOptions& options) const = 0;
 };
 
 template <class V>
@@ -137,17 +147,22 @@ struct KrigingImpl final : KrigingBase {
   VariogramModel model;
   KrigingOptions options;
   Eigen::VectorXd measurement_variance;
+  Eigen::MatrixXd covariates;  // N x k (external drift)
+  Eigen::Index dimension = 0;
   std::unique_ptr<Kriging<Eigen::VectorXd, V>> kriging;
 
-  KrigingImpl(const Samples& s, const VariogramModel& m, const KrigingOptions& o, const Eigen::VectorXd& meas)
-      : points(rows_as_points(s.x)), values(rows_as_values<V>(s.z)), model(m), options(o), measurement_variance(meas) {
+  KrigingImpl(const Samples& s, const VariogramModel& m, const KrigingOptions& o, const Eigen::VectorXd& meas,
+              const Eigen::MatrixXd& cov)
+      : points(rows_as_points(s.x)), values(rows_as_values<V>(s.z)), model(m), options(o), measurement_variance(meas),
+        covariates(cov), dimension(s.x.cols()) {
     std::span<const double> mv(meas.data(), static_cast<std::size_t>(meas.size()));
-    kriging = std::make_unique<Kriging<Eigen::VectorXd, V>>(points, values, model, options, EuclideanMetric{}, mv);
-  }
-  SimulationRaw simulate(const TargetRows& targets, const SimulationOptions& so) const override {
-    std::span<const double> mv(measurement_variance.data(), static_cast<std::size_t>(measurement_variance.size()));
-    const auto r = simulate_conditional<Eigen::VectorXd, V>(points, values, rows_as_points(targets), model, options, so,
+    kriging = std::make_unique<Kriging<Eigen::VectorXd, V>>(points, values, covariates, model, options,
                                                             EuclideanMetric{}, mv);
+  }
+  SimulationRaw simulate(const TargetRows& targets, const Eigen::MatrixXd& cov, const SimulationOptions& so) const override {
+    std::span<const double> mv(measurement_variance.data(), static_cast<std::size_t>(measurement_variance.size()));
+    const auto r = simulate_conditional<Eigen::VectorXd, V>(points, values, covariates, rows_as_points(targets), cov, model,
+                                                            options, so, EuclideanMetric{}, mv);
     SimulationRaw out;
     for (const auto& d : r.draws) out.draws.push_back(values_as_rows(d));
     out.method = r.method;
@@ -157,8 +172,9 @@ struct KrigingImpl final : KrigingBase {
     return out;
   }
   const KrigingReport& report() const override { return kriging->report(); }
-  KrigingPrediction_ predict(const TargetRows& targets) const override {
-    const auto p = kriging->predict(rows_as_points(targets));
+  KrigingPrediction_ predict(const TargetRows& targets, const Eigen::MatrixXd& cov) const override {
+    const auto p = options.covariates.empty() ? kriging->predict(rows_as_points(targets))
+                                              : kriging->predict(rows_as_points(targets), cov);
     KrigingPrediction_ out;
     out.mean = values_as_rows(p.mean);
     out.variance = p.variance;
@@ -181,12 +197,24 @@ struct KrigingImpl final : KrigingBase {
       out.variance = cv.variance;
       return out;
     }
-    KrigingEstimator<Eigen::VectorXd, V> estimator{model, options, {}};
     CrossValidationOptions cvo;
     cvo.folds = folds;
     cvo.seed = seed;
-    const auto r = errfield::cross_validate(estimator, std::span<const Eigen::VectorXd>(points),
-                                            std::span<const V>(values), cvo);
+    CrossValidationResult<V> r;
+    if (options.covariates.empty()) {
+      KrigingEstimator<Eigen::VectorXd, V> estimator{model, options, {}};
+      r = errfield::cross_validate(estimator, std::span<const Eigen::VectorXd>(points), std::span<const V>(values), cvo);
+    } else {
+      // as `errfield cv --covariates`: the covariates travel with their samples through the folds
+      std::vector<Eigen::VectorXd> joined;
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        Eigen::VectorXd j(dimension + covariates.cols());
+        j << points[i], covariates.row(static_cast<Eigen::Index>(i)).transpose();
+        joined.push_back(std::move(j));
+      }
+      const ExternalDriftKrigingEstimator<V> estimator{model, options, dimension};
+      r = errfield::cross_validate(estimator, std::span<const Eigen::VectorXd>(joined), std::span<const V>(values), cvo);
+    }
     out.fold = r.fold;
     out.pred = values_as_rows(r.predicted);
     out.variance = r.variance;
@@ -201,7 +229,8 @@ class PyKriging {
             const std::string& nugget, const std::optional<std::size_t>& neighbors,
             const std::optional<double>& radius, const py::object& measurement_variance,
             const std::string& duplicates, double duplicate_distance, int threads,
-            const std::optional<std::string>& neighbour_metric)
+            const std::optional<std::string>& neighbour_metric, const py::object& covariates,
+            const std::optional<std::vector<std::string>>& covariate_names)
       : samples_(samples_arg(coords, values)) {
     const VariogramModel model = py::isinstance<py::str>(model_arg)
                                      ? VariogramModel::parse(model_arg.cast<std::string>())
@@ -222,6 +251,20 @@ class PyKriging {
     KrigingOptions o = kriging_options_from_text(text);
     o.duplicate_distance = duplicate_distance;
     o.threads = threads;
+    Eigen::MatrixXd cov;
+    if (!covariates.is_none()) {
+      cov = covariates_arg(covariates, "covariates", samples_.x.rows());
+      if (covariate_names) {
+        if (covariate_names->size() != static_cast<std::size_t>(cov.cols()))
+          throw ArgumentError("covariate_names: " + std::to_string(covariate_names->size()) + " names for " +
+                              std::to_string(cov.cols()) + " covariate columns; expected one per column");
+        o.covariates = *covariate_names;
+      } else {
+        for (Eigen::Index j = 0; j < cov.cols(); ++j) o.covariates.push_back("covariate" + std::to_string(j));
+      }
+    } else if (covariate_names) {
+      throw ArgumentError("covariate_names given without covariates");
+    }
     o.validate();
     Eigen::VectorXd meas;
     if (!measurement_variance.is_none()) {
@@ -234,10 +277,11 @@ class PyKriging {
     {
       py::gil_scoped_release release;
       impl_ = with_components(samples_.z.cols(), "values", [&]<class V>() -> std::shared_ptr<KrigingBase> {
-        return std::make_shared<KrigingImpl<V>>(samples_, model, o, meas);
+        return std::make_shared<KrigingImpl<V>>(samples_, model, o, meas, cov);
       });
     }
     model_ = model;
+    covariate_count_ = o.covariates.size();
     const auto& rep = impl_->report();
     if (!rep.usable())
       throw Error("kriging failed: " + std::string(kriging_status_name(rep.status)) + ": " + rep.message);
@@ -247,12 +291,19 @@ class PyKriging {
     }
   }
 
-  py::tuple predict(const py::object& targets) const {
+  py::tuple predict(const py::object& targets, const py::object& covariates) const {
     const RowsArg t = targets_arg(targets, samples_.x.cols());
+    const std::size_t k = impl_report_covariates();
+    if (k > 0 && covariates.is_none())
+      throw ArgumentError("predict: the kriging has " + std::to_string(k) +
+                          " covariate(s) (external drift); pass covariates=(M, k) values at the targets");
+    if (k == 0 && !covariates.is_none())
+      throw ArgumentError("predict: covariates given, but the Kriging was built without covariates");
+    const Eigen::MatrixXd cov = k > 0 ? covariates_arg(covariates, "covariates", t.data.rows()) : Eigen::MatrixXd();
     KrigingPrediction_ p;
     {
       py::gil_scoped_release release;
-      p = impl_->predict(t.data);
+      p = impl_->predict(t.data, cov);
     }
     if (p.failed) {
       const std::string w = std::to_string(p.failed) + " of " + std::to_string(t.data.rows()) +
@@ -274,8 +325,16 @@ class PyKriging {
   }
 
   py::array_t<double> simulate(const py::object& targets, std::size_t n, std::uint64_t seed, const std::string& method,
-                               std::size_t neighbours, std::size_t draws_per_path) const {
+                               std::size_t neighbours, std::size_t draws_per_path, const py::object& covariates) const {
     const RowsArg t = targets_arg(targets, samples_.x.cols());
+    const std::size_t drift_covariates = impl_report_covariates();
+    if (drift_covariates > 0 && covariates.is_none())
+      throw ArgumentError("simulate: the kriging has " + std::to_string(drift_covariates) +
+                          " covariate(s) (external drift); pass covariates=(M, k) values at the targets");
+    if (drift_covariates == 0 && !covariates.is_none())
+      throw ArgumentError("simulate: covariates given, but the Kriging was built without covariates");
+    const Eigen::MatrixXd cov =
+        drift_covariates > 0 ? covariates_arg(covariates, "covariates", t.data.rows()) : Eigen::MatrixXd();
     SimulationOptions so;
     so.draws = n;
     so.seed = seed;
@@ -286,7 +345,7 @@ class PyKriging {
     SimulationRaw r;
     {
       py::gil_scoped_release release;
-      r = impl_->simulate(t.data, so);
+      r = impl_->simulate(t.data, cov, so);
     }
     if (r.failed) {
       const std::string w = std::to_string(r.failed) + " of " + std::to_string(t.data.rows()) +
@@ -321,6 +380,8 @@ class PyKriging {
   const VariogramModel& model() const { return model_; }
 
  private:
+  std::size_t impl_report_covariates() const { return covariate_count_; }
+  std::size_t covariate_count_ = 0;
   Samples samples_;
   VariogramModel model_;
   std::shared_ptr<const KrigingBase> impl_;
@@ -485,13 +546,15 @@ void bind_interpolation(py::module_& m) {
       .def(py::init<const py::object&, const py::object&, const py::object&, const std::string&,
                     const std::optional<std::string>&, const py::object&, const std::optional<int>&, const std::string&,
                     const std::optional<std::size_t>&, const std::optional<double>&, const py::object&,
-                    const std::string&, double, int, const std::optional<std::string>&>(),
+                    const std::string&, double, int, const std::optional<std::string>&, const py::object&,
+                    const std::optional<std::vector<std::string>>&>(),
            py::arg("coords"), py::arg("values"), py::arg("model"), py::kw_only(), py::arg("kind") = "ordinary",
            py::arg("backend") = py::none(), py::arg("mean") = py::none(), py::arg("drift_order") = py::none(),
            py::arg("nugget") = "micro", py::arg("neighbors") = py::none(), py::arg("radius") = py::none(),
            py::arg("measurement_variance") = py::none(),
            py::arg("duplicates") = "error", py::arg("duplicate_distance") = 0.0, py::arg("threads") = 0,
-           py::arg("neighbour_metric") = py::none(),
+           py::arg("neighbour_metric") = py::none(), py::arg("covariates") = py::none(),
+           py::arg("covariate_names") = py::none(),
            "coords: (N, D) sample locations (mm, deg, ...). values: (N,) or (N, K), K <= 3 (mm).\n"
            "model: VariogramModel or its text (sill mm^2, range in the coordinates' unit).\n"
            "kind: 'simple' (needs mean) | 'ordinary' | 'universal' (drift_order 0, 1, 2; default 1) | 'universal1' | 'universal2'.\n"
@@ -501,21 +564,26 @@ void bind_interpolation(py::module_& m) {
            "measurement_variance: (N,) per-sample variances (value unit^2) or None.\n"
            "duplicates: 'error' | 'average' samples closer than duplicate_distance.\n"
            "neighbour_metric (local back end): 'model' (default: neighbours by the model's lag) | 'euclidean' (gstat's).\n"
+           "covariates: (N,) or (N, k) external-drift covariate values at the samples, each one more drift term\n"
+           "(kind='ordinary': kriging with external drift, gstat's krige(z ~ cov)); predict() then needs them at the\n"
+           "targets. covariate_names: their names for messages (default covariate0, ...).\n"
            "Raises errfield.Error when the covariance cannot be factored; warns (RuntimeWarning) when ill-conditioned.")
-      .def("predict", &PyKriging::predict, py::arg("targets"),
+      .def("predict", &PyKriging::predict, py::arg("targets"), py::arg("covariates") = py::none(),
            "Kriging mean and variance at targets (M, D): returns (mean, var), mean (M,) or (M, K) in the value unit,\n"
            "var (M,) in value unit^2 (shared by all components). NaN (with a RuntimeWarning) where a target could not\n"
-           "be kriged. Releases the GIL.")
+           "be kriged. covariates: (M,) or (M, k) values at the targets, required with external drift. Releases the GIL.")
       .def("cross_validate", &PyKriging::cross_validate, py::arg("folds") = "loo", py::arg("seed") = 1,
            "Cross-validation as `errfield cv --method kriging`: folds='loo' (closed form for dense, one local solve\n"
            "per sample for local; sparse uses folds) or k >= 2 folds shuffled by seed. Returns CrossValidation.")
       .def("simulate", &PyKriging::simulate, py::arg("targets"), py::arg("n"), py::kw_only(), py::arg("seed") = 1,
            py::arg("method") = "auto", py::arg("neighbours") = 60, py::arg("draws_per_path") = 10,
+           py::arg("covariates") = py::none(),
            "n conditional Gaussian realisations at targets (M, D), as `errfield interpolate --simulations n --seed S`:\n"
            "shape (n, M) for scalar values, (n, M, K) for vectors; same seed, same draws for any thread count.\n"
            "Their mean over draws is predict()'s mean and their variance its variance (conditioning by kriging).\n"
            "method: 'auto' (exact Cholesky up to 2,000 distinct locations, samples + targets) | 'cholesky' |\n"
-           "'sequential' (random path, each location from its `neighbours` nearest earlier ones). docs/kriging.md.")
+           "'sequential' (random path, each location from its `neighbours` nearest earlier ones).\n"
+           "covariates: (M, k) values at the targets when the Kriging has covariates (external drift). docs/kriging.md.")
       .def_property_readonly("report", &PyKriging::report,
                              "dict: status, message, condition_number, jitter, samples_used, merged_duplicates, drift_terms")
       .def_property_readonly("model", &PyKriging::model);

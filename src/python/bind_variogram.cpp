@@ -11,6 +11,7 @@
 #include "errfield/error.hpp"
 #include "errfield/interpolation_options.hpp"
 #include "errfield/kriging_likelihood.hpp"
+#include "errfield/trend_residuals.hpp"
 #include "errfield/variogram_fit.hpp"
 #include "errfield/variogram_model.hpp"
 #include "python/arrays.hpp"
@@ -28,14 +29,25 @@ struct PyVariogram {
   double pair_fraction = 1.0;
 };
 
+// Covariate values (external drift): (rows,) for one covariate or (rows, k); None = none.
+Eigen::MatrixXd covariates_rows(const py::object& covariates, Eigen::Index rows) {
+  if (covariates.is_none()) return {};
+  const MatrixArg c = matrix_arg(covariates, "covariates", ArraySpec{1, 2, -1, 1});
+  if (c.data.rows() != rows)
+    throw ArgumentError("covariates: " + std::to_string(c.data.rows()) + " rows but coords has " +
+                        std::to_string(rows) + "; expected one row of covariate values per location");
+  return c.data;
+}
+
 PyVariogram run_variogram(const py::object& coords, const py::object& values, const py::object& bins,
                           const std::string& estimator, const std::string& convention, double pair_fraction,
-                          std::uint64_t seed, int threads) {
+                          std::uint64_t seed, int threads, const py::object& covariates) {
   const MatrixArg x = matrix_arg(coords, "coords", ArraySpec{1, 2, -1, 2});
-  const MatrixArg z = matrix_arg(values, "values", ArraySpec{1, 2, -1, 1});
+  MatrixArg z = matrix_arg(values, "values", ArraySpec{1, 2, -1, 1});
   if (z.data.rows() != x.data.rows())
     throw ArgumentError("values: " + std::to_string(z.data.rows()) + " rows but coords has " +
                         std::to_string(x.data.rows()) + "; expected one value (row) per location");
+  if (!covariates.is_none()) z.data = ols_trend_residuals(z.data, covariates_rows(covariates, x.data.rows()));
   const LagBins lag_bins = LagBins::from_edges(vector_arg(bins, "bins", 2));
   EmpiricalVariogramOptions options;
   options.estimator = estimator_from_name(estimator);
@@ -253,13 +265,15 @@ void bind_variogram(py::module_& m) {
 
   m.def("variogram", &run_variogram, py::arg("coords"), py::arg("values"), py::arg("bins"),
         py::arg("estimator") = "matheron", py::kw_only(), py::arg("convention") = "paper",
-        py::arg("pair_fraction") = 1.0, py::arg("seed") = 0, py::arg("threads") = 0,
+        py::arg("pair_fraction") = 1.0, py::arg("seed") = 0, py::arg("threads") = 0, py::arg("covariates") = py::none(),
         "Empirical semivariogram of `values` at `coords`, as `errfield variogram`.\n\n"
         "coords: (N, D) float64, any D (task space mm, joint space deg, ...); (N,) for 1-D.\n"
         "values: (N,) or (N, K); K > 1 is a vector value (gamma is the sum over components).\n"
         "bins: increasing bin edges e0 < e1 < ... (lag unit), at least two.\n"
         "estimator: 'matheron' | 'cressie' | 'dowd'.  convention: 'paper' ([lo, hi)) | 'gstat'.\n"
         "pair_fraction: deterministic fraction of the pairs in (0, 1], seeded by `seed`.\n"
+        "covariates: (N,) or (N, k): the variogram of the residuals of the ordinary least-squares trend\n"
+        "1 + covariates (gstat's variogram(z ~ cov); `errfield variogram --covariates`).\n"
         "Returns an EmpiricalVariogram with NumPy arrays lag_lo, lag_hi, lag_mean, gamma (value unit^2), pairs.\n"
         "Releases the GIL; runs OpenMP on `threads` threads (0 = default), result independent of it.");
 
@@ -318,9 +332,10 @@ void bind_variogram(py::module_& m) {
       "fit_likelihood",
       [](const py::object& coords, const py::object& values, const std::string& model, const std::string& method,
          const std::string& kind, int drift_order, double mean, bool nugget, std::optional<double> nu,
-         const std::string& anisotropy) {
+         const std::string& anisotropy, const py::object& covariates) {
         const ScalarSamples s = scalar_samples(coords, values);
         auto o = likelihood_options(method, kind, drift_order, mean, nugget);
+        o.covariates = covariates_rows(covariates, s.x.rows());
         if (anisotropy == "ard") o.anisotropy = LikelihoodFitOptions::Anisotropy::Ard;
         else if (anisotropy == "rotated" || anisotropy == "anis") o.anisotropy = LikelihoodFitOptions::Anisotropy::Rotated;
         else if (anisotropy != "none")
@@ -349,7 +364,7 @@ void bind_variogram(py::module_& m) {
       },
       py::arg("coords"), py::arg("values"), py::arg("model"), py::kw_only(), py::arg("method") = "reml",
       py::arg("kind") = "ordinary", py::arg("drift_order") = 1, py::arg("mean") = 0.0, py::arg("nugget") = true,
-      py::arg("nu") = py::none(), py::arg("anisotropy") = "none",
+      py::arg("nu") = py::none(), py::arg("anisotropy") = "none", py::arg("covariates") = py::none(),
       "ML or REML estimate of a model's sills and ranges from scalar samples, as\n"
       "`errfield fit-variogram --method reml|ml` (which uses kind='ordinary').\n\n"
       "coords: (N, D); values: (N,) scalar. model: a bounded kind or model text (see fit_variogram).\n"
@@ -357,6 +372,8 @@ void bind_variogram(py::module_& m) {
       "nugget: fit a nugget (True) or none. O(N^3) per evaluation: meant for N up to a few thousand.\n"
       "anisotropy: 'none' | 'ard' (one range per coordinate: the model gets '@ard(s_1,...,s_D)') |\n"
       "'rotated' or 'anis' (2-D/3-D, gstat's anis: angles and ratios fitted too, '@anis(...)').\n"
+      "covariates: (N,) or (N, k) external-drift values, one more column of the drift F each (as\n"
+      "`fit-variogram --covariates`).\n"
       "Returns a dict: model, negative_log_likelihood, evaluations, converged, message, ranges (one per\n"
       "coordinate with ard, along the principal axes with rotated, in the coordinates' unit),\n"
       "range_standard_errors, aic, bic, parameters, angles_deg and angle_standard_errors_deg (rotated;\n"
@@ -365,14 +382,17 @@ void bind_variogram(py::module_& m) {
   m.def(
       "negative_log_likelihood",
       [](const py::object& coords, const py::object& values, const VariogramModel& model, const std::string& method,
-         const std::string& kind, int drift_order, double mean) {
+         const std::string& kind, int drift_order, double mean, const py::object& covariates) {
         const ScalarSamples s = scalar_samples(coords, values);
-        const auto o = likelihood_options(method, kind, drift_order, mean, true);
+        auto o = likelihood_options(method, kind, drift_order, mean, true);
+        o.covariates = covariates_rows(covariates, s.x.rows());
+        o.validate();
         py::gil_scoped_release release;
         return negative_log_likelihood(s.x, s.z, model, o);
       },
       py::arg("coords"), py::arg("values"), py::arg("model"), py::kw_only(), py::arg("method") = "reml",
       py::arg("kind") = "ordinary", py::arg("drift_order") = 1, py::arg("mean") = 0.0,
+      py::arg("covariates") = py::none(),
       "The (restricted) negative log-likelihood of a Gaussian field with covariance `model` at the samples\n"
       "(+inf when the covariance is not positive definite). Formula: include/errfield/kriging_likelihood.hpp.");
 }

@@ -42,6 +42,7 @@ def variogram(
     pair_fraction: float = 1.0,
     seed: int = 0,
     threads: int = 0,
+    covariates: ArrayLike | None = None,
 ) -> EmpiricalVariogram: ...
 
 class VariogramModel:
@@ -95,6 +96,7 @@ def fit_likelihood(
     nugget: bool = True,
     nu: float | None = None,
     anisotropy: Literal["none", "ard", "rotated", "anis"] = "none",
+    covariates: ArrayLike | None = None,
 ) -> dict[str, Any]: ...
 def negative_log_likelihood(
     coords: ArrayLike,
@@ -105,6 +107,7 @@ def negative_log_likelihood(
     kind: str = "ordinary",
     drift_order: int = 1,
     mean: float = 0.0,
+    covariates: ArrayLike | None = None,
 ) -> float: ...
 
 class CrossValidation:
@@ -141,8 +144,10 @@ class Kriging:
         duplicate_distance: float = 0.0,
         threads: int = 0,
         neighbour_metric: Literal["model", "euclidean"] | None = None,
+        covariates: ArrayLike | None = None,
+        covariate_names: Sequence[str] | None = None,
     ) -> None: ...
-    def predict(self, targets: ArrayLike) -> tuple[F64, F64]: ...
+    def predict(self, targets: ArrayLike, covariates: ArrayLike | None = None) -> tuple[F64, F64]: ...
     def cross_validate(self, folds: int | Literal["loo"] = "loo", seed: int = 1) -> CrossValidation: ...
     def simulate(
         self,
@@ -153,6 +158,7 @@ class Kriging:
         method: Literal["auto", "cholesky", "sequential"] = "auto",
         neighbours: int = 60,
         draws_per_path: int = 10,
+        covariates: ArrayLike | None = None,
     ) -> F64: ...
     @property
     def report(self) -> dict[str, Any]: ...

@@ -178,7 +178,7 @@ TEST_F(ExternalDriftCli, MissingOrNonFiniteCovariateNamesFileRowAndColumn) {
   rewrite("S.csv", "S_nan.csv", [](const CsvTable& t, std::size_t row, std::vector<std::string>& cells) {
     if (row == 4) cells[t.column_index("c")] = "nan";
   });
-  for (const std::string cmd : {"interpolate --method kriging --targets " + path("T.csv") + " --out " + path("P.csv"),
+  for (const std::string& cmd : {"interpolate --method kriging --targets " + path("T.csv") + " --out " + path("P.csv"),
                                 std::string("cv --method kriging")}) {
     const auto nan = run(cmd + " --samples " + path("S_nan.csv") + " --coords x,y --value v --covariates c --model \"" +
                          kModel + "\"");

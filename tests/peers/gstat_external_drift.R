@@ -8,6 +8,7 @@
 #   ked.csv        pred,var   krige(log(zinc) ~ sqrt(dist), model = Sph + nugget), global
 #   ked_local.csv  pred,var   the same with nmax = 20
 #   uk_ked.csv     pred,var   krige(log(zinc) ~ x + y + sqrt(dist)), Exp + nugget, global
+#   anis_local.csv pred,var   krige(log(zinc) ~ sqrt(dist)), Sph + nugget with anis = c(30, 0.5), nmax = 20
 #   variogram.csv  np,dist,gamma   variogram(log(zinc) ~ sqrt(dist)), gstat's default bins
 #   cv.csv         pred,var,residual   krige.cv(log(zinc) ~ sqrt(dist)), leave-one-out
 suppressPackageStartupMessages({ library(sp); library(gstat) })
@@ -31,6 +32,9 @@ k <- krige(logzinc ~ sqrtdist, locations = ~x + y, data = s, newdata = g, model 
 put(data.frame(pred = k$var1.pred, var = k$var1.var), "ked_local.csv")
 k <- krige(logzinc ~ x + y + sqrtdist, locations = ~x + y, data = s, newdata = g, model = exp_model, debug.level = 0)
 put(data.frame(pred = k$var1.pred, var = k$var1.var), "uk_ked.csv")
+anis <- vgm(0.15, "Sph", 800, 0.05, anis = c(30, 0.5))
+k <- krige(logzinc ~ sqrtdist, locations = ~x + y, data = s, newdata = g, model = anis, nmax = 20, debug.level = 0)
+put(data.frame(pred = k$var1.pred, var = k$var1.var), "anis_local.csv")
 sp_s <- s
 coordinates(sp_s) <- ~x + y
 v <- variogram(logzinc ~ sqrtdist, sp_s)

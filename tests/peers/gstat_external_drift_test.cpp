@@ -126,6 +126,14 @@ TEST_F(GstatExternalDrift, LocalKrigingWithExternalDriftNmax20) {
   krige({"--model", kSph, "--backend", "local", "--neighbors", "20"}, "ked_local.csv", 20);
 }
 
+// gstat picks the nmax neighbours by the plain Euclidean distance, whatever the anisotropy:
+// errfield's --neighbour-metric euclidean, which searches the coordinates without the covariates.
+TEST_F(GstatExternalDrift, AnisotropicLocalKrigingWithGstatsNeighbourhoods) {
+  krige({"--model", "sph(sill=0.15,range=800)+nug(0.05)@anis(30,0.5)", "--backend", "local", "--neighbors", "20",
+         "--neighbour-metric", "euclidean"},
+        "anis_local.csv", 20);
+}
+
 TEST_F(GstatExternalDrift, LinearDriftPlusCovariate) {
   krige({"--model", kExp, "--kind", "universal1"}, "uk_ked.csv");
 }
