@@ -22,6 +22,7 @@
 /// fitted isotropically by BOBYQA without gradients. The mathematics: docs/kriging.md.
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -91,6 +92,10 @@ struct LikelihoodFitOptions {
   int starts = 8;
   /// Gradient path: local L-BFGS runs from the best screened starts.
   int local_runs = 2;
+  /// Gradient path: a model to start from as well (e.g. the fit of a subset): its ranges (along
+  /// each coordinate with ARD) and nugget / partial sill are screened with the other starts, and
+  /// the Vecchia neighbour sets are first found at its ranges. Ignored by rotated fits.
+  std::optional<VariogramModel> initial_model;
   /// Lower bound of nugget / total sill when the nugget is fitted: a floor keeps the kriging system
   /// well conditioned (its condition number is then below ~ N / min_nugget_ratio).
   double min_nugget_ratio = 1e-9;

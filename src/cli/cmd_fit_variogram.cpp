@@ -24,6 +24,9 @@ struct FitVariogramArgs {
   bool weights_given = false, range_max_given = false, anisotropy_given = false, kind_given = false;
   std::string nu_text;
   bool nu_given = false;
+  std::string likelihood = "auto", ordering = "maxmin";
+  int neighbours = LikelihoodFitOptions{}.vecchia_neighbours;
+  bool likelihood_given = false;
   double range_max = 0.0;
 };
 
@@ -73,9 +76,24 @@ void print_components(const VariogramModel& model) {
   }
 }
 
-// The likelihood is O(N^3) per evaluation and BOBYQA needs hundreds: beyond this the fit would
-// run for hours, so it is refused up front (exit 3) with the alternative named.
-// kMaxLikelihoodSamples: errfield/kriging_likelihood.hpp (shared with the library and Python).
+// The exact likelihood is O(N^3) per evaluation and a fit needs hundreds: beyond
+// kMaxLikelihoodSamples it is refused up front (exit 3) with the alternative named; --likelihood
+// auto (the default) switches to the Vecchia approximation above kExactLikelihoodMaxSamples, which
+// has its own sample and memory budget (check_likelihood_budget, shared with the library and Python).
+
+LikelihoodMethod likelihood_method_from(const std::string& text) {
+  if (text == "auto") return LikelihoodMethod::Auto;
+  if (text == "exact") return LikelihoodMethod::Exact;
+  if (text == "vecchia") return LikelihoodMethod::Vecchia;
+  throw ArgumentError("--likelihood: '" + text + "'; expected auto, exact or vecchia");
+}
+
+VecchiaOrdering vecchia_ordering_from(const std::string& text) {
+  if (text == "maxmin") return VecchiaOrdering::MaxMin;
+  if (text == "random") return VecchiaOrdering::Random;
+  if (text == "coordinate") return VecchiaOrdering::Coordinate;
+  throw ArgumentError("--vecchia-ordering: '" + text + "'; expected maxmin, random or coordinate");
+}
 
 /// ML/REML on the samples (kriging_likelihood.hpp): the likelihood of kriging of --kind (the mean
 /// or drift profiled out), nugget free or none, isotropic or ARD, one value or a vector sharing one
@@ -106,6 +124,12 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   if (a.nugget == "free") o.fit_nugget = true;
   else if (a.nugget == "none") o.fit_nugget = false;
   else throw ArgumentError("--nugget: '" + a.nugget + "'; with --method " + a.method + " expected free or none");
+  o.method = likelihood_method_from(a.likelihood);
+  o.vecchia_ordering = vecchia_ordering_from(a.ordering);
+  o.vecchia_neighbours = a.neighbours;
+  if (o.vecchia_neighbours < 1 || o.vecchia_neighbours > kMaxVecchiaNeighbours)
+    throw ArgumentError("--vecchia-neighbours: " + std::to_string(a.neighbours) + "; expected 1 to " +
+                        std::to_string(kMaxVecchiaNeighbours));
   o.validate();
   const ModelComponent structure = structure_from(a);
   if (structure.kind == ModelKind::Power || structure.kind == ModelKind::Linear)
@@ -114,10 +138,14 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   const auto coord_names = split_column_list(a.coords, "--coords");
   const auto value_names = split_column_list(a.value, "--value");
   const CsvTable t = CsvTable::read(a.input);
-  if (t.row_count() > static_cast<std::size_t>(kMaxLikelihoodSamples))
+  if (!likelihood_uses_vecchia(o, static_cast<long>(t.row_count())) &&
+      t.row_count() > static_cast<std::size_t>(kMaxLikelihoodSamples))
     throw ResourceError(a.input + ": " + std::to_string(t.row_count()) + " samples; --method " + a.method +
-                        " costs O(N^3) per evaluation and is limited to " + std::to_string(kMaxLikelihoodSamples) +
-                        ": use --method wls on the empirical variogram ('errfield variogram'), or a subsample");
+                        " --likelihood exact costs O(N^3) per evaluation and is limited to " +
+                        std::to_string(kMaxLikelihoodSamples) +
+                        ": use --likelihood vecchia (or auto), --method wls on the empirical variogram ('errfield "
+                        "variogram'), or a subsample");
+  check_likelihood_budget(static_cast<Eigen::Index>(t.row_count()), static_cast<Eigen::Index>(value_names.size()), o);
   if (t.row_count() < static_cast<std::size_t>(kMinLikelihoodSamples))
     throw InputError(a.input + ": " + std::to_string(t.row_count()) + " data row(s); the likelihood fit needs "
                      "at least " + std::to_string(kMinLikelihoodSamples) + " samples", a.input);
@@ -153,7 +181,9 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   }
   if (!a.out.empty()) {
     nlohmann::json j = r.model;
+    const bool vecchia = likelihood_uses_vecchia(o, static_cast<long>(t.row_count()));
     j["fit"] = {{"method", a.method},
+                {"likelihood", vecchia ? "vecchia" : "exact"},
                 {"nugget", a.nugget},
                 {"anisotropy", a.anisotropy},
                 {"kind", a.kind},
@@ -170,6 +200,10 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
                 {"status", r.converged ? "converged" : "not_converged"},
                 {"message", r.message},
                 {"input", a.input}};
+    if (vecchia) {
+      j["fit"]["vecchia_neighbours"] = o.vecchia_neighbours;
+      j["fit"]["vecchia_ordering"] = a.ordering;
+    }
     if (rotated) {
       j["fit"]["angles_deg"] = angles;
       j["fit"]["angle_standard_errors_deg"] = angle_errors;
@@ -183,6 +217,8 @@ void run_fit_variogram(const FitVariogramArgs& a) {
   if (a.method == "ml" || a.method == "reml") return run_likelihood_fit(a);
   if (a.method != "wls") throw ArgumentError("--method: '" + a.method + "'; expected wls, ml or reml");
   if (a.anisotropy_given) throw ArgumentError("--anisotropy applies to --method ml or reml");
+  if (a.likelihood_given)
+    throw ArgumentError("--likelihood, --vecchia-neighbours and --vecchia-ordering apply to --method ml or reml");
   if (a.kind_given) throw ArgumentError("--kind applies to --method ml or reml");
   if (!a.coords.empty() || !a.value.empty())
     throw ArgumentError("--coords/--value belong to --method ml or reml; --method wls reads an empirical variogram");
@@ -288,8 +324,9 @@ void add_fit_variogram_command(CLI::App& app) {
       "work). Prints the fitted model, e.g. sph(sill=0.3,range=400)+nug(sill=0.002), its\n"
       "parameters and the weighted SSE; --out writes it as JSON (readable as a model).\n"
       "--method ml|reml instead maximizes the (restricted) Gaussian likelihood of the samples\n"
-      "themselves (--input with --coords and --value; no binning; O(N^3) per evaluation, so up to\n"
-      "3,000 samples): the model ordinary kriging with that data finds most probable.");
+      "themselves (--input with --coords and --value; no binning): the model ordinary kriging with\n"
+      "that data finds most probable. Exact (O(N^3) per evaluation) up to 3,000 samples, then the\n"
+      "Vecchia nearest-neighbour approximation (O(N m^3); --likelihood, --vecchia-neighbours).");
   cmd->add_option("--input", args->input, "empirical variogram CSV (wls), or the samples CSV (ml, reml)")->required();
   cmd->add_option("--method", args->method,
                   "wls (default: weighted least squares on the empirical variogram), ml or reml (likelihood of the "
@@ -320,6 +357,17 @@ void add_fit_variogram_command(CLI::App& app) {
   cmd->add_option("--range-max", args->range_max,
                   "wls: upper bound of the range (lag unit); default 100 x the largest lag")
       ->each([args](const std::string&) { args->range_max_given = true; });
+  cmd->add_option("--likelihood", args->likelihood,
+                  "ml/reml: auto (default: exact up to 3000 samples, vecchia above), exact (O(N^3) per evaluation, "
+                  "up to 3000 samples) or vecchia (each sample conditioned on its --vecchia-neighbours nearest "
+                  "predecessors; docs/kriging.md)")
+      ->each([args](const std::string&) { args->likelihood_given = true; });
+  cmd->add_option("--vecchia-neighbours", args->neighbours,
+                  "ml/reml with the Vecchia likelihood: neighbours per sample, m (default 30)")
+      ->each([args](const std::string&) { args->likelihood_given = true; });
+  cmd->add_option("--vecchia-ordering", args->ordering,
+                  "ml/reml with the Vecchia likelihood: maxmin (default), random or coordinate")
+      ->each([args](const std::string&) { args->likelihood_given = true; });
   cmd->add_option("--out", args->out, "output JSON (written atomically)");
   cmd->footer(
       "Example:\n"

@@ -255,8 +255,9 @@ LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eige
     for (int k = 0; k < np; ++k) t[k] = std::clamp(t[k], lb[k], ub[k]);
     starts.push_back(std::move(t));
   }
-  // Vecchia: neighbour sets in the coordinates scaled by the starting ranges' common shape (the
-  // extent along each coordinate with ARD; any common scale leaves isotropic sets unchanged), fixed
+  // Vecchia: neighbour sets in the coordinates scaled by the initial model's ranges, else by the
+  // starting ranges' common shape (the extent along each coordinate with ARD; any common scale
+  // leaves isotropic sets unchanged), fixed
   // during the search so that the objective is smooth, then found again at the fitted ranges and
   // the search resumed from there (below).
   const bool vecchia = likelihood_uses_vecchia(o, static_cast<long>(x.rows()));
@@ -267,7 +268,28 @@ LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eige
     neighbours = find_vecchia_neighbours(scaled, o.vecchia_neighbours, o.vecchia_ordering);
     pr.vecchia = &neighbours;
   };
-  if (vecchia) find_neighbours(scale);
+  // The given model: its ranges along each coordinate (the isotropic range everywhere, or the
+  // largest ARD range for an isotropic fit) and its nugget / partial sill, first of the starts.
+  std::vector<double> initial_ranges;
+  if (o.initial_model) {
+    const VariogramModel& m = *o.initial_model;
+    double range = 0.0, partial = 0.0;
+    for (const auto& comp : m.components())
+      if (comp.kind != ModelKind::Nugget) range = std::max(range, comp.range), partial += comp.sill;
+    const Anisotropy& an = m.anisotropy();
+    if (range > 0.0 && partial > 0.0) {
+      std::vector<double> t(np);
+      for (int k = 0; k < nr; ++k) {
+        double rk = range;
+        if (pr.ard && an.type() == Anisotropy::Type::Ard && an.dimension() == pr.dims) rk = range * an.parameters()[k];
+        initial_ranges.push_back(rk);
+        t[k] = std::clamp(std::log(rk), lb[k], ub[k]);
+      }
+      if (o.fit_nugget) t[nr] = std::clamp(std::log(std::max(m.nugget() / partial, 1e-300)), lb[nr], ub[nr]);
+      starts.insert(starts.begin(), std::move(t));
+    }
+  }
+  if (vecchia) find_neighbours(initial_ranges.empty() ? scale : initial_ranges);
   std::vector<std::pair<double, std::size_t>> screened;
   for (std::size_t s = 0; s < starts.size(); ++s) screened.emplace_back(pr.evaluate(starts[s].data(), nullptr), s);
   std::sort(screened.begin(), screened.end());

@@ -175,6 +175,8 @@ double vecchia_profiled_nll(const Eigen::MatrixXd& u, const Eigen::MatrixXd& z, 
         w(i, v) = y[static_cast<std::size_t>(v)];
       }
       if (!want) continue;
+      // R_cc^-1 v_c for each column (overwriting v_c: the gradient needs only these).
+      for (Eigen::Index v = 0; v < nv; ++v) solve(rcc.data(), k, values.data() + static_cast<std::size_t>(v) * mmax);
       // h_k = dr_k - dR_k b and b'dr_k, for the ranges (dR_ss = 0) and the nugget (dR = g I, dr = 0).
       std::fill(h.begin(), h.end(), 0.0);
       std::fill(bdr.begin(), bdr.end(), 0.0);
@@ -220,7 +222,6 @@ double vecchia_profiled_nll(const Eigen::MatrixXd& u, const Eigen::MatrixXd& z, 
         }
         dd_over_d(i, t) = dd / d;
         // dy(v) = -(db'v_c) / sqrt(d) - y dd / (2 d), db'v_c = h_t' R_cc^-1 v_c
-        solve(rcc.data(), k, ht);
         for (Eigen::Index v = 0; v < nv; ++v)
           dw(i, t * nv + v) = -dot(ht, values.data() + static_cast<std::size_t>(v) * mmax, k) / sd -
                               0.5 * y[static_cast<std::size_t>(v)] * dd / d;
