@@ -23,39 +23,32 @@ namespace {
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // In-place Cholesky factor (lower triangle) of the k x k column-major matrix a; false when not
-// positive definite. Written out so that every thread does the same operations in the same order.
+// positive definite. Eigen's blocked kernels, single-threaded here (EIGEN_DONT_PARALLELIZE), so
+// every thread does the same operations in the same order.
 bool cholesky(double* a, std::size_t k) {
-  for (std::size_t j = 0; j < k; ++j) {
-    double s = a[j + j * k];
-    for (std::size_t l = 0; l < j; ++l) s -= a[j + l * k] * a[j + l * k];
-    if (!(s > 0.0)) return false;
-    const double d = std::sqrt(s);
-    a[j + j * k] = d;
-    for (std::size_t i = j + 1; i < k; ++i) {
-      double t = a[i + j * k];
-      for (std::size_t l = 0; l < j; ++l) t -= a[i + l * k] * a[j + l * k];
-      a[i + j * k] = t / d;
-    }
-  }
-  return true;
+  Eigen::Map<Eigen::MatrixXd> m(a, static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(k));
+  const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(m);
+  return llt.info() == Eigen::Success;
 }
 
-void forward(const double* l, std::size_t k, double* x) {
-  for (std::size_t i = 0; i < k; ++i) {
-    double t = x[i];
-    for (std::size_t j = 0; j < i; ++j) t -= l[i + j * k] * x[j];
-    x[i] = t / l[i + i * k];
-  }
+using Columns = Eigen::Map<Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
+
+// x <- L^-1 x for `columns` right-hand sides of leading dimension ld.
+void forward(const double* l, std::size_t k, double* x, std::size_t columns = 1, std::size_t ld = 0) {
+  const Eigen::Map<const Eigen::MatrixXd> factor(l, static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(k));
+  Columns rhs(x, static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(columns),
+              Eigen::OuterStride<>(static_cast<Eigen::Index>(ld ? ld : k)));
+  factor.triangularView<Eigen::Lower>().solveInPlace(rhs);
 }
 
 // x <- (L L')^-1 x
-void solve(const double* l, std::size_t k, double* x) {
-  forward(l, k, x);
-  for (std::size_t i = k; i-- > 0;) {
-    double t = x[i];
-    for (std::size_t j = i + 1; j < k; ++j) t -= l[j + i * k] * x[j];
-    x[i] = t / l[i + i * k];
-  }
+void solve(const double* l, std::size_t k, double* x, std::size_t columns = 1, std::size_t ld = 0) {
+  if (k == 0) return;
+  forward(l, k, x, columns, ld);
+  const Eigen::Map<const Eigen::MatrixXd> factor(l, static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(k));
+  Columns rhs(x, static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(columns),
+              Eigen::OuterStride<>(static_cast<Eigen::Index>(ld ? ld : k)));
+  factor.triangularView<Eigen::Lower>().transpose().solveInPlace(rhs);
 }
 
 double dot(const double* a, const double* b, std::size_t k) {
@@ -153,7 +146,7 @@ double vecchia_profiled_nll(const Eigen::MatrixXd& u, const Eigen::MatrixXd& z, 
         dr_coef[a] = dc;
         r2[a] = d2;
       }
-      if (!cholesky(rcc.data(), k)) {
+      if (k > 0 && !cholesky(rcc.data(), k)) {
         ++failed;
         continue;
       }
@@ -176,7 +169,7 @@ double vecchia_profiled_nll(const Eigen::MatrixXd& u, const Eigen::MatrixXd& z, 
       }
       if (!want) continue;
       // R_cc^-1 v_c for each column (overwriting v_c: the gradient needs only these).
-      for (Eigen::Index v = 0; v < nv; ++v) solve(rcc.data(), k, values.data() + static_cast<std::size_t>(v) * mmax);
+      solve(rcc.data(), k, values.data(), static_cast<std::size_t>(nv), mmax);
       // h_k = dr_k - dR_k b and b'dr_k, for the ranges (dR_ss = 0) and the nugget (dR = g I, dr = 0).
       std::fill(h.begin(), h.end(), 0.0);
       std::fill(bdr.begin(), bdr.end(), 0.0);
