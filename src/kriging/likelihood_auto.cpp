@@ -160,9 +160,10 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
   f.fit_nugget = true;
   f.anisotropy = choice.model.anisotropy().isotropic() ? LikelihoodFitOptions::Anisotropy::None
                                                        : LikelihoodFitOptions::Anisotropy::Ard;
-  // From the subset's estimate: with Vecchia (beyond kExactLikelihoodMaxSamples) the neighbour sets
-  // are then found in nearly the right metric from the start.
-  f.initial_model = choice.model;
+  // Vecchia (beyond kExactLikelihoodMaxSamples): from the subset's estimate as well, so that the
+  // neighbour sets are found in nearly the right metric from the start. (The exact refit keeps its
+  // data-based starts, as before.)
+  if (likelihood_uses_vecchia(f, static_cast<long>(n))) f.initial_model = choice.model;
   double cond = std::numeric_limits<double>::infinity();
   for (int attempt = 0; attempt < 4; ++attempt) {
     LikelihoodFitResult r = fit_likelihood(x, values, {structure}, f);
