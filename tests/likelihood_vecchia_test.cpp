@@ -264,6 +264,40 @@ TEST(VecchiaLikelihood, ThirtyNeighboursAgreeWithTheExactFitAtFourHundredSamples
   EXPECT_NEAR(nugget_ratio_v, nugget_ratio_e, 0.25 * nugget_ratio_e);
 }
 
+TEST(VecchiaLikelihood, ModelChoiceRefitsAllSamplesByVecchiaFromTheSubsetsEstimate) {
+  // As the robot fit beyond 3,000 samples, scaled down: the family chosen on a subset of 60, the
+  // refit of all 200 by the Vecchia likelihood (forced here), started from the subset's estimate.
+  const Field f = simulate(200, Eigen::Vector2d(15, 35), 0.1, 1, 18);
+  ModelChoiceOptions o;
+  o.fit.method = LikelihoodMethod::Vecchia;
+  o.fit.vecchia_neighbours = 20;
+  o.fit.starts = 3;
+  o.fit.local_runs = 1;
+  o.kinds = {ModelKind::Matern};
+  o.matern_nu = {1.5};
+  o.try_isotropic = false;
+  o.choice_subsample = 60;
+  const ModelChoice choice = choose_likelihood_model(f.x, f.z, o);
+  EXPECT_NE(choice.reason.find("refitted on all"), std::string::npos) << choice.reason;
+  EXPECT_NE(choice.fit.message.find("Vecchia likelihood, 20 neighbours"), std::string::npos) << choice.fit.message;
+  EXPECT_GT(choice.model.nugget(), 0.0);
+  EXPECT_EQ(choice.model.anisotropy().type(), Anisotropy::Type::Ard);
+  // The refit is a local optimum of the Vecchia likelihood it reports: nudging the nugget or all
+  // ranges together (which leaves the neighbour sets as they are) does not lower it. (Nudging one
+  // ARD range changes the sets, and with them the approximation, by a few tenths here.)
+  LikelihoodFitOptions v = vecchia(20);
+  const double at = negative_log_likelihood(f.x, f.z, choice.model, v);
+  EXPECT_NEAR(at, choice.fit.negative_log_likelihood, 1e-9 * std::abs(at));
+  for (const double factor : {0.97, 1.03}) {
+    std::vector<ModelComponent> c = choice.model.components();
+    c.back().sill *= factor;  // the nugget
+    EXPECT_GE(negative_log_likelihood(f.x, f.z, VariogramModel(c, choice.model.anisotropy()), v), at - 1e-6);
+    std::vector<ModelComponent> r = choice.model.components();
+    r.front().range *= factor;
+    EXPECT_GE(negative_log_likelihood(f.x, f.z, VariogramModel(r, choice.model.anisotropy()), v), at - 1e-6);
+  }
+}
+
 TEST(VecchiaLikelihood, BudgetsAreCheckedBeforeAnyWork) {
   LikelihoodFitOptions exact;
   exact.method = LikelihoodMethod::Exact;

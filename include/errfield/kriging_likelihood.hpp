@@ -101,12 +101,14 @@ struct LikelihoodFitOptions {
   double min_nugget_ratio = 1e-9;
   int max_evaluations = 3000;
   double relative_tolerance = 1e-9;
-  /// Exact, Vecchia, or Auto (exact up to kExactLikelihoodMaxSamples). Vecchia applies to the
-  /// gradient path (one structure + nugget, isotropic, ARD or rotated); other structures are exact.
+  /// Exact, Vecchia, or Auto (exact up to kExactLikelihoodMaxSamples). Vecchia applies to every
+  /// path: the gradient path (isotropic, ARD, rotated) and BOBYQA's nested models (their sets found
+  /// once, in the isotropic metric).
   LikelihoodMethod method = LikelihoodMethod::Auto;
   /// Vecchia: how many nearest predecessors each sample is conditioned on (m). 30 keeps the
-  /// approximate REML ranges well within their standard errors of the exact ones (measured,
-  /// docs/kriging.md); more is closer and costs O(m^3) per sample.
+  /// approximate REML ranges well within their standard errors of the exact ones in 2-D (measured,
+  /// docs/kriging.md); a very smooth field in six dimensions (the robot's joint space) needed 80.
+  /// More is closer and costs O(m^3) per sample.
   int vecchia_neighbours = 30;
   VecchiaOrdering vecchia_ordering = VecchiaOrdering::MaxMin;
   /// Vecchia: bytes the neighbour sets and per-sample terms may take; ResourceError before any work
