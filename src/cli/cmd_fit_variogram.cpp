@@ -151,7 +151,14 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
                      "at least " + std::to_string(kMinLikelihoodSamples) + " samples", a.input);
   const Eigen::MatrixXd x = t.numeric_columns(coord_names);
   const Eigen::MatrixXd z = t.numeric_columns(value_names);
+  // A terminal sees what a long fit is doing (a 50,000-sample Vecchia fit takes tens of seconds).
+  const bool vecchia_fit = likelihood_uses_vecchia(o, static_cast<long>(t.row_count()));
+  const StageLog stage("fit-variogram", t.row_count() > 1000);
+  stage(std::string(restricted ? "REML" : "ML") + " fit of " + std::to_string(t.row_count()) + " samples by the " +
+        (vecchia_fit ? "Vecchia likelihood (" + std::to_string(o.vecchia_neighbours) + " neighbours per sample)"
+                     : std::string("exact likelihood (O(N^3) per evaluation)")));
   const LikelihoodFitResult r = with_source(a.input, [&] { return fit_likelihood(x, z, {structure}, o); });
+  stage("done");
   print_components(r.model);
   std::cout << (restricted ? "REML" : "ML") << " negative log-likelihood = " << format_number(r.negative_log_likelihood)
             << ", " << t.row_count() << " samples x " << value_names.size() << " value column(s), " << r.evaluations
@@ -181,9 +188,8 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   }
   if (!a.out.empty()) {
     nlohmann::json j = r.model;
-    const bool vecchia = likelihood_uses_vecchia(o, static_cast<long>(t.row_count()));
     j["fit"] = {{"method", a.method},
-                {"likelihood", vecchia ? "vecchia" : "exact"},
+                {"likelihood", vecchia_fit ? "vecchia" : "exact"},
                 {"nugget", a.nugget},
                 {"anisotropy", a.anisotropy},
                 {"kind", a.kind},
@@ -200,7 +206,7 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
                 {"status", r.converged ? "converged" : "not_converged"},
                 {"message", r.message},
                 {"input", a.input}};
-    if (vecchia) {
+    if (vecchia_fit) {
       j["fit"]["vecchia_neighbours"] = o.vecchia_neighbours;
       j["fit"]["vecchia_ordering"] = a.ordering;
     }
