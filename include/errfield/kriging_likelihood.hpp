@@ -22,6 +22,8 @@
 /// best of several screened starts; other structures (nested models, mat with another nu) are
 /// fitted isotropically by BOBYQA without gradients. The mathematics: docs/kriging.md.
 
+#include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -35,10 +37,39 @@ namespace errfield {
 /// Fewest samples fit_likelihood (and `errfield fit-variogram --method ml|reml`) accepts: a sill, a
 /// range, a nugget and a mean need more data than parameters.
 inline constexpr long kMinLikelihoodSamples = 4;
-/// Most samples fit_likelihood accepts (ResourceError beyond; the CLI and Python share it): every
-/// evaluation factorizes an N x N matrix, O(N^3), and a fit needs hundreds; beyond it fit the
-/// empirical variogram (fit_variogram) or a subsample.
+/// Most samples the exact likelihood accepts (LikelihoodMethod::Exact; ResourceError beyond; the
+/// CLI and Python share it): every evaluation factorizes an N x N matrix, O(N^3), and a fit needs
+/// hundreds. Beyond it the Vecchia approximation (below) takes over.
 inline constexpr long kMaxLikelihoodSamples = 3000;
+/// LikelihoodMethod::Auto: the exact likelihood up to this many samples (the exact path as it
+/// was before the Vecchia approximation existed), Vecchia above (docs/kriging.md, "Vecchia
+/// likelihood", for what it costs in accuracy).
+inline constexpr long kExactLikelihoodMaxSamples = kMaxLikelihoodSamples;
+/// Most samples the Vecchia likelihood accepts (cost O(N m^3) per evaluation, memory O(N m); the
+/// memory is also checked against LikelihoodFitOptions::vecchia_memory_budget_bytes first).
+inline constexpr long kMaxVecchiaLikelihoodSamples = 2000000;
+
+/// Most neighbours a Vecchia conditioning set may have (each sample then factorizes an m x m block).
+inline constexpr int kMaxVecchiaNeighbours = 400;
+
+/// How the likelihood is evaluated.
+///  Exact:   the dense formula below, O(N^3) per evaluation, N <= kMaxLikelihoodSamples.
+///  Vecchia: the nearest-neighbour approximation of Vecchia (1988): the samples are ordered, and
+///           each one's density is conditioned only on its m nearest predecessors (in the model's
+///           metric), so the joint density is a product of N small Gaussian conditionals and
+///           K^-1 ~ U U' with U sparse (m + 1 non-zeros per column). O(N m^3) per evaluation.
+///           With m >= N - 1 it is the exact likelihood (any ordering).
+///  Auto:    Exact up to kExactLikelihoodMaxSamples samples, Vecchia above.
+enum class LikelihoodMethod { Auto, Exact, Vecchia };
+
+/// The order in which the Vecchia approximation conditions the samples on each other.
+///  MaxMin:     each next sample is the one farthest from those already ordered (the first: the
+///              one nearest the centroid), so early samples spread over the domain and later ones
+///              condition on near and far neighbours; the most accurate for a given m in the
+///              literature (Guinness 2018) and here (docs/kriging.md). O(N log N) with a kd-tree.
+///  Random:     a fixed pseudo-random permutation (seeded, reproducible).
+///  Coordinate: sorted along the first coordinate (ties by sample index); the least accurate.
+enum class VecchiaOrdering { MaxMin, Random, Coordinate };
 
 /// The spread (max - min) of the values fit_likelihood accepts: outside it the likelihood's sums of
 /// squares overflow or underflow a double, so the values must be rescaled first.
@@ -67,11 +98,28 @@ struct LikelihoodFitOptions {
   int starts = 8;
   /// Gradient path: local L-BFGS runs from the best screened starts.
   int local_runs = 2;
+  /// Gradient path: a model to start from as well (e.g. the fit of a subset): its ranges (along
+  /// each coordinate with ARD) and nugget / partial sill are screened with the other starts, and
+  /// the Vecchia neighbour sets are first found at its ranges. Ignored by rotated fits.
+  std::optional<VariogramModel> initial_model;
   /// Lower bound of nugget / total sill when the nugget is fitted: a floor keeps the kriging system
   /// well conditioned (its condition number is then below ~ N / min_nugget_ratio).
   double min_nugget_ratio = 1e-9;
   int max_evaluations = 3000;
   double relative_tolerance = 1e-9;
+  /// Exact, Vecchia, or Auto (exact up to kExactLikelihoodMaxSamples). Vecchia applies to every
+  /// path: the gradient path (isotropic, ARD, rotated) and BOBYQA's nested models (their sets found
+  /// once, in the isotropic metric).
+  LikelihoodMethod method = LikelihoodMethod::Auto;
+  /// Vecchia: how many nearest predecessors each sample is conditioned on (m). 30 keeps the
+  /// approximate REML ranges well within their standard errors of the exact ones in 2-D (measured,
+  /// docs/kriging.md); a very smooth field in six dimensions (the robot's joint space) needed 80.
+  /// More is closer and costs O(m^3) per sample.
+  int vecchia_neighbours = 30;
+  VecchiaOrdering vecchia_ordering = VecchiaOrdering::MaxMin;
+  /// Vecchia: bytes the neighbour sets and per-sample terms may take; ResourceError before any work
+  /// beyond it.
+  std::size_t vecchia_memory_budget_bytes = std::size_t{4} << 30;
   /// Throws ArgumentError naming the field.
   void validate() const;
 };
@@ -99,7 +147,16 @@ struct LikelihoodFitResult {
   std::vector<double> angle_standard_errors_deg;
 };
 
-/// The (restricted) negative log-likelihood above for `model` at samples given as the rows of
+/// Whether `options` evaluate the likelihood of `samples` samples by the Vecchia approximation.
+bool likelihood_uses_vecchia(const LikelihoodFitOptions& options, long samples);
+
+/// The sample budget fit_likelihood checks before any work: ResourceError beyond
+/// kMaxLikelihoodSamples for the exact likelihood, beyond kMaxVecchiaLikelihoodSamples or
+/// options.vecchia_memory_budget_bytes for Vecchia. `columns`: value components.
+void check_likelihood_budget(Eigen::Index samples, Eigen::Index columns, const LikelihoodFitOptions& options);
+
+/// The (restricted) negative log-likelihood above (Vecchia's approximation of it when
+/// likelihood_uses_vecchia(options, N); neighbours in the model's metric) for `model` at samples given as the rows of
 /// `coordinates` (N x D) with `values` (N x C, C >= 1; a VectorXd is one column). Returns +infinity when K or F'K^-1F is not
 /// positive definite. Throws ArgumentError for mismatched sizes or an unbounded model.
 double negative_log_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,

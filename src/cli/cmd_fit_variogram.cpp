@@ -25,6 +25,9 @@ struct FitVariogramArgs {
   bool weights_given = false, range_max_given = false, anisotropy_given = false, kind_given = false;
   std::string nu_text;
   bool nu_given = false;
+  std::string likelihood = "auto", ordering = "maxmin";
+  int neighbours = LikelihoodFitOptions{}.vecchia_neighbours;
+  bool likelihood_given = false;
   double range_max = 0.0;
 };
 
@@ -74,9 +77,24 @@ void print_components(const VariogramModel& model) {
   }
 }
 
-// The likelihood is O(N^3) per evaluation and BOBYQA needs hundreds: beyond this the fit would
-// run for hours, so it is refused up front (exit 3) with the alternative named.
-// kMaxLikelihoodSamples: errfield/kriging_likelihood.hpp (shared with the library and Python).
+// The exact likelihood is O(N^3) per evaluation and a fit needs hundreds: beyond
+// kMaxLikelihoodSamples it is refused up front (exit 3) with the alternative named; --likelihood
+// auto (the default) switches to the Vecchia approximation above kExactLikelihoodMaxSamples, which
+// has its own sample and memory budget (check_likelihood_budget, shared with the library and Python).
+
+LikelihoodMethod likelihood_method_from(const std::string& text) {
+  if (text == "auto") return LikelihoodMethod::Auto;
+  if (text == "exact") return LikelihoodMethod::Exact;
+  if (text == "vecchia") return LikelihoodMethod::Vecchia;
+  throw ArgumentError("--likelihood: '" + text + "'; expected auto, exact or vecchia");
+}
+
+VecchiaOrdering vecchia_ordering_from(const std::string& text) {
+  if (text == "maxmin") return VecchiaOrdering::MaxMin;
+  if (text == "random") return VecchiaOrdering::Random;
+  if (text == "coordinate") return VecchiaOrdering::Coordinate;
+  throw ArgumentError("--vecchia-ordering: '" + text + "'; expected maxmin, random or coordinate");
+}
 
 /// ML/REML on the samples (kriging_likelihood.hpp): the likelihood of kriging of --kind (the mean
 /// or drift profiled out), nugget free or none, isotropic or ARD, one value or a vector sharing one
@@ -107,6 +125,12 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   if (a.nugget == "free") o.fit_nugget = true;
   else if (a.nugget == "none") o.fit_nugget = false;
   else throw ArgumentError("--nugget: '" + a.nugget + "'; with --method " + a.method + " expected free or none");
+  o.method = likelihood_method_from(a.likelihood);
+  o.vecchia_ordering = vecchia_ordering_from(a.ordering);
+  o.vecchia_neighbours = a.neighbours;
+  if (o.vecchia_neighbours < 1 || o.vecchia_neighbours > kMaxVecchiaNeighbours)
+    throw ArgumentError("--vecchia-neighbours: " + std::to_string(a.neighbours) + "; expected 1 to " +
+                        std::to_string(kMaxVecchiaNeighbours));
   o.validate();
   const ModelComponent structure = structure_from(a);
   if (structure.kind == ModelKind::Power || structure.kind == ModelKind::Linear)
@@ -115,10 +139,14 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   const auto coord_names = split_column_list(a.coords, "--coords");
   const auto value_names = split_column_list(a.value, "--value");
   const CsvTable t = CsvTable::read(a.input);
-  if (t.row_count() > static_cast<std::size_t>(kMaxLikelihoodSamples))
+  if (!likelihood_uses_vecchia(o, static_cast<long>(t.row_count())) &&
+      t.row_count() > static_cast<std::size_t>(kMaxLikelihoodSamples))
     throw ResourceError(a.input + ": " + std::to_string(t.row_count()) + " samples; --method " + a.method +
-                        " costs O(N^3) per evaluation and is limited to " + std::to_string(kMaxLikelihoodSamples) +
-                        ": use --method wls on the empirical variogram ('errfield variogram'), or a subsample");
+                        " --likelihood exact costs O(N^3) per evaluation and is limited to " +
+                        std::to_string(kMaxLikelihoodSamples) +
+                        ": use --likelihood vecchia (or auto), --method wls on the empirical variogram ('errfield "
+                        "variogram'), or a subsample");
+  check_likelihood_budget(static_cast<Eigen::Index>(t.row_count()), static_cast<Eigen::Index>(value_names.size()), o);
   if (t.row_count() < static_cast<std::size_t>(kMinLikelihoodSamples))
     throw InputError(a.input + ": " + std::to_string(t.row_count()) + " data row(s); the likelihood fit needs "
                      "at least " + std::to_string(kMinLikelihoodSamples) + " samples", a.input);
@@ -130,7 +158,14 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
       throw ArgumentError("--covariates with --kind simple0; expected --kind ordinary (external drift) or universal1/2");
     o.covariates = t.numeric_columns(covariate_names);
   }
+  // A terminal sees what a long fit is doing (a 50,000-sample Vecchia fit takes tens of seconds).
+  const bool vecchia_fit = likelihood_uses_vecchia(o, static_cast<long>(t.row_count()));
+  const StageLog stage("fit-variogram", t.row_count() > 1000);
+  stage(std::string(restricted ? "REML" : "ML") + " fit of " + std::to_string(t.row_count()) + " samples by the " +
+        (vecchia_fit ? "Vecchia likelihood (" + std::to_string(o.vecchia_neighbours) + " neighbours per sample)"
+                     : std::string("exact likelihood (O(N^3) per evaluation)")));
   const LikelihoodFitResult r = with_source(a.input, [&] { return fit_likelihood(x, z, {structure}, o); });
+  stage("done");
   print_components(r.model);
   std::cout << (restricted ? "REML" : "ML") << " negative log-likelihood = " << format_number(r.negative_log_likelihood)
             << ", " << t.row_count() << " samples x " << value_names.size() << " value column(s), " << r.evaluations
@@ -161,6 +196,7 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   if (!a.out.empty()) {
     nlohmann::json j = r.model;
     j["fit"] = {{"method", a.method},
+                {"likelihood", vecchia_fit ? "vecchia" : "exact"},
                 {"nugget", a.nugget},
                 {"anisotropy", a.anisotropy},
                 {"kind", a.kind},
@@ -178,6 +214,10 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
                 {"status", r.converged ? "converged" : "not_converged"},
                 {"message", r.message},
                 {"input", a.input}};
+    if (vecchia_fit) {
+      j["fit"]["vecchia_neighbours"] = o.vecchia_neighbours;
+      j["fit"]["vecchia_ordering"] = a.ordering;
+    }
     if (rotated) {
       j["fit"]["angles_deg"] = angles;
       j["fit"]["angle_standard_errors_deg"] = angle_errors;
@@ -191,6 +231,8 @@ void run_fit_variogram(const FitVariogramArgs& a) {
   if (a.method == "ml" || a.method == "reml") return run_likelihood_fit(a);
   if (a.method != "wls") throw ArgumentError("--method: '" + a.method + "'; expected wls, ml or reml");
   if (a.anisotropy_given) throw ArgumentError("--anisotropy applies to --method ml or reml");
+  if (a.likelihood_given)
+    throw ArgumentError("--likelihood, --vecchia-neighbours and --vecchia-ordering apply to --method ml or reml");
   if (a.kind_given) throw ArgumentError("--kind applies to --method ml or reml");
   if (!a.covariates.empty())
     throw ArgumentError("--covariates applies to --method ml or reml; for wls, fit the residual variogram of "
@@ -299,8 +341,9 @@ void add_fit_variogram_command(CLI::App& app) {
       "work). Prints the fitted model, e.g. sph(sill=0.3,range=400)+nug(sill=0.002), its\n"
       "parameters and the weighted SSE; --out writes it as JSON (readable as a model).\n"
       "--method ml|reml instead maximizes the (restricted) Gaussian likelihood of the samples\n"
-      "themselves (--input with --coords and --value; no binning; O(N^3) per evaluation, so up to\n"
-      "3,000 samples): the model ordinary kriging with that data finds most probable.");
+      "themselves (--input with --coords and --value; no binning): the model ordinary kriging with\n"
+      "that data finds most probable. Exact (O(N^3) per evaluation) up to 3,000 samples, then the\n"
+      "Vecchia nearest-neighbour approximation (O(N m^3); --likelihood, --vecchia-neighbours).");
   cmd->add_option("--input", args->input, "empirical variogram CSV (wls), or the samples CSV (ml, reml)")->required();
   cmd->add_option("--method", args->method,
                   "wls (default: weighted least squares on the empirical variogram), ml or reml (likelihood of the "
@@ -334,6 +377,17 @@ void add_fit_variogram_command(CLI::App& app) {
   cmd->add_option("--range-max", args->range_max,
                   "wls: upper bound of the range (lag unit); default 100 x the largest lag")
       ->each([args](const std::string&) { args->range_max_given = true; });
+  cmd->add_option("--likelihood", args->likelihood,
+                  "ml/reml: auto (default: exact up to 3000 samples, vecchia above), exact (O(N^3) per evaluation, "
+                  "up to 3000 samples) or vecchia (each sample conditioned on its --vecchia-neighbours nearest "
+                  "predecessors; docs/kriging.md)")
+      ->each([args](const std::string&) { args->likelihood_given = true; });
+  cmd->add_option("--vecchia-neighbours", args->neighbours,
+                  "ml/reml with the Vecchia likelihood: neighbours per sample, m (default 30)")
+      ->each([args](const std::string&) { args->likelihood_given = true; });
+  cmd->add_option("--vecchia-ordering", args->ordering,
+                  "ml/reml with the Vecchia likelihood: maxmin (default), random or coordinate")
+      ->each([args](const std::string&) { args->likelihood_given = true; });
   cmd->add_option("--out", args->out, "output JSON (written atomically)");
   cmd->footer(
       "Example:\n"

@@ -12,6 +12,8 @@
 #include "errfield/error.hpp"
 #include "kriging/likelihood_profile.hpp"
 #include "kriging/likelihood_rotated.hpp"
+#include "kriging/likelihood_vecchia.hpp"
+#include "kriging/vecchia_neighbours.hpp"
 #include "optim/bobyqa.hpp"
 
 namespace errfield {
@@ -110,7 +112,8 @@ struct Problem {
   const Eigen::MatrixXd* f;
   std::vector<ModelComponent> structure;
   bool fit_nugget;
-  bool restricted;
+  const LikelihoodFitOptions* options = nullptr;
+  const detail::VecchiaNeighbours* neighbours = nullptr;  // Vecchia: isotropic, so fixed
   int evaluations = 0;
   VariogramModel model_of(const double* theta) const {
     std::vector<ModelComponent> c = structure;
@@ -129,26 +132,37 @@ struct Problem {
   }
 };
 
+
+// The likelihood of `model` as written, exact or Vecchia as `o` says; Vecchia's neighbours are found
+// in the model's metric (its anisotropy applied), unless `neighbours` gives them.
+double nll_of_model(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const Eigen::MatrixXd& f,
+                    const VariogramModel& model, const LikelihoodFitOptions& o,
+                    const detail::VecchiaNeighbours* neighbours = nullptr) {
+  const Anisotropy& a = model.anisotropy();
+  const bool vecchia = likelihood_uses_vecchia(o, static_cast<long>(x.rows()));
+  if (a.isotropic() && !vecchia) return nll(x, z, f, model, o.restricted);
+  // The drift stays a polynomial of the given coordinates; only the lags are mapped.
+  Eigen::MatrixXd mapped = x;
+  if (!a.isotropic()) {
+    Eigen::VectorXd in(x.cols()), out(x.cols());
+    for (Eigen::Index i = 0; i < x.rows(); ++i) {
+      in = x.row(i).transpose();
+      a.apply(in.data(), out.data(), static_cast<int>(in.size()));
+      mapped.row(i) = out.transpose();
+    }
+  }
+  if (!vecchia) return nll(mapped, z, f, model, o.restricted);
+  const Eigen::MatrixXd points = mapped.transpose();
+  if (neighbours) return detail::vecchia_model_nll(points, z, f, model, o.restricted, *neighbours);
+  const detail::VecchiaNeighbours found = detail::find_vecchia_neighbours(points, o.vecchia_neighbours, o.vecchia_ordering);
+  return detail::vecchia_model_nll(points, z, f, model, o.restricted, found);
+}
+
 double objective(const double* theta, void* data) {
   auto& p = *static_cast<Problem*>(data);
   ++p.evaluations;
-  const double v = nll(*p.x, *p.z, *p.f, p.model_of(theta), p.restricted);
+  const double v = nll_of_model(*p.x, *p.z, *p.f, p.model_of(theta), *p.options, p.neighbours);
   return std::isfinite(v) ? v : 1e300;
-}
-
-double nll_of_model(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const Eigen::MatrixXd& f,
-                    const VariogramModel& model, bool restricted) {
-  const Anisotropy& a = model.anisotropy();
-  if (a.isotropic()) return nll(x, z, f, model, restricted);
-  // The drift stays a polynomial of the given coordinates; only the lags are mapped.
-  Eigen::MatrixXd mapped(x.rows(), x.cols());
-  Eigen::VectorXd in(x.cols()), out(x.cols());
-  for (Eigen::Index i = 0; i < x.rows(); ++i) {
-    in = x.row(i).transpose();
-    a.apply(in.data(), out.data(), static_cast<int>(in.size()));
-    mapped.row(i) = out.transpose();
-  }
-  return nll(mapped, z, f, model, restricted);
 }
 
 LikelihoodFitResult fit_likelihood_checked(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
@@ -159,7 +173,43 @@ LikelihoodFitResult fit_bobyqa(const Eigen::MatrixXd& coordinates, const Eigen::
 
 }  // namespace
 
+bool likelihood_uses_vecchia(const LikelihoodFitOptions& options, long samples) {
+  return options.method == LikelihoodMethod::Vecchia ||
+         (options.method == LikelihoodMethod::Auto && samples > kExactLikelihoodMaxSamples);
+}
+
+void check_likelihood_budget(Eigen::Index samples, Eigen::Index columns, const LikelihoodFitOptions& options) {
+  const long n = static_cast<long>(samples);
+  if (!likelihood_uses_vecchia(options, n)) {
+    if (n > kMaxLikelihoodSamples)
+      throw ResourceError("likelihood: " + std::to_string(n) +
+                          " samples; the exact likelihood costs O(N^3) per evaluation and is limited to " +
+                          std::to_string(kMaxLikelihoodSamples) +
+                          " samples: use the Vecchia approximation (method auto or vecchia; 'errfield fit-variogram "
+                          "--likelihood vecchia'), fit the empirical variogram ('--method wls') or a subsample");
+    return;
+  }
+  if (n > kMaxVecchiaLikelihoodSamples)
+    throw ResourceError("likelihood: " + std::to_string(n) + " samples; the Vecchia likelihood is limited to " +
+                        std::to_string(kMaxVecchiaLikelihoodSamples) + " samples: fit a subsample");
+  // Per sample: the neighbour sets, the whitened columns (values and drift) and their derivatives.
+  const std::size_t drift_columns = options.kind == KrigingKind::Simple      ? 0
+                                    : options.kind == KrigingKind::Ordinary ? 1
+                                                                            : 28;  // at most (order 2, D = 6)
+  const double bytes = detail::vecchia_memory_bytes(static_cast<std::size_t>(n), options.vecchia_neighbours,
+                                                    static_cast<std::size_t>(columns) + drift_columns, 8);
+  if (bytes > static_cast<double>(options.vecchia_memory_budget_bytes))
+    throw ResourceError("likelihood: the Vecchia likelihood needs ~" + format_number(std::round(bytes / (1 << 20))) +
+                        " MiB for N = " + std::to_string(n) + " samples and " +
+                        std::to_string(options.vecchia_neighbours) + " neighbours, over vecchia_memory_budget_bytes = " +
+                        format_number(std::round(static_cast<double>(options.vecchia_memory_budget_bytes) / (1 << 20))) +
+                        " MiB: fewer neighbours or a subsample");
+}
+
 void LikelihoodFitOptions::validate() const {
+  if (vecchia_neighbours < 1 || vecchia_neighbours > kMaxVecchiaNeighbours)
+    throw ArgumentError("likelihood options: vecchia_neighbours = " + std::to_string(vecchia_neighbours) +
+                        "; expected 1 to " + std::to_string(kMaxVecchiaNeighbours));
   if (kind == KrigingKind::Universal && (drift_order < 0 || drift_order > 2))
     throw ArgumentError("likelihood options: drift_order = " + std::to_string(drift_order) + "; expected 0, 1 or 2");
   if (!std::isfinite(simple_mean)) throw ArgumentError("likelihood options: simple_mean is not finite");
@@ -190,7 +240,7 @@ double negative_log_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::
     throw ArgumentError("likelihood: the model's anisotropy " + a.to_string() + " is for " +
                         std::to_string(a.dimension()) + " coordinates but the samples have " +
                         std::to_string(coordinates.cols()));
-  return nll_of_model(coordinates, z, drift(coordinates, options), model, options.restricted);
+  return nll_of_model(coordinates, z, drift(coordinates, options), model, options);
 }
 
 LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
@@ -202,12 +252,7 @@ LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eig
     if (c.kind != ModelKind::Nugget && !c.bounded())
       throw ArgumentError("likelihood: component '" + std::string(model_kind_name(c.kind)) +
                           "' has no covariance (pow, lin); use nug, sph, exp, gau, mat or wen");
-  if (coordinates.rows() > kMaxLikelihoodSamples)
-    throw ResourceError("likelihood: " + std::to_string(coordinates.rows()) +
-                        " samples; a likelihood fit costs O(N^3) per evaluation and is limited to " +
-                        std::to_string(kMaxLikelihoodSamples) +
-                        " samples: fit the empirical variogram (fit_variogram, 'errfield fit-variogram --method wls') "
-                        "or a subsample");
+  check_likelihood_budget(coordinates.rows(), values.cols(), options);
   if (coordinates.rows() < kMinLikelihoodSamples)
     throw InputError("likelihood: " + std::to_string(coordinates.rows()) + " samples; need at least " +
                      std::to_string(kMinLikelihoodSamples));
@@ -266,7 +311,7 @@ LikelihoodFitResult fit_likelihood_checked(const Eigen::MatrixXd& coordinates, c
                                 ? detail::fit_rotated_likelihood(coordinates, z, f, non_nugget[0], options)
                                 : detail::fit_profiled_likelihood(coordinates, z, f, non_nugget[0], options);
     // Report the likelihood of the model as written, by the plain formula (a check of the profile).
-    r.negative_log_likelihood = nll_of_model(coordinates, z, f, r.model, options.restricted);
+    r.negative_log_likelihood = nll_of_model(coordinates, z, f, r.model, options);
     if (!std::isfinite(r.negative_log_likelihood))
       throw Error("likelihood: the negative log-likelihood is " + format_number(r.negative_log_likelihood) +
                   " at the best parameters found (" + r.model.to_string() +
@@ -302,7 +347,13 @@ LikelihoodFitResult fit_bobyqa(const Eigen::MatrixXd& coordinates, const Eigen::
   pr.z = &z;
   pr.f = &f;
   pr.fit_nugget = options.fit_nugget;
-  pr.restricted = options.restricted;
+  pr.options = &options;
+  detail::VecchiaNeighbours neighbours;
+  if (likelihood_uses_vecchia(options, static_cast<long>(coordinates.rows()))) {
+    neighbours = detail::find_vecchia_neighbours(coordinates.transpose(), options.vecchia_neighbours,
+                                                 options.vecchia_ordering);
+    pr.neighbours = &neighbours;
+  }
 
   const double var = std::max((values.rowwise() - values.colwise().mean()).array().square().mean(), 1e-300);
   const double extent = (coordinates.colwise().maxCoeff() - coordinates.colwise().minCoeff()).norm();
@@ -332,7 +383,7 @@ LikelihoodFitResult fit_bobyqa(const Eigen::MatrixXd& coordinates, const Eigen::
   const detail::BobyqaOutcome outcome = bobyqa.minimize(&objective, &pr, x0);
   LikelihoodFitResult res;
   res.model = pr.model_of(x0.data());
-  res.negative_log_likelihood = nll(coordinates, z, f, res.model, options.restricted);
+  res.negative_log_likelihood = nll_of_model(coordinates, z, f, res.model, options, pr.neighbours);
   res.evaluations = pr.evaluations;
   res.converged = outcome.converged;
   res.message = bobyqa.describe(outcome, "likelihood");

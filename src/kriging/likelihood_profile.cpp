@@ -9,64 +9,12 @@
 #include <Eigen/Cholesky>
 
 #include "errfield/csv_table.hpp"
+#include "kriging/correlation_derivative.hpp"
+#include "kriging/likelihood_vecchia.hpp"
 #include "optim/lbfgs.hpp"
 
 namespace errfield::detail {
 namespace {
-
-// Correlation rho(r) at the scaled lag r = h / a and rho'(r) / r, which stays finite at r -> 0 for
-// every kind here except exp (where it multiplies a squared coordinate lag <= r^2, so the product
-// is finite; at r = 0 the pair is a duplicate and contributes nothing).
-struct Correlation {
-  ModelKind kind;
-  int matern = 0;  // 1, 3, 5: nu = 0.5, 1.5, 2.5
-  void operator()(double r, double& rho, double& d) const {
-    switch (kind) {
-      case ModelKind::Spherical:
-        if (r >= 1.0) {
-          rho = 0.0, d = 0.0;
-        } else {
-          rho = 1.0 - r * (1.5 - 0.5 * r * r);
-          d = r > 0.0 ? 1.5 * (r * r - 1.0) / r : 0.0;
-        }
-        return;
-      case ModelKind::Gaussian: {
-        rho = std::exp(-r * r);
-        d = -2.0 * rho;
-        return;
-      }
-      case ModelKind::Wendland:
-        if (r >= 1.0) {
-          rho = 0.0, d = 0.0;
-        } else {
-          const double s = 1.0 - r;
-          rho = s * s * s * s * (4.0 * r + 1.0);
-          d = -20.0 * s * s * s;
-        }
-        return;
-      default: {
-        const double e = std::exp(-r);
-        if (matern == 1) {
-          rho = e;
-          d = r > 0.0 ? -e / r : 0.0;
-        } else if (matern == 3) {
-          rho = (1.0 + r) * e;
-          d = -e;
-        } else {
-          rho = (1.0 + r + r * r / 3.0) * e;
-          d = -(1.0 + r) * e / 3.0;
-        }
-      }
-    }
-  }
-};
-
-Correlation correlation_of(const ModelComponent& c) {
-  Correlation k{c.kind};
-  if (c.kind == ModelKind::Exponential) k.matern = 1;
-  if (c.kind == ModelKind::Matern) k.matern = c.nu == 0.5 ? 1 : c.nu == 1.5 ? 3 : 5;
-  return k;
-}
 
 constexpr double kFailed = 1e300;
 
@@ -114,6 +62,7 @@ struct Profile {
   Eigen::MatrixXd u, r, w, linv;
   Eigen::LLT<Eigen::MatrixXd> llt;
   double sigma2 = 0.0;
+  const VecchiaNeighbours* vecchia = nullptr;  // set: the Vecchia approximation with these sets
 
   int range_count() const { return ard ? dims : 1; }
 
@@ -123,6 +72,10 @@ struct Profile {
     u.resize(dims, n);
     for (int k = 0; k < dims; ++k) u.row(k) = x->col(k).transpose() * std::exp(-theta[ard ? k : 0]);
     const double g = fit_nugget ? std::exp(theta[nr]) : 0.0;
+    if (vecchia) {
+      const double v = vecchia_profiled_nll(u, *z, *f, *vecchia, corr, g, ard, fit_nugget, restricted, grad, &sigma2);
+      return std::isfinite(v) ? v : kFailed;
+    }
     r.resize(n, n);
     for (Eigen::Index j = 0; j < n; ++j) {
       r(j, j) = 1.0 + g;
@@ -302,6 +255,41 @@ LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eige
     for (int k = 0; k < np; ++k) t[k] = std::clamp(t[k], lb[k], ub[k]);
     starts.push_back(std::move(t));
   }
+  // Vecchia: neighbour sets in the coordinates scaled by the initial model's ranges, else by the
+  // starting ranges' common shape (the extent along each coordinate with ARD; any common scale
+  // leaves isotropic sets unchanged), fixed
+  // during the search so that the objective is smooth, then found again at the fitted ranges and
+  // the search resumed from there (below).
+  const bool vecchia = likelihood_uses_vecchia(o, static_cast<long>(x.rows()));
+  VecchiaNeighbours neighbours;
+  auto find_neighbours = [&](const std::vector<double>& ranges) {
+    Eigen::MatrixXd scaled = x.transpose();
+    for (int k = 0; k < pr.dims; ++k) scaled.row(k) /= ranges[static_cast<std::size_t>(pr.ard ? k : 0)];
+    neighbours = find_vecchia_neighbours(scaled, o.vecchia_neighbours, o.vecchia_ordering);
+    pr.vecchia = &neighbours;
+  };
+  // The given model: its ranges along each coordinate (the isotropic range everywhere, or the
+  // largest ARD range for an isotropic fit) and its nugget / partial sill, first of the starts.
+  std::vector<double> initial_ranges;
+  if (o.initial_model) {
+    const VariogramModel& m = *o.initial_model;
+    double range = 0.0, partial = 0.0;
+    for (const auto& comp : m.components())
+      if (comp.kind != ModelKind::Nugget) range = std::max(range, comp.range), partial += comp.sill;
+    const Anisotropy& an = m.anisotropy();
+    if (range > 0.0 && partial > 0.0) {
+      std::vector<double> t(np);
+      for (int k = 0; k < nr; ++k) {
+        double rk = range;
+        if (pr.ard && an.type() == Anisotropy::Type::Ard && an.dimension() == pr.dims) rk = range * an.parameters()[k];
+        initial_ranges.push_back(rk);
+        t[k] = std::clamp(std::log(rk), lb[k], ub[k]);
+      }
+      if (o.fit_nugget) t[nr] = std::clamp(std::log(std::max(m.nugget() / partial, 1e-300)), lb[nr], ub[nr]);
+      starts.insert(starts.begin(), std::move(t));
+    }
+  }
+  if (vecchia) find_neighbours(initial_ranges.empty() ? scale : initial_ranges);
   std::vector<std::pair<double, std::size_t>> screened;
   for (std::size_t s = 0; s < starts.size(); ++s) screened.emplace_back(pr.evaluate(starts[s].data(), nullptr), s);
   std::sort(screened.begin(), screened.end());
@@ -325,6 +313,17 @@ LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eige
   if (!(best < kFailed))
     throw InputError("likelihood: the covariance is not positive definite at any starting point (values or "
                      "coordinates of extreme magnitude? rescale them to units of order 1)");
+  if (vecchia && pr.ard) {
+    std::vector<double> fitted(static_cast<std::size_t>(nr));
+    for (int k = 0; k < nr; ++k) fitted[static_cast<std::size_t>(k)] = std::exp(best_theta[static_cast<std::size_t>(k)]);
+    find_neighbours(fitted);
+    std::vector<double> t = best_theta;
+    const LbfgsOutcome out = minimize_lbfgs(&objective, &pr, t, lb, ub, o.relative_tolerance, o.max_evaluations);
+    evaluations += out.evaluations;
+    best = out.objective;
+    best_theta = t;
+    best_outcome = out;
+  }
   std::vector<double> se_log = log_range_errors(pr, best_theta);
   evaluations += np + 2;
   pr.evaluate(best_theta.data(), nullptr);
@@ -352,7 +351,11 @@ LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eige
   res.evaluations = evaluations;
   res.converged = best_outcome.converged;
   res.message = best_outcome.message + " (best of " + std::to_string(runs) + " L-BFGS runs from " +
-                std::to_string(starts.size()) + " screened starts)";
+                std::to_string(starts.size()) + " screened starts" +
+                (vecchia ? std::string("; Vecchia likelihood, ") + std::to_string(o.vecchia_neighbours) +
+                               " neighbours" + (pr.ard ? ", sets found again at the fitted ranges" : "")
+                         : std::string()) +
+                ")";
   // A range on its box bound is no estimate: the likelihood still improved towards the bound. With
   // one range (or all ARD ranges there) the fit has not found a model; one ARD range on its upper
   // bound alone says the field hardly varies along that coordinate, which is an answer: noted only.

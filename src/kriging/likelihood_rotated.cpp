@@ -127,6 +127,7 @@ LikelihoodFitResult fit_rotated_likelihood(const Eigen::MatrixXd& x, const Eigen
                         std::to_string(d) + "; use ARD in other dimensions");
   RotatedProfile pr{&x, &z, &f, structure, options};
   pr.ard_options.anisotropy = LikelihoodFitOptions::Anisotropy::Ard;
+  pr.ard_options.initial_model.reset();  // its ranges are along the given axes, not the rotated ones
   // Angle boxes: a rotation by 90 degrees swaps the roles of the axes (ARD's ranges absorb it), so
   // 2-D needs [0, 90); 3-D azimuth [0, 180), dip and rotation [-90, 90).
   std::vector<double> lo, hi;

@@ -207,6 +207,20 @@ py::dict fit_variogram_py(const py::object& variogram, const std::string& model,
   return d;
 }
 
+void set_likelihood_method(LikelihoodFitOptions& o, const std::string& likelihood, int neighbours,
+                           const std::string& ordering) {
+  if (likelihood == "auto") o.method = LikelihoodMethod::Auto;
+  else if (likelihood == "exact") o.method = LikelihoodMethod::Exact;
+  else if (likelihood == "vecchia") o.method = LikelihoodMethod::Vecchia;
+  else throw ArgumentError("likelihood: '" + likelihood + "'; expected 'auto', 'exact' or 'vecchia'");
+  if (ordering == "maxmin") o.vecchia_ordering = VecchiaOrdering::MaxMin;
+  else if (ordering == "random") o.vecchia_ordering = VecchiaOrdering::Random;
+  else if (ordering == "coordinate") o.vecchia_ordering = VecchiaOrdering::Coordinate;
+  else throw ArgumentError("vecchia_ordering: '" + ordering + "'; expected 'maxmin', 'random' or 'coordinate'");
+  o.vecchia_neighbours = neighbours;
+  o.validate();
+}
+
 LikelihoodFitOptions likelihood_options(const std::string& method, const std::string& kind, int drift_order,
                                         double mean, bool nugget) {
   LikelihoodFitOptions o;
@@ -332,10 +346,12 @@ void bind_variogram(py::module_& m) {
       "fit_likelihood",
       [](const py::object& coords, const py::object& values, const std::string& model, const std::string& method,
          const std::string& kind, int drift_order, double mean, bool nugget, std::optional<double> nu,
-         const std::string& anisotropy, const py::object& covariates) {
+         const std::string& anisotropy, const py::object& covariates, const std::string& likelihood,
+         int vecchia_neighbours, const std::string& vecchia_ordering) {
         const ScalarSamples s = scalar_samples(coords, values);
         auto o = likelihood_options(method, kind, drift_order, mean, nugget);
         o.covariates = covariates_rows(covariates, s.x.rows());
+        set_likelihood_method(o, likelihood, vecchia_neighbours, vecchia_ordering);
         if (anisotropy == "ard") o.anisotropy = LikelihoodFitOptions::Anisotropy::Ard;
         else if (anisotropy == "rotated" || anisotropy == "anis") o.anisotropy = LikelihoodFitOptions::Anisotropy::Rotated;
         else if (anisotropy != "none")
@@ -365,11 +381,16 @@ void bind_variogram(py::module_& m) {
       py::arg("coords"), py::arg("values"), py::arg("model"), py::kw_only(), py::arg("method") = "reml",
       py::arg("kind") = "ordinary", py::arg("drift_order") = 1, py::arg("mean") = 0.0, py::arg("nugget") = true,
       py::arg("nu") = py::none(), py::arg("anisotropy") = "none", py::arg("covariates") = py::none(),
+      py::arg("likelihood") = "auto",
+      py::arg("vecchia_neighbours") = LikelihoodFitOptions{}.vecchia_neighbours, py::arg("vecchia_ordering") = "maxmin",
       "ML or REML estimate of a model's sills and ranges from scalar samples, as\n"
       "`errfield fit-variogram --method reml|ml` (which uses kind='ordinary').\n\n"
       "coords: (N, D); values: (N,) scalar. model: a bounded kind or model text (see fit_variogram).\n"
       "method: 'reml' | 'ml'. kind: 'simple' (known mean) | 'ordinary' | 'universal' (drift_order 0-2).\n"
-      "nugget: fit a nugget (True) or none. O(N^3) per evaluation: meant for N up to a few thousand.\n"
+      "nugget: fit a nugget (True) or none.\n"
+      "likelihood: 'auto' (exact up to 3,000 samples, Vecchia above) | 'exact' (O(N^3) per evaluation,\n"
+      "up to 3,000 samples) | 'vecchia' (each sample conditioned on its vecchia_neighbours nearest\n"
+      "predecessors in the vecchia_ordering 'maxmin' | 'random' | 'coordinate'; O(N m^3)).\n"
       "anisotropy: 'none' | 'ard' (one range per coordinate: the model gets '@ard(s_1,...,s_D)') |\n"
       "'rotated' or 'anis' (2-D/3-D, gstat's anis: angles and ratios fitted too, '@anis(...)').\n"
       "covariates: (N,) or (N, k) external-drift values, one more column of the drift F each (as\n"

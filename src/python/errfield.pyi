@@ -97,6 +97,9 @@ def fit_likelihood(
     nu: float | None = None,
     anisotropy: Literal["none", "ard", "rotated", "anis"] = "none",
     covariates: ArrayLike | None = None,
+    likelihood: Literal["auto", "exact", "vecchia"] = "auto",
+    vecchia_neighbours: int = 30,
+    vecchia_ordering: Literal["maxmin", "random", "coordinate"] = "maxmin",
 ) -> dict[str, Any]: ...
 def negative_log_likelihood(
     coords: ArrayLike,

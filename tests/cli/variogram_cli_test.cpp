@@ -249,11 +249,50 @@ TEST_F(VariogramCli, FitVariogramByLikelihoodMatchesTheLibraryAndRefusesWhatDoes
   std::string big = "x,y,z,dL\n";
   for (int i = 0; i < 3001; ++i) big += std::to_string(i) + ",0,0,1\n";
   write("big.csv", big);
-  bad = run("fit-variogram --method reml --input " + path("big.csv") + " --coords x,y,z --value dL --model exp --out " +
-            path("big.json"));
+  bad = run("fit-variogram --method reml --likelihood exact --input " + path("big.csv") +
+            " --coords x,y,z --value dL --model exp --out " + path("big.json"));
   EXPECT_EQ(bad.exit_code, 3);
   EXPECT_NE(bad.err.find("--method wls"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("--likelihood vecchia"), std::string::npos) << bad.err;
   EXPECT_FALSE(fs::exists(path("big.json")));
+  // The default (auto) takes them to the Vecchia likelihood: no budget refusal; these values are all
+  // equal, which the data check then names (exit 2).
+  bad = run("fit-variogram --method reml --input " + path("big.csv") + " --coords x,y,z --value dL --model exp");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("values are equal"), std::string::npos) << bad.err;
+  bad = run("fit-variogram --method reml --input " + path("in.csv") +
+            " --coords x,y,z --value dL --model exp --vecchia-neighbours 0");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--vecchia-neighbours"), std::string::npos) << bad.err;
+  bad = run("fit-variogram --input " + path("in.csv") + " --model exp --likelihood vecchia");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("apply to --method ml or reml"), std::string::npos) << bad.err;
+}
+
+TEST_F(VariogramCli, FitVariogramByTheVecchiaLikelihoodWritesTheLibrarysFit) {
+  Eigen::MatrixXd x, z;
+  write("in.csv", simulated_csv(80, 7, &x, &z));
+  const auto r = run("fit-variogram --method reml --likelihood vecchia --vecchia-neighbours 12 --vecchia-ordering random "
+                     "--anisotropy ard --input " + path("in.csv") + " --coords \"x [mm],y,z\" --value dL --model exp --out " +
+                     path("m.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(read("m.json"));
+  EXPECT_EQ(j["fit"]["likelihood"], "vecchia");
+  EXPECT_EQ(j["fit"]["vecchia_neighbours"], 12);
+  EXPECT_EQ(j["fit"]["vecchia_ordering"], "random");
+  LikelihoodFitOptions o;
+  o.method = LikelihoodMethod::Vecchia;
+  o.vecchia_neighbours = 12;
+  o.vecchia_ordering = VecchiaOrdering::Random;
+  o.anisotropy = LikelihoodFitOptions::Anisotropy::Ard;
+  const auto lib = fit_likelihood(x, z.col(0), {{ModelKind::Exponential, 0, 0, 0.5}}, o);
+  EXPECT_EQ(j.get<VariogramModel>().to_string(), lib.model.to_string());
+  EXPECT_EQ(j["fit"]["negative_log_likelihood"].get<double>(), lib.negative_log_likelihood);
+  // Small N by default: the exact likelihood, said so.
+  const auto e = run("fit-variogram --method reml --input " + path("in.csv") +
+                     " --coords \"x [mm],y,z\" --value dL --model exp --out " + path("e.json"));
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_EQ(nlohmann::json::parse(read("e.json"))["fit"]["likelihood"], "exact");
 }
 
 }  // namespace

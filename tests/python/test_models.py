@@ -166,9 +166,23 @@ def test_likelihood_sample_minimum_and_constant_values_are_the_clis(tmp_path):
 
 
 def test_likelihood_sample_budget_is_the_clis():
-    """The CLI refused more than 3,000 samples for ML/REML (O(N^3) per evaluation, exit 3); Python
-    went ahead (N = 10^5 would allocate 80 GB per matrix). One limit, a ResourceError before any work."""
+    """The CLI refused more than 3,000 samples for the exact ML/REML (O(N^3) per evaluation, exit 3);
+    Python went ahead (N = 10^5 would allocate 80 GB per matrix). One limit, a ResourceError before any
+    work; beyond it the default (likelihood='auto') takes the Vecchia approximation."""
     rng = np.random.default_rng(3)
     x = rng.uniform(0, 100, size=(3001, 2))
     with pytest.raises(errfield.ResourceError, match="limited to 3000 samples"):
-        errfield.fit_likelihood(x, rng.standard_normal(3001), "exp")
+        errfield.fit_likelihood(x, rng.standard_normal(3001), "exp", likelihood="exact")
+    with pytest.raises(errfield.ArgumentError, match="vecchia_neighbours"):
+        errfield.fit_likelihood(x[:50], rng.standard_normal(50), "exp", vecchia_neighbours=0)
+
+
+def test_vecchia_likelihood_with_every_predecessor_is_the_exact_one():
+    """With as many neighbours as samples - 1 the Vecchia likelihood is exact (an identity)."""
+    rng = np.random.default_rng(4)
+    x = rng.uniform(0, 100, size=(40, 2))
+    z = np.sin(x[:, 0] / 20.0) + 0.1 * rng.standard_normal(40)
+    exact = errfield.fit_likelihood(x, z, "exp", likelihood="exact")
+    vecchia = errfield.fit_likelihood(x, z, "exp", likelihood="vecchia", vecchia_neighbours=39)
+    assert vecchia["negative_log_likelihood"] == pytest.approx(exact["negative_log_likelihood"], rel=1e-8)
+    assert "Vecchia" in vecchia["message"]

@@ -164,7 +164,9 @@ VariogramModel estimate_field_variogram(const FieldSamples& samples, const Eigen
 /// The model a field uses when none is given, and why: choose_likelihood_model (REML with the
 /// field's kriging kind; sph/exp/gau/mat(1.5, 2.5) with a nugget, isotropic or ARD over the six
 /// joints in joint space or over x, y, z in task space, smallest AIC among well-conditioned fits)
-/// on up to 3,000 samples; beyond, estimate_field_variogram. (Task space used
+/// at any N: the choice on a subset of 300, the refit on all samples by the Vecchia likelihood
+/// beyond kExactLikelihoodMaxSamples (issue 23; before, beyond 3,000 samples,
+/// estimate_field_variogram without a nugget or ARD). (Task space used
 /// estimate_field_variogram until issue 19: it fitted no nugget on the paper's grid and claimed
 /// too small a variance.)
 VariogramModel choose_field_model(const FieldSamples& samples, const Eigen::MatrixXd& values,
