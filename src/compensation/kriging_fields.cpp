@@ -336,26 +336,30 @@ std::vector<double> squared_z_of(const ErrorField& field) {
   throw Error("variance calibration: not a kriging field");
 }
 
+/// A field is one dense factorization (fit offers no local or sparse back end): a sample count
+/// over the dense budget is refused before any variogram estimation (which, by the Vecchia
+/// likelihood, could otherwise run for minutes first), naming what fit can do instead. K and its
+/// factor, plus one N x N for the leave-one-out.
+void refuse_over_dense_budget(const std::string& kind, std::size_t count, bool with_leave_one_out) {
+  const double n = static_cast<double>(count);
+  const double matrices = with_leave_one_out ? 3.0 : 2.0;
+  const double budget = static_cast<double>(KrigingOptions{}.dense_memory_budget_bytes);
+  if (matrices * n * n * sizeof(double) <= budget) return;
+  const auto fits = static_cast<std::size_t>(std::floor(std::sqrt(budget / (matrices * sizeof(double)))));
+  throw ResourceError(kind + ": " + std::to_string(count) + " points need ~" +
+                      format_number(std::round(matrices * n * n * sizeof(double) / (1 << 20))) +
+                      " MiB for the dense covariance factorization, over the budget of " +
+                      format_number(std::round(budget / (1 << 20))) + " MiB; the kriging methods of fit are dense: "
+                      "use at most " + std::to_string(fits) +
+                      " points (a coarser grid), or --method distance-idw or position-idw, which have no such limit");
+}
+
 template <class V>
 KrigingFieldFit make_field(std::string kind, const FieldSamples& samples, std::vector<V> values,
                            const Eigen::MatrixXd& flat, const KrigingFieldOptions& options,
                            std::optional<Eigen::Vector3d> base, bool with_leave_one_out) {
   options.validate();
-  // A field is one dense factorization (fit offers no local or sparse back end): refuse a sample
-  // count over the dense budget now, not after seconds of variogram estimation, and name what
-  // fit can do instead. K and its factor, plus one N x N for the leave-one-out.
-  const double n = static_cast<double>(values.size());
-  const double matrices = with_leave_one_out ? 3.0 : 2.0;
-  const double budget = static_cast<double>(KrigingOptions{}.dense_memory_budget_bytes);
-  if (matrices * n * n * sizeof(double) > budget) {
-    const auto fits = static_cast<std::size_t>(std::floor(std::sqrt(budget / (matrices * sizeof(double)))));
-    throw ResourceError(kind + ": " + std::to_string(values.size()) + " points need ~" +
-                        format_number(std::round(matrices * n * n * sizeof(double) / (1 << 20))) +
-                        " MiB for the dense covariance factorization, over the budget of " +
-                        format_number(std::round(budget / (1 << 20))) + " MiB; the kriging methods of fit are dense: "
-                        "use at most " + std::to_string(fits) +
-                        " points (a coarser grid), or --method distance-idw or position-idw, which have no such limit");
-  }
+  refuse_over_dense_budget(kind, values.size(), with_leave_one_out);
   if (!options.model && options.on_stage) options.on_stage("estimating the variogram");
   std::string reason;
   const VariogramModel model = options.model ? *options.model : choose_field_model(samples, flat, options, reason);
@@ -487,6 +491,8 @@ Eigen::Matrix<double, N, 1> read_vec(const nlohmann::json& j, const std::string&
 
 VariogramModel choose_field_model(const FieldSamples& samples, const Eigen::MatrixXd& values,
                                   const KrigingFieldOptions& options, std::string& reason) {
+  // The model is for a dense field: refuse what the field would refuse, before the fit.
+  refuse_over_dense_budget("kriging field", samples.joints_deg.size(), false);
   // At any N (issue 23): the families are compared on a subset (choose_likelihood_model), and the
   // winner's refit on all samples uses the Vecchia likelihood beyond kExactLikelihoodMaxSamples.
   // Until then more than 3,000 samples fell back to the weighted fit of the empirical variogram,
