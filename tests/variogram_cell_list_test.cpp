@@ -192,6 +192,7 @@ TEST(VariogramCellList, EqualsAllPairsForDirectionsVectorValuesEstimatorsAndSubs
       for (auto estimator : {VariogramEstimator::Matheron, VariogramEstimator::CressieHawkins,
                              VariogramEstimator::Dowd})
         for (double fraction : {1.0, 0.5}) {
+          if (fraction < 1.0 && estimator != VariogramEstimator::Matheron) continue;  // CI time
           SCOPED_TRACE("D=" + std::to_string(c.dimension) + " K=" + std::to_string(components) + " " +
                        std::string(estimator_name(estimator)) + " fraction " + std::to_string(fraction));
           EmpiricalVariogramOptions o;
