@@ -243,6 +243,7 @@ bool build_variogram_cells(const double* axis_major, std::size_t n, int dimensio
   // the 3-D neighbourhood away (measured: docs/variogram.md).
   constexpr std::size_t kCellReach = 2;
   constexpr double kMinCells = 2.0 * kCellReach + 1.0;
+  static_assert(kCellReach >= 1 && kCellReach <= kernels::kCellListMaxReach);
   auto cells_for = [](double extent, double side) {
     return std::min(std::floor(extent / side) + 1.0, 1099511627776.0);  // 2^40: coarsened below
   };
