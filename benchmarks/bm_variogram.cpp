@@ -109,8 +109,51 @@ void BM_VariogramKernel3d(benchmark::State& state) {
       benchmark::Counter(pairs, benchmark::Counter::kIsIterationInvariantRate);
 }
 
+// Cutoff against extent (issue 22 item 7): 3-D locations uniform in a 500 cube, 15 bins up to
+// the cutoff = ratio x 500, N up to 10^6 (the largest N only at short cutoffs). `search`: 0 =
+// automatic (the cell list where it pays), 1 = all pairs, 2 = cell list forced. Counter
+// `binned_pairs` = pairs within the cutoff.
+//
+//   build/benchmarks/bm_variogram --benchmark_filter='BM_VariogramCutoff3d/N:80000/ratio_pct:20'
+void BM_VariogramCutoff3d(benchmark::State& state) {
+  const std::size_t n = static_cast<std::size_t>(state.range(0));
+  const double cutoff = 500.0 * static_cast<double>(state.range(1)) / 100.0;
+  const auto search = static_cast<errfield::PairSearch>(state.range(2));
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<double> u(0.0, 500.0);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(n), 3), z(static_cast<Eigen::Index>(n), 1);
+  for (Eigen::Index i = 0; i < x.rows(); ++i) {
+    for (int a = 0; a < 3; ++a) x(i, a) = u(rng);
+    z(i, 0) = std::sin(x(i, 0) / 80.0) + std::cos(x(i, 2) / 120.0) + noise(rng);
+  }
+  const auto bins = errfield::LagBins::uniform(0.0, cutoff, cutoff / 15.0);
+  errfield::EmpiricalVariogramOptions options;
+  options.threads = 2;
+  options.pair_search = search;
+  double binned = 0.0;
+  for (auto _ : state) {
+    auto v = errfield::empirical_variogram(x, z, bins, options);
+    binned = 0.0;
+    for (const auto& b : v.bins) binned += static_cast<double>(b.pairs);
+    benchmark::DoNotOptimize(v.bins.data());
+  }
+  state.counters["binned_pairs"] = binned;
+}
+
+void cutoff_cases(benchmark::internal::Benchmark* b) {
+  for (long n : {20000L, 80000L})
+    for (long ratio : {5L, 10L, 20L, 30L, 50L, 100L})
+      for (long search : {0L, 1L}) b->Args({n, ratio, search});
+  // Larger N only where the cell list keeps it reasonable (all pairs: minutes).
+  for (long ratio : {5L, 10L, 20L}) b->Args({200000L, ratio, 0L});
+  for (long ratio : {5L, 10L}) b->Args({1000000L, ratio, 0L});
+  b->ArgNames({"N", "ratio_pct", "search"})->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
 }  // namespace
 
+BENCHMARK(BM_VariogramCutoff3d)->Apply(cutoff_cases);
 BENCHMARK(BM_VariogramKernel3d)->Arg(0)->Arg(1)->Arg(2)->ArgName("isa")->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Variogram3d)->Apply(sizes);
 BENCHMARK(BM_Variogram6d)->Apply(sizes);

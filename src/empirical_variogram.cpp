@@ -9,6 +9,10 @@
 #include <numbers>
 #include <string>
 
+#if defined(_OPENMP)
+#include <omp.h>
+#endif
+
 #include "errfield/csv_table.hpp"
 
 namespace errfield {
@@ -203,6 +207,136 @@ void throw_dimension_mismatch(std::size_t row, int dimension, int expected) {
   throw ArgumentError("empirical variogram: location row " + std::to_string(row) + " has " +
                       std::to_string(dimension) + " coordinates; location row 0 has " +
                       std::to_string(expected));
+}
+
+int variogram_team_size(int threads) {
+#if defined(_OPENMP)
+  return threads > 0 ? threads : std::max(1, omp_get_max_threads());
+#else
+  (void)threads;
+  return 1;
+#endif
+}
+
+int variogram_thread_index() {
+#if defined(_OPENMP)
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
+bool build_variogram_cells(const double* axis_major, std::size_t n, int dimension,
+                           const std::vector<double>& axis_bound, bool force, VariogramCells& cells) {
+  if (n < 2 || n >= std::numeric_limits<std::uint32_t>::max()) return false;
+  if (!force && n < kCellListMinPoints) return false;
+  // Cells a little wider than bound / reach: a pair within the bound then differs by less than
+  // `reach` cells on the axis even after the rounding of (x - lo) / side (relative ~1e-16 per cell
+  // index, far below the margin for the at most 2^28 cells allowed), so the kernel finds it.
+  constexpr double kSideMargin = 1e-6;
+  struct Axis {
+    int axis;
+    double lo, extent, side, cells, bound;
+  };
+  // Cells of half the bound: a pair within the cutoff is at most 2 cells apart on an axis, and
+  // the cells the kernel skips by their distance to the point (beyond the bound) take ~half of
+  // the 3-D neighbourhood away (measured: docs/variogram.md).
+  constexpr std::size_t kCellReach = 2;
+  constexpr double kMinCells = 2.0 * kCellReach + 1.0;
+  static_assert(kCellReach >= 1 && kCellReach <= kernels::kCellListMaxReach);
+  auto cells_for = [](double extent, double side) {
+    return std::min(std::floor(extent / side) + 1.0, 1099511627776.0);  // 2^40: coarsened below
+  };
+  std::vector<Axis> axes;
+  for (int a = 0; a < dimension; ++a) {
+    const double b = axis_bound[static_cast<std::size_t>(a)];
+    if (!(std::isfinite(b) && b > 0.0)) continue;
+    const double* x = axis_major + static_cast<std::size_t>(a) * n;
+    const auto [lo, hi] = std::minmax_element(x, x + n);
+    const double extent = *hi - *lo;
+    const double side = b * (1.0 + kSideMargin) / static_cast<double>(kCellReach);
+    const double count = cells_for(extent, side);
+    // With fewer cells every cell neighbours every other: gridding the axis saves nothing.
+    if (count >= kMinCells) axes.push_back({a, *lo, extent, side, count, b});
+  }
+  std::sort(axes.begin(), axes.end(), [](const Axis& p, const Axis& q) {
+    return p.cells > q.cells || (p.cells == q.cells && p.axis < q.axis);
+  });
+  if (axes.size() > static_cast<std::size_t>(kernels::kCellListMaxAxes))
+    axes.resize(static_cast<std::size_t>(kernels::kCellListMaxAxes));
+  // At most ~2 cells per point (more cells are mostly empty and only cost their visits).
+  const double max_cells = std::min(2.0 * static_cast<double>(n), 268435456.0);
+  auto total = [&] {
+    double t = 1.0;
+    for (const Axis& x : axes) t *= x.cells;
+    return t;
+  };
+  while (!axes.empty() && total() > max_cells) {
+    auto widest = std::max_element(axes.begin(), axes.end(),
+                                   [](const Axis& p, const Axis& q) { return p.cells < q.cells; });
+    widest->side *= 2.0;
+    widest->cells = cells_for(widest->extent, widest->side);
+    if (widest->cells < kMinCells) axes.erase(widest);
+  }
+  if (axes.empty()) return false;
+  double visited = 1.0;  // expected share of the pairs in neighbouring cells
+  // (c cells, reach r: sum over cells of the neighbours within r, over c^2), before the skipping.
+  const double r = static_cast<double>(kCellReach);
+  for (const Axis& x : axes)
+    visited *= std::min(1.0, ((2.0 * r + 1.0) * x.cells - r * (r + 1.0)) / (x.cells * x.cells));
+  if (!force && visited > kCellListMaxFraction) return false;
+
+  kernels::CellList& g = cells.list;
+  g = kernels::CellList{};
+  g.n = n;
+  g.dimension = dimension;
+  g.axes = static_cast<int>(axes.size());
+  std::size_t stride = 1;
+  g.reach = kCellReach;
+  for (std::size_t k = 0; k < axes.size(); ++k) {
+    g.axis[k] = axes[k].axis;
+    g.origin[k] = axes[k].lo;
+    g.side[k] = axes[k].side;
+    g.inv_bound[k] = 1.0 / axes[k].bound;
+    g.cells_per_axis[k] = static_cast<std::size_t>(axes[k].cells);
+    g.stride[k] = stride;
+    stride *= g.cells_per_axis[k];
+  }
+  const std::size_t cell_count = stride;
+  cells.cell_of.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::size_t cell = 0;
+    for (std::size_t k = 0; k < axes.size(); ++k) {
+      const double u = (axis_major[static_cast<std::size_t>(axes[k].axis) * n + i] - axes[k].lo) / axes[k].side;
+      const std::size_t index = std::min(static_cast<std::size_t>(u), g.cells_per_axis[k] - 1);
+      cell += index * g.stride[k];
+    }
+    cells.cell_of[i] = static_cast<std::uint32_t>(cell);
+  }
+  // Counting sort by cell; ascending original index within a cell.
+  cells.cell_start.assign(cell_count + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) ++cells.cell_start[cells.cell_of[i] + 1];
+  for (std::size_t c = 0; c < cell_count; ++c) cells.cell_start[c + 1] += cells.cell_start[c];
+  cells.point.resize(n);
+  cells.position.resize(n);
+  {
+    std::vector<std::uint32_t> next(cells.cell_start.begin(), cells.cell_start.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t p = next[cells.cell_of[i]]++;
+      cells.point[p] = static_cast<std::uint32_t>(i);
+      cells.position[i] = p;
+    }
+  }
+  const std::size_t D = static_cast<std::size_t>(dimension);
+  cells.coordinates.resize(n * D);
+  for (std::size_t a = 0; a < D; ++a)
+    for (std::size_t p = 0; p < n; ++p) cells.coordinates[a * n + p] = axis_major[a * n + cells.point[p]];
+  g.coordinates = cells.coordinates.data();
+  g.point = cells.point.data();
+  g.position = cells.position.data();
+  g.cell_of = cells.cell_of.data();
+  g.cell_start = cells.cell_start.data();
+  return true;
 }
 
 kernels::BinLayout variogram_bin_layout(const LagBins& bins, const EmpiricalVariogramOptions& o) {

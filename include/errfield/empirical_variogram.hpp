@@ -18,7 +18,11 @@
 /// e_1..e_n when e_0 = 0. Pairs outside [e_0, e_n] are ignored.
 ///
 /// Cost: one pass over the N(N-1)/2 pairs, each lag computed once; memory O(N K + bins K C)
-/// with C = kVariogramChunks fixed row chunks (never an N x N matrix). Dowd's estimator needs
+/// with C = kVariogramChunks fixed row chunks (never an N x N matrix). When the largest bin edge
+/// (the cutoff) is short against the extent of the locations, a cell list (kernels/pair_cells.hpp)
+/// enumerates only the pairs of neighbouring cells instead, in the same order, so the result is
+/// the same bit for bit (options.pair_search; Euclidean, joint-space and weighted Euclidean
+/// metrics; other metrics always use all pairs); it costs O(N D) more memory plus O(N) per thread. Dowd's estimator needs
 /// medians, hence a second pass and storage of every binned difference, bounded by
 /// EmpiricalVariogramOptions::max_stored_differences. Parallel with OpenMP; the chunks
 /// and the order in which their sums are merged do not depend on the number of threads, so the
@@ -94,6 +98,14 @@ class LagBins {
   bool uniform_ = false;
 };
 
+/// How empirical_variogram finds the pairs: every pair, or only the pairs a cell list puts within
+/// the largest bin edge (the cutoff). Both give the same result, bit for bit (docs/variogram.md).
+enum class PairSearch {
+  Automatic,  ///< a cell list when the cutoff is short against the extent of the locations
+  AllPairs,   ///< all N(N-1)/2 pairs
+  CellList,   ///< a cell list whenever the metric allows one (see empirical_variogram)
+};
+
 /// Numerical and sampling policy of empirical_variogram.
 struct EmpiricalVariogramOptions {
   VariogramEstimator estimator = VariogramEstimator::Matheron;
@@ -116,6 +128,8 @@ struct EmpiricalVariogramOptions {
   /// Only the pairs whose separation points along this direction (variogram_direction.hpp);
   /// default: every pair. Checked against the location dimension by empirical_variogram.
   VariogramDirection direction;
+  /// Which pairs are enumerated; does not change the result (only the time it takes).
+  PairSearch pair_search = PairSearch::Automatic;
   /// Throws ArgumentError naming the offending field.
   void validate() const;
 };

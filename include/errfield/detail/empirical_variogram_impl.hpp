@@ -3,11 +3,13 @@
 // here, before the parallel region; the pair loop itself is kernels/pair_binning.hpp.
 
 #include <cmath>
+#include <limits>
 #include <string>
 #include <type_traits>
 #include <vector>
 
 #include "pair_binning.hpp"
+#include "pair_cells.hpp"
 #include "pair_direction.hpp"
 #include "pair_binning_simd.hpp"
 
@@ -49,6 +51,64 @@ kernels::DirectionCone variogram_direction_cone(const VariogramDirection& direct
 [[noreturn]] void throw_bad_coordinate(std::size_t row, int coordinate, double value);
 [[noreturn]] void throw_dimension_mismatch(std::size_t row, int dimension, int expected);
 
+/// A cell list with the arrays kernels::CellList points into (built by build_variogram_cells).
+struct VariogramCells {
+  std::vector<double> coordinates;  ///< cell-ordered, axis-major, all axes
+  std::vector<std::uint32_t> point, position, cell_of, cell_start;
+  kernels::CellList list;
+  bool built() const noexcept { return list.axes > 0; }
+};
+
+/// The automatic choice (PairSearch::Automatic) takes the cell list when its estimated share of
+/// the pairs, prod_a min(1, (3 c_a - 2) / c_a^2) over the gridded axes with c_a cells, is at most
+/// kCellListMaxFraction and there are at least kCellListMinPoints locations (measured crossover:
+/// docs/variogram.md).
+inline constexpr double kCellListMaxFraction = 0.5;
+inline constexpr std::size_t kCellListMinPoints = 1000;
+
+/// Builds a cell list over axis-major coordinates (dimension x n) for pairs whose difference on
+/// axis a is at most axis_bound[a] (infinite: that axis cannot be gridded) and returns true, or
+/// returns false when no axis can be gridded, n does not fit the 32-bit indices, or (unless
+/// `force`) the cell list would not pay: it estimates the fraction of the pairs it would visit and
+/// uses the cell list below kCellListMaxFraction, for n >= kCellListMinPoints.
+bool build_variogram_cells(const double* axis_major, std::size_t n, int dimension,
+                           const std::vector<double>& axis_bound, bool force, VariogramCells& cells);
+
+/// One thread's workspace for the cell list (kernels::CellListScratch over n points).
+struct VariogramCellScratch {
+  std::vector<double> lag_of;
+  std::vector<std::uint64_t> bits, summary;
+  explicit VariogramCellScratch(std::size_t n)
+      : lag_of(n), bits((n + 63) / 64, 0), summary((n + 4095) / 4096, 0) {}
+  kernels::CellListScratch view() noexcept { return {lag_of.data(), bits.data(), summary.data()}; }
+};
+
+/// Threads a parallel region with `threads` (0: OpenMP's default) can have at most, and the calling
+/// thread's index in its team (0 outside a parallel region).
+int variogram_team_size(int threads);
+int variogram_thread_index();
+
+/// The largest difference on each axis that a pair with lag <= cutoff can have under `metric`, for
+/// the metrics whose form is known (Euclidean and joint-space: the cutoff itself; weighted
+/// Euclidean: cutoff / sqrt(w_a), infinite for w_a = 0). False for any other metric.
+template <class M>
+bool variogram_axis_bounds(const M& metric, int dimension, double cutoff, std::vector<double>& bound) {
+  bound.assign(static_cast<std::size_t>(dimension), cutoff);
+  if constexpr (std::is_same_v<M, EuclideanMetric> || std::is_same_v<M, JointSpaceMetric>) {
+    return true;
+  } else if constexpr (std::is_same_v<M, WeightedEuclideanMetric>) {
+    const std::vector<double>& w = metric.weights();
+    if (w.size() > static_cast<std::size_t>(dimension)) return false;
+    for (std::size_t a = 0; a < bound.size(); ++a)
+      bound[a] = a < w.size() && w[a] > 0.0 ? cutoff / std::sqrt(w[a])
+                                            : std::numeric_limits<double>::infinity();
+    return true;
+  } else {
+    (void)metric;
+    return false;
+  }
+}
+
 /// Everything one chunk needs; `soa` (axis-major coordinates) is set when the Euclidean fast
 /// path applies, `dimension` is then the number of axes.
 template <class L, class M>
@@ -67,9 +127,84 @@ struct VariogramJob {
   const kernels::DirectionCone* cone;  ///< null: every direction
 };
 
+/// A chunk's view of the cell list: the grid, the direction cone over its cell-ordered
+/// coordinates (null: every direction) and the running thread's workspace.
+struct VariogramCellRun {
+  const kernels::CellList* list;
+  const kernels::DirectionCone* cone;
+  kernels::CellListScratch scratch;
+};
+
+/// visit(i, j, h, m) with batches of the pairs of rows [r0, r1) within the cutoff, in the
+/// all-pairs order, with the lags the all-pairs loop computes (the Euclidean fast path's or the
+/// metric's).
+template <class L, class M, class Visit>
+void for_each_cell_pair(const VariogramJob<L, M>& job, const VariogramCellRun& cells,
+                        std::size_t r0, std::size_t r1, Visit&& visit) {
+  const kernels::CellList& g = *cells.list;
+  const double cutoff = job.layout.edges[job.layout.bins];
+  if (job.soa == nullptr) {
+    auto lags = [&](std::size_t i, std::size_t, std::size_t p0, std::size_t m, double* h) {
+      const L& li = job.locations[i];
+      for (std::size_t t = 0; t < m; ++t) h[t] = (*job.metric)(li, job.locations[g.point[p0 + t]]);
+    };
+    kernels::for_each_pair_in_cells<false>(g, r0, r1, cutoff, cells.cone, lags, cells.scratch, visit);
+    return;
+  }
+  auto euclid = [&]<int D>() {
+    auto lags = [&](std::size_t, std::size_t pi, std::size_t p0, std::size_t m, double* h2) {
+      kernels::cell_squared_euclidean_lags<D>(g, pi, p0, m, h2);
+    };
+    kernels::for_each_pair_in_cells<true>(g, r0, r1, cutoff, cells.cone, lags, cells.scratch, visit);
+  };
+  switch (job.dimension) {
+    case 1: euclid.template operator()<1>(); break;
+    case 2: euclid.template operator()<2>(); break;
+    case 3: euclid.template operator()<3>(); break;
+    case 6: euclid.template operator()<6>(); break;
+    default: euclid.template operator()<0>();
+  }
+}
+
+/// The cell list's counterpart of bin_pair_rows: the same pairs in the same order, so the same sums.
+template <kernels::PairStatistic S, bool Sub, int K_FIXED, class L, class M>
+void bin_cell_pairs(const VariogramJob<L, M>& job, const VariogramCellRun& cells, std::size_t r0,
+                    std::size_t r1, kernels::PairSums out) {
+  for_each_cell_pair(job, cells, r0, r1,
+                     [&](std::size_t i, const std::uint32_t* j, const double* h, std::size_t m) {
+    kernels::accumulate_pair_batch<S, Sub, K_FIXED>(i, j, h, m, job.values, job.components,
+                                                    job.layout, job.seed, job.keep_below, out);
+  });
+}
+
+/// The cell list's counterpart of store_pair_differences (Dowd's second pass).
+template <bool Sub, class L, class M>
+void store_cell_differences(const VariogramJob<L, M>& job, const VariogramCellRun& cells,
+                            std::size_t r0, std::size_t r1, std::uint64_t* cursor, double* out) {
+  const std::size_t K = static_cast<std::size_t>(job.components);
+  for_each_cell_pair(job, cells, r0, r1,
+                     [&](std::size_t i, const std::uint32_t* j, const double* h, std::size_t m) {
+    const double* zi = job.values + i * K;
+    for (std::size_t t = 0; t < m; ++t) {
+      if constexpr (Sub) {
+        if (kernels::pair_hash(job.seed, i, j[t]) >= job.keep_below) continue;
+      }
+      const std::ptrdiff_t k = kernels::find_bin(h[t], job.layout);
+      if (k < 0) continue;
+      const double* zj = job.values + static_cast<std::size_t>(j[t]) * K;
+      double* o = out + cursor[k]++ * K;
+      for (std::size_t c = 0; c < K; ++c) o[c] = std::fabs(zi[c] - zj[c]);
+    }
+  });
+}
+
 template <kernels::PairStatistic S, bool Sub, int K, class L, class M>
-void run_variogram_chunk_k(const VariogramJob<L, M>& job, std::size_t r0, std::size_t r1,
-                           kernels::PairSums out) {
+void run_variogram_chunk_k(const VariogramJob<L, M>& job, const VariogramCellRun* cells,
+                           std::size_t r0, std::size_t r1, kernels::PairSums out) {
+  if (cells != nullptr) {
+    bin_cell_pairs<S, Sub, K>(job, *cells, r0, r1, out);
+    return;
+  }
   if (job.soa == nullptr) {
     kernels::bin_pair_rows<S, Sub, K>(job.locations, job.values, job.components, *job.metric,
                                       job.layout, job.seed, job.keep_below, r0, r1, out, job.cone);
@@ -91,23 +226,53 @@ void run_variogram_chunk_k(const VariogramJob<L, M>& job, std::size_t r0, std::s
 }
 
 template <kernels::PairStatistic S, bool Sub, class L, class M>
-void run_variogram_chunk_s(const VariogramJob<L, M>& job, std::size_t r0, std::size_t r1,
-                           kernels::PairSums out) {
-  if (job.components == 1) run_variogram_chunk_k<S, Sub, 1>(job, r0, r1, out);
-  else if (job.components == 3) run_variogram_chunk_k<S, Sub, 3>(job, r0, r1, out);
-  else run_variogram_chunk_k<S, Sub, 0>(job, r0, r1, out);
+void run_variogram_chunk_s(const VariogramJob<L, M>& job, const VariogramCellRun* cells,
+                           std::size_t r0, std::size_t r1, kernels::PairSums out) {
+  if (job.components == 1) run_variogram_chunk_k<S, Sub, 1>(job, cells, r0, r1, out);
+  else if (job.components == 3) run_variogram_chunk_k<S, Sub, 3>(job, cells, r0, r1, out);
+  else run_variogram_chunk_k<S, Sub, 0>(job, cells, r0, r1, out);
 }
 
+/// Sums of rows [r0, r1) into `out`: over all pairs, or over the cell list's when `cells` is set.
 template <class L, class M>
-void run_variogram_chunk(const VariogramJob<L, M>& job, kernels::PairStatistic stat,
-                         bool subsample, std::size_t r0, std::size_t r1, kernels::PairSums out) {
+void run_variogram_chunk(const VariogramJob<L, M>& job, const VariogramCellRun* cells,
+                         kernels::PairStatistic stat, bool subsample, std::size_t r0,
+                         std::size_t r1, kernels::PairSums out) {
   using kernels::PairStatistic;
   if (stat == PairStatistic::SquaredDifference) {
-    if (subsample) run_variogram_chunk_s<PairStatistic::SquaredDifference, true>(job, r0, r1, out);
-    else run_variogram_chunk_s<PairStatistic::SquaredDifference, false>(job, r0, r1, out);
+    if (subsample) run_variogram_chunk_s<PairStatistic::SquaredDifference, true>(job, cells, r0, r1, out);
+    else run_variogram_chunk_s<PairStatistic::SquaredDifference, false>(job, cells, r0, r1, out);
   } else {
-    if (subsample) run_variogram_chunk_s<PairStatistic::RootAbsDifference, true>(job, r0, r1, out);
-    else run_variogram_chunk_s<PairStatistic::RootAbsDifference, false>(job, r0, r1, out);
+    if (subsample) run_variogram_chunk_s<PairStatistic::RootAbsDifference, true>(job, cells, r0, r1, out);
+    else run_variogram_chunk_s<PairStatistic::RootAbsDifference, false>(job, cells, r0, r1, out);
+  }
+}
+
+/// Runs chunk(c, scratch) for c = 0..chunks-1 on `threads` OpenMP threads (0: the default),
+/// dynamically scheduled; `scratch` is the running thread's cell-list workspace (one per thread,
+/// allocated here before the parallel region when `cell_points` > 0, else empty).
+template <class Chunk>
+void for_each_variogram_chunk(int threads, std::size_t chunks, std::size_t cell_points, Chunk&& chunk) {
+  std::vector<VariogramCellScratch> scratch;
+  if (cell_points > 0) {
+    const int team = variogram_team_size(threads);
+    scratch.reserve(static_cast<std::size_t>(team));
+    for (int t = 0; t < team; ++t) scratch.emplace_back(cell_points);
+  }
+  const std::ptrdiff_t count = static_cast<std::ptrdiff_t>(chunks);
+  auto body = [&] {
+    kernels::CellListScratch mine;
+    if (!scratch.empty()) mine = scratch[static_cast<std::size_t>(variogram_thread_index())].view();
+#pragma omp for schedule(dynamic, 1)
+    for (std::ptrdiff_t c = 0; c < count; ++c) chunk(static_cast<std::size_t>(c), mine);
+  };
+  // Each chunk owns its sums, so which thread runs it does not matter.
+  if (threads > 0) {
+#pragma omp parallel num_threads(threads)
+    body();
+  } else {
+#pragma omp parallel
+    body();
   }
 }
 
@@ -182,20 +347,39 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
   const detail::VariogramJob<L, M> job{locations.data(), &metric, soa.empty() ? nullptr : soa.data(),
                                        n, dim, z.data(), K, layout, options.seed, keep_below,
                                        kernels::best_kernel_isa(), cone_ptr};
-  const std::ptrdiff_t chunks = static_cast<std::ptrdiff_t>(C);
-  auto run = [&](std::ptrdiff_t c) {
-    const std::size_t cu = static_cast<std::size_t>(c);
-    kernels::PairSums out{count.data() + cu * B, lag.data() + cu * B, stat.data() + cu * B * Ks};
-    detail::run_variogram_chunk(job, statistic, subsample, rows[cu], rows[cu + 1], out);
-  };
-  // Each chunk owns its sums, so which thread runs it does not matter.
-  if (options.threads > 0) {
-#pragma omp parallel for schedule(dynamic, 1) num_threads(options.threads)
-    for (std::ptrdiff_t c = 0; c < chunks; ++c) run(c);
-  } else {
-#pragma omp parallel for schedule(dynamic, 1)
-    for (std::ptrdiff_t c = 0; c < chunks; ++c) run(c);
+  // Cell list: only the pairs that can lie within the last edge, in the all-pairs order.
+  detail::VariogramCells cells;
+  kernels::DirectionCone cell_cone;
+  std::vector<double> bound;
+  if (options.pair_search != PairSearch::AllPairs &&
+      detail::variogram_axis_bounds(metric, dim, bins.edges().back(), bound)) {
+    const double* axis_major = !soa.empty() ? soa.data() : cone_coordinates.data();
+    std::vector<double> copy;
+    if (soa.empty() && cone_coordinates.empty()) {
+      copy.resize(n * static_cast<std::size_t>(dim));
+      for (std::size_t i = 0; i < n; ++i)
+        for (int a = 0; a < dim; ++a)
+          copy[static_cast<std::size_t>(a) * n + i] = LocationTraits<L>::coordinate(locations[i], a);
+      axis_major = copy.data();
+    }
+    if (detail::build_variogram_cells(axis_major, n, dim, bound,
+                                      options.pair_search == PairSearch::CellList, cells) &&
+        cone_ptr != nullptr) {
+      cell_cone = cone;  // the same test on the cell-ordered copy of the coordinates
+      cell_cone.coordinates = cells.coordinates.data();
+    }
   }
+  const std::size_t cell_points = cells.built() ? n : 0;
+  auto cell_run = [&](kernels::CellListScratch scratch) {
+    return detail::VariogramCellRun{&cells.list, cone_ptr != nullptr ? &cell_cone : nullptr, scratch};
+  };
+  detail::for_each_variogram_chunk(options.threads, C, cell_points,
+                                   [&](std::size_t c, kernels::CellListScratch scratch) {
+    kernels::PairSums out{count.data() + c * B, lag.data() + c * B, stat.data() + c * B * Ks};
+    const detail::VariogramCellRun run = cell_run(scratch);
+    detail::run_variogram_chunk(job, cells.built() ? &run : nullptr, statistic, subsample, rows[c],
+                                rows[c + 1], out);
+  });
   EmpiricalVariogram result = detail::finalize_variogram(bins, options, K, C, count, lag, stat);
   result.direction = options.direction;
   if (options.estimator == VariogramEstimator::Dowd) {
@@ -204,9 +388,17 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
     std::vector<std::uint64_t> cursor = detail::dowd_offsets(count, C, bins.size(), K, options);
     std::vector<double> stored(cursor.back() * Ks);  // last entry: number of stored pairs
     const std::vector<std::uint64_t> offsets = cursor;
-    auto store = [&](std::ptrdiff_t c) {
-      const std::size_t cu = static_cast<std::size_t>(c);
-      if (subsample)
+    detail::for_each_variogram_chunk(options.threads, C, cell_points,
+                                     [&](std::size_t cu, kernels::CellListScratch scratch) {
+      if (cells.built()) {
+        const detail::VariogramCellRun run = cell_run(scratch);
+        if (subsample)
+          detail::store_cell_differences<true>(job, run, rows[cu], rows[cu + 1],
+                                               cursor.data() + cu * B, stored.data());
+        else
+          detail::store_cell_differences<false>(job, run, rows[cu], rows[cu + 1],
+                                                cursor.data() + cu * B, stored.data());
+      } else if (subsample)
         kernels::store_pair_differences<true>(locations.data(), z.data(), K, metric, layout,
                                               options.seed, keep_below, rows[cu], rows[cu + 1],
                                               cursor.data() + cu * B, stored.data(), cone_ptr);
@@ -214,14 +406,7 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
         kernels::store_pair_differences<false>(locations.data(), z.data(), K, metric, layout,
                                                options.seed, keep_below, rows[cu], rows[cu + 1],
                                                cursor.data() + cu * B, stored.data(), cone_ptr);
-    };
-    if (options.threads > 0) {
-#pragma omp parallel for schedule(dynamic, 1) num_threads(options.threads)
-      for (std::ptrdiff_t c = 0; c < chunks; ++c) store(c);
-    } else {
-#pragma omp parallel for schedule(dynamic, 1)
-      for (std::ptrdiff_t c = 0; c < chunks; ++c) store(c);
-    }
+    });
     detail::finalize_dowd(result, stored, offsets, C);
   }
   return result;

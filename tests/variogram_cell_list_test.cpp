@@ -1,0 +1,269 @@
+// The empirical variogram's cell list (PairSearch::CellList, kernels/pair_cells.hpp) against the
+// all-pairs loop (bit for bit: it visits the same pairs in the same order) and against a brute
+// force over all pairs written here (counts exactly, sums to the rounding of a different summation
+// order). Small simulated data: uniform random locations, part of them on a lattice so that lags
+// equal the cutoff and the bin edges, and points land on cell boundaries; duplicates included.
+
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "errfield/empirical_variogram.hpp"
+
+namespace errfield {
+namespace variogram_cell_list_test {
+
+// n locations in [0, 1]^D: a third on the lattice of step `step` (lags that are exact multiples of
+// it, so equal to edges and cutoffs chosen as multiples), a tenth duplicating earlier rows, the
+// rest uniform. Simulated.
+Eigen::MatrixXd simulated_locations(std::size_t n, int dimension, double step, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(n), dimension);
+  for (Eigen::Index i = 0; i < x.rows(); ++i) {
+    const int kind = static_cast<int>(i % 10);
+    if (kind == 9 && i > 0) {
+      x.row(i) = x.row(static_cast<Eigen::Index>(rng() % static_cast<std::uint64_t>(i)));
+      continue;
+    }
+    for (int a = 0; a < dimension; ++a) {
+      const double r = u(rng);
+      x(i, a) = kind < 3 ? std::round(r / step) * step : r;
+    }
+  }
+  return x;
+}
+
+Eigen::MatrixXd simulated_values(std::size_t n, int components, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, 1.0);
+  Eigen::MatrixXd v(static_cast<Eigen::Index>(n), components);
+  for (Eigen::Index i = 0; i < v.rows(); ++i)
+    for (int c = 0; c < components; ++c) v(i, c) = g(rng) + 0.3 * std::sin(static_cast<double>(i));
+  return v;
+}
+
+EmpiricalVariogram run(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const LagBins& bins,
+                       EmpiricalVariogramOptions o, PairSearch search, int threads = 2) {
+  o.pair_search = search;
+  o.threads = threads;
+  return empirical_variogram(x, z, bins, o);
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+void expect_bit_identical(const EmpiricalVariogram& a, const EmpiricalVariogram& b) {
+  ASSERT_EQ(a.bins.size(), b.bins.size());
+  ASSERT_EQ(a.components(), b.components());
+  for (std::size_t k = 0; k < a.bins.size(); ++k) {
+    SCOPED_TRACE("bin " + std::to_string(k));
+    EXPECT_EQ(a.bins[k].pairs, b.bins[k].pairs);
+    EXPECT_TRUE(same_bits(a.bins[k].gamma, b.bins[k].gamma)) << a.bins[k].gamma << " vs " << b.bins[k].gamma;
+    EXPECT_TRUE(same_bits(a.bins[k].lag_mean, b.bins[k].lag_mean))
+        << a.bins[k].lag_mean << " vs " << b.bins[k].lag_mean;
+    for (int c = 0; c < a.components(); ++c)
+      EXPECT_TRUE(same_bits(a.component_gamma(static_cast<Eigen::Index>(k), c),
+                            b.component_gamma(static_cast<Eigen::Index>(k), c)));
+  }
+}
+
+// Matheron over every pair (i, j < i), written out: h = sqrt(sum_a w_a d_a^2) in axis order (the
+// library's arithmetic, so the bin of a lag equal to an edge is decided identically), bins by the
+// comparison rule, sums in pair order.
+struct BruteForce {
+  std::vector<std::uint64_t> pairs;
+  std::vector<double> lag_mean, gamma;
+};
+
+BruteForce brute_force(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const std::vector<double>& e,
+                       bool gstat, const std::vector<double>& weights = {}) {
+  const std::size_t bins = e.size() - 1;
+  BruteForce r{std::vector<std::uint64_t>(bins, 0), std::vector<double>(bins, 0.0),
+               std::vector<double>(bins, 0.0)};
+  for (Eigen::Index i = 1; i < x.rows(); ++i)
+    for (Eigen::Index j = 0; j < i; ++j) {
+      double s = 0.0;
+      for (Eigen::Index a = 0; a < x.cols(); ++a) {
+        const double d = x(i, a) - x(j, a);
+        s += weights.empty() ? d * d : weights[static_cast<std::size_t>(a)] * d * d;
+      }
+      const double h = std::sqrt(s);
+      for (std::size_t k = 0; k < bins; ++k) {
+        const bool in = gstat ? (k == 0 ? h >= e[0] && h <= e[1] : h > e[k] && h <= e[k + 1])
+                              : h >= e[k] && h < e[k + 1];
+        if (!in) continue;
+        r.pairs[k] += 1;
+        r.lag_mean[k] += h;
+        for (Eigen::Index c = 0; c < z.cols(); ++c) {
+          const double d = z(i, c) - z(j, c);
+          r.gamma[k] += d * d;
+        }
+        break;
+      }
+    }
+  for (std::size_t k = 0; k < bins; ++k) {
+    const double m = static_cast<double>(r.pairs[k]);
+    r.lag_mean[k] /= m;
+    r.gamma[k] /= 2.0 * m;
+  }
+  return r;
+}
+
+// The library sums in 64 row chunks merged in order, the brute force in one sequence: a sum of at
+// most ~10^5 same-sign terms then differs by at most ~10^5 x 2^-53 relative; 1e-12 is ten times
+// what the few thousand pairs per bin here can produce.
+constexpr double kOrderTolerance = 1e-12;
+
+void expect_matches_brute_force(const EmpiricalVariogram& v, const BruteForce& r) {
+  ASSERT_EQ(v.bins.size(), r.pairs.size());
+  for (std::size_t k = 0; k < r.pairs.size(); ++k) {
+    SCOPED_TRACE("bin " + std::to_string(k));
+    EXPECT_EQ(v.bins[k].pairs, r.pairs[k]);
+    if (r.pairs[k] == 0) continue;
+    EXPECT_NEAR(v.bins[k].lag_mean, r.lag_mean[k], kOrderTolerance * r.lag_mean[k]);
+    EXPECT_NEAR(v.bins[k].gamma, r.gamma[k], kOrderTolerance * r.gamma[k]);
+  }
+}
+
+TEST(VariogramCellList, EqualsAllPairsAndBruteForceInOneToSixDimensionsForCutoffsUpToTheExtent) {
+  for (int dimension : {1, 2, 3, 4, 6}) {
+    const std::size_t n = dimension == 1 ? 300 : 500;
+    const Eigen::MatrixXd x = simulated_locations(n, dimension, 0.05, 11 + dimension);
+    const Eigen::MatrixXd z = simulated_values(n, 1, 3 + dimension);
+    // Cutoffs 0.05 .. 1 of the extent, multiples of the lattice step: lattice lags hit them exactly.
+    for (double cutoff : {0.05, 0.1, 0.25, 0.5, 1.0}) {
+      for (auto convention : {BinConvention::HalfOpen, BinConvention::Gstat}) {
+        SCOPED_TRACE("D=" + std::to_string(dimension) + " cutoff " + std::to_string(cutoff) + " " +
+                     std::string(convention_name(convention)));
+        const LagBins bins = LagBins::uniform(0.0, cutoff, cutoff / 5.0);
+        EmpiricalVariogramOptions o;
+        o.convention = convention;
+        const EmpiricalVariogram cells = run(x, z, bins, o, PairSearch::CellList);
+        expect_bit_identical(cells, run(x, z, bins, o, PairSearch::AllPairs));
+        expect_matches_brute_force(cells, brute_force(x, z, bins.edges(), convention == BinConvention::Gstat));
+        std::uint64_t in_range = 0;
+        for (const auto& b : cells.bins) in_range += b.pairs;
+        EXPECT_GT(in_range, 0u);
+      }
+    }
+  }
+}
+
+TEST(VariogramCellList, LatticeWithCutoffEqualToTheCellSideKeepsEveryPairAtTheCutoff) {
+  // A 9 x 9 lattice of step 0.125 (exact in binary) and a cutoff of exactly 0.125: the 2 x 8 x 9
+  // axis-neighbour pairs have lag exactly 0.125 = the last edge, and their points sit in adjacent
+  // cells, each within 1e-6 of a cell boundary. Under gstat's convention the last bin (0.0625,
+  // 0.125] holds exactly those pairs; under the half-open one no bin does.
+  Eigen::MatrixXd x(81, 2);
+  for (int a = 0; a < 9; ++a)
+    for (int b = 0; b < 9; ++b) x.row(a * 9 + b) << 0.125 * a, 0.125 * b;
+  const Eigen::MatrixXd z = simulated_values(81, 1, 5);
+  const LagBins bins = LagBins::from_edges({0.0, 0.0625, 0.125});
+  for (auto convention : {BinConvention::Gstat, BinConvention::HalfOpen}) {
+    EmpiricalVariogramOptions o;
+    o.convention = convention;
+    const EmpiricalVariogram cells = run(x, z, bins, o, PairSearch::CellList);
+    expect_bit_identical(cells, run(x, z, bins, o, PairSearch::AllPairs));
+    expect_matches_brute_force(cells, brute_force(x, z, bins.edges(), convention == BinConvention::Gstat));
+    EXPECT_EQ(cells.bins[0].pairs, 0u);
+    EXPECT_EQ(cells.bins[1].pairs, convention == BinConvention::Gstat ? 144u : 0u);
+  }
+}
+
+TEST(VariogramCellList, EqualsAllPairsForDirectionsVectorValuesEstimatorsAndSubsampling) {
+  struct Case {
+    int dimension;
+    VariogramDirection direction;
+  };
+  const std::vector<Case> cases = {
+      {2, VariogramDirection::gstat(30.0, 22.5)},
+      {3, VariogramDirection::gstat(45.0, 22.5, 30.0, 20.0)},
+      {6, VariogramDirection::axis(1, 6, 30.0)},
+      {3, VariogramDirection()},
+  };
+  for (const Case& c : cases) {
+    const Eigen::MatrixXd x = simulated_locations(400, c.dimension, 0.05, 21 + c.dimension);
+    for (int components : {1, 3, 2}) {
+      const Eigen::MatrixXd z = simulated_values(400, components, 9 + components);
+      for (auto estimator : {VariogramEstimator::Matheron, VariogramEstimator::CressieHawkins,
+                             VariogramEstimator::Dowd})
+        for (double fraction : {1.0, 0.5}) {
+          if (fraction < 1.0 && estimator != VariogramEstimator::Matheron) continue;  // CI time
+          SCOPED_TRACE("D=" + std::to_string(c.dimension) + " K=" + std::to_string(components) + " " +
+                       std::string(estimator_name(estimator)) + " fraction " + std::to_string(fraction));
+          EmpiricalVariogramOptions o;
+          o.direction = c.direction;
+          o.estimator = estimator;
+          o.pair_fraction = fraction;
+          o.seed = 17;
+          const LagBins bins = LagBins::uniform(0.0, 0.3, 0.05);
+          expect_bit_identical(run(x, z, bins, o, PairSearch::CellList),
+                               run(x, z, bins, o, PairSearch::AllPairs));
+        }
+    }
+  }
+}
+
+TEST(VariogramCellList, WeightedMetricEqualsAllPairsAndBruteForceIncludingAZeroWeight) {
+  const std::size_t n = 400;
+  const Eigen::MatrixXd x = simulated_locations(n, 3, 0.05, 31);
+  const Eigen::MatrixXd z = simulated_values(n, 1, 32);
+  std::vector<Eigen::Vector3d> loc(n);
+  for (std::size_t i = 0; i < n; ++i) loc[i] = x.row(static_cast<Eigen::Index>(i)).transpose();
+  for (const std::vector<double>& w : {std::vector<double>{1.0, 4.0, 0.25}, std::vector<double>{9.0, 0.0, 1.0}}) {
+    SCOPED_TRACE("weights " + std::to_string(w[0]) + " " + std::to_string(w[1]) + " " + std::to_string(w[2]));
+    const WeightedEuclideanMetric metric(w);
+    const LagBins bins = LagBins::uniform(0.0, 0.2, 0.04);
+    EmpiricalVariogramOptions o;
+    o.threads = 2;
+    auto with = [&](PairSearch s) {
+      o.pair_search = s;
+      return empirical_variogram<Eigen::Vector3d, WeightedEuclideanMetric>(
+          std::span<const Eigen::Vector3d>(loc), z, metric, bins, o);
+    };
+    const EmpiricalVariogram cells = with(PairSearch::CellList);
+    expect_bit_identical(cells, with(PairSearch::AllPairs));
+    expect_matches_brute_force(cells, brute_force(x, z, bins.edges(), false, w));
+  }
+}
+
+TEST(VariogramCellList, BitIdenticalForOneAndTwoThreads) {
+  const Eigen::MatrixXd x = simulated_locations(600, 3, 0.05, 41);
+  const Eigen::MatrixXd z = simulated_values(600, 3, 42);
+  const LagBins bins = LagBins::uniform(0.0, 0.2, 0.02);
+  for (auto estimator : {VariogramEstimator::Matheron, VariogramEstimator::Dowd}) {
+    EmpiricalVariogramOptions o;
+    o.estimator = estimator;
+    expect_bit_identical(run(x, z, bins, o, PairSearch::CellList, 1), run(x, z, bins, o, PairSearch::CellList, 2));
+  }
+}
+
+TEST(VariogramCellList, AutomaticChoiceTakesTheCellListOnlyForShortCutoffsAndEnoughPoints) {
+  const std::size_t n = 2000;
+  const Eigen::MatrixXd x = simulated_locations(n, 3, 0.05, 51);
+  auto chooses = [&](double cutoff, std::size_t points, bool force) {
+    std::vector<double> axis_major(3 * points);
+    for (std::size_t i = 0; i < points; ++i)
+      for (std::size_t a = 0; a < 3; ++a)
+        axis_major[a * points + i] = x(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(a));
+    detail::VariogramCells cells;
+    return detail::build_variogram_cells(axis_major.data(), points, 3, std::vector<double>(3, cutoff),
+                                         force, cells);
+  };
+  EXPECT_TRUE(chooses(0.1, n, false));
+  EXPECT_FALSE(chooses(0.6, n, false));        // 2 cells per axis: nothing to skip
+  EXPECT_FALSE(chooses(0.1, 500, false));      // too few points to pay for the grid
+  EXPECT_TRUE(chooses(0.1, 500, true));
+  EXPECT_FALSE(chooses(1.0, n, true));         // one cell per axis: not even forced
+  // And the automatic result is the all-pairs one.
+  const Eigen::MatrixXd z = simulated_values(n, 1, 52);
+  const LagBins bins = LagBins::uniform(0.0, 0.1, 0.01);
+  expect_bit_identical(run(x, z, bins, {}, PairSearch::Automatic), run(x, z, bins, {}, PairSearch::AllPairs));
+}
+
+}  // namespace variogram_cell_list_test
+}  // namespace errfield
