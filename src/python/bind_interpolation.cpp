@@ -134,7 +134,9 @@ struct SimulationRaw {
 struct KrigingBase {
   virtual ~KrigingBase() = default;
   virtual const KrigingReport& report() const = 0;
-  virtual KrigingPrediction_ predict(const TargetRows& targets, const Eigen::MatrixXd& covariates) const = 0;
+  /// `block` non-null: block kriging of blocks centred on the targets.
+  virtual KrigingPrediction_ predict(const TargetRows& targets, const Eigen::MatrixXd& covariates,
+                                     const BlockDiscretization* block) const = 0;
   virtual CvRaw cross_validate(std::size_t folds, std::uint64_t seed) const = 0;
   virtual SimulationRaw simulate(const TargetRows& targets, const Eigen::MatrixXd& covariates,
                                  const SimulationOptions& options) const = 0;
@@ -172,9 +174,11 @@ struct KrigingImpl final : KrigingBase {
     return out;
   }
   const KrigingReport& report() const override { return kriging->report(); }
-  KrigingPrediction_ predict(const TargetRows& targets, const Eigen::MatrixXd& cov) const override {
-    const auto p = options.covariates.empty() ? kriging->predict(rows_as_points(targets))
-                                              : kriging->predict(rows_as_points(targets), cov);
+  KrigingPrediction_ predict(const TargetRows& targets, const Eigen::MatrixXd& cov,
+                             const BlockDiscretization* block) const override {
+    const auto p = block ? kriging->predict_blocks(rows_as_points(targets), *block, cov)
+                   : options.covariates.empty() ? kriging->predict(rows_as_points(targets))
+                                                : kriging->predict(rows_as_points(targets), cov);
     KrigingPrediction_ out;
     out.mean = values_as_rows(p.mean);
     out.variance = p.variance;
@@ -291,7 +295,8 @@ class PyKriging {
     }
   }
 
-  py::tuple predict(const py::object& targets, const py::object& covariates) const {
+  py::tuple predict(const py::object& targets, const py::object& covariates, const py::object& block, int block_points,
+                    const std::string& block_rule) const {
     const RowsArg t = targets_arg(targets, samples_.x.cols());
     const std::size_t k = impl_report_covariates();
     if (k > 0 && covariates.is_none())
@@ -300,10 +305,19 @@ class PyKriging {
     if (k == 0 && !covariates.is_none())
       throw ArgumentError("predict: covariates given, but the Kriging was built without covariates");
     const Eigen::MatrixXd cov = k > 0 ? covariates_arg(covariates, "covariates", t.data.rows()) : Eigen::MatrixXd();
+    std::optional<BlockDiscretization> discretization;
+    if (!block.is_none()) {
+      if (block_rule != "gauss" && block_rule != "regular")
+        throw ArgumentError("predict: block_rule '" + block_rule + "'; expected 'gauss' or 'regular'");
+      discretization = BlockDiscretization{vector_arg(block, "block"), block_points,
+                                           block_rule == "regular" ? BlockDiscretization::Rule::Regular
+                                                                   : BlockDiscretization::Rule::GaussLegendre};
+    }
+    const BlockDiscretization* block_ptr = discretization ? &*discretization : nullptr;
     KrigingPrediction_ p;
     {
       py::gil_scoped_release release;
-      p = impl_->predict(t.data, cov);
+      p = impl_->predict(t.data, cov, block_ptr);
     }
     if (p.failed) {
       const std::string w = std::to_string(p.failed) + " of " + std::to_string(t.data.rows()) +
@@ -568,10 +582,14 @@ void bind_interpolation(py::module_& m) {
            "(kind='ordinary': kriging with external drift, gstat's krige(z ~ cov)); predict() then needs them at the\n"
            "targets. covariate_names: their names for messages (default covariate0, ...).\n"
            "Raises errfield.Error when the covariance cannot be factored; warns (RuntimeWarning) when ill-conditioned.")
-      .def("predict", &PyKriging::predict, py::arg("targets"), py::arg("covariates") = py::none(),
+      .def("predict", &PyKriging::predict, py::arg("targets"), py::arg("covariates") = py::none(), py::kw_only(),
+           py::arg("block") = py::none(), py::arg("block_points") = 4, py::arg("block_rule") = "gauss",
            "Kriging mean and variance at targets (M, D): returns (mean, var), mean (M,) or (M, K) in the value unit,\n"
            "var (M,) in value unit^2 (shared by all components). NaN (with a RuntimeWarning) where a target could not\n"
-           "be kriged. covariates: (M,) or (M, k) values at the targets, required with external drift. Releases the GIL.")
+           "be kriged. covariates: (M,) or (M, k) values at the targets, required with external drift.\n"
+           "block: (D,) block size in the coordinates' unit: block kriging of blocks centred on the targets, as\n"
+           "`interpolate --block` (block_points per axis, block_rule 'gauss' | 'regular'; dense and local back ends).\n"
+           "Releases the GIL.")
       .def("cross_validate", &PyKriging::cross_validate, py::arg("folds") = "loo", py::arg("seed") = 1,
            "Cross-validation as `errfield cv --method kriging`: folds='loo' (closed form for dense, one local solve\n"
            "per sample for local; sparse uses folds) or k >= 2 folds shuffled by seed. Returns CrossValidation.")

@@ -150,7 +150,15 @@ class Kriging:
         covariates: ArrayLike | None = None,
         covariate_names: Sequence[str] | None = None,
     ) -> None: ...
-    def predict(self, targets: ArrayLike, covariates: ArrayLike | None = None) -> tuple[F64, F64]: ...
+    def predict(
+        self,
+        targets: ArrayLike,
+        covariates: ArrayLike | None = None,
+        *,
+        block: ArrayLike | None = None,
+        block_points: int = 4,
+        block_rule: Literal["gauss", "regular"] = "gauss",
+    ) -> tuple[F64, F64]: ...
     def cross_validate(self, folds: int | Literal["loo"] = "loo", seed: int = 1) -> CrossValidation: ...
     def simulate(
         self,

@@ -228,3 +228,20 @@ def test_simulate_matches_cli_and_the_kriging_moments(tmp_path):
     assert vec.shape == (2, 12, 2)
     with pytest.raises(errfield.ArgumentError):
         k.simulate(t, 2, method="turning-bands")
+
+
+def test_block_prediction_matches_cli(tmp_path):
+    # predict(block=...) is `interpolate --block`, and a block is known better than a point.
+    x, z, t = data(n=40, m=12)
+    s, tt, _ = write_samples(tmp_path, x, z, t)
+    k = errfield.Kriging(x, z, MODEL)
+    mean, var = k.predict(t, block=[40.0, 60.0], block_points=3, block_rule="regular")
+    run_cli("interpolate", "--method", "kriging", "--samples", s, "--targets", tt, "--coords", "x,y", "--value", "v",
+            "--model", MODEL, "--block", "40,60", "--block-points", "3", "--block-rule", "regular",
+            "--out", tmp_path / "p.csv")
+    out = read_csv(tmp_path / "p.csv")
+    assert same(mean, numbers(out["pred"]))
+    assert same(var, numbers(out["var"]))
+    assert np.all(var < k.predict(t)[1])
+    with pytest.raises(errfield.ArgumentError):
+        k.predict(t, block=[40.0])
