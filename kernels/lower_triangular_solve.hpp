@@ -1,7 +1,7 @@
 #pragma once
 /// Hot loop of dense kriging variances: B := L^-1 B for a lower-triangular L (n x n) and many
 /// right-hand sides (one per target), both column-major. The compiled version
-/// (src/kernels/lower_triangular_solve.cpp) is blocked and register-tiled, reads the off-diagonal
+/// (kernels/lower_triangular_solve.cpp) is blocked and register-tiled, reads the off-diagonal
 /// part of L from a copy packed once into 8-row tiles (so the inner loop streams contiguous memory),
 /// and is compiled for AVX2/FMA and chosen at run time when the CPU has them: the default build
 /// targets plain x86-64, where Eigen's own solve runs at SSE2 speed. `lower_solve_reference` is the

@@ -412,7 +412,7 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
   return result;
 }
 
-// Compiled once in the library (src/empirical_variogram.cpp).
+// Compiled once in the library (src/variogram/empirical_variogram.cpp).
 namespace detail {
 using Location6d = Eigen::Matrix<double, 6, 1>;
 }  // namespace detail
