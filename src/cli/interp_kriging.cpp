@@ -58,10 +58,11 @@ void add_kriging_options(CLI::App& cmd) {
                  "Variogram model in gstat's vgm terms, e.g. \"sph(sill=0.3,range=400)+nug(0.002)\" (models: nug, sph, "
                  "exp, gau, mat, wen; 'sill' is the partial sill of that component). NOTE: 'range' of exp and gau is "
                  "the scale parameter a, not the practical range (practical range ~3a for exp, ~1.73a for gau), as in "
-                 "gstat. A model JSON file (fit-variogram --out) is read. 'auto': up to 3,000 samples, REML fits of "
-                 "sph/exp/gau/mat(1.5,2.5) with a nugget, isotropic and ARD, and the one with the smallest AIC whose "
-                 "kriging system is well conditioned (printed with the reason); with more samples or --backend sparse, "
-                 "the best weighted fit of sph and exp (sparse: sph only) to the empirical variogram")
+                 "gstat. A model JSON file (fit-variogram --out) is read. 'auto': REML fits of sph/exp/gau/mat(1.5,2.5) "
+                 "with a nugget, isotropic and ARD, compared on 300 samples, and the one with the smallest AIC whose "
+                 "kriging system is well conditioned, refitted on all samples (exact likelihood up to 3,000, Vecchia "
+                 "beyond; printed with the reason); with --backend sparse, the best weighted fit of sph to the "
+                 "empirical variogram")
       ->group(group);
   cmd.add_option("--kind", o.kind, "simple | ordinary (default) | universal1 | universal2 (linear / quadratic drift in the coordinates)")
       ->group(group);
@@ -171,12 +172,10 @@ VariogramModel auto_model(const Eigen::MatrixXd& coords, const Eigen::MatrixXd& 
   return best.model;
 }
 
-// The likelihood is O(N^3) per evaluation; beyond this --model auto fits the empirical variogram.
-// (kMaxLikelihoodSamples, errfield/kriging_likelihood.hpp: shared with fit-variogram and the library.)
-
-// --model auto on up to 3,000 samples: REML fits of sph/exp/gau/mat(1.5, 2.5) with a nugget,
-// isotropic and ARD, for the kriging kind asked; the smallest AIC among the well-conditioned ones
-// (compared on a subset of 300 samples, the winner refitted on all).
+// --model auto: REML fits of sph/exp/gau/mat(1.5, 2.5) with a nugget, isotropic and ARD, for the
+// kriging kind asked; the smallest AIC among the well-conditioned ones (compared on a subset of 300
+// samples, the winner refitted on all: the exact likelihood up to kMaxLikelihoodSamples, the Vecchia
+// approximation beyond, so more samples never change the family to one without a nugget or ARD).
 VariogramModel likelihood_auto_model(const Eigen::MatrixXd& coords, const Eigen::MatrixXd& values,
                                      const KrigingOptions& kriging, std::vector<std::string>& notes) {
   ModelChoiceOptions mo;
@@ -227,7 +226,7 @@ Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const E
   if (o.model == "auto" && !opt.covariates.empty())
     throw ArgumentError("--model auto does not take --covariates yet; fit the residual variogram (errfield variogram "
                         "--covariates, or fit-variogram --method reml --covariates) and pass it as --model");
-  if (o.model == "auto" && opt.backend != KrigingBackend::Sparse && coords.rows() <= kMaxLikelihoodSamples) {
+  if (o.model == "auto" && opt.backend != KrigingBackend::Sparse) {
     s.model = with_source(samples.source(), [&] { return likelihood_auto_model(coords, values, opt, notes); });
   } else {
     s.model = o.model == "auto" ? auto_model(coords, values, opt.backend == KrigingBackend::Sparse, notes)

@@ -26,6 +26,7 @@ namespace kriging_cli_test {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
+using ::testing::Not;
 using P3 = Eigen::Vector3d;
 
 class KrigingCli : public testing::CliTest {
@@ -257,6 +258,38 @@ TEST_F(KrigingCli, BlockKrigingWritesTheLibrarysBlocks) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_THAT(r.output(), HasSubstr("sparse"));
   EXPECT_FALSE(fs::exists(path("Q.csv")));
+}
+
+TEST_F(KrigingCli, ModelAutoKeepsTheLikelihoodFamiliesBeyond3000Samples) {
+  // Issue 23: beyond 3,000 samples --model auto used to fall back to a weighted fit of the empirical
+  // variogram (isotropic, and on a 125 mm grid no nugget). Now the families are the same at any N:
+  // compared on 300 samples, the winner refitted on all by the Vecchia likelihood. SIMULATED 2-D
+  // field with noise variance 4e-4: the nugget must be found, near that.
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> u(0.0, 1000.0);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  std::ofstream s(path("big.csv")), t(path("bigt.csv"));
+  s.precision(10);
+  s << "x,y,v\n";
+  for (int i = 0; i < 3100; ++i) {
+    const double x = u(rng), y = u(rng);
+    s << x << ',' << y << ',' << std::sin(x / 150.0) * std::cos(y / 220.0) + noise(rng) << '\n';
+  }
+  t << "x,y\n500,500\n250,750\n";
+  s.close();
+  t.close();
+  const auto r = run("interpolate --method kriging --samples " + path("big.csv") + " --targets " + path("bigt.csv") +
+                     " --coords x,y --value v --model auto --neighbors 16 --out " + path("P.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output();
+  EXPECT_THAT(r.output(), HasSubstr("REML fits"));
+  EXPECT_THAT(r.output(), HasSubstr("refitted on all"));
+  EXPECT_THAT(r.output(), Not(HasSubstr("empirical variogram")));
+  const std::string out = r.output();
+  const auto at = out.find("+nug(sill=");
+  ASSERT_NE(at, std::string::npos) << out;
+  const double nugget = std::stod(out.substr(at + 10));
+  EXPECT_GT(nugget, 0.5 * 4e-4);
+  EXPECT_LT(nugget, 2.0 * 4e-4);
 }
 
 }  // namespace
