@@ -531,6 +531,30 @@ class Kriging {
   std::shared_ptr<const detail::KrigingEngine> engine_;
 };
 
+namespace detail {
+/// A kriging prediction as cross_validate takes it: NaN values (and variances) for every query
+/// when there are no predictions, and the variance of the residual of a new observation (plus the
+/// nugget when it is measurement error).
+template <Value V>
+HoldOutPrediction<V> hold_out_prediction(KrigingPrediction<V> p, std::size_t queries, const VariogramModel& model,
+                                         const KrigingOptions& options) {
+  HoldOutPrediction<V> out;
+  if (p.mean.size() != queries) {
+    V nan_value = ValueTraits<V>::zero();
+    double& (*writable)(V&, int) = &ValueTraits<V>::component;
+    for (int c = 0; c < ValueTraits<V>::kComponents; ++c) writable(nan_value, c) = std::numeric_limits<double>::quiet_NaN();
+    out.value.assign(queries, nan_value);
+    if (options.compute_variance) out.variance.assign(queries, std::numeric_limits<double>::quiet_NaN());
+    return out;
+  }
+  out.value = std::move(p.mean);
+  out.variance = std::move(p.variance);
+  if (options.nugget == NuggetTreatment::MeasurementError)
+    for (double& v : out.variance) v += model.nugget();
+  return out;
+}
+}  // namespace detail
+
 /// Kriging as a HoldOutEstimator for cross_validate (cross_validation.hpp), so that kriging and
 /// IDW are validated on the same folds. fit_predict factors the training samples and predicts at
 /// the held-out locations; the variance is that of the residual of a new observation there: the
@@ -549,21 +573,7 @@ struct KrigingEstimator {
   HoldOutPrediction<V> fit_predict(std::span<const L> locations, std::span<const V> values,
                                    std::span<const L> query) const {
     const Kriging<L, V, M> kriging(locations, values, model, options, metric);
-    KrigingPrediction<V> p = kriging.predict(query);
-    HoldOutPrediction<V> out;
-    if (!p.usable() && p.mean.size() != query.size()) {
-      V nan_value = ValueTraits<V>::zero();
-      double& (*writable)(V&, int) = &ValueTraits<V>::component;
-      for (int c = 0; c < ValueTraits<V>::kComponents; ++c) writable(nan_value, c) = std::numeric_limits<double>::quiet_NaN();
-      out.value.assign(query.size(), nan_value);
-      if (options.compute_variance) out.variance.assign(query.size(), std::numeric_limits<double>::quiet_NaN());
-      return out;
-    }
-    out.value = std::move(p.mean);
-    out.variance = std::move(p.variance);
-    if (options.nugget == NuggetTreatment::MeasurementError)
-      for (double& v : out.variance) v += model.nugget();
-    return out;
+    return detail::hold_out_prediction(kriging.predict(query), query.size(), model, options);
   }
 };
 
@@ -593,22 +603,9 @@ struct ExternalDriftKrigingEstimator {
     const Eigen::MatrixXd train_cov = split(locations, train);
     const Eigen::MatrixXd test_cov = split(query, test);
     const Kriging<Eigen::VectorXd, V> kriging(std::span<const Eigen::VectorXd>(train), values, train_cov, model, options);
-    HoldOutPrediction<V> out;
     KrigingPrediction<V> p;
     if (kriging.report().usable()) p = kriging.predict(std::span<const Eigen::VectorXd>(test), test_cov);
-    if (p.mean.size() != query.size()) {
-      V nan_value = ValueTraits<V>::zero();
-      double& (*writable)(V&, int) = &ValueTraits<V>::component;
-      for (int c = 0; c < ValueTraits<V>::kComponents; ++c) writable(nan_value, c) = std::numeric_limits<double>::quiet_NaN();
-      out.value.assign(query.size(), nan_value);
-      if (options.compute_variance) out.variance.assign(query.size(), std::numeric_limits<double>::quiet_NaN());
-      return out;
-    }
-    out.value = std::move(p.mean);
-    out.variance = std::move(p.variance);
-    if (options.nugget == NuggetTreatment::MeasurementError)
-      for (double& v : out.variance) v += model.nugget();
-    return out;
+    return detail::hold_out_prediction(std::move(p), query.size(), model, options);
   }
 };
 
