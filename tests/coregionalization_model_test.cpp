@@ -1,6 +1,8 @@
 #include "errfield/coregionalization_model.hpp"
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -84,6 +86,25 @@ TEST(CoregionalizationModel, JsonRoundTripKeepsEveryNumberAndTheAnisotropy) {
   bad["structures"][0]["sills"][1] = {0.1};
   EXPECT_THROW((void)bad.get<CoregionalizationModel>(), ArgumentError);
   EXPECT_FALSE(is_coregionalization_json(nlohmann::json::parse(R"({"components":[{"kind":"nug","sill":1}]})")));
+}
+
+TEST(CoregionalizationModel, LoadingAFileNamesItWhenTheModelIsBad) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "errfield_lmc_load_test";
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path good = dir / "good.json", bad = dir / "bad.json";
+  nlohmann::json j = nugget_plus_spherical();
+  std::ofstream(good) << j.dump();
+  EXPECT_EQ(load_coregionalization_model(good.string()).to_string(), nugget_plus_spherical().to_string());
+  j["structures"][1]["sills"] = {{1.0, 2.0}, {2.0, 1.0}};  // eigenvalue -1: not PSD
+  std::ofstream(bad) << j.dump();
+  try {
+    (void)load_coregionalization_model(bad.string());
+    ADD_FAILURE() << "a non-PSD LMC was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("positive semi-definite"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace coregionalization_model_test

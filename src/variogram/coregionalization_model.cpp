@@ -3,13 +3,13 @@
 #include "errfield/coregionalization_model.hpp"
 
 #include <cmath>
-#include <fstream>
 #include <sstream>
 
 #include <Eigen/Eigenvalues>
 #include <nlohmann/json.hpp>
 
 #include "errfield/error.hpp"
+#include "errfield/json_file.hpp"
 
 namespace errfield {
 
@@ -229,16 +229,9 @@ void from_json(const nlohmann::json& j, CoregionalizationModel& model) {
 
 CoregionalizationModel load_coregionalization_model(std::string_view path) {
   const std::string s(path);
-  std::ifstream in(s);
-  if (!in) throw InputError(s + ": cannot open the LMC model JSON", s);
-  nlohmann::json j;
+  const nlohmann::json j = read_json_file(s, "LMC model JSON");
   try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(s + ": not valid JSON (" + e.what() + ")", s);
-  }
-  try {
-    return j.get<CoregionalizationModel>();
+    return with_json_source(s, [&] { return j.get<CoregionalizationModel>(); });
   } catch (const ArgumentError& e) {
     throw InputError(s + ": " + e.what(), s);
   }
