@@ -16,14 +16,14 @@ namespace errfield::cli {
 
 namespace {
 
-std::string joined(const std::vector<std::string>& names) {
+std::string cokriging_joined_names(const std::vector<std::string>& names) {
   std::string s;
   for (const auto& n : names) s += (s.empty() ? "" : ",") + n;
   return s;
 }
 
 // Column names of the covariance output: var (var_<col>) per component, then cov_<A>_<B>.
-std::vector<std::pair<std::string, std::pair<int, int>>> covariance_columns(const std::vector<std::string>& values) {
+std::vector<std::pair<std::string, std::pair<int, int>>> cokriging_covariance_columns(const std::vector<std::string>& values) {
   const int p = static_cast<int>(values.size());
   std::vector<std::pair<std::string, std::pair<int, int>>> columns;
   for (int a = 0; a < p; ++a)
@@ -34,7 +34,7 @@ std::vector<std::pair<std::string, std::pair<int, int>>> covariance_columns(cons
   return columns;
 }
 
-std::string description(const CoregionalizationModel& model, const KrigingOptions& o, const KrigingReport& rep) {
+std::string cokriging_description(const CoregionalizationModel& model, const KrigingOptions& o, const KrigingReport& rep) {
   return "cokriging: " + std::string(kriging_kind_name(o.kind)) +
          (o.kind == KrigingKind::Universal ? " (drift order " + std::to_string(o.drift_order) + " per component)" : std::string()) +
          ", linear model of coregionalization of " + std::to_string(model.components()) + " components (" +
@@ -57,13 +57,13 @@ CoregionalizationModel load_lmc_for_values(const std::string& path, const std::v
   const auto& names = model.component_names();
   if (static_cast<std::size_t>(model.components()) != value_columns.size())
     throw InputError(path + ": the coregionalization model has " + std::to_string(model.components()) + " components" +
-                         (names.empty() ? std::string() : " (" + joined(names) + ")") + " but --value gives " +
-                         std::to_string(value_columns.size()) + " column(s) (" + joined(value_columns) +
+                         (names.empty() ? std::string() : " (" + cokriging_joined_names(names) + ")") + " but --value gives " +
+                         std::to_string(value_columns.size()) + " column(s) (" + cokriging_joined_names(value_columns) +
                          "); expected one --value column per model component",
                      path);
   if (!names.empty() && names != value_columns)
-    throw InputError(path + ": the coregionalization model's components are " + joined(names) + " but --value is " +
-                         joined(value_columns) + "; expected the same names in the same order (the model's rows and "
+    throw InputError(path + ": the coregionalization model's components are " + cokriging_joined_names(names) + " but --value is " +
+                         cokriging_joined_names(value_columns) + "; expected the same names in the same order (the model's rows and "
                          "columns are the components in that order)",
                      path);
   return model;
@@ -72,7 +72,7 @@ CoregionalizationModel load_lmc_for_values(const std::string& path, const std::v
 InterpolationResult interpolate_cokriging(const InterpolationRequest& r, const CoregionalizationModel& model,
                                           const KrigingOptions& options) {
   InterpolationResult result;
-  const auto columns = covariance_columns(r.value_columns);
+  const auto columns = cokriging_covariance_columns(r.value_columns);
   for (const auto& c : columns)
     if (r.targets->has_column(c.first))
       throw InputError(r.targets->source() + ": already has a column '" + c.first + "', which the output would repeat; rename it",
@@ -102,8 +102,8 @@ InterpolationResult interpolate_cokriging(const InterpolationRequest& r, const C
     }
     if (model.component_names().empty())
       result.notes.push_back("the coregionalization model does not name its components; taken in --value order (" +
-                             joined(r.value_columns) + ")");
-    result.notes.push_back(description(model, options, rep));
+                             cokriging_joined_names(r.value_columns) + ")");
+    result.notes.push_back(cokriging_description(model, options, rep));
   });
   return result;
 }
@@ -111,7 +111,7 @@ InterpolationResult interpolate_cokriging(const InterpolationRequest& r, const C
 CrossValidationOutput cross_validate_cokriging(const CrossValidationRequest& r, const CoregionalizationModel& model,
                                                const KrigingOptions& options) {
   CrossValidationOutput out;
-  const auto columns = covariance_columns(r.value_columns);
+  const auto columns = cokriging_covariance_columns(r.value_columns);
   const auto points = rows_as_points(r.sample_coords);
   with_value_type(r.value_columns.size(), [&]<class V>() {
     const auto values = rows_as_values<V>(r.sample_values);
@@ -138,7 +138,7 @@ CrossValidationOutput cross_validate_cokriging(const CrossValidationRequest& r, 
                                         : "leave-one-out cokriging: each sample from its neighbours without itself") +
                         "; every component of a sample left out together" +
                         (p > 1 ? "; var is the mean of the components' residual variances (var_<col>, cov_<A>_<B>)" : ""));
-    out.notes.push_back(description(model, options, cokriging.report()));
+    out.notes.push_back(cokriging_description(model, options, cokriging.report()));
   });
   return out;
 }

@@ -78,7 +78,7 @@ struct CokrigingImpl final : CokrigingBase {
 };
 
 // (M, P) variances and (M, P, P) covariances from the packed rows (row-major a * P + b).
-py::tuple covariance_arrays(const Eigen::MatrixXd& packed, Eigen::Index p) {
+py::tuple cokriging_covariance_arrays(const Eigen::MatrixXd& packed, Eigen::Index p) {
   const Eigen::Index m = packed.rows();
   py::array_t<double> var({static_cast<py::ssize_t>(m), static_cast<py::ssize_t>(p)});
   py::array_t<double> cov({static_cast<py::ssize_t>(m), static_cast<py::ssize_t>(p), static_cast<py::ssize_t>(p)});
@@ -91,7 +91,7 @@ py::tuple covariance_arrays(const Eigen::MatrixXd& packed, Eigen::Index p) {
   return py::make_tuple(var, cov);
 }
 
-CoregionalizationModel lmc_arg(const py::object& model) {
+CoregionalizationModel cokriging_model_arg(const py::object& model) {
   std::string text;
   if (py::isinstance<py::dict>(model)) text = py::module_::import("json").attr("dumps")(model).cast<std::string>();
   else if (py::isinstance<py::str>(model)) text = model.cast<std::string>();
@@ -112,7 +112,7 @@ class PyCokriging {
     if (z.data.rows() != x_.rows())
       throw ArgumentError("values: " + std::to_string(z.data.rows()) + " rows but coords has " + std::to_string(x_.rows()) +
                           "; expected one row of components per location");
-    const CoregionalizationModel lmc = lmc_arg(model);
+    const CoregionalizationModel lmc = cokriging_model_arg(model);
     if (lmc.components() != z.data.cols())
       throw ArgumentError("values: " + std::to_string(z.data.cols()) + " columns but the model has " +
                           std::to_string(lmc.components()) + " components; expected one column per component");
@@ -157,7 +157,7 @@ class PyCokriging {
                             "); their predictions are NaN";
       if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
     }
-    const py::tuple vc = covariance_arrays(r.covariance, components_);
+    const py::tuple vc = cokriging_covariance_arrays(r.covariance, components_);
     return py::make_tuple(to_numpy(r.mean), vc[0], vc[1]);
   }
 
@@ -169,7 +169,7 @@ class PyCokriging {
     }
     if (r.mean.rows() != x_.rows())
       throw Error("cokriging cross-validation failed: " + std::string(kriging_status_name(r.status)) + ": " + r.message);
-    const py::tuple vc = covariance_arrays(r.covariance, components_);
+    const py::tuple vc = cokriging_covariance_arrays(r.covariance, components_);
     return py::make_tuple(to_numpy(r.mean), to_numpy(r.residual), vc[1]);
   }
 

@@ -2,9 +2,8 @@
 // ships (tests/peers/gstat_cokriging.R): ordinary cokriging of log(zinc) and log(copper) with an
 // explicit linear model of coregionalization (nugget + Sph(800) for the direct and the cross
 // variogram), gstat's predict() on meuse.grid globally, with nmax = 20, and with a linear drift per
-// variable. errfield runs through
-// its CLI (interpolate --method kriging --model lmc.json) on the CSVs the R script wrote. Skipped
-// with a message when Rscript, gstat or sp is missing.
+// variable. errfield runs through its CLI (interpolate --method kriging --model lmc.json) on the
+// CSVs the R script wrote. Skipped with a message when Rscript, gstat or sp is missing.
 
 #include <algorithm>
 #include <cmath>
