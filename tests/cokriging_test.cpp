@@ -244,9 +244,12 @@ TEST(Cokriging, LocalWithAllSamplesEqualsDense) {
   const auto values = some_values<Eigen::Vector3d>(x);
   const CoregionalizationModel model = heterogeneous_model(3);
   const auto targets = scattered_points(15, 100.0, 6);
-  for (KrigingKind kind : {KrigingKind::Ordinary, KrigingKind::Universal}) {
+  for (KrigingKind kind : {KrigingKind::Simple, KrigingKind::Ordinary, KrigingKind::Universal}) {
     KrigingOptions dense;
     dense.kind = kind;
+    dense.simple_mean = {0.1, -0.2, 0.3};
+    // Simple: the nugget as measurement error, whose leave-one-out residuals carry it.
+    if (kind == KrigingKind::Simple) dense.nugget = NuggetTreatment::MeasurementError;
     KrigingOptions local = dense;
     local.backend = KrigingBackend::Local;
     for (std::size_t k : {std::size_t{40}, std::size_t{45}}) {
