@@ -218,6 +218,22 @@ TEST(Cokriging, IntrinsicModelGivesKrigingWithTheSharedModel) {
   }
 }
 
+TEST(Cokriging, MeansWithoutVariancesAreTheSame) {
+  const auto x = scattered_points(30, 100.0, 17);
+  const auto values = some_values<Eigen::Vector3d>(x);
+  const auto targets = scattered_points(70, 100.0, 18);
+  for (KrigingKind kind : {KrigingKind::Simple, KrigingKind::Ordinary, KrigingKind::Universal}) {
+    KrigingOptions o;
+    o.kind = kind;
+    const auto with = Cokriging<Point, Eigen::Vector3d>(x, values, heterogeneous_model(3), o).predict(targets);
+    o.compute_variance = false;
+    const auto without = Cokriging<Point, Eigen::Vector3d>(x, values, heterogeneous_model(3), o).predict(targets);
+    EXPECT_TRUE(without.covariance.empty());
+    for (std::size_t t = 0; t < targets.size(); ++t)
+      EXPECT_LT((with.mean[t] - without.mean[t]).cwiseAbs().maxCoeff(), 1e-12) << "target " << t;
+  }
+}
+
 TEST(Cokriging, ExactAtTheDataWithoutNugget) {
   const auto x = scattered_points(25, 100.0, 3);
   const auto values = some_values<Eigen::Vector2d>(x);

@@ -108,6 +108,7 @@ class CokrigingEngine {
   Eigen::LLT<Eigen::MatrixXd> g_llt_;
   Eigen::VectorXd beta_;  // Pp
   Eigen::VectorXd ry_;    // L^-1 (z - F beta)
+  Eigen::VectorXd alpha_; // K^-1 (z - F beta) = L^-T ry_: means without variances, O(NP^2) per target
   Eigen::VectorXd z_;     // NP
 };
 
@@ -321,6 +322,7 @@ void CokrigingEngine::setup_dense() {
     beta_.resize(0);
     ry_ = y;
   }
+  alpha_ = llt_.matrixU().solve(ry_);
 }
 
 CokrigingOutput CokrigingEngine::unusable() const {
@@ -348,37 +350,51 @@ CokrigingOutput CokrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, 
   out.mean.resize(m, P);
   if (options_.compute_variance) out.covariance.resize(m, P * P);
   const auto lower = llt_.matrixL();
+  // Targets in fixed batches: one triangular solve with batch * P right-hand sides reads the
+  // NP x NP factor once per batch instead of once per target (a target at a time was memory bound:
+  // 19 s for N = 1000, P = 3 and 2000 targets). The batches do not depend on the thread count, so
+  // neither do the results.
+  const auto batch = static_cast<Eigen::Index>(options_.target_batch);
+  const Eigen::Index batches = (m + batch - 1) / batch;
 #pragma omp parallel num_threads(thread_count())
   {
-    Eigen::MatrixXd w(np, P), r(p * P, P), cov(P, P);
+    Eigen::MatrixXd w, r(p * P, P), cov(P, P), block(P, P);
     Eigen::VectorXd mean(P), frow(p);
-    Eigen::MatrixXd block(P, P);
-#pragma omp for schedule(dynamic, 16)
-    for (Eigen::Index t = 0; t < m; ++t) {
-      const double* target = embedded.col(t).data();
-      for (Eigen::Index i = 0; i < n; ++i) {
-        target_block(target, i, block.data());
-        w.middleRows(i * P, P) = block;
+#pragma omp for schedule(dynamic, 1)
+    for (Eigen::Index bt = 0; bt < batches; ++bt) {
+      const Eigen::Index t0 = bt * batch, nb = std::min(batch, m - t0);
+      w.resize(np, nb * P);
+      for (Eigen::Index k = 0; k < nb; ++k) {
+        const double* target = embedded.col(t0 + k).data();
+        for (Eigen::Index i = 0; i < n; ++i) {
+          target_block(target, i, block.data());
+          w.block(i * P, k * P, P, P) = block;
+        }
       }
-      lower.solveInPlace(w);
-      mean.noalias() = w.transpose() * ry_;
-      if (p > 0) {
-        drift_row(raw.col(t).data(), frow.data());
-        for (Eigen::Index b = 0; b < P; ++b) mean[b] += frow.dot(beta_.segment(b * p, p));
+      // Without variances the means are C0' alpha: no solve.
+      if (options_.compute_variance) lower.solveInPlace(w);
+      for (Eigen::Index k = 0; k < nb; ++k) {
+        const Eigen::Index t = t0 + k;
+        const auto wt = w.middleCols(k * P, P);
+        mean.noalias() = wt.transpose() * (options_.compute_variance ? ry_ : alpha_);
+        if (p > 0) {
+          drift_row(raw.col(t).data(), frow.data());
+          for (Eigen::Index b = 0; b < P; ++b) mean[b] += frow.dot(beta_.segment(b * p, p));
+        }
+        out.mean.row(t) = mean.transpose();
+        if (!options_.compute_variance) continue;
+        cov = target_zero_;
+        cov.noalias() -= wt.transpose() * wt;
+        if (p > 0) {
+          r.setZero();
+          for (Eigen::Index b = 0; b < P; ++b) r.block(b * p, b, p, 1) = frow;
+          r.noalias() -= q_.transpose() * wt;
+          g_llt_.matrixL().solveInPlace(r);
+          cov.noalias() += r.transpose() * r;
+        }
+        for (Eigen::Index b = 0; b < P; ++b)
+          for (Eigen::Index a = 0; a < P; ++a) out.covariance(t, a + P * b) = cov(a, b);
       }
-      out.mean.row(t) = mean.transpose();
-      if (!options_.compute_variance) continue;
-      cov = target_zero_;
-      cov.noalias() -= w.transpose() * w;
-      if (p > 0) {
-        r.setZero();
-        for (Eigen::Index b = 0; b < P; ++b) r.block(b * p, b, p, 1) = frow;
-        r.noalias() -= q_.transpose() * w;
-        g_llt_.matrixL().solveInPlace(r);
-        cov.noalias() += r.transpose() * r;
-      }
-      for (Eigen::Index b = 0; b < P; ++b)
-        for (Eigen::Index a = 0; a < P; ++a) out.covariance(t, a + P * b) = cov(a, b);
     }
   }
   if (options_.kind == KrigingKind::Simple) out.mean.rowwise() += simple_mean_.transpose();
