@@ -11,6 +11,8 @@
 #   cok.csv          lzn_pred,lzn_var,lcu_pred,lcu_var,cov   global cokriging
 #   cok_local.csv    the same with nmax = 20
 #   cok_universal.csv   global universal cokriging, a linear drift in x and y per variable
+#   cv.csv           lzn_pred,lzn_var,lzn_residual,lcu_residual   gstat.cv(remove.all = TRUE): leave-one-out
+#                    with every variable of a sample left out (gstat reports pred and var of the first)
 suppressPackageStartupMessages({ library(sp); library(gstat) })
 out <- commandArgs(trailingOnly = TRUE)[1]
 data(meuse, package = "sp", envir = environment())
@@ -39,3 +41,6 @@ pick <- function(p) data.frame(lzn_pred = p$lzn.pred, lzn_var = p$lzn.var, lcu_p
 put(pick(as.data.frame(predict(build(Inf), g, debug.level = 0))), "cok.csv")
 put(pick(as.data.frame(predict(build(20), g, debug.level = 0))), "cok_local.csv")
 put(pick(as.data.frame(predict(build(Inf, "x + y"), g, debug.level = 0))), "cok_universal.csv")
+cv <- as.data.frame(gstat.cv(build(Inf), remove.all = TRUE, verbose = FALSE))
+all <- as.data.frame(gstat.cv(build(Inf), remove.all = TRUE, verbose = FALSE, all.residuals = TRUE))
+put(data.frame(lzn_pred = cv$lzn.pred, lzn_var = cv$lzn.var, lzn_residual = all$lzn, lcu_residual = all$lcu), "cv.csv")

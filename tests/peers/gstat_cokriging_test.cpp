@@ -2,7 +2,7 @@
 // ships (tests/peers/gstat_cokriging.R): ordinary cokriging of log(zinc) and log(copper) with an
 // explicit linear model of coregionalization (nugget + Sph(800) for the direct and the cross
 // variogram), gstat's predict() on meuse.grid globally, with nmax = 20, and with a linear drift per
-// variable. errfield runs through its CLI (interpolate --method kriging --model lmc.json) on the
+// variable, and gstat.cv's leave-one-out. errfield runs through its CLI (interpolate --method kriging --model lmc.json) on the
 // CSVs the R script wrote. Skipped with a message when Rscript, gstat or sp is missing.
 
 #include <algorithm>
@@ -114,6 +114,27 @@ TEST_F(GstatCokriging, GlobalUniversalCokriging) { cokrige({"--kind", "universal
 
 TEST_F(GstatCokriging, LocalOrdinaryCokrigingNmax20) {
   cokrige({"--backend", "local", "--neighbors", "20", "--neighbour-metric", "euclidean"}, "cok_local.csv", 20);
+}
+
+// gstat.cv(remove.all = TRUE): every variable of a sample left out, as errfield's leave-one-out
+// (the block form of Dubrule's closed form, docs/kriging.md).
+TEST_F(GstatCokriging, LeaveOneOutCokriging) {
+  const auto r = run_errfield({"cv", "--method", "kriging", "--samples", file("meuse.csv"), "--coords", "x,y", "--value",
+                               "lzn,lcu", "--model", file("lmc.json"), "--out", file("cv_ours.csv")},
+                              root_);
+  ASSERT_EQ(r.exit_code, 0) << r.output();
+  const Eigen::MatrixXd ours = columns(file("cv_ours.csv"), {"pred_lzn", "var_lzn", "residual_lzn", "residual_lcu"});
+  const Eigen::MatrixXd theirs = columns(file("cv.csv"), {"lzn_pred", "lzn_var", "lzn_residual", "lcu_residual"});
+  ASSERT_EQ(ours.rows(), theirs.rows());
+  double worst = 0.0;
+  for (Eigen::Index i = 0; i < ours.rows(); ++i)
+    for (Eigen::Index j = 0; j < ours.cols(); ++j) {
+      // Residuals are ~0.3 in size: relative to 0.1 where they pass through zero.
+      const double scale = std::max(std::abs(theirs(i, j)), 0.1);
+      worst = std::max(worst, std::abs(ours(i, j) - theirs(i, j)) / scale);
+      EXPECT_NEAR(ours(i, j), theirs(i, j), 1e-8 * scale) << "sample " << i << ", column " << j;
+    }
+  std::cout << "gstat.cv: largest relative difference " << worst << "\n";
 }
 
 }  // namespace gstat_cokriging_test
