@@ -454,6 +454,28 @@ TEST(Cokriging, RefusesWhatItDoesNotSupport) {
                ArgumentError);
 }
 
+TEST(Cokriging, MemoryBudgetIsCheckedBeforeAllocating) {
+  const auto x = scattered_points(100, 100.0, 51);
+  const auto values = some_values<Eigen::Vector3d>(x);
+  KrigingOptions o;
+  o.dense_memory_budget_bytes = 1 << 20;  // the 300 x 300 system needs 2 * 300^2 * 8 bytes = 1.4 MB
+  try {
+    Cokriging<Point, Eigen::Vector3d>(x, values, heterogeneous_model(3), o);
+    ADD_FAILURE() << "no ResourceError";
+  } catch (const ResourceError& e) {
+    EXPECT_NE(std::string(e.what()).find("300 x 300 system"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("local back end"), std::string::npos) << e.what();
+  }
+  o.backend = KrigingBackend::Local;
+  o.neighbors = 20;  // 60 x 60 per target: fits
+  const auto p = Cokriging<Point, Eigen::Vector3d>(x, values, heterogeneous_model(3), o).predict(x);
+  EXPECT_TRUE(p.usable());
+  o.neighbors = 100;
+  o.threads = 4;  // 4 x (300^2 + ...) doubles > 1 MiB
+  const Cokriging<Point, Eigen::Vector3d> too_many(x, values, heterogeneous_model(3), o);
+  EXPECT_THROW(too_many.predict(x), ResourceError);
+}
+
 TEST(Cokriging, AnisotropyIsTheModelsLagMap) {
   // ARD with range multiplier 2 along y equals the isotropic model on y / 2.
   const auto x = scattered_points(20, 100.0, 41);

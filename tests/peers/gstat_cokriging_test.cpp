@@ -2,8 +2,9 @@
 // ships (tests/peers/gstat_cokriging.R): ordinary cokriging of log(zinc) and log(copper) with an
 // explicit linear model of coregionalization (nugget + Sph(800) for the direct and the cross
 // variogram), gstat's predict() on meuse.grid globally, with nmax = 20, and with a linear drift per
-// variable, and gstat.cv's leave-one-out. errfield runs through its CLI (interpolate --method kriging --model lmc.json) on the
-// CSVs the R script wrote. Skipped with a message when Rscript, gstat or sp is missing.
+// variable, and gstat.cv's leave-one-out. errfield runs through its CLI (interpolate and cv
+// --method kriging --model lmc.json) on the CSVs the R script wrote. Skipped with a message when
+// Rscript, gstat or sp is missing.
 
 #include <algorithm>
 #include <cmath>
