@@ -108,13 +108,22 @@ class GstatCokriging : public ::testing::Test {
   }
 };
 
-TEST_F(GstatCokriging, GlobalOrdinaryCokriging) { cokrige({}, "cok.csv"); }
-
-// gstat's universal cokriging: each variable with its own linear drift in x and y.
-TEST_F(GstatCokriging, GlobalUniversalCokriging) { cokrige({"--kind", "universal1"}, "cok_universal.csv"); }
-
-TEST_F(GstatCokriging, LocalOrdinaryCokrigingNmax20) {
-  cokrige({"--backend", "local", "--neighbors", "20", "--neighbour-metric", "euclidean"}, "cok_local.csv", 20);
+// One test for the three predictions: ctest runs every test in its own process, and each runs the
+// R script (~4 s) first.
+TEST_F(GstatCokriging, PredictionsMatchGstat) {
+  {
+    SCOPED_TRACE("global ordinary cokriging");
+    cokrige({}, "cok.csv");
+  }
+  {
+    // gstat's universal cokriging: each variable with its own linear drift in x and y.
+    SCOPED_TRACE("global universal cokriging, ~ x + y");
+    cokrige({"--kind", "universal1"}, "cok_universal.csv");
+  }
+  {
+    SCOPED_TRACE("local ordinary cokriging, nmax = 20");
+    cokrige({"--backend", "local", "--neighbors", "20", "--neighbour-metric", "euclidean"}, "cok_local.csv", 20);
+  }
 }
 
 // gstat.cv(remove.all = TRUE): every variable of a sample left out, as errfield's leave-one-out
