@@ -14,7 +14,7 @@
 /// the special case K structures with B_k = b_k I (intrinsic, no cross-covariance). Use an LMC when
 /// the components are correlated with each other differently at different ranges.
 ///
-/// JSON form (what `fit-variogram --lmc` writes, what `interpolate --lmc` reads):
+/// JSON form (what `fit-variogram --lmc` writes, what `interpolate --method kriging --model lmc.json` reads):
 ///   {"type": "lmc", "components": ["ex", "ey", "ez"],
 ///    "structures": [{"kind": "nug", "sills": [[...], [...], [...]]},
 ///                   {"kind": "sph", "range": 400, "sills": [[...], [...], [...]]}],

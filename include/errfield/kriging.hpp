@@ -27,6 +27,7 @@
 /// factorization (several right-hand sides). This is the intrinsic coregionalization model with
 /// one variogram for every component: the weights, and hence the kriging variance, are the same
 /// for all components; cross-covariances between components are not used. See docs/kriging.md.
+/// To use them (a linear model of coregionalization), see Cokriging (cokriging.hpp).
 ///
 /// Thread safety: a constructed Kriging object is immutable; predict() may be called concurrently.
 /// predict() itself runs OpenMP over targets.

@@ -153,6 +153,14 @@ void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& ow
       for (std::size_t i = 0; i < n; ++i) var[i] = cell(result.variance[i]);
       out.add_column("var", std::move(var));
     }
+    for (const auto& [name, values] : result.extra_columns) {
+      if (samples.has_column(name))
+        throw InputError(a.samples + ": already has a column '" + name + "', which the output would repeat; rename it",
+                         a.samples, 1, name);
+      std::vector<std::string> cells(n);
+      for (std::size_t i = 0; i < n; ++i) cells[i] = cell(values[i]);
+      out.add_column(name, std::move(cells));
+    }
     out.write(a.out);
   }
 

@@ -9,6 +9,7 @@
 #include <limits>
 
 #include "cli/cli_support.hpp"
+#include "cli/interp_cokriging.hpp"
 #include "cli/interpolation_methods.hpp"
 #include "errfield/conditional_simulation.hpp"
 #include "errfield/cross_validation.hpp"
@@ -62,7 +63,11 @@ void add_kriging_options(CLI::App& cmd) {
                  "with a nugget, isotropic and ARD, compared on 300 samples, and the one with the smallest AIC whose "
                  "kriging system is well conditioned, refitted on all samples (exact likelihood up to 3,000, Vecchia "
                  "beyond; printed with the reason); with --backend sparse, the best weighted fit of sph to the "
-                 "empirical variogram")
+                 "empirical variogram. A linear model of coregionalization (an LMC JSON, \"type\": \"lmc\", as "
+                 "fit-variogram --lmc writes) with one component per --value column, in --value order: cokriging, "
+                 "which writes var_<col> per component and the prediction error covariances cov_<A>_<B> "
+                 "(docs/kriging.md, Cokriging); not with --covariates, --measurement-variance, --block, --simulations, "
+                 "--backend sparse")
       ->group(group);
   cmd.add_option("--kind", o.kind, "simple | ordinary (default) | universal1 | universal2 (linear / quadratic drift in the coordinates)")
       ->group(group);
@@ -260,8 +265,45 @@ void refuse_duplicate_samples(const Eigen::MatrixXd& coords, const RowLabels& la
   }
 }
 
+// --model names a linear model of coregionalization (an LMC JSON): cokriging. The kriging options
+// cokriging does not have are refused by name, never ignored.
+KrigingOptions cokriging_options(const CsvTable& samples, const SharedInterpolationOptions& shared, bool interpolate) {
+  const auto& o = cli_options;
+  const auto refuse = [&](const std::string& option, const std::string& why) {
+    throw ArgumentError(option + " is not available with cokriging (--model " + o.model +
+                        " is a linear model of coregionalization): " + why);
+  };
+  if (!o.covariates.empty()) refuse("--covariates", "external drift is not supported; use --kind ordinary, universal1 or universal2");
+  if (!o.measurement_variance.empty())
+    refuse("--measurement-variance", "per-sample measurement variances are not supported; the model's nugget with --nugget-as error is the observation noise");
+  if (interpolate) {
+    if (!o.block.empty()) refuse("--block", "block cokriging is not implemented; predict at points");
+    if (o.simulations > 0) refuse("--simulations", "conditional co-simulation is not implemented");
+    for (const CLI::Option* opt : simulation_only_options)
+      if (opt->count()) refuse(opt->get_name(), "it belongs to --simulations, which cokriging does not have");
+    for (const CLI::Option* opt : block_only_options)
+      if (opt->count()) refuse(opt->get_name(), "it belongs to --block, which cokriging does not have");
+  }
+  if (o.backend == "sparse") refuse("--backend sparse", "use --backend dense (default) or local (--neighbors K)");
+  KrigingOptionText text;
+  text.kind = o.kind;
+  if (!std::isnan(o.mean)) text.mean = std::vector<double>{o.mean};
+  if (!o.backend.empty()) text.backend = o.backend;
+  text.neighbors = shared.neighbors;
+  text.radius = shared.radius;
+  if (!o.neighbour_metric.empty()) text.neighbour_metric = o.neighbour_metric;
+  text.nugget = o.nugget_as;
+  KrigingOptions options = kriging_options_from_text(text, cli_option_names());
+  options.sample_labels = row_labels_of(samples, "sample");
+  return options;
+}
+
 InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
   InterpolationResult result;
+  if (model_file_is_lmc(cli_options.model)) {
+    const KrigingOptions options = cokriging_options(*r.samples, r.shared, true);
+    return interpolate_cokriging(r, load_lmc_for_values(cli_options.model, r.value_columns), options);
+  }
   const Setup s = make_setup(*r.samples, r.sample_coords, r.sample_values, r.shared, result.notes);
   const auto points = rows_as_points(r.sample_coords);
   const auto targets = rows_as_points(r.target_coords);
@@ -374,6 +416,13 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
 
 CrossValidationOutput cross_validate_kriging(const CrossValidationRequest& r) {
   CrossValidationOutput out;
+  if (model_file_is_lmc(cli_options.model)) {
+    if (r.folds > 0)
+      throw ArgumentError("--folds " + std::to_string(r.folds) + " is not available with cokriging (--model " + cli_options.model +
+                          " is a linear model of coregionalization): its cross-validation is leave-one-out; drop --folds");
+    const KrigingOptions options = cokriging_options(*r.samples, r.shared, false);
+    return cross_validate_cokriging(r, load_lmc_for_values(cli_options.model, r.value_columns), options);
+  }
   const Setup s = make_setup(*r.samples, r.sample_coords, r.sample_values, r.shared, out.notes);
   if (s.measurement_variance.size() > 0 && r.folds > 0)
     out.notes.push_back("k-fold z-scores use the kriging variance without the held-out samples' measurement variance");
@@ -429,7 +478,8 @@ InterpolationMethodRegistration kriging_method{{
     "kriging",
     "simple / ordinary / universal kriging with a variogram --model (gstat vgm terms; 'range' of exp/gau is "
     "the scale a, not the practical range) or --model auto; writes pred and the kriging variance var "
-    "(var_<col> for vectors); --backend dense|local|sparse, --neighbors K / --radius R for local",
+    "(var_<col> for vectors); --backend dense|local|sparse, --neighbors K / --radius R for local; with an LMC "
+    "JSON as --model, cokriging (var_<col> per component, cov_<A>_<B>)",
     {"--neighbors", "--radius"},
     &add_kriging_options,
     &interpolate_kriging,

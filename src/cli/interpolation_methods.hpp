@@ -81,6 +81,8 @@ struct CrossValidationOutput {
   std::vector<std::size_t> fold;  ///< fold of each sample (0-based)
   Eigen::MatrixXd pred;           ///< N x C, NaN row = not predicted
   std::vector<double> variance;   ///< per sample prediction variance, empty if the method has none
+  /// Further per-sample columns written after var (e.g. cokriging's var_<col>, cov_<A>_<B>).
+  std::vector<std::pair<std::string, std::vector<double>>> extra_columns;
   std::vector<std::string> notes;
 };
 

@@ -128,6 +128,28 @@ class CrossValidation:
     mean_z: float | None
     mean_squared_z: float | None
 
+class Cokriging:
+    def __init__(
+        self,
+        coords: ArrayLike,
+        values: ArrayLike,
+        model: str | dict[str, Any],
+        *,
+        kind: Literal["simple", "ordinary", "universal", "universal1", "universal2"] = "ordinary",
+        backend: Literal["dense", "local"] | None = None,
+        mean: float | Sequence[float] | None = None,
+        drift_order: int | None = None,
+        nugget: Literal["micro", "error"] = "micro",
+        neighbors: int | None = None,
+        radius: float | None = None,
+        threads: int = 0,
+        neighbour_metric: Literal["model", "euclidean"] | None = None,
+    ) -> None: ...
+    def predict(self, targets: ArrayLike) -> tuple[F64, F64, F64]: ...
+    def cross_validate(self) -> tuple[F64, F64, F64]: ...
+    @property
+    def report(self) -> dict[str, Any]: ...
+
 class Kriging:
     def __init__(
         self,

@@ -90,6 +90,7 @@ PYBIND11_MODULE(errfield, m) {
         "column-major storage): for tests that an argument was read in place.");
   errfield::python::bind_variogram(m);
   errfield::python::bind_interpolation(m);
+  errfield::python::bind_cokriging(m);
   errfield::python::bind_robot(m);
   errfield::python::bind_calibration(m);
   errfield::python::bind_pipeline(m);
