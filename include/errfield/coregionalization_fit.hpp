@@ -105,6 +105,17 @@ std::vector<ModelComponent> fit_coregionalization_ranges(const CrossVariogramTab
                                                          const std::vector<ModelComponent>& structures,
                                                          LmcWeighting weighting = LmcWeighting::NjOverH2);
 
+/// The structures of an LMC fit from text: a model in VariogramModel's text form
+/// ("nug(0)+sph(1,400)": kinds, ranges and nu kept, sills ignored; ranges_given = true) or
+/// '+'-separated kinds ("nug+sph": ranges to be fitted, e.g. by fit_coregionalization_ranges;
+/// ranges_given = false; a mat kind takes `nu`, which must then be > 0). Throws ArgumentError
+/// naming the offending text, for an unbounded kind (pow, lin), an anisotropy ('@') or mat without nu.
+struct CoregionalizationTemplate {
+  std::vector<ModelComponent> structures;
+  bool ranges_given = false;
+};
+CoregionalizationTemplate parse_coregionalization_template(std::string_view text, double nu = 0.0);
+
 /// Q(B) of `model` on `table` with `weighting` (the quantity both methods minimize).
 double coregionalization_weighted_residual(const CrossVariogramTable& table, const CoregionalizationModel& model,
                                            LmcWeighting weighting);

@@ -232,49 +232,6 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   if (!r.converged) std::cerr << "errfield fit-variogram: warning: " << r.message << "\n";
 }
 
-/// --model for --lmc: a model text ("nug(0)+sph(1,400)": kinds and ranges, sills ignored) or
-/// '+'-separated kinds ("nug+sph": ranges fitted first). Sets `ranges_given`.
-std::vector<ModelComponent> lmc_template(const FitVariogramArgs& a, bool& ranges_given) {
-  if (a.model.find('(') != std::string::npos) {
-    ranges_given = true;
-    VariogramModel m;
-    try {
-      m = VariogramModel::parse(a.model);
-    } catch (const ArgumentError& e) {
-      throw ArgumentError(std::string("--model: ") + e.what() +
-                          " (with --lmc a template such as nug(0)+sph(1,400), or kinds such as nug+sph)");
-    }
-    if (!m.anisotropy().isotropic())
-      throw ArgumentError("--model '" + a.model + "': --lmc fits isotropic variograms; drop the '@' anisotropy");
-    return m.components();
-  }
-  ranges_given = false;
-  std::vector<ModelComponent> out;
-  std::vector<std::string> kinds{""};
-  for (char ch : a.model) {
-    if (ch == '+') kinds.emplace_back();
-    else if (ch != ' ') kinds.back() += ch;
-  }
-  for (const auto& name : kinds) {
-    ModelComponent c;
-    try {
-      c.kind = model_kind_from_name(name);
-    } catch (const ArgumentError& e) {
-      throw ArgumentError("--model '" + a.model + "': " + e.what() +
-                          "; with --lmc expected a model such as nug(0)+sph(1,400) (kinds and ranges; sills ignored) "
-                          "or kinds such as nug+sph (ranges fitted to the mean direct variogram)");
-    }
-    if (c.kind == ModelKind::Matern) {
-      if (!a.nu_given || a.nu_text == "auto") throw ArgumentError("--model " + a.model + " has mat: give --nu V (a number)");
-      const auto res = std::from_chars(a.nu_text.data(), a.nu_text.data() + a.nu_text.size(), c.nu);
-      if (res.ec != std::errc() || res.ptr != a.nu_text.data() + a.nu_text.size() || !(c.nu > 0.0))
-        throw ArgumentError("--nu: '" + a.nu_text + "'; expected a number > 0");
-    }
-    out.push_back(c);
-  }
-  return out;
-}
-
 /// --lmc: the direct and cross variograms of --value's columns (from a CSV of 'variogram --cross',
 /// or computed from the samples with --coords), then the LMC fit (coregionalization_fit.hpp).
 void run_lmc_fit(const FitVariogramArgs& a) {
@@ -296,12 +253,20 @@ void run_lmc_fit(const FitVariogramArgs& a) {
     throw ArgumentError("--weights cressie with --lmc: its weights depend on each variogram's model; expected nj, "
                         "nj_h2 or unweighted");
   o.weighting = lmc_weighting_from_name(a.weights);
-  bool ranges_given = false;
-  std::vector<ModelComponent> structures = lmc_template(a, ranges_given);
-  for (const ModelComponent& c : structures)
-    if (!c.bounded())
-      throw ArgumentError("--model '" + a.model + "': " + std::string(model_kind_name(c.kind)) +
-                          " has no sill; an LMC needs bounded structures (nug, sph, exp, gau, mat, wen)");
+  double nu = 0.0;
+  if (a.nu_given) {
+    const auto res = std::from_chars(a.nu_text.data(), a.nu_text.data() + a.nu_text.size(), nu);
+    if (res.ec != std::errc() || res.ptr != a.nu_text.data() + a.nu_text.size() || !(nu > 0.0))
+      throw ArgumentError("--nu: '" + a.nu_text + "'; with --lmc expected a number > 0");
+  }
+  CoregionalizationTemplate tmpl;
+  try {
+    tmpl = parse_coregionalization_template(a.model, nu);
+  } catch (const ArgumentError& e) {
+    throw ArgumentError(std::string("--model: ") + e.what());
+  }
+  std::vector<ModelComponent> structures = tmpl.structures;
+  const bool ranges_given = tmpl.ranges_given;
 
   const CsvTable t = CsvTable::read(a.input);
   const std::size_t P = names.size();

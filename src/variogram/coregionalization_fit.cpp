@@ -307,6 +307,49 @@ std::vector<ModelComponent> fit_coregionalization_ranges(const CrossVariogramTab
   return out;
 }
 
+CoregionalizationTemplate parse_coregionalization_template(std::string_view text, double nu) {
+  const std::string hint = " (an LMC template is a model such as nug(0)+sph(1,400): kinds and ranges kept, sills "
+                           "ignored; or kinds such as nug+sph: ranges fitted to the mean direct variogram)";
+  CoregionalizationTemplate t;
+  if (text.find('(') != std::string_view::npos) {
+    VariogramModel m;
+    try {
+      m = VariogramModel::parse(text);
+    } catch (const ArgumentError& e) {
+      throw ArgumentError(std::string(e.what()) + hint);
+    }
+    if (!m.anisotropy().isotropic())
+      throw ArgumentError("LMC template '" + std::string(text) + "': the fit is isotropic; drop the '@' anisotropy");
+    t.structures = m.components();
+    t.ranges_given = true;
+  } else {
+    std::vector<std::string> kinds{""};
+    for (char ch : text) {
+      if (ch == '+') kinds.emplace_back();
+      else if (ch != ' ') kinds.back() += ch;
+    }
+    for (const std::string& name : kinds) {
+      ModelComponent c;
+      try {
+        c.kind = model_kind_from_name(name);
+      } catch (const ArgumentError& e) {
+        throw ArgumentError("LMC template '" + std::string(text) + "': " + e.what() + hint);
+      }
+      if (c.kind == ModelKind::Matern) {
+        if (!(nu > 0.0))
+          throw ArgumentError("LMC template '" + std::string(text) + "' has mat: give its smoothness nu (> 0)");
+        c.nu = nu;
+      }
+      t.structures.push_back(c);
+    }
+  }
+  for (const ModelComponent& c : t.structures)
+    if (!c.bounded())
+      throw ArgumentError("LMC template '" + std::string(text) + "': " + std::string(model_kind_name(c.kind)) +
+                          " has no sill; an LMC needs bounded structures (nug, sph, exp, gau, mat, wen)");
+  return t;
+}
+
 double coregionalization_weighted_residual(const CrossVariogramTable& table, const CoregionalizationModel& model,
                                            LmcWeighting weighting) {
   const LmcBins b = usable_bins(table, weighting);
