@@ -477,10 +477,12 @@ void add_fit_variogram_command(CLI::App& app) {
   cmd->add_option("--method", args->method,
                   "wls (default: weighted least squares on the empirical variogram), ml or reml (likelihood of the "
                   "samples; REML removes the bias of estimating the mean)");
-  cmd->add_option("--coords", args->coords, "ml/reml: coordinate columns of --input, e.g. x,y,z (any unit)");
+  cmd->add_option("--coords", args->coords,
+                  "ml/reml (and --lmc on samples): coordinate columns of --input, e.g. x,y,z (any unit)");
   cmd->add_option("--value", args->value,
                   "ml/reml: the value column, e.g. dL, or several (ex,ey,ez): one model shared by the components, "
-                  "the sum of their log-likelihoods");
+                  "the sum of their log-likelihoods; --lmc: the components (>= 2), whose gamma_<A> and gamma_<A>_<B> "
+                  "columns --input holds");
   cmd->add_option("--anisotropy", args->anisotropy,
                   "ml/reml: none (default, one range), ard (one range per --coords column; the model gets @ard(...)) "
                   "or rotated (alias anis; 2 or 3 --coords: gstat's anis, angle(s) and ratio(s) fitted too; the model "
@@ -504,7 +506,7 @@ void add_fit_variogram_command(CLI::App& app) {
   cmd->add_option("--nugget", args->nugget, "free (default), fixed=V (value unit^2) or none");
   cmd->add_option("--weights", args->weights,
                   "wls: nj (N_j, gstat fit.method 1), nj_h2 (N_j/h_j^2, method 7, default), cressie "
-                  "(N_j/model(h_j)^2, method 2)")
+                  "(N_j/model(h_j)^2, method 2); --lmc: nj, nj_h2 or unweighted (method 6)")
       ->each([args](const std::string&) { args->weights_given = true; });
   cmd->add_option("--range-max", args->range_max,
                   "wls: upper bound of the range (lag unit); default 100 x the largest lag")
@@ -536,8 +538,8 @@ void add_fit_variogram_command(CLI::App& app) {
       "  errfield variogram --input errors.csv --coords x,y,z --value dL --bins 0:2200:200 --out vario.csv\n"
       "  errfield fit-variogram --input vario.csv --model sph --nugget free --weights nj_h2 --out model.json\n"
       "  errfield fit-variogram --method reml --input errors.csv --coords x,y,z --value dL --model exp --out model.json\n"
-      "  errfield variogram --input errors.csv --coords x,y,z --value ex,ey,ez --cross --out cross.csv\n"
-      "  errfield fit-variogram --lmc --input cross.csv --value ex,ey,ez --model 'nug(0)+sph(1,400)' --out lmc.json\n"
+      "  errfield variogram --input errors.csv --coords x,y,z --value dx,dy,dz --cross --out cross.csv\n"
+      "  errfield fit-variogram --lmc --input cross.csv --value dx,dy,dz --model 'nug(0)+sph(1,400)' --out lmc.json\n"
       "  errfield fit-variogram --method reml --anisotropy ard --input residuals.csv --coords q1,q2,q3,q4,q5,q6 \\\n"
       "      --value ex,ey,ez --model mat --nu 2.5 --out model.json   # then fit/interpolate --model model.json\n"
       "(errors.csv, residuals.csv: SIMULATED examples from scripts/make_example_error_field.py, see README.md)");

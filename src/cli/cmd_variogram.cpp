@@ -292,7 +292,7 @@ void add_variogram_command(CLI::App& app) {
       "--alpha 0,45,90,135 --tol-hor 22.5\n"
       "  errfield variogram --input errors.csv --coords q1,q2,q3,q4,q5,q6 --value dx,dy,dz "
       "--bins 0:100:10 --per-coordinate\n"
-      "  errfield variogram --input errors.csv --coords x,y,z --value ex,ey,ez --cross --out cross.csv");
+      "  errfield variogram --input errors.csv --coords x,y,z --value dx,dy,dz --cross --out cross.csv");
   cmd->callback([args] { run_variogram(*args); });
 }
 
