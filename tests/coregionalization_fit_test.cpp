@@ -177,7 +177,9 @@ TEST(CoregionalizationFit, GstatMethodIsSeparateWeightedLinearLeastSquares) {
       const Eigen::Vector3d sills = ldlt.solve(rhs);
       for (int k = 0; k < 3; ++k) {
         ASSERT_GE(r.smallest_eigenvalue_before_projection[static_cast<std::size_t>(k)], 0.0);  // no projection here
-        if (a == b) ASSERT_GT(sills(k), 0.0);  // no direct sill fixed at 0 either
+        if (a == b) {
+          ASSERT_GT(sills(k), 0.0);  // no direct sill fixed at 0 either
+        }
         EXPECT_NEAR(r.model.structures()[static_cast<std::size_t>(k)].sills(a, b), sills(k), 1e-10)
             << "entry " << a << "," << b << " structure " << k;
       }

@@ -127,7 +127,9 @@ TEST_F(GstatLmcPeer, GstatMethodMatchesFitLmc) {
       EXPECT_NEAR(r.model.structures()[k].sills(a, b), g.numeric_cell(row, g.column_index("psill")), 1e-8 * largest)
           << name << " structure " << k;
     }
-    if (c.file == "fit_exp.csv") EXPECT_LT(r.smallest_eigenvalue_before_projection[0], 0.0);  // projection active
+    if (c.file == "fit_exp.csv") {
+      EXPECT_LT(r.smallest_eigenvalue_before_projection[0], 0.0);  // projection active
+    }
     // Goulard-Voltz on the same table is PSD and no worse in the objective both report.
     o.method = LmcFitMethod::GoulardVoltz;
     const CoregionalizationFitResult gv = fit_coregionalization(table, c.structures, o, names());
