@@ -16,7 +16,8 @@
 ///   GoulardVoltz  (Goulard & Voltz 1992) each B_k in turn is replaced by its exact constrained
 ///                 minimizer with the others fixed: the unconstrained WLS update projected onto the
 ///                 PSD cone (eigenvalues clipped at 0, the nearest PSD matrix in Frobenius norm),
-///                 until Q or the B_k change by less than the relative tolerance. It starts from
+///                 until no entry of a B_k moves by more than the relative tolerance (of the
+///                 largest entry) or a sweep no longer lowers Q. It starts from
 ///                 the Gstat result, and every update lowers Q, so its Q is never above Gstat's.
 ///   Gstat         R gstat's fit.lmc (fit.ranges = FALSE, correct.diagonal = 1): each direct and
 ///                 cross variogram is fitted alone by linear WLS of its partial sills (a direct
@@ -60,7 +61,7 @@ LmcWeighting lmc_weighting_from_name(std::string_view name);
 struct CoregionalizationFitOptions {
   LmcFitMethod method = LmcFitMethod::GoulardVoltz;
   LmcWeighting weighting = LmcWeighting::NjOverH2;
-  double relative_tolerance = 1e-12;  ///< Goulard-Voltz: stop when Q or max |B change| moves less
+  double relative_tolerance = 1e-12;  ///< Goulard-Voltz: stop when max |B change| <= this x max |B|
   int max_iterations = 10000;         ///< Goulard-Voltz sweeps over all B_k
   /// Throws ArgumentError naming the offending field.
   void validate() const;

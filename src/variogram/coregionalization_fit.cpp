@@ -231,12 +231,14 @@ CoregionalizationFitResult fit_coregionalization(const CrossVariogramTable& tabl
       }
     result.converged = false;
     std::vector<Eigen::MatrixXd> fitted(b.lag.size());  // sum_k B_k g_k(h_j)
-    for (std::size_t j = 0; j < b.lag.size(); ++j) {
-      fitted[j] = Eigen::MatrixXd::Zero(b.components, b.components);
-      for (std::size_t k = 0; k < K; ++k) fitted[j] += x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k)) * sills[k];
-    }
     while (result.iterations < options.max_iterations) {
       ++result.iterations;
+      const std::vector<Eigen::MatrixXd> before = sills;
+      // Recomputed every sweep (updated in place within it), so rounding does not accumulate.
+      for (std::size_t j = 0; j < b.lag.size(); ++j) {
+        fitted[j] = Eigen::MatrixXd::Zero(b.components, b.components);
+        for (std::size_t k = 0; k < K; ++k) fitted[j] += x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k)) * sills[k];
+      }
       double change = 0.0, size = 0.0;
       for (std::size_t k = 0; k < K; ++k) {
         if (!(c[k] > 0.0)) continue;  // g_k = 0 at every lag: B_k does not enter Q
@@ -254,10 +256,14 @@ CoregionalizationFitResult fit_coregionalization(const CrossVariogramTable& tabl
         sills[k] = next;
       }
       const double q_next = residual(b, x, sills);
+      // Converged when no entry of any B_k moved by more than the tolerance relative to the
+      // largest entry, or when a sweep no longer lowers Q at all (rounding). A relative test on Q
+      // alone would stop early: Q is quadratic in B, so a change of 1e-12 in Q allows 1e-6 in B.
       const bool small_step = change <= options.relative_tolerance * size;
-      const bool flat = q - q_next <= options.relative_tolerance * q;
-      q = q_next;
-      if (small_step || flat) {
+      const bool stalled = q_next >= q;
+      if (q_next > q) sills = before;  // a sweep that rounding made worse is undone: Q never rises
+      else q = q_next;
+      if (small_step || stalled) {
         result.converged = true;
         break;
       }
