@@ -163,7 +163,7 @@ Eigen::MatrixXd psd_projection(const Eigen::MatrixXd& m, double& smallest) {
   return 0.5 * (p + p.transpose());
 }
 
-double residual(const LmcBins& b, const Eigen::MatrixXd& x, const std::vector<Eigen::MatrixXd>& sills) {
+double lmc_residual(const LmcBins& b, const Eigen::MatrixXd& x, const std::vector<Eigen::MatrixXd>& sills) {
   double q = 0.0;
   for (std::size_t j = 0; j < b.lag.size(); ++j) {
     Eigen::MatrixXd r = b.gamma[j];
@@ -218,7 +218,7 @@ CoregionalizationFitResult fit_coregionalization(const CrossVariogramTable& tabl
   result.smallest_eigenvalue_before_projection.assign(K, 0.0);
   std::vector<Eigen::MatrixXd> sills = separate_fits(b, x);
   for (std::size_t k = 0; k < K; ++k) sills[k] = psd_projection(sills[k], result.smallest_eigenvalue_before_projection[k]);
-  double q = residual(b, x, sills);
+  double q = lmc_residual(b, x, sills);
   if (options.method == LmcFitMethod::GoulardVoltz) {
     // Block coordinate descent: with the others fixed, Q(B_k) = c_k ||B_k - U_k||_F^2 + const,
     // c_k = sum_j w_j g_k(h_j)^2 and U_k the unconstrained update, so the PSD projection of U_k is
@@ -255,7 +255,7 @@ CoregionalizationFitResult fit_coregionalization(const CrossVariogramTable& tabl
           fitted[j] += x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k)) * (next - sills[k]);
         sills[k] = next;
       }
-      const double q_next = residual(b, x, sills);
+      const double q_next = lmc_residual(b, x, sills);
       // Converged when no entry of any B_k moved by more than the tolerance relative to the
       // largest entry, or when a sweep no longer lowers Q at all (rounding). A relative test on Q
       // alone would stop early: Q is quadratic in B, so a change of 1e-12 in Q allows 1e-6 in B.
@@ -365,7 +365,7 @@ double coregionalization_weighted_residual(const CrossVariogramTable& table, con
     structures.push_back({.kind = s.kind, .sill = 1.0, .range = s.range, .nu = s.nu});
     sills.push_back(s.sills);
   }
-  return residual(b, unit_design(b, structures), sills);
+  return lmc_residual(b, unit_design(b, structures), sills);
 }
 
 }  // namespace errfield
