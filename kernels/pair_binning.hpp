@@ -20,7 +20,13 @@ namespace errfield::kernels {
 
 /// What is summed per pair and component c, with d = z_i[c] - z_j[c]:
 /// SquaredDifference sums d^2 (Matheron), RootAbsDifference sums |d|^(1/2) (Cressie–Hawkins).
-enum class PairStatistic { SquaredDifference, RootAbsDifference };
+/// CrossProducts sums d_c^2 for every c, then d_a d_b for every a < b (cross-variograms).
+enum class PairStatistic { SquaredDifference, RootAbsDifference, CrossProducts };
+
+/// Sums per bin that statistic S keeps for K components: K, or K + K(K-1)/2 for CrossProducts.
+constexpr std::size_t pair_statistic_width(PairStatistic s, std::size_t K) noexcept {
+  return s == PairStatistic::CrossProducts ? K + K * (K - 1) / 2 : K;
+}
 
 /// Bin edges e_0 < e_1 < ... < e_n (n = bins) and which bin a lag h belongs to:
 /// half-open  [e_k, e_{k+1}) for every k;
@@ -97,8 +103,21 @@ inline void sqrt_block(double* h, std::size_t m) noexcept {
 
 template <PairStatistic S>
 inline double pair_statistic(double d) noexcept {
-  if constexpr (S == PairStatistic::SquaredDifference) return d * d;
-  else return std::sqrt(std::fabs(d));
+  if constexpr (S == PairStatistic::RootAbsDifference) return std::sqrt(std::fabs(d));
+  else return d * d;
+}
+
+/// Adds one pair's statistics (z_i, z_j: K components) to its bin's pair_statistic_width(S, K)
+/// sums `s`: per component first, then for CrossProducts the products (z_i[a] - z_j[a])
+/// (z_i[b] - z_j[b]) in the order (0,1), (0,2), ..., (1,2), ...
+template <PairStatistic S>
+inline void add_pair_statistics(const double* zi, const double* zj, std::size_t K, double* s) noexcept {
+  for (std::size_t c = 0; c < K; ++c) s[c] += pair_statistic<S>(zi[c] - zj[c]);
+  if constexpr (S == PairStatistic::CrossProducts) {
+    std::size_t p = K;
+    for (std::size_t a = 0; a < K; ++a)
+      for (std::size_t b = a + 1; b < K; ++b) s[p++] += (zi[a] - zj[a]) * (zi[b] - zj[b]);
+  }
 }
 }  // namespace detail
 
@@ -187,9 +206,7 @@ inline void accumulate_lags(std::size_t i, std::size_t j0, std::size_t m, const 
     if constexpr (K_FIXED == 1) {
       out.stat[kb] += w[t];
     } else {
-      const double* zj = values + j * K;
-      double* s = out.stat + kb * K;
-      for (std::size_t c = 0; c < K; ++c) s[c] += pair_statistic<S>(zi[c] - zj[c]);
+      add_pair_statistics<S>(zi, values + j * K, K, out.stat + kb * pair_statistic_width(S, K));
     }
   }
 }

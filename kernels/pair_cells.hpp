@@ -235,9 +235,8 @@ void accumulate_pair_batch(std::size_t i, const std::uint32_t* j, const double* 
     }
     out.count[kb] += 1;
     out.lag[kb] += h[t];
-    const double* zj = values + static_cast<std::size_t>(j[t]) * K;
-    double* s = out.stat + kb * K;
-    for (std::size_t c = 0; c < K; ++c) s[c] += detail::pair_statistic<S>(zi[c] - zj[c]);
+    detail::add_pair_statistics<S>(zi, values + static_cast<std::size_t>(j[t]) * K, K,
+                                   out.stat + kb * pair_statistic_width(S, K));
   }
 }
 

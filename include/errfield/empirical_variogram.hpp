@@ -30,6 +30,11 @@
 /// equal-width bins the pair loop runs an AVX2 or AVX-512 kernel when the CPU has it
 /// (kernels/pair_binning_simd.hpp, chosen at run time), bit-identical to the portable one.
 ///
+/// Cross-variograms (options.cross_variograms, Matheron only): for components a < b also
+///   gamma_ab,k = 1/(2 N_k) sum (z_i[a] - z_j[a]) (z_i[b] - z_j[b])
+/// over the same pairs (gstat's cross-variogram of collocated data), in
+/// EmpiricalVariogram::cross_gamma; same single pass, same thread-independent result.
+///
 /// Directional variograms (gstat's alpha/tol.hor, per-coordinate): options.direction keeps only
 /// the pairs whose separation points along a direction (variogram_direction.hpp); the others
 /// fall in no bin. Same single pass, plus one angle test per pair, no SIMD kernel.
@@ -130,6 +135,10 @@ struct EmpiricalVariogramOptions {
   VariogramDirection direction;
   /// Which pairs are enumerated; does not change the result (only the time it takes).
   PairSearch pair_search = PairSearch::Automatic;
+  /// Also the cross-variogram of every pair of components (EmpiricalVariogram::cross_gamma).
+  /// Matheron only: validate() refuses it with cressie or dowd, whose transforms of |z_i - z_j|
+  /// have no signed cross counterpart.
+  bool cross_variograms = false;
   /// Throws ArgumentError naming the offending field.
   void validate() const;
 };
@@ -153,7 +162,16 @@ struct EmpiricalVariogram {
   BinConvention convention = BinConvention::HalfOpen;
   double pair_fraction = 1.0;
   VariogramDirection direction;  ///< the pairs' direction filter (default: all)
+  /// With options.cross_variograms: bins x K(K-1)/2, the cross-variogram of components a < b in
+  /// column cross_column(a, b, K), i.e. the order (0,1), (0,2), ..., (1,2), ... (NaN for an empty
+  /// bin); otherwise empty.
+  Eigen::MatrixXd cross_gamma;
   int components() const noexcept { return static_cast<int>(component_gamma.cols()); }
+  /// Column of the pair a < b in cross_gamma for K components.
+  static int cross_column(int a, int b, int K) noexcept { return a * K - a * (a + 1) / 2 + (b - a - 1); }
+  /// gamma_ab in bin k: component_gamma for a == b, cross_gamma otherwise (either order of a, b).
+  /// Throws ArgumentError for a != b without cross variograms or for an index out of range.
+  double gamma_of(std::size_t bin, int a, int b) const;
 };
 
 /// Empirical variogram of values (N x K, one row per location, K >= 1 components) at

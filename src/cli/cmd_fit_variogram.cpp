@@ -11,6 +11,8 @@
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
 #include "errfield/atomic_file.hpp"
+#include "errfield/coregionalization_fit.hpp"
+#include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
 #include "errfield/kriging_likelihood.hpp"
 #include "errfield/variogram_fit.hpp"
@@ -29,6 +31,9 @@ struct FitVariogramArgs {
   int neighbours = LikelihoodFitOptions{}.vecchia_neighbours;
   bool likelihood_given = false;
   double range_max = 0.0;
+  bool lmc = false;                         // --lmc: fit a linear model of coregionalization
+  std::string lmc_method = "goulard-voltz";
+  bool lmc_method_given = false;
 };
 
 double parse_cell(const CsvTable& t, std::size_t r, std::size_t c) {
@@ -227,7 +232,131 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   if (!r.converged) std::cerr << "errfield fit-variogram: warning: " << r.message << "\n";
 }
 
+/// --lmc: the direct and cross variograms of --value's columns (from a CSV of 'variogram --cross',
+/// or computed from the samples with --coords), then the LMC fit (coregionalization_fit.hpp).
+void run_lmc_fit(const FitVariogramArgs& a) {
+  if (a.method != "wls") throw ArgumentError("--lmc fits by weighted least squares; drop --method " + a.method);
+  if (a.anisotropy_given || a.likelihood_given || a.kind_given || !a.covariates.empty())
+    throw ArgumentError("--anisotropy, --likelihood, --kind and --covariates apply to --method ml or reml, not --lmc");
+  if (a.range_max_given || a.nugget != "free")
+    throw ArgumentError("--range-max and --nugget do not apply to --lmc: the template --model holds the structures "
+                        "(e.g. nug(0)+sph(1,400))");
+  if (a.value.empty())
+    throw ArgumentError("--lmc needs --value A,B[,...]: the components (at least 2), whose gamma_<A> and gamma_<A>_<B> "
+                        "columns --input holds (errfield variogram --cross), or value columns of the samples with --coords");
+  const auto names = split_column_list(a.value, "--value");
+  if (names.size() < 2)
+    throw ArgumentError("--lmc needs at least 2 --value columns (got '" + a.value + "'); for one, fit without --lmc");
+  CoregionalizationFitOptions o;
+  o.method = lmc_fit_method_from_name(a.lmc_method);
+  if (a.weights == "cressie" || a.weights == "2")
+    throw ArgumentError("--weights cressie with --lmc: its weights depend on each variogram's model; expected nj, "
+                        "nj_h2 or unweighted");
+  o.weighting = lmc_weighting_from_name(a.weights);
+  double nu = 0.0;
+  if (a.nu_given) {
+    const auto res = std::from_chars(a.nu_text.data(), a.nu_text.data() + a.nu_text.size(), nu);
+    if (res.ec != std::errc() || res.ptr != a.nu_text.data() + a.nu_text.size() || !(nu > 0.0))
+      throw ArgumentError("--nu: '" + a.nu_text + "'; with --lmc expected a number > 0");
+  }
+  CoregionalizationTemplate tmpl;
+  try {
+    tmpl = parse_coregionalization_template(a.model, nu);
+  } catch (const ArgumentError& e) {
+    throw ArgumentError(std::string("--model: ") + e.what());
+  }
+  std::vector<ModelComponent> structures = tmpl.structures;
+  const bool ranges_given = tmpl.ranges_given;
+
+  const CsvTable t = CsvTable::read(a.input);
+  const std::size_t P = names.size();
+  CrossVariogramTable table;
+  if (!a.coords.empty()) {
+    // The samples: gstat's default bins and boundaries, as 'errfield variogram --cross' without --bins.
+    const Eigen::MatrixXd x = t.numeric_columns(split_column_list(a.coords, "--coords"));
+    const Eigen::MatrixXd z = t.numeric_columns(names);
+    EmpiricalVariogramOptions vo;
+    vo.convention = BinConvention::Gstat;
+    vo.cross_variograms = true;
+    const EmpiricalVariogram v = with_source(a.input, [&] { return empirical_variogram(x, z, LagBins::gstat_default(x), vo); });
+    table = CrossVariogramTable::from(v);
+  } else {
+    const std::size_t c_lag = find_column(t, "lag_mean", "dist");
+    const std::size_t c_pairs = find_column(t, "pairs", "np");
+    std::vector<std::vector<std::size_t>> col(P, std::vector<std::size_t>(P));
+    for (std::size_t i = 0; i < P; ++i)
+      for (std::size_t j = i; j < P; ++j) {
+        const std::string name = i == j ? "gamma_" + names[i] : "gamma_" + names[i] + "_" + names[j];
+        if (!t.has_column(name))
+          throw InputError(a.input + ": no column '" + name + "'; --lmc reads the CSV of 'errfield variogram --value " +
+                               a.value + " --cross' (or give --coords to fit the samples in --input)",
+                           a.input, 0, name);
+        col[i][j] = col[j][i] = t.column_index(name);
+      }
+    for (const char* label : {"direction", "dip", "coordinate"})
+      if (t.has_column(label))
+        throw InputError(a.input + ": column '" + label + "': a directional variogram; --lmc fits one isotropic LMC",
+                         a.input, 0, label);
+    for (std::size_t r = 0; r < t.row_count(); ++r) {
+      const double np = parse_cell(t, r, c_pairs);
+      if (np < 0.0 || np != std::floor(np))
+        throw InputError(t.source() + ":" + std::to_string(t.line_of_row(r)) + ": column '" + t.header()[c_pairs] +
+                             "': " + format_number(np) + " is not a pair count (an integer >= 0)",
+                         t.source(), t.line_of_row(r), t.header()[c_pairs]);
+      if (np == 0.0) continue;  // empty bin: empty cells
+      Eigen::MatrixXd g(static_cast<Eigen::Index>(P), static_cast<Eigen::Index>(P));
+      for (std::size_t i = 0; i < P; ++i)
+        for (std::size_t j = 0; j < P; ++j) g(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = parse_cell(t, r, col[i][j]);
+      table.lag.push_back(parse_cell(t, r, c_lag));
+      table.pairs.push_back(static_cast<std::uint64_t>(np));
+      table.gamma.push_back(std::move(g));
+    }
+    if (table.lag.empty()) throw InputError(a.input + ": no bin with pairs > 0; nothing to fit", a.input);
+  }
+  if (!ranges_given) {
+    structures = with_source(a.input, [&] { return fit_coregionalization_ranges(table, structures, o.weighting); });
+    std::cout << "ranges fitted to the mean of the " << P << " direct variograms:";
+    for (const ModelComponent& c : structures)
+      if (c.kind != ModelKind::Nugget) std::cout << " " << model_kind_name(c.kind) << " " << format_number(c.range);
+    std::cout << "\n";
+  }
+  const CoregionalizationFitResult r = with_source(a.input, [&] { return fit_coregionalization(table, structures, o, names); });
+  std::cout << "LMC (" << lmc_fit_method_name(o.method) << ", weights " << lmc_weighting_name(o.weighting) << ") of "
+            << P << " components over " << r.bins_used << " bins:\n";
+  for (std::size_t k = 0; k < r.model.structures().size(); ++k) {
+    const CoregionalizationStructure& s = r.model.structures()[k];
+    std::cout << "  " << model_kind_name(s.kind);
+    if (s.kind != ModelKind::Nugget) std::cout << "(range=" << format_number(s.range) << ")";
+    std::cout << "  B = [";
+    for (Eigen::Index i = 0; i < s.sills.rows(); ++i) {
+      std::cout << (i ? "; " : "");
+      for (Eigen::Index j = 0; j < s.sills.cols(); ++j) std::cout << (j ? ", " : "") << format_number(s.sills(i, j));
+    }
+    const double e = r.smallest_eigenvalue_before_projection[k];
+    std::cout << "]  smallest eigenvalue before projection " << format_number(e)
+              << (e < 0.0 ? " (clipped to 0: PSD enforced)" : "") << "\n";
+  }
+  std::cout << "weighted residual = " << format_number(r.weighted_residual) << ", " << r.iterations
+            << " iteration(s), " << r.message << "\n";
+  if (!a.out.empty()) {
+    nlohmann::json j = r.model;
+    j["fit"] = {{"method", std::string(lmc_fit_method_name(o.method))},
+                {"weights", std::string(lmc_weighting_name(o.weighting))},
+                {"ranges", ranges_given ? "given" : "fitted"},
+                {"weighted_residual", r.weighted_residual},
+                {"iterations", r.iterations},
+                {"converged", r.converged},
+                {"smallest_eigenvalue_before_projection", r.smallest_eigenvalue_before_projection},
+                {"bins_used", r.bins_used},
+                {"input", a.input}};
+    write_file_atomically(a.out, j.dump(2) + "\n");
+  }
+  if (!r.converged) std::cerr << "errfield fit-variogram: warning: " << r.message << "\n";
+}
+
 void run_fit_variogram(const FitVariogramArgs& a) {
+  if (a.lmc) return run_lmc_fit(a);
+  if (a.lmc_method_given) throw ArgumentError("--lmc-method applies to --lmc");
   if (a.method == "ml" || a.method == "reml") return run_likelihood_fit(a);
   if (a.method != "wls") throw ArgumentError("--method: '" + a.method + "'; expected wls, ml or reml");
   if (a.anisotropy_given) throw ArgumentError("--anisotropy applies to --method ml or reml");
@@ -348,10 +477,12 @@ void add_fit_variogram_command(CLI::App& app) {
   cmd->add_option("--method", args->method,
                   "wls (default: weighted least squares on the empirical variogram), ml or reml (likelihood of the "
                   "samples; REML removes the bias of estimating the mean)");
-  cmd->add_option("--coords", args->coords, "ml/reml: coordinate columns of --input, e.g. x,y,z (any unit)");
+  cmd->add_option("--coords", args->coords,
+                  "ml/reml (and --lmc on samples): coordinate columns of --input, e.g. x,y,z (any unit)");
   cmd->add_option("--value", args->value,
                   "ml/reml: the value column, e.g. dL, or several (ex,ey,ez): one model shared by the components, "
-                  "the sum of their log-likelihoods");
+                  "the sum of their log-likelihoods; --lmc: the components (>= 2), whose gamma_<A> and gamma_<A>_<B> "
+                  "columns --input holds");
   cmd->add_option("--anisotropy", args->anisotropy,
                   "ml/reml: none (default, one range), ard (one range per --coords column; the model gets @ard(...)) "
                   "or rotated (alias anis; 2 or 3 --coords: gstat's anis, angle(s) and ratio(s) fitted too; the model "
@@ -364,7 +495,10 @@ void add_fit_variogram_command(CLI::App& app) {
   cmd->add_option("--covariates", args->covariates,
                   "ml/reml: columns COL[,COL...] of --input added to the drift F (with --kind ordinary: the "
                   "likelihood of kriging with external drift, interpolate --method kriging --covariates)");
-  cmd->add_option("--model", args->model, "sph, exp, gau, mat (needs --nu), wen, pow or lin")->required();
+  cmd->add_option("--model", args->model,
+                  "sph, exp, gau, mat (needs --nu), wen, pow or lin; with --lmc a template of bounded structures, "
+                  "e.g. nug(0)+sph(1,400) or nug+sph")
+      ->required();
   cmd->add_option("--nu", args->nu_text,
                   "Matérn smoothness nu (gstat's kappa), fixed during the fit; ml/reml: 'auto' = the most likely of "
                   "0.5, 1.5, 2.5")
@@ -372,7 +506,7 @@ void add_fit_variogram_command(CLI::App& app) {
   cmd->add_option("--nugget", args->nugget, "free (default), fixed=V (value unit^2) or none");
   cmd->add_option("--weights", args->weights,
                   "wls: nj (N_j, gstat fit.method 1), nj_h2 (N_j/h_j^2, method 7, default), cressie "
-                  "(N_j/model(h_j)^2, method 2)")
+                  "(N_j/model(h_j)^2, method 2); --lmc: nj, nj_h2 or unweighted (method 6)")
       ->each([args](const std::string&) { args->weights_given = true; });
   cmd->add_option("--range-max", args->range_max,
                   "wls: upper bound of the range (lag unit); default 100 x the largest lag")
@@ -388,12 +522,24 @@ void add_fit_variogram_command(CLI::App& app) {
   cmd->add_option("--vecchia-ordering", args->ordering,
                   "ml/reml with the Vecchia likelihood: maxmin (default), random or coordinate")
       ->each([args](const std::string&) { args->likelihood_given = true; });
+  cmd->add_flag("--lmc", args->lmc,
+                "fit a linear model of coregionalization to the direct and cross variograms of the --value columns "
+                "(>= 2): --input is the CSV of 'errfield variogram --cross' (or the samples, with --coords); --model "
+                "is the template, e.g. nug(0)+sph(1,400) (kinds and ranges kept, sills ignored) or nug+sph (ranges "
+                "fitted first to the mean direct variogram); --weights nj, nj_h2 (default) or unweighted; --out "
+                "writes the LMC JSON that interpolate and cv --method kriging --model lmc.json read (cokriging)");
+  cmd->add_option("--lmc-method", args->lmc_method,
+                  "--lmc: goulard-voltz (default: iterated WLS, each B_k projected onto the PSD matrices) or gstat "
+                  "(gstat's fit.lmc: separate fits, then negative eigenvalues set to 0)")
+      ->each([args](const std::string&) { args->lmc_method_given = true; });
   cmd->add_option("--out", args->out, "output JSON (written atomically)");
   cmd->footer(
       "Example:\n"
       "  errfield variogram --input errors.csv --coords x,y,z --value dL --bins 0:2200:200 --out vario.csv\n"
       "  errfield fit-variogram --input vario.csv --model sph --nugget free --weights nj_h2 --out model.json\n"
       "  errfield fit-variogram --method reml --input errors.csv --coords x,y,z --value dL --model exp --out model.json\n"
+      "  errfield variogram --input errors.csv --coords x,y,z --value dx,dy,dz --cross --out cross.csv\n"
+      "  errfield fit-variogram --lmc --input cross.csv --value dx,dy,dz --model 'nug(0)+sph(1,400)' --out lmc.json\n"
       "  errfield fit-variogram --method reml --anisotropy ard --input residuals.csv --coords q1,q2,q3,q4,q5,q6 \\\n"
       "      --value ex,ey,ez --model mat --nu 2.5 --out model.json   # then fit/interpolate --model model.json\n"
       "(errors.csv, residuals.csv: SIMULATED examples from scripts/make_example_error_field.py, see README.md)");

@@ -20,6 +20,7 @@ namespace {
 struct VariogramArgs {
   std::string input, coords, value, bins, estimator = "matheron", convention, out;  // convention "": see run_variogram
   bool per_component = false;
+  bool cross = false;  // --cross: direct and cross variograms of every value column pair
   double subsample = 1.0;
   std::uint64_t seed = 0;
   int threads = 0;
@@ -127,6 +128,15 @@ void run_variogram(const VariogramArgs& a) {
   check_thread_count("--threads", a.threads);
   options.threads = a.threads;
   options.max_stored_differences = a.max_stored;
+  if (a.cross) {
+    if (value_names.size() < 2)
+      throw ArgumentError("--cross needs at least 2 --value columns (their cross-variograms); got '" + a.value + "'");
+    if (options.estimator != VariogramEstimator::Matheron)
+      throw ArgumentError("--cross with --estimator " + a.estimator +
+                          ": cross-variograms are means of products of differences (Matheron); the robust "
+                          "estimators transform |z_i - z_j| and have no signed cross counterpart; use --estimator matheron");
+    options.cross_variograms = true;
+  }
   naming_options([&] { options.validate(); }, {{"variogram options: pair_fraction", "--subsample"},
                                                {"pair_fraction", "--subsample"},
                                                {"variogram options: threads", "--threads"}});
@@ -151,6 +161,7 @@ void run_variogram(const VariogramArgs& a) {
               << (options.convention == BinConvention::Gstat ? ", gstat's boundaries" : "") << "\n";
   std::vector<std::string> lo, hi, mean, gamma, pairs, alpha, beta, coordinate;
   std::vector<std::vector<std::string>> per_component(value_names.size());
+  std::vector<std::vector<std::string>> cross(value_names.size() * (value_names.size() - 1) / 2);
   std::uint64_t total = 0;
   for (const DirectionalRun& run : runs) {
     options.direction = run.direction;
@@ -171,6 +182,8 @@ void run_variogram(const VariogramArgs& a) {
       coordinate.push_back(run.coordinate);
       for (int c = 0; c < v.components(); ++c)
         per_component[static_cast<std::size_t>(c)].push_back(cell(v.component_gamma(static_cast<Eigen::Index>(b), c)));
+      for (std::size_t c = 0; c < cross.size() && a.cross; ++c)
+        cross[c].push_back(cell(v.cross_gamma(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(c))));
       total += bin.pairs;
     }
   }
@@ -181,8 +194,15 @@ void run_variogram(const VariogramArgs& a) {
   out.add_column("lag_mean", mean);
   out.add_column("gamma", gamma);
   out.add_column("pairs", pairs);
-  if (a.per_component)
+  if (a.per_component || a.cross)
     for (std::size_t c = 0; c < value_names.size(); ++c) out.add_column("gamma_" + value_names[c], per_component[c]);
+  if (a.cross) {
+    // Pairs A before B in --value order: EmpiricalVariogram::cross_column's order.
+    std::size_t c = 0;
+    for (std::size_t i = 0; i < value_names.size(); ++i)
+      for (std::size_t j = i + 1; j < value_names.size(); ++j)
+        out.add_column("gamma_" + value_names[i] + "_" + value_names[j], cross[c++]);
+  }
   if (!a.alpha.empty()) out.add_column("direction", alpha);
   if (!a.beta.empty()) out.add_column("dip", beta);
   if (a.per_coordinate) out.add_column("coordinate", coordinate);
@@ -206,7 +226,8 @@ void add_variogram_command(CLI::App& app) {
       "columns lag_lo,lag_hi,lag_mean,gamma,pairs; an empty bin has pairs 0 and empty lag_mean and\n"
       "gamma. Several --value columns form a vector value: gamma is then half the mean squared norm\n"
       "of the difference (the sum of the per-column variograms, which --per-component adds as\n"
-      "gamma_<column>). See docs/geostatistics.md.");
+      "gamma_<column>); --cross also adds the cross-variograms gamma_<A>_<B> (the input of\n"
+      "fit-variogram --lmc). See docs/geostatistics.md.");
   cmd->add_option("--input", args->input, "CSV with the coordinate and value columns")->required();
   cmd->add_option("--coords", args->coords,
                   "coordinate columns, any number, e.g. x,y,z (task space, mm) or q1,q2,q3,q4,q5,q6 "
@@ -230,6 +251,10 @@ void add_variogram_command(CLI::App& app) {
                   "as R gstat's boundaries=");
   cmd->add_flag("--per-component", args->per_component,
                 "add a gamma_<column> column per value column");
+  cmd->add_flag("--cross", args->cross,
+                "with 2 or more --value columns: the direct variogram gamma_<column> of each and the "
+                "cross-variogram gamma_<A>_<B> = 1/(2N) sum (A_i - A_j)(B_i - B_j) of each pair A before B "
+                "in --value order (gstat's variogram of a multivariable gstat object; matheron only)");
   cmd->add_option("--subsample", args->subsample,
                   "use a deterministic fraction of the pairs, in (0,1] (default 1: all pairs)");
   cmd->add_option("--seed", args->seed, "seed of --subsample (default 0)")->check(kUnsignedInteger);
@@ -266,7 +291,8 @@ void add_variogram_command(CLI::App& app) {
       "  errfield variogram --input errors.csv --coords x,y --value dL --bins 0:2200:200 "
       "--alpha 0,45,90,135 --tol-hor 22.5\n"
       "  errfield variogram --input errors.csv --coords q1,q2,q3,q4,q5,q6 --value dx,dy,dz "
-      "--bins 0:100:10 --per-coordinate");
+      "--bins 0:100:10 --per-coordinate\n"
+      "  errfield variogram --input errors.csv --coords x,y,z --value dx,dy,dz --cross --out cross.csv");
   cmd->callback([args] { run_variogram(*args); });
 }
 

@@ -7,6 +7,9 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <nlohmann/json.hpp>
+
+#include "errfield/coregionalization_fit.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
 #include "errfield/interpolation_options.hpp"
@@ -82,6 +85,121 @@ PyVariogram run_variogram(const py::object& coords, const py::object& values, co
   out.convention = std::string(convention_name(v.convention));
   out.pair_fraction = v.pair_fraction;
   return out;
+}
+
+/// errfield.cross_variogram: direct and cross variograms as a dict of NumPy arrays, gamma (bins, P, P).
+py::dict run_cross_variogram(const py::object& coords, const py::object& values, const py::object& bins,
+                             const std::string& convention, double pair_fraction, std::uint64_t seed, int threads) {
+  const MatrixArg x = matrix_arg(coords, "coords", ArraySpec{1, 2, -1, 2});
+  const MatrixArg z = matrix_arg(values, "values", ArraySpec{2, 2, -1, 2});
+  if (z.data.rows() != x.data.rows())
+    throw ArgumentError("values: " + std::to_string(z.data.rows()) + " rows but coords has " +
+                        std::to_string(x.data.rows()) + "; expected one row of values per location");
+  if (z.data.cols() < 2)
+    throw ArgumentError("values: " + std::to_string(z.data.cols()) +
+                        " column(s); cross-variograms need at least 2 components (N, P >= 2)");
+  const LagBins lag_bins = LagBins::from_edges(vector_arg(bins, "bins", 2));
+  EmpiricalVariogramOptions options;
+  options.convention = convention_from_name(convention);
+  options.pair_fraction = pair_fraction;
+  options.seed = seed;
+  options.threads = threads;
+  options.cross_variograms = true;
+  options.validate();
+  EmpiricalVariogram v;
+  {
+    py::gil_scoped_release release;
+    v = empirical_variogram(x.data, z.data, lag_bins, options);
+  }
+  const std::size_t n = v.bins.size();
+  const int P = v.components();
+  std::vector<double> lo(n), hi(n), mean(n);
+  std::vector<std::uint64_t> pairs(n);
+  py::array_t<double> gamma({static_cast<py::ssize_t>(n), static_cast<py::ssize_t>(P), static_cast<py::ssize_t>(P)});
+  auto g = gamma.mutable_unchecked<3>();
+  for (std::size_t k = 0; k < n; ++k) {
+    lo[k] = v.bins[k].lag_lo;
+    hi[k] = v.bins[k].lag_hi;
+    mean[k] = v.bins[k].lag_mean;
+    pairs[k] = v.bins[k].pairs;
+    for (int a = 0; a < P; ++a)
+      for (int b = 0; b < P; ++b) g(static_cast<py::ssize_t>(k), a, b) = v.gamma_of(k, a, b);
+  }
+  py::dict d;
+  d["lag_lo"] = to_numpy(lo);
+  d["lag_hi"] = to_numpy(hi);
+  d["lag_mean"] = to_numpy(mean);
+  d["pairs"] = to_numpy(pairs);
+  d["gamma"] = gamma;
+  d["convention"] = std::string(convention_name(v.convention));
+  return d;
+}
+
+/// errfield.fit_lmc: the LMC fit of a cross_variogram result (or any mapping with lag_mean, pairs
+/// and gamma (bins, P, P)).
+py::dict run_fit_lmc(const py::object& variogram, const std::string& model, const std::string& method,
+                     const std::string& weights, std::optional<double> nu, const py::object& names) {
+  auto item = [&](const char* key) {
+    if (py::isinstance<py::dict>(variogram)) {
+      const py::dict d = variogram.cast<py::dict>();
+      if (!d.contains(key)) throw ArgumentError(std::string("variogram: no '") + key + "'; expected the result of errfield.cross_variogram");
+      return py::object(d[key]);
+    }
+    return py::object(variogram.attr(key));
+  };
+  const std::vector<double> lag = vector_arg(item("lag_mean"), "variogram lag_mean", 1, /*finite=*/false);  // NaN: empty bin
+  const py::array_t<double, py::array::c_style | py::array::forcecast> pairs_in =
+      py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(item("pairs"));
+  const auto gamma_in = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(item("gamma"));
+  if (!pairs_in || !gamma_in || gamma_in.ndim() != 3 || gamma_in.shape(1) != gamma_in.shape(2) ||
+      static_cast<std::size_t>(gamma_in.shape(0)) != lag.size() || static_cast<std::size_t>(pairs_in.size()) != lag.size())
+    throw ArgumentError("variogram: expected lag_mean (bins,), pairs (bins,) and gamma (bins, P, P), as errfield.cross_variogram returns");
+  CrossVariogramTable table;
+  const auto g = gamma_in.unchecked<3>();
+  const py::ssize_t P = gamma_in.shape(1);
+  for (std::size_t k = 0; k < lag.size(); ++k) {
+    const double np = pairs_in.data()[k];
+    if (!(np >= 0.0) || np != std::floor(np))
+      throw ArgumentError("variogram: pairs[" + std::to_string(k) + "] = " + std::to_string(np) + "; expected an integer >= 0");
+    table.lag.push_back(lag[k]);
+    table.pairs.push_back(static_cast<std::uint64_t>(np));
+    Eigen::MatrixXd m(P, P);
+    for (py::ssize_t a = 0; a < P; ++a)
+      for (py::ssize_t b = 0; b < P; ++b) m(a, b) = np == 0.0 ? 0.0 : g(static_cast<py::ssize_t>(k), a, b);
+    table.gamma.push_back(std::move(m));
+  }
+  std::vector<std::string> component_names;
+  if (!names.is_none()) component_names = names.cast<std::vector<std::string>>();
+  CoregionalizationFitOptions o;
+  o.method = lmc_fit_method_from_name(method);
+  o.weighting = lmc_weighting_from_name(weights);
+  const CoregionalizationTemplate t = parse_coregionalization_template(model, nu.value_or(0.0));
+  CoregionalizationFitResult r;
+  {
+    py::gil_scoped_release release;
+    const std::vector<ModelComponent> structures =
+        t.ranges_given ? t.structures : fit_coregionalization_ranges(table, t.structures, o.weighting);
+    r = fit_coregionalization(table, structures, o, component_names);
+  }
+  py::list structures;
+  for (const CoregionalizationStructure& s : r.model.structures()) {
+    py::dict d;
+    d["kind"] = std::string(model_kind_name(s.kind));
+    if (s.kind != ModelKind::Nugget) d["range"] = s.range;
+    if (s.kind == ModelKind::Matern) d["nu"] = s.nu;
+    d["sills"] = to_numpy(s.sills);
+    structures.append(d);
+  }
+  py::dict d;
+  d["structures"] = structures;
+  d["json"] = nlohmann::json(r.model).dump(2) + "\n";
+  d["weighted_residual"] = r.weighted_residual;
+  d["iterations"] = r.iterations;
+  d["converged"] = r.converged;
+  d["smallest_eigenvalue_before_projection"] = to_numpy(r.smallest_eigenvalue_before_projection);
+  d["bins_used"] = r.bins_used;
+  d["message"] = r.message;
+  return d;
 }
 
 /// Lags h as a scalar or an array of any shape; negative or NaN lags are an ArgumentError.
@@ -290,6 +408,27 @@ void bind_variogram(py::module_& m) {
         "1 + covariates (gstat's variogram(z ~ cov); `errfield variogram --covariates`).\n"
         "Returns an EmpiricalVariogram with NumPy arrays lag_lo, lag_hi, lag_mean, gamma (value unit^2), pairs.\n"
         "Releases the GIL; runs OpenMP on `threads` threads (0 = default), result independent of it.");
+
+  m.def("cross_variogram", &run_cross_variogram, py::arg("coords"), py::arg("values"), py::arg("bins"), py::kw_only(),
+        py::arg("convention") = "paper", py::arg("pair_fraction") = 1.0, py::arg("seed") = 0, py::arg("threads") = 0,
+        "Direct and cross empirical variograms (Matheron) of P >= 2 value components, as\n"
+        "`errfield variogram --cross`: gamma_ab = 1/(2N) sum (z_i[a] - z_j[a]) (z_i[b] - z_j[b]) per bin.\n\n"
+        "coords: (N, D); values: (N, P), P >= 2; bins: increasing edges (lag unit).\n"
+        "Returns a dict: lag_lo, lag_hi, lag_mean, pairs (uint64) of shape (bins,), gamma (bins, P, P)\n"
+        "(symmetric; the diagonal holds the direct variograms; NaN for empty bins), convention.\n"
+        "Releases the GIL; the result does not depend on `threads`.");
+  m.def("fit_lmc", &run_fit_lmc, py::arg("variogram"), py::arg("model"), py::kw_only(),
+        py::arg("method") = "goulard-voltz", py::arg("weights") = "nj_h2", py::arg("nu") = py::none(),
+        py::arg("names") = py::none(),
+        "Fits a linear model of coregionalization to a cross_variogram result, as `errfield fit-variogram --lmc`.\n\n"
+        "model: template 'nug(0)+sph(1,400)' (kinds and ranges kept, sills ignored) or kinds 'nug+sph' (ranges\n"
+        "fitted first to the mean direct variogram; 'mat' needs nu).\n"
+        "method: 'goulard-voltz' (iterated WLS, each B_k projected onto the PSD matrices) | 'gstat' (gstat's\n"
+        "fit.lmc: separate fits, then negative eigenvalues set to 0). weights: 'nj_h2' | 'nj' | 'unweighted'.\n"
+        "names: the P component names written into the JSON.\n"
+        "Returns a dict: structures (list of dicts kind, range, nu, sills (P, P)), json (the LMC JSON that\n"
+        "`fit-variogram --lmc --out` writes, without its 'fit' object), weighted_residual, iterations,\n"
+        "converged, smallest_eigenvalue_before_projection (per structure), bins_used, message.");
 
   py::class_<VariogramModel>(m, "VariogramModel",
                              "A variogram model in gstat's vgm vocabulary, e.g. 'sph(sill=0.3,range=400)+nug(0.002)'. "

@@ -45,6 +45,26 @@ def variogram(
     covariates: ArrayLike | None = None,
 ) -> EmpiricalVariogram: ...
 
+def cross_variogram(
+    coords: ArrayLike,
+    values: ArrayLike,
+    bins: ArrayLike,
+    *,
+    convention: Literal["paper", "gstat"] = "paper",
+    pair_fraction: float = 1.0,
+    seed: int = 0,
+    threads: int = 0,
+) -> dict[str, Any]: ...
+def fit_lmc(
+    variogram: Any,
+    model: str,
+    *,
+    method: Literal["goulard-voltz", "gstat"] = "goulard-voltz",
+    weights: Literal["nj_h2", "nj", "unweighted"] = "nj_h2",
+    nu: float | None = None,
+    names: list[str] | None = None,
+) -> dict[str, Any]: ...
+
 class VariogramModel:
     def __init__(self, text: str) -> None: ...
     @staticmethod

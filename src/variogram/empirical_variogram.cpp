@@ -118,6 +118,23 @@ void EmpiricalVariogramOptions::validate() const {
     throw ArgumentError("variogram options: pair_fraction = " + format_number(pair_fraction) +
                         "; expected 0 < pair_fraction <= 1");
   check_thread_count("variogram options: threads", threads);
+  if (cross_variograms && estimator != VariogramEstimator::Matheron)
+    throw ArgumentError("variogram options: cross_variograms with the " + std::string(estimator_name(estimator)) +
+                        " estimator; cross-variograms are means of products of differences (Matheron): the robust "
+                        "estimators transform |z_i - z_j| and have no signed cross counterpart");
+}
+
+double EmpiricalVariogram::gamma_of(std::size_t bin, int a, int b) const {
+  const int K = components();
+  if (bin >= bins.size() || a < 0 || b < 0 || a >= K || b >= K)
+    throw ArgumentError("empirical variogram: gamma_of(bin " + std::to_string(bin) + ", " + std::to_string(a) + ", " +
+                        std::to_string(b) + ") outside " + std::to_string(bins.size()) + " bins x " +
+                        std::to_string(K) + " components");
+  const auto k = static_cast<Eigen::Index>(bin);
+  if (a == b) return component_gamma(k, a);
+  if (cross_gamma.cols() != K * (K - 1) / 2)
+    throw ArgumentError("empirical variogram: no cross-variograms (computed without cross_variograms)");
+  return cross_gamma(k, cross_column(std::min(a, b), std::max(a, b), K));
 }
 
 namespace detail {
@@ -419,6 +436,7 @@ EmpiricalVariogram finalize_variogram(const LagBins& bins, const EmpiricalVariog
   const std::size_t B = bins.size();
   const std::size_t stride = B + 1;  // per-chunk arrays carry a discard slot at the end
   const std::size_t K = static_cast<std::size_t>(components);
+  const std::size_t W = o.cross_variograms ? K + K * (K - 1) / 2 : K;  // sums per bin (kernels' width)
   const double nan = std::numeric_limits<double>::quiet_NaN();
   EmpiricalVariogram out;
   out.estimator = o.estimator;
@@ -426,7 +444,8 @@ EmpiricalVariogram finalize_variogram(const LagBins& bins, const EmpiricalVariog
   out.pair_fraction = o.pair_fraction;
   out.bins.resize(B);
   out.component_gamma.resize(static_cast<Eigen::Index>(B), components);
-  std::vector<double> s(K);
+  if (o.cross_variograms) out.cross_gamma.resize(static_cast<Eigen::Index>(B), static_cast<Eigen::Index>(W - K));
+  std::vector<double> s(W);
   for (std::size_t b = 0; b < B; ++b) {
     std::uint64_t n = 0;
     double lag_sum = 0.0;
@@ -434,7 +453,7 @@ EmpiricalVariogram finalize_variogram(const LagBins& bins, const EmpiricalVariog
     for (std::size_t c = 0; c < chunks; ++c) {  // fixed order: chunk 0, 1, ...
       n += count[c * stride + b];
       lag_sum += lag[c * stride + b];
-      for (std::size_t k = 0; k < K; ++k) s[k] += stat[(c * stride + b) * K + k];
+      for (std::size_t k = 0; k < W; ++k) s[k] += stat[(c * stride + b) * W + k];
     }
     VariogramBin& bin = out.bins[b];
     bin.lag_lo = bins.lag_lo(b);
@@ -443,6 +462,7 @@ EmpiricalVariogram finalize_variogram(const LagBins& bins, const EmpiricalVariog
     if (n == 0) {
       bin.lag_mean = bin.gamma = nan;
       for (std::size_t k = 0; k < K; ++k) out.component_gamma(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(k)) = nan;
+      if (o.cross_variograms) out.cross_gamma.row(static_cast<Eigen::Index>(b)).setConstant(nan);
       continue;
     }
     const double nd = static_cast<double>(n);
@@ -460,6 +480,8 @@ EmpiricalVariogram finalize_variogram(const LagBins& bins, const EmpiricalVariog
       total += g;
     }
     bin.gamma = total;
+    for (std::size_t k = K; k < W; ++k)  // cross-variograms: Matheron only (validate)
+      out.cross_gamma(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(k - K)) = s[k] / (2.0 * nd);
   }
   return out;
 }

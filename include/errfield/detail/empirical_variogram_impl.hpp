@@ -228,7 +228,9 @@ void run_variogram_chunk_k(const VariogramJob<L, M>& job, const VariogramCellRun
 template <kernels::PairStatistic S, bool Sub, class L, class M>
 void run_variogram_chunk_s(const VariogramJob<L, M>& job, const VariogramCellRun* cells,
                            std::size_t r0, std::size_t r1, kernels::PairSums out) {
-  if (job.components == 1) run_variogram_chunk_k<S, Sub, 1>(job, cells, r0, r1, out);
+  // Cross products need two components or more; one run-time-K instantiation serves them all.
+  if constexpr (S == kernels::PairStatistic::CrossProducts) run_variogram_chunk_k<S, Sub, 0>(job, cells, r0, r1, out);
+  else if (job.components == 1) run_variogram_chunk_k<S, Sub, 1>(job, cells, r0, r1, out);
   else if (job.components == 3) run_variogram_chunk_k<S, Sub, 3>(job, cells, r0, r1, out);
   else run_variogram_chunk_k<S, Sub, 0>(job, cells, r0, r1, out);
 }
@@ -239,7 +241,10 @@ void run_variogram_chunk(const VariogramJob<L, M>& job, const VariogramCellRun* 
                          kernels::PairStatistic stat, bool subsample, std::size_t r0,
                          std::size_t r1, kernels::PairSums out) {
   using kernels::PairStatistic;
-  if (stat == PairStatistic::SquaredDifference) {
+  if (stat == PairStatistic::CrossProducts) {
+    if (subsample) run_variogram_chunk_s<PairStatistic::CrossProducts, true>(job, cells, r0, r1, out);
+    else run_variogram_chunk_s<PairStatistic::CrossProducts, false>(job, cells, r0, r1, out);
+  } else if (stat == PairStatistic::SquaredDifference) {
     if (subsample) run_variogram_chunk_s<PairStatistic::SquaredDifference, true>(job, cells, r0, r1, out);
     else run_variogram_chunk_s<PairStatistic::SquaredDifference, false>(job, cells, r0, r1, out);
   } else {
@@ -307,18 +312,20 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
   for (std::size_t i = 0; i < n; ++i)
     for (int c = 0; c < K; ++c) z[i * Ks + static_cast<std::size_t>(c)] = values(static_cast<Eigen::Index>(i), c);
 
-  detail::check_variogram_accumulators(bins.size(), K, options);
+  // Dowd's first pass counts pairs (and sums lags); its medians come from the second pass.
+  const kernels::PairStatistic statistic = options.cross_variograms ? kernels::PairStatistic::CrossProducts
+                                           : options.estimator == VariogramEstimator::CressieHawkins
+                                               ? kernels::PairStatistic::RootAbsDifference
+                                               : kernels::PairStatistic::SquaredDifference;
+  const std::size_t W = kernels::pair_statistic_width(statistic, Ks);  // sums per bin
+  detail::check_variogram_accumulators(bins.size(), static_cast<int>(W), options);
   const std::vector<std::size_t> rows = detail::variogram_chunk_rows(n);
   const std::size_t C = rows.size() - 1;
   const std::size_t B = bins.size() + 1;  // + a discard slot for lags outside every bin
   std::vector<std::uint64_t> count(C * B, 0);
   std::vector<double> lag(C * B, 0.0);
-  std::vector<double> stat(C * B * Ks, 0.0);
+  std::vector<double> stat(C * B * W, 0.0);
   const kernels::BinLayout layout = detail::variogram_bin_layout(bins, options);
-  // Dowd's first pass counts pairs (and sums lags); its medians come from the second pass.
-  const kernels::PairStatistic statistic = options.estimator == VariogramEstimator::CressieHawkins
-                                               ? kernels::PairStatistic::RootAbsDifference
-                                               : kernels::PairStatistic::SquaredDifference;
   const bool subsample = options.pair_fraction < 1.0;
   const std::uint64_t keep_below = subsample ? detail::variogram_keep_below(options.pair_fraction) : 0;
   std::vector<double> soa;
@@ -375,7 +382,7 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
   };
   detail::for_each_variogram_chunk(options.threads, C, cell_points,
                                    [&](std::size_t c, kernels::CellListScratch scratch) {
-    kernels::PairSums out{count.data() + c * B, lag.data() + c * B, stat.data() + c * B * Ks};
+    kernels::PairSums out{count.data() + c * B, lag.data() + c * B, stat.data() + c * B * W};
     const detail::VariogramCellRun run = cell_run(scratch);
     detail::run_variogram_chunk(job, cells.built() ? &run : nullptr, statistic, subsample, rows[c],
                                 rows[c + 1], out);

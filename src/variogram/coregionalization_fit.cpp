@@ -1,0 +1,371 @@
+// Fitting the coregionalization matrices of an LMC: gstat's fit.lmc and Goulard-Voltz (see
+// coregionalization_fit.hpp for the objective and the methods).
+
+#include "errfield/coregionalization_fit.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+
+#include "errfield/error.hpp"
+#include "errfield/variogram_fit.hpp"
+
+namespace errfield {
+
+std::string_view lmc_fit_method_name(LmcFitMethod m) {
+  return m == LmcFitMethod::Gstat ? "gstat" : "goulard-voltz";
+}
+
+LmcFitMethod lmc_fit_method_from_name(std::string_view name) {
+  if (name == "goulard-voltz") return LmcFitMethod::GoulardVoltz;
+  if (name == "gstat") return LmcFitMethod::Gstat;
+  throw ArgumentError("LMC fit method '" + std::string(name) + "'; expected goulard-voltz or gstat");
+}
+
+std::string_view lmc_weighting_name(LmcWeighting w) {
+  switch (w) {
+    case LmcWeighting::Nj: return "nj";
+    case LmcWeighting::Unweighted: return "unweighted";
+    case LmcWeighting::NjOverH2: break;
+  }
+  return "nj_h2";
+}
+
+LmcWeighting lmc_weighting_from_name(std::string_view name) {
+  if (name == "nj" || name == "1") return LmcWeighting::Nj;
+  if (name == "nj_h2" || name == "7") return LmcWeighting::NjOverH2;
+  if (name == "unweighted" || name == "6") return LmcWeighting::Unweighted;
+  throw ArgumentError("LMC fit weights '" + std::string(name) +
+                      "'; expected nj (gstat fit.method 1), nj_h2 (7) or unweighted (6)");
+}
+
+void CoregionalizationFitOptions::validate() const {
+  if (!(relative_tolerance > 0.0 && relative_tolerance < 1.0))
+    throw ArgumentError("LMC fit options: relative_tolerance = " + std::to_string(relative_tolerance) +
+                        "; expected 0 < relative_tolerance < 1");
+  if (max_iterations < 1)
+    throw ArgumentError("LMC fit options: max_iterations = " + std::to_string(max_iterations) + "; expected >= 1");
+}
+
+CrossVariogramTable CrossVariogramTable::from(const EmpiricalVariogram& v) {
+  const int P = v.components();
+  if (P >= 2 && v.cross_gamma.cols() != P * (P - 1) / 2)
+    throw ArgumentError("cross-variogram table: the empirical variogram has no cross-variograms; compute it with "
+                        "EmpiricalVariogramOptions::cross_variograms");
+  CrossVariogramTable t;
+  for (std::size_t b = 0; b < v.bins.size(); ++b) {
+    t.lag.push_back(v.bins[b].lag_mean);
+    t.pairs.push_back(v.bins[b].pairs);
+    Eigen::MatrixXd g(P, P);
+    for (int i = 0; i < P; ++i)
+      for (int j = 0; j < P; ++j) g(i, j) = v.bins[b].pairs == 0 ? 0.0 : v.gamma_of(b, i, j);
+    t.gamma.push_back(std::move(g));
+  }
+  return t;
+}
+
+namespace {
+
+/// The usable bins of a table: lag, weight and gamma matrix.
+struct LmcBins {
+  std::vector<double> lag, weight;
+  std::vector<std::uint64_t> pairs;
+  std::vector<Eigen::MatrixXd> gamma;
+  int components = 0;
+};
+
+LmcBins usable_bins(const CrossVariogramTable& t, LmcWeighting weighting) {
+  if (t.lag.size() != t.pairs.size() || t.lag.size() != t.gamma.size())
+    throw ArgumentError("cross-variogram table: " + std::to_string(t.lag.size()) + " lags, " +
+                        std::to_string(t.pairs.size()) + " pair counts and " + std::to_string(t.gamma.size()) +
+                        " gamma matrices; expected one of each per bin");
+  LmcBins b;
+  b.components = t.gamma.empty() ? 0 : static_cast<int>(t.gamma.front().rows());
+  if (b.components < 2)
+    throw ArgumentError("LMC fit: " + std::to_string(b.components) +
+                        " component(s); an LMC fit needs at least 2 (with 1, use fit_variogram)");
+  for (std::size_t j = 0; j < t.lag.size(); ++j) {
+    const Eigen::MatrixXd& g = t.gamma[j];
+    if (g.rows() != b.components || g.cols() != b.components)
+      throw ArgumentError("cross-variogram table: bin " + std::to_string(j) + " has a " + std::to_string(g.rows()) +
+                          " x " + std::to_string(g.cols()) + " gamma matrix; expected " +
+                          std::to_string(b.components) + " x " + std::to_string(b.components));
+    if (t.pairs[j] == 0) continue;
+    if (!std::isfinite(t.lag[j]) || t.lag[j] < 0.0)
+      throw InputError("cross-variogram table: bin " + std::to_string(j) + " has lag " + std::to_string(t.lag[j]) +
+                       "; expected a finite lag >= 0");
+    if (!g.allFinite())
+      throw InputError("cross-variogram table: bin " + std::to_string(j) + " has a non-finite gamma");
+    const double scale = std::max(g.cwiseAbs().maxCoeff(), 1e-300);
+    if (((g - g.transpose()).cwiseAbs().array() > 1e-12 * scale).any())
+      throw InputError("cross-variogram table: bin " + std::to_string(j) + " has an asymmetric gamma matrix");
+    // gstat's fit.method 7 refuses lag 0; a bin of coincident points carries no range information.
+    if (weighting == LmcWeighting::NjOverH2 && t.lag[j] == 0.0) continue;
+    const double n = static_cast<double>(t.pairs[j]);
+    b.lag.push_back(t.lag[j]);
+    b.pairs.push_back(t.pairs[j]);
+    b.weight.push_back(weighting == LmcWeighting::Nj         ? n
+                       : weighting == LmcWeighting::NjOverH2 ? n / (t.lag[j] * t.lag[j])
+                                                             : 1.0);
+    b.gamma.push_back(g);
+  }
+  return b;
+}
+
+void check_structures(const std::vector<ModelComponent>& structures) {
+  if (structures.empty()) throw ArgumentError("LMC fit: no structures; expected e.g. nug(0)+sph(1,400)");
+  for (std::size_t k = 0; k < structures.size(); ++k) {
+    const ModelComponent& s = structures[k];
+    if (!s.bounded())
+      throw ArgumentError("LMC fit: structure " + std::to_string(k) + " is " + std::string(model_kind_name(s.kind)) +
+                          ", which has no sill; an LMC needs bounded structures (nug, sph, exp, gau, mat, wen)");
+  }
+}
+
+/// Design matrix X(j, k) = g_k(h_j) with unit sills.
+Eigen::MatrixXd unit_design(const LmcBins& b, const std::vector<ModelComponent>& structures) {
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(b.lag.size()), static_cast<Eigen::Index>(structures.size()));
+  for (std::size_t k = 0; k < structures.size(); ++k) {
+    ModelComponent unit = structures[k];
+    unit.sill = 1.0;
+    for (std::size_t j = 0; j < b.lag.size(); ++j)
+      x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k)) = unit.gamma(b.lag[j]);
+  }
+  return x;
+}
+
+/// Linear WLS of y on the columns of x marked free (the others fixed at 0).
+Eigen::VectorXd weighted_linear_fit(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const Eigen::VectorXd& sw,
+                                    const std::vector<bool>& free) {
+  std::vector<Eigen::Index> cols;
+  for (Eigen::Index k = 0; k < x.cols(); ++k)
+    if (free[static_cast<std::size_t>(k)]) cols.push_back(k);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(x.cols());
+  if (cols.empty()) return b;
+  Eigen::MatrixXd a(x.rows(), static_cast<Eigen::Index>(cols.size()));
+  for (std::size_t c = 0; c < cols.size(); ++c) a.col(static_cast<Eigen::Index>(c)) = x.col(cols[c]).cwiseProduct(sw);
+  const Eigen::VectorXd coef = a.colPivHouseholderQr().solve(y.cwiseProduct(sw));
+  for (std::size_t c = 0; c < cols.size(); ++c) b(cols[c]) = coef(static_cast<Eigen::Index>(c));
+  return b;
+}
+
+/// Nearest PSD matrix (Frobenius): eigenvalues clipped at 0; also returns the smallest eigenvalue.
+Eigen::MatrixXd psd_projection(const Eigen::MatrixXd& m, double& smallest) {
+  const Eigen::MatrixXd sym = 0.5 * (m + m.transpose());
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(sym);
+  smallest = eig.eigenvalues().minCoeff();
+  if (smallest >= 0.0) return sym;
+  const Eigen::VectorXd d = eig.eigenvalues().cwiseMax(0.0);
+  Eigen::MatrixXd p = eig.eigenvectors() * d.asDiagonal() * eig.eigenvectors().transpose();
+  return 0.5 * (p + p.transpose());
+}
+
+double lmc_residual(const LmcBins& b, const Eigen::MatrixXd& x, const std::vector<Eigen::MatrixXd>& sills) {
+  double q = 0.0;
+  for (std::size_t j = 0; j < b.lag.size(); ++j) {
+    Eigen::MatrixXd r = b.gamma[j];
+    for (std::size_t k = 0; k < sills.size(); ++k)
+      r -= x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k)) * sills[k];
+    q += b.weight[j] * r.squaredNorm();
+  }
+  return q;
+}
+
+/// gstat's fit.lmc: per direct/cross variogram a linear WLS of the partial sills; a direct
+/// variogram's negative sills are fixed at 0 and the others refitted (fit.variogram's rule for
+/// direct variograms), until none is negative. Unprojected.
+std::vector<Eigen::MatrixXd> separate_fits(const LmcBins& b, const Eigen::MatrixXd& x) {
+  const int P = b.components;
+  const std::size_t K = static_cast<std::size_t>(x.cols());
+  std::vector<Eigen::MatrixXd> sills(K, Eigen::MatrixXd::Zero(P, P));
+  const Eigen::VectorXd sw = Eigen::Map<const Eigen::VectorXd>(b.weight.data(), static_cast<Eigen::Index>(b.weight.size())).cwiseSqrt();
+  Eigen::VectorXd y(x.rows());
+  for (int i = 0; i < P; ++i) {
+    for (int l = i; l < P; ++l) {
+      for (std::size_t j = 0; j < b.lag.size(); ++j) y(static_cast<Eigen::Index>(j)) = b.gamma[j](i, l);
+      std::vector<bool> free(K, true);
+      Eigen::VectorXd coef = weighted_linear_fit(x, y, sw, free);
+      while (i == l && (coef.array() < 0.0).any()) {
+        // fit.variogram: fit.sills = psill > 0, negative ones set to 0, refit.
+        for (std::size_t k = 0; k < K; ++k) free[k] = free[k] && coef(static_cast<Eigen::Index>(k)) > 0.0;
+        coef = weighted_linear_fit(x, y, sw, free);
+      }
+      for (std::size_t k = 0; k < K; ++k) sills[k](i, l) = sills[k](l, i) = coef(static_cast<Eigen::Index>(k));
+    }
+  }
+  return sills;
+}
+
+}  // namespace
+
+CoregionalizationFitResult fit_coregionalization(const CrossVariogramTable& table,
+                                                 const std::vector<ModelComponent>& structures,
+                                                 const CoregionalizationFitOptions& options,
+                                                 std::vector<std::string> component_names) {
+  options.validate();
+  check_structures(structures);
+  const LmcBins b = usable_bins(table, options.weighting);
+  const std::size_t K = structures.size();
+  if (b.lag.size() < K)
+    throw ArgumentError("LMC fit: " + std::to_string(b.lag.size()) + " usable bin(s) for " + std::to_string(K) +
+                        " structures; expected at least as many bins as structures");
+  const Eigen::MatrixXd x = unit_design(b, structures);
+  CoregionalizationFitResult result;
+  result.bins_used = b.lag.size();
+  result.smallest_eigenvalue_before_projection.assign(K, 0.0);
+  std::vector<Eigen::MatrixXd> sills = separate_fits(b, x);
+  for (std::size_t k = 0; k < K; ++k) sills[k] = psd_projection(sills[k], result.smallest_eigenvalue_before_projection[k]);
+  double q = lmc_residual(b, x, sills);
+  if (options.method == LmcFitMethod::GoulardVoltz) {
+    // Block coordinate descent: with the others fixed, Q(B_k) = c_k ||B_k - U_k||_F^2 + const,
+    // c_k = sum_j w_j g_k(h_j)^2 and U_k the unconstrained update, so the PSD projection of U_k is
+    // B_k's exact constrained minimizer and Q never increases.
+    std::vector<double> c(K, 0.0);
+    for (std::size_t k = 0; k < K; ++k)
+      for (std::size_t j = 0; j < b.lag.size(); ++j) {
+        const double g = x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k));
+        c[k] += b.weight[j] * g * g;
+      }
+    result.converged = false;
+    std::vector<Eigen::MatrixXd> fitted(b.lag.size());  // sum_k B_k g_k(h_j)
+    while (result.iterations < options.max_iterations) {
+      ++result.iterations;
+      const std::vector<Eigen::MatrixXd> before = sills;
+      // Recomputed every sweep (updated in place within it), so rounding does not accumulate.
+      for (std::size_t j = 0; j < b.lag.size(); ++j) {
+        fitted[j] = Eigen::MatrixXd::Zero(b.components, b.components);
+        for (std::size_t k = 0; k < K; ++k) fitted[j] += x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k)) * sills[k];
+      }
+      double change = 0.0, size = 0.0;
+      for (std::size_t k = 0; k < K; ++k) {
+        if (!(c[k] > 0.0)) continue;  // g_k = 0 at every lag: B_k does not enter Q
+        Eigen::MatrixXd u = Eigen::MatrixXd::Zero(b.components, b.components);
+        for (std::size_t j = 0; j < b.lag.size(); ++j) {
+          const double g = x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k));
+          u += (b.weight[j] * g) * (b.gamma[j] - fitted[j] + g * sills[k]);
+        }
+        u /= c[k];
+        const Eigen::MatrixXd next = psd_projection(u, result.smallest_eigenvalue_before_projection[k]);
+        change = std::max(change, (next - sills[k]).cwiseAbs().maxCoeff());
+        size = std::max(size, next.cwiseAbs().maxCoeff());
+        for (std::size_t j = 0; j < b.lag.size(); ++j)
+          fitted[j] += x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k)) * (next - sills[k]);
+        sills[k] = next;
+      }
+      const double q_next = lmc_residual(b, x, sills);
+      // Converged when no entry of any B_k moved by more than the tolerance relative to the
+      // largest entry, or when a sweep no longer lowers Q at all (rounding). A relative test on Q
+      // alone would stop early: Q is quadratic in B, so a change of 1e-12 in Q allows 1e-6 in B.
+      const bool small_step = change <= options.relative_tolerance * size;
+      const bool stalled = q_next >= q;
+      if (q_next > q) sills = before;  // a sweep that rounding made worse is undone: Q never rises
+      else q = q_next;
+      if (small_step || stalled) {
+        result.converged = true;
+        break;
+      }
+    }
+    result.message = std::string(result.converged ? "converged" : "stopped at max_iterations") + " after " +
+                     std::to_string(result.iterations) + " Goulard-Voltz sweep(s)";
+  } else {
+    result.message = "gstat fit.lmc: separate linear fits, then eigenvalues clipped at 0";
+  }
+  result.weighted_residual = q;
+  std::vector<CoregionalizationStructure> out;
+  for (std::size_t k = 0; k < K; ++k)
+    out.push_back({.kind = structures[k].kind, .range = structures[k].range, .nu = structures[k].nu, .sills = sills[k]});
+  result.model = CoregionalizationModel(std::move(out), {}, std::move(component_names));
+  return result;
+}
+
+std::vector<ModelComponent> fit_coregionalization_ranges(const CrossVariogramTable& table,
+                                                         const std::vector<ModelComponent>& structures,
+                                                         LmcWeighting weighting) {
+  check_structures(structures);
+  const LmcBins b = usable_bins(table, weighting);
+  std::vector<ModelComponent> ranged;
+  bool nugget = false;
+  for (const ModelComponent& s : structures) {
+    if (s.kind == ModelKind::Nugget) nugget = true;
+    else ranged.push_back(s);
+  }
+  if (ranged.empty()) return structures;
+  std::vector<double> mean;
+  std::vector<std::uint64_t> n;
+  for (std::size_t j = 0; j < b.lag.size(); ++j) {
+    mean.push_back(b.gamma[j].trace() / b.components);
+    // fit_variogram knows N_j and N_j / h_j^2; unweighted is N_j with every N_j = 1.
+    n.push_back(weighting == LmcWeighting::Unweighted ? 1 : b.pairs[j]);
+  }
+  VariogramFitOptions o;
+  o.weighting = weighting == LmcWeighting::NjOverH2 ? FitWeighting::NjOverH2 : FitWeighting::Nj;
+  o.nugget = nugget ? NuggetMode::Free : NuggetMode::None;
+  const VariogramFitResult r = fit_variogram(b.lag, mean, n, ranged, o);
+  if (r.status == FitStatus::Failed)
+    throw ArgumentError("LMC fit: fitting the ranges to the mean direct variogram failed: " + r.message);
+  std::vector<ModelComponent> out = structures;
+  std::size_t next = 0;
+  for (ModelComponent& s : out)
+    if (s.kind != ModelKind::Nugget) s.range = r.model.components()[next++].range;
+  return out;
+}
+
+CoregionalizationTemplate parse_coregionalization_template(std::string_view text, double nu) {
+  const std::string hint = " (an LMC template is a model such as nug(0)+sph(1,400): kinds and ranges kept, sills "
+                           "ignored; or kinds such as nug+sph: ranges fitted to the mean direct variogram)";
+  CoregionalizationTemplate t;
+  if (text.find('(') != std::string_view::npos) {
+    VariogramModel m;
+    try {
+      m = VariogramModel::parse(text);
+    } catch (const ArgumentError& e) {
+      throw ArgumentError(std::string(e.what()) + hint);
+    }
+    if (!m.anisotropy().isotropic())
+      throw ArgumentError("LMC template '" + std::string(text) + "': the fit is isotropic; drop the '@' anisotropy");
+    t.structures = m.components();
+    t.ranges_given = true;
+  } else {
+    std::vector<std::string> kinds{""};
+    for (char ch : text) {
+      if (ch == '+') kinds.emplace_back();
+      else if (ch != ' ') kinds.back() += ch;
+    }
+    for (const std::string& name : kinds) {
+      ModelComponent c;
+      try {
+        c.kind = model_kind_from_name(name);
+      } catch (const ArgumentError& e) {
+        throw ArgumentError("LMC template '" + std::string(text) + "': " + e.what() + hint);
+      }
+      if (c.kind == ModelKind::Matern) {
+        if (!(nu > 0.0))
+          throw ArgumentError("LMC template '" + std::string(text) + "' has mat: give its smoothness nu (> 0)");
+        c.nu = nu;
+      }
+      t.structures.push_back(c);
+    }
+  }
+  for (const ModelComponent& c : t.structures)
+    if (!c.bounded())
+      throw ArgumentError("LMC template '" + std::string(text) + "': " + std::string(model_kind_name(c.kind)) +
+                          " has no sill; an LMC needs bounded structures (nug, sph, exp, gau, mat, wen)");
+  return t;
+}
+
+double coregionalization_weighted_residual(const CrossVariogramTable& table, const CoregionalizationModel& model,
+                                           LmcWeighting weighting) {
+  const LmcBins b = usable_bins(table, weighting);
+  std::vector<ModelComponent> structures;
+  std::vector<Eigen::MatrixXd> sills;
+  for (const CoregionalizationStructure& s : model.structures()) {
+    structures.push_back({.kind = s.kind, .sill = 1.0, .range = s.range, .nu = s.nu});
+    sills.push_back(s.sills);
+  }
+  return lmc_residual(b, unit_design(b, structures), sills);
+}
+
+}  // namespace errfield
