@@ -109,11 +109,14 @@ std::vector<ModelComponent> fit_coregionalization_ranges(const CrossVariogramTab
 /// The structures of an LMC fit from text: a model in VariogramModel's text form
 /// ("nug(0)+sph(1,400)": kinds, ranges and nu kept, sills ignored; ranges_given = true) or
 /// '+'-separated kinds ("nug+sph": ranges to be fitted, e.g. by fit_coregionalization_ranges;
-/// ranges_given = false; a mat kind takes `nu`, which must then be > 0). Throws ArgumentError
-/// naming the offending text, for an unbounded kind (pow, lin), an anisotropy ('@') or mat without nu.
+/// ranges_given = false; a mat kind takes `nu`, which must then be > 0). A model may carry an
+/// anisotropy ('@ard(...)', '@anis(...)'): the LMC is then fitted to the variograms of the mapped
+/// coordinates A x (only from samples, where the mapping can be applied) and keeps it. Throws
+/// ArgumentError naming the offending text, for an unbounded kind (pow, lin) or mat without nu.
 struct CoregionalizationTemplate {
   std::vector<ModelComponent> structures;
   bool ranges_given = false;
+  Anisotropy anisotropy;  ///< isotropic unless the template model has one
 };
 CoregionalizationTemplate parse_coregionalization_template(std::string_view text, double nu = 0.0);
 

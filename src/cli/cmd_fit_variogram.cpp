@@ -273,14 +273,31 @@ void run_lmc_fit(const FitVariogramArgs& a) {
   CrossVariogramTable table;
   if (!a.coords.empty()) {
     // The samples: gstat's default bins and boundaries, as 'errfield variogram --cross' without --bins.
-    const Eigen::MatrixXd x = t.numeric_columns(split_column_list(a.coords, "--coords"));
+    Eigen::MatrixXd x = t.numeric_columns(split_column_list(a.coords, "--coords"));
     const Eigen::MatrixXd z = t.numeric_columns(names);
+    if (!tmpl.anisotropy.isotropic()) {
+      // An anisotropic template: the variograms of the mapped coordinates A x, where the LMC is isotropic.
+      const int d = static_cast<int>(x.cols());
+      if (tmpl.anisotropy.dimension() != d)
+        throw ArgumentError("--model: the anisotropy @" + tmpl.anisotropy.to_string() + " is for " +
+                            std::to_string(tmpl.anisotropy.dimension()) + " coordinates but --coords has " + std::to_string(d));
+      Eigen::VectorXd in(d), out(d);
+      for (Eigen::Index r = 0; r < x.rows(); ++r) {
+        in = x.row(r).transpose();
+        tmpl.anisotropy.apply(in.data(), out.data(), d);
+        x.row(r) = out.transpose();
+      }
+    }
     EmpiricalVariogramOptions vo;
     vo.convention = BinConvention::Gstat;
     vo.cross_variograms = true;
     const EmpiricalVariogram v = with_source(a.input, [&] { return empirical_variogram(x, z, LagBins::gstat_default(x), vo); });
     table = CrossVariogramTable::from(v);
   } else {
+    if (!tmpl.anisotropy.isotropic())
+      throw ArgumentError("--model: an anisotropic template (@" + tmpl.anisotropy.to_string() +
+                          ") needs the samples (--coords), whose coordinates are mapped before the variograms; a "
+                          "variogram CSV's lags are already computed");
     const std::size_t c_lag = find_column(t, "lag_mean", "dist");
     const std::size_t c_pairs = find_column(t, "pairs", "np");
     std::vector<std::vector<std::size_t>> col(P, std::vector<std::size_t>(P));
@@ -321,6 +338,8 @@ void run_lmc_fit(const FitVariogramArgs& a) {
     std::cout << "\n";
   }
   const CoregionalizationFitResult r = with_source(a.input, [&] { return fit_coregionalization(table, structures, o, names); });
+  // The fit is isotropic in the mapped coordinates; the model keeps the template's map.
+  const CoregionalizationModel model(r.model.structures(), tmpl.anisotropy, r.model.component_names());
   std::cout << "LMC (" << lmc_fit_method_name(o.method) << ", weights " << lmc_weighting_name(o.weighting) << ") of "
             << P << " components over " << r.bins_used << " bins:\n";
   for (std::size_t k = 0; k < r.model.structures().size(); ++k) {
@@ -338,8 +357,11 @@ void run_lmc_fit(const FitVariogramArgs& a) {
   }
   std::cout << "weighted residual = " << format_number(r.weighted_residual) << ", " << r.iterations
             << " iteration(s), " << r.message << "\n";
+  if (!model.anisotropy().isotropic())
+    std::cout << "anisotropy @" << model.anisotropy().to_string()
+              << " (from --model): the variograms are of the mapped coordinates, and the LMC keeps the map\n";
   if (!a.out.empty()) {
-    nlohmann::json j = r.model;
+    nlohmann::json j = model;
     j["fit"] = {{"method", std::string(lmc_fit_method_name(o.method))},
                 {"weights", std::string(lmc_weighting_name(o.weighting))},
                 {"ranges", ranges_given ? "given" : "fitted"},

@@ -174,6 +174,10 @@ py::dict run_fit_lmc(const py::object& variogram, const std::string& model, cons
   o.method = lmc_fit_method_from_name(method);
   o.weighting = lmc_weighting_from_name(weights);
   const CoregionalizationTemplate t = parse_coregionalization_template(model, nu.value_or(0.0));
+  if (!t.anisotropy.isotropic())
+    throw ArgumentError("fit_lmc: the template's anisotropy @" + t.anisotropy.to_string() +
+                        " cannot be applied to a computed variogram; compute cross_variogram on the mapped "
+                        "coordinates (or use the CLI's fit-variogram --lmc --coords, which maps them)");
   CoregionalizationFitResult r;
   {
     py::gil_scoped_release release;

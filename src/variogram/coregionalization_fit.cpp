@@ -324,8 +324,7 @@ CoregionalizationTemplate parse_coregionalization_template(std::string_view text
     } catch (const ArgumentError& e) {
       throw ArgumentError(std::string(e.what()) + hint);
     }
-    if (!m.anisotropy().isotropic())
-      throw ArgumentError("LMC template '" + std::string(text) + "': the fit is isotropic; drop the '@' anisotropy");
+    t.anisotropy = m.anisotropy();
     t.structures = m.components();
     t.ranges_given = true;
   } else {

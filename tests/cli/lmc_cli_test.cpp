@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "errfield/coregionalization_fit.hpp"
+#include "errfield/coregionalization_model.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "support/cli_harness.hpp"
@@ -153,6 +154,41 @@ TEST_F(LmcCli, FitLmcRejectsMisuseNamingTheOption) {
   const auto r = run("fit-variogram --input " + path("v.csv") + " --model sph --lmc-method gstat");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--lmc-method applies to --lmc"), std::string::npos) << r.err;
+}
+
+// An anisotropic template: the same LMC as the isotropic template on coordinates scaled by the map
+// (ard(1, 0.5): lag |(dx, dy / 0.5)|), written with the map so that cokriging applies it.
+TEST_F(LmcCli, AnisotropicTemplateFitsTheMappedCoordinatesAndKeepsTheMap) {
+  Eigen::MatrixXd x, z;
+  write("in.csv", simulated_csv(150, &x, &z));
+  std::string scaled = "x,y,ex,ey,ez\n";
+  for (Eigen::Index i = 0; i < x.rows(); ++i) {
+    scaled += format_number(x(i, 0)) + "," + format_number(x(i, 1) / 0.5);
+    for (int c = 0; c < 3; ++c) scaled += "," + format_number(z(i, c));
+    scaled += "\n";
+  }
+  write("scaled.csv", scaled);
+  auto r = run("fit-variogram --lmc --input " + path("in.csv") + " --coords x,y --value ex,ey,ez --model 'nug(0)+gau(1,300)@ard(1,0.5)' --out " +
+               path("aniso.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("anisotropy @ard(1,0.5)"), std::string::npos) << r.out;
+  r = run("fit-variogram --lmc --input " + path("scaled.csv") + " --coords x,y --value ex,ey,ez --model 'nug(0)+gau(1,300)' --out " +
+          path("iso.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CoregionalizationModel aniso = load_coregionalization_model(path("aniso.json"));
+  const CoregionalizationModel iso = load_coregionalization_model(path("iso.json"));
+  EXPECT_EQ(aniso.anisotropy().to_string(), "ard(1,0.5)");
+  ASSERT_EQ(aniso.structures().size(), iso.structures().size());
+  for (std::size_t k = 0; k < iso.structures().size(); ++k)
+    EXPECT_LE((aniso.structures()[k].sills - iso.structures()[k].sills).cwiseAbs().maxCoeff(),
+              1e-9 * iso.structures()[k].sills.cwiseAbs().maxCoeff() + 1e-15)
+        << "structure " << k;
+  // A variogram CSV cannot be mapped: refused naming the reason.
+  r = run("variogram --input " + path("in.csv") + " --coords x,y --value ex,ey,ez --cross --out " + path("v.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = run("fit-variogram --lmc --input " + path("v.csv") + " --value ex,ey,ez --model 'nug(0)+gau(1,300)@ard(1,0.5)'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("needs the samples (--coords)"), std::string::npos) << r.err;
 }
 
 }  // namespace lmc_cli_test
