@@ -20,7 +20,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${ERRFIELD_TSAN_BUILD_DIR:-build-tsan}
-TESTS=${ERRFIELD_TSAN_TESTS:-'^((EmpiricalVariogram|PairBinningKernel|GridIdw|GridIdwKernel|ScatteredIdw|Kriging|SimpleOrdinaryUniversal/KrigingVariants|Commands/Determinism)\.|VecchiaLikelihood\.SameBits|ConditionalSimulation\.SameDraws|VarianceReduction\.SamePicks)'}
+TESTS=${ERRFIELD_TSAN_TESTS:-'^((EmpiricalVariogram|PairBinningKernel|GridIdw|GridIdwKernel|ScatteredIdw|Kriging|SimpleOrdinaryUniversal/KrigingVariants|Commands/Determinism)\.|VecchiaLikelihood\.SameBits|ConditionalSimulation\.SameDraws|VarianceReduction\.SamePicks|Cokriging\.ResultsAreBitIdentical|CrossVariogram\.BitIdentical)'}
 TARGETS=${ERRFIELD_TSAN_TARGETS:-errfield_cli estimators_tests kernels_tests reliability_tests}
 ARCHER=$(ls /usr/lib/llvm-*/lib/libarcher.so 2>/dev/null | sort -V | tail -n 1 || true)
 [ -n "$ARCHER" ] || { echo "tsan: libarcher.so not found (apt-get install libomp-14-dev)"; exit 1; }
