@@ -27,6 +27,7 @@
 
 #include "errfield/csv_table.hpp"
 #include "kriging/kd_tree.hpp"
+#include "kriging/neighbour_selection.hpp"
 
 namespace errfield::detail {
 
@@ -35,11 +36,7 @@ namespace {
 enum class CokrigingOutcome : std::uint8_t { Ok, TooFew, NotPositiveDefinite, SingularDrift, OverBudget };
 
 // One thread's matrices, grown but never shrunk, so that warm targets allocate nothing.
-struct CokrigingWorkspace {
-  std::vector<std::size_t> index;
-  std::vector<double> d2;
-  std::vector<std::pair<std::size_t, double>> hits;
-  std::vector<std::size_t> chosen;
+struct CokrigingWorkspace : NeighbourBuffers {
   Eigen::MatrixXd k, q, w, g, r, f0;
   Eigen::VectorXd y, beta;
   Eigen::MatrixXd cov;
@@ -574,8 +571,7 @@ CokrigingOutput CokrigingEngine::predict_local(const Eigen::MatrixXd& embedded, 
 #pragma omp parallel num_threads(threads)
   {
     CokrigingWorkspace ws;
-    ws.index.resize(k_query);
-    ws.d2.resize(k_query);
+    ws.size_for(k_query);
 #pragma omp for schedule(dynamic, 64)
     for (Eigen::Index t = 0; t < m; ++t) {
       // Neighbours by the model's lag, or by the raw coordinates (NeighbourMetric::Euclidean).
@@ -583,19 +579,7 @@ CokrigingOutput CokrigingEngine::predict_local(const Eigen::MatrixXd& embedded, 
       const double* target = embedded.col(t).data();
       const double* query = search_tree_ ? raw.col(t).data() : target;
       const std::size_t self = leave_one_out ? static_cast<std::size_t>(t) : n_samples;
-      ws.chosen.clear();
-      if (k_max > 0) {
-        const std::size_t found = tree.nearest(query, k_query, ws.index.data(), ws.d2.data());
-        for (std::size_t a = 0; a < found && ws.chosen.size() < k_max; ++a)
-          if (ws.index[a] != self && ws.d2[a] < r2) ws.chosen.push_back(ws.index[a]);
-      } else {
-        tree.within(query, r2, ws.hits);
-        for (const auto& h : ws.hits)
-          if (h.first != self) ws.chosen.push_back(h.first);
-        // Radius search returns hits unsorted; order them so the system (and its rounding) does not
-        // depend on the search's internal order.
-        std::sort(ws.chosen.begin(), ws.chosen.end());
-      }
+      select_neighbours(tree, query, k_max, r2, self, ws);
       CokrigingOutcome o = CokrigingOutcome::Ok;
       if (k_max == 0 && system_bytes(ws.chosen.size()) > budget) {
         std::size_t seen = largest_over.load();
