@@ -26,6 +26,7 @@
 #include <omp.h>
 
 #include "errfield/csv_table.hpp"
+#include "kriging/duplicate_samples.hpp"
 #include "kriging/kd_tree.hpp"
 #include "kriging/neighbour_selection.hpp"
 
@@ -189,25 +190,9 @@ void CokrigingEngine::validate_options() const {
 }
 
 void CokrigingEngine::refuse_duplicates() const {
-  const auto n = static_cast<std::size_t>(points_.cols());
-  if (n < 2) return;
-  const double tol2 = options_.duplicate_distance * options_.duplicate_distance;
-  std::size_t idx[2];
-  double d2[2];
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t found = tree_->nearest(points_.col(static_cast<Eigen::Index>(i)).data(), 2, idx, d2);
-    for (std::size_t k = 0; k < found; ++k) {
-      if (idx[k] == i || d2[k] > tol2) continue;
-      const std::size_t a = std::min(i, idx[k]), b = std::max(i, idx[k]);
-      const RowLabels& labels = options_.sample_labels;
-      const bool labelled = labels.lines.size() == n;
-      const std::string which = labelled ? labels(b) + ": cokriging: this sample and " + labels(a)
-                                         : "cokriging: samples " + std::to_string(a) + " and " + std::to_string(b);
-      throw InputError(which + " are duplicates (lag " + format_number(std::sqrt(d2[k])) +
-                           "); the cokriging matrix would be singular: remove one or average them",
-                       labelled ? labels.source : std::string(), labelled ? labels.line(b) : 0);
-    }
-  }
+  if (const auto pair = first_duplicate(*tree_, points_, options_.duplicate_distance))
+    throw_duplicate(*pair, options_.sample_labels, static_cast<std::size_t>(points_.cols()), "cokriging",
+                    "); the cokriging matrix would be singular: remove one or average them");
 }
 
 void CokrigingEngine::covariance_at(double h, double* out) const {

@@ -11,6 +11,7 @@
 #include "errfield/thread_count.hpp"
 #include "errfield/csv_table.hpp"
 #include "kriging/cholmod_factor.hpp"
+#include "kriging/duplicate_samples.hpp"
 
 namespace errfield {
 
@@ -189,24 +190,10 @@ void KrigingEngine::merge_duplicates() {
   const double tol = options_.duplicate_distance;
   const double tol2 = tol * tol;
   if (options_.duplicates == DuplicatePolicy::Error) {
-    std::size_t idx[2];
-    double d2[2];
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t found = tree_->nearest(points_.col(static_cast<Eigen::Index>(i)).data(), 2, idx, d2);
-      for (std::size_t k = 0; k < found; ++k) {
-        if (idx[k] == i || d2[k] > tol2) continue;
-        const std::size_t a = std::min(i, idx[k]), b = std::max(i, idx[k]);
-        const RowLabels& labels = options_.sample_labels;
-        const bool labelled = labels.lines.size() == n;
-        // file:line of the later one first, like every row error ("S.csv:9: ... S.csv:5 ...")
-        const std::string which = labelled ? labels(b) + ": kriging: this sample and " + labels(a)
-                                           : "kriging: samples " + std::to_string(a) + " and " + std::to_string(b);
-        throw InputError(which + " are duplicates (lag " + format_number(std::sqrt(d2[k])) +
-                             (tol > 0 ? " <= duplicate_distance " + format_number(tol) : std::string(", same location")) +
-                             "); remove one, or set duplicates = Average to merge them",
-                         labelled ? labels.source : std::string(), labelled ? labels.line(b) : 0);
-      }
-    }
+    if (const auto pair = first_duplicate(*tree_, points_, tol))
+      throw_duplicate(*pair, options_.sample_labels, n, "kriging",
+                      (tol > 0 ? " <= duplicate_distance " + format_number(tol) : std::string(", same location")) +
+                          "); remove one, or set duplicates = Average to merge them");
     return;
   }
   // Average: union of all pairs within tol, each group represented by its lowest index.
