@@ -29,6 +29,7 @@
 #include "kriging/duplicate_samples.hpp"
 #include "kriging/kd_tree.hpp"
 #include "kriging/neighbour_selection.hpp"
+#include "kriging/simple_mean.hpp"
 
 namespace errfield::detail {
 
@@ -132,13 +133,7 @@ CokrigingEngine::CokrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, 
   observed_ = values_;
   simple_mean_ = Eigen::VectorXd::Zero(components_);
   if (options_.kind == KrigingKind::Simple) {
-    const auto& m = options_.simple_mean;
-    if (m.size() == 1) simple_mean_.setConstant(m[0]);
-    else if (m.size() == static_cast<std::size_t>(components_))
-      for (int c = 0; c < components_; ++c) simple_mean_[c] = m[static_cast<std::size_t>(c)];
-    else if (!m.empty())
-      throw ArgumentError("cokriging options: simple_mean has " + std::to_string(m.size()) + " entries; expected 0, 1 or " +
-                          std::to_string(components_) + " (one per component)");
+    simple_mean_ = simple_mean_per_component(options_.simple_mean, components_, "cokriging");
     values_.rowwise() -= simple_mean_.transpose();
   }
   switch (options_.kind) {

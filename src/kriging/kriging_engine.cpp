@@ -12,6 +12,7 @@
 #include "errfield/csv_table.hpp"
 #include "kriging/cholmod_factor.hpp"
 #include "kriging/duplicate_samples.hpp"
+#include "kriging/simple_mean.hpp"
 
 namespace errfield {
 
@@ -131,15 +132,8 @@ KrigingEngine::KrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, Eige
                         "plus nugget); got '" + model_.to_string() + "'. Use the dense or local back end");
 
   simple_mean_ = Eigen::VectorXd::Zero(components_);
-  if (options_.kind == KrigingKind::Simple) {
-    const auto& m = options_.simple_mean;
-    if (m.size() == 1) simple_mean_.setConstant(m[0]);
-    else if (m.size() == static_cast<std::size_t>(components_))
-      for (int c = 0; c < components_; ++c) simple_mean_[c] = m[static_cast<std::size_t>(c)];
-    else if (!m.empty())
-      throw ArgumentError("kriging options: simple_mean has " + std::to_string(m.size()) +
-                          " entries; expected 0, 1 or " + std::to_string(components_) + " (one per component)");
-  }
+  if (options_.kind == KrigingKind::Simple)
+    simple_mean_ = simple_mean_per_component(options_.simple_mean, components_, "kriging");
 
   original_index_.resize(n);
   std::iota(original_index_.begin(), original_index_.end(), std::size_t{0});
