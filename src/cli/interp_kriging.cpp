@@ -197,6 +197,21 @@ VariogramModel likelihood_auto_model(const Eigen::MatrixXd& coords, const Eigen:
   return choice.model;
 }
 
+// The kriging option words as given on the command line (--kind, --mean, --backend, --neighbors,
+// --radius, --neighbour-metric, --nugget-as), for kriging and cokriging alike.
+KrigingOptions kriging_options_from_cli(const SharedInterpolationOptions& shared) {
+  const auto& o = cli_options;
+  KrigingOptionText text;
+  text.kind = o.kind;
+  if (!std::isnan(o.mean)) text.mean = std::vector<double>{o.mean};
+  if (!o.backend.empty()) text.backend = o.backend;
+  text.neighbors = shared.neighbors;
+  text.radius = shared.radius;
+  if (!o.neighbour_metric.empty()) text.neighbour_metric = o.neighbour_metric;
+  text.nugget = o.nugget_as;
+  return kriging_options_from_text(text, cli_option_names());
+}
+
 struct Setup {
   VariogramModel model;
   KrigingOptions options;
@@ -208,15 +223,7 @@ Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const E
                  const SharedInterpolationOptions& shared, std::vector<std::string>& notes) {
   const auto& o = cli_options;
   Setup s;
-  KrigingOptionText text;
-  text.kind = o.kind;
-  if (!std::isnan(o.mean)) text.mean = std::vector<double>{o.mean};
-  if (!o.backend.empty()) text.backend = o.backend;
-  text.neighbors = shared.neighbors;
-  text.radius = shared.radius;
-  if (!o.neighbour_metric.empty()) text.neighbour_metric = o.neighbour_metric;
-  text.nugget = o.nugget_as;
-  s.options = kriging_options_from_text(text, cli_option_names());
+  s.options = kriging_options_from_cli(shared);
   auto& opt = s.options;
   opt.sample_labels = row_labels_of(samples, "sample");
   opt.covariates = o.covariates;
@@ -285,15 +292,7 @@ KrigingOptions cokriging_options(const CsvTable& samples, const SharedInterpolat
       if (opt->count()) refuse(opt->get_name(), "it belongs to --block, which cokriging does not have");
   }
   if (o.backend == "sparse") refuse("--backend sparse", "use --backend dense (default) or local (--neighbors K)");
-  KrigingOptionText text;
-  text.kind = o.kind;
-  if (!std::isnan(o.mean)) text.mean = std::vector<double>{o.mean};
-  if (!o.backend.empty()) text.backend = o.backend;
-  text.neighbors = shared.neighbors;
-  text.radius = shared.radius;
-  if (!o.neighbour_metric.empty()) text.neighbour_metric = o.neighbour_metric;
-  text.nugget = o.nugget_as;
-  KrigingOptions options = kriging_options_from_text(text, cli_option_names());
+  KrigingOptions options = kriging_options_from_cli(shared);
   options.sample_labels = row_labels_of(samples, "sample");
   return options;
 }

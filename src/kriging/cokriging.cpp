@@ -26,7 +26,10 @@
 #include <omp.h>
 
 #include "errfield/csv_table.hpp"
+#include "kriging/duplicate_samples.hpp"
 #include "kriging/kd_tree.hpp"
+#include "kriging/neighbour_selection.hpp"
+#include "kriging/simple_mean.hpp"
 
 namespace errfield::detail {
 
@@ -35,11 +38,7 @@ namespace {
 enum class CokrigingOutcome : std::uint8_t { Ok, TooFew, NotPositiveDefinite, SingularDrift, OverBudget };
 
 // One thread's matrices, grown but never shrunk, so that warm targets allocate nothing.
-struct CokrigingWorkspace {
-  std::vector<std::size_t> index;
-  std::vector<double> d2;
-  std::vector<std::pair<std::size_t, double>> hits;
-  std::vector<std::size_t> chosen;
+struct CokrigingWorkspace : NeighbourBuffers {
   Eigen::MatrixXd k, q, w, g, r, f0;
   Eigen::VectorXd y, beta;
   Eigen::MatrixXd cov;
@@ -134,13 +133,7 @@ CokrigingEngine::CokrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, 
   observed_ = values_;
   simple_mean_ = Eigen::VectorXd::Zero(components_);
   if (options_.kind == KrigingKind::Simple) {
-    const auto& m = options_.simple_mean;
-    if (m.size() == 1) simple_mean_.setConstant(m[0]);
-    else if (m.size() == static_cast<std::size_t>(components_))
-      for (int c = 0; c < components_; ++c) simple_mean_[c] = m[static_cast<std::size_t>(c)];
-    else if (!m.empty())
-      throw ArgumentError("cokriging options: simple_mean has " + std::to_string(m.size()) + " entries; expected 0, 1 or " +
-                          std::to_string(components_) + " (one per component)");
+    simple_mean_ = simple_mean_per_component(options_.simple_mean, components_, "cokriging");
     values_.rowwise() -= simple_mean_.transpose();
   }
   switch (options_.kind) {
@@ -192,25 +185,9 @@ void CokrigingEngine::validate_options() const {
 }
 
 void CokrigingEngine::refuse_duplicates() const {
-  const auto n = static_cast<std::size_t>(points_.cols());
-  if (n < 2) return;
-  const double tol2 = options_.duplicate_distance * options_.duplicate_distance;
-  std::size_t idx[2];
-  double d2[2];
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::size_t found = tree_->nearest(points_.col(static_cast<Eigen::Index>(i)).data(), 2, idx, d2);
-    for (std::size_t k = 0; k < found; ++k) {
-      if (idx[k] == i || d2[k] > tol2) continue;
-      const std::size_t a = std::min(i, idx[k]), b = std::max(i, idx[k]);
-      const RowLabels& labels = options_.sample_labels;
-      const bool labelled = labels.lines.size() == n;
-      const std::string which = labelled ? labels(b) + ": cokriging: this sample and " + labels(a)
-                                         : "cokriging: samples " + std::to_string(a) + " and " + std::to_string(b);
-      throw InputError(which + " are duplicates (lag " + format_number(std::sqrt(d2[k])) +
-                           "); the cokriging matrix would be singular: remove one or average them",
-                       labelled ? labels.source : std::string(), labelled ? labels.line(b) : 0);
-    }
-  }
+  if (const auto pair = first_duplicate(*tree_, points_, options_.duplicate_distance))
+    throw_duplicate(*pair, options_.sample_labels, static_cast<std::size_t>(points_.cols()), "cokriging",
+                    "); the cokriging matrix would be singular: remove one or average them");
 }
 
 void CokrigingEngine::covariance_at(double h, double* out) const {
@@ -574,8 +551,7 @@ CokrigingOutput CokrigingEngine::predict_local(const Eigen::MatrixXd& embedded, 
 #pragma omp parallel num_threads(threads)
   {
     CokrigingWorkspace ws;
-    ws.index.resize(k_query);
-    ws.d2.resize(k_query);
+    ws.size_for(k_query);
 #pragma omp for schedule(dynamic, 64)
     for (Eigen::Index t = 0; t < m; ++t) {
       // Neighbours by the model's lag, or by the raw coordinates (NeighbourMetric::Euclidean).
@@ -583,19 +559,7 @@ CokrigingOutput CokrigingEngine::predict_local(const Eigen::MatrixXd& embedded, 
       const double* target = embedded.col(t).data();
       const double* query = search_tree_ ? raw.col(t).data() : target;
       const std::size_t self = leave_one_out ? static_cast<std::size_t>(t) : n_samples;
-      ws.chosen.clear();
-      if (k_max > 0) {
-        const std::size_t found = tree.nearest(query, k_query, ws.index.data(), ws.d2.data());
-        for (std::size_t a = 0; a < found && ws.chosen.size() < k_max; ++a)
-          if (ws.index[a] != self && ws.d2[a] < r2) ws.chosen.push_back(ws.index[a]);
-      } else {
-        tree.within(query, r2, ws.hits);
-        for (const auto& h : ws.hits)
-          if (h.first != self) ws.chosen.push_back(h.first);
-        // Radius search returns hits unsorted; order them so the system (and its rounding) does not
-        // depend on the search's internal order.
-        std::sort(ws.chosen.begin(), ws.chosen.end());
-      }
+      select_neighbours(tree, query, k_max, r2, self, ws);
       CokrigingOutcome o = CokrigingOutcome::Ok;
       if (k_max == 0 && system_bytes(ws.chosen.size()) > budget) {
         std::size_t seen = largest_over.load();

@@ -11,6 +11,8 @@
 #include "errfield/thread_count.hpp"
 #include "errfield/csv_table.hpp"
 #include "kriging/cholmod_factor.hpp"
+#include "kriging/duplicate_samples.hpp"
+#include "kriging/simple_mean.hpp"
 
 namespace errfield {
 
@@ -130,15 +132,8 @@ KrigingEngine::KrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, Eige
                         "plus nugget); got '" + model_.to_string() + "'. Use the dense or local back end");
 
   simple_mean_ = Eigen::VectorXd::Zero(components_);
-  if (options_.kind == KrigingKind::Simple) {
-    const auto& m = options_.simple_mean;
-    if (m.size() == 1) simple_mean_.setConstant(m[0]);
-    else if (m.size() == static_cast<std::size_t>(components_))
-      for (int c = 0; c < components_; ++c) simple_mean_[c] = m[static_cast<std::size_t>(c)];
-    else if (!m.empty())
-      throw ArgumentError("kriging options: simple_mean has " + std::to_string(m.size()) +
-                          " entries; expected 0, 1 or " + std::to_string(components_) + " (one per component)");
-  }
+  if (options_.kind == KrigingKind::Simple)
+    simple_mean_ = simple_mean_per_component(options_.simple_mean, components_, "kriging");
 
   original_index_.resize(n);
   std::iota(original_index_.begin(), original_index_.end(), std::size_t{0});
@@ -189,24 +184,10 @@ void KrigingEngine::merge_duplicates() {
   const double tol = options_.duplicate_distance;
   const double tol2 = tol * tol;
   if (options_.duplicates == DuplicatePolicy::Error) {
-    std::size_t idx[2];
-    double d2[2];
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::size_t found = tree_->nearest(points_.col(static_cast<Eigen::Index>(i)).data(), 2, idx, d2);
-      for (std::size_t k = 0; k < found; ++k) {
-        if (idx[k] == i || d2[k] > tol2) continue;
-        const std::size_t a = std::min(i, idx[k]), b = std::max(i, idx[k]);
-        const RowLabels& labels = options_.sample_labels;
-        const bool labelled = labels.lines.size() == n;
-        // file:line of the later one first, like every row error ("S.csv:9: ... S.csv:5 ...")
-        const std::string which = labelled ? labels(b) + ": kriging: this sample and " + labels(a)
-                                           : "kriging: samples " + std::to_string(a) + " and " + std::to_string(b);
-        throw InputError(which + " are duplicates (lag " + format_number(std::sqrt(d2[k])) +
-                             (tol > 0 ? " <= duplicate_distance " + format_number(tol) : std::string(", same location")) +
-                             "); remove one, or set duplicates = Average to merge them",
-                         labelled ? labels.source : std::string(), labelled ? labels.line(b) : 0);
-      }
-    }
+    if (const auto pair = first_duplicate(*tree_, points_, tol))
+      throw_duplicate(*pair, options_.sample_labels, n, "kriging",
+                      (tol > 0 ? " <= duplicate_distance " + format_number(tol) : std::string(", same location")) +
+                          "); remove one, or set duplicates = Average to merge them");
     return;
   }
   // Average: union of all pairs within tol, each group represented by its lowest index.

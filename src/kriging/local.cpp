@@ -11,15 +11,12 @@
 
 #include "errfield/csv_table.hpp"
 #include "kriging/kriging_engine.hpp"
+#include "kriging/neighbour_selection.hpp"
 
 namespace errfield::detail {
 namespace {
 
-struct LocalWorkspace {
-  std::vector<std::size_t> index;
-  std::vector<double> d2;
-  std::vector<std::pair<std::size_t, double>> hits;
-  std::vector<std::size_t> chosen;
+struct LocalWorkspace : NeighbourBuffers {
   Eigen::MatrixXd k, q, y, g, beta;
   Eigen::VectorXd c0, w, r, s, lambda;
   Eigen::RowVectorXd mean;
@@ -122,8 +119,7 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
   {
     LocalWorkspace ws;
     const std::size_t k_query = k_max > 0 ? std::min(k_max + (leave_one_out ? 1 : 0), n_samples) : 0;
-    ws.index.resize(k_query);
-    ws.d2.resize(k_query);
+    ws.size_for(k_query);
     const auto ceiling = static_cast<Eigen::Index>(std::max<std::size_t>(k_ceiling, 1));
     ws.reserve(static_cast<Eigen::Index>(std::max<std::size_t>(k_query, 1)), p, comps, ceiling);
 #pragma omp for schedule(dynamic, 64)
@@ -133,16 +129,7 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
       const double* target = group > 1 ? centre_embedded.col(t).data() : embedded.col(t).data();  // the model's lag
       const double* query = search_tree_ ? (group > 1 ? centre_raw.col(t).data() : raw.col(t).data()) : target;
       const std::size_t self = leave_one_out ? static_cast<std::size_t>(t) : n_samples;
-      ws.chosen.clear();
-      if (k_max > 0) {
-        const std::size_t found = tree.nearest(query, k_query, ws.index.data(), ws.d2.data());
-        for (std::size_t a = 0; a < found && ws.chosen.size() < k_max; ++a)
-          if (ws.index[a] != self && ws.d2[a] < r2) ws.chosen.push_back(ws.index[a]);
-      } else {
-        tree.within(query, r2, ws.hits);
-        for (const auto& h : ws.hits)
-          if (h.first != self) ws.chosen.push_back(h.first);
-      }
+      select_neighbours(tree, query, k_max, r2, self, ws);
       const auto nn = static_cast<Eigen::Index>(ws.chosen.size());
       auto fail = [&](TargetOutcome o) {
         outcome[static_cast<std::size_t>(t)] = o;

@@ -15,6 +15,7 @@
 #include "errfield/value_rows.hpp"
 #include "python/arrays.hpp"
 #include "python/bindings.hpp"
+#include "python/kriging_report.hpp"
 #include "python/options.hpp"
 
 namespace errfield::python {
@@ -136,12 +137,7 @@ class PyCokriging {
         return std::make_shared<CokrigingImpl<V>>(x_, z.data, lmc, o);
       });
     }
-    const auto& rep = impl_->report();
-    if (!rep.usable()) throw Error("cokriging failed: " + std::string(kriging_status_name(rep.status)) + ": " + rep.message);
-    if (!rep.message.empty()) {
-      const std::string w = std::string(kriging_status_name(rep.status)) + ": " + rep.message;
-      if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
-    }
+    raise_or_warn(impl_->report(), "cokriging");
   }
 
   py::tuple predict(const py::object& targets) const {
@@ -151,12 +147,7 @@ class PyCokriging {
       py::gil_scoped_release release;
       r = impl_->predict(t.data);
     }
-    if (r.failed) {
-      const std::string w = std::to_string(r.failed) + " of " + std::to_string(t.data.rows()) +
-                            " targets could not be cokriged (" + std::string(kriging_status_name(r.status)) +
-                            "); their predictions are NaN";
-      if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
-    }
+    warn_failed_targets(r.failed, static_cast<std::size_t>(t.data.rows()), r.status, "cokriged", "predictions");
     const py::tuple vc = cokriging_covariance_arrays(r.covariance, components_);
     return py::make_tuple(to_numpy(r.mean), vc[0], vc[1]);
   }
@@ -175,12 +166,7 @@ class PyCokriging {
 
   py::dict report() const {
     const auto& rep = impl_->report();
-    py::dict d;
-    d["status"] = std::string(kriging_status_name(rep.status));
-    d["message"] = rep.message;
-    d["condition_number"] = rep.condition_number;
-    d["jitter"] = rep.jitter;
-    d["samples_used"] = rep.samples_used;
+    py::dict d = report_dict(rep);
     d["drift_terms"] = rep.drift_terms;
     return d;
   }

@@ -22,6 +22,7 @@
 #include "errfield/value_rows.hpp"
 #include "python/arrays.hpp"
 #include "python/bindings.hpp"
+#include "python/kriging_report.hpp"
 #include "python/options.hpp"
 
 namespace errfield::python {
@@ -286,13 +287,7 @@ class PyKriging {
     }
     model_ = model;
     covariate_count_ = o.covariates.size();
-    const auto& rep = impl_->report();
-    if (!rep.usable())
-      throw Error("kriging failed: " + std::string(kriging_status_name(rep.status)) + ": " + rep.message);
-    if (!rep.message.empty()) {
-      const std::string w = std::string(kriging_status_name(rep.status)) + ": " + rep.message;
-      if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
-    }
+    raise_or_warn(impl_->report(), "kriging");
   }
 
   py::tuple predict(const py::object& targets, const py::object& covariates, const py::object& block, int block_points,
@@ -319,12 +314,7 @@ class PyKriging {
       py::gil_scoped_release release;
       p = impl_->predict(t.data, cov, block_ptr);
     }
-    if (p.failed) {
-      const std::string w = std::to_string(p.failed) + " of " + std::to_string(t.data.rows()) +
-                            " targets could not be kriged (" + std::string(kriging_status_name(p.status)) +
-                            "); their predictions are NaN";
-      if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
-    }
+    warn_failed_targets(p.failed, static_cast<std::size_t>(t.data.rows()), p.status, "kriged", "predictions");
     return py::make_tuple(to_numpy(p.mean, samples_.scalar), to_numpy(p.variance));
   }
 
@@ -361,12 +351,7 @@ class PyKriging {
       py::gil_scoped_release release;
       r = impl_->simulate(t.data, cov, so);
     }
-    if (r.failed) {
-      const std::string w = std::to_string(r.failed) + " of " + std::to_string(t.data.rows()) +
-                            " targets could not be kriged (" + std::string(kriging_status_name(r.status)) +
-                            "); their draws are NaN";
-      if (PyErr_WarnEx(PyExc_RuntimeWarning, w.c_str(), 1) != 0) throw py::error_already_set();
-    }
+    warn_failed_targets(r.failed, static_cast<std::size_t>(t.data.rows()), r.status, "kriged", "draws");
     const auto m = static_cast<py::ssize_t>(t.data.rows());
     const auto k = static_cast<py::ssize_t>(samples_.z.cols());
     py::array_t<double> out = samples_.scalar ? py::array_t<double>({static_cast<py::ssize_t>(n), m})
@@ -381,12 +366,7 @@ class PyKriging {
 
   py::dict report() const {
     const auto& r = impl_->report();
-    py::dict d;
-    d["status"] = std::string(kriging_status_name(r.status));
-    d["message"] = r.message;
-    d["condition_number"] = r.condition_number;
-    d["jitter"] = r.jitter;
-    d["samples_used"] = r.samples_used;
+    py::dict d = report_dict(r);
     d["merged_duplicates"] = r.merged_duplicates;
     d["drift_terms"] = r.drift_terms;
     return d;

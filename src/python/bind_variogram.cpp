@@ -42,6 +42,38 @@ Eigen::MatrixXd covariates_rows(const py::object& covariates, Eigen::Index rows)
   return c.data;
 }
 
+// The sampling options errfield.variogram and errfield.cross_variogram share, then the variogram
+// computed without the GIL; `options` carries what differs (estimator, cross_variograms). The
+// callers read the bin edges first, so a bad `bins` is reported before a bad option word.
+EmpiricalVariogram variogram_without_gil(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const LagBins& lag_bins,
+                                         EmpiricalVariogramOptions options, const std::string& convention,
+                                         double pair_fraction, std::uint64_t seed, int threads) {
+  options.convention = convention_from_name(convention);
+  options.pair_fraction = pair_fraction;
+  options.seed = seed;
+  options.threads = threads;
+  options.validate();
+  py::gil_scoped_release release;
+  return empirical_variogram(x, z, lag_bins, options);
+}
+
+// Each bin's lag range, mean lag and pair count as NumPy arrays (the CSV's lag columns).
+struct BinLagArrays {
+  py::object lag_lo, lag_hi, lag_mean, pairs;
+};
+BinLagArrays bin_lag_arrays(const EmpiricalVariogram& v) {
+  const std::size_t n = v.bins.size();
+  std::vector<double> lo(n), hi(n), mean(n);
+  std::vector<std::uint64_t> pairs(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    lo[k] = v.bins[k].lag_lo;
+    hi[k] = v.bins[k].lag_hi;
+    mean[k] = v.bins[k].lag_mean;
+    pairs[k] = v.bins[k].pairs;
+  }
+  return {to_numpy(lo), to_numpy(hi), to_numpy(mean), to_numpy(pairs)};
+}
+
 PyVariogram run_variogram(const py::object& coords, const py::object& values, const py::object& bins,
                           const std::string& estimator, const std::string& convention, double pair_fraction,
                           std::uint64_t seed, int threads, const py::object& covariates) {
@@ -54,32 +86,17 @@ PyVariogram run_variogram(const py::object& coords, const py::object& values, co
   const LagBins lag_bins = LagBins::from_edges(vector_arg(bins, "bins", 2));
   EmpiricalVariogramOptions options;
   options.estimator = estimator_from_name(estimator);
-  options.convention = convention_from_name(convention);
-  options.pair_fraction = pair_fraction;
-  options.seed = seed;
-  options.threads = threads;
-  options.validate();
-  EmpiricalVariogram v;
-  {
-    py::gil_scoped_release release;
-    v = empirical_variogram(x.data, z.data, lag_bins, options);
-  }
-  const std::size_t n = v.bins.size();
-  std::vector<double> lo(n), hi(n), mean(n), gamma(n);
-  std::vector<std::uint64_t> pairs(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    lo[k] = v.bins[k].lag_lo;
-    hi[k] = v.bins[k].lag_hi;
-    mean[k] = v.bins[k].lag_mean;
-    gamma[k] = v.bins[k].gamma;
-    pairs[k] = v.bins[k].pairs;
-  }
+  const EmpiricalVariogram v =
+      variogram_without_gil(x.data, z.data, lag_bins, options, convention, pair_fraction, seed, threads);
+  std::vector<double> gamma(v.bins.size());
+  for (std::size_t k = 0; k < gamma.size(); ++k) gamma[k] = v.bins[k].gamma;
+  const BinLagArrays lags = bin_lag_arrays(v);
   PyVariogram out;
-  out.lag_lo = to_numpy(lo);
-  out.lag_hi = to_numpy(hi);
-  out.lag_mean = to_numpy(mean);
+  out.lag_lo = lags.lag_lo;
+  out.lag_hi = lags.lag_hi;
+  out.lag_mean = lags.lag_mean;
   out.gamma = to_numpy(gamma);
-  out.pairs = to_numpy(pairs);
+  out.pairs = lags.pairs;
   out.component_gamma = to_numpy(v.component_gamma);
   out.estimator = std::string(estimator_name(v.estimator));
   out.convention = std::string(convention_name(v.convention));
@@ -100,36 +117,22 @@ py::dict run_cross_variogram(const py::object& coords, const py::object& values,
                         " column(s); cross-variograms need at least 2 components (N, P >= 2)");
   const LagBins lag_bins = LagBins::from_edges(vector_arg(bins, "bins", 2));
   EmpiricalVariogramOptions options;
-  options.convention = convention_from_name(convention);
-  options.pair_fraction = pair_fraction;
-  options.seed = seed;
-  options.threads = threads;
   options.cross_variograms = true;
-  options.validate();
-  EmpiricalVariogram v;
-  {
-    py::gil_scoped_release release;
-    v = empirical_variogram(x.data, z.data, lag_bins, options);
-  }
+  const EmpiricalVariogram v =
+      variogram_without_gil(x.data, z.data, lag_bins, options, convention, pair_fraction, seed, threads);
   const std::size_t n = v.bins.size();
   const int P = v.components();
-  std::vector<double> lo(n), hi(n), mean(n);
-  std::vector<std::uint64_t> pairs(n);
   py::array_t<double> gamma({static_cast<py::ssize_t>(n), static_cast<py::ssize_t>(P), static_cast<py::ssize_t>(P)});
   auto g = gamma.mutable_unchecked<3>();
-  for (std::size_t k = 0; k < n; ++k) {
-    lo[k] = v.bins[k].lag_lo;
-    hi[k] = v.bins[k].lag_hi;
-    mean[k] = v.bins[k].lag_mean;
-    pairs[k] = v.bins[k].pairs;
+  for (std::size_t k = 0; k < n; ++k)
     for (int a = 0; a < P; ++a)
       for (int b = 0; b < P; ++b) g(static_cast<py::ssize_t>(k), a, b) = v.gamma_of(k, a, b);
-  }
+  const BinLagArrays lags = bin_lag_arrays(v);
   py::dict d;
-  d["lag_lo"] = to_numpy(lo);
-  d["lag_hi"] = to_numpy(hi);
-  d["lag_mean"] = to_numpy(mean);
-  d["pairs"] = to_numpy(pairs);
+  d["lag_lo"] = lags.lag_lo;
+  d["lag_hi"] = lags.lag_hi;
+  d["lag_mean"] = lags.lag_mean;
+  d["pairs"] = lags.pairs;
   d["gamma"] = gamma;
   d["convention"] = std::string(convention_name(v.convention));
   return d;

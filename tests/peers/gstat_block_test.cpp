@@ -19,22 +19,18 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
 #include "errfield/csv_table.hpp"
 #include "support/cli_harness.hpp"
+#include "support/gstat_peer.hpp"
 
 namespace errfield {
 namespace gstat_block_test {
 
+using errfield::testing::csv_columns;
 using errfield::testing::run_errfield;
-
-bool gstat_with_meuse() {
-  return std::system("Rscript -e 'suppressPackageStartupMessages({library(gstat); library(sp)})' >/dev/null 2>&1") == 0;
-}
 
 constexpr const char* kSph = "sph(sill=0.15,range=800)+nug(0.05)";
 constexpr const char* kExp = "exp(sill=0.12,range=250)+nug(0.04)";
@@ -42,23 +38,14 @@ constexpr const char* kExp = "exp(sill=0.12,range=250)+nug(0.04)";
 class GstatBlock : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    available_ = gstat_with_meuse();
-    if (!available_) return;
-    root_ = std::filesystem::temp_directory_path() / ("errfield_gstat_block_" + std::to_string(::getpid()));
-    std::filesystem::remove_all(root_);
-    std::filesystem::create_directories(root_);
-    const std::string cmd = "Rscript '" ERRFIELD_SOURCE_DIR "/tests/peers/gstat_block.R' '" + root_.string() + "'";
-    r_ok_ = std::system(cmd.c_str()) == 0;
+    gstat_.start(ERRFIELD_SOURCE_DIR "/tests/peers/gstat_block.R", "errfield_gstat_block");
   }
-  static void TearDownTestSuite() {
-    std::error_code ec;
-    if (!root_.empty()) std::filesystem::remove_all(root_, ec);
-  }
+  static void TearDownTestSuite() { gstat_.finish(); }
   void SetUp() override {
-    if (!available_) GTEST_SKIP() << "Rscript with gstat and sp not found; install r-cran-gstat to run this cross-check";
-    ASSERT_TRUE(r_ok_) << "tests/peers/gstat_block.R failed";
+    if (!gstat_.available()) GTEST_SKIP() << errfield::testing::kGstatMissing;
+    ASSERT_TRUE(gstat_.succeeded()) << "tests/peers/gstat_block.R failed";
   }
-  static std::string file(const std::string& name) { return (root_ / name).string(); }
+  static std::string file(const std::string& name) { return gstat_.file(name); }
 
   // Runs interpolate --block on the grid and compares pred and var with gstat's, relative to each
   // value (predictions ~5..7.5, variances ~0.03..0.2).
@@ -67,21 +54,19 @@ class GstatBlock : public ::testing::Test {
     std::vector<std::string> args{"interpolate", "--method", "kriging", "--samples", file("meuse.csv"), "--targets",
                                   file("grid.csv"), "--coords", "x,y", "--value", "logzinc", "--out", file("ours.csv")};
     args.insert(args.end(), extra.begin(), extra.end());
-    const auto r = run_errfield(args, root_);
+    const auto r = run_errfield(args, gstat_.root());
     ASSERT_EQ(r.exit_code, 0) << r.output();
-    const Eigen::MatrixXd ours = CsvTable::read(file("ours.csv")).numeric_columns({"pred", "var"});
-    const Eigen::MatrixXd theirs = CsvTable::read(file(reference)).numeric_columns({"pred", "var"});
+    const Eigen::MatrixXd ours = csv_columns(file("ours.csv"), {"pred", "var"});
+    const Eigen::MatrixXd theirs = csv_columns(file(reference), {"pred", "var"});
     ASSERT_EQ(ours.rows(), theirs.rows());
-    const Eigen::MatrixXd s = CsvTable::read(file("meuse.csv")).numeric_columns({"x", "y"});
-    const Eigen::MatrixXd g = CsvTable::read(file("grid.csv")).numeric_columns({"x", "y"});
+    // a tie between the nmax-th and next neighbour may be broken differently
+    const std::vector<bool> tied =
+        nmax > 0 ? errfield::testing::tied_neighbourhoods(csv_columns(file("meuse.csv"), {"x", "y"}),
+                                                          csv_columns(file("grid.csv"), {"x", "y"}), nmax)
+                 : std::vector<bool>(static_cast<std::size_t>(ours.rows()), false);
     double worst[2] = {0.0, 0.0};
     for (Eigen::Index t = 0; t < ours.rows(); ++t) {
-      if (nmax > 0) {  // a tie between the nmax-th and next neighbour may be broken differently
-        std::vector<double> d;
-        for (Eigen::Index i = 0; i < s.rows(); ++i) d.push_back((s.row(i) - g.row(t)).norm());
-        std::sort(d.begin(), d.end());
-        if (std::abs(d[nmax] - d[nmax - 1]) <= 1e-9 * d[nmax]) continue;
-      }
+      if (tied[static_cast<std::size_t>(t)]) continue;
       for (int c = 0; c < 2; ++c) {
         const double rel = std::abs(ours(t, c) - theirs(t, c)) / std::abs(theirs(t, c));
         worst[c] = std::max(worst[c], rel);
@@ -90,8 +75,7 @@ class GstatBlock : public ::testing::Test {
     }
     std::cout << reference << ": largest relative difference pred " << worst[0] << ", var " << worst[1] << "\n";
   }
-  inline static bool available_ = false, r_ok_ = false;
-  inline static std::filesystem::path root_;
+  inline static errfield::testing::GstatScriptRun gstat_;
 };
 
 TEST_F(GstatBlock, EvenGridIsTheSameArithmetic) {

@@ -14,22 +14,18 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
 #include "errfield/csv_table.hpp"
 #include "support/cli_harness.hpp"
+#include "support/gstat_peer.hpp"
 
 namespace errfield {
 namespace gstat_cokriging_test {
 
+using errfield::testing::csv_columns;
 using errfield::testing::run_errfield;
-
-bool gstat_with_meuse() {
-  return std::system("Rscript -e 'suppressPackageStartupMessages({library(gstat); library(sp)})' >/dev/null 2>&1") == 0;
-}
 
 // The R script's model in errfield's words: gstat's vgm(psill, "Sph", 800, nugget) per direct
 // and cross variogram become the nugget and the Sph coregionalization matrices.
@@ -37,48 +33,25 @@ constexpr const char* kLmc = R"({"type": "lmc", "components": ["lzn", "lcu"],
   "structures": [{"kind": "nug", "sills": [[0.05, 0.02], [0.02, 0.04]]},
                  {"kind": "sph", "range": 800, "sills": [[0.55, 0.25], [0.25, 0.15]]}]})";
 
-Eigen::MatrixXd columns(const std::string& path, const std::vector<std::string>& names) {
-  return CsvTable::read(path).numeric_columns(names);
-}
-
 // The R script runs once for the suite (about 2 s); each test runs errfield on its CSVs.
 class GstatCokriging : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    available_ = gstat_with_meuse();
-    if (!available_) return;
-    root_ = std::filesystem::temp_directory_path() / ("errfield_gstat_cokriging_" + std::to_string(::getpid()));
-    std::filesystem::remove_all(root_);
-    std::filesystem::create_directories(root_);
-    const std::string cmd = "Rscript '" ERRFIELD_SOURCE_DIR "/tests/peers/gstat_cokriging.R' '" + root_.string() + "'";
-    r_ok_ = std::system(cmd.c_str()) == 0;
-    std::ofstream(root_ / "lmc.json") << kLmc;
+    gstat_.start(ERRFIELD_SOURCE_DIR "/tests/peers/gstat_cokriging.R", "errfield_gstat_cokriging");
+    if (gstat_.available()) std::ofstream(gstat_.root() / "lmc.json") << kLmc;
   }
-  static void TearDownTestSuite() {
-    std::error_code ec;
-    if (!root_.empty()) std::filesystem::remove_all(root_, ec);
-  }
+  static void TearDownTestSuite() { gstat_.finish(); }
   void SetUp() override {
-    if (!available_) GTEST_SKIP() << "Rscript with gstat and sp not found; install r-cran-gstat to run this cross-check";
-    ASSERT_TRUE(r_ok_) << "tests/peers/gstat_cokriging.R failed";
+    if (!gstat_.available()) GTEST_SKIP() << errfield::testing::kGstatMissing;
+    ASSERT_TRUE(gstat_.succeeded()) << "tests/peers/gstat_cokriging.R failed";
   }
-  static std::string file(const std::string& name) { return (root_ / name).string(); }
-  inline static bool available_ = false, r_ok_ = false;
-  inline static std::filesystem::path root_;
+  static std::string file(const std::string& name) { return gstat_.file(name); }
+  inline static errfield::testing::GstatScriptRun gstat_;
 
-  // Targets whose nmax-th and (nmax+1)-th nearest samples are at the same distance: the
-  // neighbourhood is then a tie that gstat and errfield may break differently, so they are left
-  // out of the comparison.
+  // Targets whose nmax-th and (nmax+1)-th nearest samples tie are left out of the comparison.
   static std::vector<bool> tied_neighbourhoods(std::size_t nmax) {
-    const Eigen::MatrixXd s = columns(file("meuse.csv"), {"x", "y"}), g = columns(file("grid.csv"), {"x", "y"});
-    std::vector<bool> tied(static_cast<std::size_t>(g.rows()), false);
-    for (Eigen::Index t = 0; t < g.rows(); ++t) {
-      std::vector<double> d;
-      for (Eigen::Index i = 0; i < s.rows(); ++i) d.push_back((s.row(i) - g.row(t)).norm());
-      std::sort(d.begin(), d.end());
-      tied[static_cast<std::size_t>(t)] = std::abs(d[nmax] - d[nmax - 1]) <= 1e-9 * d[nmax];
-    }
-    return tied;
+    return errfield::testing::tied_neighbourhoods(csv_columns(file("meuse.csv"), {"x", "y"}),
+                                                  csv_columns(file("grid.csv"), {"x", "y"}), nmax);
   }
 
   static void cokrige(const std::vector<std::string>& extra, const std::string& reference, std::size_t nmax = 0) {
@@ -86,10 +59,10 @@ class GstatCokriging : public ::testing::Test {
                                   file("grid.csv"), "--coords", "x,y", "--value", "lzn,lcu", "--model", file("lmc.json"),
                                   "--out", file("ours.csv")};
     args.insert(args.end(), extra.begin(), extra.end());
-    const auto r = run_errfield(args, root_);
+    const auto r = run_errfield(args, gstat_.root());
     ASSERT_EQ(r.exit_code, 0) << r.output();
-    const Eigen::MatrixXd ours = columns(file("ours.csv"), {"pred_lzn", "var_lzn", "pred_lcu", "var_lcu", "cov_lzn_lcu"});
-    const Eigen::MatrixXd theirs = columns(file(reference), {"lzn_pred", "lzn_var", "lcu_pred", "lcu_var", "cov"});
+    const Eigen::MatrixXd ours = csv_columns(file("ours.csv"), {"pred_lzn", "var_lzn", "pred_lcu", "var_lcu", "cov_lzn_lcu"});
+    const Eigen::MatrixXd theirs = csv_columns(file(reference), {"lzn_pred", "lzn_var", "lcu_pred", "lcu_var", "cov"});
     ASSERT_EQ(ours.rows(), theirs.rows());
     const std::vector<bool> tied = nmax > 0 ? tied_neighbourhoods(nmax) : std::vector<bool>(ours.rows(), false);
     EXPECT_LE(std::count(tied.begin(), tied.end(), true), 10) << "more ties than the Meuse grid has";
@@ -131,10 +104,10 @@ TEST_F(GstatCokriging, PredictionsMatchGstat) {
 TEST_F(GstatCokriging, LeaveOneOutCokriging) {
   const auto r = run_errfield({"cv", "--method", "kriging", "--samples", file("meuse.csv"), "--coords", "x,y", "--value",
                                "lzn,lcu", "--model", file("lmc.json"), "--out", file("cv_ours.csv")},
-                              root_);
+                              gstat_.root());
   ASSERT_EQ(r.exit_code, 0) << r.output();
-  const Eigen::MatrixXd ours = columns(file("cv_ours.csv"), {"pred_lzn", "var_lzn", "residual_lzn", "residual_lcu"});
-  const Eigen::MatrixXd theirs = columns(file("cv.csv"), {"lzn_pred", "lzn_var", "lzn_residual", "lcu_residual"});
+  const Eigen::MatrixXd ours = csv_columns(file("cv_ours.csv"), {"pred_lzn", "var_lzn", "residual_lzn", "residual_lcu"});
+  const Eigen::MatrixXd theirs = csv_columns(file("cv.csv"), {"lzn_pred", "lzn_var", "lzn_residual", "lcu_residual"});
   ASSERT_EQ(ours.rows(), theirs.rows());
   double worst = 0.0;
   for (Eigen::Index i = 0; i < ours.rows(); ++i)

@@ -13,30 +13,22 @@
 #include <filesystem>
 #include <vector>
 
-#include <unistd.h>
-
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
 #include "errfield/csv_table.hpp"
 #include "support/cli_harness.hpp"
+#include "support/gstat_peer.hpp"
 
 namespace errfield {
 namespace gstat_external_drift_test {
 
+using errfield::testing::csv_columns;
 using errfield::testing::run_errfield;
-
-bool gstat_with_meuse() {
-  return std::system("Rscript -e 'suppressPackageStartupMessages({library(gstat); library(sp)})' >/dev/null 2>&1") == 0;
-}
 
 // The models of the R script, in errfield's words (gstat's vgm(psill, model, range, nugget)).
 constexpr const char* kSph = "sph(sill=0.15,range=800)+nug(0.05)";
 constexpr const char* kExp = "exp(sill=0.12,range=250)+nug(0.04)";
-
-Eigen::MatrixXd columns(const std::string& path, const std::vector<std::string>& names) {
-  return CsvTable::read(path).numeric_columns(names);
-}
 
 // |ours - theirs| <= tol * max(|theirs|, floor), column by column, naming the row.
 void expect_close(const Eigen::MatrixXd& ours, const Eigen::MatrixXd& theirs, double tol, double floor,
@@ -57,49 +49,31 @@ void expect_close(const Eigen::MatrixXd& ours, const Eigen::MatrixXd& theirs, do
 class GstatExternalDrift : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    available_ = gstat_with_meuse();
-    if (!available_) return;
-    root_ = std::filesystem::temp_directory_path() / ("errfield_gstat_external_drift_" + std::to_string(::getpid()));
-    std::filesystem::remove_all(root_);
-    std::filesystem::create_directories(root_);
-    const std::string cmd = "Rscript '" ERRFIELD_SOURCE_DIR "/tests/peers/gstat_external_drift.R' '" + root_.string() + "'";
-    r_ok_ = std::system(cmd.c_str()) == 0;
+    gstat_.start(ERRFIELD_SOURCE_DIR "/tests/peers/gstat_external_drift.R", "errfield_gstat_external_drift");
   }
-  static void TearDownTestSuite() {
-    std::error_code ec;
-    if (!root_.empty()) std::filesystem::remove_all(root_, ec);
-  }
+  static void TearDownTestSuite() { gstat_.finish(); }
   void SetUp() override {
-    if (!available_) GTEST_SKIP() << "Rscript with gstat and sp not found; install r-cran-gstat to run this cross-check";
-    ASSERT_TRUE(r_ok_) << "tests/peers/gstat_external_drift.R failed";
+    if (!gstat_.available()) GTEST_SKIP() << errfield::testing::kGstatMissing;
+    ASSERT_TRUE(gstat_.succeeded()) << "tests/peers/gstat_external_drift.R failed";
   }
-  static std::string file(const std::string& name) { return (root_ / name).string(); }
-  inline static bool available_ = false, r_ok_ = false;
-  inline static std::filesystem::path root_;
+  static std::string file(const std::string& name) { return gstat_.file(name); }
+  inline static errfield::testing::GstatScriptRun gstat_;
 
-  // Targets whose nmax-th and (nmax+1)-th nearest samples are at the same distance: the
-  // neighbourhood is then a tie that gstat and errfield may break differently (3 of the 3103
-  // Meuse grid cells with nmax = 20), so they are left out of the comparison.
+  // Targets whose nmax-th and (nmax+1)-th nearest samples tie (3 of the 3103 Meuse grid cells with
+  // nmax = 20) are left out of the comparison.
   std::vector<bool> tied_neighbourhoods(std::size_t nmax) const {
-    const Eigen::MatrixXd s = columns(file("meuse.csv"), {"x", "y"}), g = columns(file("grid.csv"), {"x", "y"});
-    std::vector<bool> tied(static_cast<std::size_t>(g.rows()), false);
-    for (Eigen::Index t = 0; t < g.rows(); ++t) {
-      std::vector<double> d;
-      for (Eigen::Index i = 0; i < s.rows(); ++i) d.push_back((s.row(i) - g.row(t)).norm());
-      std::sort(d.begin(), d.end());
-      tied[static_cast<std::size_t>(t)] = std::abs(d[nmax] - d[nmax - 1]) <= 1e-9 * d[nmax];
-    }
-    return tied;
+    return errfield::testing::tied_neighbourhoods(csv_columns(file("meuse.csv"), {"x", "y"}),
+                                                  csv_columns(file("grid.csv"), {"x", "y"}), nmax);
   }
   void krige(const std::vector<std::string>& extra, const std::string& reference, std::size_t nmax = 0) {
     std::vector<std::string> args{"interpolate", "--method", "kriging", "--samples", file("meuse.csv"), "--targets",
                                   file("grid.csv"), "--coords", "x,y", "--value", "logzinc", "--covariates", "sqrtdist",
                                   "--out", file("ours.csv")};
     args.insert(args.end(), extra.begin(), extra.end());
-    const auto r = run_errfield(args, root_);
+    const auto r = run_errfield(args, gstat_.root());
     ASSERT_EQ(r.exit_code, 0) << r.output();
     // Predictions are log(zinc) ~ 5..7.5, variances ~0.05..0.2: relative 1e-8 of each.
-    Eigen::MatrixXd ours = columns(file("ours.csv"), {"pred", "var"}), theirs = columns(file(reference), {"pred", "var"});
+    Eigen::MatrixXd ours = csv_columns(file("ours.csv"), {"pred", "var"}), theirs = csv_columns(file(reference), {"pred", "var"});
     if (nmax > 0) {
       const std::vector<bool> tied = tied_neighbourhoods(nmax);
       const auto kept = static_cast<Eigen::Index>(std::count(tied.begin(), tied.end(), false));
@@ -141,16 +115,16 @@ TEST_F(GstatExternalDrift, LinearDriftPlusCovariate) {
 TEST_F(GstatExternalDrift, ResidualVariogramOfTheOlsTrend) {
   const auto r = run_errfield({"variogram", "--input", file("meuse.csv"), "--coords", "x,y", "--value", "logzinc",
                                "--covariates", "sqrtdist", "--out", file("vario.csv")},
-                              root_);
+                              gstat_.root());
   ASSERT_EQ(r.exit_code, 0) << r.output();
-  const Eigen::MatrixXd ours_all = columns(file("vario.csv"), {"pairs", "lag_mean", "gamma"});
+  const Eigen::MatrixXd ours_all = csv_columns(file("vario.csv"), {"pairs", "lag_mean", "gamma"});
   // gstat leaves out the empty bins.
   std::vector<Eigen::Index> used;
   for (Eigen::Index i = 0; i < ours_all.rows(); ++i)
     if (ours_all(i, 0) > 0) used.push_back(i);
   Eigen::MatrixXd ours(static_cast<Eigen::Index>(used.size()), 3);
   for (std::size_t k = 0; k < used.size(); ++k) ours.row(static_cast<Eigen::Index>(k)) = ours_all.row(used[k]);
-  const Eigen::MatrixXd theirs = columns(file("variogram.csv"), {"np", "dist", "gamma"});
+  const Eigen::MatrixXd theirs = csv_columns(file("variogram.csv"), {"np", "dist", "gamma"});
   ASSERT_EQ(ours.rows(), theirs.rows());
   for (Eigen::Index i = 0; i < ours.rows(); ++i) EXPECT_EQ(ours(i, 0), theirs(i, 0)) << "pairs of bin " << i;
   expect_close(ours.rightCols(2), theirs.rightCols(2), 1e-10, 0.0, "variogram lag and gamma");
@@ -160,11 +134,11 @@ TEST_F(GstatExternalDrift, LeaveOneOutWithExternalDrift) {
   const auto r = run_errfield({"cv", "--method", "kriging", "--samples", file("meuse.csv"), "--coords", "x,y",
                                "--value", "logzinc", "--covariates", "sqrtdist", "--model", kSph, "--out",
                                file("cv_ours.csv")},
-                              root_);
+                              gstat_.root());
   ASSERT_EQ(r.exit_code, 0) << r.output();
   // Residuals are ~0.3 in size: relative to 0.1 where they pass through zero.
-  expect_close(columns(file("cv_ours.csv"), {"pred", "var", "residual"}),
-               columns(file("cv.csv"), {"pred", "var", "residual"}), 1e-8, 0.1, "krige.cv");
+  expect_close(csv_columns(file("cv_ours.csv"), {"pred", "var", "residual"}),
+               csv_columns(file("cv.csv"), {"pred", "var", "residual"}), 1e-8, 0.1, "krige.cv");
 }
 
 }  // namespace gstat_external_drift_test

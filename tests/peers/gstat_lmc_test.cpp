@@ -16,11 +16,7 @@
 //    the projection is exercised. Sills agree to 1e-8 relative to the largest sill.
 // Skipped when Rscript, gstat or sp is missing.
 
-#include <unistd.h>
-
 #include <cmath>
-#include <cstdlib>
-#include <filesystem>
 #include <map>
 
 #include <gtest/gtest.h>
@@ -28,36 +24,23 @@
 #include "errfield/coregionalization_fit.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/empirical_variogram.hpp"
+#include "support/gstat_peer.hpp"
 
 namespace errfield {
 namespace gstat_lmc_test {
 
-namespace fs = std::filesystem;
-
-bool gstat_available() {
-  return std::system("Rscript -e 'suppressPackageStartupMessages({library(gstat); library(sp)})' >/dev/null 2>&1") == 0;
-}
-
 class GstatLmcPeer : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    available_ = gstat_available();
-    if (!available_) return;
-    dir_ = fs::temp_directory_path() / ("errfield_gstat_lmc_peer_" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-    const std::string cmd = "Rscript " + std::string(ERRFIELD_SOURCE_DIR) + "/tests/peers/gstat_lmc.R " +
-                            dir_.string() + " 2>" + (dir_ / "r.log").string();
-    ran_ = std::system(cmd.c_str()) == 0;
+    gstat_.start(ERRFIELD_SOURCE_DIR "/tests/peers/gstat_lmc.R", "errfield_gstat_lmc_peer");
   }
-  static void TearDownTestSuite() {
-    if (!dir_.empty()) fs::remove_all(dir_);
-  }
+  static void TearDownTestSuite() { gstat_.finish(); }
   void SetUp() override {
-    if (!available_) GTEST_SKIP() << "Rscript with the gstat and sp packages not found";
-    ASSERT_TRUE(ran_) << "gstat_lmc.R failed; see " << (dir_ / "r.log");
+    if (!gstat_.available()) GTEST_SKIP() << errfield::testing::kGstatMissing;
+    ASSERT_TRUE(gstat_.succeeded()) << "tests/peers/gstat_lmc.R failed";
   }
   static EmpiricalVariogram ours() {
-    const CsvTable t = CsvTable::read((dir_ / "meuse.csv").string());
+    const CsvTable t = CsvTable::read(gstat_.file("meuse.csv"));
     const Eigen::MatrixXd x = t.numeric_columns({"x", "y"});
     const Eigen::MatrixXd z = t.numeric_columns(names());
     EmpiricalVariogramOptions o;
@@ -69,13 +52,12 @@ class GstatLmcPeer : public ::testing::Test {
   // gstat's id of the direct (a == b) or cross variogram of components a <= b.
   static std::string id(int a, int b) { return a == b ? names()[a] : names()[a] + "." + names()[b]; }
 
-  static inline fs::path dir_;
-  static inline bool ran_ = false, available_ = false;
+  inline static errfield::testing::GstatScriptRun gstat_;
 };
 
 TEST_F(GstatLmcPeer, DirectAndCrossVariogramsMatchGstatsMultivariableVariogram) {
   const EmpiricalVariogram v = ours();
-  const CsvTable g = CsvTable::read((dir_ / "variogram.csv").string());
+  const CsvTable g = CsvTable::read(gstat_.file("variogram.csv"));
   const std::size_t c_id = g.column_index("id");
   std::map<std::string, std::vector<std::size_t>> rows;  // id -> rows in bin order
   for (std::size_t r = 0; r < g.row_count(); ++r) rows[g.row(r)[c_id]].push_back(r);
@@ -112,7 +94,7 @@ TEST_F(GstatLmcPeer, GstatMethodMatchesFitLmc) {
     o.method = LmcFitMethod::Gstat;
     o.weighting = LmcWeighting::NjOverH2;
     const CoregionalizationFitResult r = fit_coregionalization(table, c.structures, o, names());
-    const CsvTable g = CsvTable::read((dir_ / c.file).string());
+    const CsvTable g = CsvTable::read(gstat_.file(c.file));
     ASSERT_EQ(g.row_count(), 6u * c.structures.size());
     double largest = 0.0;
     for (const auto& s : r.model.structures()) largest = std::max(largest, s.sills.cwiseAbs().maxCoeff());
