@@ -315,7 +315,7 @@ TEST(VariogramCellList, SortedColumnsAvx512KernelEqualsPortableKernelBitForBit) 
         axis_major[static_cast<std::size_t>(a) * n + i] = x(static_cast<Eigen::Index>(i), a);
     const LagBins bins = LagBins::uniform(0.0, 0.15, 0.01);
     detail::VariogramColumns columns;
-    ASSERT_TRUE(detail::build_variogram_columns(axis_major.data(), z.data(), n, dimension, 0.15, true, columns));
+    ASSERT_TRUE(detail::build_variogram_columns(axis_major.data(), z.data(), n, dimension, 0.15, true, 1.0, columns));
     for (bool gstat : {false, true})
       for (auto statistic : {kernels::PairStatistic::SquaredDifference, kernels::PairStatistic::RootAbsDifference}) {
         SCOPED_TRACE("D=" + std::to_string(dimension) + (gstat ? " gstat" : " paper"));
@@ -348,22 +348,25 @@ TEST(VariogramCellList, SortedColumnsAvx512KernelEqualsPortableKernelBitForBit) 
   }
 }
 
-TEST(VariogramCellList, AutomaticChoiceTakesTheSortedColumnsOnlyForShortCutoffsAndEnoughPoints) {
+TEST(VariogramCellList, AutomaticChoiceTakesTheSortedColumnsForEnoughPointsAndAnyCutoffWithAvx512) {
   const std::size_t n = 2000;
   const Eigen::MatrixXd x = simulated_locations(n, 3, 0.05, 53);
   const Eigen::MatrixXd z = simulated_values(n, 1, 54);
-  auto chooses = [&](double cutoff, std::size_t points, bool force) {
+  auto chooses = [&](double cutoff, std::size_t points, bool force, kernels::KernelIsa isa) {
     std::vector<double> axis_major(3 * points);
     for (std::size_t i = 0; i < points; ++i)
       for (std::size_t a = 0; a < 3; ++a)
         axis_major[a * points + i] = x(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(a));
     detail::VariogramColumns columns;
-    return detail::build_variogram_columns(axis_major.data(), z.data(), points, 3, cutoff, force, columns);
+    return detail::build_variogram_columns(axis_major.data(), z.data(), points, 3, cutoff, force,
+                                           detail::column_max_share(isa), columns);
   };
-  EXPECT_TRUE(chooses(0.1, n, false));
-  EXPECT_FALSE(chooses(1.0, n, false));   // every pair within reach: all pairs is faster
-  EXPECT_FALSE(chooses(0.1, 500, false)); // too few points to pay for the sorting
-  EXPECT_TRUE(chooses(1.0, n, true));     // forced: one column, sorted, still exact
+  using kernels::KernelIsa;
+  EXPECT_TRUE(chooses(0.1, n, false, KernelIsa::Baseline));
+  EXPECT_FALSE(chooses(1.0, n, false, KernelIsa::Baseline));   // portable kernel: all pairs is faster
+  EXPECT_TRUE(chooses(1.0, n, false, KernelIsa::Avx512));      // AVX-512: never slower than all pairs
+  EXPECT_FALSE(chooses(0.1, 500, false, KernelIsa::Avx512));   // too few points to pay for the sorting
+  EXPECT_TRUE(chooses(1.0, 500, true, KernelIsa::Baseline));   // forced: one column, sorted, still exact
 }
 
 TEST(VariogramCellList, AutomaticChoiceTakesTheCellListOnlyForShortCutoffsAndEnoughPoints) {

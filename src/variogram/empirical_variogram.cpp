@@ -340,7 +340,8 @@ bool build_variogram_cells(const double* axis_major, std::size_t n, int dimensio
 }
 
 bool build_variogram_columns(const double* axis_major, const double* values, std::size_t n,
-                             int dimension, double cutoff, bool force, VariogramColumns& columns) {
+                             int dimension, double cutoff, bool force, double max_share,
+                             VariogramColumns& columns) {
   if (dimension < 1 || dimension > 3) return false;
   if (n < 2 || n > kernels::kSimdMaxPoints) return false;
   if (!force && n < kCellListMinPoints) return false;
@@ -389,22 +390,27 @@ bool build_variogram_columns(const double* axis_major, const double* values, std
     widest->cells = cells_for(widest->extent, widest->side);
     if (widest->cells < kMinColumns) grid.erase(widest);
   }
+  // Columns coarsened to a side >= the cutoff need a stencil of 1 column only: a pair within the
+  // cutoff is at most floor(cutoff / side) + 1 columns apart.
+  std::size_t reach = 1;
+  for (const Axis& x : grid)
+    reach = std::max(reach, std::min(kReach, static_cast<std::size_t>(std::floor(cutoff / x.side)) + 1));
   // Expected share of the pairs visited (uniform points): within the cutoff on the sort axis,
   // 2u - u^2 for u = cutoff / extent; within reach on a gridded axis of c columns,
   // ((2r + 1) c - r (r + 1)) / c^2.
   const double u = sort_axis.extent > 0.0 ? std::min(1.0, cutoff / sort_axis.extent) : 1.0;
   double visited = 2.0 * u - u * u;
-  const double r = static_cast<double>(kReach);
+  const double r = static_cast<double>(reach);
   for (const Axis& x : grid)
     visited *= std::min(1.0, ((2.0 * r + 1.0) * x.cells - r * (r + 1.0)) / (x.cells * x.cells));
-  if (!force && visited > kCellListMaxFraction) return false;
+  if (!force && visited > max_share) return false;
 
   kernels::SortedColumns& g = columns.list;
   g = kernels::SortedColumns{};
   g.dimension = dimension;
   g.sort_axis = sort_axis.axis;
   g.grid_axes = static_cast<int>(grid.size());
-  g.reach = kReach;
+  g.reach = reach;
   g.cutoff = cutoff;
   for (std::size_t k = 0; k < grid.size(); ++k) {
     g.grid_axis[k] = grid[k].axis;

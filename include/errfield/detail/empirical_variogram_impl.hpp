@@ -87,10 +87,20 @@ struct VariogramColumns {
 
 /// Builds the sorted columns of n points (axis-major coordinates, dimension 1..3, one value per
 /// point) for a Euclidean cutoff and returns true, or returns false when n does not fit or (unless
-/// `force`) the columns would not pay: their estimated share of the pairs visited is above
-/// kCellListMaxFraction, or n < kCellListMinPoints.
+/// `force`) the columns would not pay: n < kCellListMinPoints, or their estimated share of the
+/// pairs visited is above `max_share` (column_max_share).
 bool build_variogram_columns(const double* axis_major, const double* values, std::size_t n,
-                             int dimension, double cutoff, bool force, VariogramColumns& columns);
+                             int dimension, double cutoff, bool force, double max_share,
+                             VariogramColumns& columns);
+
+/// The largest estimated share of visited pairs for which Automatic takes the sorted columns.
+/// With AVX-512 they are never slower than all pairs (measured, N = 20,000 in a 500 cube: as fast
+/// at a cutoff of the whole side, 3x faster at half of it; docs/benchmarks.md): 1, always. Their
+/// portable kernel takes one pair at a time against the all-pairs loop's vectors: the cell
+/// list's rule, kCellListMaxFraction.
+inline double column_max_share(kernels::KernelIsa isa) noexcept {
+  return isa == kernels::KernelIsa::Avx512 ? 1.0 : kCellListMaxFraction;
+}
 
 /// One thread's workspace for the cell list (kernels::CellListScratch over n points).
 struct VariogramCellScratch {
@@ -390,7 +400,8 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
       !subsample && cone_ptr == nullptr && options.estimator != VariogramEstimator::Dowd &&
       layout.uniform && bins.size() <= kernels::kSimdMaxBins)
     detail::build_variogram_columns(soa.data(), z.data(), n, dim, bins.edges().back(),
-                                    options.pair_search == PairSearch::CellList, columns);
+                                    options.pair_search == PairSearch::CellList,
+                                    detail::column_max_share(job.isa), columns);
   if (columns.built()) {
     // One workspace of slot copies per thread, 32-byte aligned, allocated before the region.
     const std::size_t slot_doubles = kernels::column_slot_doubles(bins.size()) + 4;
