@@ -12,9 +12,10 @@
 /// cell side is at least cutoff / reach - and, within a column, by a third axis (the sort axis,
 /// the one with the largest extent). Point p then meets the points of its own column after it
 /// and the points of the columns ahead of it in a half stencil ((d1, d2) with d2 > 0, or d2 = 0
-/// and d1 > 0, |d| <= reach): each pair exactly once. In each column only the points within
-/// sqrt(cutoff^2 - gap^2) of p on the sort axis (gap: p's distance to the column) can be in range,
-/// a contiguous run found by binary search. Their squared lags are computed 8 at a time (AVX-512)
+/// and d1 > 0, |d| <= reach): each pair exactly once. In each column only the points within the
+/// cutoff of p on the sort axis can be in range, a contiguous run whose ends only move forward as
+/// p advances (a sweep), and a column farther from p than the cutoff is skipped. Their squared
+/// lags are computed 8 at a time (AVX-512)
 /// or one at a time (any CPU), the candidates within the cutoff are packed into a buffer and
 /// binned from there, so the vector work per pair in range does not pay for the candidates out
 /// of it.
