@@ -111,7 +111,7 @@ void BM_VariogramKernel3d(benchmark::State& state) {
 
 // Cutoff against extent (issue 22 item 7): 3-D locations uniform in a 500 cube, 15 bins up to
 // the cutoff = ratio x 500, N up to 10^6 (the largest N only at short cutoffs). `search`: 0 =
-// automatic (the cell list where it pays), 1 = all pairs, 2 = cell list forced. Counter
+// automatic (sorted columns where they pay), 1 = all pairs, 2 = sorted columns forced. Counter
 // `binned_pairs` = pairs within the cutoff.
 //
 //   build/benchmarks/bm_variogram --benchmark_filter='BM_VariogramCutoff3d/N:80000/ratio_pct:20'
@@ -145,6 +145,9 @@ void cutoff_cases(benchmark::internal::Benchmark* b) {
   for (long n : {20000L, 80000L})
     for (long ratio : {5L, 10L, 20L, 30L, 50L, 100L})
       for (long search : {0L, 1L}) b->Args({n, ratio, search});
+  // Forced pair search at long cutoffs: where the automatic choice's threshold sits.
+  for (long ratio : {30L, 50L, 70L, 100L}) b->Args({20000L, ratio, 2L});
+  b->Args({80000L, 50L, 2L});
   // Larger N only where the cell list keeps it reasonable (all pairs: minutes).
   for (long ratio : {5L, 10L, 20L}) b->Args({200000L, ratio, 0L});
   for (long ratio : {5L, 10L}) b->Args({1000000L, ratio, 0L});

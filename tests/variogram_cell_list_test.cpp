@@ -1,11 +1,16 @@
-// The empirical variogram's cell list (PairSearch::CellList, kernels/pair_cells.hpp) against the
-// all-pairs loop (bit for bit: it visits the same pairs in the same order) and against a brute
-// force over all pairs written here (counts exactly, sums to the rounding of a different summation
-// order). Small simulated data: uniform random locations, part of them on a lattice so that lags
-// equal the cutoff and the bin edges, and points land on cell boundaries; duplicates included.
+// The empirical variogram's pair searches against the all-pairs loop and against a brute force
+// over all pairs written here. The ordered cell list (kernels/pair_cells.hpp: directions, vector
+// values, Dowd, subsampling, weighted metrics, more than 3 axes) visits the same pairs in the same
+// order: bit for bit. The sorted columns (kernels/pair_columns.hpp: Euclidean, 1-3 axes, one
+// component, Matheron or Cressie-Hawkins, every pair) visit each pair in range once in another
+// order: pair counts exactly, sums to the rounding of a different summation order (see
+// order_tolerance). Small simulated data: uniform random locations, part of them on a lattice so
+// that lags equal the cutoff and the bin edges, and points land on cell boundaries; duplicates
+// included.
 
 #include <cmath>
 #include <cstring>
+#include <tuple>
 #include <random>
 #include <string>
 #include <vector>
@@ -13,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include "errfield/empirical_variogram.hpp"
+#include "pair_columns.hpp"
 
 namespace errfield {
 namespace variogram_cell_list_test {
@@ -113,10 +119,14 @@ BruteForce brute_force(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const
   return r;
 }
 
-// The library sums in 64 row chunks merged in order, the brute force in one sequence: a sum of at
-// most ~10^5 same-sign terms then differs by at most ~10^5 x 2^-53 relative; 1e-12 is ten times
-// what the few thousand pairs per bin here can produce.
-constexpr double kOrderTolerance = 1e-12;
+// Two sums of the same m >= 1 non-negative terms in different orders (chunks, slot copies) each
+// lie within (m - 1) u S of the exact sum S (u = 2^-53, Higham's bound for recursive summation in
+// any order), so they differ by at most 2 m u S; gamma and the mean lag add one division each, and
+// Cressie-Hawkins raises a mean to the 4th power (4 times its relative error). Hence 8 (m + 2) u,
+// relative: rounding-level, ~1e-11 for the few thousand pairs per bin here.
+double order_tolerance(std::uint64_t pairs) {
+  return 8.0 * (static_cast<double>(pairs) + 2.0) * std::ldexp(1.0, -53);
+}
 
 void expect_matches_brute_force(const EmpiricalVariogram& v, const BruteForce& r) {
   ASSERT_EQ(v.bins.size(), r.pairs.size());
@@ -124,9 +134,44 @@ void expect_matches_brute_force(const EmpiricalVariogram& v, const BruteForce& r
     SCOPED_TRACE("bin " + std::to_string(k));
     EXPECT_EQ(v.bins[k].pairs, r.pairs[k]);
     if (r.pairs[k] == 0) continue;
-    EXPECT_NEAR(v.bins[k].lag_mean, r.lag_mean[k], kOrderTolerance * r.lag_mean[k]);
-    EXPECT_NEAR(v.bins[k].gamma, r.gamma[k], kOrderTolerance * r.gamma[k]);
+    const double tol = order_tolerance(r.pairs[k]);
+    EXPECT_NEAR(v.bins[k].lag_mean, r.lag_mean[k], tol * r.lag_mean[k]);
+    EXPECT_NEAR(v.bins[k].gamma, r.gamma[k], tol * r.gamma[k]);
   }
+}
+
+// The same pairs in every bin (counts exactly) and the same sums up to the summation order.
+void expect_equal_to_rounding(const EmpiricalVariogram& a, const EmpiricalVariogram& b) {
+  ASSERT_EQ(a.bins.size(), b.bins.size());
+  ASSERT_EQ(a.components(), b.components());
+  for (std::size_t k = 0; k < a.bins.size(); ++k) {
+    SCOPED_TRACE("bin " + std::to_string(k));
+    ASSERT_EQ(a.bins[k].pairs, b.bins[k].pairs);
+    if (a.bins[k].pairs == 0) {
+      EXPECT_TRUE(std::isnan(a.bins[k].gamma) && std::isnan(b.bins[k].gamma));
+      continue;
+    }
+    const double tol = order_tolerance(a.bins[k].pairs);
+    EXPECT_NEAR(a.bins[k].lag_mean, b.bins[k].lag_mean, tol * b.bins[k].lag_mean);
+    EXPECT_NEAR(a.bins[k].gamma, b.bins[k].gamma, tol * b.bins[k].gamma);
+    for (int c = 0; c < a.components(); ++c) {
+      const double g = b.component_gamma(static_cast<Eigen::Index>(k), c);
+      EXPECT_NEAR(a.component_gamma(static_cast<Eigen::Index>(k), c), g, tol * g);
+    }
+  }
+}
+
+// Whether empirical_variogram takes the sorted columns for these inputs (when a cell list is
+// forced): the fast path's conditions, documented in empirical_variogram.hpp.
+bool takes_columns(int dimension, int components, const EmpiricalVariogramOptions& o) {
+  return dimension <= 3 && components == 1 && o.direction.is_all() && o.pair_fraction == 1.0 &&
+         o.estimator != VariogramEstimator::Dowd;
+}
+
+// Bit for bit where the ordered cell list runs, to rounding where the sorted columns do.
+void expect_as_all_pairs(const EmpiricalVariogram& cells, const EmpiricalVariogram& all, bool columns) {
+  if (columns) expect_equal_to_rounding(cells, all);
+  else expect_bit_identical(cells, all);
 }
 
 TEST(VariogramCellList, EqualsAllPairsAndBruteForceInOneToSixDimensionsForCutoffsUpToTheExtent) {
@@ -143,7 +188,7 @@ TEST(VariogramCellList, EqualsAllPairsAndBruteForceInOneToSixDimensionsForCutoff
         EmpiricalVariogramOptions o;
         o.convention = convention;
         const EmpiricalVariogram cells = run(x, z, bins, o, PairSearch::CellList);
-        expect_bit_identical(cells, run(x, z, bins, o, PairSearch::AllPairs));
+        expect_as_all_pairs(cells, run(x, z, bins, o, PairSearch::AllPairs), takes_columns(dimension, 1, o));
         expect_matches_brute_force(cells, brute_force(x, z, bins.edges(), convention == BinConvention::Gstat));
         std::uint64_t in_range = 0;
         for (const auto& b : cells.bins) in_range += b.pairs;
@@ -167,7 +212,7 @@ TEST(VariogramCellList, LatticeWithCutoffEqualToTheCellSideKeepsEveryPairAtTheCu
     EmpiricalVariogramOptions o;
     o.convention = convention;
     const EmpiricalVariogram cells = run(x, z, bins, o, PairSearch::CellList);
-    expect_bit_identical(cells, run(x, z, bins, o, PairSearch::AllPairs));
+    expect_equal_to_rounding(cells, run(x, z, bins, o, PairSearch::AllPairs));  // sorted columns
     expect_matches_brute_force(cells, brute_force(x, z, bins.edges(), convention == BinConvention::Gstat));
     EXPECT_EQ(cells.bins[0].pairs, 0u);
     EXPECT_EQ(cells.bins[1].pairs, convention == BinConvention::Gstat ? 144u : 0u);
@@ -201,8 +246,9 @@ TEST(VariogramCellList, EqualsAllPairsForDirectionsVectorValuesEstimatorsAndSubs
           o.pair_fraction = fraction;
           o.seed = 17;
           const LagBins bins = LagBins::uniform(0.0, 0.3, 0.05);
-          expect_bit_identical(run(x, z, bins, o, PairSearch::CellList),
-                               run(x, z, bins, o, PairSearch::AllPairs));
+          expect_as_all_pairs(run(x, z, bins, o, PairSearch::CellList),
+                              run(x, z, bins, o, PairSearch::AllPairs),
+                              takes_columns(c.dimension, components, o));
         }
     }
   }
@@ -242,6 +288,87 @@ TEST(VariogramCellList, BitIdenticalForOneAndTwoThreads) {
   }
 }
 
+TEST(VariogramCellList, SortedColumnsBitIdenticalForOneTwoAndThreeThreads) {
+  const Eigen::MatrixXd x = simulated_locations(600, 3, 0.05, 43);
+  const Eigen::MatrixXd z = simulated_values(600, 1, 44);
+  const LagBins bins = LagBins::uniform(0.0, 0.2, 0.02);
+  for (auto estimator : {VariogramEstimator::Matheron, VariogramEstimator::CressieHawkins}) {
+    EmpiricalVariogramOptions o;
+    o.estimator = estimator;
+    const EmpiricalVariogram one = run(x, z, bins, o, PairSearch::CellList, 1);
+    expect_bit_identical(one, run(x, z, bins, o, PairSearch::CellList, 2));
+    expect_bit_identical(one, run(x, z, bins, o, PairSearch::CellList, 3));
+  }
+}
+
+// The AVX-512 column kernel adds the same pairs in the same order to the same slot copies as the
+// portable one: equal sums bit for bit, for a whole range of rows and for uneven chunks of it.
+TEST(VariogramCellList, SortedColumnsAvx512KernelEqualsPortableKernelBitForBit) {
+  if (!kernels::kernel_isa_supported(kernels::KernelIsa::Avx512)) GTEST_SKIP() << "no AVX-512 on this CPU";
+  const std::size_t n = 700;
+  for (int dimension : {1, 2, 3}) {
+    const Eigen::MatrixXd x = simulated_locations(n, dimension, 0.05, 61 + dimension);
+    const Eigen::MatrixXd z = simulated_values(n, 1, 62);
+    std::vector<double> axis_major(n * static_cast<std::size_t>(dimension));
+    for (std::size_t i = 0; i < n; ++i)
+      for (int a = 0; a < dimension; ++a)
+        axis_major[static_cast<std::size_t>(a) * n + i] = x(static_cast<Eigen::Index>(i), a);
+    const LagBins bins = LagBins::uniform(0.0, 0.15, 0.01);
+    detail::VariogramColumns columns;
+    ASSERT_TRUE(detail::build_variogram_columns(axis_major.data(), z.data(), n, dimension, 0.15, true, 1.0, columns));
+    for (bool gstat : {false, true})
+      for (auto statistic : {kernels::PairStatistic::SquaredDifference, kernels::PairStatistic::RootAbsDifference}) {
+        SCOPED_TRACE("D=" + std::to_string(dimension) + (gstat ? " gstat" : " paper"));
+        EmpiricalVariogramOptions o;
+        o.convention = gstat ? BinConvention::Gstat : BinConvention::HalfOpen;
+        const kernels::BinLayout layout = detail::variogram_bin_layout(bins, o);
+        const std::size_t B = bins.size() + 1;
+        auto sums = [&](kernels::KernelIsa isa, std::size_t chunks) {
+          std::vector<std::uint64_t> count(B, 0);
+          std::vector<double> lag(B, 0.0), stat(B, 0.0);
+          alignas(64) static double slots[kernels::column_slot_doubles(64)];
+          for (std::size_t c = 0; c < chunks; ++c)
+            detail::run_column_chunk(isa, columns.list, layout, statistic, n * c / chunks, n * (c + 1) / chunks,
+                                     slots, kernels::PairSums{count.data(), lag.data(), stat.data()});
+          std::uint64_t total = 0;
+          for (std::size_t k = 0; k < bins.size(); ++k) total += count[k];
+          EXPECT_GT(total, 0u);
+          return std::make_tuple(count, lag, stat);
+        };
+        for (std::size_t chunks : {std::size_t{1}, std::size_t{7}}) {
+          const auto [c0, l0, s0] = sums(kernels::KernelIsa::Baseline, chunks);
+          const auto [c1, l1, s1] = sums(kernels::KernelIsa::Avx512, chunks);
+          for (std::size_t k = 0; k < B; ++k) {
+            EXPECT_EQ(c0[k], c1[k]);
+            EXPECT_TRUE(same_bits(l0[k], l1[k])) << l0[k] << " vs " << l1[k];
+            EXPECT_TRUE(same_bits(s0[k], s1[k])) << s0[k] << " vs " << s1[k];
+          }
+        }
+      }
+  }
+}
+
+TEST(VariogramCellList, AutomaticChoiceTakesTheSortedColumnsForEnoughPointsAndAnyCutoffWithAvx512) {
+  const std::size_t n = 2000;
+  const Eigen::MatrixXd x = simulated_locations(n, 3, 0.05, 53);
+  const Eigen::MatrixXd z = simulated_values(n, 1, 54);
+  auto chooses = [&](double cutoff, std::size_t points, bool force, kernels::KernelIsa isa) {
+    std::vector<double> axis_major(3 * points);
+    for (std::size_t i = 0; i < points; ++i)
+      for (std::size_t a = 0; a < 3; ++a)
+        axis_major[a * points + i] = x(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(a));
+    detail::VariogramColumns columns;
+    return detail::build_variogram_columns(axis_major.data(), z.data(), points, 3, cutoff, force,
+                                           detail::column_max_share(isa), columns);
+  };
+  using kernels::KernelIsa;
+  EXPECT_TRUE(chooses(0.1, n, false, KernelIsa::Baseline));
+  EXPECT_FALSE(chooses(1.0, n, false, KernelIsa::Baseline));   // portable kernel: all pairs is faster
+  EXPECT_TRUE(chooses(1.0, n, false, KernelIsa::Avx512));      // AVX-512: never slower than all pairs
+  EXPECT_FALSE(chooses(0.1, 500, false, KernelIsa::Avx512));   // too few points to pay for the sorting
+  EXPECT_TRUE(chooses(1.0, 500, true, KernelIsa::Baseline));   // forced: one column, sorted, still exact
+}
+
 TEST(VariogramCellList, AutomaticChoiceTakesTheCellListOnlyForShortCutoffsAndEnoughPoints) {
   const std::size_t n = 2000;
   const Eigen::MatrixXd x = simulated_locations(n, 3, 0.05, 51);
@@ -262,7 +389,7 @@ TEST(VariogramCellList, AutomaticChoiceTakesTheCellListOnlyForShortCutoffsAndEno
   // And the automatic result is the all-pairs one.
   const Eigen::MatrixXd z = simulated_values(n, 1, 52);
   const LagBins bins = LagBins::uniform(0.0, 0.1, 0.01);
-  expect_bit_identical(run(x, z, bins, {}, PairSearch::Automatic), run(x, z, bins, {}, PairSearch::AllPairs));
+  expect_equal_to_rounding(run(x, z, bins, {}, PairSearch::Automatic), run(x, z, bins, {}, PairSearch::AllPairs));
 }
 
 }  // namespace variogram_cell_list_test

@@ -19,10 +19,16 @@
 ///
 /// Cost: one pass over the N(N-1)/2 pairs, each lag computed once; memory O(N K + bins K C)
 /// with C = kVariogramChunks fixed row chunks (never an N x N matrix). When the largest bin edge
-/// (the cutoff) is short against the extent of the locations, a cell list (kernels/pair_cells.hpp)
-/// enumerates only the pairs of neighbouring cells instead, in the same order, so the result is
-/// the same bit for bit (options.pair_search; Euclidean, joint-space and weighted Euclidean
-/// metrics; other metrics always use all pairs); it costs O(N D) more memory plus O(N) per thread. Dowd's estimator needs
+/// (the cutoff) is short against the extent of the locations, only the pairs that can lie within
+/// it are enumerated (options.pair_search; Euclidean, joint-space and weighted Euclidean metrics;
+/// other metrics always use all pairs): in the common case - Euclidean or joint-space lags in 1 to
+/// 3 dimensions, one value component, Matheron or Cressie-Hawkins, every pair, every direction,
+/// equally spaced bins (at most 1024) - by sorted columns (kernels/pair_columns.hpp),
+/// each pair in range once in an order of its own: the same pairs in every bin (counts exactly),
+/// sums equal to the all-pairs ones up to the rounding of the summation order (a relative
+/// ~m 2^-53 for m pairs), bit-identical for any thread count; otherwise by a cell list
+/// (kernels/pair_cells.hpp) in the all-pairs order, the same result bit for bit. Either costs
+/// O(N D) more memory (the cell list O(N) more per thread). Dowd's estimator needs
 /// medians, hence a second pass and storage of every binned difference, bounded by
 /// EmpiricalVariogramOptions::max_stored_differences. Parallel with OpenMP; the chunks
 /// and the order in which their sums are merged do not depend on the number of threads, so the
@@ -103,12 +109,14 @@ class LagBins {
   bool uniform_ = false;
 };
 
-/// How empirical_variogram finds the pairs: every pair, or only the pairs a cell list puts within
-/// the largest bin edge (the cutoff). Both give the same result, bit for bit (docs/variogram.md).
+/// How empirical_variogram finds the pairs: every pair, or only the pairs that sorted columns or a
+/// cell list put within the largest bin edge (the cutoff). The same pairs either way; the sums are
+/// the same bit for bit, or to the rounding of the summation order where the sorted columns run
+/// (see empirical_variogram; docs/geostatistics.md).
 enum class PairSearch {
-  Automatic,  ///< a cell list when the cutoff is short against the extent of the locations
+  Automatic,  ///< columns or a cell list when the cutoff is short against the extent of the locations
   AllPairs,   ///< all N(N-1)/2 pairs
-  CellList,   ///< a cell list whenever the metric allows one (see empirical_variogram)
+  CellList,   ///< columns or a cell list whenever the metric allows one (see empirical_variogram)
 };
 
 /// Numerical and sampling policy of empirical_variogram.

@@ -35,6 +35,18 @@ std::string strip_unit(std::string_view name) {
 std::vector<std::string> split_line(std::string_view line, char delimiter, const std::string& source,
                                     std::size_t line_number) {
   std::vector<std::string> cells;
+  if (line.find('"') == std::string_view::npos) {
+    // No quotes (the common case): the cells are the trimmed pieces between delimiters, cut
+    // whole rather than char by char (reading was a fifth of a 20,000-row variogram's time).
+    cells.reserve(static_cast<std::size_t>(std::count(line.begin(), line.end(), delimiter)) + 1);
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t d = line.find(delimiter, start);
+      cells.push_back(trim(line.substr(start, d == std::string_view::npos ? std::string_view::npos : d - start)));
+      if (d == std::string_view::npos) return cells;
+      start = d + 1;
+    }
+  }
   std::string cell;
   bool quoted = false;
   bool was_quoted = false;
@@ -80,6 +92,12 @@ CsvTable CsvTable::read(const std::string& path, std::size_t max_bytes) {
   // Block by block, so that a binary file (/dev/zero) stops at its first NUL and an endless one
   // (a pipe, /dev/urandom) at the byte limit, never after filling the memory.
   std::string text;
+  {
+    // One allocation for a regular file (growing by doubling copied and re-touched every byte).
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    if (!ec && size <= max_bytes) text.reserve(static_cast<std::size_t>(size));
+  }
   std::vector<char> block(std::size_t{1} << 20);
   while (in) {
     in.read(block.data(), static_cast<std::streamsize>(block.size()));
@@ -106,6 +124,11 @@ CsvTable CsvTable::parse(std::string_view text, std::string source) {
   if (text.find('\0') != std::string_view::npos)
     throw InputError(src + ": contains a NUL byte; expected a text CSV file", src);
 
+  {
+    const auto lines = static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')) + 1;
+    table.rows_.reserve(lines);
+    table.lines_.reserve(lines);
+  }
   char delimiter = ',';
   bool have_header = false;
   std::size_t line_number = 0;
@@ -117,8 +140,8 @@ CsvTable CsvTable::parse(std::string_view text, std::string source) {
     pos = end + 1;
     ++line_number;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    const std::string trimmed = trim(line);
-    if (trimmed.empty() || trimmed[0] == '#') {
+    const auto first = line.find_first_not_of(" \t");  // blank or comment line: skipped
+    if (first == std::string_view::npos || line[first] == '#') {
       if (end == text.size()) break;
       continue;
     }

@@ -356,6 +356,122 @@ bool build_variogram_cells(const double* axis_major, std::size_t n, int dimensio
   return true;
 }
 
+bool build_variogram_columns(const double* axis_major, const double* values, std::size_t n,
+                             int dimension, double cutoff, bool force, double max_share,
+                             VariogramColumns& columns) {
+  if (dimension < 1 || dimension > 3) return false;
+  if (n < 2 || n > kernels::kSimdMaxPoints) return false;
+  if (!force && n < kCellListMinPoints) return false;
+  if (!(std::isfinite(cutoff) && cutoff > 0.0)) return false;
+  // Columns of half the cutoff (a pair within it is at most 2 columns apart), as the cell list's
+  // cells: the gap of a point to a column trims the run on the sort axis to the circle's chord.
+  constexpr std::size_t kReach = 2;
+  constexpr double kSideMargin = 1e-6;  // see build_variogram_cells
+  constexpr double kMinColumns = 2.0 * kReach + 1.0;
+  static_assert(kReach >= 1 && kReach <= kernels::kColumnMaxReach);
+  struct Axis {
+    int axis;
+    double lo, extent, side, cells;
+  };
+  auto cells_for = [](double extent, double side) {
+    return std::min(std::floor(extent / side) + 1.0, 1099511627776.0);  // 2^40: coarsened below
+  };
+  std::vector<Axis> all;
+  for (int a = 0; a < dimension; ++a) {
+    const double* x = axis_major + static_cast<std::size_t>(a) * n;
+    const auto [lo, hi] = std::minmax_element(x, x + n);
+    const double side = cutoff * (1.0 + kSideMargin) / static_cast<double>(kReach);
+    all.push_back({a, *lo, *hi - *lo, side, cells_for(*hi - *lo, side)});
+  }
+  // The sort axis: the largest extent (first on ties); the others are gridded when they have
+  // enough columns for some to be out of reach, most columns first.
+  const auto sort_it = std::max_element(all.begin(), all.end(),
+                                        [](const Axis& p, const Axis& q) { return p.extent < q.extent; });
+  const Axis sort_axis = *sort_it;
+  std::vector<Axis> grid;
+  for (const Axis& x : all)
+    if (x.axis != sort_axis.axis && x.cells >= kMinColumns) grid.push_back(x);
+  std::sort(grid.begin(), grid.end(), [](const Axis& p, const Axis& q) {
+    return p.cells > q.cells || (p.cells == q.cells && p.axis < q.axis);
+  });
+  // At most one column per point: emptier columns only cost their visits.
+  auto total = [&] {
+    double t = 1.0;
+    for (const Axis& x : grid) t *= x.cells;
+    return t;
+  };
+  while (!grid.empty() && total() > static_cast<double>(n)) {
+    auto widest = std::max_element(grid.begin(), grid.end(),
+                                   [](const Axis& p, const Axis& q) { return p.cells < q.cells; });
+    widest->side *= 2.0;
+    widest->cells = cells_for(widest->extent, widest->side);
+    if (widest->cells < kMinColumns) grid.erase(widest);
+  }
+  // Columns coarsened to a side >= the cutoff need a stencil of 1 column only: a pair within the
+  // cutoff is at most floor(cutoff / side) + 1 columns apart.
+  std::size_t reach = 1;
+  for (const Axis& x : grid)
+    reach = std::max(reach, std::min(kReach, static_cast<std::size_t>(std::floor(cutoff / x.side)) + 1));
+  // Expected share of the pairs visited (uniform points): within the cutoff on the sort axis,
+  // 2u - u^2 for u = cutoff / extent; within reach on a gridded axis of c columns,
+  // ((2r + 1) c - r (r + 1)) / c^2.
+  const double u = sort_axis.extent > 0.0 ? std::min(1.0, cutoff / sort_axis.extent) : 1.0;
+  double visited = 2.0 * u - u * u;
+  const double r = static_cast<double>(reach);
+  for (const Axis& x : grid)
+    visited *= std::min(1.0, ((2.0 * r + 1.0) * x.cells - r * (r + 1.0)) / (x.cells * x.cells));
+  if (!force && visited > max_share) return false;
+
+  kernels::SortedColumns& g = columns.list;
+  g = kernels::SortedColumns{};
+  g.dimension = dimension;
+  g.sort_axis = sort_axis.axis;
+  g.grid_axes = static_cast<int>(grid.size());
+  g.reach = reach;
+  g.cutoff = cutoff;
+  for (std::size_t k = 0; k < grid.size(); ++k) {
+    g.grid_axis[k] = grid[k].axis;
+    g.origin[k] = grid[k].lo;
+    g.side[k] = grid[k].side;
+    g.columns_per_axis[k] = static_cast<std::size_t>(grid[k].cells);
+  }
+  const std::size_t column_count = g.columns_per_axis[0] * g.columns_per_axis[1];
+  std::vector<std::uint32_t> column_of(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::size_t column = 0, stride = 1;
+    for (std::size_t k = 0; k < grid.size(); ++k) {
+      const double v = (axis_major[static_cast<std::size_t>(grid[k].axis) * n + i] - grid[k].lo) / grid[k].side;
+      column += std::min(static_cast<std::size_t>(v), g.columns_per_axis[k] - 1) * stride;
+      stride *= g.columns_per_axis[k];
+    }
+    column_of[i] = static_cast<std::uint32_t>(column);
+  }
+  // Counting sort by column, then each column by the sort axis (index breaks ties: deterministic).
+  columns.column_start.assign(column_count + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) ++columns.column_start[column_of[i] + 1];
+  for (std::size_t c = 0; c < column_count; ++c) columns.column_start[c + 1] += columns.column_start[c];
+  std::vector<std::uint32_t> point(n);
+  {
+    std::vector<std::uint32_t> next(columns.column_start.begin(), columns.column_start.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) point[next[column_of[i]]++] = static_cast<std::uint32_t>(i);
+  }
+  const double* key = axis_major + static_cast<std::size_t>(sort_axis.axis) * n;
+  for (std::size_t c = 0; c < column_count; ++c)
+    std::sort(point.begin() + columns.column_start[c], point.begin() + columns.column_start[c + 1],
+              [key](std::uint32_t p, std::uint32_t q) { return key[p] < key[q] || (key[p] == key[q] && p < q); });
+  const std::size_t D = static_cast<std::size_t>(dimension);
+  columns.coordinates.resize(n * D);
+  columns.values.resize(n);
+  for (std::size_t a = 0; a < D; ++a)
+    for (std::size_t p = 0; p < n; ++p) columns.coordinates[a * n + p] = axis_major[a * n + point[p]];
+  for (std::size_t p = 0; p < n; ++p) columns.values[p] = values[point[p]];
+  g.coordinates = columns.coordinates.data();
+  g.values = columns.values.data();
+  g.column_start = columns.column_start.data();
+  g.n = n;
+  return true;
+}
+
 kernels::BinLayout variogram_bin_layout(const LagBins& bins, const EmpiricalVariogramOptions& o) {
   kernels::BinLayout layout;
   layout.edges = bins.edges().data();
