@@ -21,6 +21,9 @@
 # ctest names a parameterized test "<name>  # GetParam() = ...", hence the "( |$)"). And
 # KrigingCli.ModelAutoKeepsTheLikelihoodFamiliesBeyond3000Samples (a 3,100-sample Vecchia refit:
 # 38 s here, 1.7 s in Release); the Vecchia likelihood's code runs here through VecchiaLikelihood.*.
+# And ReproduceCli.OneRunWritesEveryTableAndARenderableReport (one whole reproduction and its
+# report: 73 s here, the stage's longest test on 2026-11-26); the same CLI path, report included,
+# runs here through AtomicCliOutput.ReproduceReplacesItsFilesAllOrNone.
 
 # Debug info: -g1 (line tables, function names; no local variables) instead of -g: reports keep
 # file:line, and the build, nearly all of this stage's CPU time, is cheaper (CI budget).
@@ -39,7 +42,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${ERRFIELD_ASAN_BUILD_DIR:-build-asan}
-EXCLUDE=${ERRFIELD_ASAN_EXCLUDE:-'^Gstat|^KdlPeer|^install_consumer$|^docs_commands$|^CalibrationDistanceGeometry\.|^PredictiveCoverage\.|^Commands/Determinism\.SameBytesForOneAndTwoThreadsRunAfterRun/reproduce( |$)|^KrigingCli\.ModelAutoKeepsTheLikelihoodFamiliesBeyond3000Samples$'}
+EXCLUDE=${ERRFIELD_ASAN_EXCLUDE:-'^Gstat|^KdlPeer|^install_consumer$|^docs_commands$|^CalibrationDistanceGeometry\.|^PredictiveCoverage\.|^Commands/Determinism\.SameBytesForOneAndTwoThreadsRunAfterRun/reproduce( |$)|^KrigingCli\.ModelAutoKeepsTheLikelihoodFamiliesBeyond3000Samples$|^ReproduceCli\.OneRunWritesEveryTableAndARenderableReport$'}
 
 # clang, with -DERRFIELD_BUILD_FUZZERS=ON: the library and the CLI objects carry ASan+UBSan and
 # libFuzzer's coverage instrumentation, so scripts/fuzz.sh --build-dir build-asan links its targets

@@ -163,6 +163,33 @@ struct VariogramCellRun {
   kernels::CellListScratch scratch;
 };
 
+/// The plain Euclidean metrics take the axis-major fast path (same lags, bit for bit).
+template <class M>
+inline constexpr bool kPlainEuclidean =
+    std::is_same_v<M, EuclideanMetric> || std::is_same_v<M, JointSpaceMetric>;
+inline constexpr int kMaxFastDimension = 64;
+
+/// Calls f.template operator()<D>() with the Euclidean fast path's compile-time dimension D (0:
+/// any). A location type of fixed size has one possible D, so only that one is instantiated (every
+/// D is a copy of the pair loop per statistic and location type: compile time); a dynamic one
+/// dispatches on `dimension`.
+template <class L, class F>
+void with_euclidean_dimension(int dimension, F&& f) {
+  constexpr int kD = LocationTraits<L>::kDimension;
+  if constexpr (kD == 1 || kD == 2 || kD == 3 || kD == 6) {
+    (void)dimension;
+    f.template operator()<kD>();
+  } else {
+    switch (dimension) {
+      case 1: f.template operator()<1>(); break;
+      case 2: f.template operator()<2>(); break;
+      case 3: f.template operator()<3>(); break;
+      case 6: f.template operator()<6>(); break;
+      default: f.template operator()<0>();
+    }
+  }
+}
+
 /// visit(i, j, h, m) with batches of the pairs of rows [r0, r1) within the cutoff, in the
 /// all-pairs order, with the lags the all-pairs loop computes (the Euclidean fast path's or the
 /// metric's).
@@ -179,18 +206,13 @@ void for_each_cell_pair(const VariogramJob<L, M>& job, const VariogramCellRun& c
     kernels::for_each_pair_in_cells<false>(g, r0, r1, cutoff, cells.cone, lags, cells.scratch, visit);
     return;
   }
-  auto euclid = [&]<int D>() {
-    auto lags = [&](std::size_t, std::size_t pi, std::size_t p0, std::size_t m, double* h2) {
-      kernels::cell_squared_euclidean_lags<D>(g, pi, p0, m, h2);
-    };
-    kernels::for_each_pair_in_cells<true>(g, r0, r1, cutoff, cells.cone, lags, cells.scratch, visit);
-  };
-  switch (job.dimension) {
-    case 1: euclid.template operator()<1>(); break;
-    case 2: euclid.template operator()<2>(); break;
-    case 3: euclid.template operator()<3>(); break;
-    case 6: euclid.template operator()<6>(); break;
-    default: euclid.template operator()<0>();
+  if constexpr (kPlainEuclidean<M>) {  // soa is only set for these
+    with_euclidean_dimension<L>(job.dimension, [&]<int D>() {
+      auto lags = [&](std::size_t, std::size_t pi, std::size_t p0, std::size_t m, double* h2) {
+        kernels::cell_squared_euclidean_lags<D>(g, pi, p0, m, h2);
+      };
+      kernels::for_each_pair_in_cells<true>(g, r0, r1, cutoff, cells.cone, lags, cells.scratch, visit);
+    });
   }
 }
 
@@ -238,18 +260,13 @@ void run_variogram_chunk_k(const VariogramJob<L, M>& job, const VariogramCellRun
                                       job.layout, job.seed, job.keep_below, r0, r1, out, job.cone);
     return;
   }
-  auto euclid = [&]<int D>() {
-    kernels::bin_pair_rows_euclidean_isa<S, Sub, K, D>(job.isa, job.soa, job.n, job.dimension,
-                                                       job.values, job.components, job.layout,
-                                                       job.seed, job.keep_below, r0, r1, out,
-                                                       job.cone);
-  };
-  switch (job.dimension) {
-    case 1: euclid.template operator()<1>(); break;
-    case 2: euclid.template operator()<2>(); break;
-    case 3: euclid.template operator()<3>(); break;
-    case 6: euclid.template operator()<6>(); break;
-    default: euclid.template operator()<0>();
+  if constexpr (kPlainEuclidean<M>) {  // soa is only set for these
+    with_euclidean_dimension<L>(job.dimension, [&]<int D>() {
+      kernels::bin_pair_rows_euclidean_isa<S, Sub, K, D>(job.isa, job.soa, job.n, job.dimension,
+                                                         job.values, job.components, job.layout,
+                                                         job.seed, job.keep_below, r0, r1, out,
+                                                         job.cone);
+    });
   }
 }
 
@@ -326,11 +343,6 @@ void for_each_variogram_chunk(int threads, std::size_t chunks, std::size_t cell_
   }
 }
 
-/// The plain Euclidean metrics take the axis-major fast path (same lags, bit for bit).
-template <class M>
-inline constexpr bool kPlainEuclidean =
-    std::is_same_v<M, EuclideanMetric> || std::is_same_v<M, JointSpaceMetric>;
-inline constexpr int kMaxFastDimension = 64;
 
 }  // namespace detail
 
