@@ -67,7 +67,7 @@ struct OutputTable {
   void add_all_columns(const CsvTable& input) {
     for (std::size_t c = 0; c < input.header().size(); ++c) {
       std::vector<std::string> cells(input.row_count());
-      for (std::size_t r = 0; r < input.row_count(); ++r) cells[r] = input.row(r)[c];
+      for (std::size_t r = 0; r < input.row_count(); ++r) cells[r] = input.cell(r, c);
       put_column(input.header()[c], std::move(cells));  // the input's own text, as it was
     }
   }
@@ -76,7 +76,7 @@ struct OutputTable {
     for (std::size_t c = 0; c < input.header().size(); ++c) {
       std::vector<std::string> cells;
       cells.reserve(rows.size());
-      for (std::size_t r : rows) cells.push_back(input.row(r)[c]);
+      for (std::size_t r : rows) cells.emplace_back(input.cell(r, c));
       put_column(input.header()[c], std::move(cells));
     }
   }

@@ -425,7 +425,7 @@ void run_fit_variogram(const FitVariogramArgs& a) {
     const std::size_t c = t.column_index(label);
     std::vector<std::string> seen;
     for (std::size_t r = 0; r < t.row_count(); ++r)
-      if (std::find(seen.begin(), seen.end(), t.row(r)[c]) == seen.end()) seen.push_back(t.row(r)[c]);
+      if (std::find(seen.begin(), seen.end(), t.cell(r, c)) == seen.end()) seen.emplace_back(t.cell(r, c));
     if (seen.size() > 1) {
       std::string list;
       for (std::size_t k = 0; k < seen.size() && k < 8; ++k) list += (k ? ", " : "") + seen[k];

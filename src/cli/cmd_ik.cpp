@@ -109,7 +109,7 @@ void run_ik(const IkArgs& a) {
     for (const auto& qn : qnames) is_seed = is_seed || (has_seed && table.column_index(qn) == c);
     if (is_seed || std::find(computed.begin(), computed.end(), column_key(table.header()[c])) != computed.end()) continue;
     std::vector<std::string> cells(n);
-    for (std::size_t r = 0; r < n; ++r) cells[r] = table.row(r)[c];
+    for (std::size_t r = 0; r < n; ++r) cells[r] = table.cell(r, c);
     out.put_column(table.header()[c], std::move(cells));  // the input's own text
   }
   for (int k = 0; k < robot::kJointCount; ++k) out.add_numeric_column(qnames[static_cast<std::size_t>(k)], q[static_cast<std::size_t>(k)]);

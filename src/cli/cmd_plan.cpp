@@ -74,7 +74,7 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
     const CsvTable d = CsvTable::read(a.data);
     measured = read_joint_columns(d);
     if (d.has_column("point"))
-      for (std::size_t i = 0; i < d.row_count(); ++i) measured_points.insert(d.row(i)[d.column_index("point")]);
+      for (std::size_t i = 0; i < d.row_count(); ++i) measured_points.emplace(d.cell(i, d.column_index("point")));
   }
   if (!measured_points.empty() && !pool.has_column("point"))
     throw InputError(a.candidates + ": no column 'point', so the poses of --data (matched by point) cannot be left out",
@@ -82,7 +82,7 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
   std::vector<std::size_t> rows;  // pool rows still to choose from
   std::vector<JointVector> open;
   for (std::size_t i = 0; i < pool.row_count(); ++i) {
-    if (!measured_points.empty() && measured_points.count(pool.row(i)[pool.column_index("point")])) continue;
+    if (!measured_points.empty() && measured_points.count(std::string(pool.cell(i, pool.column_index("point"))))) continue;
     rows.push_back(i);
     open.push_back(pool_q[i]);
   }
@@ -149,8 +149,8 @@ VariogramModel model_from_variogram_csv(const std::string& path) {
   const std::size_t lag_col = t.column_index("lag_mean"), gamma_col = t.column_index("gamma");
   for (std::size_t r = 0; r < t.row_count(); ++r) {
     if (p[r] <= 0) continue;  // empty bins have empty lag_mean/gamma cells
-    lag.push_back(std::stod(t.row(r)[lag_col]));
-    gamma.push_back(std::stod(t.row(r)[gamma_col]));
+    lag.push_back(std::stod(std::string(t.cell(r, lag_col))));
+    gamma.push_back(std::stod(std::string(t.cell(r, gamma_col))));
     pairs.push_back(static_cast<std::uint64_t>(p[r]));
   }
   VariogramFitOptions fo;

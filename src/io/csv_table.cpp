@@ -8,6 +8,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 #include <unordered_map>
 
 #include "errfield/error.hpp"
@@ -15,12 +16,14 @@
 namespace errfield {
 namespace {
 
-std::string trim(std::string_view s) {
+std::string_view trim_view(std::string_view s) {
   const auto first = s.find_first_not_of(" \t");
   if (first == std::string_view::npos) return {};
   const auto last = s.find_last_not_of(" \t");
-  return std::string(s.substr(first, last - first + 1));
+  return s.substr(first, last - first + 1);
 }
+
+std::string trim(std::string_view s) { return std::string(trim_view(s)); }
 
 // "x [mm]" and "x (mm)" are looked up as "x": tracker exports put units in headers.
 // Surrounding blanks never count (a quoted header cell may keep them), so a name is found however
@@ -126,8 +129,8 @@ CsvTable CsvTable::parse(std::string_view text, std::string source) {
 
   {
     const auto lines = static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')) + 1;
-    table.rows_.reserve(lines);
     table.lines_.reserve(lines);
+    table.cells_.reserve(text.size());
   }
   char delimiter = ',';
   bool have_header = false;
@@ -174,19 +177,49 @@ CsvTable CsvTable::parse(std::string_view text, std::string source) {
       }
       have_header = true;
     } else {
-      auto cells = split_line(line, delimiter, src, line_number);
-      if (cells.size() != table.header_.size())
+      const std::size_t cells = table.append_row(line, delimiter, line_number);
+      if (cells != table.header_.size())
         throw InputError(src + ":" + std::to_string(line_number) + ": row has " +
-                             std::to_string(cells.size()) + " cells; the header has " +
+                             std::to_string(cells) + " cells; the header has " +
                              std::to_string(table.header_.size()),
                          src, line_number);
-      table.rows_.push_back(std::move(cells));
       table.lines_.push_back(line_number);
     }
     if (end == text.size()) break;
   }
   if (!have_header) throw InputError(src + ": file is empty; expected a header line", src);
   return table;
+}
+
+std::size_t CsvTable::append_row(std::string_view line, char delimiter, std::size_t line_number) {
+  const std::size_t before = cell_ends_.size();
+  if (line.find('"') == std::string_view::npos) {
+    // No quotes (the common case): the trimmed pieces between delimiters, appended in place.
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t d = line.find(delimiter, start);
+      cells_ += trim_view(line.substr(start, d == std::string_view::npos ? std::string_view::npos : d - start));
+      cell_ends_.push_back(cells_.size());
+      if (d == std::string_view::npos) break;
+      start = d + 1;
+    }
+  } else {
+    for (const std::string& cell : split_line(line, delimiter, source_, line_number)) {
+      cells_ += cell;
+      cell_ends_.push_back(cells_.size());
+    }
+  }
+  return cell_ends_.size() - before;
+}
+
+std::string_view CsvTable::cell(std::size_t row, std::size_t column) const {
+  if (row >= lines_.size() || column >= header_.size())
+    throw std::out_of_range("CsvTable::cell(" + std::to_string(row) + ", " + std::to_string(column) +
+                            ") of a " + std::to_string(lines_.size()) + " x " + std::to_string(header_.size()) +
+                            " table");
+  const std::size_t k = row * header_.size() + column;
+  const std::size_t begin = k == 0 ? 0 : cell_ends_[k - 1];
+  return std::string_view(cells_).substr(begin, cell_ends_[k] - begin);
 }
 
 std::string column_key(std::string_view name) { return strip_unit(name); }
@@ -211,36 +244,37 @@ std::size_t CsvTable::column_index(std::string_view name) const {
 
 std::vector<double> CsvTable::numeric_column(std::string_view name) const {
   const std::size_t c = column_index(name);
-  std::vector<double> out(rows_.size());
-  for (std::size_t r = 0; r < rows_.size(); ++r) out[r] = numeric_cell(r, c);
+  std::vector<double> out(row_count());
+  for (std::size_t r = 0; r < out.size(); ++r) out[r] = numeric_cell(r, c);
   return out;
 }
 
 double CsvTable::numeric_cell(std::size_t r, std::size_t c) const {
-  const std::string& cell = rows_.at(r).at(c);
+  const std::string_view text = cell(r, c);
+  const auto quoted = [&] { return "'" + std::string(text) + "'"; };
   const auto fail = [&](const std::string& what) {
     throw InputError(source_ + ":" + std::to_string(lines_[r]) + ": column '" + header_[c] + "'" + what, source_,
                      lines_[r], header_[c]);
   };
-  if (cell.empty()) fail(" is empty; expected a number");
+  if (text.empty()) fail(" is empty; expected a number");
   double v = 0.0;
-  const char* first = cell.data();
-  const char* last = cell.data() + cell.size();
+  const char* first = text.data();
+  const char* last = text.data() + text.size();
   if (*first == '+') ++first;
   const auto res = std::from_chars(first, last, v);
   if (res.ec == std::errc::result_out_of_range && res.ptr == last) {
     // Overflow is an error (below); underflow reads as the nearest double (0 or subnormal).
     v = std::strtod(std::string(first, last).c_str(), nullptr);
-    if (std::isinf(v)) fail(": '" + cell + "' is not a finite number (beyond the range of a double)");
+    if (std::isinf(v)) fail(": " + quoted() + " is not a finite number (beyond the range of a double)");
   } else if (res.ec != std::errc() || res.ptr != last) {
-    fail(": '" + cell + "' is not a number");
+    fail(": " + quoted() + " is not a number");
   }
-  if (!std::isfinite(v)) fail(": '" + cell + "' is not a finite number");
+  if (!std::isfinite(v)) fail(": " + quoted() + " is not a finite number");
   return v;
 }
 
 Eigen::MatrixXd CsvTable::numeric_columns(const std::vector<std::string>& names) const {
-  Eigen::MatrixXd m(static_cast<Eigen::Index>(rows_.size()), static_cast<Eigen::Index>(names.size()));
+  Eigen::MatrixXd m(static_cast<Eigen::Index>(row_count()), static_cast<Eigen::Index>(names.size()));
   for (std::size_t j = 0; j < names.size(); ++j) {
     const auto col = numeric_column(names[j]);
     for (std::size_t i = 0; i < col.size(); ++i)

@@ -33,7 +33,7 @@ DistanceTable distance_measurements_from_table(const CsvTable& table, const std:
       const std::vector<double> d = table.numeric_column(col);
       const bool in_metres = distances_in_metres(d, nominal, {}).has_value();  // warned about, not refused
       for (std::size_t i = 0; i < table.row_count(); ++i) {
-        const std::string kind = has_kind ? table.row(i)[kind_col] : "target";
+        const std::string kind(has_kind ? table.cell(i, kind_col) : std::string_view("target"));
         if (kind == "base")
           throw ArgumentError("--base-point: " + source + ":" + std::to_string(table.line_of_row(i)) +
                               " is a base row (kind=base), a robot-position base point; give base points either as "
@@ -67,7 +67,7 @@ DistanceTable distance_measurements_from_table(const CsvTable& table, const std:
   const std::size_t kind_col = table.column_index("kind");
   std::vector<std::size_t> base_rows;
   for (std::size_t i = 0; i < table.row_count(); ++i) {
-    const std::string& k = table.row(i)[kind_col];
+    const std::string k(table.cell(i, kind_col));
     if (k == "base") base_rows.push_back(i);
     else if (k != "target")
       throw InputError(source + ":" + std::to_string(table.line_of_row(i)) + ": column 'kind': '" + k +

@@ -269,7 +269,7 @@ void check_distance_columns(const CsvTable& t, const MdhModel* robot, const std:
   const std::size_t kind_col = has_kind ? t.column_index("kind") : 0;
   std::vector<std::size_t> base_rows;
   for (std::size_t i = 0; has_kind && i < t.row_count(); ++i)
-    if (t.row(i)[kind_col] == "base") base_rows.push_back(i);
+    if (t.cell(i, kind_col) == "base") base_rows.push_back(i);
   // Nominal positions of the rows and the base points, to recognise a row that is a base point.
   std::vector<Eigen::Vector3d> nominal, bases;
   const bool has_q = t.has_column("q1") && t.has_column("q2") && t.has_column("q3") && t.has_column("q4") &&

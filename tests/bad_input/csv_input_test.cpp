@@ -63,7 +63,7 @@ TEST(CsvBadInput, NonNumericEmptyNanAndInfCells) {
   const auto only = [&](std::size_t line) {
     return [&t, line] {
       // One bad row at a time: a table of the header plus that line.
-      const auto one = CsvTable::parse("x,v\n" + t.row(line - 2)[0] + "," + t.row(line - 2)[1] + "\n", "c.csv");
+      const auto one = CsvTable::parse("x,v\n" + std::string(t.cell(line - 2, 0)) + "," + std::string(t.cell(line - 2, 1)) + "\n", "c.csv");
       one.numeric_column("v");
     };
   };

@@ -48,7 +48,7 @@ class WrongCommand : public testing::CliTest {
   std::vector<std::string> column(const std::string& file, const std::string& name) {
     const CsvTable t = CsvTable::read(path(file));
     std::vector<std::string> v;
-    for (std::size_t i = 0; i < t.row_count(); ++i) v.push_back(t.row(i)[t.column_index(name)]);
+    for (std::size_t i = 0; i < t.row_count(); ++i) v.emplace_back(t.cell(i, t.column_index(name)));
     return v;
   }
   nlohmann::json read_json(const std::string& file) { return nlohmann::json::parse(read(file)); }
@@ -265,10 +265,10 @@ TEST_F(WrongCommand, RemeasuredPosesFitByDefault) {
   // REML and ML directly, on a scalar with one duplicated location.
   std::string s = "q1,q2,q3,q4,q5,q6,e\n";
   for (std::size_t i = 0; i < t.row_count(); ++i) {
-    for (const char* q : {"q1", "q2", "q3", "q4", "q5", "q6"}) s += t.row(i)[t.column_index(q)] + ",";
+    for (const char* q : {"q1", "q2", "q3", "q4", "q5", "q6"}) s += std::string(t.cell(i, t.column_index(q))) + ",";
     s += format_number(std::sin(0.05 * t.numeric_cell(i, t.column_index("q1"))) + 0.01 * static_cast<double>(i % 3)) + "\n";
   }
-  for (const char* q : {"q1", "q2", "q3", "q4", "q5", "q6"}) s += t.row(3)[t.column_index(q)] + ",";
+  for (const char* q : {"q1", "q2", "q3", "q4", "q5", "q6"}) s += std::string(t.cell(3, t.column_index(q))) + ",";
   s += "0.5\n";
   write("dup.csv", s);
   for (const char* method : {"reml", "ml"}) {
@@ -289,12 +289,12 @@ TEST_F(WrongCommand, BasePointThatIsGridVertexZero) {
   const std::size_t kind = t.column_index("kind");
   auto joints = [&](std::size_t i) {
     std::string q;
-    for (const char* c : {"q1", "q2", "q3", "q4", "q5", "q6"}) q += t.row(i)[t.column_index(c)] + ",";
+    for (const char* c : {"q1", "q2", "q3", "q4", "q5", "q6"}) q += std::string(t.cell(i, t.column_index(c))) + ",";
     return q;
   };
   std::size_t base = t.row_count(), vertex0 = t.row_count();
   for (std::size_t i = 0; i < t.row_count(); ++i)
-    if (t.row(i)[kind] == "base") base = i;
+    if (t.cell(i, kind) == "base") base = i;
   ASSERT_LT(base, t.row_count());
   for (std::size_t i = 0; i < t.row_count() && vertex0 == t.row_count(); ++i)
     if (i != base && joints(i) == joints(base)) vertex0 = i;
@@ -343,13 +343,13 @@ TEST_F(WrongCommand, BasePointThatIsGridVertexZero) {
 robot::JointVector joints_of(const CsvTable& t, std::size_t i, const std::string& prefix) {
   robot::JointVector q;
   for (int k = 0; k < 6; ++k) {
-    const std::string& cell = t.row(i)[t.column_index(prefix + std::to_string(k + 1))];
+    const std::string cell(t.cell(i, t.column_index(prefix + std::to_string(k + 1))));
     q[k] = cell.empty() ? std::nan("") : std::stod(cell);
   }
   return q;
 }
 double cell_of(const CsvTable& t, std::size_t i, const std::string& column) {
-  const std::string& cell = t.row(i)[t.column_index(column)];
+  const std::string cell(t.cell(i, t.column_index(column)));
   return cell.empty() ? std::nan("") : std::stod(cell);
 }
 

@@ -17,7 +17,7 @@ TEST(CsvTable, ReadsBomCrlfSemicolonsCommentsAndUnits) {
 
 TEST(CsvTable, QuotedCellsKeepDelimiters) {
   const auto t = CsvTable::parse("name,v\n\"a,b\",1\n", "q.csv");
-  EXPECT_EQ(t.row(0)[0], "a,b");
+  EXPECT_EQ(t.cell(0, 0), "a,b");
 }
 
 TEST(CsvTable, BadCellNamesFileLineAndColumn) {
