@@ -103,6 +103,9 @@ struct OutputTable {
 /// summary before committing its output file calls it between the two, so a failing run leaves
 /// the previous file in place (docs/reliability.md, "Atomic outputs").
 void require_standard_output();
+/// Lets the OpenMP worker threads go (they are started again by the next parallel region), so
+/// that they do not spin-wait while the command formats and writes its results.
+void release_idle_threads();
 
 // kMaxThreads and check_thread_count (--threads): errfield/thread_count.hpp, shared with the library and Python.
 
