@@ -211,6 +211,44 @@ __attribute__((target("avx512f"), always_inline)) inline __m512d pair_slots_avx5
   return _mm512_mask_blend_pd(0x33, one_zero, _mm512_permutex2var_pd(h, idx, w));
 }
 
+/// The bin rule's constants for 8 lags at once, made once per kernel call (bin_rule_avx512).
+struct BinRuleAvx512 {
+  __m512d first_edge, last_edge, inv_width, near_low, near_high, outside;
+};
+
+__attribute__((target("avx512f"), always_inline)) inline BinRuleAvx512 bin_rule_avx512(
+    const BinLayout& bins) noexcept {
+  return {_mm512_set1_pd(bins.edges[0]), _mm512_set1_pd(bins.edges[bins.bins]), _mm512_set1_pd(bins.inv_width),
+          _mm512_set1_pd(kNearEdge), _mm512_set1_pd(1.0 - kNearEdge), _mm512_set1_pd(static_cast<double>(bins.bins))};
+}
+
+/// The bins of 8 lags h into c[0..7] (32-byte aligned), bins.bins for a lag outside every bin: the
+/// truncated (h - e0) / width, except that a lag within kNearEdge (relative) of an inner edge is
+/// decided by find_bin on the stored edges, so every pair lands where the scalar rule puts it.
+template <bool Gstat>
+ERRFIELD_KERNELS_NO_FP_CONTRACT __attribute__((target("avx512f"), always_inline)) inline void bin_codes_avx512(
+    const BinRuleAvx512& rule, const BinLayout& bins, __m512d h, std::int32_t* c) noexcept {
+  ERRFIELD_KERNELS_NO_FP_CONTRACT_BODY
+  const __mmask8 in = _mm512_mask_cmp_pd_mask(_mm512_cmp_pd_mask(h, rule.first_edge, _CMP_GE_OQ), h, rule.last_edge,
+                                              Gstat ? _CMP_LE_OQ : _CMP_LT_OQ);
+  const __m512d g = _mm512_mul_pd(_mm512_sub_pd(h, rule.first_edge), rule.inv_width);
+  const __m512d k = _mm512_mask_roundscale_pd(g, 0xFF, g, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
+  const __m512d frac = _mm512_sub_pd(g, k);
+  const __mmask8 near = _mm512_mask_cmp_pd_mask(in, frac, rule.near_low, _CMP_LT_OQ) |
+                        _mm512_mask_cmp_pd_mask(in, frac, rule.near_high, _CMP_GT_OQ);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(c),
+                     _mm512_maskz_cvttpd_epi32(0xFF, _mm512_mask_blend_pd(in, rule.outside, k)));
+  if (near != 0) {  // rare: decide on the stored edges
+    alignas(64) double hs[8];
+    _mm512_store_pd(hs, h);
+    for (int t = 0; t < 8; ++t) {
+      if (((near >> t) & 1) == 0) continue;
+      const std::ptrdiff_t kb = find_bin(hs[t], bins);
+      c[t] = kb < 0 ? static_cast<std::int32_t>(bins.bins) : static_cast<std::int32_t>(kb);
+    }
+  }
+}
+
 template <PairStatistic S, bool Gstat, int D_FIXED>
 ERRFIELD_KERNELS_NO_FP_CONTRACT __attribute__((target("avx512f"))) void
 bin_pair_rows_euclidean_avx512(const double* coordinates, std::size_t n, int dimension,
@@ -222,14 +260,8 @@ bin_pair_rows_euclidean_avx512(const double* coordinates, std::size_t n, int dim
   alignas(64) double slots[4 * (kSimdMaxBins + 1)];
   for (std::size_t k = 0; k < 4 * B; ++k) slots[k] = 0.0;
 
-  const double e0 = bins.edges[0];
-  const __m512d ve0 = _mm512_set1_pd(e0), ven = _mm512_set1_pd(bins.edges[bins.bins]);
-  const __m512d vinv = _mm512_set1_pd(bins.inv_width);
-  const __m512d vlo = _mm512_set1_pd(detail::kNearEdge);
-  const __m512d vhi = _mm512_set1_pd(1.0 - detail::kNearEdge);
-  const __m512d voutside = _mm512_set1_pd(static_cast<double>(bins.bins));
+  const BinRuleAvx512 rule = bin_rule_avx512(bins);
   const __m512d vone_zero = _mm512_set_pd(0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0);
-  const std::int32_t outside = static_cast<std::int32_t>(bins.bins);
 
   double xi[D_FIXED > 0 ? D_FIXED : 64];
   __m512d vxi[D_FIXED > 0 ? D_FIXED : 64];
@@ -253,27 +285,8 @@ bin_pair_rows_euclidean_avx512(const double* coordinates, std::size_t n, int dim
       __m512d w;
       if constexpr (S == PairStatistic::SquaredDifference) w = _mm512_mul_pd(dz, dz);
       else w = _mm512_mask_sqrt_pd(dz, 0xFF, _mm512_abs_pd(dz));
-      const __mmask8 in = _mm512_mask_cmp_pd_mask(_mm512_cmp_pd_mask(h, ve0, _CMP_GE_OQ), h, ven,
-                                                  Gstat ? _CMP_LE_OQ : _CMP_LT_OQ);
-      const __m512d g = _mm512_mul_pd(_mm512_sub_pd(h, ve0), vinv);
-      const __m512d k = _mm512_mask_roundscale_pd(g, 0xFF, g, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
-      const __m512d frac = _mm512_sub_pd(g, k);
-      const __mmask8 near = _mm512_mask_cmp_pd_mask(in, frac, vlo, _CMP_LT_OQ) |
-                            _mm512_mask_cmp_pd_mask(in, frac, vhi, _CMP_GT_OQ);
-      // Bin per lane, `outside` for lanes outside every bin (near-edge lanes are fixed below).
-      const __m256i code =
-          _mm512_maskz_cvttpd_epi32(0xFF, _mm512_mask_blend_pd(in, voutside, k));
       alignas(32) std::int32_t c[8];
-      _mm256_store_si256(reinterpret_cast<__m256i*>(c), code);
-      if (near != 0) {  // rare: decide on the stored edges
-        alignas(64) double hs[8];
-        _mm512_store_pd(hs, h);
-        for (int t = 0; t < 8; ++t) {
-          if (((near >> t) & 1) == 0) continue;
-          const std::ptrdiff_t kb = find_bin(hs[t], bins);
-          c[t] = kb < 0 ? outside : static_cast<std::int32_t>(kb);
-        }
-      }
+      detail::bin_codes_avx512<Gstat>(rule, bins, h, c);
       // (h_t, w_t, 1, 0) per pair t, added in pair order.
       const __m512d p01 = detail::pair_slots_avx512<0>(h, w, vone_zero);
       const __m512d p23 = detail::pair_slots_avx512<1>(h, w, vone_zero);

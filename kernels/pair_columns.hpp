@@ -240,13 +240,8 @@ ERRFIELD_KERNELS_NO_FP_CONTRACT __attribute__((target("avx512f"))) inline void d
     const BinLayout& bins) noexcept {
   ERRFIELD_KERNELS_NO_FP_CONTRACT_BODY
   static_assert(kColumnSlotCopies == 4, "lane t of 8 goes to copy t & 3");
-  const __m512d ve0 = _mm512_set1_pd(bins.edges[0]), ven = _mm512_set1_pd(bins.edges[bins.bins]);
-  const __m512d vinv = _mm512_set1_pd(bins.inv_width);
-  const __m512d vlo = _mm512_set1_pd(kNearEdge);
-  const __m512d vhi = _mm512_set1_pd(1.0 - kNearEdge);
-  const __m512d voutside = _mm512_set1_pd(static_cast<double>(bins.bins));
+  const BinRuleAvx512 rule = bin_rule_avx512(bins);
   const __m512d vone_zero = _mm512_set_pd(0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0);
-  const std::int32_t outside = static_cast<std::int32_t>(bins.bins);
   double* copy[4] = {slots, slots + B * 4, slots + 2 * B * 4, slots + 3 * B * 4};
   for (std::size_t gi = 0; gi < groups; ++gi) {
     const __m512d h = _mm512_mask_sqrt_pd(_mm512_setzero_pd(), 0xFF, _mm512_loadu_pd(h2s + 8 * gi));
@@ -254,27 +249,8 @@ ERRFIELD_KERNELS_NO_FP_CONTRACT __attribute__((target("avx512f"))) inline void d
     __m512d w;
     if constexpr (S == PairStatistic::SquaredDifference) w = _mm512_mul_pd(dz, dz);
     else w = _mm512_mask_sqrt_pd(dz, 0xFF, _mm512_abs_pd(dz));
-    // The bin rule of bin_pair_rows_euclidean_avx512 (lags within kNearEdge of an inner edge are
-    // decided by find_bin on the stored edges).
-    const __mmask8 in = _mm512_mask_cmp_pd_mask(_mm512_cmp_pd_mask(h, ve0, _CMP_GE_OQ), h, ven,
-                                                Gstat ? _CMP_LE_OQ : _CMP_LT_OQ);
-    const __m512d gs = _mm512_mul_pd(_mm512_sub_pd(h, ve0), vinv);
-    const __m512d kf = _mm512_mask_roundscale_pd(gs, 0xFF, gs, _MM_FROUND_TO_ZERO | _MM_FROUND_NO_EXC);
-    const __m512d frac = _mm512_sub_pd(gs, kf);
-    const __mmask8 near = _mm512_mask_cmp_pd_mask(in, frac, vlo, _CMP_LT_OQ) |
-                          _mm512_mask_cmp_pd_mask(in, frac, vhi, _CMP_GT_OQ);
     alignas(32) std::int32_t c[8];
-    _mm256_store_si256(reinterpret_cast<__m256i*>(c),
-                       _mm512_maskz_cvttpd_epi32(0xFF, _mm512_mask_blend_pd(in, voutside, kf)));
-    if (near != 0) {
-      alignas(64) double hs[8];
-      _mm512_store_pd(hs, h);
-      for (int t = 0; t < 8; ++t) {
-        if (((near >> t) & 1) == 0) continue;
-        const std::ptrdiff_t kb = find_bin(hs[t], bins);
-        c[t] = kb < 0 ? outside : static_cast<std::int32_t>(kb);
-      }
-    }
+    bin_codes_avx512<Gstat>(rule, bins, h, c);  // the all-pairs kernel's rule
     const __m512d p01 = pair_slots_avx512<0>(h, w, vone_zero);
     const __m512d p23 = pair_slots_avx512<1>(h, w, vone_zero);
     const __m512d p45 = pair_slots_avx512<2>(h, w, vone_zero);
