@@ -217,18 +217,33 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
   const std::size_t total = std::min<std::size_t>(options.count + options.lookahead, static_cast<std::size_t>(C));
   std::vector<char> taken(static_cast<std::size_t>(C), 0);
   std::vector<Eigen::VectorXd> u_c;  // the picks' rank-one updates over the candidates
+  if (options.first_picks.size() > options.count)
+    throw ArgumentError("first_picks: " + std::to_string(options.first_picks.size()) + " rows for a count of " +
+                        std::to_string(options.count));
+  for (std::size_t f = 0; f < options.first_picks.size(); ++f) {
+    const std::size_t row = options.first_picks[f];
+    if (row >= static_cast<std::size_t>(C) ||
+        std::find(options.first_picks.begin(), options.first_picks.begin() + static_cast<std::ptrdiff_t>(f), row) !=
+            options.first_picks.begin() + static_cast<std::ptrdiff_t>(f))
+      throw ArgumentError("first_picks[" + std::to_string(f) + "]: row " + std::to_string(row) +
+                          " is beyond the candidates or given twice");
+  }
   for (std::size_t pick = 0; pick < total; ++pick) {
-    // The R x C work of a pick, one candidate column per iteration: each column's sum runs over the
-    // references in their order, whatever the thread count.
-    Eigen::VectorXd reduction(C);
-#pragma omp parallel for schedule(static)
-    for (Eigen::Index c = 0; c < C; ++c) reduction[c] = (cross.col(c).array().square() * scale_r.array()).sum();
     Eigen::Index best = -1;
-    double best_score = -1.0;
-    for (Eigen::Index c = 0; c < C; ++c) {
-      if (taken[static_cast<std::size_t>(c)]) continue;
-      const double score = reduction[c] / (std::max(var_c[c], 0.0) + noise);
-      if (score > best_score) best_score = score, best = c;
+    if (pick < options.first_picks.size()) {
+      best = static_cast<Eigen::Index>(options.first_picks[pick]);
+    } else {
+      // The R x C work of a pick, one candidate column per iteration: each column's sum runs over
+      // the references in their order, whatever the thread count.
+      Eigen::VectorXd reduction(C);
+#pragma omp parallel for schedule(static)
+      for (Eigen::Index c = 0; c < C; ++c) reduction[c] = (cross.col(c).array().square() * scale_r.array()).sum();
+      double best_score = -1.0;
+      for (Eigen::Index c = 0; c < C; ++c) {
+        if (taken[static_cast<std::size_t>(c)]) continue;
+        const double score = reduction[c] / (std::max(var_c[c], 0.0) + noise);
+        if (score > best_score) best_score = score, best = c;
+      }
     }
     taken[static_cast<std::size_t>(best)] = 1;
     (pick < options.count ? plan.chosen : plan.lookahead_rows).push_back(static_cast<std::size_t>(best));
@@ -248,6 +263,37 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
     plan.predicted_mse.push_back(mse());
   }
   return plan;
+}
+
+std::vector<std::size_t> box_extending_picks(const Eigen::MatrixXd& candidates, const Eigen::MatrixXd& measured,
+                                             double margin, std::size_t limit) {
+  check_columns(candidates, measured);
+  if (!(margin >= 0.0 && std::isfinite(margin)))
+    throw ArgumentError("box_extending_picks: margin " + format_number(margin) + "; expected a finite margin >= 0");
+  std::vector<std::size_t> picks;
+  if (measured.rows() == 0) return picks;
+  Eigen::RowVectorXd lower = measured.colwise().minCoeff().array() - margin;
+  Eigen::RowVectorXd upper = measured.colwise().maxCoeff().array() + margin;
+  std::vector<char> taken(static_cast<std::size_t>(candidates.rows()), 0);
+  while (picks.size() < limit) {
+    Eigen::Index best = -1;
+    double best_beyond = 0.0;
+    for (Eigen::Index a = 0; a < candidates.cols() && best < 0; ++a)
+      for (int side = 0; side < 2; ++side) {
+        for (Eigen::Index c = 0; c < candidates.rows(); ++c) {
+          if (taken[static_cast<std::size_t>(c)]) continue;
+          const double beyond = side == 0 ? lower[a] - candidates(c, a) : candidates(c, a) - upper[a];
+          if (beyond > best_beyond) best_beyond = beyond, best = c;
+        }
+        if (best >= 0) break;
+      }
+    if (best < 0) break;
+    picks.push_back(static_cast<std::size_t>(best));
+    taken[static_cast<std::size_t>(best)] = 1;
+    lower = lower.cwiseMin((candidates.row(best).array() - margin).matrix());
+    upper = upper.cwiseMax((candidates.row(best).array() + margin).matrix());
+  }
+  return picks;
 }
 
 std::vector<double> local_error_scale(const Eigen::MatrixXd& samples, const Eigen::MatrixXd& values,

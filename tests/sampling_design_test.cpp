@@ -282,5 +282,65 @@ TEST(VarianceReduction, SamePicksAndPredictionsForOneAndTwoThreads) {
   for (std::size_t i = 0; i < one.predicted_mse.size(); ++i) EXPECT_EQ(one.predicted_mse[i], two.predicted_mse[i]) << i;
 }
 
+TEST(BoxExtendingPicks, TakeTheFarthestBeyondTheMeasuredBoxPerAxisAndSideUntilNoneIsLeft) {
+  Eigen::MatrixXd measured(3, 2);
+  measured << 0.0, 0.0, 1.0, 1.0, 0.5, 0.2;
+  Eigen::MatrixXd pool(6, 2);
+  pool << 0.5, 0.5,    // inside
+      1.5, 0.5,        // beyond x max by 0.5: covered once row 2 is picked
+      2.0, 0.4,        // beyond x max by 1.0
+      -1.0, 0.2,       // beyond x min by 1.0
+      0.3, 1.05,       // beyond y max by 0.05
+      0.2, 1.3;        // beyond y max by 0.3
+  // Axis 0 lower side, axis 0 upper side, axis 1 upper side; row 4 is inside the grown box then.
+  EXPECT_EQ(box_extending_picks(pool, measured, 0.0, 10), (std::vector<std::size_t>{3, 2, 5}));
+  EXPECT_EQ(box_extending_picks(pool, measured, 0.0, 2), (std::vector<std::size_t>{3, 2}));
+  // A margin of 0.2 covers rows 1 and 4 (and widens the box the picks grow by it).
+  EXPECT_EQ(box_extending_picks(pool, measured, 0.2, 10), (std::vector<std::size_t>{3, 2, 5}));
+  EXPECT_TRUE(box_extending_picks(pool, measured, 1.0, 10).empty());
+  EXPECT_TRUE(box_extending_picks(pool, Eigen::MatrixXd(0, 2), 0.0, 10).empty());
+  // Brute force: after the picks every pool row lies in the box of measured + picks.
+  const auto picks = box_extending_picks(pool, measured, 0.0, 10);
+  Eigen::MatrixXd all(measured.rows() + static_cast<Eigen::Index>(picks.size()), 2);
+  all.topRows(measured.rows()) = measured;
+  for (std::size_t k = 0; k < picks.size(); ++k)
+    all.row(measured.rows() + static_cast<Eigen::Index>(k)) = pool.row(static_cast<Eigen::Index>(picks[k]));
+  for (Eigen::Index i = 0; i < pool.rows(); ++i)
+    for (Eigen::Index a = 0; a < 2; ++a) {
+      EXPECT_GE(pool(i, a), all.col(a).minCoeff());
+      EXPECT_LE(pool(i, a), all.col(a).maxCoeff());
+    }
+  EXPECT_THROW(box_extending_picks(pool, measured, -1.0, 10), ArgumentError);
+}
+
+TEST(VarianceReduction, FirstPicksComeFirstAndTheRestIsTheGreedyChoiceGivenThem) {
+  // Picking rows 7 and 3 first, then greedily, must equal the greedy choice conditioned on the
+  // measured rows plus rows 7 and 3 (a second call), and the predictions after them must agree.
+  const Eigen::MatrixXd pool = uniform_points(50, 2, 8.0, 51), measured = uniform_points(6, 2, 8.0, 52);
+  const VariogramModel model = VariogramModel::parse("exp(sill=1,range=2.5)+nug(0.05)");
+  VarianceReductionOptions o;
+  o.count = 8;
+  o.first_picks = {7, 3};
+  const VarianceReductionPlan forced = select_by_variance_reduction(pool, measured, model, o);
+  ASSERT_EQ(forced.chosen.size(), 8u);
+  EXPECT_EQ(forced.chosen[0], 7u);
+  EXPECT_EQ(forced.chosen[1], 3u);
+  Eigen::MatrixXd more(measured.rows() + 2, 2);
+  more << measured, pool.row(7), pool.row(3);
+  // The second call sees rows 7 and 3 among its candidates too: a measured location's candidate
+  // has (almost) no variance left to reduce, so it is not picked again.
+  VarianceReductionOptions rest;
+  rest.count = 6;
+  const VarianceReductionPlan given = select_by_variance_reduction(pool, more, model, rest);
+  EXPECT_EQ(std::vector<std::size_t>(forced.chosen.begin() + 2, forced.chosen.end()), given.chosen);
+  ASSERT_EQ(forced.predicted_mse.size(), 9u);
+  for (std::size_t k = 0; k < given.predicted_mse.size(); ++k)
+    EXPECT_NEAR(forced.predicted_mse[k + 2], given.predicted_mse[k], 1e-9 * given.predicted_mse[k]) << k;
+  o.first_picks = {7, 7};
+  EXPECT_THROW(select_by_variance_reduction(pool, measured, model, o), ArgumentError);
+  o.first_picks = {50};
+  EXPECT_THROW(select_by_variance_reduction(pool, measured, model, o), ArgumentError);
+}
+
 }  // namespace sampling_design_test
 }  // namespace errfield

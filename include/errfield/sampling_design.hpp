@@ -59,7 +59,20 @@ struct VarianceReductionOptions {
   /// is weighted, and predicted_mse scaled, by it - a field whose errors grow at the workspace
   /// edges is sampled more there.
   std::vector<double> variance_scale;
+  /// Candidate rows picked first, in this order, before the greedy choice (count includes them):
+  /// locations the caller needs whatever their variance reduction (e.g. those that extend the
+  /// region a model answers for). Distinct, and at most `count`.
+  std::vector<std::size_t> first_picks;
 };
+
+/// Candidate rows that extend the box of `measured` (one location per row; per axis [min - margin,
+/// max + margin]) to the candidates' own extent: while some candidate lies outside the box, the one
+/// farthest beyond it on one axis and side (axes in order, lower side first) is picked and the box
+/// grown by it. At most `limit` rows, in picking order. For a model that refuses locations outside
+/// the box of its samples, these are the measurements without which part of the pool stays refused.
+/// Empty `measured`: nothing (there is no box yet).
+std::vector<std::size_t> box_extending_picks(const Eigen::MatrixXd& candidates, const Eigen::MatrixXd& measured,
+                                             double margin, std::size_t limit);
 
 struct VarianceReductionPlan {
   std::vector<std::size_t> chosen;  ///< candidate rows, in picking order (`count` of them)

@@ -116,6 +116,40 @@ TEST_F(PlanCandidates, WithAModelPredictsTheRmsAndAnswersATarget) {
   EXPECT_EQ(s["poses_for_target"].get<int>(), 0);  // 1 m is reached already
   const auto measured = points("measured.csv");
   for (const auto& p : points("next.csv")) EXPECT_EQ(std::count(measured.begin(), measured.end(), p), 0) << p;
+  // The fitted model refuses poses beyond the box of its samples' joints widened by its margin:
+  // after a batch no pool pose may lie beyond the box of the measured and chosen poses so widened.
+  // Returns whether some pool pose lay beyond it before the batch.
+  auto check_region_covered = [&](const std::string& model, const std::string& data, const std::string& chosen,
+                                  const std::string& out) {
+    const auto field = nlohmann::json::parse(read(model))["field"];
+    EXPECT_EQ(field["space"], "joint");
+    const double margin = field["region_margin_deg"].get<double>();
+    const CsvTable pool = CsvTable::read(path("pool.csv")), done = CsvTable::read(path(data)),
+                   next = CsvTable::read(path(chosen));
+    bool was_outside = false;
+    for (int k = 1; k <= 6; ++k) {
+      const std::string q = "q" + std::to_string(k);
+      const auto a = done.numeric_column(q), b = next.numeric_column(q), all = pool.numeric_column(q);
+      const double lo0 = *std::min_element(a.begin(), a.end()) - margin;
+      const double hi0 = *std::max_element(a.begin(), a.end()) + margin;
+      const double lo = std::min(lo0, *std::min_element(b.begin(), b.end()) - margin);
+      const double hi = std::max(hi0, *std::max_element(b.begin(), b.end()) + margin);
+      for (double v : all) {
+        was_outside = was_outside || v < lo0 || v > hi0;
+        EXPECT_GE(v, lo) << q << " after " << chosen;
+        EXPECT_LE(v, hi) << q << " after " << chosen;
+      }
+    }
+    EXPECT_EQ(was_outside, out.find("extend the fitted region") != std::string::npos) << out;
+    return was_outside;
+  };
+  check_region_covered("m.json", "measured.csv", "next.csv", r.out);
+  // From 25 measured poses much of the pool lies beyond their box: the batch starts by extending it.
+  take_rows("all.csv", "measured25.csv", 1, 26);
+  ASSERT_EQ(run("fit --robot r.json --data measured25.csv --out m25.json").exit_code, 0);
+  const auto r25 = run("plan --candidates pool.csv --count 20 --model m25.json --data measured25.csv --out next25.csv");
+  ASSERT_EQ(r25.exit_code, 0) << r25.err;
+  EXPECT_TRUE(check_region_covered("m25.json", "measured25.csv", "next25.csv", r25.out));
   // A target below the nugget is never reached: said, not a number made up.
   const auto t = run("plan --candidates pool.csv --count 20 --model m.json --data measured.csv --target-rms 1e-6 "
                      "--summary-out t.json --out next2.csv");

@@ -34,6 +34,10 @@ struct PoseSelectionOptions {
   /// With a model: weight by where the model's leave-one-out errors exceeded its variance
   /// (local_error_scale in sampling_design.hpp).
   bool local_scale = true;
+  /// With a model: first take the pool poses beyond the box of the poses measured so far (the
+  /// region the model answers for, widened by its margin), the farthest per axis and side, so that
+  /// no part of the pool stays refused by the next fit (box_extending_picks in sampling_design.hpp).
+  bool extend_region = true;
   /// Throws ArgumentError naming the field.
   void validate() const;
 };
@@ -48,6 +52,7 @@ struct PoseSelection {
   /// when not reached within count + max_lookahead poses of this pool.
   std::optional<std::size_t> poses_for_target;
   std::size_t conditioned_on = 0;  ///< measured poses the model-based choice was conditioned on
+  std::size_t region_extending = 0;  ///< model-based: how many of `chosen` (the first) extend the region
 };
 
 /// Chooses `options.count` of `candidates` (joints, deg). `measured` are the poses measured so far
