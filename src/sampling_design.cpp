@@ -185,7 +185,6 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
   }
   Eigen::VectorXd scale_r(R);
   for (Eigen::Index i = 0; i < R; ++i) scale_r[i] = scale_c[static_cast<Eigen::Index>(ref_rows[static_cast<std::size_t>(i)])];
-  const double scale_mean = scale_r.mean();
   constexpr double kMaxBytes = 4.0 * 1024 * 1024 * 1024;
   if (static_cast<double>(R) * static_cast<double>(C) * 8.0 > kMaxBytes)
     throw ResourceError("variance reduction over " + std::to_string(R) + " references x " + std::to_string(C) +
@@ -196,7 +195,6 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
   // Posterior after the measured locations: Σ(a,b) = k(a,b) − W_a' W_b, W = L⁻¹ K_D·, L L' = K_DD + noise I.
   Eigen::MatrixXd cross = k.between(xr, xc);                 // Σ(R, C), updated in place
   Eigen::VectorXd var_c = Eigen::VectorXd::Constant(C, k(0.0));  // Σ(c, c)
-  Eigen::VectorXd var_r = Eigen::VectorXd::Constant(R, k(0.0));  // Σ(r, r)
   Eigen::MatrixXd w_c;  // M x C, kept for the candidate-candidate covariances of later picks
   if (xd.rows() > 0) {
     Eigen::MatrixXd kdd = k.between(xd, xd);
@@ -208,14 +206,55 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
     const Eigen::MatrixXd w_r = llt.matrixL().solve(k.between(xd, xr));
     cross.noalias() -= w_r.transpose() * w_c;
     var_c -= w_c.colwise().squaredNorm().transpose();
-    var_r -= w_r.colwise().squaredNorm().transpose();
   }
-  // A new reading's error variance at r: (field + nugget) times the local scale.
-  auto mse = [&] { return (scale_r.array() * var_r.cwiseMax(0.0).array()).mean() + scale_mean * nugget; };
+  // Leave-one-out variances: a measured or picked location counts in the prediction with the
+  // field's variance there given every other reading, 1 / (K_S^-1)_ii - noise over the set S of
+  // measured and picked locations (what a new pose near it, not on it, would see). K_S^-1 is kept
+  // explicitly and grown by one row and column per pick (a bordered inverse, O(|S|^2) each).
+  const Eigen::Index M = xd.rows();
+  const Eigen::Index E = options.measured_in_prediction ? M : 0;
+  Eigen::VectorXd scale_e = Eigen::VectorXd::Ones(E);
+  if (E > 0 && !options.measured_scale.empty()) {
+    if (static_cast<Eigen::Index>(options.measured_scale.size()) != E)
+      throw ArgumentError("measured_scale: " + std::to_string(options.measured_scale.size()) + " values for " +
+                          std::to_string(E) + " measured locations");
+    for (Eigen::Index e = 0; e < E; ++e) {
+      const double v = options.measured_scale[static_cast<std::size_t>(e)];
+      if (!(v >= 0.0 && std::isfinite(v)))
+        throw ArgumentError("measured_scale[" + std::to_string(e) + "]: " + format_number(v) + "; expected >= 0");
+      scale_e[e] = v;
+    }
+  }
+  const std::size_t total = std::min<std::size_t>(options.count + options.lookahead, static_cast<std::size_t>(C));
+  const Eigen::Index S_max = M + static_cast<Eigen::Index>(total);
+  Eigen::MatrixXd k_inverse(S_max, S_max);  // top-left |S| x |S| in use
+  Eigen::MatrixXd x_set(S_max, xc.cols());
+  Eigen::Index S = M;
+  if (M > 0) {
+    Eigen::MatrixXd kdd = k.between(xd, xd);
+    kdd.diagonal().array() += noise;
+    k_inverse.topLeftCorner(M, M) = Eigen::LLT<Eigen::MatrixXd>(kdd).solve(Eigen::MatrixXd::Identity(M, M));
+    x_set.topRows(M) = xd;
+  }
+  std::vector<Eigen::Index> set_of_candidate(static_cast<std::size_t>(C), -1);  // a pick's index in S
+  auto loo = [&](Eigen::Index i) { return std::max(1.0 / k_inverse(i, i) - noise, 0.0); };
+  // A new reading's error variance, (field + nugget) times the local scale, averaged over every
+  // candidate (and measured location): the pool as a whole, which the poses asked for later
+  // resemble. Averaged over the candidates not picked alone it was biased low after a greedy
+  // batch, which leaves the candidates whose variance it did not need to reduce.
+  std::vector<char> taken(static_cast<std::size_t>(C), 0);
+  const double scale_all = (scale_c.sum() + scale_e.sum()) / static_cast<double>(C + E);
+  auto mse = [&] {
+    double sum = 0.0;
+    for (Eigen::Index c = 0; c < C; ++c) {
+      const Eigen::Index i = set_of_candidate[static_cast<std::size_t>(c)];
+      sum += scale_c[c] * (i >= 0 ? loo(i) : std::max(var_c[c], 0.0));
+    }
+    for (Eigen::Index e = 0; e < E; ++e) sum += scale_e[e] * loo(e);
+    return sum / static_cast<double>(C + E) + scale_all * nugget;
+  };
   plan.predicted_mse.push_back(xd.rows() > 0 ? mse() : std::numeric_limits<double>::quiet_NaN());
 
-  const std::size_t total = std::min<std::size_t>(options.count + options.lookahead, static_cast<std::size_t>(C));
-  std::vector<char> taken(static_cast<std::size_t>(C), 0);
   std::vector<Eigen::VectorXd> u_c;  // the picks' rank-one updates over the candidates
   if (options.first_picks.size() > options.count)
     throw ArgumentError("first_picks: " + std::to_string(options.first_picks.size()) + " rows for a count of " +
@@ -257,8 +296,20 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
     const Eigen::VectorXd ur = cross.col(best) / denominator;
 #pragma omp parallel for schedule(static)
     for (Eigen::Index c = 0; c < C; ++c) cross.col(c) -= uc[c] * ur;
+    {
+      // K_S^-1 bordered by the pick: b = k(S, pick), a = K_S^-1 b, s = k(pick, pick) + noise - b'a.
+      Eigen::VectorXd b(S);
+      for (Eigen::Index i = 0; i < S; ++i) b[i] = k((x_set.row(i) - xc.row(best)).norm());
+      const Eigen::VectorXd a = k_inverse.topLeftCorner(S, S) * b;
+      const double schur = k(0.0) + noise - b.dot(a);
+      k_inverse.topLeftCorner(S, S).noalias() += (a / schur) * a.transpose();
+      k_inverse.block(0, S, S, 1) = -a / schur;
+      k_inverse.block(S, 0, 1, S) = (-a / schur).transpose();
+      k_inverse(S, S) = 1.0 / schur;
+      x_set.row(S) = xc.row(best);
+      set_of_candidate[static_cast<std::size_t>(best)] = S++;
+    }
     var_c -= uc.cwiseAbs2();
-    var_r -= ur.cwiseAbs2();
     u_c.push_back(uc);
     plan.predicted_mse.push_back(mse());
   }

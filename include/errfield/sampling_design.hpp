@@ -63,6 +63,11 @@ struct VarianceReductionOptions {
   /// locations the caller needs whatever their variance reduction (e.g. those that extend the
   /// region a model answers for). Distinct, and at most `count`.
   std::vector<std::size_t> first_picks;
+  /// The measured locations count in predicted_mse too, each with its leave-one-out variance (when
+  /// they were drawn from the same pool as the candidates: the prediction is then over the whole
+  /// pool). Their variance multipliers in `measured_scale` (empty = 1), as variance_scale.
+  bool measured_in_prediction = false;
+  std::vector<double> measured_scale;
 };
 
 /// Candidate rows that extend the box of `measured` (one location per row; per axis [min - margin,
@@ -76,9 +81,12 @@ std::vector<std::size_t> box_extending_picks(const Eigen::MatrixXd& candidates, 
 
 struct VarianceReductionPlan {
   std::vector<std::size_t> chosen;  ///< candidate rows, in picking order (`count` of them)
-  /// Mean over the references of the predictive variance of a new measurement (field + nugget), per
+  /// Mean over every candidate (and, with measured_in_prediction, measured location) of the
+  /// predictive variance of a new measurement (field + nugget, times its variance scale), per
   /// component: [0] with the measured locations only, [k] after the first k picks (count +
-  /// lookahead entries after [0], fewer if the candidates ran out).
+  /// lookahead entries after [0], fewer if the candidates ran out). A picked candidate counts with
+  /// its variance before its own pick, a measured location with its leave-one-out variance: what a
+  /// new location near them would see. The references serve the choice only.
   std::vector<double> predicted_mse;
   /// The lookahead picks' rows (after `chosen`), for "how many more would it take".
   std::vector<std::size_t> lookahead_rows;

@@ -75,6 +75,9 @@ PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
   const Eigen::MatrixXd pool = joint ? joint_rows(candidates) : position_rows(candidates, where);
   const Eigen::MatrixXd done = joint ? joint_rows(known) : position_rows(known, where);
   VarianceReductionOptions vo;
+  // The predicted RMS is over the whole pool: the candidates and the poses measured already (in
+  // plan's use the pool rows of --data), as the poses asked for later will be spread.
+  vo.measured_in_prediction = true;
   if (options.local_scale) {
     // Where the model's own leave-one-out errors were larger than its variance said (e.g. the
     // workspace edges of a robot whose errors grow there), weight the choice and the prediction.
@@ -91,6 +94,7 @@ PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
       for (int k = 0; k < 3; ++k) values(static_cast<Eigen::Index>(i), k) = fv.at(i).at(static_cast<std::size_t>(k)).get<double>();
     const Eigen::MatrixXd xs = joint ? joint_rows(sq) : position_rows(sq, where);
     vo.variance_scale = local_error_scale(xs, values, vm, pool);
+    if (done.rows() > 0) vo.measured_scale = local_error_scale(xs, values, vm, done);
   }
   if (options.extend_region) {
     // The model refuses a pose outside the box of its samples (widened by its margin): a pool pose
