@@ -45,7 +45,8 @@ struct PoseSelectionOptions {
 struct PoseSelection {
   std::vector<std::size_t> chosen;  ///< indices into the candidates, in measuring order
   std::string design;               ///< for people: which design and why
-  /// Model-based only: predicted 3-D RMS (mm) of a new reading over the pool, [0] with the poses
+  /// Model-based only: predicted 3-D RMS (mm) of a new reading over the pool and the measured poses
+  /// (these and the chosen ones with their leave-one-out variance: VarianceReductionPlan), [0] with the poses
   /// measured so far, [k] after the first k chosen (and lookahead) poses.
   std::vector<double> predicted_rms_mm;
   /// With target_rms_mm: how many poses (counted from now) the prediction needs to reach it; empty
