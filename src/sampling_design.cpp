@@ -90,6 +90,24 @@ Eigen::VectorXd squared_distance_to_set(const Eigen::MatrixXd& z, const Eigen::M
   return d;
 }
 
+/// Per-location variance multipliers: `given` (`count` of them, each finite and >= 0; ArgumentError
+/// naming `name` otherwise), or 1 everywhere when it is empty.
+Eigen::VectorXd variance_multipliers(const std::vector<double>& given, Eigen::Index count, const char* name,
+                                     const char* locations) {
+  Eigen::VectorXd scale = Eigen::VectorXd::Ones(count);
+  if (given.empty()) return scale;
+  if (static_cast<Eigen::Index>(given.size()) != count)
+    throw ArgumentError(std::string(name) + ": " + std::to_string(given.size()) + " values for " + std::to_string(count) +
+                        " " + locations);
+  for (Eigen::Index i = 0; i < count; ++i) {
+    const double v = given[static_cast<std::size_t>(i)];
+    if (!(v >= 0.0 && std::isfinite(v)))
+      throw ArgumentError(std::string(name) + "[" + std::to_string(i) + "]: " + format_number(v) + "; expected >= 0");
+    scale[i] = v;
+  }
+  return scale;
+}
+
 /// The locations mapped by the model's anisotropy, so that the lag is a plain Euclidean distance.
 Eigen::MatrixXd mapped_by_anisotropy(const Eigen::MatrixXd& x, const Anisotropy& a) {
   if (a.isotropic()) return x;
@@ -171,18 +189,7 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
   }
   const Eigen::Index R = static_cast<Eigen::Index>(ref_rows.size());
   plan.references = ref_rows.size();
-  Eigen::VectorXd scale_c = Eigen::VectorXd::Ones(C);
-  if (!options.variance_scale.empty()) {
-    if (static_cast<Eigen::Index>(options.variance_scale.size()) != C)
-      throw ArgumentError("variance_scale: " + std::to_string(options.variance_scale.size()) + " values for " +
-                          std::to_string(C) + " candidates");
-    for (Eigen::Index c = 0; c < C; ++c) {
-      const double v = options.variance_scale[static_cast<std::size_t>(c)];
-      if (!(v >= 0.0 && std::isfinite(v)))
-        throw ArgumentError("variance_scale[" + std::to_string(c) + "]: " + format_number(v) + "; expected >= 0");
-      scale_c[c] = v;
-    }
-  }
+  const Eigen::VectorXd scale_c = variance_multipliers(options.variance_scale, C, "variance_scale", "candidates");
   Eigen::VectorXd scale_r(R);
   for (Eigen::Index i = 0; i < R; ++i) scale_r[i] = scale_c[static_cast<Eigen::Index>(ref_rows[static_cast<std::size_t>(i)])];
   constexpr double kMaxBytes = 4.0 * 1024 * 1024 * 1024;
@@ -213,18 +220,8 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
   // explicitly and grown by one row and column per pick (a bordered inverse, O(|S|^2) each).
   const Eigen::Index M = xd.rows();
   const Eigen::Index E = options.measured_in_prediction ? M : 0;
-  Eigen::VectorXd scale_e = Eigen::VectorXd::Ones(E);
-  if (E > 0 && !options.measured_scale.empty()) {
-    if (static_cast<Eigen::Index>(options.measured_scale.size()) != E)
-      throw ArgumentError("measured_scale: " + std::to_string(options.measured_scale.size()) + " values for " +
-                          std::to_string(E) + " measured locations");
-    for (Eigen::Index e = 0; e < E; ++e) {
-      const double v = options.measured_scale[static_cast<std::size_t>(e)];
-      if (!(v >= 0.0 && std::isfinite(v)))
-        throw ArgumentError("measured_scale[" + std::to_string(e) + "]: " + format_number(v) + "; expected >= 0");
-      scale_e[e] = v;
-    }
-  }
+  const Eigen::VectorXd scale_e =
+      variance_multipliers(E > 0 ? options.measured_scale : std::vector<double>{}, E, "measured_scale", "measured locations");
   const std::size_t total = std::min<std::size_t>(options.count + options.lookahead, static_cast<std::size_t>(C));
   const Eigen::Index S_max = M + static_cast<Eigen::Index>(total);
   Eigen::MatrixXd k_inverse(S_max, S_max);  // top-left |S| x |S| in use
