@@ -203,6 +203,7 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
   Eigen::MatrixXd cross = k.between(xr, xc);                 // Σ(R, C), updated in place
   Eigen::VectorXd var_c = Eigen::VectorXd::Constant(C, k(0.0));  // Σ(c, c)
   Eigen::MatrixXd w_c;  // M x C, kept for the candidate-candidate covariances of later picks
+  Eigen::MatrixXd measured_inverse;  // (K_DD + noise I)^-1, for the leave-one-out variances below
   if (xd.rows() > 0) {
     Eigen::MatrixXd kdd = k.between(xd, xd);
     kdd.diagonal().array() += noise;
@@ -213,6 +214,7 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
     const Eigen::MatrixXd w_r = llt.matrixL().solve(k.between(xd, xr));
     cross.noalias() -= w_r.transpose() * w_c;
     var_c -= w_c.colwise().squaredNorm().transpose();
+    measured_inverse = llt.solve(Eigen::MatrixXd::Identity(xd.rows(), xd.rows()));
   }
   // Leave-one-out variances: a measured or picked location counts in the prediction with the
   // field's variance there given every other reading, 1 / (K_S^-1)_ii - noise over the set S of
@@ -228,9 +230,7 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
   Eigen::MatrixXd x_set(S_max, xc.cols());
   Eigen::Index S = M;
   if (M > 0) {
-    Eigen::MatrixXd kdd = k.between(xd, xd);
-    kdd.diagonal().array() += noise;
-    k_inverse.topLeftCorner(M, M) = Eigen::LLT<Eigen::MatrixXd>(kdd).solve(Eigen::MatrixXd::Identity(M, M));
+    k_inverse.topLeftCorner(M, M) = measured_inverse;
     x_set.topRows(M) = xd;
   }
   std::vector<Eigen::Index> set_of_candidate(static_cast<std::size_t>(C), -1);  // a pick's index in S
