@@ -26,15 +26,17 @@ struct FitArgs {
   std::optional<double> region_margin;
   std::size_t base = 0;
   bool reflector_far_ok = false;
+  int joint_functions = compensation::FitOptions{}.joint_function_degree;
 };
 
 void run_fit(const FitArgs& a) {
   using namespace robot;
   using namespace compensation;
   const MdhModel model = load_robot_or_default(a.robot);
-  const FitOptions o = fit_options_from_text({a.method, a.space, a.power, a.model, a.kind, a.base, a.region_margin,
+  FitOptions o = fit_options_from_text({a.method, a.space, a.power, a.model, a.kind, a.base, a.region_margin,
                                               a.calibration, a.robust, a.max_condition, a.outlier_limit,
                                               a.variance_calibration});
+  o.joint_function_degree = a.joint_functions;
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.base_points) {
     const auto v = parse_numbers(b, 3, "--base-point");
@@ -146,6 +148,15 @@ void add_fit_command(CLI::App& app) {
                   "most 1 and at least 95 % fall in the 95 % region; the predicted errors are unchanged, var_mm2 "
                   "and r95_mm hold on held-out readings (docs/robot.md, 'Predictive uncertainty'); stored in the "
                   "model file")
+      ->capture_default_str();
+  cmd->add_option("--joint-functions", a->joint_functions,
+                  "kinematic+kriging: DEGREE of per-joint angle-error functions (Legendre polynomials of each joint's "
+                  "angle over its measured range, no constant: that is the joint offset) fitted to the calibration's "
+                  "residuals before the field krigs what they leave; they model errors that depend on one joint's "
+                  "angle (growing toward the end of its travel, gear transmission, gain), which the kinematic model "
+                  "cannot express and the field learns only near its samples; 0 = none; docs/robot.md says which "
+                  "data decided the default")
+      ->check(CLI::Range(0, 20))
       ->capture_default_str();
   cmd->add_flag("--reflector-far-ok", a->reflector_far_ok,
                 "kinematic methods from positions: accept a reflector found more than 50 mm from --robot's tool "

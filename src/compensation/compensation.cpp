@@ -229,6 +229,12 @@ CompensationModel CompensationModel::with_tool_point(std::optional<Eigen::Vector
   return m;
 }
 
+CompensationModel CompensationModel::with_joint_error_functions(std::optional<JointErrorFunctions> functions) const {
+  CompensationModel m = *this;
+  m.joint_functions_ = std::move(functions);
+  return m;
+}
+
 MdhModel CompensationModel::aimed_model() const {
   if (!tool_point_) return command_model_;
   Eigen::Isometry3d tool = command_model_.tool();
@@ -246,6 +252,16 @@ ErrorPrediction CompensationModel::predict_error(const JointVector& q_deg) const
   if (!field_) return {};
   ErrorPrediction p = field_->predict(forward_position(nominal_model(), q_deg), q_deg);
   if (p.inside_region && credible_) p.credible = credible_->contains(p);
+  // The credible range is the field's (its values are what the functions left); the functions are
+  // smooth in each joint and clamped beyond the fitted range, so they add no extrapolation.
+  if (p.inside_region && joint_functions_) {
+    p.position_error_mm += joint_functions_->position_error_mm(command_model_, q_deg);
+    // Their estimation error is part of the field's error (the `var_field_mm2` column) and of a
+    // new reading's.
+    const Eigen::Vector3d v = joint_functions_->axis_variance_mm2(command_model_, q_deg);
+    if (std::isfinite(p.variance_mm2)) p.variance_mm2 += v.sum();
+    if (p.axis_variance_mm2.allFinite()) p.axis_variance_mm2 += v;
+  }
   return p;
 }
 
@@ -267,6 +283,7 @@ nlohmann::json CompensationModel::to_json() const {
   }
   if (tool_point_) j["tool_point_mm"] = {tool_point_->x(), tool_point_->y(), tool_point_->z()};
   if (reflector_) j["reflector_mm"] = {reflector_->x(), reflector_->y(), reflector_->z()};
+  if (joint_functions_) j["joint_error_functions"] = joint_functions_->to_json();
   if (!notes_.empty()) j["notes"] = notes_;
   if (!excluded_rows_.empty()) j["excluded_rows"] = excluded_rows_;
   return j;
@@ -420,6 +437,14 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
   if (model.tool_point_ && method != CompensationMethod::kinematic && method != CompensationMethod::kinematic_kriging)
     fail_model(source, "member \"tool_point_mm\": only calibrated models (kinematic, kinematic+kriging) aim a tool "
                        "point on their calibrated flange; method \"" + std::string(method_name(method)) + "\" has none");
+  if (j.contains("joint_error_functions")) {
+    // Evaluated through the calibrated command model's Jacobian and added to a field's prediction:
+    // meaningless for any other method (a hand-edited or mixed file).
+    if (method != CompensationMethod::kinematic_kriging)
+      fail_model(source, "member \"joint_error_functions\": only kinematic+kriging models carry joint error functions; "
+                         "method \"" + std::string(method_name(method)) + "\" has none; refit the model with 'errfield fit'");
+    model.joint_functions_ = JointErrorFunctions::from_json(j["joint_error_functions"], source);
+  }
   if (j.contains("data_joints_deg")) {
     const auto& q = j["data_joints_deg"];
     if (!q.is_array()) fail_model(source, "member \"data_joints_deg\": expected an array of 6-number arrays");

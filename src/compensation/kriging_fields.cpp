@@ -39,6 +39,9 @@ void KrigingFieldOptions::validate() const {
   if (!(region_margin_deg >= 0.0) || !std::isfinite(region_margin_deg))
     throw ArgumentError("KrigingFieldOptions: region_margin_deg = " + std::to_string(region_margin_deg) +
                         "; expected a finite value >= 0");
+  if (!(value_variance_inflation >= 1.0) || !std::isfinite(value_variance_inflation))
+    throw ArgumentError("KrigingFieldOptions: value_variance_inflation = " + std::to_string(value_variance_inflation) +
+                        "; expected a finite value >= 1");
 }
 
 namespace {
@@ -382,6 +385,7 @@ KrigingFieldFit make_field(std::string kind, const FieldSamples& samples, std::v
   const KrigingFieldFit first = build(model, options, false);
   std::vector<double> zs = squared_z_of(*first.field);
   if (zs.empty()) return with_leave_one_out ? build(model, options, true) : first;
+  for (double& z : zs) z *= options.value_variance_inflation;
   // Per sample z² = |residual|² / variance, a χ²_K variable when the model is right.
   constexpr int K = ValueTraits<V>::kComponents;
   double mean = 0.0;

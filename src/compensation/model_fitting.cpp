@@ -136,6 +136,9 @@ void FitOptions::validate() const {
     throw ArgumentError("fit: region margin " + std::to_string(*region_margin) + "; expected a finite value >= 0");
   if (!(outlier_limit >= 0.0) || !std::isfinite(outlier_limit))
     throw ArgumentError("fit: outlier limit " + std::to_string(outlier_limit) + "; expected a finite value >= 0 (0 = off)");
+  if (joint_function_degree < 0 || joint_function_degree > 20)
+    throw ArgumentError("fit: joint function degree " + std::to_string(joint_function_degree) +
+                        "; expected 0 (none) to 20");
   calibration.validate();
 }
 
@@ -398,13 +401,37 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       std::vector<Eigen::Vector3d> residual(identified.size());
       for (std::size_t i = 0; i < residual.size(); ++i)
         residual[i] = reg.robot_from_tracker * d.measured_mm[i] - identified[i];
+      std::optional<JointErrorFunctionFit> jf;
+      double inflation = 1.0;
+      if (o.joint_function_degree > 0) {
+        jf = fit_joint_error_functions(kin.model, d.q_deg, residual, o.joint_function_degree);
+        residual = jf->remaining_mm;
+        out.notes.push_back("joint error functions (Legendre degree " + std::to_string(o.joint_function_degree) +
+                            " per joint, ridge by generalized cross-validation: " +
+                            format_number(std::round(jf->effective_parameters * 10) / 10) +
+                            " effective parameters): residual RMS " + format_number(std::round(jf->rms_before_mm * 1e4) / 1e4) +
+                            " -> " + format_number(std::round(jf->rms_after_mm * 1e4) / 1e4) +
+                            " mm, largest joint angle error " +
+                            format_number(std::round(jf->functions.largest_angle_error_mrad() * 1e3) / 1e3) +
+                            " mrad; the field's variance calibration counts their leave-one-out inflation x" +
+                            format_number(std::round(jf->leave_one_out_inflation * 1e3) / 1e3));
+        inflation = jf->leave_one_out_inflation;
+      }
       KrigingFieldOptions ko = field_options(o, model_estimated);
+      ko.value_variance_inflation = inflation;
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(residual.size()), 3);
       for (std::size_t i = 0; i < residual.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = residual[i].transpose();
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
       ko.model = chosen_model(o, samples, flat, ko, model_reason);
       const KrigingFieldFit fit = fit_vector_kriging_field(samples, residual, ko);
-      out.model = CompensationModel(method, kin.model, fit.field).with_tool_point(kin.tool_point_mm, kin.reflector_mm);
+      std::optional<JointErrorFunctions> functions;
+      if (jf) {
+        set_coefficient_covariance(*jf, d.q_deg, fit.model);
+        functions = std::move(jf->functions);
+      }
+      out.model = CompensationModel(method, kin.model, fit.field)
+                      .with_tool_point(kin.tool_point_mm, kin.reflector_mm)
+                      .with_joint_error_functions(std::move(functions));
       out.cross_validation = kriging_report(fit, o.space, o);
       out.notes.push_back("residuals after calibration kriged with " + fit.model.to_string());
       out.notes.push_back("variogram per component: " + describe_field_model(fit.model, o.space));

@@ -349,6 +349,7 @@ def fit(
     outlier_limit: float = 5.0,
     reflector_far_ok: bool = False,
     variance_calibration: Literal["auto", "loo", "none"] = "auto",
+    joint_functions: int = 8,
 ) -> CompensationModel: ...
 def predict(model: CompensationModel, joints: ArrayLike | Columns) -> dict[str, Any]: ...
 def compensate(

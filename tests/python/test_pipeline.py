@@ -77,6 +77,22 @@ def test_fit_variance_calibration_is_the_clis(sim, tmp_path, choice):
         errfield.fit(read_measurements(sim / "grid.csv"), robot=str(sim / "robot.json"), variance_calibration="yes")
 
 
+@pytest.mark.parametrize("degree", [0, 4])
+def test_fit_joint_functions_are_the_clis(sim, tmp_path, degree):
+    # kinematic+kriging with per-joint error functions of a degree (0 = none): the CLI's model file.
+    run_cli("fit", "--robot", sim / "robot.json", "--data", sim / "grid.csv", "--method", "kinematic+kriging",
+            "--joint-functions", degree, "--out", tmp_path / "cli.json")
+    model = errfield.fit(read_measurements(sim / "grid.csv"), robot=str(sim / "robot.json"),
+                         method="kinematic+kriging", joint_functions=degree)
+    assert model.to_json().encode() == (tmp_path / "cli.json").read_bytes()
+    stored = json.loads(model.to_json())
+    assert ("joint_error_functions" in stored) == (degree > 0)
+    if degree:
+        assert stored["joint_error_functions"]["degree"] == degree
+    with pytest.raises(errfield.ArgumentError, match="joint function degree"):
+        errfield.fit(read_measurements(sim / "grid.csv"), robot=str(sim / "robot.json"), joint_functions=21)
+
+
 def check_columns(result, csv_path):
     """Every column the binding returns equals the CLI's column of that name (numbers bit for bit)."""
     csv_ = read_csv(csv_path)

@@ -28,6 +28,7 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "errfield/compensation/joint_error_functions.hpp"
 #include "errfield/compensation/registration.hpp"
 #include "errfield/robot/inverse_kinematics.hpp"
 #include "errfield/robot/mdh_model.hpp"
@@ -182,12 +183,17 @@ class CompensationModel {
   const std::optional<Eigen::Vector3d>& reflector_mm() const noexcept { return reflector_; }
   CompensationModel with_tool_point(std::optional<Eigen::Vector3d> tool_point_mm,
                                     std::optional<Eigen::Vector3d> reflector_mm) const;
+  /// kinematic+kriging fitted with per-joint angle-error functions (fit --joint-functions): they are
+  /// evaluated through the command model's Jacobian and added to the field's prediction.
+  const std::optional<JointErrorFunctions>& joint_error_functions() const noexcept { return joint_functions_; }
+  CompensationModel with_joint_error_functions(std::optional<JointErrorFunctions> functions) const;
   /// The model compensate aims with: the command model, with its tool translation set to
   /// tool_point_mm() where the model has one.
   robot::MdhModel aimed_model() const;
 
   /// The field's prediction at joints `q_deg` (evaluated at nominal_model()'s FK), with the credible
-  /// range applied; zero prediction, inside the region, when the model has no field.
+  /// range applied (to the field's part), plus the joint error functions where the model has them;
+  /// zero prediction, inside the region, when the model has no field.
   ErrorPrediction predict_error(const robot::JointVector& q_deg) const;
 
   /// The robot's whole predicted error of the tool point at nominal joints `q_deg` (CompensatedTarget::
@@ -231,6 +237,7 @@ class CompensationModel {
   std::vector<robot::JointVector> data_joints_;
   std::optional<CredibleRange> credible_;
   std::optional<Eigen::Vector3d> tool_point_, reflector_;
+  std::optional<JointErrorFunctions> joint_functions_;
   std::vector<std::string> excluded_rows_, notes_;
 };
 

@@ -88,6 +88,11 @@ struct KrigingFieldOptions {
   /// Calibrate the predictive variance by leave-one-out (VarianceCalibration) before the field is
   /// returned: the field's model is then the calibrated one. fit_*_kriging_field only.
   bool calibrate_variance = false;
+  /// With calibrate_variance: the values are what a preceding regression fitted on the same samples
+  /// left (joint_error_functions.hpp), so their leave-one-out z² understate a new reading's by this
+  /// factor (>= 1; the regression's own leave-one-out over in-sample residual ratio); the
+  /// calibration multiplies them by it.
+  double value_variance_inflation = 1.0;
   /// The calibration a field's model already carries (written to and read from the model JSON,
   /// member "variance_calibration"; the model string is the calibrated model).
   std::optional<VarianceCalibration> variance_calibration;

@@ -116,6 +116,14 @@ struct FitOptions {
   /// 2 % × 3 mm outliers it dropped exactly the outliers and matched the oracle (docs/robot.md,
   /// "Gross outliers in fit").
   double outlier_limit = 5.0;
+  /// kinematic+kriging: before the field, fit per-joint angle-error functions of this Legendre degree
+  /// to the calibration's residuals (joint_error_functions.hpp) and krige what they leave; 0 = none.
+  /// Why 8: on SIMULATED held-out sets (KR 16 with realistic systematic effects, 40-240 poses from
+  /// random, maximin and adaptive designs; KR 16 with compliance only, with outliers, with rigid
+  /// joints; UR5e; ER20-C10) it lowered the held-out RMS by a third from 80 poses on, by 12 % at 40,
+  /// never raised it by more than 7 % (one set of 40 poses) and kept the 95 % coverage; degrees 10-12
+  /// gained more on some sets and lost on others (docs/robot.md, "Joint error functions").
+  int joint_function_degree = 8;
   /// Kriging methods: calibrate the predictive variance by leave-one-out (the variance the model
   /// states for a held-out reading, var_mm2 and r95_mm; docs/robot.md "Predictive uncertainty").
   VarianceCalibrationChoice variance_calibration = VarianceCalibrationChoice::automatic;

@@ -1,0 +1,99 @@
+#pragma once
+/// Per-joint angle-error functions: the part of a robot's remaining error that depends on one
+/// joint's angle only — errors that grow toward the end of a joint's travel (a dress pack's drag, a
+/// hose, a counterbalance spring), a gear's transmission error, a joint's gain error. A kinematic
+/// model cannot express them (its joint offset is a constant) and a kriging field in joint space
+/// learns them only where it has samples nearby in all six joints; as functions of one angle each,
+/// every measured pose informs them.
+///
+/// Use it between the kinematic calibration and the field (`fit --joint-functions`, kinematic+
+/// kriging): fit_joint_error_functions on the calibration's residuals, subtract, krige the rest;
+/// CompensationModel adds the functions back to every prediction.
+///
+/// Model: joint j's angle error dq_j(q_j) = sum_k c_jk P_k(u_j), k = 1..degree, with P_k the Legendre
+/// polynomial of degree k and u_j = 2 (q_j - lo_j) / (hi_j - lo_j) - 1 the joint scaled over the
+/// fitted joints' range (clamped to [-1, 1] beyond it: constant continuation, never a polynomial's
+/// growth; the field refuses poses far outside anyway). No constant term: that is the calibration's
+/// joint offset. The position error it causes at the tool point is sum_j J_j(q) dq_j, with J_j the
+/// linear part of the calibrated model's geometric Jacobian column j (mm/rad) at q.
+///
+/// Fit: ridge least squares on the coefficients (mrad), the ridge chosen by generalized
+/// cross-validation, so that data without such errors leave the functions near zero.
+/// Units: joints deg, coefficients mrad, positions mm, robot frame.
+
+#include <array>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <nlohmann/json_fwd.hpp>
+
+#include "errfield/robot/mdh_model.hpp"
+
+namespace errfield {
+class VariogramModel;
+}
+
+namespace errfield::compensation {
+
+struct JointErrorFunctions {
+  int degree = 0;                    ///< highest Legendre degree (coefficients per joint)
+  std::array<double, 6> lo_deg{};    ///< each joint's range over the fitted poses
+  std::array<double, 6> hi_deg{};    ///< (lo == hi: no function; the joint did not move, or barely moved the point)
+  Eigen::MatrixXd coefficients_mrad; ///< 6 x degree: row j, column k-1 = c_jk
+  /// Covariance of the coefficients (mrad², 6·degree square, joint-major as the design's columns),
+  /// under the field's covariance of the residuals they were fitted to (set_coefficient_covariance);
+  /// empty: no variance is added.
+  Eigen::MatrixXd coefficient_covariance_mrad2;
+
+  /// Angle error of each joint at joints `q_deg` (mrad).
+  Eigen::Matrix<double, 6, 1> angle_error_mrad(const robot::JointVector& q_deg) const;
+  /// The position error they cause at `model`'s tool point (robot frame, mm).
+  Eigen::Vector3d position_error_mm(const robot::MdhModel& model, const robot::JointVector& q_deg) const;
+  /// The variance (mm², per robot-frame axis) their estimation error adds to a prediction at q:
+  /// the diagonal of D cov D', D the 3 x 6·degree design row block at q. Zero without a covariance.
+  Eigen::Vector3d axis_variance_mm2(const robot::MdhModel& model, const robot::JointVector& q_deg) const;
+  /// The 3 x 6·degree block of the design at q: position error (mm) per coefficient (mrad).
+  Eigen::MatrixXd design_rows(const Eigen::Matrix<double, 6, 6>& jacobian, const robot::JointVector& q_deg) const;
+  /// The largest |dq_j| over each joint's range (mrad), sampled: for people.
+  double largest_angle_error_mrad() const;
+
+  /// {"degree": K, "lo_deg": [6], "hi_deg": [6], "coefficients_mrad": [[K] x 6],
+  ///  "coefficient_covariance_mrad2": [[6K] x 6K] (optional)}
+  nlohmann::json to_json() const;
+  /// Throws InputError naming `source` and the member.
+  static JointErrorFunctions from_json(const nlohmann::json& j, const std::string& source);
+};
+
+struct JointErrorFunctionFit {
+  JointErrorFunctions functions;
+  std::vector<Eigen::Vector3d> remaining_mm;  ///< residual - fitted position error, per pose
+  double effective_parameters = 0.0;          ///< trace of the ridge hat matrix
+  double ridge = 0.0;                         ///< the penalty GCV chose (relative to the largest s^2)
+  double rms_before_mm = 0.0, rms_after_mm = 0.0;  ///< 3-D RMS of the residuals and of what remains
+  /// sum |leave-one-pose-out residual|^2 / sum |in-sample residual|^2 of the regression (>= 1): how
+  /// much the remaining residuals understate a new pose's (KrigingFieldOptions::value_variance_inflation).
+  double leave_one_out_inflation = 1.0;
+  Eigen::MatrixXd design;         ///< 3N x 6·degree (mm per mrad), rows 3i..3i+2 for pose i
+  Eigen::MatrixXd ridge_inverse;  ///< (design' design + ridge)^-1; empty when no function was fitted
+};
+
+/// Sets fit.functions.coefficient_covariance_mrad2 = R F' S F R (R = fit.ridge_inverse, F the
+/// design, S the covariance of the residuals: per component, `field_model`'s covariance between the
+/// poses' joints with its nugget on the diagonal, centred, P K P with P = I - 11'/n, because the
+/// field's ordinary kriging takes a constant per component). The residuals are spatially correlated, so the
+/// coefficients vary far more than independent errors would say; the field's variance at a new
+/// pose does not contain that, and without it the 95 % region held 90 % of held-out readings
+/// (SIMULATED KR 16, docs/robot.md "Joint error functions"). The field does correct part of the
+/// functions' error near its samples, so the sum is, if anything, cautious.
+void set_coefficient_covariance(JointErrorFunctionFit& fit, const std::vector<robot::JointVector>& q_deg,
+                                const VariogramModel& field_model);
+
+/// Fits the functions to `residual_mm[i]` (robot frame, the calibrated model's residual at joints
+/// `q_deg[i]`). Throws ArgumentError for degree < 1 or mismatched sizes; fewer poses than
+/// parameters are allowed (the ridge keeps the fit determined).
+JointErrorFunctionFit fit_joint_error_functions(const robot::MdhModel& model, const std::vector<robot::JointVector>& q_deg,
+                                                const std::vector<Eigen::Vector3d>& residual_mm, int degree);
+
+}  // namespace errfield::compensation

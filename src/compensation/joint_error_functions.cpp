@@ -1,0 +1,324 @@
+#include "errfield/compensation/joint_error_functions.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/SVD>
+#include <nlohmann/json.hpp>
+
+#include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
+#include "errfield/robot/kinematics.hpp"
+#include "errfield/variogram_model.hpp"
+
+namespace errfield::compensation {
+
+namespace {
+
+constexpr int kJoints = robot::kJointCount;
+// A joint whose Jacobian column (RMS over the poses) is below this fraction of the largest one's
+// gets no function: 1 % is a 10 mm lever beside a 1 m arm.
+constexpr double kMinRelativeLever = 0.01;
+
+/// P_1(u) .. P_degree(u) by Bonnet's recursion.
+void legendre(double u, int degree, double* out) {
+  double previous = 1.0, current = u;
+  for (int n = 1; n <= degree; ++n) {
+    out[n - 1] = current;
+    const double next = ((2.0 * n + 1.0) * u * current - n * previous) / (n + 1.0);
+    previous = current;
+    current = next;
+  }
+}
+
+double scaled(double q, double lo, double hi) {
+  if (!(hi > lo)) return 0.0;
+  return std::clamp(2.0 * (q - lo) / (hi - lo) - 1.0, -1.0, 1.0);
+}
+
+[[noreturn]] void bad(const std::string& source, const std::string& what) {
+  throw InputError(source + ": member \"joint_error_functions" + what, source);
+}
+
+}  // namespace
+
+Eigen::Matrix<double, 6, 1> JointErrorFunctions::angle_error_mrad(const robot::JointVector& q_deg) const {
+  Eigen::Matrix<double, 6, 1> dq = Eigen::Matrix<double, 6, 1>::Zero();
+  std::vector<double> p(static_cast<std::size_t>(std::max(degree, 1)));
+  for (int j = 0; j < kJoints; ++j) {
+    if (!(hi_deg[j] > lo_deg[j])) continue;
+    legendre(scaled(q_deg[j], lo_deg[j], hi_deg[j]), degree, p.data());
+    for (int k = 0; k < degree; ++k) dq[j] += coefficients_mrad(j, k) * p[static_cast<std::size_t>(k)];
+  }
+  return dq;
+}
+
+Eigen::MatrixXd JointErrorFunctions::design_rows(const Eigen::Matrix<double, 6, 6>& jacobian, const robot::JointVector& q_deg) const {
+  Eigen::MatrixXd d = Eigen::MatrixXd::Zero(3, kJoints * degree);
+  std::vector<double> p(static_cast<std::size_t>(std::max(degree, 1)));
+  for (int j = 0; j < kJoints; ++j) {
+    if (!(hi_deg[static_cast<std::size_t>(j)] > lo_deg[static_cast<std::size_t>(j)])) continue;
+    legendre(scaled(q_deg[j], lo_deg[static_cast<std::size_t>(j)], hi_deg[static_cast<std::size_t>(j)]), degree, p.data());
+    for (int k = 0; k < degree; ++k) d.col(j * degree + k) = 1e-3 * p[static_cast<std::size_t>(k)] * jacobian.block<3, 1>(0, j);
+  }
+  return d;
+}
+
+Eigen::Vector3d JointErrorFunctions::axis_variance_mm2(const robot::MdhModel& model, const robot::JointVector& q_deg) const {
+  if (degree == 0 || coefficient_covariance_mrad2.size() == 0) return Eigen::Vector3d::Zero();
+  const Eigen::MatrixXd d = design_rows(robot::geometric_jacobian(model, q_deg), q_deg);
+  return (d * coefficient_covariance_mrad2 * d.transpose()).diagonal();
+}
+
+Eigen::Vector3d JointErrorFunctions::position_error_mm(const robot::MdhModel& model, const robot::JointVector& q_deg) const {
+  if (degree == 0) return Eigen::Vector3d::Zero();
+  const Eigen::Matrix<double, 6, 6> jacobian = robot::geometric_jacobian(model, q_deg);
+  return jacobian.topRows<3>() * (1e-3 * angle_error_mrad(q_deg));
+}
+
+double JointErrorFunctions::largest_angle_error_mrad() const {
+  double largest = 0.0;
+  std::vector<double> p(static_cast<std::size_t>(std::max(degree, 1)));
+  for (int j = 0; j < kJoints; ++j)
+    for (int s = 0; s <= 200; ++s) {
+      legendre(-1.0 + s / 100.0, degree, p.data());
+      double dq = 0.0;
+      for (int k = 0; k < degree; ++k) dq += coefficients_mrad(j, k) * p[static_cast<std::size_t>(k)];
+      largest = std::max(largest, std::abs(dq));
+    }
+  return largest;
+}
+
+nlohmann::json JointErrorFunctions::to_json() const {
+  nlohmann::json c = nlohmann::json::array();
+  for (int j = 0; j < kJoints; ++j) {
+    nlohmann::json row = nlohmann::json::array();
+    for (int k = 0; k < degree; ++k) row.push_back(coefficients_mrad(j, k));
+    c.push_back(row);
+  }
+  nlohmann::json j = {{"degree", degree}, {"lo_deg", lo_deg}, {"hi_deg", hi_deg}, {"coefficients_mrad", c}};
+  if (coefficient_covariance_mrad2.size() > 0) {
+    nlohmann::json cov = nlohmann::json::array();
+    for (Eigen::Index r = 0; r < coefficient_covariance_mrad2.rows(); ++r) {
+      nlohmann::json row = nlohmann::json::array();
+      for (Eigen::Index k = 0; k < coefficient_covariance_mrad2.cols(); ++k) row.push_back(coefficient_covariance_mrad2(r, k));
+      cov.push_back(row);
+    }
+    j["coefficient_covariance_mrad2"] = cov;
+  }
+  return j;
+}
+
+JointErrorFunctions JointErrorFunctions::from_json(const nlohmann::json& j, const std::string& source) {
+  if (!j.is_object()) bad(source, "\": expected an object {degree, lo_deg, hi_deg, coefficients_mrad}");
+  JointErrorFunctions f;
+  if (!j.contains("degree") || !j["degree"].is_number_integer() || j["degree"].get<int>() < 1 ||
+      j["degree"].get<int>() > 20)
+    bad(source, ".degree\": expected an integer 1..20");
+  f.degree = j["degree"].get<int>();
+  auto six = [&](const char* key, std::array<double, 6>& into) {
+    if (!j.contains(key) || !j[key].is_array() || j[key].size() != 6) bad(source, std::string(".") + key + "\": expected 6 numbers (deg)");
+    for (std::size_t k = 0; k < 6; ++k) {
+      if (!j[key][k].is_number() || !std::isfinite(j[key][k].get<double>()))
+        bad(source, std::string(".") + key + "\"[" + std::to_string(k) + "]: expected a finite number (deg)");
+      into[k] = j[key][k].get<double>();
+    }
+  };
+  six("lo_deg", f.lo_deg);
+  six("hi_deg", f.hi_deg);
+  for (int k = 0; k < kJoints; ++k)
+    if (f.hi_deg[static_cast<std::size_t>(k)] < f.lo_deg[static_cast<std::size_t>(k)])
+      bad(source, ".hi_deg\"[" + std::to_string(k) + "]: below lo_deg");
+  const auto& c = j.contains("coefficients_mrad") ? j["coefficients_mrad"] : nlohmann::json();
+  if (!c.is_array() || c.size() != 6) bad(source, ".coefficients_mrad\": expected 6 arrays of " + std::to_string(f.degree) + " numbers");
+  f.coefficients_mrad.resize(kJoints, f.degree);
+  for (std::size_t r = 0; r < 6; ++r) {
+    if (!c[r].is_array() || c[r].size() != static_cast<std::size_t>(f.degree))
+      bad(source, ".coefficients_mrad\"[" + std::to_string(r) + "]: expected " + std::to_string(f.degree) + " numbers");
+    for (std::size_t k = 0; k < c[r].size(); ++k) {
+      if (!c[r][k].is_number() || !std::isfinite(c[r][k].get<double>()))
+        bad(source, ".coefficients_mrad\"[" + std::to_string(r) + "][" + std::to_string(k) + "]: expected a finite number");
+      f.coefficients_mrad(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k)) = c[r][k].get<double>();
+    }
+  }
+  if (j.contains("coefficient_covariance_mrad2")) {
+    const auto& v = j["coefficient_covariance_mrad2"];
+    const std::size_t p = 6 * static_cast<std::size_t>(f.degree);
+    if (!v.is_array() || v.size() != p)
+      bad(source, ".coefficient_covariance_mrad2\": expected " + std::to_string(p) + " rows of " + std::to_string(p) + " numbers");
+    f.coefficient_covariance_mrad2.resize(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(p));
+    for (std::size_t r = 0; r < p; ++r) {
+      if (!v[r].is_array() || v[r].size() != p)
+        bad(source, ".coefficient_covariance_mrad2\"[" + std::to_string(r) + "]: expected " + std::to_string(p) + " numbers");
+      for (std::size_t k = 0; k < p; ++k) {
+        if (!v[r][k].is_number() || !std::isfinite(v[r][k].get<double>()))
+          bad(source, ".coefficient_covariance_mrad2\"[" + std::to_string(r) + "][" + std::to_string(k) + "]: expected a finite number");
+        f.coefficient_covariance_mrad2(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k)) = v[r][k].get<double>();
+      }
+    }
+    // A hand-edited covariance could make a variance negative: it must be symmetric with a
+    // non-negative diagonal.
+    for (std::size_t r = 0; r < p; ++r)
+      if (f.coefficient_covariance_mrad2(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(r)) < 0.0)
+        bad(source, ".coefficient_covariance_mrad2\"[" + std::to_string(r) + "][" + std::to_string(r) + "]: a variance below 0");
+  }
+  return f;
+}
+
+JointErrorFunctionFit fit_joint_error_functions(const robot::MdhModel& model, const std::vector<robot::JointVector>& q_deg,
+                                                const std::vector<Eigen::Vector3d>& residual_mm, int degree) {
+  if (degree < 1 || degree > 20)
+    throw ArgumentError("fit_joint_error_functions: degree " + std::to_string(degree) + "; expected 1..20");
+  if (q_deg.size() != residual_mm.size() || q_deg.empty())
+    throw ArgumentError("fit_joint_error_functions: " + std::to_string(q_deg.size()) + " poses for " +
+                        std::to_string(residual_mm.size()) + " residuals");
+  const auto n = static_cast<Eigen::Index>(q_deg.size());
+  JointErrorFunctionFit out;
+  JointErrorFunctions& f = out.functions;
+  f.degree = degree;
+  f.lo_deg.fill(std::numeric_limits<double>::infinity());
+  f.hi_deg.fill(-std::numeric_limits<double>::infinity());
+  for (const auto& q : q_deg)
+    for (int j = 0; j < kJoints; ++j) {
+      f.lo_deg[static_cast<std::size_t>(j)] = std::min(f.lo_deg[static_cast<std::size_t>(j)], q[j]);
+      f.hi_deg[static_cast<std::size_t>(j)] = std::max(f.hi_deg[static_cast<std::size_t>(j)], q[j]);
+    }
+  // A joint that barely moved carries no function: its polynomial in u would be fitted to noise.
+  for (std::size_t j = 0; j < 6; ++j)
+    if (f.hi_deg[j] - f.lo_deg[j] < 1.0) f.hi_deg[j] = f.lo_deg[j];
+  // Nor does a joint that barely moves the measured point (a wrist joint turning a reflector that
+  // sits near its axis): its coefficients would be free to absorb anything at huge angles.
+  std::vector<Eigen::Matrix<double, 6, 6>> jacobians(q_deg.size());
+  Eigen::Matrix<double, 6, 1> lever = Eigen::Matrix<double, 6, 1>::Zero();  // mean |J_j|^2, (mm/rad)^2
+  for (std::size_t i = 0; i < q_deg.size(); ++i) {
+    jacobians[i] = robot::geometric_jacobian(model, q_deg[i]);
+    lever += jacobians[i].topRows<3>().colwise().squaredNorm().transpose();
+  }
+  for (int j = 0; j < kJoints; ++j)
+    if (lever[j] < kMinRelativeLever * kMinRelativeLever * lever.maxCoeff()) f.hi_deg[static_cast<std::size_t>(j)] = f.lo_deg[static_cast<std::size_t>(j)];
+  const Eigen::Index p = kJoints * degree;
+  // Design: row 3i+a, column j*degree+k-1 = J_j(q_i)[a] * P_k(u_ij) * 1e-3 (mm per mrad).
+  Eigen::MatrixXd design = Eigen::MatrixXd::Zero(3 * n, p);
+  Eigen::VectorXd y(3 * n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto& q = q_deg[static_cast<std::size_t>(i)];
+    const Eigen::Matrix<double, 6, 6>& jac = jacobians[static_cast<std::size_t>(i)];
+    y.segment<3>(3 * i) = residual_mm[static_cast<std::size_t>(i)];
+    design.middleRows<3>(3 * i) = f.design_rows(jac, q);
+  }
+  const Eigen::BDCSVD<Eigen::MatrixXd> svd(design, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::VectorXd s = svd.singularValues();
+  const Eigen::VectorXd uy = svd.matrixU().transpose() * y;
+  const double yy = y.squaredNorm(), outside = std::max(yy - uy.squaredNorm(), 0.0);
+  const double rows = static_cast<double>(3 * n), s2max = s.size() > 0 ? s[0] * s[0] : 0.0;
+  // Generalized cross-validation over the ridge, from none (lambda -> infinity: no functions) down
+  // to 1e-12 of the largest s^2. GCV(lambda) = rows * RSS / (rows - df)^2.
+  double best_gcv = rows * yy / (rows * rows), best_lambda = std::numeric_limits<double>::infinity(), best_df = 0.0;
+  if (s2max > 0.0)
+    for (double t = 0.0; t <= 12.0; t += 0.25) {
+      const double lambda = s2max * std::pow(10.0, -t);
+      double rss = outside, df = 0.0;
+      for (Eigen::Index k = 0; k < s.size(); ++k) {
+        const double s2 = s[k] * s[k], shrink = lambda / (s2 + lambda);
+        rss += shrink * shrink * uy[k] * uy[k];
+        df += s2 / (s2 + lambda);
+      }
+      if (df >= rows - 1.0) continue;
+      const double gcv = rows * rss / ((rows - df) * (rows - df));
+      if (gcv < best_gcv) {
+        best_gcv = gcv;
+        best_lambda = lambda;
+        best_df = df;
+      }
+    }
+  Eigen::VectorXd beta = Eigen::VectorXd::Zero(p);
+  if (std::isfinite(best_lambda)) {
+    Eigen::VectorXd w(s.size());
+    for (Eigen::Index k = 0; k < s.size(); ++k) w[k] = s[k] / (s[k] * s[k] + best_lambda) * uy[k];
+    beta = svd.matrixV() * w;
+  }
+  f.coefficients_mrad = Eigen::Map<const Eigen::MatrixXd>(beta.data(), degree, kJoints).transpose();
+  const Eigen::VectorXd fitted = design * beta;
+  out.remaining_mm.resize(static_cast<std::size_t>(n));
+  double before = 0.0, after = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    out.remaining_mm[static_cast<std::size_t>(i)] = y.segment<3>(3 * i) - fitted.segment<3>(3 * i);
+    before += y.segment<3>(3 * i).squaredNorm();
+    after += out.remaining_mm[static_cast<std::size_t>(i)].squaredNorm();
+  }
+  // Leave-one-pose-out residuals of the regression, (I - H_ii)^-1 r_i with H_ii the pose's 3 x 3 block
+  // of the ridge hat matrix U diag(s^2 / (s^2 + lambda)) U': the in-sample residuals understate a new
+  // pose's by their ratio, which the field's variance calibration has to know.
+  if (std::isfinite(best_lambda) && after > 0.0) {
+    Eigen::VectorXd shrink(s.size());
+    for (Eigen::Index k = 0; k < s.size(); ++k) shrink[k] = s[k] * s[k] / (s[k] * s[k] + best_lambda);
+    const Eigen::MatrixXd& u = svd.matrixU();
+    double held_out = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Eigen::Matrix<double, 3, Eigen::Dynamic> ui = u.middleRows<3>(3 * i);
+      const Eigen::Matrix3d h = ui * shrink.asDiagonal() * ui.transpose();
+      held_out += ((Eigen::Matrix3d::Identity() - h).inverse() * out.remaining_mm[static_cast<std::size_t>(i)]).squaredNorm();
+    }
+    out.leave_one_out_inflation = held_out / after;
+  }
+  if (std::isfinite(best_lambda)) {
+    const Eigen::MatrixXd& v = svd.matrixV();
+    Eigen::VectorXd inv(s.size());
+    for (Eigen::Index k = 0; k < s.size(); ++k) inv[k] = 1.0 / (s[k] * s[k] + best_lambda);
+    out.ridge_inverse = v * inv.asDiagonal() * v.transpose();
+  }
+  out.design = std::move(design);
+  out.rms_before_mm = std::sqrt(before / static_cast<double>(n));
+  out.rms_after_mm = std::sqrt(after / static_cast<double>(n));
+  out.effective_parameters = best_df;
+  out.ridge = std::isfinite(best_lambda) && s2max > 0.0 ? best_lambda / s2max : best_lambda;
+  return out;
+}
+
+void set_coefficient_covariance(JointErrorFunctionFit& fit, const std::vector<robot::JointVector>& q_deg,
+                                const VariogramModel& field_model) {
+  JointErrorFunctions& f = fit.functions;
+  f.coefficient_covariance_mrad2.resize(0, 0);
+  if (fit.ridge_inverse.size() == 0) return;
+  const auto n = static_cast<Eigen::Index>(q_deg.size());
+  if (fit.design.rows() != 3 * n)
+    throw ArgumentError("set_coefficient_covariance: " + std::to_string(q_deg.size()) + " poses for a design of " +
+                        std::to_string(fit.design.rows() / 3));
+  // The residuals' covariance per component, between the poses' joints in the model's metric.
+  Eigen::MatrixXd x(kJoints, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const robot::JointVector& q = q_deg[static_cast<std::size_t>(i)];
+    field_model.anisotropy().apply(q.data(), x.col(i).data(), kJoints);
+  }
+  const double sill = field_model.sill(), nugget = field_model.nugget();
+  Eigen::MatrixXd k(n, n);
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (Eigen::Index i = j; i < n; ++i)
+      if (i == j) {
+        k(i, i) = sill;  // a reading: field and nugget
+      } else {
+        const double h = (x.col(i) - x.col(j)).norm();
+        k(i, j) = k(j, i) = h > 0.0 ? sill - field_model.gamma(h) : sill - nugget;  // two readings share the field only
+      }
+  // Without the covariance of a constant: ordinary kriging estimates each component's mean from the
+  // remaining residuals, so a shift of the functions common to all poses does not reach a
+  // prediction. (With nearly linear fitted variograms, whose sill is arbitrary and large, that
+  // constant part made the variance ~5x too large on SIMULATED ER20 data.) K <- P K P, P = I - 11'/n.
+  const Eigen::VectorXd row_mean = k.rowwise().mean();
+  const double grand_mean = row_mean.mean();
+  k.colwise() -= row_mean;
+  k.rowwise() -= row_mean.transpose();
+  k.array() += grand_mean;
+  // F' S F = sum over the three components of F_a' K F_a (the components are independent).
+  const Eigen::Index p = fit.design.cols();
+  Eigen::MatrixXd middle = Eigen::MatrixXd::Zero(p, p);
+  Eigen::MatrixXd fa(n, p);
+  for (int a = 0; a < 3; ++a) {
+    for (Eigen::Index i = 0; i < n; ++i) fa.row(i) = fit.design.row(3 * i + a);
+    middle.noalias() += fa.transpose() * (k * fa);
+  }
+  f.coefficient_covariance_mrad2 = fit.ridge_inverse * middle * fit.ridge_inverse;
+}
+
+}  // namespace errfield::compensation

@@ -1,0 +1,264 @@
+#include "errfield/compensation/joint_error_functions.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include <nlohmann/json.hpp>
+
+#include "errfield/compensation/compensation.hpp"
+#include "errfield/error.hpp"
+#include "errfield/robot/builtin_robots.hpp"
+#include "errfield/robot/kinematics.hpp"
+#include "errfield/variogram_model.hpp"
+
+namespace errfield::compensation {
+using namespace errfield::robot;
+namespace joint_error_functions_test {
+
+// KR 16 with a 150 mm tool offset from the flange axis, so that every joint moves the point.
+MdhModel robot_with_tool() {
+  Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
+  tool.translation() = Eigen::Vector3d(60.0, -30.0, 130.0);
+  return find_builtin_robot("kr16")->model.with_tool(tool);
+}
+
+std::vector<JointVector> random_poses(std::size_t n, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  const double lo[6] = {-150, -130, 70, -90, -110, -180}, hi[6] = {150, -30, 150, 90, 110, 180};
+  std::vector<JointVector> q(n);
+  for (auto& v : q)
+    for (int j = 0; j < 6; ++j) v[j] = std::uniform_real_distribution<double>(lo[j], hi[j])(rng);
+  return q;
+}
+
+// The truth, written without the library's polynomials: each joint's error in mrad as a plain
+// polynomial in u (a combination of Legendre degrees 1..4), e.g. 0.8 u^4 - 0.3 u.
+double truth_mrad(int joint, double u) {
+  const double a[6][5] = {{0, -0.3, 0, 0, 0.8}, {0, 0.2, 0.4, 0, 0}, {0, 0, 0, -0.5, 0},
+                          {0, 0.6, 0, 0, 0},    {0, 0, 1.2, 0, 0.9}, {0, -0.4, 0, 0, 0}};
+  double v = 0.0, p = 1.0;
+  for (int k = 0; k < 5; ++k, p *= u) v += a[joint][k] * p;
+  return v;
+}
+
+// What those joint errors do to the tool point: the FK at the perturbed joints, by finite
+// difference of positions (no Jacobian involved).
+Eigen::Vector3d moved_by(const MdhModel& m, const JointVector& q, const std::array<double, 6>& lo,
+                         const std::array<double, 6>& hi) {
+  JointVector dq_deg;
+  for (int j = 0; j < 6; ++j) {
+    const double u = 2.0 * (q[j] - lo[static_cast<std::size_t>(j)]) / (hi[static_cast<std::size_t>(j)] - lo[static_cast<std::size_t>(j)]) - 1.0;
+    dq_deg[j] = truth_mrad(j, u) * 1e-3 * 180.0 / M_PI;
+  }
+  return forward_position(m, q + dq_deg) - forward_position(m, q);
+}
+
+TEST(JointErrorFunctions, PositionErrorIsTheFkOfTheAngleErrors) {
+  const MdhModel m = robot_with_tool();
+  JointErrorFunctions f;
+  f.degree = 3;
+  f.lo_deg = {-150, -130, 70, -90, -110, -180};
+  f.hi_deg = {150, -30, 150, 90, 110, 180};
+  f.coefficients_mrad = Eigen::MatrixXd::Random(6, 3);
+  for (const JointVector& q : random_poses(20, 3)) {
+    const Eigen::Matrix<double, 6, 1> dq = f.angle_error_mrad(q);
+    // Legendre P1..P3 written out
+    for (int j = 0; j < 6; ++j) {
+      const double u = 2.0 * (q[j] - f.lo_deg[static_cast<std::size_t>(j)]) /
+                           (f.hi_deg[static_cast<std::size_t>(j)] - f.lo_deg[static_cast<std::size_t>(j)]) - 1.0;
+      const double expected = f.coefficients_mrad(j, 0) * u + f.coefficients_mrad(j, 1) * (1.5 * u * u - 0.5) +
+                              f.coefficients_mrad(j, 2) * (2.5 * u * u * u - 1.5 * u);
+      EXPECT_NEAR(dq[j], expected, 1e-12);
+    }
+    // Small angles: first order in dq, so compare with the FK difference at 1/1000 of the error
+    // and scale back (the second-order remainder is then ~1e-6 relative).
+    const Eigen::Vector3d fd = (forward_position(m, q + 1e-3 * dq * 1e-3 * 180.0 / M_PI) - forward_position(m, q)) * 1e3;
+    EXPECT_LT((f.position_error_mm(m, q) - fd).norm(), 1e-6 * std::max(1.0, fd.norm())) << q.transpose();
+  }
+}
+
+TEST(JointErrorFunctions, ClampedBeyondTheFittedRange) {
+  JointErrorFunctions f;
+  f.degree = 2;
+  f.lo_deg = {0, 0, 0, 0, 0, 0};
+  f.hi_deg = {10, 10, 10, 10, 10, 10};
+  f.coefficients_mrad = Eigen::MatrixXd::Ones(6, 2);
+  JointVector at_edge = JointVector::Constant(10.0), beyond = JointVector::Constant(25.0);
+  EXPECT_EQ(f.angle_error_mrad(at_edge), f.angle_error_mrad(beyond));
+  EXPECT_NEAR(f.angle_error_mrad(at_edge)[0], 2.0, 1e-15);  // P1(1) + P2(1)
+}
+
+TEST(JointErrorFunctions, RecoversJointErrorsFromPositionsAlone) {
+  const MdhModel m = robot_with_tool();
+  const std::vector<JointVector> q = random_poses(300, 5);
+  std::array<double, 6> lo, hi;
+  lo.fill(1e9);
+  hi.fill(-1e9);
+  for (const auto& v : q)
+    for (std::size_t j = 0; j < 6; ++j) {
+      lo[j] = std::min(lo[j], v[static_cast<Eigen::Index>(j)]);
+      hi[j] = std::max(hi[j], v[static_cast<Eigen::Index>(j)]);
+    }
+  // The functions have no constant: that is the joint offset, which the calibration identifies
+  // before them. So the residuals are those left after the calibration took each truth's mean over
+  // u in [-1, 1] as an offset; the functions then hold the truth minus that mean.
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> noise(0.0, 0.005);
+  std::vector<Eigen::Vector3d> r(q.size());
+  JointVector offset_deg;
+  for (int j = 0; j < 6; ++j) {
+    double mean = 0.0;
+    for (int s = 0; s < 2001; ++s) mean += truth_mrad(j, -1.0 + s / 1000.0) / 2001.0;
+    offset_deg[j] = mean * 1e-3 * 180.0 / M_PI;
+  }
+  for (std::size_t i = 0; i < q.size(); ++i)
+    r[i] = moved_by(m, q[i], lo, hi) - (forward_position(m, q[i] + offset_deg) - forward_position(m, q[i])) +
+           Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+  const JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 4);
+  EXPECT_GT(fit.rms_before_mm, 0.3);  // the effect is well above the noise
+  // What is left is the noise (3-D RMS 0.005 sqrt(3)) plus the linearization (second order).
+  EXPECT_LT(fit.rms_after_mm, 0.0125) << fit.rms_before_mm;
+  EXPECT_GE(fit.leave_one_out_inflation, 1.0);
+  // The recovered angle errors, compared where they matter (over each joint's range).
+  for (int j = 0; j < 6; ++j) {
+    double mean = 0.0;
+    for (int s = 0; s < 2001; ++s) mean += truth_mrad(j, -1.0 + s / 1000.0) / 2001.0;
+    for (double u : {-1.0, -0.5, 0.0, 0.5, 1.0}) {
+      JointVector at = JointVector::Zero();
+      at[j] = lo[static_cast<std::size_t>(j)] + 0.5 * (u + 1.0) * (hi[static_cast<std::size_t>(j)] - lo[static_cast<std::size_t>(j)]);
+      EXPECT_NEAR(fit.functions.angle_error_mrad(at)[j], truth_mrad(j, u) - mean, 0.05) << "joint " << j + 1 << " u " << u;
+    }
+  }
+}
+
+TEST(JointErrorFunctions, NoiseAloneLeavesThemNearZero) {
+  const MdhModel m = robot_with_tool();
+  const std::vector<JointVector> q = random_poses(200, 7);
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  std::vector<Eigen::Vector3d> r(q.size());
+  for (auto& v : r) v = Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+  const JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 8);
+  // Generalized cross-validation does not spend 48 parameters on noise: at most a few effective
+  // ones, and the residual barely shrinks.
+  EXPECT_LT(fit.effective_parameters, 6.0);
+  EXPECT_GT(fit.rms_after_mm, 0.97 * fit.rms_before_mm);
+}
+
+TEST(JointErrorFunctions, AJointThatDoesNotMoveThePointHasNone) {
+  // No tool: the flange origin lies on joint 6's axis, which then moves nothing.
+  const MdhModel m = find_builtin_robot("kr16")->model;
+  const std::vector<JointVector> q = random_poses(60, 13);
+  std::vector<Eigen::Vector3d> r(q.size(), Eigen::Vector3d(0.01, -0.02, 0.03));
+  const JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 3);
+  EXPECT_EQ(fit.functions.lo_deg[5], fit.functions.hi_deg[5]);
+  EXPECT_EQ(fit.functions.coefficients_mrad.row(5).norm(), 0.0);
+  EXPECT_LT(fit.functions.lo_deg[0], fit.functions.hi_deg[0]);
+}
+
+TEST(JointErrorFunctions, JsonRoundTripAndRefusals) {
+  JointErrorFunctions f;
+  f.degree = 2;
+  f.lo_deg = {-1, -2, -3, -4, -5, -6};
+  f.hi_deg = {1, 2, 3, 4, 5, 6};
+  f.coefficients_mrad = Eigen::MatrixXd::Random(6, 2);
+  const JointErrorFunctions back = JointErrorFunctions::from_json(f.to_json(), "m.json");
+  EXPECT_EQ(back.degree, 2);
+  EXPECT_EQ(back.lo_deg, f.lo_deg);
+  EXPECT_EQ(back.hi_deg, f.hi_deg);
+  EXPECT_EQ(back.coefficients_mrad, f.coefficients_mrad);
+  auto refused = [&](nlohmann::json j, const std::string& names) {
+    try {
+      JointErrorFunctions::from_json(j, "m.json");
+      ADD_FAILURE() << "accepted " << j.dump();
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(names), std::string::npos) << e.what();
+      EXPECT_EQ(e.file(), "m.json");
+    }
+  };
+  nlohmann::json j = f.to_json();
+  j["degree"] = 0;
+  refused(j, "joint_error_functions.degree");
+  j = f.to_json();
+  j["coefficients_mrad"][3] = {1.0};
+  refused(j, "joint_error_functions.coefficients_mrad\"[3]");
+  j = f.to_json();
+  j["hi_deg"][2] = -10.0;
+  refused(j, "joint_error_functions.hi_deg\"[2]");
+  j = f.to_json();
+  j["lo_deg"] = "wide";
+  refused(j, "joint_error_functions.lo_deg");
+  EXPECT_THROW(fit_joint_error_functions(robot_with_tool(), random_poses(3, 1), std::vector<Eigen::Vector3d>(2), 2),
+               ArgumentError);
+  EXPECT_THROW(fit_joint_error_functions(robot_with_tool(), random_poses(3, 1), std::vector<Eigen::Vector3d>(3), 0),
+               ArgumentError);
+}
+
+TEST(JointErrorFunctions, CoefficientCovarianceIsTheSandwichUnderTheCentredFieldCovariance) {
+  const MdhModel m = robot_with_tool();
+  const std::vector<JointVector> q = random_poses(40, 17);
+  std::vector<Eigen::Vector3d> r(q.size());
+  for (std::size_t i = 0; i < q.size(); ++i)  // a smooth joint-1 effect, so that some functions are fitted
+    r[i] = Eigen::Vector3d(0.2 * std::sin(q[i][0] / 40.0), 0.1 * std::cos(q[i][4] / 30.0), 0.05);
+  JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 3);
+  ASSERT_GT(fit.ridge_inverse.size(), 0);
+  const VariogramModel field = VariogramModel::parse("sph(sill=0.01,range=200)+nug(0.0004)@ard(1,0.5,2,1,1,0.3)");
+  set_coefficient_covariance(fit, q, field);
+  // The 3N x 3N covariance of the residuals written out in full: components independent, one
+  // covariance each, nugget on the diagonal.
+  const auto n = static_cast<Eigen::Index>(q.size());
+  const double scale[6] = {1, 0.5, 2, 1, 1, 0.3};
+  Eigen::MatrixXd sigma = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < n; ++j) {
+      double h2 = 0.0;
+      for (int k = 0; k < 6; ++k) h2 += std::pow((q[static_cast<std::size_t>(i)][k] - q[static_cast<std::size_t>(j)][k]) / scale[k], 2);  // ard: range along k = range * s_k
+      const double h = std::sqrt(h2) / 200.0;
+      const double c = i == j ? 0.0104 : (h >= 1.0 ? 0.0 : 0.01 * (1.0 - 1.5 * h + 0.5 * h * h * h));
+      for (int a = 0; a < 3; ++a) sigma(3 * i + a, 3 * j + a) = c;
+    }
+  // Less what a constant per component carries (ordinary kriging takes it): P sigma P per component.
+  Eigen::MatrixXd centre = Eigen::MatrixXd::Identity(3 * n, 3 * n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < n; ++j)
+      for (int a = 0; a < 3; ++a) centre(3 * i + a, 3 * j + a) -= 1.0 / static_cast<double>(n);
+  sigma = centre * sigma * centre;
+  const Eigen::MatrixXd expected = fit.ridge_inverse * fit.design.transpose() * sigma * fit.design * fit.ridge_inverse;
+  const Eigen::MatrixXd& got = fit.functions.coefficient_covariance_mrad2;
+  ASSERT_EQ(got.rows(), expected.rows());
+  EXPECT_LT((got - expected).norm(), 1e-9 * expected.norm());
+  // A prediction's variance: the design rows at q through that covariance.
+  const JointVector at = q[3];
+  const Eigen::MatrixXd d = fit.design.middleRows<3>(9);
+  EXPECT_LT((fit.functions.axis_variance_mm2(m, at) - (d * got * d.transpose()).diagonal()).norm(),
+            1e-12 + 1e-9 * got.norm());
+  // Round trip through JSON keeps it; a negative variance is refused.
+  const JointErrorFunctions back = JointErrorFunctions::from_json(fit.functions.to_json(), "m.json");
+  EXPECT_EQ(back.coefficient_covariance_mrad2, got);
+  nlohmann::json j = fit.functions.to_json();
+  j["coefficient_covariance_mrad2"][2][2] = -1.0;
+  EXPECT_THROW(JointErrorFunctions::from_json(j, "m.json"), InputError);
+}
+
+TEST(JointErrorFunctions, OnlyKinematicKrigingModelsCarryThem) {
+  const MdhModel m = robot_with_tool();
+  JointErrorFunctions f;
+  f.degree = 1;
+  f.lo_deg = {-150, -130, 70, -90, -110, -180};
+  f.hi_deg = {150, -30, 150, 90, 110, 180};
+  f.coefficients_mrad = Eigen::MatrixXd::Constant(6, 1, 0.5);
+  const CompensationModel kin(CompensationMethod::kinematic, m, nullptr);
+  nlohmann::json j = kin.to_json();
+  j["joint_error_functions"] = f.to_json();
+  try {
+    CompensationModel::from_json(j, "k.json");
+    FAIL() << "a kinematic model with joint error functions was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("only kinematic+kriging"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace joint_error_functions_test
+}  // namespace errfield::compensation
