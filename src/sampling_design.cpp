@@ -241,6 +241,23 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
   // batch, which leaves the candidates whose variance it did not need to reduce.
   std::vector<char> taken(static_cast<std::size_t>(C), 0);
   const double scale_all = (scale_c.sum() + scale_e.sum()) / static_cast<double>(C + E);
+  // The linear term's coefficient covariance (updated with each pick) and the mean of D_c' D_c.
+  const auto& lin = options.linear_term;
+  const bool linear = lin.covariance.size() > 0;
+  const Eigen::Index K = linear ? lin.components : 1;
+  Eigen::MatrixXd lin_cov, lin_q;
+  if (linear) {
+    const Eigen::Index p = lin.covariance.rows();
+    if (K < 1 || lin.covariance.cols() != p || lin.candidate_rows.rows() != K * C || lin.candidate_rows.cols() != p ||
+        !lin.covariance.allFinite() || !lin.candidate_rows.allFinite())
+      throw ArgumentError("linear_term: expected a finite p x p covariance and " + std::to_string(K) + " x " +
+                          std::to_string(C) + " candidate rows of p columns, got " + std::to_string(lin.covariance.rows()) +
+                          " x " + std::to_string(lin.covariance.cols()) + " and " + std::to_string(lin.candidate_rows.rows()) +
+                          " x " + std::to_string(lin.candidate_rows.cols()));
+    lin_cov = lin.covariance;
+    lin_q = lin.candidate_rows.transpose() * lin.candidate_rows / static_cast<double>(C);
+  }
+  auto linear_mse = [&] { return linear ? (lin_cov * lin_q).trace() / static_cast<double>(K) : 0.0; };
   auto mse = [&] {
     double sum = 0.0;
     for (Eigen::Index c = 0; c < C; ++c) {
@@ -248,7 +265,7 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
       sum += scale_c[c] * (i >= 0 ? loo(i) : std::max(var_c[c], 0.0));
     }
     for (Eigen::Index e = 0; e < E; ++e) sum += scale_e[e] * loo(e);
-    return sum / static_cast<double>(C + E) + scale_all * nugget;
+    return sum / static_cast<double>(C + E) + scale_all * nugget + linear_mse();
   };
   plan.predicted_mse.push_back(xd.rows() > 0 ? mse() : std::numeric_limits<double>::quiet_NaN());
 
@@ -274,10 +291,24 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
       Eigen::VectorXd reduction(C);
 #pragma omp parallel for schedule(static)
       for (Eigen::Index c = 0; c < C; ++c) reduction[c] = (cross.col(c).array().square() * scale_r.array()).sum();
+      // The linear term's reduction of the mean variance over the candidates (per component,
+      // times the references: the field's reduction is summed over them), each candidate alone.
+      Eigen::VectorXd linear_reduction = Eigen::VectorXd::Zero(C);
+      if (linear) {
+#pragma omp parallel for schedule(static)
+        for (Eigen::Index c = 0; c < C; ++c) {
+          if (taken[static_cast<std::size_t>(c)]) continue;
+          const auto d = lin.candidate_rows.middleRows(K * c, K);
+          const Eigen::MatrixXd g = d * lin_cov;  // K x p
+          Eigen::MatrixXd m = g * d.transpose();
+          m.diagonal().array() += std::max(var_c[c], 0.0) + noise;
+          linear_reduction[c] = m.llt().solve(g * lin_q * g.transpose()).trace() * static_cast<double>(R) / static_cast<double>(K);
+        }
+      }
       double best_score = -1.0;
       for (Eigen::Index c = 0; c < C; ++c) {
         if (taken[static_cast<std::size_t>(c)]) continue;
-        const double score = reduction[c] / (std::max(var_c[c], 0.0) + noise);
+        const double score = reduction[c] / (std::max(var_c[c], 0.0) + noise) + linear_reduction[c];
         if (score > best_score) best_score = score, best = c;
       }
     }
@@ -305,6 +336,16 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
       k_inverse(S, S) = 1.0 / schur;
       x_set.row(S) = xc.row(best);
       set_of_candidate[static_cast<std::size_t>(best)] = S++;
+    }
+    if (linear) {
+      // beta's covariance given the pick (before var_c is updated: the pick's reading has the
+      // field's variance as it was before it).
+      const auto d = lin.candidate_rows.middleRows(K * best, K);
+      const Eigen::MatrixXd g = d * lin_cov;
+      Eigen::MatrixXd m = g * d.transpose();
+      m.diagonal().array() += std::max(var_c[best], 0.0) + noise;
+      lin_cov -= g.transpose() * m.llt().solve(g);
+      lin_cov = 0.5 * (lin_cov + lin_cov.transpose());
     }
     var_c -= uc.cwiseAbs2();
     u_c.push_back(uc);

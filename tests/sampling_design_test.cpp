@@ -183,6 +183,77 @@ TEST(VarianceReduction, GreedyPicksAndPredictionsMatchABruteForcePosterior) {
     EXPECT_NEAR(whole.predicted_mse[q], whole_mse(q), 1e-9) << "after " << q << " picks";
 }
 
+// A linear term (readings = D_c beta + field + noise): the picks minimize the pool's field variance
+// plus the term's mean variance tr(A Q), A beta's covariance after the sequential GLS updates with
+// each pick's field variance at the time of its pick, written out here from brute-force posteriors.
+TEST(VarianceReduction, ALinearTermAddsItsVarianceAndItsReductionToTheChoice) {
+  const Eigen::MatrixXd pool = uniform_points(20, 2, 8.0, 17);
+  const Eigen::MatrixXd measured = uniform_points(3, 2, 8.0, 18);
+  const VariogramModel model = VariogramModel::parse("exp(sill=1,range=2)+nug(0.1)");
+  auto rows_of = [](const Eigen::RowVectorXd& x) {
+    Eigen::RowVectorXd d(3);
+    d << x[0] / 8.0, x[1] / 8.0, (x[0] / 8.0) * (x[0] / 8.0);
+    return d;
+  };
+  VarianceReductionOptions o;
+  o.count = 4;
+  o.lookahead = 1;
+  o.max_references = 100;
+  o.linear_term.components = 1;
+  o.linear_term.covariance = Eigen::Matrix3d::Identity() * 0.5;
+  o.linear_term.candidate_rows.resize(20, 3);
+  for (int c = 0; c < 20; ++c) o.linear_term.candidate_rows.row(c) = rows_of(pool.row(c));
+  const VarianceReductionPlan plan = select_by_variance_reduction(pool, measured, model, o);
+  ASSERT_EQ(plan.predicted_mse.size(), 6u);
+  const TestCovariance k;
+  Eigen::Matrix3d q = Eigen::Matrix3d::Zero();
+  for (int c = 0; c < 20; ++c) q += rows_of(pool.row(c)).transpose() * rows_of(pool.row(c)) / 20.0;
+  Eigen::Matrix3d a = Eigen::Matrix3d::Identity() * 0.5;
+  std::vector<Eigen::RowVectorXd> set;
+  for (int j = 0; j < measured.rows(); ++j) set.push_back(measured.row(j));
+  EXPECT_NEAR(plan.predicted_mse[0], brute_force_mse(pool, set, k) + (a * q).trace(), 1e-9);
+  // beta's covariance after a reading at x, whose field variance given `given` is its posterior.
+  auto updated = [&](const Eigen::Matrix3d& cov, const Eigen::RowVectorXd& x, const std::vector<Eigen::RowVectorXd>& given) {
+    const double field = brute_force_mse(x, given, k) - k.nugget;  // posterior variance of the field at x
+    const Eigen::RowVectorXd d = rows_of(x);
+    const double s = field + k.nugget + d * cov * d.transpose();
+    return Eigen::Matrix3d(cov - (cov * d.transpose()) * (d * cov) / s);
+  };
+  std::vector<bool> used(20, false);
+  std::vector<int> picked;
+  std::vector<std::size_t> all = plan.chosen;
+  all.insert(all.end(), plan.lookahead_rows.begin(), plan.lookahead_rows.end());
+  for (std::size_t step = 0; step < all.size(); ++step) {
+    int best = -1;
+    double best_total = std::numeric_limits<double>::infinity();
+    for (int c = 0; c < 20; ++c) {
+      if (used[static_cast<std::size_t>(c)]) continue;
+      auto with = set;
+      with.push_back(pool.row(c));
+      const double total = brute_force_mse(pool, with, k) + (updated(a, pool.row(c), set) * q).trace();
+      if (total < best_total - 1e-12) best_total = total, best = c;
+    }
+    EXPECT_EQ(all[step], static_cast<std::size_t>(best)) << "pick " << step;
+    a = updated(a, pool.row(best), set);
+    used[static_cast<std::size_t>(best)] = true;
+    set.push_back(pool.row(best));
+    picked.push_back(best);
+    EXPECT_NEAR(plan.predicted_mse[step + 1], brute_force_pool_mse(pool, set, picked, 3, k) + (a * q).trace(), 1e-9)
+        << "after pick " << step;
+  }
+  // A term with no uncertainty changes nothing: the picks are those without it.
+  VarianceReductionOptions none = o;
+  none.linear_term.covariance = Eigen::Matrix3d::Zero();
+  VarianceReductionOptions plain = o;
+  plain.linear_term = {};
+  EXPECT_EQ(select_by_variance_reduction(pool, measured, model, plain).chosen,
+            select_by_variance_reduction(pool, measured, model, none).chosen);
+  // Shapes are checked.
+  VarianceReductionOptions bad = o;
+  bad.linear_term.candidate_rows.resize(19, 3);
+  EXPECT_THROW(select_by_variance_reduction(pool, measured, model, bad), ArgumentError);
+}
+
 TEST(VarianceReduction, PredictedErrorHoldsForOrdinaryKrigingOnDrawsOfTheModel) {
   // Gaussian fields of the model with a constant mean the predictor does not know (5 mm), read
   // with the nugget as noise; ordinary kriging (written here) predicts a new reading at each

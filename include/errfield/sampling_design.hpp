@@ -68,6 +68,20 @@ struct VarianceReductionOptions {
   /// pool). Their variance multipliers in `measured_scale` (empty = 1), as variance_scale.
   bool measured_in_prediction = false;
   std::vector<double> measured_scale;
+  /// A linear term beside the field (e.g. a regression fitted to the data before the field was,
+  /// with coefficients beta): a reading at candidate c is D_c beta + field + noise, with D_c the
+  /// candidate's `components` x p rows of `candidate_rows` (rows [components·c, components·(c+1))).
+  /// `covariance` is beta's covariance now (p x p). A pick informs beta as a reading whose other
+  /// parts have the field's current variance at c plus the noise, per component (the GLS update
+  /// A <- A - A D' (S + D A D')^-1 D A); the choice adds the term's integrated variance reduction
+  /// over the candidates, and predicted_mse its mean variance tr(A Q) / components, Q the mean of
+  /// D_c' D_c over the candidates. Empty `covariance`: no term.
+  struct LinearTerm {
+    Eigen::MatrixXd covariance;
+    Eigen::MatrixXd candidate_rows;
+    int components = 1;
+  };
+  LinearTerm linear_term;
 };
 
 /// Candidate rows that extend the box of `measured` (one location per row; per axis [min - margin,

@@ -1,6 +1,7 @@
 #include "errfield/compensation/joint_error_functions.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -291,32 +292,36 @@ void set_coefficient_covariance(JointErrorFunctionFit& fit, const std::vector<ro
     const robot::JointVector& q = q_deg[static_cast<std::size_t>(i)];
     field_model.anisotropy().apply(q.data(), x.col(i).data(), kJoints);
   }
-  const double sill = field_model.sill(), nugget = field_model.nugget();
-  Eigen::MatrixXd k(n, n);
-  for (Eigen::Index j = 0; j < n; ++j)
-    for (Eigen::Index i = j; i < n; ++i)
-      if (i == j) {
-        k(i, i) = sill;  // a reading: field and nugget
-      } else {
-        const double h = (x.col(i) - x.col(j)).norm();
-        k(i, j) = k(j, i) = h > 0.0 ? sill - field_model.gamma(h) : sill - nugget;  // two readings share the field only
-      }
   // Without the covariance of a constant: ordinary kriging estimates each component's mean from the
   // remaining residuals, so a shift of the functions common to all poses does not reach a
   // prediction. (With nearly linear fitted variograms, whose sill is arbitrary and large, that
-  // constant part made the variance ~5x too large on SIMULATED ER20 data.) K <- P K P, P = I - 11'/n.
-  const Eigen::VectorXd row_mean = k.rowwise().mean();
-  const double grand_mean = row_mean.mean();
-  k.colwise() -= row_mean;
-  k.rowwise() -= row_mean.transpose();
-  k.array() += grand_mean;
-  // F' S F = sum over the three components of F_a' K F_a (the components are independent).
+  // constant part made the variance ~5x too large on SIMULATED ER20 data.) P K P with P = I - 11'/n,
+  // applied as F_a' P K P F_a = G_a' K G_a with the centred design columns G_a = P F_a.
   const Eigen::Index p = fit.design.cols();
-  Eigen::MatrixXd middle = Eigen::MatrixXd::Zero(p, p);
-  Eigen::MatrixXd fa(n, p);
+  std::array<Eigen::MatrixXd, 3> g;
   for (int a = 0; a < 3; ++a) {
-    for (Eigen::Index i = 0; i < n; ++i) fa.row(i) = fit.design.row(3 * i + a);
-    middle.noalias() += fa.transpose() * (k * fa);
+    g[static_cast<std::size_t>(a)].resize(n, p);
+    for (Eigen::Index i = 0; i < n; ++i) g[static_cast<std::size_t>(a)].row(i) = fit.design.row(3 * i + a);
+    g[static_cast<std::size_t>(a)].rowwise() -= g[static_cast<std::size_t>(a)].colwise().mean();
+  }
+  // F' S F = sum over the three (independent) components of G_a' K G_a, with K assembled a block of
+  // columns at a time (never n x n: 5,000 poses would need 200 MB).
+  const double sill = field_model.sill(), nugget = field_model.nugget();
+  constexpr Eigen::Index kBlock = 256;
+  Eigen::MatrixXd middle = Eigen::MatrixXd::Zero(p, p);
+  Eigen::MatrixXd k(n, std::min(kBlock, n));
+  for (Eigen::Index j0 = 0; j0 < n; j0 += kBlock) {
+    const Eigen::Index b = std::min(kBlock, n - j0);
+    for (Eigen::Index jj = 0; jj < b; ++jj)
+      for (Eigen::Index i = 0; i < n; ++i) {
+        if (i == j0 + jj) {
+          k(i, jj) = sill;  // a reading: field and nugget
+          continue;
+        }
+        const double h = (x.col(i) - x.col(j0 + jj)).norm();
+        k(i, jj) = h > 0.0 ? sill - field_model.gamma(h) : sill - nugget;  // two readings share the field only
+      }
+    for (const Eigen::MatrixXd& ga : g) middle.noalias() += (ga.transpose() * k.leftCols(b)) * ga.middleRows(j0, b);
   }
   f.coefficient_covariance_mrad2 = fit.ridge_inverse * middle * fit.ridge_inverse;
 }

@@ -106,6 +106,18 @@ PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
                                 : field.value("region_margin_mm", 0.0) + kRegionToleranceMm;
     vo.first_picks = box_extending_picks(pool, done, margin, options.count);
   }
+  if (const auto& f = model->joint_error_functions(); f && f->coefficient_covariance_mrad2.size() > 0 && !candidates.empty()) {
+    // The joint error functions (kinematic+kriging fitted with them): their estimation variance is
+    // part of every prediction, and a pose informs them by its lever on each joint at each angle,
+    // wherever the field is; the choice weighs both. Measured: without this term, adaptive
+    // selection lost to maximin at every count once the functions were in the model (docs/robot.md).
+    vo.linear_term.components = 3;
+    vo.linear_term.covariance = f->coefficient_covariance_mrad2;
+    vo.linear_term.candidate_rows.resize(3 * static_cast<Eigen::Index>(candidates.size()), f->coefficient_covariance_mrad2.cols());
+    for (std::size_t c = 0; c < candidates.size(); ++c)
+      vo.linear_term.candidate_rows.middleRows(3 * static_cast<Eigen::Index>(c), 3) =
+          f->design_rows(robot::geometric_jacobian(model->command_model(), candidates[c]), candidates[c]);
+  }
   vo.count = options.count;
   vo.lookahead = options.target_rms_mm ? options.max_lookahead : 0;
   vo.max_references = options.max_references;

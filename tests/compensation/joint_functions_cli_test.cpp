@@ -10,7 +10,9 @@
 #include <nlohmann/json.hpp>
 
 #include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/pose_selection.hpp"
 #include "errfield/compensation/prediction.hpp"
+#include "errfield/csv_table.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "support/cli_harness.hpp"
 #include "support/session_split.hpp"
@@ -87,6 +89,38 @@ TEST_F(JointFunctionsCli, TheModelAddsThemAndTheirVarianceThroughTheCalibratedJa
     largest = std::max(largest, fd.norm());
   }
   EXPECT_GT(largest, 0.05);  // they do something on these data
+}
+
+TEST_F(JointFunctionsCli, PlanPredictionIncludesTheirVarianceAndItsReduction) {
+  ASSERT_EQ(run("fit --robot r.json --data train.csv --out m.json").exit_code, 0);
+  const CompensationModel m = load_model(path("m.json")).model;
+  nlohmann::json j = nlohmann::json::parse(read("m.json"));
+  j.erase("joint_error_functions");
+  const CompensationModel bare = CompensationModel::from_json(j, "bare");
+  // The pool: the held-out poses' joints.
+  const CsvTable hold = CsvTable::read(path("hold.csv"));
+  std::vector<robot::JointVector> pool;
+  for (std::size_t i = 0; i < hold.row_count(); ++i) {
+    if (hold.cell(i, hold.column_index("kind")) != "target") continue;
+    robot::JointVector q;
+    for (int k = 0; k < 6; ++k) q[k] = hold.numeric_cell(i, hold.column_index("q" + std::to_string(k + 1)));
+    pool.push_back(q);
+  }
+  PoseSelectionOptions o;
+  o.count = 5;
+  const PoseSelection with = select_poses(pool, m.data_joints(), &m, o);
+  const PoseSelection without = select_poses(pool, m.data_joints(), &bare, o);
+  ASSERT_EQ(with.predicted_rms_mm.size(), without.predicted_rms_mm.size());
+  double mean = 0.0;
+  for (const auto& q : pool) mean += m.joint_error_functions()->axis_variance_mm2(m.command_model(), q).sum();
+  mean /= static_cast<double>(pool.size());
+  EXPECT_GT(mean, 0.0);
+  // Now: the field's prediction plus the functions' mean variance over the pool.
+  EXPECT_NEAR(with.predicted_rms_mm[0] * with.predicted_rms_mm[0],
+              without.predicted_rms_mm[0] * without.predicted_rms_mm[0] + mean, 1e-9);
+  // Each pose measured lowers both parts (the functions' by the GLS update of their covariance).
+  for (std::size_t k = 1; k < with.predicted_rms_mm.size(); ++k)
+    EXPECT_LE(with.predicted_rms_mm[k], with.predicted_rms_mm[k - 1] + 1e-12) << k;
 }
 
 TEST_F(JointFunctionsCli, ADegreeOutOfRangeIsRefused) {
