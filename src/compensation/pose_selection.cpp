@@ -136,7 +136,8 @@ PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
                                        : std::to_string(vo.first_picks.size()) +
                                              " poses that extend the fitted region to the pool's extent, then ") +
                std::string("integrated variance reduction under the model's field (") + (joint ? "joint" : "task") +
-               " space), conditioned on " + std::to_string(known.size()) +
+               " space)" + (vo.linear_term.covariance.size() > 0 ? " and its joint error functions" : "") +
+               ", conditioned on " + std::to_string(known.size()) +
                " measured poses; predicted RMS over " + std::to_string(plan.references) + " pool poses";
   return out;
 }
