@@ -33,6 +33,16 @@ std::vector<JointVector> random_poses(std::size_t n, unsigned seed) {
   return q;
 }
 
+// Functions with these coefficients (6 x degree) over the joint box random_poses draws from.
+JointErrorFunctions functions_over_the_box(const Eigen::MatrixXd& coefficients_mrad) {
+  JointErrorFunctions f;
+  f.degree = static_cast<int>(coefficients_mrad.cols());
+  f.lo_deg = {-150, -130, 70, -90, -110, -180};
+  f.hi_deg = {150, -30, 150, 90, 110, 180};
+  f.coefficients_mrad = coefficients_mrad;
+  return f;
+}
+
 // The truth, written without the library's polynomials: each joint's error in mrad as a plain
 // polynomial in u (a combination of Legendre degrees 1..4), e.g. 0.8 u^4 - 0.3 u.
 double truth_mrad(int joint, double u) {
@@ -57,11 +67,7 @@ Eigen::Vector3d moved_by(const MdhModel& m, const JointVector& q, const std::arr
 
 TEST(JointErrorFunctions, PositionErrorIsTheFkOfTheAngleErrors) {
   const MdhModel m = robot_with_tool();
-  JointErrorFunctions f;
-  f.degree = 3;
-  f.lo_deg = {-150, -130, 70, -90, -110, -180};
-  f.hi_deg = {150, -30, 150, 90, 110, 180};
-  f.coefficients_mrad = Eigen::MatrixXd::Random(6, 3);
+  const JointErrorFunctions f = functions_over_the_box(Eigen::MatrixXd::Random(6, 3));
   for (const JointVector& q : random_poses(20, 3)) {
     const Eigen::Matrix<double, 6, 1> dq = f.angle_error_mrad(q);
     // Legendre P1..P3 written out
@@ -244,11 +250,7 @@ TEST(JointErrorFunctions, CoefficientCovarianceIsTheSandwichUnderTheCentredField
 
 TEST(JointErrorFunctions, OnlyKinematicKrigingModelsCarryThem) {
   const MdhModel m = robot_with_tool();
-  JointErrorFunctions f;
-  f.degree = 1;
-  f.lo_deg = {-150, -130, 70, -90, -110, -180};
-  f.hi_deg = {150, -30, 150, 90, 110, 180};
-  f.coefficients_mrad = Eigen::MatrixXd::Constant(6, 1, 0.5);
+  const JointErrorFunctions f = functions_over_the_box(Eigen::MatrixXd::Constant(6, 1, 0.5));
   const CompensationModel kin(CompensationMethod::kinematic, m, nullptr);
   nlohmann::json j = kin.to_json();
   j["joint_error_functions"] = f.to_json();
