@@ -38,7 +38,7 @@ double scaled(double q, double lo, double hi) {
   return std::clamp(2.0 * (q - lo) / (hi - lo) - 1.0, -1.0, 1.0);
 }
 
-[[noreturn]] void bad(const std::string& source, const std::string& what) {
+[[noreturn]] void bad_functions_member(const std::string& source, const std::string& what) {
   throw InputError(source + ": member \"joint_error_functions" + what, source);
 }
 
@@ -112,17 +112,17 @@ nlohmann::json JointErrorFunctions::to_json() const {
 }
 
 JointErrorFunctions JointErrorFunctions::from_json(const nlohmann::json& j, const std::string& source) {
-  if (!j.is_object()) bad(source, "\": expected an object {degree, lo_deg, hi_deg, coefficients_mrad}");
+  if (!j.is_object()) bad_functions_member(source, "\": expected an object {degree, lo_deg, hi_deg, coefficients_mrad}");
   JointErrorFunctions f;
   if (!j.contains("degree") || !j["degree"].is_number_integer() || j["degree"].get<int>() < 1 ||
       j["degree"].get<int>() > 20)
-    bad(source, ".degree\": expected an integer 1..20");
+    bad_functions_member(source, ".degree\": expected an integer 1..20");
   f.degree = j["degree"].get<int>();
   auto six = [&](const char* key, std::array<double, 6>& into) {
-    if (!j.contains(key) || !j[key].is_array() || j[key].size() != 6) bad(source, std::string(".") + key + "\": expected 6 numbers (deg)");
+    if (!j.contains(key) || !j[key].is_array() || j[key].size() != 6) bad_functions_member(source, std::string(".") + key + "\": expected 6 numbers (deg)");
     for (std::size_t k = 0; k < 6; ++k) {
       if (!j[key][k].is_number() || !std::isfinite(j[key][k].get<double>()))
-        bad(source, std::string(".") + key + "\"[" + std::to_string(k) + "]: expected a finite number (deg)");
+        bad_functions_member(source, std::string(".") + key + "\"[" + std::to_string(k) + "]: expected a finite number (deg)");
       into[k] = j[key][k].get<double>();
     }
   };
@@ -130,16 +130,16 @@ JointErrorFunctions JointErrorFunctions::from_json(const nlohmann::json& j, cons
   six("hi_deg", f.hi_deg);
   for (int k = 0; k < kJoints; ++k)
     if (f.hi_deg[static_cast<std::size_t>(k)] < f.lo_deg[static_cast<std::size_t>(k)])
-      bad(source, ".hi_deg\"[" + std::to_string(k) + "]: below lo_deg");
+      bad_functions_member(source, ".hi_deg\"[" + std::to_string(k) + "]: below lo_deg");
   const auto& c = j.contains("coefficients_mrad") ? j["coefficients_mrad"] : nlohmann::json();
-  if (!c.is_array() || c.size() != 6) bad(source, ".coefficients_mrad\": expected 6 arrays of " + std::to_string(f.degree) + " numbers");
+  if (!c.is_array() || c.size() != 6) bad_functions_member(source, ".coefficients_mrad\": expected 6 arrays of " + std::to_string(f.degree) + " numbers");
   f.coefficients_mrad.resize(kJoints, f.degree);
   for (std::size_t r = 0; r < 6; ++r) {
     if (!c[r].is_array() || c[r].size() != static_cast<std::size_t>(f.degree))
-      bad(source, ".coefficients_mrad\"[" + std::to_string(r) + "]: expected " + std::to_string(f.degree) + " numbers");
+      bad_functions_member(source, ".coefficients_mrad\"[" + std::to_string(r) + "]: expected " + std::to_string(f.degree) + " numbers");
     for (std::size_t k = 0; k < c[r].size(); ++k) {
       if (!c[r][k].is_number() || !std::isfinite(c[r][k].get<double>()))
-        bad(source, ".coefficients_mrad\"[" + std::to_string(r) + "][" + std::to_string(k) + "]: expected a finite number");
+        bad_functions_member(source, ".coefficients_mrad\"[" + std::to_string(r) + "][" + std::to_string(k) + "]: expected a finite number");
       f.coefficients_mrad(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k)) = c[r][k].get<double>();
     }
   }
@@ -147,14 +147,14 @@ JointErrorFunctions JointErrorFunctions::from_json(const nlohmann::json& j, cons
     const auto& v = j["coefficient_covariance_mrad2"];
     const std::size_t p = 6 * static_cast<std::size_t>(f.degree);
     if (!v.is_array() || v.size() != p)
-      bad(source, ".coefficient_covariance_mrad2\": expected " + std::to_string(p) + " rows of " + std::to_string(p) + " numbers");
+      bad_functions_member(source, ".coefficient_covariance_mrad2\": expected " + std::to_string(p) + " rows of " + std::to_string(p) + " numbers");
     f.coefficient_covariance_mrad2.resize(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(p));
     for (std::size_t r = 0; r < p; ++r) {
       if (!v[r].is_array() || v[r].size() != p)
-        bad(source, ".coefficient_covariance_mrad2\"[" + std::to_string(r) + "]: expected " + std::to_string(p) + " numbers");
+        bad_functions_member(source, ".coefficient_covariance_mrad2\"[" + std::to_string(r) + "]: expected " + std::to_string(p) + " numbers");
       for (std::size_t k = 0; k < p; ++k) {
         if (!v[r][k].is_number() || !std::isfinite(v[r][k].get<double>()))
-          bad(source, ".coefficient_covariance_mrad2\"[" + std::to_string(r) + "][" + std::to_string(k) + "]: expected a finite number");
+          bad_functions_member(source, ".coefficient_covariance_mrad2\"[" + std::to_string(r) + "][" + std::to_string(k) + "]: expected a finite number");
         f.coefficient_covariance_mrad2(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k)) = v[r][k].get<double>();
       }
     }
@@ -162,7 +162,7 @@ JointErrorFunctions JointErrorFunctions::from_json(const nlohmann::json& j, cons
     // non-negative diagonal.
     for (std::size_t r = 0; r < p; ++r)
       if (f.coefficient_covariance_mrad2(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(r)) < 0.0)
-        bad(source, ".coefficient_covariance_mrad2\"[" + std::to_string(r) + "][" + std::to_string(r) + "]: a variance below 0");
+        bad_functions_member(source, ".coefficient_covariance_mrad2\"[" + std::to_string(r) + "][" + std::to_string(r) + "]: a variance below 0");
   }
   return f;
 }
