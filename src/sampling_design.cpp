@@ -125,6 +125,10 @@ Eigen::MatrixXd mapped_by_anisotropy(const Eigen::MatrixXd& x, const Anisotropy&
 }
 
 /// Prior covariance of the field plus the constant mean's variance, between the rows of a and b.
+// Components of a reading in VarianceReductionOptions::linear_term (3 for a position): their
+// per-candidate systems live on the stack up to this size.
+constexpr int kMaxLinearComponents = 8;
+
 struct PriorCovariance {
   VariogramModel isotropic;
   double field_variance = 0.0;  ///< structured sill (nugget excluded): C(0) of the noise-free field
@@ -248,9 +252,10 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
   Eigen::MatrixXd lin_cov, lin_q;
   if (linear) {
     const Eigen::Index p = lin.covariance.rows();
-    if (K < 1 || lin.covariance.cols() != p || lin.candidate_rows.rows() != K * C || lin.candidate_rows.cols() != p ||
+    if (K < 1 || K > kMaxLinearComponents || lin.covariance.cols() != p || lin.candidate_rows.rows() != K * C || lin.candidate_rows.cols() != p ||
         !lin.covariance.allFinite() || !lin.candidate_rows.allFinite())
-      throw ArgumentError("linear_term: expected a finite p x p covariance and " + std::to_string(K) + " x " +
+      throw ArgumentError("linear_term: expected 1 to " + std::to_string(kMaxLinearComponents) +
+                          " components, a finite p x p covariance and " + std::to_string(K) + " x " +
                           std::to_string(C) + " candidate rows of p columns, got " + std::to_string(lin.covariance.rows()) +
                           " x " + std::to_string(lin.covariance.cols()) + " and " + std::to_string(lin.candidate_rows.rows()) +
                           " x " + std::to_string(lin.candidate_rows.cols()));
@@ -295,14 +300,19 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
       // times the references: the field's reduction is summed over them), each candidate alone.
       Eigen::VectorXd linear_reduction = Eigen::VectorXd::Zero(C);
       if (linear) {
+        // G = D A and G Q for every candidate by two products (no allocation per candidate), then
+        // each candidate's K x K system: reduction tr((S + G D')^-1 G Q G').
+        const Eigen::MatrixXd g_all = lin.candidate_rows * lin_cov;
+        const Eigen::MatrixXd gq_all = g_all * lin_q;
+        using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxLinearComponents, kMaxLinearComponents>;
 #pragma omp parallel for schedule(static)
         for (Eigen::Index c = 0; c < C; ++c) {
           if (taken[static_cast<std::size_t>(c)]) continue;
-          const auto d = lin.candidate_rows.middleRows(K * c, K);
-          const Eigen::MatrixXd g = d * lin_cov;  // K x p
-          Eigen::MatrixXd m = g * d.transpose();
+          const auto g = g_all.middleRows(K * c, K);
+          Small m = g * lin.candidate_rows.middleRows(K * c, K).transpose();
           m.diagonal().array() += std::max(var_c[c], 0.0) + noise;
-          linear_reduction[c] = m.llt().solve(g * lin_q * g.transpose()).trace() * static_cast<double>(R) / static_cast<double>(K);
+          const Small t = gq_all.middleRows(K * c, K) * g.transpose();
+          linear_reduction[c] = m.llt().solve(t).trace() * static_cast<double>(R) / static_cast<double>(K);
         }
       }
       double best_score = -1.0;

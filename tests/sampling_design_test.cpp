@@ -383,16 +383,27 @@ TEST(VarianceReduction, SamePicksAndPredictionsForOneAndTwoThreads) {
   o.count = 15;
   o.lookahead = 10;
   o.max_references = 120;
-  const int before = omp_get_max_threads();
-  omp_set_num_threads(1);
-  const VarianceReductionPlan one = select_by_variance_reduction(pool, measured, model, o);
-  omp_set_num_threads(2);
-  const VarianceReductionPlan two = select_by_variance_reduction(pool, measured, model, o);
-  omp_set_num_threads(before);
-  EXPECT_EQ(one.chosen, two.chosen);
-  EXPECT_EQ(one.lookahead_rows, two.lookahead_rows);
-  ASSERT_EQ(one.predicted_mse.size(), two.predicted_mse.size());
-  for (std::size_t i = 0; i < one.predicted_mse.size(); ++i) EXPECT_EQ(one.predicted_mse[i], two.predicted_mse[i]) << i;
+  for (const bool linear : {false, true}) {
+    if (linear) {  // with a linear term, whose per-candidate reductions run in parallel too
+      o.linear_term.components = 2;
+      o.linear_term.covariance = Eigen::MatrixXd::Identity(4, 4);
+      o.linear_term.candidate_rows = Eigen::MatrixXd::Zero(600, 4);
+      for (Eigen::Index c = 0; c < 300; ++c) {
+        o.linear_term.candidate_rows.row(2 * c) << pool(c, 0) / 10.0, pool(c, 1) / 10.0, 0.0, 0.0;
+        o.linear_term.candidate_rows.row(2 * c + 1) << 0.0, 0.0, pool(c, 2) / 10.0, pool(c, 0) * pool(c, 1) / 100.0;
+      }
+    }
+    const int before = omp_get_max_threads();
+    omp_set_num_threads(1);
+    const VarianceReductionPlan one = select_by_variance_reduction(pool, measured, model, o);
+    omp_set_num_threads(2);
+    const VarianceReductionPlan two = select_by_variance_reduction(pool, measured, model, o);
+    omp_set_num_threads(before);
+    EXPECT_EQ(one.chosen, two.chosen) << linear;
+    EXPECT_EQ(one.lookahead_rows, two.lookahead_rows) << linear;
+    ASSERT_EQ(one.predicted_mse.size(), two.predicted_mse.size());
+    for (std::size_t i = 0; i < one.predicted_mse.size(); ++i) EXPECT_EQ(one.predicted_mse[i], two.predicted_mse[i]) << i;
+  }
 }
 
 TEST(BoxExtendingPicks, TakeTheFarthestBeyondTheMeasuredBoxPerAxisAndSideUntilNoneIsLeft) {

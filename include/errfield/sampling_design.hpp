@@ -75,7 +75,7 @@ struct VarianceReductionOptions {
   /// parts have the field's current variance at c plus the noise, per component (the GLS update
   /// A <- A - A D' (S + D A D')^-1 D A); the choice adds the term's integrated variance reduction
   /// over the candidates, and predicted_mse its mean variance tr(A Q) / components, Q the mean of
-  /// D_c' D_c over the candidates. Empty `covariance`: no term.
+  /// D_c' D_c over the candidates. Empty `covariance`: no term. At most 8 components.
   struct LinearTerm {
     Eigen::MatrixXd covariance;
     Eigen::MatrixXd candidate_rows;

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include <Eigen/SVD>
+#include <Eigen/Eigenvalues>
 #include <nlohmann/json.hpp>
 
 #include "errfield/csv_table.hpp"
@@ -208,11 +208,20 @@ JointErrorFunctionFit fit_joint_error_functions(const robot::MdhModel& model, co
     y.segment<3>(3 * i) = residual_mm[static_cast<std::size_t>(i)];
     design.middleRows<3>(3 * i) = f.design_rows(jac, q);
   }
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(design, Eigen::ComputeThinU | Eigen::ComputeThinV);
-  const Eigen::VectorXd s = svd.singularValues();
-  const Eigen::VectorXd uy = svd.matrixU().transpose() * y;
+  // The ridge solutions for every penalty from one eigendecomposition of the p x p Gram matrix
+  // F'F = V diag(s^2) V' (p <= 120: cheap, where a thin SVD of the 3N x p design cost ~30 s of
+  // compile time): beta = V diag(1 / (s^2 + lambda)) V'F'y. With z = V'F'y, the design's own
+  // coordinates of y are z_k / s_k, and the part of y outside its columns is |y|^2 - sum (z_k/s_k)^2.
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(design.transpose() * design);
+  const Eigen::VectorXd s2 = gram.eigenvalues().cwiseMax(0.0);
+  const Eigen::MatrixXd& v = gram.eigenvectors();
+  const Eigen::VectorXd z = v.transpose() * (design.transpose() * y);
+  const double s2max = s2.size() > 0 ? s2.maxCoeff() : 0.0;
+  Eigen::VectorXd uy = Eigen::VectorXd::Zero(s2.size());
+  for (Eigen::Index k = 0; k < s2.size(); ++k)
+    if (s2[k] > 1e-14 * s2max) uy[k] = z[k] / std::sqrt(s2[k]);
   const double yy = y.squaredNorm(), outside = std::max(yy - uy.squaredNorm(), 0.0);
-  const double rows = static_cast<double>(3 * n), s2max = s.size() > 0 ? s[0] * s[0] : 0.0;
+  const double rows = static_cast<double>(3 * n);
   // Generalized cross-validation over the ridge, from none (lambda -> infinity: no functions) down
   // to 1e-12 of the largest s^2. GCV(lambda) = rows * RSS / (rows - df)^2.
   double best_gcv = rows * yy / (rows * rows), best_lambda = std::numeric_limits<double>::infinity(), best_df = 0.0;
@@ -220,10 +229,10 @@ JointErrorFunctionFit fit_joint_error_functions(const robot::MdhModel& model, co
     for (double t = 0.0; t <= 12.0; t += 0.25) {
       const double lambda = s2max * std::pow(10.0, -t);
       double rss = outside, df = 0.0;
-      for (Eigen::Index k = 0; k < s.size(); ++k) {
-        const double s2 = s[k] * s[k], shrink = lambda / (s2 + lambda);
+      for (Eigen::Index k = 0; k < s2.size(); ++k) {
+        const double shrink = lambda / (s2[k] + lambda);
         rss += shrink * shrink * uy[k] * uy[k];
-        df += s2 / (s2 + lambda);
+        df += s2[k] / (s2[k] + lambda);
       }
       if (df >= rows - 1.0) continue;
       const double gcv = rows * rss / ((rows - df) * (rows - df));
@@ -235,9 +244,10 @@ JointErrorFunctionFit fit_joint_error_functions(const robot::MdhModel& model, co
     }
   Eigen::VectorXd beta = Eigen::VectorXd::Zero(p);
   if (std::isfinite(best_lambda)) {
-    Eigen::VectorXd w(s.size());
-    for (Eigen::Index k = 0; k < s.size(); ++k) w[k] = s[k] / (s[k] * s[k] + best_lambda) * uy[k];
-    beta = svd.matrixV() * w;
+    Eigen::VectorXd inv(s2.size());
+    for (Eigen::Index k = 0; k < s2.size(); ++k) inv[k] = 1.0 / (s2[k] + best_lambda);
+    out.ridge_inverse = v * inv.asDiagonal() * v.transpose();
+    beta = v * inv.cwiseProduct(z);
   }
   f.coefficients_mrad = Eigen::Map<const Eigen::MatrixXd>(beta.data(), degree, kJoints).transpose();
   const Eigen::VectorXd fitted = design * beta;
@@ -248,26 +258,17 @@ JointErrorFunctionFit fit_joint_error_functions(const robot::MdhModel& model, co
     before += y.segment<3>(3 * i).squaredNorm();
     after += out.remaining_mm[static_cast<std::size_t>(i)].squaredNorm();
   }
-  // Leave-one-pose-out residuals of the regression, (I - H_ii)^-1 r_i with H_ii the pose's 3 x 3 block
-  // of the ridge hat matrix U diag(s^2 / (s^2 + lambda)) U': the in-sample residuals understate a new
-  // pose's by their ratio, which the field's variance calibration has to know.
+  // Leave-one-pose-out residuals of the regression, (I - H_ii)^-1 r_i with H_ii = F_i R F_i' the
+  // pose's 3 x 3 block of the ridge hat matrix: the in-sample residuals understate a new pose's by
+  // their ratio, which the field's variance calibration has to know.
   if (std::isfinite(best_lambda) && after > 0.0) {
-    Eigen::VectorXd shrink(s.size());
-    for (Eigen::Index k = 0; k < s.size(); ++k) shrink[k] = s[k] * s[k] / (s[k] * s[k] + best_lambda);
-    const Eigen::MatrixXd& u = svd.matrixU();
     double held_out = 0.0;
     for (Eigen::Index i = 0; i < n; ++i) {
-      const Eigen::Matrix<double, 3, Eigen::Dynamic> ui = u.middleRows<3>(3 * i);
-      const Eigen::Matrix3d h = ui * shrink.asDiagonal() * ui.transpose();
+      const auto fi = design.middleRows<3>(3 * i);
+      const Eigen::Matrix3d h = fi * out.ridge_inverse * fi.transpose();
       held_out += ((Eigen::Matrix3d::Identity() - h).inverse() * out.remaining_mm[static_cast<std::size_t>(i)]).squaredNorm();
     }
     out.leave_one_out_inflation = held_out / after;
-  }
-  if (std::isfinite(best_lambda)) {
-    const Eigen::MatrixXd& v = svd.matrixV();
-    Eigen::VectorXd inv(s.size());
-    for (Eigen::Index k = 0; k < s.size(); ++k) inv[k] = 1.0 / (s[k] * s[k] + best_lambda);
-    out.ridge_inverse = v * inv.asDiagonal() * v.transpose();
   }
   out.design = std::move(design);
   out.rms_before_mm = std::sqrt(before / static_cast<double>(n));
