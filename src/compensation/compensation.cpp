@@ -255,10 +255,11 @@ ErrorPrediction CompensationModel::predict_error(const JointVector& q_deg) const
   // The credible range is the field's (its values are what the functions left); the functions are
   // smooth in each joint and clamped beyond the fitted range, so they add no extrapolation.
   if (p.inside_region && joint_functions_) {
-    p.position_error_mm += joint_functions_->position_error_mm(command_model_, q_deg);
+    const JointFunctionPrediction f = joint_functions_->predict(command_model_, q_deg);
+    p.position_error_mm += f.position_error_mm;
     // Their estimation error is part of the field's error (the `var_field_mm2` column) and of a
     // new reading's.
-    const Eigen::Vector3d v = joint_functions_->axis_variance_mm2(command_model_, q_deg);
+    const Eigen::Vector3d& v = f.axis_variance_mm2;
     if (std::isfinite(p.variance_mm2)) p.variance_mm2 += v.sum();
     if (p.axis_variance_mm2.allFinite()) p.axis_variance_mm2 += v;
   }

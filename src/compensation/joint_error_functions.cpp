@@ -8,7 +8,6 @@
 #include <Eigen/Eigenvalues>
 #include <nlohmann/json.hpp>
 
-#include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/variogram_model.hpp"
@@ -66,16 +65,24 @@ Eigen::MatrixXd JointErrorFunctions::design_rows(const Eigen::Matrix<double, 6, 
   return d;
 }
 
-Eigen::Vector3d JointErrorFunctions::axis_variance_mm2(const robot::MdhModel& model, const robot::JointVector& q_deg) const {
-  if (degree == 0 || coefficient_covariance_mrad2.size() == 0) return Eigen::Vector3d::Zero();
+JointFunctionPrediction JointErrorFunctions::predict(const robot::MdhModel& model, const robot::JointVector& q_deg) const {
+  JointFunctionPrediction out;
+  if (degree == 0) return out;
+  // One Jacobian and one design block for both: the same mapping the fit used.
   const Eigen::MatrixXd d = design_rows(robot::geometric_jacobian(model, q_deg), q_deg);
-  return (d * coefficient_covariance_mrad2 * d.transpose()).diagonal();
+  // Joint-major, as the design's columns: column j of the transpose holds joint j's coefficients.
+  const Eigen::MatrixXd by_joint = coefficients_mrad.transpose();
+  out.position_error_mm = d * Eigen::Map<const Eigen::VectorXd>(by_joint.data(), kJoints * degree);
+  if (coefficient_covariance_mrad2.size() > 0) out.axis_variance_mm2 = (d * coefficient_covariance_mrad2 * d.transpose()).diagonal();
+  return out;
+}
+
+Eigen::Vector3d JointErrorFunctions::axis_variance_mm2(const robot::MdhModel& model, const robot::JointVector& q_deg) const {
+  return predict(model, q_deg).axis_variance_mm2;
 }
 
 Eigen::Vector3d JointErrorFunctions::position_error_mm(const robot::MdhModel& model, const robot::JointVector& q_deg) const {
-  if (degree == 0) return Eigen::Vector3d::Zero();
-  const Eigen::Matrix<double, 6, 6> jacobian = robot::geometric_jacobian(model, q_deg);
-  return jacobian.topRows<3>() * (1e-3 * angle_error_mrad(q_deg));
+  return predict(model, q_deg).position_error_mm;
 }
 
 double JointErrorFunctions::largest_angle_error_mrad() const {

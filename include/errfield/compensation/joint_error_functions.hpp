@@ -37,6 +37,13 @@ class VariogramModel;
 
 namespace errfield::compensation {
 
+/// What the functions add at one pose (robot frame): their position error (mm) and the variance per
+/// axis (mm²) of their estimation error (zero without a coefficient covariance).
+struct JointFunctionPrediction {
+  Eigen::Vector3d position_error_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d axis_variance_mm2 = Eigen::Vector3d::Zero();
+};
+
 struct JointErrorFunctions {
   int degree = 0;                    ///< highest Legendre degree (coefficients per joint)
   std::array<double, 6> lo_deg{};    ///< each joint's range over the fitted poses
@@ -49,6 +56,8 @@ struct JointErrorFunctions {
 
   /// Angle error of each joint at joints `q_deg` (mrad).
   Eigen::Matrix<double, 6, 1> angle_error_mrad(const robot::JointVector& q_deg) const;
+  /// Both of the below from one Jacobian of `model` at q (what a prediction needs).
+  JointFunctionPrediction predict(const robot::MdhModel& model, const robot::JointVector& q_deg) const;
   /// The position error they cause at `model`'s tool point (robot frame, mm).
   Eigen::Vector3d position_error_mm(const robot::MdhModel& model, const robot::JointVector& q_deg) const;
   /// The variance (mm², per robot-frame axis) their estimation error adds to a prediction at q:
