@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <random>
+#include <vector>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
@@ -169,6 +170,28 @@ TEST(ModelChoice, PicksTheSmallestCriterionAmongWellConditionedFits) {
   // Ranges differing by a factor of 25 make ARD clearly more likely than one range.
   EXPECT_EQ(choice.model.anisotropy().type(), Anisotropy::Type::Ard) << choice.reason;
   EXPECT_FALSE(choice.reason.empty());
+}
+
+TEST(ModelChoice, TheSubsetDependsOnTheSamplesNotOnTheirOrder) {
+  // Beyond choice_subsample the families are compared on a subset; the same rows in another order
+  // (a file sorted differently) must see the same subset, hence the same criteria and model. Drawn
+  // by row index, the subsets differed and so did the criteria (by whole units of AIC).
+  const Field f = simulate(90, Eigen::Vector2d(15, 40), 1.0, 0.05, 1, 31);
+  std::vector<Eigen::Index> permutation(90);
+  for (Eigen::Index i = 0; i < 90; ++i) permutation[static_cast<std::size_t>(i)] = (37 * i + 11) % 90;  // 37 coprime to 90
+  const Eigen::MatrixXd x2 = f.x(permutation, Eigen::all), z2 = f.z(permutation, Eigen::all);
+  ModelChoiceOptions o;
+  o.kinds = {ModelKind::Spherical, ModelKind::Gaussian};
+  o.choice_subsample = 40;
+  const ModelChoice a = choose_likelihood_model(f.x, f.z, o), b = choose_likelihood_model(x2, z2, o);
+  ASSERT_EQ(a.candidates.size(), b.candidates.size());
+  for (std::size_t k = 0; k < a.candidates.size(); ++k)
+    EXPECT_NEAR(a.candidates[k].criterion, b.candidates[k].criterion, 1e-6 * std::abs(a.candidates[k].criterion)) << k;
+  ASSERT_EQ(a.model.components().size(), b.model.components().size());
+  EXPECT_EQ(a.model.components().front().kind, b.model.components().front().kind);
+  EXPECT_NEAR(a.model.sill(), b.model.sill(), 1e-5 * a.model.sill());
+  EXPECT_NEAR(a.model.nugget(), b.model.nugget(), 1e-5 * a.model.sill());
+  EXPECT_NE(a.reason.find("random subset of 40 of the 90"), std::string::npos) << a.reason;
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <limits>
 
@@ -22,19 +23,38 @@ namespace {
 // the condition number of all samples when it factorizes them.
 constexpr Eigen::Index kConditionSamples = kMaxLikelihoodSamples;
 
+// A fixed random subset of `count` of the rows of x (with `values` beside them; may have no
+// columns), in ascending row order, that depends on the rows' contents and not on their order in the
+// file: the rows are put in lexicographic order of (coordinates, values) before the seeded shuffle.
+// A subset drawn by row index changed the family fit chose for 687 SIMULATED KR 16 poses when the
+// same rows came in another order (and the held-out RMS by 9 %).
+std::vector<Eigen::Index> order_independent_subset(const Eigen::MatrixXd& x, const Eigen::MatrixXd& values,
+                                                   std::size_t count, std::uint64_t seed) {
+  std::vector<Eigen::Index> order(static_cast<std::size_t>(x.rows()));
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<Eigen::Index>(i);
+  auto key_less = [&](Eigen::Index a, Eigen::Index b) {
+    for (Eigen::Index k = 0; k < x.cols(); ++k)
+      if (x(a, k) != x(b, k)) return x(a, k) < x(b, k);
+    for (Eigen::Index k = 0; k < values.cols(); ++k)
+      if (values(a, k) != values(b, k)) return values(a, k) < values(b, k);
+    return false;
+  };
+  std::stable_sort(order.begin(), order.end(), key_less);
+  std::mt19937_64 rng(seed);
+  for (std::size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[rng() % i]);
+  order.resize(std::min(count, order.size()));
+  std::sort(order.begin(), order.end());
+  return order;
+}
+
 // 1-norm condition estimate of the model's covariance at the samples (as the dense kriging engine
 // estimates it): infinity when not positive definite.
 double condition_number(const Eigen::MatrixXd& all, const VariogramModel& model) {
   Eigen::MatrixXd subset;
-  if (all.rows() > kConditionSamples) {
-    std::vector<Eigen::Index> order(static_cast<std::size_t>(all.rows()));
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<Eigen::Index>(i);
-    std::mt19937_64 rng(20261126);
-    for (std::size_t i = order.size(); i > 1; --i) std::swap(order[i - 1], order[rng() % i]);
-    order.resize(static_cast<std::size_t>(kConditionSamples));
-    std::sort(order.begin(), order.end());
-    subset = all(order, Eigen::all);
-  }
+  if (all.rows() > kConditionSamples)
+    subset = all(order_independent_subset(all, Eigen::MatrixXd(all.rows(), 0), static_cast<std::size_t>(kConditionSamples),
+                                          20261126),
+                 Eigen::all);
   const Eigen::MatrixXd& x = all.rows() > kConditionSamples ? subset : all;
   const Eigen::Index n = x.rows(), d = x.cols();
   Eigen::MatrixXd pts(d, n);
@@ -146,12 +166,7 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
                                     const ModelChoiceOptions& o) {
   const auto n = static_cast<std::size_t>(x.rows());
   if (o.choice_subsample == 0 || n <= o.choice_subsample) return choose_among_candidates(x, values, o);
-  std::vector<Eigen::Index> order(n);
-  for (std::size_t i = 0; i < n; ++i) order[i] = static_cast<Eigen::Index>(i);
-  std::mt19937_64 rng(20261123);
-  std::shuffle(order.begin(), order.end(), rng);
-  order.resize(o.choice_subsample);
-  std::sort(order.begin(), order.end());
+  const std::vector<Eigen::Index> order = order_independent_subset(x, values, o.choice_subsample, 20261123);
   const Eigen::MatrixXd xs = x(order, Eigen::all), vs = values(order, Eigen::all);
   ModelChoice choice = choose_among_candidates(xs, vs, o);
   // Refit the winning family (and isotropy) on every sample, with the nugget floor it needed.
