@@ -104,7 +104,7 @@ void add_fit_command(CLI::App& app) {
                   "(fit-variogram --out), or a family whose parameters are estimated: sph, exp, gau, mat, "
                   "mat(2.5), wen, with @iso or @ard to fix the anisotropy; default (auto): the REML fit of "
                   "sph/exp/gau/mat(1.5,2.5) + nugget, isotropic or ARD (over q1..q6 in joint space, x,y,z in task "
-                  "space), with the smallest AIC among well-conditioned ones (compared on 300 points, the winner refitted on "
+                  "space), with the smallest AIC among well-conditioned ones (compared on up to 700 points, the winner refitted on "
                   "all; beyond 3000 points by the Vecchia likelihood)");
   cmd->add_option("--kind", a->kind,
                   "kriging methods: ordinary (default), universal1 or universal2 (linear / quadratic drift in the "

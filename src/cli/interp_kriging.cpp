@@ -60,7 +60,7 @@ void add_kriging_options(CLI::App& cmd) {
                  "exp, gau, mat, wen; 'sill' is the partial sill of that component). NOTE: 'range' of exp and gau is "
                  "the scale parameter a, not the practical range (practical range ~3a for exp, ~1.73a for gau), as in "
                  "gstat. A model JSON file (fit-variogram --out) is read. 'auto': REML fits of sph/exp/gau/mat(1.5,2.5) "
-                 "with a nugget, isotropic and ARD, compared on 300 samples, and the one with the smallest AIC whose "
+                 "with a nugget, isotropic and ARD, compared on up to 700 samples, and the one with the smallest AIC whose "
                  "kriging system is well conditioned, refitted on all samples (exact likelihood up to 3,000, Vecchia "
                  "beyond; printed with the reason); with --backend sparse, the best weighted fit of sph to the "
                  "empirical variogram. A linear model of coregionalization (an LMC JSON, \"type\": \"lmc\", as "

@@ -263,7 +263,7 @@ TEST_F(KrigingCli, BlockKrigingWritesTheLibrarysBlocks) {
 TEST_F(KrigingCli, ModelAutoKeepsTheLikelihoodFamiliesBeyond3000Samples) {
   // Issue 23: beyond 3,000 samples --model auto used to fall back to a weighted fit of the empirical
   // variogram (isotropic, and on a 125 mm grid no nugget). Now the families are the same at any N:
-  // compared on 300 samples, the winner refitted on all by the Vecchia likelihood. SIMULATED 2-D
+  // compared on 700 samples, the winner refitted on all by the Vecchia likelihood. SIMULATED 2-D
   // field with noise variance 4e-4: the nugget must be found, near that.
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> u(0.0, 1000.0);
