@@ -7,6 +7,9 @@
 //                                 200, as `plan --target-rms` uses) under an ARD Matérn 5/2 + nugget
 //                                 model, conditioned on {measured} poses, over {candidates};
 //                                 issue 21's case is {10000, 500} (target: under 10 s for the plan).
+//   BM_SelectByVarianceReductionLinearTerm: the same with a linear term beside the field, as `plan`
+//                                 fills it from a model's joint error functions (48 coefficients:
+//                                 6 joints x degree 8, 3 components per reading; docs/benchmarks.md).
 //   BM_LocalErrorScale          : the leave-one-out local scale `plan --local-scale on` computes at
 //                                 every candidate from {measured} poses and their values.
 
@@ -55,6 +58,49 @@ void BM_SelectByVarianceReduction(benchmark::State& state) {
 BENCHMARK(BM_SelectByVarianceReduction)
     ->ArgNames({"candidates", "measured"})
     ->Args({2000, 300})
+    ->Args({10000, 500})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+// Joint error functions' design rows: each joint's Legendre polynomials of degree 1..8 of its scaled
+// angle times a lever per component (a stand-in for the Jacobian column; a smooth function of the
+// pose), and a coefficient covariance of (0.05 mrad)^2 with a mild correlation between neighbours.
+errfield::VarianceReductionOptions::LinearTerm joint_functions_term(const Eigen::MatrixXd& candidates) {
+  constexpr int joints = 6, degree = 8, components = 3, p = joints * degree;
+  errfield::VarianceReductionOptions::LinearTerm term;
+  term.components = components;
+  term.candidate_rows.resize(components * candidates.rows(), p);
+  for (Eigen::Index c = 0; c < candidates.rows(); ++c)
+    for (int j = 0; j < joints; ++j) {
+      const double u = candidates(c, j) / 180.0;
+      double previous = 1.0, current = u;  // Legendre recurrence: P0, P1
+      for (int k = 1; k <= degree; ++k) {
+        for (int m = 0; m < components; ++m)
+          term.candidate_rows(components * c + m, j * degree + k - 1) =
+              current * 0.5 * std::cos(candidates(c, (j + m + 1) % joints) / 90.0 + m);
+        const double next = ((2 * k + 1) * u * current - k * previous) / (k + 1);
+        previous = current;
+        current = next;
+      }
+    }
+  term.covariance = Eigen::MatrixXd::Identity(p, p);
+  for (int i = 0; i + 1 < p; ++i) term.covariance(i, i + 1) = term.covariance(i + 1, i) = 0.3;
+  term.covariance *= 0.05 * 0.05;
+  return term;
+}
+
+void BM_SelectByVarianceReductionLinearTerm(benchmark::State& state) {
+  const Eigen::MatrixXd candidates = joint_poses(state.range(0), 1);
+  const Eigen::MatrixXd measured = joint_poses(state.range(1), 2);
+  const errfield::VariogramModel model = joint_space_model();
+  errfield::VarianceReductionOptions o;
+  o.count = 40;
+  o.lookahead = 200;
+  o.linear_term = joint_functions_term(candidates);
+  for (auto _ : state) benchmark::DoNotOptimize(errfield::select_by_variance_reduction(candidates, measured, model, o));
+}
+BENCHMARK(BM_SelectByVarianceReductionLinearTerm)
+    ->ArgNames({"candidates", "measured"})
     ->Args({10000, 500})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();

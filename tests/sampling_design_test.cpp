@@ -468,5 +468,61 @@ TEST(VarianceReduction, FirstPicksComeFirstAndTheRestIsTheGreedyChoiceGivenThem)
   EXPECT_THROW(select_by_variance_reduction(pool, measured, model, o), ArgumentError);
 }
 
+// The spacing floor: each greedy pick is the best of the candidates whose distance to the nearest
+// measured or picked location (axes scaled by their standard deviation over the pool) is at least
+// the floor's fraction of the largest such distance, found here by brute force: distances written
+// out, and each eligible candidate's posterior refitted.
+TEST(VarianceReduction, ASpacingFloorRestrictsEachPickToTheFarEnoughCandidates) {
+  const Eigen::MatrixXd pool = uniform_points(30, 2, 8.0, 61), measured = uniform_points(4, 2, 8.0, 62);
+  const VariogramModel model = VariogramModel::parse("exp(sill=1,range=2)+nug(0.1)");
+  VarianceReductionOptions o;
+  o.count = 6;
+  o.lookahead = 2;
+  o.max_references = 100;
+  const VarianceReductionPlan free_choice = select_by_variance_reduction(pool, measured, model, o);
+  o.spacing_floor = 0.8;
+  const VarianceReductionPlan plan = select_by_variance_reduction(pool, measured, model, o);
+  std::vector<std::size_t> all = plan.chosen;
+  all.insert(all.end(), plan.lookahead_rows.begin(), plan.lookahead_rows.end());
+  ASSERT_EQ(all.size(), 8u);
+  std::vector<std::size_t> all_free = free_choice.chosen;
+  all_free.insert(all_free.end(), free_choice.lookahead_rows.begin(), free_choice.lookahead_rows.end());
+  EXPECT_NE(all, all_free) << "the floor should change the choice on this pool";
+  Eigen::RowVectorXd sd(2);
+  for (int a = 0; a < 2; ++a) {
+    const double mean = pool.col(a).mean();
+    sd[a] = std::sqrt((pool.col(a).array() - mean).square().sum() / 29.0);
+  }
+  const TestCovariance k;
+  std::vector<Eigen::RowVectorXd> set;
+  for (int j = 0; j < measured.rows(); ++j) set.push_back(measured.row(j));
+  std::vector<bool> used(30, false);
+  for (std::size_t step = 0; step < all.size(); ++step) {
+    std::vector<double> nearest(30, std::numeric_limits<double>::infinity());
+    double largest = 0.0;
+    for (int c = 0; c < 30; ++c) {
+      for (const auto& x : set) nearest[static_cast<std::size_t>(c)] = std::min(nearest[static_cast<std::size_t>(c)], (pool.row(c) - x).cwiseQuotient(sd).norm());
+      if (!used[static_cast<std::size_t>(c)]) largest = std::max(largest, nearest[static_cast<std::size_t>(c)]);
+    }
+    int best = -1;
+    double best_mse = std::numeric_limits<double>::infinity();
+    for (int c = 0; c < 30; ++c) {
+      if (used[static_cast<std::size_t>(c)] || nearest[static_cast<std::size_t>(c)] < 0.8 * largest) continue;
+      auto with = set;
+      with.push_back(pool.row(c));
+      const double mse = brute_force_mse(pool, with, k);
+      if (mse < best_mse - 1e-12) best_mse = mse, best = c;
+    }
+    ASSERT_GE(best, 0);
+    EXPECT_EQ(all[step], static_cast<std::size_t>(best)) << "pick " << step;
+    used[static_cast<std::size_t>(best)] = true;
+    set.push_back(pool.row(best));
+  }
+  for (const double bad : {-0.1, 1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    o.spacing_floor = bad;
+    EXPECT_THROW(select_by_variance_reduction(pool, measured, model, o), ArgumentError) << bad;
+  }
+}
+
 }  // namespace sampling_design_test
 }  // namespace errfield

@@ -82,6 +82,11 @@ struct VarianceReductionOptions {
     int components = 1;
   };
   LinearTerm linear_term;
+  /// A hedge against a model fitted on few readings, in [0, 1): a greedy pick is only among the
+  /// candidates whose distance to the nearest measured or picked location (each axis scaled by its
+  /// standard deviation over the candidates, as select_maximin) is at least this fraction of the
+  /// largest such distance. 0: variance reduction alone. first_picks are exempt.
+  double spacing_floor = 0.0;
 };
 
 /// Candidate rows that extend the box of `measured` (one location per row; per axis [min - margin,
