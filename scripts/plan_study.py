@@ -4,8 +4,11 @@ random, maximin (space-filling) and adaptive (`errfield plan --model`) selection
 `plan` predicted beside the one achieved. All data SIMULATED by `errfield simulate`.
 
 usage: scripts/plan_study.py ERRFIELD_BINARY WORKDIR [--robot kr16] [--seed 3] [--pool 2000]
-       [--holdout 300] [--batch 40] [--batches 6] [--extra "simulate options"]
-Prints one table row per (design, count); writes WORKDIR/plan_study.csv.
+       [--holdout 300] [--batch 40] [--batches 6] [--long-counts 320,480,687]
+       [--extra "simulate options"]
+Prints one table row per (design, count); writes WORKDIR/plan_study.csv. --long-counts scores random
+and maximin also at these larger counts (the whole pool at most): how many poses each needs for
+what adaptive reaches with fewer.
 """
 import argparse
 import csv
@@ -49,6 +52,8 @@ def main():
     ap.add_argument("--batches", type=int, default=6)
     ap.add_argument("--designs", default="random,maximin,adaptive")
     ap.add_argument("--local-scale", default="on")
+    ap.add_argument("--long-counts", default="")
+    ap.add_argument("--plan-extra", default="", help="more options for plan --model, e.g. \"--spacing-floor 0.5\"")
     ap.add_argument("--extra", default="--joint-box -150,150,-130,-30,70,150,-90,90,-110,110,-180,180 "
                                         "--systematic realistic --orientation-spread 30 --joint-decimals 3")
     a = ap.parse_args()
@@ -89,17 +94,18 @@ def main():
 
     designs = a.designs.split(",")
     counts = [a.batch * (k + 1) for k in range(a.batches)]
+    long_counts = sorted(set(counts) | {min(int(c), len(pool)) for c in a.long_counts.split(",") if c})
     if "random" in designs:
         order = [r[point] for r in pool]
         random.Random(int(a.seed)).shuffle(order)
-        for n in counts:
+        for n in long_counts:
             score(f"random_{n}", order[:n])
     if "maximin" in designs:
         nxt = os.path.join(W, "maximin_order.csv")
-        run([E, "plan", "--robot", robot, "--candidates", os.path.join(W, "pool.csv"), "--count", str(counts[-1]),
-             "--out", nxt])
+        run([E, "plan", "--robot", robot, "--candidates", os.path.join(W, "pool.csv"), "--count",
+             str(long_counts[-1]), "--out", nxt])
         order = [r[header.index("point")] for r in read(nxt)[1]]
-        for n in counts:
+        for n in long_counts:
             score(f"maximin_{n}", order[:n])
     if "adaptive" in designs:
         chosen = []
@@ -111,7 +117,7 @@ def main():
             if model:
                 summ = os.path.join(W, f"adaptive_plan_{n}.json")
                 cmd += ["--model", model, "--data", os.path.join(W, f"adaptive_{n - a.batch}.csv"),
-                        "--summary-out", summ, "--local-scale", a.local_scale]
+                        "--summary-out", summ, "--local-scale", a.local_scale, *a.plan_extra.split()]
             run(cmd)
             if model:
                 predicted = json.load(open(summ))["predicted_rms_mm"]["after"]

@@ -34,6 +34,7 @@ struct PlanArgs {
   std::size_t count = 0;
   double target_rms = 0.0;
   std::string local_scale = "on";
+  double spacing_floor = 0.7;
 };
 
 std::string three_digits(double v) {
@@ -96,9 +97,11 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
     throw ArgumentError("--local-scale: expected on or off, got '" + a.local_scale + "'");
   o.local_scale = a.local_scale == "on";
   if (cmd->count("--target-rms")) o.target_rms_mm = a.target_rms;
+  o.spacing_floor = a.spacing_floor;
   PoseSelection sel;
   naming_options([&] { sel = select_poses(open, measured, model ? &*model : nullptr, o); },
-                 {{"PoseSelectionOptions::count", "--count"}, {"PoseSelectionOptions::target_rms_mm", "--target-rms"}});
+                 {{"PoseSelectionOptions::count", "--count"}, {"PoseSelectionOptions::target_rms_mm", "--target-rms"},
+                  {"PoseSelectionOptions::spacing_floor", "--spacing-floor"}});
   OutputTable out;
   std::vector<std::size_t> picked;
   for (std::size_t k : sel.chosen) picked.push_back(rows[k]);
@@ -289,6 +292,12 @@ void add_plan_command(CLI::App& app) {
                   "--candidates with --model: on (default) weights the choice and the prediction by where the model's "
                   "leave-one-out errors exceeded its variance (docs/robot.md, 'Which poses to measure'); off: the "
                   "model's variance as it is")
+      ->capture_default_str();
+  cmd->add_option("--spacing-floor", a->spacing_floor,
+                  "--candidates with --model: choose only among pool poses at least this fraction (0..1) of the "
+                  "farthest pose's distance (joints scaled by their spread) from all measured or chosen: a hedge "
+                  "against a model fitted on few poses (0.7: measured, docs/robot.md 'Which poses to measure'); 0 = "
+                  "variance reduction alone")
       ->capture_default_str();
   cmd->add_option("--summary-out", a->summary_out,
                   "--candidates: also write the design and predicted RMS (now, after, per pose) as JSON");

@@ -17,6 +17,9 @@ void PoseSelectionOptions::validate() const {
     throw ArgumentError("PoseSelectionOptions::target_rms_mm: " + format_number(*target_rms_mm) +
                         "; expected a finite RMS > 0 (mm)");
   if (max_references == 0) throw ArgumentError("PoseSelectionOptions::max_references: expected at least 1");
+  if (!(spacing_floor >= 0.0 && spacing_floor < 1.0))
+    throw ArgumentError("PoseSelectionOptions::spacing_floor: " + format_number(spacing_floor) +
+                        "; expected a fraction in [0, 1)");
 }
 
 namespace {
@@ -118,6 +121,7 @@ PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
       vo.linear_term.candidate_rows.middleRows(3 * static_cast<Eigen::Index>(c), 3) =
           f->design_rows(robot::geometric_jacobian(model->command_model(), candidates[c]), candidates[c]);
   }
+  vo.spacing_floor = options.spacing_floor;
   vo.count = options.count;
   vo.lookahead = options.target_rms_mm ? options.max_lookahead : 0;
   vo.max_references = options.max_references;
@@ -137,6 +141,9 @@ PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
                                              " poses that extend the fitted region to the pool's extent, then ") +
                std::string("integrated variance reduction under the model's field (") + (joint ? "joint" : "task") +
                " space)" + (vo.linear_term.covariance.size() > 0 ? " and its joint error functions" : "") +
+               (vo.spacing_floor > 0.0 ? " among the poses at least " + format_number(vo.spacing_floor) +
+                                             " of the farthest one's distance from everything measured or chosen"
+                                       : std::string()) +
                ", conditioned on " + std::to_string(known.size()) +
                " measured poses; predicted RMS over " + std::to_string(plan.references) + " pool poses";
   return out;

@@ -211,7 +211,7 @@ py::dict validate_py(const PyModel& m, const py::object& data, const py::object&
 }
 
 py::dict plan_py(const py::object& candidates, std::size_t count, const py::object& model, const py::object& measured,
-                 std::optional<double> target_rms, bool local_scale) {
+                 std::optional<double> target_rms, bool local_scale, double spacing_floor) {
   const std::vector<JointVector> pool = joint_vectors_arg(candidates, "candidates");
   const std::vector<JointVector> done =
       measured.is_none() ? std::vector<JointVector>{} : joint_vectors_arg(measured, "measured");
@@ -221,6 +221,7 @@ py::dict plan_py(const py::object& candidates, std::size_t count, const py::obje
   o.count = count;
   o.target_rms_mm = target_rms;
   o.local_scale = local_scale;
+  o.spacing_floor = spacing_floor;
   PoseSelection sel;
   {
     py::gil_scoped_release release;
@@ -287,10 +288,12 @@ void bind_pipeline(py::module_& m) {
         "error), cmd_x..z, cq1..cq6 (NaN for refused targets: nothing to send), var_field_mm2, r95_mm and status.");
   m.def("plan", &plan_py, py::arg("candidates"), py::kw_only(), py::arg("count"), py::arg("model") = py::none(),
         py::arg("measured") = py::none(), py::arg("target_rms") = py::none(), py::arg("local_scale") = true,
+        py::arg("spacing_floor") = 0.7,
         "`errfield plan --candidates`: which poses to measure next. candidates: (N, 6) joints (deg) or a dict with\n"
         "q1..q6 (drop the rows already measured first); measured: the poses measured so far (conditioned on, kept\n"
         "away from). Without a model, maximin in joint space; with a CompensationModel (vector-kriging field), greedy\n"
-        "integrated variance reduction. Returns a dict: chosen (candidate rows, in measuring order), design,\n"
+        "integrated variance reduction among the candidates at least spacing_floor (0..1) of the farthest one's distance\n"
+        "from everything measured or chosen (plan --spacing-floor). Returns a dict: chosen (candidate rows, in measuring order), design,\n"
         "predicted_rms_mm ([0] now, [k] after k more poses; model only), poses_for_target (target_rms given: poses\n"
         "from now the prediction needs, None if not reached), conditioned_on. Releases the GIL.");
   m.def("validate", &validate_py, py::arg("model"), py::arg("data"), py::kw_only(), py::arg("robot") = py::none(),

@@ -369,6 +369,7 @@ def plan(
     measured: ArrayLike | Columns | None = None,
     target_rms: float | None = None,
     local_scale: bool = True,
+    spacing_floor: float = 0.7,
 ) -> dict[str, Any]: ...
 def validate(
     model: CompensationModel,

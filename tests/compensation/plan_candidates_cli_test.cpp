@@ -109,6 +109,14 @@ TEST_F(PlanCandidates, WithAModelPredictsTheRmsAndAnswersATarget) {
                      "--summary-out s.json --out next.csv");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("variance reduction"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("at least 0.7 of the farthest"), std::string::npos) << r.out;  // the default spacing floor
+  for (const std::string bad : {"1", "-0.2", "nan"}) {
+    const auto f = run("plan --candidates pool.csv --count 5 --model m.json --data measured.csv --spacing-floor " + bad +
+                       " --out bad_floor.csv");
+    EXPECT_EQ(f.exit_code, 2) << bad << "\n" << f.err;
+    EXPECT_NE(f.err.find("--spacing-floor"), std::string::npos) << bad << "\n" << f.err;
+    EXPECT_FALSE(std::filesystem::exists(path("bad_floor.csv"))) << bad;
+  }
   const auto s = nlohmann::json::parse(read("s.json"));
   const double now = s["predicted_rms_mm"]["now"].get<double>(), after = s["predicted_rms_mm"]["after"].get<double>();
   EXPECT_GT(now, 0.0);
