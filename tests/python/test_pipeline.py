@@ -257,5 +257,13 @@ def test_plan_matches_cli(tmp_path):
     s = json.loads((tmp_path / "s.json").read_text())
     assert second["predicted_rms_mm"][0] == s["predicted_rms_mm"]["now"]
     assert list(second["predicted_rms_mm"]) == s["predicted_rms_mm"]["by_pose"]
+    # The spacing floor: the CLI's option, the same choice; 0 is variance reduction alone.
+    run_cli("plan", "--candidates", tmp_path / "pool.csv", "--count", "12", "--model", tmp_path / "m.json",
+            "--data", tmp_path / "measured.csv", "--spacing-floor", "0", "--out", tmp_path / "n3.csv")
+    free = errfield.plan(pool, count=12, model=loaded, measured=measured, spacing_floor=0.0)
+    assert list(read_csv(tmp_path / "n3.csv")["point"]) == [pool["point"][i] for i in free["chosen"]]
+    assert "at least 0.7" in second["design"] and "at least" not in free["design"]
     with pytest.raises(errfield.ArgumentError, match="count"):
         errfield.plan(pool, count=0)
+    with pytest.raises(errfield.ArgumentError, match="spacing_floor"):
+        errfield.plan(pool, count=5, model=loaded, measured=measured, spacing_floor=1.0)
