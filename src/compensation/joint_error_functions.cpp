@@ -41,6 +41,69 @@ double scaled(double q, double lo, double hi) {
   throw InputError(source + ": member \"joint_error_functions" + what, source);
 }
 
+/// Ridge least squares of y on the design's columns with the penalty that minimizes generalized
+/// cross-validation, from none (lambda -> infinity: no functions) down to 1e-12 of the largest
+/// eigenvalue of the Gram matrix: GCV(lambda) = rows * RSS / (rows - df)^2. All penalties come from
+/// one eigendecomposition of the p x p Gram matrix F'F = V diag(s^2) V' (p <= 120: cheap, where a
+/// thin SVD of the rows x p design cost ~30 s of compile time): beta = V diag(1 / (s^2 + lambda))
+/// V'F'y. With z = V'F'y, the design's own coordinates of y are z_k / s_k, and the part of y outside
+/// its columns is |y|^2 - sum (z_k/s_k)^2.
+struct RidgeFit {
+  Eigen::VectorXd beta;           ///< zero when no penalty beat "no functions"
+  Eigen::MatrixXd ridge_inverse;  ///< (F'F + lambda I)^-1; empty then
+  double lambda = std::numeric_limits<double>::infinity();
+  double largest_s2 = 0.0;
+  double effective_parameters = 0.0;
+};
+
+RidgeFit ridge_by_gcv(const Eigen::MatrixXd& design, const Eigen::VectorXd& y) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(design.transpose() * design);
+  const Eigen::VectorXd s2 = gram.eigenvalues().cwiseMax(0.0);
+  const Eigen::MatrixXd& v = gram.eigenvectors();
+  const Eigen::VectorXd z = v.transpose() * (design.transpose() * y);
+  RidgeFit out;
+  out.largest_s2 = s2.size() > 0 ? s2.maxCoeff() : 0.0;
+  Eigen::VectorXd uy = Eigen::VectorXd::Zero(s2.size());
+  for (Eigen::Index k = 0; k < s2.size(); ++k)
+    if (s2[k] > 1e-14 * out.largest_s2) uy[k] = z[k] / std::sqrt(s2[k]);
+  const double yy = y.squaredNorm(), outside = std::max(yy - uy.squaredNorm(), 0.0);
+  const auto rows = static_cast<double>(design.rows());
+  double best_gcv = rows * yy / (rows * rows);
+  if (out.largest_s2 > 0.0)
+    for (double t = 0.0; t <= 12.0; t += 0.25) {
+      const double lambda = out.largest_s2 * std::pow(10.0, -t);
+      double rss = outside, df = 0.0;
+      for (Eigen::Index k = 0; k < s2.size(); ++k) {
+        const double shrink = lambda / (s2[k] + lambda);
+        rss += shrink * shrink * uy[k] * uy[k];
+        df += s2[k] / (s2[k] + lambda);
+      }
+      if (df >= rows - 1.0) continue;
+      const double gcv = rows * rss / ((rows - df) * (rows - df));
+      if (gcv < best_gcv) {
+        best_gcv = gcv;
+        out.lambda = lambda;
+        out.effective_parameters = df;
+      }
+    }
+  out.beta = Eigen::VectorXd::Zero(design.cols());
+  if (std::isfinite(out.lambda)) {
+    Eigen::VectorXd inv(s2.size());
+    for (Eigen::Index k = 0; k < s2.size(); ++k) inv[k] = 1.0 / (s2[k] + out.lambda);
+    out.ridge_inverse = v * inv.asDiagonal() * v.transpose();
+    out.beta = v * inv.cwiseProduct(z);
+  }
+  return out;
+}
+
+/// Covariance of two readings of one component at the model-mapped joints a and b (field and
+/// nugget on a reading itself, the field only between two readings at one location).
+double reading_covariance(const VariogramModel& m, const Eigen::VectorXd& a, const Eigen::VectorXd& b, bool same) {
+  if (same) return m.sill();
+  const double h = (a - b).norm();
+  return h > 0.0 ? m.sill() - m.gamma(h) : m.sill() - m.nugget();
+}
+
 }  // namespace
 
 Eigen::Matrix<double, 6, 1> JointErrorFunctions::angle_error_mrad(const robot::JointVector& q_deg) const {
@@ -215,47 +278,10 @@ JointErrorFunctionFit fit_joint_error_functions(const robot::MdhModel& model, co
     y.segment<3>(3 * i) = residual_mm[static_cast<std::size_t>(i)];
     design.middleRows<3>(3 * i) = f.design_rows(jac, q);
   }
-  // The ridge solutions for every penalty from one eigendecomposition of the p x p Gram matrix
-  // F'F = V diag(s^2) V' (p <= 120: cheap, where a thin SVD of the 3N x p design cost ~30 s of
-  // compile time): beta = V diag(1 / (s^2 + lambda)) V'F'y. With z = V'F'y, the design's own
-  // coordinates of y are z_k / s_k, and the part of y outside its columns is |y|^2 - sum (z_k/s_k)^2.
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> gram(design.transpose() * design);
-  const Eigen::VectorXd s2 = gram.eigenvalues().cwiseMax(0.0);
-  const Eigen::MatrixXd& v = gram.eigenvectors();
-  const Eigen::VectorXd z = v.transpose() * (design.transpose() * y);
-  const double s2max = s2.size() > 0 ? s2.maxCoeff() : 0.0;
-  Eigen::VectorXd uy = Eigen::VectorXd::Zero(s2.size());
-  for (Eigen::Index k = 0; k < s2.size(); ++k)
-    if (s2[k] > 1e-14 * s2max) uy[k] = z[k] / std::sqrt(s2[k]);
-  const double yy = y.squaredNorm(), outside = std::max(yy - uy.squaredNorm(), 0.0);
-  const double rows = static_cast<double>(3 * n);
-  // Generalized cross-validation over the ridge, from none (lambda -> infinity: no functions) down
-  // to 1e-12 of the largest s^2. GCV(lambda) = rows * RSS / (rows - df)^2.
-  double best_gcv = rows * yy / (rows * rows), best_lambda = std::numeric_limits<double>::infinity(), best_df = 0.0;
-  if (s2max > 0.0)
-    for (double t = 0.0; t <= 12.0; t += 0.25) {
-      const double lambda = s2max * std::pow(10.0, -t);
-      double rss = outside, df = 0.0;
-      for (Eigen::Index k = 0; k < s2.size(); ++k) {
-        const double shrink = lambda / (s2[k] + lambda);
-        rss += shrink * shrink * uy[k] * uy[k];
-        df += s2[k] / (s2[k] + lambda);
-      }
-      if (df >= rows - 1.0) continue;
-      const double gcv = rows * rss / ((rows - df) * (rows - df));
-      if (gcv < best_gcv) {
-        best_gcv = gcv;
-        best_lambda = lambda;
-        best_df = df;
-      }
-    }
-  Eigen::VectorXd beta = Eigen::VectorXd::Zero(p);
-  if (std::isfinite(best_lambda)) {
-    Eigen::VectorXd inv(s2.size());
-    for (Eigen::Index k = 0; k < s2.size(); ++k) inv[k] = 1.0 / (s2[k] + best_lambda);
-    out.ridge_inverse = v * inv.asDiagonal() * v.transpose();
-    beta = v * inv.cwiseProduct(z);
-  }
+  const RidgeFit ridge = ridge_by_gcv(design, y);
+  out.ridge_inverse = ridge.ridge_inverse;
+  const Eigen::VectorXd& beta = ridge.beta;
+  const double best_lambda = ridge.lambda, best_df = ridge.effective_parameters, s2max = ridge.largest_s2;
   f.coefficients_mrad = Eigen::Map<const Eigen::MatrixXd>(beta.data(), degree, kJoints).transpose();
   const Eigen::VectorXd fitted = design * beta;
   out.remaining_mm.resize(static_cast<std::size_t>(n));
@@ -314,24 +340,73 @@ void set_coefficient_covariance(JointErrorFunctionFit& fit, const std::vector<ro
   }
   // F' S F = sum over the three (independent) components of G_a' K G_a, with K assembled a block of
   // columns at a time (never n x n: 5,000 poses would need 200 MB).
-  const double sill = field_model.sill(), nugget = field_model.nugget();
   constexpr Eigen::Index kBlock = 256;
   Eigen::MatrixXd middle = Eigen::MatrixXd::Zero(p, p);
   Eigen::MatrixXd k(n, std::min(kBlock, n));
   for (Eigen::Index j0 = 0; j0 < n; j0 += kBlock) {
     const Eigen::Index b = std::min(kBlock, n - j0);
     for (Eigen::Index jj = 0; jj < b; ++jj)
-      for (Eigen::Index i = 0; i < n; ++i) {
-        if (i == j0 + jj) {
-          k(i, jj) = sill;  // a reading: field and nugget
-          continue;
-        }
-        const double h = (x.col(i) - x.col(j0 + jj)).norm();
-        k(i, jj) = h > 0.0 ? sill - field_model.gamma(h) : sill - nugget;  // two readings share the field only
-      }
+      for (Eigen::Index i = 0; i < n; ++i) k(i, jj) = reading_covariance(field_model, x.col(i), x.col(j0 + jj), i == j0 + jj);
     for (const Eigen::MatrixXd& ga : g) middle.noalias() += (ga.transpose() * k.leftCols(b)) * ga.middleRows(j0, b);
   }
   f.coefficient_covariance_mrad2 = fit.ridge_inverse * middle * fit.ridge_inverse;
+}
+
+bool refit_by_generalized_least_squares(JointErrorFunctionFit& fit, const std::vector<robot::JointVector>& q_deg,
+                                        const std::vector<Eigen::Vector3d>& residual_mm, const VariogramModel& field_model) {
+  const auto n = static_cast<Eigen::Index>(q_deg.size());
+  if (fit.design.rows() != 3 * n || residual_mm.size() != q_deg.size())
+    throw ArgumentError("refit_by_generalized_least_squares: " + std::to_string(q_deg.size()) + " poses and " +
+                        std::to_string(residual_mm.size()) + " residuals for a design of " +
+                        std::to_string(fit.design.rows() / 3));
+  if (fit.ridge_inverse.size() == 0) return false;  // no function to refit
+  Eigen::MatrixXd x(kJoints, n);
+  for (Eigen::Index i = 0; i < n; ++i) field_model.anisotropy().apply(q_deg[static_cast<std::size_t>(i)].data(), x.col(i).data(), kJoints);
+  Eigen::MatrixXd k(n, n);
+  for (Eigen::Index j = 0; j < n; ++j)
+    for (Eigen::Index i = j; i < n; ++i) k(i, j) = reading_covariance(field_model, x.col(i), x.col(j), i == j);
+  const Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(k);
+  if (llt.info() != Eigen::Success) return false;
+  // Whitened by L^-1 (K = L L') and with each component's constant profiled out (ordinary kriging
+  // takes it), the GLS problem is an ordinary one: the ridge by GCV as before, on F~ and y~.
+  const Eigen::VectorXd w = llt.matrixL().solve(Eigen::VectorXd::Ones(n));
+  const double ww = w.squaredNorm();
+  const Eigen::Index p = fit.design.cols();
+  Eigen::MatrixXd fw(3 * n, p);
+  Eigen::VectorXd yw(3 * n);
+  for (int a = 0; a < 3; ++a) {
+    Eigen::MatrixXd fa(n, p);
+    Eigen::VectorXd ya(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      fa.row(i) = fit.design.row(3 * i + a);
+      ya[i] = residual_mm[static_cast<std::size_t>(i)][a];
+    }
+    llt.matrixL().solveInPlace(fa);
+    llt.matrixL().solveInPlace(ya);
+    fa -= w * ((w.transpose() * fa) / ww);
+    ya -= w * (w.dot(ya) / ww);
+    fw.middleRows(a * n, n) = fa;
+    yw.segment(a * n, n) = ya;
+  }
+  const RidgeFit ridge = ridge_by_gcv(fw, yw);
+  JointErrorFunctions& f = fit.functions;
+  f.coefficients_mrad = Eigen::Map<const Eigen::MatrixXd>(ridge.beta.data(), f.degree, kJoints).transpose();
+  // The whitened readings have covariance P (the projection that removed the constants), and
+  // F~ lies in its range: cov(beta) = R F~'F~ R.
+  f.coefficient_covariance_mrad2.resize(0, 0);
+  if (ridge.ridge_inverse.size() > 0) f.coefficient_covariance_mrad2 = ridge.ridge_inverse * (fw.transpose() * fw) * ridge.ridge_inverse;
+  fit.ridge_inverse = ridge.ridge_inverse;
+  fit.effective_parameters = ridge.effective_parameters;
+  fit.ridge = std::isfinite(ridge.lambda) && ridge.largest_s2 > 0.0 ? ridge.lambda / ridge.largest_s2 : ridge.lambda;
+  const Eigen::VectorXd fitted = fit.design * ridge.beta;
+  double after = 0.0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    fit.remaining_mm[static_cast<std::size_t>(i)] = residual_mm[static_cast<std::size_t>(i)] - fitted.segment<3>(3 * i);
+    after += fit.remaining_mm[static_cast<std::size_t>(i)].squaredNorm();
+  }
+  fit.rms_after_mm = std::sqrt(after / static_cast<double>(n));
+  fit.generalized = true;
+  return true;
 }
 
 }  // namespace errfield::compensation

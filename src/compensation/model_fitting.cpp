@@ -403,6 +403,7 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
         residual[i] = reg.robot_from_tracker * d.measured_mm[i] - identified[i];
       std::optional<JointErrorFunctionFit> jf;
       double inflation = 1.0;
+      const std::vector<Eigen::Vector3d> calibration_residual = residual;
       if (o.joint_function_degree > 0) {
         jf = fit_joint_error_functions(kin.model, d.q_deg, residual, o.joint_function_degree);
         residual = jf->remaining_mm;
@@ -423,10 +424,25 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       for (std::size_t i = 0; i < residual.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = residual[i].transpose();
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
       ko.model = chosen_model(o, samples, flat, ko, model_reason);
-      const KrigingFieldFit fit = fit_vector_kriging_field(samples, residual, ko);
+      KrigingFieldFit fit = fit_vector_kriging_field(samples, residual, ko);
       std::optional<JointErrorFunctions> functions;
       if (jf) {
-        set_coefficient_covariance(*jf, d.q_deg, fit.model);
+        // The functions again, by generalized least squares under the field's covariance (the
+        // residuals are correlated), then the field on what they leave, with the same variogram.
+        const double ordinary_rms = jf->rms_after_mm;
+        if (refit_by_generalized_least_squares(*jf, d.q_deg, calibration_residual, fit.model)) {
+          residual = jf->remaining_mm;
+          fit = fit_vector_kriging_field(samples, residual, ko);
+          out.notes.push_back("joint error functions refitted by generalized least squares under the field's "
+                              "covariance (" + format_number(std::round(jf->effective_parameters * 10) / 10) +
+                              " effective parameters): they leave an RMS of " +
+                              format_number(std::round(jf->rms_after_mm * 1e4) / 1e4) +
+                              " mm to the field (the ordinary fit left " +
+                              format_number(std::round(ordinary_rms * 1e4) / 1e4) +
+                              " mm, chasing clusters of correlated residuals)");
+        } else {
+          set_coefficient_covariance(*jf, d.q_deg, fit.model);
+        }
         functions = std::move(jf->functions);
       }
       out.model = CompensationModel(method, kin.model, fit.field)

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <random>
 
+#include <Eigen/Eigenvalues>
 #include <nlohmann/json.hpp>
 
 #include "errfield/compensation/compensation.hpp"
@@ -246,6 +247,71 @@ TEST(JointErrorFunctions, CoefficientCovarianceIsTheSandwichUnderTheCentredField
   nlohmann::json j = fit.functions.to_json();
   j["coefficient_covariance_mrad2"][2][2] = -1.0;
   EXPECT_THROW(JointErrorFunctions::from_json(j, "m.json"), InputError);
+}
+
+// The generalized least squares refit against the GLS written out with the full 3N x 3N covariance:
+// an indicator column per component for the constants ordinary kriging takes (profiled out), the
+// ridge at the penalty the fit chose, and that penalty a minimum of GCV in the whitened problem.
+TEST(JointErrorFunctions, GeneralizedRefitIsTheRidgeGlsUnderTheFieldCovariance) {
+  const MdhModel m = robot_with_tool();
+  const std::vector<JointVector> q = random_poses(40, 23);
+  std::vector<Eigen::Vector3d> r(q.size());
+  for (std::size_t i = 0; i < q.size(); ++i)
+    r[i] = Eigen::Vector3d(0.2 * std::sin(q[i][0] / 40.0) + 0.03, 0.1 * std::cos(q[i][4] / 30.0), 0.05 * std::sin(q[i][1] / 25.0));
+  JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 3);
+  ASSERT_GT(fit.ridge_inverse.size(), 0);
+  const Eigen::MatrixXd design = fit.design;
+  const VariogramModel field = VariogramModel::parse("sph(sill=0.01,range=200)+nug(0.0004)@ard(1,0.5,2,1,1,0.3)");
+  ASSERT_TRUE(refit_by_generalized_least_squares(fit, q, r, field));
+  EXPECT_TRUE(fit.generalized);
+  const auto n = static_cast<Eigen::Index>(q.size());
+  const double scale[6] = {1, 0.5, 2, 1, 1, 0.3};
+  Eigen::MatrixXd sigma = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < n; ++j) {
+      double h2 = 0.0;
+      for (int k = 0; k < 6; ++k) h2 += std::pow((q[static_cast<std::size_t>(i)][k] - q[static_cast<std::size_t>(j)][k]) / scale[k], 2);
+      const double h = std::sqrt(h2) / 200.0;
+      const double c = i == j ? 0.0104 : (h >= 1.0 ? 0.0 : 0.01 * (1.0 - 1.5 * h + 0.5 * h * h * h));
+      for (int a = 0; a < 3; ++a) sigma(3 * i + a, 3 * j + a) = c;
+    }
+  const Eigen::MatrixXd si = sigma.inverse();
+  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(3 * n, 3);  // one constant per component
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (int a = 0; a < 3; ++a) c(3 * i + a, a) = 1.0;
+  const Eigen::MatrixXd sp = si - si * c * (c.transpose() * si * c).inverse() * c.transpose() * si;
+  Eigen::VectorXd y(3 * n);
+  for (Eigen::Index i = 0; i < n; ++i) y.segment<3>(3 * i) = r[static_cast<std::size_t>(i)];
+  const Eigen::MatrixXd g = design.transpose() * sp * design;
+  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(g).eigenvalues().maxCoeff();
+  auto solve = [&](double lambda) -> Eigen::MatrixXd {
+    return (g + lambda * Eigen::MatrixXd::Identity(g.rows(), g.cols())).inverse();
+  };
+  const double lambda = fit.ridge * largest;
+  const Eigen::MatrixXd rinv = solve(lambda);
+  const Eigen::VectorXd beta = rinv * design.transpose() * sp * y;
+  const Eigen::VectorXd got = Eigen::Map<const Eigen::VectorXd>(
+      Eigen::MatrixXd(fit.functions.coefficients_mrad.transpose()).data(), beta.size());
+  EXPECT_LT((got - beta).norm(), 1e-7 * beta.norm());
+  const Eigen::MatrixXd cov = rinv * g * rinv;
+  EXPECT_LT((fit.functions.coefficient_covariance_mrad2 - cov).norm(), 1e-7 * cov.norm());
+  const Eigen::VectorXd left = y - design * beta;
+  for (Eigen::Index i = 0; i < n; ++i)
+    EXPECT_LT((fit.remaining_mm[static_cast<std::size_t>(i)] - left.segment<3>(3 * i)).norm(), 1e-9) << i;
+  // GCV in the whitened problem, rows * RSS / (rows - df)^2, is no lower a quarter decade either side.
+  auto gcv = [&](double l) {
+    const Eigen::MatrixXd ri = solve(l);
+    const Eigen::VectorXd e = y - design * (ri * design.transpose() * sp * y);
+    const double df = (ri * g).trace(), rows = static_cast<double>(3 * n);
+    return rows * e.dot(sp * e) / ((rows - df) * (rows - df));
+  };
+  EXPECT_LE(gcv(lambda), gcv(lambda * std::pow(10.0, 0.25)) * (1 + 1e-9));
+  EXPECT_LE(gcv(lambda), gcv(lambda * std::pow(10.0, -0.25)) * (1 + 1e-9));
+  // Nothing to refit without functions.
+  JointErrorFunctionFit none = fit_joint_error_functions(m, q, std::vector<Eigen::Vector3d>(q.size(), Eigen::Vector3d::Zero()), 3);
+  ASSERT_EQ(none.ridge_inverse.size(), 0);
+  EXPECT_FALSE(refit_by_generalized_least_squares(none, q, r, field));
+  EXPECT_THROW(refit_by_generalized_least_squares(fit, random_poses(5, 1), r, field), ArgumentError);
 }
 
 TEST(JointErrorFunctions, OnlyKinematicKrigingModelsCarryThem) {

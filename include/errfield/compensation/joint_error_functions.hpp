@@ -85,7 +85,10 @@ struct JointErrorFunctionFit {
   /// much the remaining residuals understate a new pose's (KrigingFieldOptions::value_variance_inflation).
   double leave_one_out_inflation = 1.0;
   Eigen::MatrixXd design;         ///< 3N x 6·degree (mm per mrad), rows 3i..3i+2 for pose i
-  Eigen::MatrixXd ridge_inverse;  ///< (design' design + ridge)^-1; empty when no function was fitted
+  /// (design' design + ridge)^-1, or of the whitened design after refit_by_generalized_least_squares;
+  /// empty when no function was fitted
+  Eigen::MatrixXd ridge_inverse;
+  bool generalized = false;  ///< refitted by generalized least squares (refit_by_generalized_least_squares)
 };
 
 /// Sets fit.functions.coefficient_covariance_mrad2 = R F' S F R (R = fit.ridge_inverse, F the
@@ -98,6 +101,21 @@ struct JointErrorFunctionFit {
 /// functions' error near its samples, so the sum is, if anything, cautious.
 void set_coefficient_covariance(JointErrorFunctionFit& fit, const std::vector<robot::JointVector>& q_deg,
                                 const VariogramModel& field_model);
+
+/// Refits the functions by generalized least squares under `field_model`'s covariance of the
+/// residuals (per component, the poses' joints in its metric, its nugget on the diagonal; each
+/// component's constant profiled out, as ordinary kriging takes it): whitened by the Cholesky factor
+/// of that covariance, the ridge is chosen by GCV as in the first fit. `residual_mm` are the same
+/// residuals the first fit saw. Updates the coefficients, remaining_mm, the ridge and sets
+/// coefficient_covariance_mrad2 = R F~'F~ R (R the whitened ridge inverse: the GLS estimate's
+/// covariance when the field's is right). The leave-one-out inflation stays the first fit's.
+/// Returns false, leaving `fit` unchanged, when there is no function to refit or the covariance is
+/// not positive definite at the poses. Why: the residuals are spatially correlated, and an ordinary
+/// fit lets the functions chase clusters of correlated residuals; on SIMULATED KR 16 the refit took
+/// 3-11 % off the held-out RMS at 120-687 poses (docs/robot.md, "Joint error functions").
+/// O(N^3) time, N^2 memory (as the field's dense kriging).
+bool refit_by_generalized_least_squares(JointErrorFunctionFit& fit, const std::vector<robot::JointVector>& q_deg,
+                                        const std::vector<Eigen::Vector3d>& residual_mm, const VariogramModel& field_model);
 
 /// Fits the functions to `residual_mm[i]` (robot frame, the calibrated model's residual at joints
 /// `q_deg[i]`). Throws ArgumentError for degree < 1 or mismatched sizes; fewer poses than
