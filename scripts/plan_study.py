@@ -53,6 +53,8 @@ def main():
     ap.add_argument("--designs", default="random,maximin,adaptive")
     ap.add_argument("--local-scale", default="on")
     ap.add_argument("--long-counts", default="")
+    ap.add_argument("--maximin-batches", type=int, default=1,
+                    help="adaptive: how many first batches are maximin (model-free) before plan --model")
     ap.add_argument("--plan-extra", default="", help="more options for plan --model, e.g. \"--spacing-floor 0.5\"")
     ap.add_argument("--extra", default="--joint-box -150,150,-130,-30,70,150,-90,90,-110,110,-180,180 "
                                         "--systematic realistic --orientation-spread 30 --joint-decimals 3")
@@ -114,12 +116,14 @@ def main():
             nxt = os.path.join(W, f"adaptive_next_{n}.csv")
             cmd = [E, "plan", "--robot", robot, "--candidates", os.path.join(W, "pool.csv"), "--count", str(a.batch),
                    "--out", nxt]
-            if model:
+            if model and n > a.batch * a.maximin_batches:
                 summ = os.path.join(W, f"adaptive_plan_{n}.json")
                 cmd += ["--model", model, "--data", os.path.join(W, f"adaptive_{n - a.batch}.csv"),
                         "--summary-out", summ, "--local-scale", a.local_scale, *a.plan_extra.split()]
+            if n <= a.batch * a.maximin_batches and chosen:
+                cmd += ["--data", os.path.join(W, f"adaptive_{n - a.batch}.csv")]
             run(cmd)
-            if model:
+            if model and n > a.batch * a.maximin_batches:
                 predicted = json.load(open(summ))["predicted_rms_mm"]["after"]
             chosen += [r[header.index("point")] for r in read(nxt)[1]]
             model, row = score(f"adaptive_{n}", chosen, predicted)

@@ -15,4 +15,9 @@ case "${1:-}" in
 esac
 bash scripts/setup.sh
 bash scripts/build.sh
+# ctest runs nproc tests at once and each test's OpenMP team has nproc threads: libgomp's default
+# spin-wait at every barrier then takes the cores from the threads with work (a 40 ms model-choice
+# test took 7 s). Waiting threads sleep instead: the suite took 67 s instead of 118 s of wall time
+# here (2026-11-26, docs/reliability.md). A test's results do not depend on it.
+export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}
 ctest --test-dir "${ERRFIELD_BUILD_DIR:-build}" --output-on-failure -j "$(nproc)" "${select[@]}"

@@ -35,6 +35,7 @@ cmake --build "$BUILD_DIR" -j "$(nproc)" --target $TARGETS
 export OMP_TOOL_LIBRARIES="$ARCHER"
 export TSAN_OPTIONS=${TSAN_OPTIONS:-halt_on_error=1:second_deadlock_stack=1:suppressions=$PWD/tests/tsan.supp}
 export OMP_NUM_THREADS=2
+export OMP_WAIT_POLICY=${OMP_WAIT_POLICY:-passive}  # as scripts/test.sh: no spinning while two tests share the cores
 
 # Self-check (tests/tsan/openmp_canary.cpp): correct OpenMP synchronisation must stay quiet (else
 # TSan does not see libomp's ordering and every report would be suspect) and a real race must be

@@ -365,7 +365,8 @@ bool refit_by_generalized_least_squares(JointErrorFunctionFit& fit, const std::v
   Eigen::MatrixXd k(n, n);
   for (Eigen::Index j = 0; j < n; ++j)
     for (Eigen::Index i = j; i < n; ++i) k(i, j) = reading_covariance(field_model, x.col(i), x.col(j), i == j);
-  const Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(k);
+  // In place (N^2 once, not twice: fit's dense budget counts such matrices).
+  const Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>, Eigen::Lower> llt(k);
   if (llt.info() != Eigen::Success) return false;
   // Whitened by L^-1 (K = L L') and with each component's constant profiled out (ordinary kriging
   // takes it), the GLS problem is an ordinary one: the ridge by GCV as before, on F~ and y~.

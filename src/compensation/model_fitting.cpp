@@ -430,7 +430,9 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
         // The functions again, by generalized least squares under the field's covariance (the
         // residuals are correlated), then the field on what they leave, with the same variogram.
         const double ordinary_rms = jf->rms_after_mm;
-        if (refit_by_generalized_least_squares(*jf, d.q_deg, calibration_residual, fit.model)) {
+        const VariogramModel field_model = fit.model;
+        fit = KrigingFieldFit{};  // the first field's N x N factorization is not needed any more
+        if (refit_by_generalized_least_squares(*jf, d.q_deg, calibration_residual, field_model)) {
           residual = jf->remaining_mm;
           fit = fit_vector_kriging_field(samples, residual, ko);
           out.notes.push_back("joint error functions refitted by generalized least squares under the field's "
@@ -440,8 +442,12 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
                               " mm to the field (the ordinary fit left " +
                               format_number(std::round(ordinary_rms * 1e4) / 1e4) +
                               " mm, chasing clusters of correlated residuals)");
-        } else {
+        } else {  // jf is as the ordinary fit left it
+          fit = fit_vector_kriging_field(samples, residual, ko);
           set_coefficient_covariance(*jf, d.q_deg, fit.model);
+          if (jf->ridge_inverse.size() > 0)
+            out.notes.push_back("joint error functions: the field's covariance at the poses is not positive definite "
+                                "(repeated poses without a nugget), so they keep the ordinary fit");
         }
         functions = std::move(jf->functions);
       }

@@ -203,6 +203,24 @@ TEST(JointErrorFunctions, JsonRoundTripAndRefusals) {
                ArgumentError);
 }
 
+// The 3N x 3N covariance of the residuals at joints q written out in full under
+// sph(sill=0.01,range=200)+nug(0.0004)@ard(1,0.5,2,1,1,0.3): components independent, one covariance
+// each, nugget on the diagonal (ard: the range along joint k is range * s_k).
+Eigen::MatrixXd full_residual_covariance(const std::vector<JointVector>& q) {
+  const auto n = static_cast<Eigen::Index>(q.size());
+  const double scale[6] = {1, 0.5, 2, 1, 1, 0.3};
+  Eigen::MatrixXd sigma = Eigen::MatrixXd::Zero(3 * n, 3 * n);
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index j = 0; j < n; ++j) {
+      double h2 = 0.0;
+      for (int k = 0; k < 6; ++k) h2 += std::pow((q[static_cast<std::size_t>(i)][k] - q[static_cast<std::size_t>(j)][k]) / scale[k], 2);
+      const double h = std::sqrt(h2) / 200.0;
+      const double c = i == j ? 0.0104 : (h >= 1.0 ? 0.0 : 0.01 * (1.0 - 1.5 * h + 0.5 * h * h * h));
+      for (int a = 0; a < 3; ++a) sigma(3 * i + a, 3 * j + a) = c;
+    }
+  return sigma;
+}
+
 TEST(JointErrorFunctions, CoefficientCovarianceIsTheSandwichUnderTheCentredFieldCovariance) {
   const MdhModel m = robot_with_tool();
   const std::vector<JointVector> q = random_poses(40, 17);
@@ -213,19 +231,8 @@ TEST(JointErrorFunctions, CoefficientCovarianceIsTheSandwichUnderTheCentredField
   ASSERT_GT(fit.ridge_inverse.size(), 0);
   const VariogramModel field = VariogramModel::parse("sph(sill=0.01,range=200)+nug(0.0004)@ard(1,0.5,2,1,1,0.3)");
   set_coefficient_covariance(fit, q, field);
-  // The 3N x 3N covariance of the residuals written out in full: components independent, one
-  // covariance each, nugget on the diagonal.
   const auto n = static_cast<Eigen::Index>(q.size());
-  const double scale[6] = {1, 0.5, 2, 1, 1, 0.3};
-  Eigen::MatrixXd sigma = Eigen::MatrixXd::Zero(3 * n, 3 * n);
-  for (Eigen::Index i = 0; i < n; ++i)
-    for (Eigen::Index j = 0; j < n; ++j) {
-      double h2 = 0.0;
-      for (int k = 0; k < 6; ++k) h2 += std::pow((q[static_cast<std::size_t>(i)][k] - q[static_cast<std::size_t>(j)][k]) / scale[k], 2);  // ard: range along k = range * s_k
-      const double h = std::sqrt(h2) / 200.0;
-      const double c = i == j ? 0.0104 : (h >= 1.0 ? 0.0 : 0.01 * (1.0 - 1.5 * h + 0.5 * h * h * h));
-      for (int a = 0; a < 3; ++a) sigma(3 * i + a, 3 * j + a) = c;
-    }
+  Eigen::MatrixXd sigma = full_residual_covariance(q);
   // Less what a constant per component carries (ordinary kriging takes it): P sigma P per component.
   Eigen::MatrixXd centre = Eigen::MatrixXd::Identity(3 * n, 3 * n);
   for (Eigen::Index i = 0; i < n; ++i)
@@ -265,17 +272,7 @@ TEST(JointErrorFunctions, GeneralizedRefitIsTheRidgeGlsUnderTheFieldCovariance) 
   ASSERT_TRUE(refit_by_generalized_least_squares(fit, q, r, field));
   EXPECT_TRUE(fit.generalized);
   const auto n = static_cast<Eigen::Index>(q.size());
-  const double scale[6] = {1, 0.5, 2, 1, 1, 0.3};
-  Eigen::MatrixXd sigma = Eigen::MatrixXd::Zero(3 * n, 3 * n);
-  for (Eigen::Index i = 0; i < n; ++i)
-    for (Eigen::Index j = 0; j < n; ++j) {
-      double h2 = 0.0;
-      for (int k = 0; k < 6; ++k) h2 += std::pow((q[static_cast<std::size_t>(i)][k] - q[static_cast<std::size_t>(j)][k]) / scale[k], 2);
-      const double h = std::sqrt(h2) / 200.0;
-      const double c = i == j ? 0.0104 : (h >= 1.0 ? 0.0 : 0.01 * (1.0 - 1.5 * h + 0.5 * h * h * h));
-      for (int a = 0; a < 3; ++a) sigma(3 * i + a, 3 * j + a) = c;
-    }
-  const Eigen::MatrixXd si = sigma.inverse();
+  const Eigen::MatrixXd si = full_residual_covariance(q).inverse();
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(3 * n, 3);  // one constant per component
   for (Eigen::Index i = 0; i < n; ++i)
     for (int a = 0; a < 3; ++a) c(3 * i + a, a) = 1.0;
