@@ -18,7 +18,9 @@
 /// linear part of the calibrated model's geometric Jacobian column j (mm/rad) at q.
 ///
 /// Fit: ridge least squares on the coefficients (mrad), the ridge chosen by generalized
-/// cross-validation, so that data without such errors leave the functions near zero.
+/// cross-validation, so that data without such errors leave the functions near zero; once the
+/// field's variogram is known, `fit` refits them by generalized least squares under its covariance
+/// (refit_by_generalized_least_squares).
 /// Units: joints deg, coefficients mrad, positions mm, robot frame.
 
 #include <array>
@@ -50,8 +52,8 @@ struct JointErrorFunctions {
   std::array<double, 6> hi_deg{};    ///< (lo == hi: no function; the joint did not move, or barely moved the point)
   Eigen::MatrixXd coefficients_mrad; ///< 6 x degree: row j, column k-1 = c_jk
   /// Covariance of the coefficients (mrad², 6·degree square, joint-major as the design's columns),
-  /// under the field's covariance of the residuals they were fitted to (set_coefficient_covariance);
-  /// empty: no variance is added.
+  /// under the field's covariance of the residuals they were fitted to (refit_by_generalized_least_
+  /// squares, or set_coefficient_covariance for the ordinary fit); empty: no variance is added.
   Eigen::MatrixXd coefficient_covariance_mrad2;
 
   /// Angle error of each joint at joints `q_deg` (mrad).
