@@ -35,6 +35,7 @@ struct SimulateArgs {
   bool truth_columns = false;
   std::string systematic = "config";
   double compliance_mrad_per_knm = -1.0;  // < 0: as --systematic left it
+  std::string mass_offset;                // "X,Y,Z" mm; empty: as the config left it
   std::vector<std::string> end_range_errors;
 };
 
@@ -102,7 +103,8 @@ void set_shoulder_elbow_compliance(robot::SimulatorConfig& config, double mrad_p
 // --systematic and its refinements --compliance and --end-range-error, applied to the config.
 // Returns a description for the file's SIMULATED header (empty: the config's effects untouched).
 std::string apply_systematic_effects(robot::SimulatorConfig& config, const std::string& preset,
-                                     double compliance_mrad_per_knm, const std::vector<std::string>& end_range) {
+                                     double compliance_mrad_per_knm, const std::vector<std::string>& end_range,
+                                     const std::string& mass_offset) {
   std::string said;
   if (preset == "none") {
     config.compliance.stiffness_nm_per_rad.fill(0.0);
@@ -129,6 +131,11 @@ std::string apply_systematic_effects(robot::SimulatorConfig& config, const std::
                           format_number(compliance_mrad_per_knm));
     set_shoulder_elbow_compliance(config, compliance_mrad_per_knm);
     said += " joints 2-3 compliance " + format_number(compliance_mrad_per_knm) + " mrad/kNm under gravity;";
+  }
+  if (!mass_offset.empty()) {
+    const std::vector<double> v = parse_numbers(mass_offset, 3, "--mass-offset");
+    for (auto& offset : config.compliance.mass_offset_mm) offset = {v[0], v[1], v[2]};
+    said += " link masses " + mass_offset + " mm off the frame origins' lines (link frames);";
   }
   for (const std::string& item : end_range) {
     // qJ:ONSET_DEG:ERROR_DEG
@@ -198,7 +205,7 @@ void run_simulate(const SimulateArgs& a) {
       throw ArgumentError("--outliers: expected FRACTION in [0, 1] and MM > 0, got '" + a.outliers + "'");
   }
   const std::string systematic =
-      apply_systematic_effects(config, a.systematic, a.compliance_mrad_per_knm, a.end_range_errors);
+      apply_systematic_effects(config, a.systematic, a.compliance_mrad_per_knm, a.end_range_errors, a.mass_offset);
   const SimulatedRobot robot(config);
   SimulationRng rng(config.seed);
 
@@ -529,6 +536,10 @@ void add_simulate_command(CLI::App& app) {
                   "and payload, mrad per kN·m (0 = rigid; the paper default is ~0.33-0.42); applied after "
                   "--systematic")
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--mass-offset", args->mass_offset,
+                  "X,Y,Z: every link's mass moved by this offset (mm, in the link's own frame) from halfway between "
+                  "its frame origins, where motors and counterweights put it on a real arm; a gravity model on the frame "
+                  "origins (fit's --gravity-load) cannot express it; applied after --systematic");
   cmd->add_option("--end-range-error", args->end_range_errors,
                   "qJ:ONSET_DEG:ERROR_DEG, repeatable: joint J's angle error grows quadratically from 0 at |qJ| = "
                   "ONSET_DEG to ERROR_DEG at the joint's limit, signed like qJ (dress-pack drag, a hose, a "

@@ -85,6 +85,8 @@ void SimulatorConfig::validate() const {
     const auto k = static_cast<std::size_t>(i);
     nonneg(compliance.stiffness_nm_per_rad[k], "compliance.stiffness_nm_per_rad[" + std::to_string(i) + "]");
     nonneg(compliance.link_mass_kg[k], "compliance.link_mass_kg[" + std::to_string(i) + "]");
+    for (double v : compliance.mass_offset_mm[k])
+      if (!std::isfinite(v)) throw ArgumentError("SimulatorConfig: compliance.mass_offset_mm[" + std::to_string(i) + "] is not finite");
     nonneg(transmission.amplitude_deg[k], "transmission.amplitude_deg[" + std::to_string(i) + "]");
     nonneg(end_range.onset_deg[k], "end_range.onset_deg[" + std::to_string(i) + "]");
     if (!std::isfinite(end_range.error_at_limit_deg[k]))
@@ -141,7 +143,13 @@ SimulatorConfig SimulatorConfig::from_json(const nlohmann::json& j, const std::s
   }
   if (j.contains("compliance")) {
     const auto& g = j["compliance"];
-    json_check_keys(g, {"stiffness_nm_per_rad", "link_mass_kg", "payload_kg", "gravity_world"}, "compliance.", source);
+    json_check_keys(g, {"stiffness_nm_per_rad", "link_mass_kg", "mass_offset_mm", "payload_kg", "gravity_world"}, "compliance.", source);
+    if (g.contains("mass_offset_mm")) {
+      if (!g["mass_offset_mm"].is_array() || g["mass_offset_mm"].size() != kJointCount)
+        throw InputError(source + ": member \"compliance.mass_offset_mm\": expected 6 arrays of 3 numbers (mm)", source);
+      for (std::size_t k = 0; k < kJointCount; ++k)
+        c.compliance.mass_offset_mm[k] = json_array<3>(g["mass_offset_mm"][k], "compliance.mass_offset_mm[" + std::to_string(k) + "]", source);
+    }
     if (g.contains("stiffness_nm_per_rad"))
       c.compliance.stiffness_nm_per_rad = json_array<6>(g["stiffness_nm_per_rad"], "compliance.stiffness_nm_per_rad", source);
     if (g.contains("link_mass_kg"))
@@ -204,6 +212,7 @@ nlohmann::json SimulatorConfig::to_json() const {
       {"compliance",
        {{"stiffness_nm_per_rad", compliance.stiffness_nm_per_rad},
         {"link_mass_kg", compliance.link_mass_kg},
+        {"mass_offset_mm", compliance.mass_offset_mm},
         {"payload_kg", compliance.payload_kg},
         {"gravity_world", {compliance.gravity_world.x(), compliance.gravity_world.y(), compliance.gravity_world.z()}}}},
       {"transmission",
@@ -260,6 +269,7 @@ JointVector SimulatedRobot::joint_deflection_deg(const JointVector& q_cmd_deg) c
     const Eigen::Vector3d o = f.frames[k + 1].translation();
     point[k] = i + 1 < kJointCount ? Eigen::Vector3d(0.5 * (o + f.frames[k + 2].translation()))
                                    : Eigen::Vector3d(o + 50.0 * f.frames[k + 1].linear().col(2));
+    point[k] += f.frames[k + 1].linear() * Eigen::Vector3d(c.mass_offset_mm[k][0], c.mass_offset_mm[k][1], c.mass_offset_mm[k][2]);
     mass[k] = c.link_mass_kg[k];
   }
   point[kJointCount] = f.tool().translation();

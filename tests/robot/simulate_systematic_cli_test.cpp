@@ -84,6 +84,20 @@ TEST_F(SimulateSystematic, ComplianceIsLinearInTheComplianceAndZeroIsRigid) {
   }
 }
 
+TEST_F(SimulateSystematic, MassOffsetMovesTheGravityLoadAndIsWrittenToTheConfig) {
+  const auto compliant = truth("--systematic none --compliance 1", "compliant");
+  const auto offset = truth("--systematic none --compliance 1 --mass-offset 0,150,0 --config-out " + path("c.json"), "offset");
+  const auto rigid = truth("--systematic none --compliance 0 --mass-offset 0,150,0", "rigid");
+  const auto plain_rigid = truth("--systematic none --compliance 0", "plain_rigid");
+  for (std::size_t i = 0; i < compliant.size(); ++i) {
+    EXPECT_GT((offset[i] - compliant[i]).norm(), 0.005) << "row " << i << ": the load moved";
+    EXPECT_EQ((rigid[i] - plain_rigid[i]).norm(), 0.0) << "row " << i << ": rigid joints do not feel it";
+  }
+  EXPECT_NE(read("offset.csv").find("0,150,0 mm off the frame origins"), std::string::npos);
+  const std::string config = read("c.json");
+  EXPECT_NE(config.find("mass_offset_mm"), std::string::npos);
+}
+
 TEST_F(SimulateSystematic, RealisticPresetNamesItsEffectsAndAddsThemToTheGeometry) {
   const auto none = truth("--systematic none", "none");
   const auto realistic = truth("--systematic realistic", "realistic");
@@ -110,6 +124,7 @@ TEST_F(SimulateSystematic, BadSystematicOptionsAreUsageErrors) {
       {"--end-range-error q1:90", "--end-range-error"},
       {"--end-range-error q1:400:0.1", "below the joint's limit"},
       {"--end-range-error q1:x:0.1", "ONSET_DEG"},
+      {"--mass-offset 1,2", "--mass-offset"},
   };
   for (const auto& [opt, word] : cases) {
     const auto r = run(std::string("simulate --robot kr16 ") + opt + " --out " + path("x.csv"));

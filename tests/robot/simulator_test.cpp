@@ -65,8 +65,10 @@ SimulatorConfig compliance_only() {
 
 TEST(Simulator, ComplianceMatchesVirtualWork) {
   // Independent check of the gravity torques: tau_j = -dV/dq_j with V = sum m_b g h_b the
-  // potential energy, differentiated numerically through FK. Deflection = tau / k.
-  const SimulatorConfig c = compliance_only();
+  // potential energy, differentiated numerically through FK. Deflection = tau / k. The masses sit
+  // off the lines between the frame origins (--mass-offset), each moved in its own link frame.
+  SimulatorConfig c = compliance_only();
+  for (std::size_t k = 0; k < 6; ++k) c.compliance.mass_offset_mm[k] = {40.0 + 10.0 * static_cast<double>(k), -70.0, 25.0};
   const SimulatedRobot robot(c);
   const auto& cm = c.compliance;
   auto potential = [&](const JointVector& q) {
@@ -78,7 +80,8 @@ TEST(Simulator, ComplianceMatchesVirtualWork) {
       const Eigen::Vector3d o = f.frames[k + 1].translation();
       const Eigen::Vector3d p = i + 1 < kJointCount ? Eigen::Vector3d(0.5 * (o + f.frames[k + 2].translation()))
                                                     : Eigen::Vector3d(o + 50.0 * f.frames[k + 1].linear().col(2));
-      v -= cm.link_mass_kg[k] * cm.gravity_world.dot(p * 1e-3);
+      const Eigen::Vector3d off(cm.mass_offset_mm[k][0], cm.mass_offset_mm[k][1], cm.mass_offset_mm[k][2]);
+      v -= cm.link_mass_kg[k] * cm.gravity_world.dot((p + f.frames[k + 1].linear() * off) * 1e-3);
     }
     v -= cm.payload_kg * cm.gravity_world.dot(f.tool().translation() * 1e-3);
     return v;  // J

@@ -47,6 +47,10 @@ struct ComplianceModel {
   /// Point masses (kg) of links 1..6, placed halfway between the origins of frames i and i+1
   /// (link 6: 50 mm beyond the flange along its z axis).
   std::array<double, kJointCount> link_mass_kg{};
+  /// Each link's mass moved off that place by this offset (mm, in the link's own frame i): motors
+  /// and counterweights sit off the chain, where a gravity model on the frame origins (a fit's
+  /// gravity-load terms) cannot put them (`simulate --mass-offset`). Zero by default.
+  std::array<std::array<double, 3>, kJointCount> mass_offset_mm{};
   double payload_kg = 0.0;                             ///< At the tool point.
   Eigen::Vector3d gravity_world{0.0, 0.0, -9.80665};   ///< m/s², in the world frame.
 };
