@@ -5,8 +5,10 @@ degrees, on SIMULATED data sets that `errfield simulate` makes here, and on the 
 plan studies (scripts/plan_study.py work directories).
 
 usage: scripts/joint_functions_study.py ERRFIELD WORKDIR [--degrees 0,4,6,8,10,12]
-       [--plan-dirs DIR,DIR...]
-Writes WORKDIR/joint_functions.csv (one row per set and degree) and prints, per group of sets, the
+       [--plan-dirs DIR,DIR...] [--fit-extra "fit options"] [--fits NAME]
+--fit-extra is passed to every fit except degree 0's (e.g. "--gravity-load off"); --fits names the
+folder of WORKDIR its fits go to (default "fits"), so runs with other options keep the data sets.
+Writes WORKDIR/fits/joint_functions.csv (one row per set and degree) and prints, per group of sets, the
 geometric mean of the RMS ratio to degree 0, the worst ratio and the mean coverage.
 """
 import argparse
@@ -59,10 +61,11 @@ def make_set(E, W, name, n_train, n_all, options):
     return (name, robot, train, hold)
 
 
-def score(E, W, spec, degree):
+def score(E, W, spec, degree, fits="fits", extra=()):
     name, robot, train, hold = spec
-    tag = os.path.join(W, "fits", re.sub(r"[^A-Za-z0-9_]", "_", name) + f"_{degree}")
-    f = run([E, "fit", "--robot", robot, "--data", train, "--out", tag + ".json", "--joint-functions", str(degree)])
+    tag = os.path.join(W, fits, re.sub(r"[^A-Za-z0-9_]", "_", name) + f"_{degree}")
+    f = run([E, "fit", "--robot", robot, "--data", train, "--out", tag + ".json", "--joint-functions", str(degree),
+             *(extra if degree else ())])
     if f.returncode:
         return {"set": name, "degree": degree, "error": f.stderr.strip()[:200]}
     run([E, "validate", "--model", tag + ".json", "--data", hold, "--summary-out", tag + "_s.json"])
@@ -79,9 +82,11 @@ def main():
     ap.add_argument("workdir")
     ap.add_argument("--degrees", default="0,4,6,8,10,12")
     ap.add_argument("--plan-dirs", default="", help="plan_study.py work directories: their {design}_{n}.csv sets")
+    ap.add_argument("--fit-extra", default="", help="more fit options, for every degree but 0")
+    ap.add_argument("--fits", default="fits", help="folder of WORKDIR for the fits")
     a = ap.parse_args()
     E, W = a.errfield, a.workdir
-    os.makedirs(os.path.join(W, "fits"), exist_ok=True)
+    os.makedirs(os.path.join(W, a.fits), exist_ok=True)
     specs = [make_set(E, W, *s) for s in SETS]
     for d in filter(None, a.plan_dirs.split(",")):
         for f in sorted(glob.glob(os.path.join(d, "*_[0-9]*.csv"))):
@@ -91,8 +96,8 @@ def main():
                               os.path.join(d, "hold.csv")))
     degrees = [int(x) for x in a.degrees.split(",")]
     with ThreadPoolExecutor(2) as ex:
-        rows = list(ex.map(lambda j: score(E, W, *j), [(s, d) for s in specs for d in degrees]))
-    with open(os.path.join(W, "joint_functions.csv"), "w", newline="") as f:
+        rows = list(ex.map(lambda j: score(E, W, *j, a.fits, a.fit_extra.split()), [(s, d) for s in specs for d in degrees]))
+    with open(os.path.join(W, a.fits, "joint_functions.csv"), "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=["set", "degree", "heldout_rms_mm", "heldout_max_mm", "coverage95",
                                           "mean_nees", "refused", "error"])
         w.writeheader()

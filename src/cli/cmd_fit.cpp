@@ -27,6 +27,7 @@ struct FitArgs {
   std::size_t base = 0;
   bool reflector_far_ok = false;
   int joint_functions = compensation::FitOptions{}.joint_function_degree;
+  std::string gravity_load = compensation::FitOptions{}.gravity_load ? "on" : "off";
 };
 
 void run_fit(const FitArgs& a) {
@@ -37,6 +38,7 @@ void run_fit(const FitArgs& a) {
                                               a.calibration, a.robust, a.max_condition, a.outlier_limit,
                                               a.variance_calibration});
   o.joint_function_degree = a.joint_functions;
+  o.gravity_load = a.gravity_load == "on";
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.base_points) {
     const auto v = parse_numbers(b, 3, "--base-point");
@@ -157,6 +159,14 @@ void add_fit_command(CLI::App& app) {
                   "cannot express and the field learns only near its samples; 0 = none; docs/robot.md says which "
                   "data decided the default")
       ->check(CLI::Range(0, 20))
+      ->capture_default_str();
+  cmd->add_option("--gravity-load", a->gravity_load,
+                  "kinematic+kriging with --joint-functions: on also fits each joint's deflection under the weight of "
+                  "the arm beyond it (a coefficient per joint and loaded point: the frame origins beyond the joint and "
+                  "the tool point, times its gravity lever about the joint's axis, gravity along -z of the robot's "
+                  "world frame), which depends on several joints at once, so no function of one angle expresses it; "
+                  "off = the one-joint functions only; docs/robot.md says which data decided the default")
+      ->check(CLI::IsMember({"on", "off"}))
       ->capture_default_str();
   cmd->add_flag("--reflector-far-ok", a->reflector_far_ok,
                 "kinematic methods from positions: accept a reflector found more than 50 mm from --robot's tool "

@@ -232,7 +232,19 @@ CompensationModel CompensationModel::with_tool_point(std::optional<Eigen::Vector
 CompensationModel CompensationModel::with_joint_error_functions(std::optional<JointErrorFunctions> functions) const {
   CompensationModel m = *this;
   m.joint_functions_ = std::move(functions);
+  m.set_function_rows_at_samples();
   return m;
+}
+
+void CompensationModel::set_function_rows_at_samples() {
+  function_rows_at_samples_.reset();
+  if (!joint_functions_ || joint_functions_->coefficient_covariance_mrad2.size() == 0 || !field_) return;
+  const std::vector<JointVector> q = field_->sample_joints();
+  if (q.empty()) return;
+  auto rows = std::make_shared<Eigen::MatrixXd>(3 * static_cast<Eigen::Index>(q.size()), joint_functions_->parameter_count());
+  for (std::size_t i = 0; i < q.size(); ++i)
+    rows->middleRows<3>(3 * static_cast<Eigen::Index>(i)) = joint_functions_->design_rows(command_model_, q[i]);
+  function_rows_at_samples_ = std::move(rows);
 }
 
 MdhModel CompensationModel::aimed_model() const {
@@ -255,7 +267,19 @@ ErrorPrediction CompensationModel::predict_error(const JointVector& q_deg) const
   // The credible range is the field's (its values are what the functions left); the functions are
   // smooth in each joint and clamped beyond the fitted range, so they add no extrapolation.
   if (p.inside_region && joint_functions_) {
-    const JointFunctionPrediction f = joint_functions_->predict(command_model_, q_deg);
+    // The field krigs what the functions left at its samples, so near them it takes back part of
+    // the functions' error: the variance is that of (D(q) - sum_i w_i F_i) beta's error, with w the
+    // field's weights and F_i the design at sample i (the universal-kriging variance's drift term).
+    std::optional<Eigen::MatrixXd> taken_back;
+    if (function_rows_at_samples_) {
+      const std::vector<double> w = field_->sample_weights(forward_position(nominal_model(), q_deg), q_deg);
+      if (3 * static_cast<Eigen::Index>(w.size()) == function_rows_at_samples_->rows()) {
+        taken_back = Eigen::MatrixXd::Zero(3, function_rows_at_samples_->cols());
+        for (std::size_t i = 0; i < w.size(); ++i)
+          if (w[i] != 0.0) *taken_back += w[i] * function_rows_at_samples_->middleRows<3>(3 * static_cast<Eigen::Index>(i));
+      }
+    }
+    const JointFunctionPrediction f = joint_functions_->predict(command_model_, q_deg, taken_back ? &*taken_back : nullptr);
     p.position_error_mm += f.position_error_mm;
     // Their estimation error is part of the field's error (the `var_field_mm2` column) and of a
     // new reading's.
@@ -445,6 +469,12 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
       fail_model(source, "member \"joint_error_functions\": only kinematic+kriging models carry joint error functions; "
                          "method \"" + std::string(method_name(method)) + "\" has none; refit the model with 'errfield fit'");
     model.joint_functions_ = JointErrorFunctions::from_json(j["joint_error_functions"], source);
+    if (model.joint_functions_->coefficient_covariance_mrad2.size() > 0 &&
+        model.joint_functions_->coefficient_covariance_mrad2.rows() != model.joint_functions_->parameter_count())
+      fail_model(source, "member \"joint_error_functions.coefficient_covariance_mrad2\": " +
+                             std::to_string(model.joint_functions_->coefficient_covariance_mrad2.rows()) + " rows for " +
+                             std::to_string(model.joint_functions_->parameter_count()) + " coefficients");
+    model.set_function_rows_at_samples();
   }
   if (j.contains("data_joints_deg")) {
     const auto& q = j["data_joints_deg"];

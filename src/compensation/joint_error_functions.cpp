@@ -106,7 +106,88 @@ double reading_covariance(const VariogramModel& m, const Eigen::VectorXd& a, con
 
 }  // namespace
 
-Eigen::Matrix<double, 6, 1> JointErrorFunctions::angle_error_mrad(const robot::JointVector& q_deg) const {
+double gravity_lever_m(const robot::KinematicFrames& frames, int joint, int frame) {
+  const Eigen::Isometry3d& axis = frames.frames[static_cast<std::size_t>(joint + 1)];
+  const Eigen::Vector3d arm = frames.frames[static_cast<std::size_t>(frame)].translation() - axis.translation();
+  // ĝ = -z of the world frame: ĝ · (z × arm) = -(z × arm)_z.
+  return -1e-3 * axis.linear().col(2).cross(arm).z();
+}
+
+namespace {
+
+/// The coefficients as one vector in the design's column order.
+Eigen::VectorXd coefficient_vector(const JointErrorFunctions& f) {
+  Eigen::VectorXd beta(f.parameter_count());
+  for (int j = 0; j < kJoints; ++j)
+    for (int k = 0; k < f.degree; ++k) beta[j * f.degree + k] = f.coefficients_mrad(j, k);
+  for (std::size_t t = 0; t < f.gravity_terms.size(); ++t)
+    beta[kJoints * f.degree + static_cast<Eigen::Index>(t)] = f.gravity_terms[t].coefficient_mrad;
+  return beta;
+}
+
+void set_coefficients(JointErrorFunctions& f, const Eigen::VectorXd& beta) {
+  f.coefficients_mrad = Eigen::Map<const Eigen::MatrixXd>(beta.data(), f.degree, kJoints).transpose();
+  for (std::size_t t = 0; t < f.gravity_terms.size(); ++t)
+    f.gravity_terms[t].coefficient_mrad = beta[kJoints * f.degree + static_cast<Eigen::Index>(t)];
+}
+
+// A gravity term whose lever's RMS over the poses is below this fraction of the largest term's
+// carries no load worth a coefficient: the lever about a vertical axis is zero up to the base's
+// tilt (a milliradian: 0.1 % of an arm's lever).
+constexpr double kMinRelativeGravityLever = 0.02;
+
+/// The gravity-load terms of the joints that move the point: every frame origin beyond the joint
+/// and the tool point, unless its lever is negligible or (to 1e-6 of its RMS at every pose) the
+/// lever of an earlier point of the same joint (coincident origins, as at a spherical wrist).
+std::vector<GravityLoadTerm> gravity_terms_over(const std::vector<robot::KinematicFrames>& frames,
+                                                const std::array<bool, kJoints>& moves_the_point) {
+  struct Candidate {
+    GravityLoadTerm term;
+    Eigen::VectorXd lever;
+  };
+  std::vector<Candidate> candidates;
+  double largest_rms = 0.0;
+  const auto n = static_cast<Eigen::Index>(frames.size());
+  for (int j = 0; j < kJoints; ++j) {
+    if (!moves_the_point[static_cast<std::size_t>(j)]) continue;
+    for (int frame = j + 2; frame <= kJoints + 1; ++frame) {
+      Candidate c;
+      c.term.joint = j;
+      c.term.frame = frame;
+      c.lever.resize(n);
+      for (Eigen::Index i = 0; i < n; ++i) c.lever[i] = gravity_lever_m(frames[static_cast<std::size_t>(i)], j, frame);
+      c.term.scale_m = std::sqrt(c.lever.squaredNorm() / static_cast<double>(std::max<Eigen::Index>(n, 1)));
+      largest_rms = std::max(largest_rms, c.term.scale_m);
+      candidates.push_back(std::move(c));
+    }
+  }
+  std::vector<GravityLoadTerm> terms;
+  std::vector<const Candidate*> kept;
+  for (const Candidate& c : candidates) {
+    if (!(c.term.scale_m > kMinRelativeGravityLever * largest_rms)) continue;
+    const bool copy = std::any_of(kept.begin(), kept.end(), [&](const Candidate* k) {
+      return k->term.joint == c.term.joint && (k->lever - c.lever).cwiseAbs().maxCoeff() <= 1e-6 * c.term.scale_m;
+    });
+    if (copy) continue;
+    kept.push_back(&c);
+    terms.push_back(c.term);
+  }
+  return terms;
+}
+
+double largest_gravity_deflection(const JointErrorFunctions& f, const std::vector<robot::KinematicFrames>& frames) {
+  double largest = 0.0;
+  for (const robot::KinematicFrames& at : frames) {
+    Eigen::Matrix<double, 6, 1> dq = Eigen::Matrix<double, 6, 1>::Zero();
+    for (const GravityLoadTerm& t : f.gravity_terms) dq[t.joint] += t.coefficient_mrad * gravity_lever_m(at, t.joint, t.frame) / t.scale_m;
+    largest = std::max(largest, dq.cwiseAbs().maxCoeff());
+  }
+  return largest;
+}
+
+}  // namespace
+
+Eigen::Matrix<double, 6, 1> JointErrorFunctions::angle_error_mrad(const robot::JointVector& q_deg, const robot::MdhModel* model) const {
   Eigen::Matrix<double, 6, 1> dq = Eigen::Matrix<double, 6, 1>::Zero();
   std::vector<double> p(static_cast<std::size_t>(std::max(degree, 1)));
   for (int j = 0; j < kJoints; ++j) {
@@ -114,29 +195,53 @@ Eigen::Matrix<double, 6, 1> JointErrorFunctions::angle_error_mrad(const robot::J
     legendre(scaled(q_deg[j], lo_deg[j], hi_deg[j]), degree, p.data());
     for (int k = 0; k < degree; ++k) dq[j] += coefficients_mrad(j, k) * p[static_cast<std::size_t>(k)];
   }
+  if (model && !gravity_terms.empty()) {
+    robot::KinematicFrames frames;
+    robot::forward_kinematics_all(*model, q_deg, frames);
+    for (const GravityLoadTerm& t : gravity_terms) dq[t.joint] += t.coefficient_mrad * gravity_lever_m(frames, t.joint, t.frame) / t.scale_m;
+  }
   return dq;
 }
 
-Eigen::MatrixXd JointErrorFunctions::design_rows(const Eigen::Matrix<double, 6, 6>& jacobian, const robot::JointVector& q_deg) const {
-  Eigen::MatrixXd d = Eigen::MatrixXd::Zero(3, kJoints * degree);
+Eigen::MatrixXd JointErrorFunctions::design_rows(const robot::KinematicFrames& frames, const robot::JointVector& q_deg) const {
+  const Eigen::Matrix<double, 6, 6> jacobian = robot::geometric_jacobian(frames, robot::EndFrame::tool);
+  Eigen::MatrixXd d = Eigen::MatrixXd::Zero(3, parameter_count());
   std::vector<double> p(static_cast<std::size_t>(std::max(degree, 1)));
   for (int j = 0; j < kJoints; ++j) {
     if (!(hi_deg[static_cast<std::size_t>(j)] > lo_deg[static_cast<std::size_t>(j)])) continue;
     legendre(scaled(q_deg[j], lo_deg[static_cast<std::size_t>(j)], hi_deg[static_cast<std::size_t>(j)]), degree, p.data());
     for (int k = 0; k < degree; ++k) d.col(j * degree + k) = 1e-3 * p[static_cast<std::size_t>(k)] * jacobian.block<3, 1>(0, j);
   }
+  for (std::size_t t = 0; t < gravity_terms.size(); ++t) {
+    const GravityLoadTerm& g = gravity_terms[t];
+    d.col(kJoints * degree + static_cast<Eigen::Index>(t)) =
+        1e-3 * gravity_lever_m(frames, g.joint, g.frame) / g.scale_m * jacobian.block<3, 1>(0, g.joint);
+  }
   return d;
 }
 
-JointFunctionPrediction JointErrorFunctions::predict(const robot::MdhModel& model, const robot::JointVector& q_deg) const {
+Eigen::MatrixXd JointErrorFunctions::design_rows(const robot::MdhModel& model, const robot::JointVector& q_deg) const {
+  robot::KinematicFrames frames;
+  robot::forward_kinematics_all(model, q_deg, frames);
+  return design_rows(frames, q_deg);
+}
+
+JointFunctionPrediction JointErrorFunctions::predict(const robot::MdhModel& model, const robot::JointVector& q_deg,
+                                                    const Eigen::MatrixXd* taken_back) const {
   JointFunctionPrediction out;
-  if (degree == 0) return out;
-  // One Jacobian and one design block for both: the same mapping the fit used.
-  const Eigen::MatrixXd d = design_rows(robot::geometric_jacobian(model, q_deg), q_deg);
-  // Joint-major, as the design's columns: column j of the transpose holds joint j's coefficients.
-  const Eigen::MatrixXd by_joint = coefficients_mrad.transpose();
-  out.position_error_mm = d * Eigen::Map<const Eigen::VectorXd>(by_joint.data(), kJoints * degree);
-  if (coefficient_covariance_mrad2.size() > 0) out.axis_variance_mm2 = (d * coefficient_covariance_mrad2 * d.transpose()).diagonal();
+  if (parameter_count() == 0) return out;
+  // One design block for both: the same mapping the fit used.
+  Eigen::MatrixXd d = design_rows(model, q_deg);
+  out.position_error_mm = d * coefficient_vector(*this);
+  if (coefficient_covariance_mrad2.size() > 0) {
+    if (taken_back) {
+      if (taken_back->rows() != 3 || taken_back->cols() != d.cols())
+        throw ArgumentError("JointErrorFunctions::predict: taken_back is " + std::to_string(taken_back->rows()) + " x " +
+                            std::to_string(taken_back->cols()) + "; expected 3 x " + std::to_string(d.cols()));
+      d -= *taken_back;
+    }
+    out.axis_variance_mm2 = (d * coefficient_covariance_mrad2 * d.transpose()).diagonal();
+  }
   return out;
 }
 
@@ -169,6 +274,12 @@ nlohmann::json JointErrorFunctions::to_json() const {
     c.push_back(row);
   }
   nlohmann::json j = {{"degree", degree}, {"lo_deg", lo_deg}, {"hi_deg", hi_deg}, {"coefficients_mrad", c}};
+  if (!gravity_terms.empty()) {
+    nlohmann::json g = nlohmann::json::array();
+    for (const GravityLoadTerm& t : gravity_terms)
+      g.push_back({{"joint", t.joint + 1}, {"frame", t.frame}, {"scale_m", t.scale_m}, {"coefficient_mrad", t.coefficient_mrad}});
+    j["gravity_terms"] = g;
+  }
   if (coefficient_covariance_mrad2.size() > 0) {
     nlohmann::json cov = nlohmann::json::array();
     for (Eigen::Index r = 0; r < coefficient_covariance_mrad2.rows(); ++r) {
@@ -213,9 +324,34 @@ JointErrorFunctions JointErrorFunctions::from_json(const nlohmann::json& j, cons
       f.coefficients_mrad(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k)) = c[r][k].get<double>();
     }
   }
+  if (j.contains("gravity_terms")) {
+    const auto& g = j["gravity_terms"];
+    if (!g.is_array()) bad_functions_member(source, ".gravity_terms\": expected an array of {joint, frame, scale_m, coefficient_mrad}");
+    for (std::size_t t = 0; t < g.size(); ++t) {
+      const std::string at = ".gravity_terms\"[" + std::to_string(t) + "]";
+      const auto& e = g[t];
+      if (!e.is_object()) bad_functions_member(source, at + ": expected {joint, frame, scale_m, coefficient_mrad}");
+      GravityLoadTerm term;
+      if (!e.contains("joint") || !e["joint"].is_number_integer() || e["joint"].get<int>() < 1 || e["joint"].get<int>() > 6)
+        bad_functions_member(source, at + ".joint: expected an integer 1..6");
+      term.joint = e["joint"].get<int>() - 1;
+      // The loaded point lies beyond the joint: frames joint+1 .. 7 (1-based joint; 7 = the tool point).
+      if (!e.contains("frame") || !e["frame"].is_number_integer() || e["frame"].get<int>() < term.joint + 2 || e["frame"].get<int>() > 7)
+        bad_functions_member(source, at + ".frame: expected an integer " + std::to_string(term.joint + 2) + "..7 (a frame beyond joint " +
+                                         std::to_string(term.joint + 1) + "; 7 = the tool point)");
+      term.frame = e["frame"].get<int>();
+      if (!e.contains("scale_m") || !e["scale_m"].is_number() || !(e["scale_m"].get<double>() > 0.0) || !std::isfinite(e["scale_m"].get<double>()))
+        bad_functions_member(source, at + ".scale_m: expected a finite number above 0 (m)");
+      term.scale_m = e["scale_m"].get<double>();
+      if (!e.contains("coefficient_mrad") || !e["coefficient_mrad"].is_number() || !std::isfinite(e["coefficient_mrad"].get<double>()))
+        bad_functions_member(source, at + ".coefficient_mrad: expected a finite number");
+      term.coefficient_mrad = e["coefficient_mrad"].get<double>();
+      f.gravity_terms.push_back(term);
+    }
+  }
   if (j.contains("coefficient_covariance_mrad2")) {
     const auto& v = j["coefficient_covariance_mrad2"];
-    const std::size_t p = 6 * static_cast<std::size_t>(f.degree);
+    const auto p = static_cast<std::size_t>(f.parameter_count());
     if (!v.is_array() || v.size() != p)
       bad_functions_member(source, ".coefficient_covariance_mrad2\": expected " + std::to_string(p) + " rows of " + std::to_string(p) + " numbers");
     f.coefficient_covariance_mrad2.resize(static_cast<Eigen::Index>(p), static_cast<Eigen::Index>(p));
@@ -238,7 +374,8 @@ JointErrorFunctions JointErrorFunctions::from_json(const nlohmann::json& j, cons
 }
 
 JointErrorFunctionFit fit_joint_error_functions(const robot::MdhModel& model, const std::vector<robot::JointVector>& q_deg,
-                                                const std::vector<Eigen::Vector3d>& residual_mm, int degree) {
+                                                const std::vector<Eigen::Vector3d>& residual_mm, int degree,
+                                                bool gravity_load) {
   if (degree < 1 || degree > 20)
     throw ArgumentError("fit_joint_error_functions: degree " + std::to_string(degree) + "; expected 1..20");
   if (q_deg.size() != residual_mm.size() || q_deg.empty())
@@ -260,29 +397,33 @@ JointErrorFunctionFit fit_joint_error_functions(const robot::MdhModel& model, co
     if (f.hi_deg[j] - f.lo_deg[j] < 1.0) f.hi_deg[j] = f.lo_deg[j];
   // Nor does a joint that barely moves the measured point (a wrist joint turning a reflector that
   // sits near its axis): its coefficients would be free to absorb anything at huge angles.
-  std::vector<Eigen::Matrix<double, 6, 6>> jacobians(q_deg.size());
+  std::vector<robot::KinematicFrames> frames(q_deg.size());
   Eigen::Matrix<double, 6, 1> lever = Eigen::Matrix<double, 6, 1>::Zero();  // mean |J_j|^2, (mm/rad)^2
   for (std::size_t i = 0; i < q_deg.size(); ++i) {
-    jacobians[i] = robot::geometric_jacobian(model, q_deg[i]);
-    lever += jacobians[i].topRows<3>().colwise().squaredNorm().transpose();
+    robot::forward_kinematics_all(model, q_deg[i], frames[i]);
+    lever += robot::geometric_jacobian(frames[i], robot::EndFrame::tool).topRows<3>().colwise().squaredNorm().transpose();
   }
-  for (int j = 0; j < kJoints; ++j)
-    if (lever[j] < kMinRelativeLever * kMinRelativeLever * lever.maxCoeff()) f.hi_deg[static_cast<std::size_t>(j)] = f.lo_deg[static_cast<std::size_t>(j)];
-  const Eigen::Index p = kJoints * degree;
-  // Design: row 3i+a, column j*degree+k-1 = J_j(q_i)[a] * P_k(u_ij) * 1e-3 (mm per mrad).
+  std::array<bool, kJoints> moves_the_point{};
+  for (int j = 0; j < kJoints; ++j) {
+    moves_the_point[static_cast<std::size_t>(j)] = lever[j] >= kMinRelativeLever * kMinRelativeLever * lever.maxCoeff();
+    if (!moves_the_point[static_cast<std::size_t>(j)]) f.hi_deg[static_cast<std::size_t>(j)] = f.lo_deg[static_cast<std::size_t>(j)];
+  }
+  if (gravity_load) f.gravity_terms = gravity_terms_over(frames, moves_the_point);
+  const Eigen::Index p = f.parameter_count();
+  // Design: row 3i+a, column j*degree+k-1 = J_j(q_i)[a] * P_k(u_ij) * 1e-3 (mm per mrad), then the
+  // gravity terms' columns J_j(q_i)[a] * lever(q_i) / scale * 1e-3.
   Eigen::MatrixXd design = Eigen::MatrixXd::Zero(3 * n, p);
   Eigen::VectorXd y(3 * n);
   for (Eigen::Index i = 0; i < n; ++i) {
-    const auto& q = q_deg[static_cast<std::size_t>(i)];
-    const Eigen::Matrix<double, 6, 6>& jac = jacobians[static_cast<std::size_t>(i)];
     y.segment<3>(3 * i) = residual_mm[static_cast<std::size_t>(i)];
-    design.middleRows<3>(3 * i) = f.design_rows(jac, q);
+    design.middleRows<3>(3 * i) = f.design_rows(frames[static_cast<std::size_t>(i)], q_deg[static_cast<std::size_t>(i)]);
   }
   const RidgeFit ridge = ridge_by_gcv(design, y);
   out.ridge_inverse = ridge.ridge_inverse;
   const Eigen::VectorXd& beta = ridge.beta;
   const double best_lambda = ridge.lambda, best_df = ridge.effective_parameters, s2max = ridge.largest_s2;
-  f.coefficients_mrad = Eigen::Map<const Eigen::MatrixXd>(beta.data(), degree, kJoints).transpose();
+  set_coefficients(f, beta);
+  out.largest_gravity_deflection_mrad = largest_gravity_deflection(f, frames);
   const Eigen::VectorXd fitted = design * beta;
   out.remaining_mm.resize(static_cast<std::size_t>(n));
   double before = 0.0, after = 0.0;
@@ -391,7 +532,7 @@ bool refit_by_generalized_least_squares(JointErrorFunctionFit& fit, const std::v
   }
   const RidgeFit ridge = ridge_by_gcv(fw, yw);
   JointErrorFunctions& f = fit.functions;
-  f.coefficients_mrad = Eigen::Map<const Eigen::MatrixXd>(ridge.beta.data(), f.degree, kJoints).transpose();
+  set_coefficients(f, ridge.beta);
   // The whitened readings have covariance P (the projection that removed the constants), and
   // F~ lies in its range: cov(beta) = R F~'F~ R.
   f.coefficient_covariance_mrad2.resize(0, 0);

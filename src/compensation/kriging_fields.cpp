@@ -3,6 +3,7 @@
 #include "errfield/kriging_likelihood.hpp"
 
 #include <algorithm>
+#include <optional>
 #include <cmath>
 #include <cstdio>
 #include <utility>
@@ -152,20 +153,25 @@ class KrigingField final : public ErrorField {
       throw InputError("kriging field: the kriging system cannot be solved: " + kriging_.report().message);
   }
 
-  ErrorPrediction predict(const Eigen::Vector3d& p, const JointVector& q) const override {
-    ErrorPrediction out;
+  /// The location the field predicts at for (p, q), or none outside its region (or at its base).
+  std::optional<L> target_at(const Eigen::Vector3d& p, const JointVector& q) const {
     const bool inside = options_.space == FieldSpace::joint ? region_.contains(Eigen::VectorXd(q))
                                                             : region_.contains(Eigen::VectorXd(p));
-    if (!inside || (base_ && (p - *base_).norm() < 1.0)) {
+    if (!inside || (base_ && (p - *base_).norm() < 1.0)) return std::nullopt;
+    if constexpr (std::is_same_v<L, JointVector>)
+      return q;
+    else
+      return p;
+  }
+
+  ErrorPrediction predict(const Eigen::Vector3d& p, const JointVector& q) const override {
+    ErrorPrediction out;
+    const std::optional<L> target = target_at(p, q);
+    if (!target) {
       out.inside_region = false;
       return out;
     }
-    L target;
-    if constexpr (std::is_same_v<L, JointVector>)
-      target = q;
-    else
-      target = p;
-    const auto pred = kriging_.predict(std::span<const L>(&target, 1));
+    const auto pred = kriging_.predict(std::span<const L>(&*target, 1));
     if (!pred.usable() || pred.mean.empty()) {
       out.inside_region = false;
       return out;
@@ -190,6 +196,18 @@ class KrigingField final : public ErrorField {
     }
     return out;
   }
+
+  std::vector<double> sample_weights(const Eigen::Vector3d& p, const JointVector& q) const override {
+    const std::optional<L> target = target_at(p, q);
+    if (!target) return {};
+    const auto pred = kriging_.predict(std::span<const L>(&*target, 1));
+    if (!pred.usable() || pred.weights.offset.size() != 2) return {};
+    std::vector<double> w(values_.size(), 0.0);
+    for (std::size_t k = pred.weights.offset[0]; k < pred.weights.offset[1]; ++k) w[pred.weights.sample[k]] += pred.weights.weight[k];
+    return w;
+  }
+
+  std::vector<JointVector> sample_joints() const override { return samples_.joints_deg; }
 
   nlohmann::json to_json() const override {
     nlohmann::json pos = nlohmann::json::array(), joints = nlohmann::json::array(), vals = nlohmann::json::array();
@@ -285,6 +303,8 @@ class KrigingField final : public ErrorField {
     k.nugget = o.nugget_is_measurement_error ? NuggetTreatment::MeasurementError : NuggetTreatment::MicroScale;
     k.threads = 1;
     k.duplicates = DuplicatePolicy::Average;
+    // sample_weights(): N doubles per single-target prediction, from the solve the variance needs anyway.
+    k.keep_weights = true;
     return k;
   }
 

@@ -405,10 +405,15 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       double inflation = 1.0;
       const std::vector<Eigen::Vector3d> calibration_residual = residual;
       if (o.joint_function_degree > 0) {
-        jf = fit_joint_error_functions(kin.model, d.q_deg, residual, o.joint_function_degree);
+        jf = fit_joint_error_functions(kin.model, d.q_deg, residual, o.joint_function_degree, o.gravity_load);
         residual = jf->remaining_mm;
+        const std::string gravity =
+            o.gravity_load ? " and " + std::to_string(jf->functions.gravity_terms.size()) +
+                                 " gravity-load terms (largest deflection over the poses " +
+                                 format_number(std::round(jf->largest_gravity_deflection_mrad * 1e3) / 1e3) + " mrad)"
+                           : std::string();
         out.notes.push_back("joint error functions (Legendre degree " + std::to_string(o.joint_function_degree) +
-                            " per joint, ridge by generalized cross-validation: " +
+                            " per joint" + gravity + ", ridge by generalized cross-validation: " +
                             format_number(std::round(jf->effective_parameters * 10) / 10) +
                             " effective parameters): residual RMS " + format_number(std::round(jf->rms_before_mm * 1e4) / 1e4) +
                             " -> " + format_number(std::round(jf->rms_after_mm * 1e4) / 1e4) +

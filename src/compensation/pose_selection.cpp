@@ -119,7 +119,7 @@ PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
     vo.linear_term.candidate_rows.resize(3 * static_cast<Eigen::Index>(candidates.size()), f->coefficient_covariance_mrad2.cols());
     for (std::size_t c = 0; c < candidates.size(); ++c)
       vo.linear_term.candidate_rows.middleRows(3 * static_cast<Eigen::Index>(c), 3) =
-          f->design_rows(robot::geometric_jacobian(model->command_model(), candidates[c]), candidates[c]);
+          f->design_rows(model->command_model(), candidates[c]);
   }
   vo.spacing_floor = options.spacing_floor;
   vo.count = options.count;

@@ -117,7 +117,7 @@ PyModel fit_py(const py::object& data, const py::object& robot, const std::strin
                const py::object& base_points, std::optional<double> region_margin,
                const std::optional<std::string>& calibration, const std::optional<std::string>& robust,
                double max_condition, double max_registration_rms, double outlier_limit, bool reflector_far_ok,
-               const std::string& variance_calibration, int joint_functions) {
+               const std::string& variance_calibration, int joint_functions, bool gravity_load) {
   const MdhModel nominal = robot_arg(robot);
   const CsvTable table = table_arg(data, "data");
   FitTableOptions fo;
@@ -125,6 +125,7 @@ PyModel fit_py(const py::object& data, const py::object& robot, const std::strin
                                   calibration.value_or(""), robust.value_or(""), max_condition, outlier_limit, variance_calibration});
   fo.fit.reflector_far_ok = reflector_far_ok;
   fo.fit.joint_function_degree = joint_functions;
+  fo.fit.gravity_load = gravity_load;
   fo.fit.validate();
   fo.fixed_bases = base_points_arg(base_points);
   fo.robot_given = !robot.is_none();
@@ -266,12 +267,13 @@ void bind_pipeline(py::module_& m) {
         py::arg("max_registration_rms") = robot::kRegistrationRmsLimitMm, py::arg("outlier_limit") = 5.0,
         py::arg("reflector_far_ok") = false, py::arg("variance_calibration") = "auto",
         py::arg("joint_functions") = FitOptions{}.joint_function_degree,
+        py::arg("gravity_load") = FitOptions{}.gravity_load,
         "`errfield fit`: a CompensationModel from measurements, a dict of columns named as the CLI's CSV\n"
         "(point, kind, q1..q6 deg, x,y,z mm, mx,my,mz mm, dist_b0.. mm). robot: None (built-in ER20-C10), a Robot,\n"
         "a built-in name or a robot JSON path. The options are the CLI's (--method, --space, --power, --model,\n"
         "--kind, --base, --base-point as base_points (K, 3) mm, --region-margin, --calibration, --robust,\n"
         "--max-condition, --max-registration-rms mm, --outlier-limit, --reflector-far-ok, --variance-calibration,\n"
-        "--joint-functions); method='auto' chooses from the data as the\n"
+        "--joint-functions, --gravity-load as a bool); method='auto' chooses from the data as the\n"
         "CLI does (kinematic+kriging in joint space with tracker positions, kinematic from distances). The fit's warnings are RuntimeWarnings. Releases the GIL.");
   m.def("predict", &predict_py, py::arg("model"), py::arg("joints"),
         "`errfield predict`: where the tool goes at joints ((N, 6) deg or a dict with q1..q6). Returns a dict:\n"

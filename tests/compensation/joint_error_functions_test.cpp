@@ -12,6 +12,7 @@
 #include "errfield/error.hpp"
 #include "errfield/robot/builtin_robots.hpp"
 #include "errfield/robot/kinematics.hpp"
+#include "errfield/robot/simulator.hpp"
 #include "errfield/variogram_model.hpp"
 
 namespace errfield::compensation {
@@ -64,6 +65,17 @@ Eigen::Vector3d moved_by(const MdhModel& m, const JointVector& q, const std::arr
     dq_deg[j] = truth_mrad(j, u) * 1e-3 * 180.0 / M_PI;
   }
   return forward_position(m, q + dq_deg) - forward_position(m, q);
+}
+
+// A hand-edited functions member is refused, naming the file and `names` (the member).
+void refused(const nlohmann::json& j, const std::string& names) {
+  try {
+    JointErrorFunctions::from_json(j, "m.json");
+    ADD_FAILURE() << "accepted " << j.dump();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(names), std::string::npos) << e.what();
+    EXPECT_EQ(e.file(), "m.json");
+  }
 }
 
 TEST(JointErrorFunctions, PositionErrorIsTheFkOfTheAngleErrors) {
@@ -147,11 +159,14 @@ TEST(JointErrorFunctions, NoiseAloneLeavesThemNearZero) {
   std::normal_distribution<double> noise(0.0, 0.02);
   std::vector<Eigen::Vector3d> r(q.size());
   for (auto& v : r) v = Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
-  const JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 8);
-  // Generalized cross-validation does not spend 48 parameters on noise: at most a few effective
-  // ones, and the residual barely shrinks.
-  EXPECT_LT(fit.effective_parameters, 6.0);
-  EXPECT_GT(fit.rms_after_mm, 0.97 * fit.rms_before_mm);
+  for (const bool gravity : {false, true}) {
+    const JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 8, gravity);
+    EXPECT_EQ(fit.functions.gravity_terms.empty(), !gravity);
+    // Generalized cross-validation does not spend 48 (with the gravity-load terms ~60) parameters on
+    // noise: at most a few effective ones, and the residual barely shrinks.
+    EXPECT_LT(fit.effective_parameters, 6.0) << gravity;
+    EXPECT_GT(fit.rms_after_mm, 0.97 * fit.rms_before_mm) << gravity;
+  }
 }
 
 TEST(JointErrorFunctions, AJointThatDoesNotMoveThePointHasNone) {
@@ -176,15 +191,6 @@ TEST(JointErrorFunctions, JsonRoundTripAndRefusals) {
   EXPECT_EQ(back.lo_deg, f.lo_deg);
   EXPECT_EQ(back.hi_deg, f.hi_deg);
   EXPECT_EQ(back.coefficients_mrad, f.coefficients_mrad);
-  auto refused = [&](nlohmann::json j, const std::string& names) {
-    try {
-      JointErrorFunctions::from_json(j, "m.json");
-      ADD_FAILURE() << "accepted " << j.dump();
-    } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find(names), std::string::npos) << e.what();
-      EXPECT_EQ(e.file(), "m.json");
-    }
-  };
   nlohmann::json j = f.to_json();
   j["degree"] = 0;
   refused(j, "joint_error_functions.degree");
@@ -309,6 +315,115 @@ TEST(JointErrorFunctions, GeneralizedRefitIsTheRidgeGlsUnderTheFieldCovariance) 
   ASSERT_EQ(none.ridge_inverse.size(), 0);
   EXPECT_FALSE(refit_by_generalized_least_squares(none, q, r, field));
   EXPECT_THROW(refit_by_generalized_least_squares(fit, random_poses(5, 1), r, field), ArgumentError);
+}
+
+// The lever is the derivative of the point's height: a unit weight at p loads joint j by
+// -d(z_p)/d(q_j) (virtual work), here by central differences of the FK, no cross product involved.
+TEST(GravityLoad, LeverIsMinusTheDerivativeOfThePointsHeight) {
+  const MdhModel m = robot_with_tool();
+  for (const JointVector& q : random_poses(10, 31)) {
+    KinematicFrames frames;
+    forward_kinematics_all(m, q, frames);
+    for (int j = 0; j < 6; ++j)
+      for (int frame = j + 2; frame <= 7; ++frame) {
+        const double h = 1e-4;  // deg
+        KinematicFrames up, down;
+        JointVector qu = q, qd = q;
+        qu[j] += h;
+        qd[j] -= h;
+        forward_kinematics_all(m, qu, up);
+        forward_kinematics_all(m, qd, down);
+        const double dz_per_rad = (up.frames[static_cast<std::size_t>(frame)].translation().z() -
+                                   down.frames[static_cast<std::size_t>(frame)].translation().z()) / (2.0 * h * M_PI / 180.0);
+        EXPECT_NEAR(gravity_lever_m(frames, j, frame), -1e-3 * dz_per_rad, 1e-9) << "joint " << j + 1 << " frame " << frame;
+      }
+  }
+}
+
+// A simulated arm whose only error is its joints yielding under gravity (the simulator's own
+// compliance model: point masses between the frame origins, a payload at the tool point; no
+// geometric error, no noise): the gravity-load terms express it, the one-joint functions cannot.
+TEST(GravityLoad, RecoversTheSimulatorsComplianceFromPositionsAlone) {
+  SimulatorConfig c = SimulatorConfig::paper_default();
+  c.nominal = robot_with_tool();
+  c.geometry = GeometricDeviation{};
+  c.transmission = TransmissionErrorModel{};
+  c.end_range = EndRangeErrorModel{};
+  c.compliance.stiffness_nm_per_rad = {0, 4e5, 6e5, 2e6, 2e6, 0};
+  c.compliance.link_mass_kg = {0, 40, 25, 8, 4, 0};  // link 6's mass sits off the frame origins' lines
+  c.compliance.payload_kg = 10;
+  c.repeatability_sigma_mm = 0.0;
+  const SimulatedRobot sim(c);
+  const std::vector<JointVector> q = random_poses(300, 37), held_out = random_poses(100, 41);
+  auto residuals = [&](const std::vector<JointVector>& at) {
+    std::vector<Eigen::Vector3d> r(at.size());
+    for (std::size_t i = 0; i < at.size(); ++i) r[i] = sim.true_position(at[i]) - forward_position(c.nominal, at[i]);
+    return r;
+  };
+  const std::vector<Eigen::Vector3d> r = residuals(q), truth = residuals(held_out);
+  const JointErrorFunctionFit with = fit_joint_error_functions(c.nominal, q, r, 4, true);
+  const JointErrorFunctionFit without = fit_joint_error_functions(c.nominal, q, r, 4, false);
+  ASSERT_FALSE(with.functions.gravity_terms.empty());
+  // Joint 1's axis is vertical: no weight loads it.
+  for (const GravityLoadTerm& t : with.functions.gravity_terms) EXPECT_NE(t.joint, 0);
+  EXPECT_GT(with.rms_before_mm, 0.3);
+  // Left: the linearization (second order in ~1 mrad over a ~1.5 m arm, ~0.002 mm) and the
+  // ridge's shrinkage; the polynomials alone leave the part that depends on several joints.
+  EXPECT_LT(with.rms_after_mm, 0.02 * with.rms_before_mm);
+  EXPECT_GT(without.rms_after_mm, 5.0 * with.rms_after_mm);
+  // Held-out poses: the terms predict the deflection where nothing was measured.
+  double error = 0.0, size = 0.0;
+  for (std::size_t i = 0; i < held_out.size(); ++i) {
+    error += (with.functions.position_error_mm(c.nominal, held_out[i]) - truth[i]).squaredNorm();
+    size += truth[i].squaredNorm();
+  }
+  EXPECT_LT(std::sqrt(error / size), 0.03);
+  // The angle errors are the simulator's deflections (mrad), up to what the joint offsets take
+  // (a constant per joint: the functions have none).
+  Eigen::Matrix<double, 6, 1> mean_difference = Eigen::Matrix<double, 6, 1>::Zero();
+  std::vector<Eigen::Matrix<double, 6, 1>> difference(held_out.size());
+  for (std::size_t i = 0; i < held_out.size(); ++i) {
+    difference[i] = with.functions.angle_error_mrad(held_out[i], &c.nominal) - sim.joint_deflection_deg(held_out[i]) * M_PI / 0.18;
+    mean_difference += difference[i] / static_cast<double>(held_out.size());
+  }
+  for (std::size_t i = 0; i < held_out.size(); ++i)
+    for (int j = 1; j < 3; ++j) EXPECT_NEAR(difference[i][j], mean_difference[j], 0.05) << "joint " << j + 1;
+}
+
+TEST(GravityLoad, CovarianceAndPredictionCarryThemAndTheyRoundTrip) {
+  const MdhModel m = robot_with_tool();
+  const std::vector<JointVector> q = random_poses(200, 43);
+  std::vector<Eigen::Vector3d> r(q.size());
+  for (std::size_t i = 0; i < q.size(); ++i) r[i] = Eigen::Vector3d(0.2 * std::sin(q[i][1] / 40.0), 0.1 * std::cos(q[i][2] / 30.0), 0.05);
+  JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 8, true);
+  ASSERT_GT(fit.ridge_inverse.size(), 0);
+  const VariogramModel field = VariogramModel::parse("sph(sill=0.01,range=200)+nug(0.0004)@ard(1,0.5,2,1,1,0.3)");
+  set_coefficient_covariance(fit, q, field);
+  EXPECT_EQ(fit.functions.coefficient_covariance_mrad2.rows(), fit.functions.parameter_count());
+  for (auto& t : fit.functions.gravity_terms) t.coefficient_mrad = 0.3;
+  const JointErrorFunctions back = JointErrorFunctions::from_json(fit.functions.to_json(), "m.json");
+  ASSERT_EQ(back.gravity_terms.size(), fit.functions.gravity_terms.size());
+  for (const JointVector& at : random_poses(5, 53)) {
+    EXPECT_EQ(back.position_error_mm(m, at), fit.functions.position_error_mm(m, at));
+    EXPECT_EQ(back.axis_variance_mm2(m, at), fit.functions.axis_variance_mm2(m, at));
+    // The position error is the FK of the angle errors (gravity terms included), to first order:
+    // a central difference at 1/1000 of them (remainder third order).
+    const Eigen::Matrix<double, 6, 1> step = 1e-3 * back.angle_error_mrad(at, &m) * 1e-3 * 180.0 / M_PI;
+    const Eigen::Vector3d fd = (forward_position(m, at + step) - forward_position(m, at - step)) * 0.5e3;
+    EXPECT_LT((back.position_error_mm(m, at) - fd).norm(), 1e-6 * std::max(1.0, fd.norm()));
+  }
+  nlohmann::json j = fit.functions.to_json();
+  j["gravity_terms"][0]["frame"] = j["gravity_terms"][0]["joint"];  // the joint's own origin: no lever
+  refused(j, "gravity_terms\"[0].frame");
+  j = fit.functions.to_json();
+  j["gravity_terms"][0]["scale_m"] = 0.0;
+  refused(j, "gravity_terms\"[0].scale_m");
+  j = fit.functions.to_json();
+  j["gravity_terms"][1]["joint"] = 7;
+  refused(j, "gravity_terms\"[1].joint");
+  j = fit.functions.to_json();
+  j["gravity_terms"].erase(0);  // the covariance no longer matches the coefficients
+  refused(j, "coefficient_covariance_mrad2");
 }
 
 TEST(JointErrorFunctions, OnlyKinematicKrigingModelsCarryThem) {

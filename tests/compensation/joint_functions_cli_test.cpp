@@ -14,31 +14,18 @@
 #include "errfield/compensation/prediction.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/robot/kinematics.hpp"
-#include "support/cli_harness.hpp"
-#include "support/session_split.hpp"
+#include "support/held_out_cli.hpp"
 
 namespace errfield::compensation {
 namespace joint_functions_cli_test {
 
-class JointFunctionsCli : public errfield::testing::CliTest {
+class JointFunctionsCli : public errfield::testing::HeldOutCli {
  protected:
   void SetUp() override {
-    ASSERT_EQ(run("simulate --robot kr16 --seed 31 --sample scattered:400 --joint-box "
-                  "-150,150,-130,-30,70,150,-90,90,-110,110,-180,180 --systematic none --end-range-error q5:95:1.5 "
-                  "--orientation-spread 20 --joint-decimals 3 --measure positions --robot-out r.json --out all.csv")
-                  .exit_code,
-              0);
-    const errfield::testing::SessionSplit s = errfield::testing::split_session(read("all.csv"), 160);
-    write("train.csv", s.train);
-    write("hold.csv", s.hold);
-  }
-  /// Fits train.csv with `options`, validates on hold.csv: the summary JSON.
-  nlohmann::json fit_and_validate(const std::string& options, const std::string& model) {
-    const errfield::testing::CliResult f = run("fit --robot r.json --data train.csv " + options + " --out " + model);
-    EXPECT_EQ(f.exit_code, 0) << f.output();
-    const errfield::testing::CliResult v = run("validate --model " + model + " --data hold.csv --summary-out s.json");
-    EXPECT_EQ(v.exit_code, 0) << v.output();
-    return nlohmann::json::parse(read("s.json"));
+    simulate_and_split("--robot kr16 --seed 31 --sample scattered:400 --joint-box "
+                       "-150,150,-130,-30,70,150,-90,90,-110,110,-180,180 --systematic none --end-range-error q5:95:1.5 "
+                       "--orientation-spread 20 --joint-decimals 3 --measure positions",
+                       160);
   }
 };
 
@@ -75,15 +62,34 @@ TEST_F(JointFunctionsCli, TheModelAddsThemAndTheirVarianceThroughTheCalibratedJa
   for (std::size_t i = 0; i < q.size(); i += 7) {
     const ErrorPrediction a = m.predict_error(q[i]), b = bare.predict_error(q[i]);
     ASSERT_TRUE(a.inside_region);
-    const Eigen::Matrix<double, 6, 1> dq_rad = 1e-3 * m.joint_error_functions()->angle_error_mrad(q[i]);
+    const Eigen::Matrix<double, 6, 1> dq_rad = 1e-3 * m.joint_error_functions()->angle_error_mrad(q[i], &m.command_model());
     // First order: FK difference at 1/1000 of the angle errors, scaled back.
     const robot::JointVector step_deg = 1e-3 * dq_rad * 180.0 / M_PI;
     const Eigen::Vector3d fd = 1e3 * (robot::forward_position(m.command_model(), q[i] + step_deg) -
                                       robot::forward_position(m.command_model(), q[i]));
     EXPECT_LT((a.position_error_mm - b.position_error_mm - fd).norm(), 1e-5) << i;
-    // and their estimation variance is added to the field's
-    const Eigen::Vector3d v = m.joint_error_functions()->axis_variance_mm2(m.command_model(), q[i]);
+    // and their estimation variance is added to the field's: what is left of it after the field's
+    // correction, (D - sum_k w_k F_k) cov (D - sum_k w_k F_k)', with w the field's weights, F_k the
+    // design at its sample k. The weights are those of the field's prediction: they reproduce it
+    // from the stored sample values.
+    const Eigen::Vector3d p_nominal = robot::forward_position(m.nominal_model(), q[i]);
+    const std::vector<double> w = m.field()->sample_weights(p_nominal, q[i]);
+    const std::vector<robot::JointVector> at = m.field()->sample_joints();
+    ASSERT_EQ(w.size(), at.size());
+    ASSERT_EQ(w.size(), j["field"]["values"].size());
+    const JointErrorFunctions& f = *m.joint_error_functions();
+    Eigen::MatrixXd g = f.design_rows(m.command_model(), q[i]);
+    Eigen::Vector3d weighted_values = Eigen::Vector3d::Zero();
+    for (std::size_t k = 0; k < w.size(); ++k) {
+      g -= w[k] * f.design_rows(m.command_model(), at[k]);
+      for (int c = 0; c < 3; ++c) weighted_values[c] += w[k] * j["field"]["values"][k][static_cast<std::size_t>(c)].get<double>();
+    }
+    EXPECT_LT((weighted_values - b.position_error_mm).norm(), 1e-9) << i;
+    const Eigen::Vector3d v = (g * f.coefficient_covariance_mrad2 * g.transpose()).diagonal();
     EXPECT_GT(v.minCoeff(), 0.0);
+    // These are training poses: there the field takes back most of the functions' error, so less
+    // is left than their variance without the correction.
+    EXPECT_LT(v.sum(), f.axis_variance_mm2(m.command_model(), q[i]).sum()) << i;
     EXPECT_NEAR(a.variance_mm2 - b.variance_mm2, v.sum(), 1e-12 + 1e-9 * a.variance_mm2);
     EXPECT_LT((a.axis_variance_mm2 - b.axis_variance_mm2 - v).norm(), 1e-12 + 1e-9 * a.variance_mm2);
     largest = std::max(largest, fd.norm());

@@ -93,6 +93,18 @@ def test_fit_joint_functions_are_the_clis(sim, tmp_path, degree):
         errfield.fit(read_measurements(sim / "grid.csv"), robot=str(sim / "robot.json"), joint_functions=21)
 
 
+@pytest.mark.parametrize("gravity", [True, False])
+def test_fit_gravity_load_is_the_clis(sim, tmp_path, gravity):
+    # The gravity-load terms beside the joint functions (on by default): the CLI's model file.
+    run_cli("fit", "--robot", sim / "robot.json", "--data", sim / "grid.csv", "--method", "kinematic+kriging",
+            "--gravity-load", "on" if gravity else "off", "--out", tmp_path / "cli.json")
+    model = errfield.fit(read_measurements(sim / "grid.csv"), robot=str(sim / "robot.json"),
+                         method="kinematic+kriging", gravity_load=gravity)
+    assert model.to_json().encode() == (tmp_path / "cli.json").read_bytes()
+    functions = json.loads(model.to_json())["joint_error_functions"]
+    assert ("gravity_terms" in functions) == gravity
+
+
 def check_columns(result, csv_path):
     """Every column the binding returns equals the CLI's column of that name (numbers bit for bit)."""
     csv_ = read_csv(csv_path)

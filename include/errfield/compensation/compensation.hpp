@@ -108,6 +108,14 @@ class ErrorField {
   virtual nlohmann::json to_json() const = 0;
   /// One line for people ("distance IDW on x [..] ... base point (..)").
   virtual std::string describe() const = 0;
+  /// The weight each sample has in the prediction at (p, q), in the order of sample_joints(), for
+  /// fields whose prediction is a weighted sum of their samples' values (kriging); empty for the
+  /// others and where the field does not predict.
+  virtual std::vector<double> sample_weights(const Eigen::Vector3d& /*p_mm*/, const robot::JointVector& /*q_deg*/) const {
+    return {};
+  }
+  /// The joints of the samples sample_weights() refers to; empty where it returns none.
+  virtual std::vector<robot::JointVector> sample_joints() const { return {}; }
 };
 
 /// The result of compensating one target.
@@ -238,7 +246,11 @@ class CompensationModel {
   std::optional<CredibleRange> credible_;
   std::optional<Eigen::Vector3d> tool_point_, reflector_;
   std::optional<JointErrorFunctions> joint_functions_;
+  /// The functions' design rows (3 per field sample, at the field's sample joints): what the field's
+  /// prediction takes back from their error near its samples (predict_error); empty without.
+  std::shared_ptr<const Eigen::MatrixXd> function_rows_at_samples_;
   std::vector<std::string> excluded_rows_, notes_;
+  void set_function_rows_at_samples();
 };
 
 /// Unit direction m = (p − base)/|p − base| of eq. 22. Precondition: p != base.

@@ -17,6 +17,16 @@
 /// joint offset. The position error it causes at the tool point is sum_j J_j(q) dq_j, with J_j the
 /// linear part of the calibrated model's geometric Jacobian column j (mm/rad) at q.
 ///
+/// Gravity-load terms (optional, `fit --gravity-load`): a joint also yields under the weight of the
+/// arm beyond it — a torsional compliance loaded by gravity, which depends on several joints at
+/// once, so no function of one angle expresses it. For a point mass m at p, joint j's load is
+/// m g · (z_j × (p − o_j)) (z_j, o_j its axis and origin), so its deflection is a sum, over the
+/// points that carry the arm's masses, of a coefficient times the lever ĝ · (z_j × (p − o_j)),
+/// ĝ = −z of the robot's world frame (a floor-mounted robot's description has z up). The points
+/// are the downstream frame origins and the tool point (GravityLoadTerm); each lever is divided by
+/// its RMS over the fitted poses, so its coefficient (mrad) is on the polynomials' scale and shares
+/// their ridge. A mass between two frame origins is a combination of their two terms.
+///
 /// Fit: ridge least squares on the coefficients (mrad), the ridge chosen by generalized
 /// cross-validation, so that data without such errors leave the functions near zero; once the
 /// field's variogram is known, `fit` refits them by generalized least squares under its covariance
@@ -31,6 +41,7 @@
 #include <Eigen/Core>
 #include <nlohmann/json_fwd.hpp>
 
+#include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/mdh_model.hpp"
 
 namespace errfield {
@@ -46,32 +57,55 @@ struct JointFunctionPrediction {
   Eigen::Vector3d axis_variance_mm2 = Eigen::Vector3d::Zero();
 };
 
+/// One gravity-load term: joint `joint`'s deflection proportional to the gravity lever about its
+/// axis of the origin of KinematicFrames::frames[frame] (7: the tool point).
+struct GravityLoadTerm {
+  int joint = 0;             ///< 0-based: the axis is frames[joint + 1]
+  int frame = 7;             ///< joint + 2 .. 7: the loaded point
+  double scale_m = 1.0;      ///< RMS of the lever over the fitted poses (m); the design uses lever / scale
+  double coefficient_mrad = 0.0;
+};
+
+/// Gravity lever (m) about joint `joint`'s axis of frames[frame]'s origin: ĝ · (z × (p − o)).
+double gravity_lever_m(const robot::KinematicFrames& frames, int joint, int frame);
+
 struct JointErrorFunctions {
   int degree = 0;                    ///< highest Legendre degree (coefficients per joint)
   std::array<double, 6> lo_deg{};    ///< each joint's range over the fitted poses
   std::array<double, 6> hi_deg{};    ///< (lo == hi: no function; the joint did not move, or barely moved the point)
   Eigen::MatrixXd coefficients_mrad; ///< 6 x degree: row j, column k-1 = c_jk
-  /// Covariance of the coefficients (mrad², 6·degree square, joint-major as the design's columns),
+  std::vector<GravityLoadTerm> gravity_terms;  ///< empty: none
+  /// Covariance of the coefficients (mrad², parameter_count() square: the polynomials' joint-major
+  /// as the design's columns, then the gravity terms in their order),
   /// under the field's covariance of the residuals they were fitted to (refit_by_generalized_least_
   /// squares, or set_coefficient_covariance for the ordinary fit); empty: no variance is added.
   Eigen::MatrixXd coefficient_covariance_mrad2;
 
-  /// Angle error of each joint at joints `q_deg` (mrad).
-  Eigen::Matrix<double, 6, 1> angle_error_mrad(const robot::JointVector& q_deg) const;
-  /// Both of the below from one Jacobian of `model` at q (what a prediction needs).
-  JointFunctionPrediction predict(const robot::MdhModel& model, const robot::JointVector& q_deg) const;
+  /// Coefficients in all: 6·degree polynomial ones, then one per gravity term.
+  Eigen::Index parameter_count() const { return 6 * static_cast<Eigen::Index>(degree) + static_cast<Eigen::Index>(gravity_terms.size()); }
+  /// Angle error of each joint at joints `q_deg` (mrad): the polynomials, plus the gravity terms
+  /// (which need the robot's frames) when `model` is given.
+  Eigen::Matrix<double, 6, 1> angle_error_mrad(const robot::JointVector& q_deg, const robot::MdhModel* model = nullptr) const;
+  /// Both of the below from one Jacobian of `model` at q (what a prediction needs). With
+  /// `taken_back` (3 x parameter_count(): the rows a field's prediction at q takes back, the
+  /// field's weights times the design at its samples), the variance is that of (D - taken_back)
+  /// times the coefficients' error: what is left of it after the field's correction.
+  JointFunctionPrediction predict(const robot::MdhModel& model, const robot::JointVector& q_deg,
+                                  const Eigen::MatrixXd* taken_back = nullptr) const;
   /// The position error they cause at `model`'s tool point (robot frame, mm).
   Eigen::Vector3d position_error_mm(const robot::MdhModel& model, const robot::JointVector& q_deg) const;
   /// The variance (mm², per robot-frame axis) their estimation error adds to a prediction at q:
-  /// the diagonal of D cov D', D the 3 x 6·degree design row block at q. Zero without a covariance.
+  /// the diagonal of D cov D', D the 3 x parameter_count() design row block at q. Zero without a covariance.
   Eigen::Vector3d axis_variance_mm2(const robot::MdhModel& model, const robot::JointVector& q_deg) const;
-  /// The 3 x 6·degree block of the design at q: position error (mm) per coefficient (mrad).
-  Eigen::MatrixXd design_rows(const Eigen::Matrix<double, 6, 6>& jacobian, const robot::JointVector& q_deg) const;
-  /// The largest |dq_j| over each joint's range (mrad), sampled: for people.
+  /// The 3 x parameter_count() block of the design at q: position error (mm) per coefficient (mrad).
+  Eigen::MatrixXd design_rows(const robot::KinematicFrames& frames, const robot::JointVector& q_deg) const;
+  Eigen::MatrixXd design_rows(const robot::MdhModel& model, const robot::JointVector& q_deg) const;
+  /// The largest |dq_j| of the polynomials over each joint's range (mrad), sampled: for people.
   double largest_angle_error_mrad() const;
 
   /// {"degree": K, "lo_deg": [6], "hi_deg": [6], "coefficients_mrad": [[K] x 6],
-  ///  "coefficient_covariance_mrad2": [[6K] x 6K] (optional)}
+  ///  "gravity_terms": [{"joint": 1..6, "frame": joint+1..7, "scale_m", "coefficient_mrad"}] (optional),
+  ///  "coefficient_covariance_mrad2": [[P] x P] (optional, P = parameter_count())}
   nlohmann::json to_json() const;
   /// Throws InputError naming `source` and the member.
   static JointErrorFunctions from_json(const nlohmann::json& j, const std::string& source);
@@ -86,7 +120,8 @@ struct JointErrorFunctionFit {
   /// sum |leave-one-pose-out residual|^2 / sum |in-sample residual|^2 of the regression (>= 1): how
   /// much the remaining residuals understate a new pose's (KrigingFieldOptions::value_variance_inflation).
   double leave_one_out_inflation = 1.0;
-  Eigen::MatrixXd design;         ///< 3N x 6·degree (mm per mrad), rows 3i..3i+2 for pose i
+  double largest_gravity_deflection_mrad = 0.0;  ///< largest |gravity terms' dq_j| over the poses
+  Eigen::MatrixXd design;         ///< 3N x parameter_count() (mm per mrad), rows 3i..3i+2 for pose i
   /// (design' design + ridge)^-1, or of the whitened design after refit_by_generalized_least_squares;
   /// empty when no function was fitted
   Eigen::MatrixXd ridge_inverse;
@@ -99,8 +134,9 @@ struct JointErrorFunctionFit {
 /// field's ordinary kriging takes a constant per component). The residuals are spatially correlated, so the
 /// coefficients vary far more than independent errors would say; the field's variance at a new
 /// pose does not contain that, and without it the 95 % region held 90 % of held-out readings
-/// (SIMULATED KR 16, docs/robot.md "Joint error functions"). The field does correct part of the
-/// functions' error near its samples, so the sum is, if anything, cautious.
+/// (SIMULATED KR 16, docs/robot.md "Joint error functions"). The field corrects part of the
+/// functions' error near its samples; CompensationModel::predict_error subtracts what it takes
+/// back (predict's `taken_back`).
 void set_coefficient_covariance(JointErrorFunctionFit& fit, const std::vector<robot::JointVector>& q_deg,
                                 const VariogramModel& field_model);
 
@@ -121,8 +157,12 @@ bool refit_by_generalized_least_squares(JointErrorFunctionFit& fit, const std::v
 
 /// Fits the functions to `residual_mm[i]` (robot frame, the calibrated model's residual at joints
 /// `q_deg[i]`). Throws ArgumentError for degree < 1 or mismatched sizes; fewer poses than
-/// parameters are allowed (the ridge keeps the fit determined).
+/// parameters are allowed (the ridge keeps the fit determined). With `gravity_load`, the gravity-load
+/// terms of every joint that moves the point, for each downstream frame origin and the tool point
+/// whose lever is not negligible (RMS under 2 % of the largest term's: a vertical axis carries
+/// none) nor a copy of an earlier point's (coincident frame origins).
 JointErrorFunctionFit fit_joint_error_functions(const robot::MdhModel& model, const std::vector<robot::JointVector>& q_deg,
-                                                const std::vector<Eigen::Vector3d>& residual_mm, int degree);
+                                                const std::vector<Eigen::Vector3d>& residual_mm, int degree,
+                                                bool gravity_load = false);
 
 }  // namespace errfield::compensation

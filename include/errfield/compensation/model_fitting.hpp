@@ -124,6 +124,13 @@ struct FitOptions {
   /// never raised it by more than 7 % (one set of 40 poses) and kept the 95 % coverage; degrees 10-12
   /// gained more on some sets and lost on others (docs/robot.md, "Joint error functions").
   int joint_function_degree = 8;
+  /// With the joint error functions: also the gravity-load terms (joint_error_functions.hpp), each
+  /// joint's deflection under the weight of the arm beyond it, which depends on several joints.
+  /// Why on: on SIMULATED KR 16 with realistic effects they took 7-18 % off the held-out RMS at
+  /// 40-687 poses (9 % to 18 % with the link masses off the frame origins' lines, which they cannot
+  /// express exactly); they cost up to 2 % on arms whose weight matters little (ER20-C10's stiff
+  /// config, UR5e) (docs/robot.md, "Gravity-load terms").
+  bool gravity_load = true;
   /// Kriging methods: calibrate the predictive variance by leave-one-out (the variance the model
   /// states for a held-out reading, var_mm2 and r95_mm; docs/robot.md "Predictive uncertainty").
   VarianceCalibrationChoice variance_calibration = VarianceCalibrationChoice::automatic;
