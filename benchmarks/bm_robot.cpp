@@ -10,11 +10,18 @@
 // BM_CalibratePositions/125   : registration + position-model calibration on the same points.
 // BM_ReproduceOneRun          : reproduce_paper with runs = 1 (what `errfield reproduce --runs 1`
 //                               computes, without writing files); target < 10 s, on 2 threads.
+// BM_PredictErrorKinematicKriging/{poses}/{degree}: CompensationModel::predict_error of a
+//                               kinematic+kriging model fitted on {poses} SIMULATED KR 16 poses (joint-
+//                               space field; degree 8: the default joint error functions with gravity-
+//                               load terms, their variance less what the field's weights take back;
+//                               0: the field alone): what validate and compensate pay per target.
 // Run: build/benchmarks/bm_robot
 #include <vector>
 
 #include <benchmark/benchmark.h>
 
+#include "errfield/compensation/model_fitting.hpp"
+#include "errfield/robot/builtin_robots.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/reproduction/paper_reproduction.hpp"
 #include "errfield/robot/simulator.hpp"
@@ -152,5 +159,40 @@ void BM_ReproduceOneRun(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_ReproduceOneRun)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(1);
+
+void BM_PredictErrorKinematicKriging(benchmark::State& state) {
+  SimulatorConfig c = SimulatorConfig::paper_default();
+  c.nominal = find_builtin_robot("kr16")->model;
+  const SimulatedRobot robot(c);
+  SimulationRng rng(5);
+  const double lo[6] = {-150, -130, 70, -90, -110, -180}, hi[6] = {150, -30, 150, 90, 110, 180};
+  auto draw = [&](std::size_t n) {
+    std::vector<JointVector> q(n);
+    for (auto& v : q)
+      for (int j = 0; j < 6; ++j) v[j] = rng.uniform(lo[j], hi[j]);
+    return q;
+  };
+  errfield::compensation::MeasurementSet d;
+  d.source = "SIMULATED";
+  d.q_deg = draw(static_cast<std::size_t>(state.range(0)));
+  for (std::size_t i = 0; i < d.q_deg.size(); ++i) {
+    d.id.push_back("p" + std::to_string(i));
+    d.nominal_mm.push_back(forward_position(robot.nominal(), d.q_deg[i]));
+    d.measured_mm.push_back(robot.measure(robot.move(d.q_deg[i], rng), rng));
+  }
+  errfield::compensation::FitOptions o;
+  o.method = errfield::compensation::CompensationMethod::kinematic_kriging;
+  o.space = errfield::compensation::FieldSpace::joint;
+  o.joint_function_degree = static_cast<int>(state.range(1));
+  const errfield::compensation::FitResult fit = errfield::compensation::fit_compensation_model(robot.nominal(), d, o);
+  const std::vector<JointVector> targets = draw(256);
+  std::size_t i = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(fit.model.predict_error(targets[i++ & 255]));
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_PredictErrorKinematicKriging)
+    ->ArgNames({"poses", "degree"})
+    ->ArgsProduct({{300, 700}, {0, 8}})
+    ->Unit(benchmark::kMicrosecond);
 
 }  // namespace

@@ -239,6 +239,38 @@ TEST(Kriging, OrdinaryWeightsSumToOne) {
   }
 }
 
+TEST(Kriging, WeightsOnRequestAreThoseKeepWeightsGives) {
+  const Data d = make_data(70, 33);
+  const auto model = VariogramModel::parse("exp(sill=1,range=20)+nug(0.1)");
+  const auto targets = make_targets(12, 5);
+  for (auto backend : {KrigingBackend::Dense, KrigingBackend::Local}) {
+    KrigingOptions opt;
+    opt.backend = backend;
+    opt.neighbors = 16;
+    const Kriging<P3, double> asked(d.points, d.values, model, opt);
+    opt.keep_weights = true;
+    const Kriging<P3, double> kept(d.points, d.values, model, opt);
+    EXPECT_TRUE(asked.predict(targets).weights.weight.empty());  // not paid for unless asked
+    const auto a = asked.predict_with_weights(targets), k = kept.predict(targets);
+    EXPECT_EQ(a.weights.offset, k.weights.offset);
+    EXPECT_EQ(a.weights.sample, k.weights.sample);
+    EXPECT_EQ(a.weights.weight, k.weights.weight);
+    EXPECT_EQ(a.mean, k.mean);
+    EXPECT_EQ(a.variance, k.variance);
+    // and they are the prediction's: the weighted sum of the values is the mean
+    for (std::size_t t = 0; t < targets.size(); ++t) {
+      double sum = 0.0;
+      for (auto i = a.weights.offset[t]; i < a.weights.offset[t + 1]; ++i) sum += a.weights.weight[i] * d.values[a.weights.sample[i]];
+      EXPECT_NEAR(sum, a.mean[t], 1e-10);
+    }
+  }
+  KrigingOptions sparse;
+  sparse.backend = KrigingBackend::Sparse;
+  const auto compact = VariogramModel::parse("sph(sill=1,range=20)+nug(0.1)");
+  const Kriging<P3, double> k(d.points, d.values, compact, sparse);
+  EXPECT_THROW(k.predict_with_weights(targets), ArgumentError);
+}
+
 TEST(Kriging, SimpleKrigingIsTheGaussianProcessPosterior) {
   // GP posterior with explicit inverse: m + k*' K^-1 (z - m), C(0) - k*' K^-1 k*.
   const Data d = make_data(40, 37);

@@ -290,6 +290,9 @@ const KrigingReport& engine_report(const KrigingEngine& engine);
 const KrigingOptions& engine_options(const KrigingEngine& engine);
 KrigingOutput engine_predict(const KrigingEngine& engine, const Eigen::MatrixXd& embedded,
                              const Eigen::MatrixXd& raw);
+/// engine_predict with the weights for this call (KrigingOptions::keep_weights's form).
+KrigingOutput engine_predict_with_weights(const KrigingEngine& engine, const Eigen::MatrixXd& embedded,
+                                          const Eigen::MatrixXd& raw);
 /// Block kriging: `embedded`/`raw` hold consecutive groups of `points_per_block` points, one group per
 /// block (the same offsets in every group); one prediction per block (dense and local back ends).
 KrigingOutput engine_predict_blocks(const KrigingEngine& engine, const Eigen::MatrixXd& embedded,
@@ -390,6 +393,18 @@ class Kriging {
                           " covariate(s); pass their values at the targets (predict(targets, covariates))");
     Eigen::MatrixXd raw = to_matrix(targets, "target");
     return convert_prediction(detail::engine_predict(*engine_, embed(raw), raw));
+  }
+
+  /// predict(), and the kriging weights of this call's targets (KrigingPrediction::weights, as
+  /// KrigingOptions::keep_weights gives them for every call): what a caller that needs the weights
+  /// now and then asks for, without paying their extra solve on every prediction. Dense and local
+  /// back ends (ArgumentError with the sparse one).
+  KrigingPrediction<V> predict_with_weights(std::span<const L> targets) const {
+    if (covariate_count_ > 0)
+      throw ArgumentError("kriging: the drift has " + std::to_string(covariate_count_) +
+                          " covariate(s); predict_with_weights takes none");
+    Eigen::MatrixXd raw = to_matrix(targets, "target");
+    return convert_prediction(detail::engine_predict_with_weights(*engine_, embed(raw), raw));
   }
 
   /// With external drift: covariates is M x k, row t the covariate values at target t. `labels`

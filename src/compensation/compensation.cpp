@@ -241,9 +241,15 @@ void CompensationModel::set_function_rows_at_samples() {
   if (!joint_functions_ || joint_functions_->coefficient_covariance_mrad2.size() == 0 || !field_) return;
   const std::vector<JointVector> q = field_->sample_joints();
   if (q.empty()) return;
-  auto rows = std::make_shared<Eigen::MatrixXd>(3 * static_cast<Eigen::Index>(q.size()), joint_functions_->parameter_count());
-  for (std::size_t i = 0; i < q.size(); ++i)
-    rows->middleRows<3>(3 * static_cast<Eigen::Index>(i)) = joint_functions_->design_rows(command_model_, q[i]);
+  // Row i: sample i's 3 x P design block, column-major (component fastest), so that the weighted
+  // sum over the samples is one matrix-vector product over contiguous rows.
+  const Eigen::Index p = joint_functions_->parameter_count();
+  auto rows = std::make_shared<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      static_cast<Eigen::Index>(q.size()), 3 * p);
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    const Eigen::MatrixXd block = joint_functions_->design_rows(command_model_, q[i]);
+    rows->row(static_cast<Eigen::Index>(i)) = Eigen::Map<const Eigen::RowVectorXd>(block.data(), 3 * p);
+  }
   function_rows_at_samples_ = std::move(rows);
 }
 
@@ -262,7 +268,9 @@ CompensationModel CompensationModel::with_credible_range(std::optional<CredibleR
 
 ErrorPrediction CompensationModel::predict_error(const JointVector& q_deg) const {
   if (!field_) return {};
-  ErrorPrediction p = field_->predict(forward_position(nominal_model(), q_deg), q_deg);
+  std::vector<double> w;  // the field's weights, when the functions' variance needs them
+  const Eigen::Vector3d at = forward_position(nominal_model(), q_deg);
+  ErrorPrediction p = function_rows_at_samples_ ? field_->predict_with_weights(at, q_deg, w) : field_->predict(at, q_deg);
   if (p.inside_region && credible_) p.credible = credible_->contains(p);
   // The credible range is the field's (its values are what the functions left); the functions are
   // smooth in each joint and clamped beyond the fitted range, so they add no extrapolation.
@@ -271,13 +279,10 @@ ErrorPrediction CompensationModel::predict_error(const JointVector& q_deg) const
     // the functions' error: the variance is that of (D(q) - sum_i w_i F_i) beta's error, with w the
     // field's weights and F_i the design at sample i (the universal-kriging variance's drift term).
     std::optional<Eigen::MatrixXd> taken_back;
-    if (function_rows_at_samples_) {
-      const std::vector<double> w = field_->sample_weights(forward_position(nominal_model(), q_deg), q_deg);
-      if (3 * static_cast<Eigen::Index>(w.size()) == function_rows_at_samples_->rows()) {
-        taken_back = Eigen::MatrixXd::Zero(3, function_rows_at_samples_->cols());
-        for (std::size_t i = 0; i < w.size(); ++i)
-          if (w[i] != 0.0) *taken_back += w[i] * function_rows_at_samples_->middleRows<3>(3 * static_cast<Eigen::Index>(i));
-      }
+    if (function_rows_at_samples_ && static_cast<Eigen::Index>(w.size()) == function_rows_at_samples_->rows()) {
+      const Eigen::RowVectorXd sum =
+          Eigen::Map<const Eigen::RowVectorXd>(w.data(), static_cast<Eigen::Index>(w.size())) * *function_rows_at_samples_;
+      taken_back = Eigen::Map<const Eigen::MatrixXd>(sum.data(), 3, sum.size() / 3);
     }
     const JointFunctionPrediction f = joint_functions_->predict(command_model_, q_deg, taken_back ? &*taken_back : nullptr);
     p.position_error_mm += f.position_error_mm;

@@ -165,13 +165,31 @@ class KrigingField final : public ErrorField {
   }
 
   ErrorPrediction predict(const Eigen::Vector3d& p, const JointVector& q) const override {
+    return predict_weighing(p, q, nullptr);
+  }
+
+  ErrorPrediction predict_with_weights(const Eigen::Vector3d& p, const JointVector& q,
+                                       std::vector<double>& weights) const override {
+    return predict_weighing(p, q, &weights);
+  }
+
+  /// The prediction, and with `weights` the weights of the samples in it (one more triangular
+  /// solve, so only when asked).
+  ErrorPrediction predict_weighing(const Eigen::Vector3d& p, const JointVector& q, std::vector<double>* weights) const {
     ErrorPrediction out;
+    if (weights) weights->clear();
     const std::optional<L> target = target_at(p, q);
     if (!target) {
       out.inside_region = false;
       return out;
     }
-    const auto pred = kriging_.predict(std::span<const L>(&*target, 1));
+    const std::span<const L> at(&*target, 1);
+    const auto pred = weights ? kriging_.predict_with_weights(at) : kriging_.predict(at);
+    if (weights && pred.usable() && pred.weights.offset.size() == 2) {
+      weights->assign(values_.size(), 0.0);
+      for (std::size_t k = pred.weights.offset[0]; k < pred.weights.offset[1]; ++k)
+        (*weights)[pred.weights.sample[k]] += pred.weights.weight[k];
+    }
     if (!pred.usable() || pred.mean.empty()) {
       out.inside_region = false;
       return out;
@@ -195,16 +213,6 @@ class KrigingField final : public ErrorField {
       out.axis_variance_mm2 = Eigen::Vector3d::Constant(field + noise);
     }
     return out;
-  }
-
-  std::vector<double> sample_weights(const Eigen::Vector3d& p, const JointVector& q) const override {
-    const std::optional<L> target = target_at(p, q);
-    if (!target) return {};
-    const auto pred = kriging_.predict(std::span<const L>(&*target, 1));
-    if (!pred.usable() || pred.weights.offset.size() != 2) return {};
-    std::vector<double> w(values_.size(), 0.0);
-    for (std::size_t k = pred.weights.offset[0]; k < pred.weights.offset[1]; ++k) w[pred.weights.sample[k]] += pred.weights.weight[k];
-    return w;
   }
 
   std::vector<JointVector> sample_joints() const override { return samples_.joints_deg; }
@@ -303,8 +311,6 @@ class KrigingField final : public ErrorField {
     k.nugget = o.nugget_is_measurement_error ? NuggetTreatment::MeasurementError : NuggetTreatment::MicroScale;
     k.threads = 1;
     k.duplicates = DuplicatePolicy::Average;
-    // sample_weights(): N doubles per single-target prediction, from the solve the variance needs anyway.
-    k.keep_weights = true;
     return k;
   }
 

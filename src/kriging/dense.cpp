@@ -84,12 +84,12 @@ void KrigingEngine::setup_dense() {
 }
 
 KrigingOutput KrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
-                                           const Eigen::VectorXd& block_weights) const {
+                                           const Eigen::VectorXd& block_weights, bool with_weights) const {
   const Eigen::Index group = std::max<Eigen::Index>(1, block_weights.size());
   const Eigen::Index n = points_.cols(), m = embedded.cols() / group, p = drift_terms_;
   // blocks: a batch's block points share the workspace of a batch of points
   const Eigen::Index batch = std::max<Eigen::Index>(1, static_cast<Eigen::Index>(options_.target_batch) / group);
-  const bool want_var = options_.compute_variance, want_w = options_.keep_weights;
+  const bool want_var = options_.compute_variance, want_w = options_.keep_weights || with_weights;
   const double c00 = block_variance(embedded, block_weights);      // the target's own variance (a block's average)
   const double zero_lag = target_variance();              // C(0) between a sample and a target point
   const Eigen::MatrixXd f0_all = block_drift_matrix(raw, block_weights);  // p x M (validated before the parallel region)

@@ -464,7 +464,7 @@ void KrigingEngine::add_simple_mean(Eigen::MatrixXd& mean) const {
 }
 
 KrigingOutput KrigingEngine::predict(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
-                                     const Eigen::VectorXd& block_weights) const {
+                                     const Eigen::VectorXd& block_weights, bool with_weights) const {
   const Eigen::Index group = std::max<Eigen::Index>(1, block_weights.size());
   if (embedded.rows() != dimension_)
     throw ArgumentError("kriging: targets have " + std::to_string(embedded.rows()) + " coordinates; samples have " +
@@ -477,10 +477,12 @@ KrigingOutput KrigingEngine::predict(const Eigen::MatrixXd& embedded, const Eige
                         std::to_string(group));
   if (group > 1 && options_.backend == KrigingBackend::Sparse)
     throw ArgumentError("kriging: block kriging is offered by the dense and local back ends, not the sparse one");
+  if (with_weights && options_.backend == KrigingBackend::Sparse)
+    throw ArgumentError("kriging: weights are offered by the dense and local back ends, not the sparse one (its weights are dense)");
   if (!report_.usable()) return unusable_output();
   switch (options_.backend) {
-    case KrigingBackend::Dense: return predict_dense(embedded, raw, block_weights);
-    case KrigingBackend::Local: return predict_local(embedded, raw, false, block_weights);
+    case KrigingBackend::Dense: return predict_dense(embedded, raw, block_weights, with_weights);
+    case KrigingBackend::Local: return predict_local(embedded, raw, false, block_weights, with_weights);
     case KrigingBackend::Sparse: return predict_sparse(embedded, raw);
   }
   return unusable_output();
@@ -610,6 +612,10 @@ Eigen::MatrixXd append_covariates(Eigen::MatrixXd raw, const Eigen::MatrixXd& co
 }
 KrigingOutput engine_predict(const KrigingEngine& engine, const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) {
   return engine.predict(embedded, raw);
+}
+KrigingOutput engine_predict_with_weights(const KrigingEngine& engine, const Eigen::MatrixXd& embedded,
+                                          const Eigen::MatrixXd& raw) {
+  return engine.predict(embedded, raw, Eigen::VectorXd(), true);
 }
 KrigingOutput engine_predict_blocks(const KrigingEngine& engine, const Eigen::MatrixXd& embedded,
                                     const Eigen::MatrixXd& raw, const Eigen::VectorXd& block_weights) {

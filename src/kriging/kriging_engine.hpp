@@ -48,8 +48,10 @@ class KrigingEngine {
   /// block); each target is the block's weighted average: covariances and drift averaged over its
   /// points, the block-to-block covariance from the first group (translation invariant) without
   /// the nugget (micro-scale variation averages out over a block, as gstat has it). Dense and local.
+  /// `with_weights`: the weights too for this call, as options().keep_weights gives them (dense and
+  /// local back ends).
   KrigingOutput predict(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
-                        const Eigen::VectorXd& block_weights = Eigen::VectorXd()) const;
+                        const Eigen::VectorXd& block_weights = Eigen::VectorXd(), bool with_weights = false) const;
   KrigingOutput leave_one_out() const;
   KrigingOutput k_fold(int folds, std::uint64_t seed) const;
 
@@ -76,9 +78,10 @@ class KrigingEngine {
   double target_zero_covariance() const { return target_variance(); }
   // back ends
   KrigingOutput predict_dense(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
-                              const Eigen::VectorXd& block_weights) const;
+                              const Eigen::VectorXd& block_weights, bool with_weights = false) const;
   KrigingOutput predict_local(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
-                              bool leave_one_out, const Eigen::VectorXd& block_weights = Eigen::VectorXd()) const;
+                              bool leave_one_out, const Eigen::VectorXd& block_weights = Eigen::VectorXd(),
+                              bool with_weights = false) const;
   // Block kriging: the weighted mean over the first group's pairs of points of their covariance
   // (the structured sill at coincident points), and the drift matrix averaged over each group
   // (p x M/g). Without weights: the target's point variance and the plain drift matrix.

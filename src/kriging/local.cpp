@@ -61,11 +61,12 @@ std::size_t neighbours_that_fit(double budget, int threads, double p, double com
 }  // namespace
 
 KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
-                                           bool leave_one_out, const Eigen::VectorXd& block_weights) const {
+                                           bool leave_one_out, const Eigen::VectorXd& block_weights,
+                                           bool with_weights) const {
   const Eigen::Index group = std::max<Eigen::Index>(1, block_weights.size());
   const Eigen::Index m = embedded.cols() / group, p = drift_terms_, comps = components_;
   const bool want_var = options_.compute_variance || leave_one_out;
-  const bool want_w = options_.keep_weights && !leave_one_out;
+  const bool want_w = (options_.keep_weights || with_weights) && !leave_one_out;
   const double c00 = block_variance(embedded, block_weights);  // the target's own variance (a block's average)
   const double zero_lag = target_variance();          // C(0) between a sample and a target point
   // Blocks: the neighbours of the block's centre (the mean of its points), as gstat does.

@@ -73,7 +73,8 @@ TEST_F(JointFunctionsCli, TheModelAddsThemAndTheirVarianceThroughTheCalibratedJa
     // design at its sample k. The weights are those of the field's prediction: they reproduce it
     // from the stored sample values.
     const Eigen::Vector3d p_nominal = robot::forward_position(m.nominal_model(), q[i]);
-    const std::vector<double> w = m.field()->sample_weights(p_nominal, q[i]);
+    std::vector<double> w;
+    m.field()->predict_with_weights(p_nominal, q[i], w);
     const std::vector<robot::JointVector> at = m.field()->sample_joints();
     ASSERT_EQ(w.size(), at.size());
     ASSERT_EQ(w.size(), j["field"]["values"].size());

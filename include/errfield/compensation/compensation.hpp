@@ -108,13 +108,15 @@ class ErrorField {
   virtual nlohmann::json to_json() const = 0;
   /// One line for people ("distance IDW on x [..] ... base point (..)").
   virtual std::string describe() const = 0;
-  /// The weight each sample has in the prediction at (p, q), in the order of sample_joints(), for
-  /// fields whose prediction is a weighted sum of their samples' values (kriging); empty for the
-  /// others and where the field does not predict.
-  virtual std::vector<double> sample_weights(const Eigen::Vector3d& /*p_mm*/, const robot::JointVector& /*q_deg*/) const {
-    return {};
+  /// predict(), and the weight each sample has in that prediction, in the order of sample_joints(),
+  /// for fields whose prediction is a weighted sum of their samples' values (kriging); `weights` is
+  /// left empty by the others and where the field does not predict.
+  virtual ErrorPrediction predict_with_weights(const Eigen::Vector3d& p_mm, const robot::JointVector& q_deg,
+                                               std::vector<double>& weights) const {
+    weights.clear();
+    return predict(p_mm, q_deg);
   }
-  /// The joints of the samples sample_weights() refers to; empty where it returns none.
+  /// The joints of the samples predict_with_weights() weighs; empty for fields without weights.
   virtual std::vector<robot::JointVector> sample_joints() const { return {}; }
 };
 
@@ -246,9 +248,10 @@ class CompensationModel {
   std::optional<CredibleRange> credible_;
   std::optional<Eigen::Vector3d> tool_point_, reflector_;
   std::optional<JointErrorFunctions> joint_functions_;
-  /// The functions' design rows (3 per field sample, at the field's sample joints): what the field's
-  /// prediction takes back from their error near its samples (predict_error); empty without.
-  std::shared_ptr<const Eigen::MatrixXd> function_rows_at_samples_;
+  /// The functions' design at the field's samples (row i: sample i's 3 x P block, column-major):
+  /// what the field's prediction takes back from their error near its samples (predict_error);
+  /// empty without.
+  std::shared_ptr<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> function_rows_at_samples_;
   std::vector<std::string> excluded_rows_, notes_;
   void set_function_rows_at_samples();
 };
