@@ -474,11 +474,6 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
       fail_model(source, "member \"joint_error_functions\": only kinematic+kriging models carry joint error functions; "
                          "method \"" + std::string(method_name(method)) + "\" has none; refit the model with 'errfield fit'");
     model.joint_functions_ = JointErrorFunctions::from_json(j["joint_error_functions"], source);
-    if (model.joint_functions_->coefficient_covariance_mrad2.size() > 0 &&
-        model.joint_functions_->coefficient_covariance_mrad2.rows() != model.joint_functions_->parameter_count())
-      fail_model(source, "member \"joint_error_functions.coefficient_covariance_mrad2\": " +
-                             std::to_string(model.joint_functions_->coefficient_covariance_mrad2.rows()) + " rows for " +
-                             std::to_string(model.joint_functions_->parameter_count()) + " coefficients");
     model.set_function_rows_at_samples();
   }
   if (j.contains("data_joints_deg")) {
