@@ -164,7 +164,8 @@ void add_fit_command(CLI::App& app) {
                   "kinematic+kriging with --joint-functions: on also fits each joint's deflection under the weight of "
                   "the arm beyond it (a coefficient per joint and loaded point: the frame origins beyond the joint and "
                   "the tool point, times its gravity lever about the joint's axis, gravity along -z of the robot's "
-                  "world frame), which depends on several joints at once, so no function of one angle expresses it; "
+                  "world frame: a robot on a wall or ceiling needs that rotation in its JSON's base), which depends on "
+                  "several joints at once, so no function of one angle expresses it; "
                   "off = the one-joint functions only; docs/robot.md says which data decided the default")
       ->check(CLI::IsMember({"on", "off"}))
       ->capture_default_str();
