@@ -175,13 +175,16 @@ std::vector<GravityLoadTerm> gravity_terms_over(const std::vector<robot::Kinemat
   return terms;
 }
 
+/// The gravity terms' angle error of each joint (mrad) at the pose `frames` describe.
+Eigen::Matrix<double, 6, 1> gravity_deflection_mrad(const JointErrorFunctions& f, const robot::KinematicFrames& frames) {
+  Eigen::Matrix<double, 6, 1> dq = Eigen::Matrix<double, 6, 1>::Zero();
+  for (const GravityLoadTerm& t : f.gravity_terms) dq[t.joint] += t.coefficient_mrad * gravity_lever_m(frames, t.joint, t.frame) / t.scale_m;
+  return dq;
+}
+
 double largest_gravity_deflection(const JointErrorFunctions& f, const std::vector<robot::KinematicFrames>& frames) {
   double largest = 0.0;
-  for (const robot::KinematicFrames& at : frames) {
-    Eigen::Matrix<double, 6, 1> dq = Eigen::Matrix<double, 6, 1>::Zero();
-    for (const GravityLoadTerm& t : f.gravity_terms) dq[t.joint] += t.coefficient_mrad * gravity_lever_m(at, t.joint, t.frame) / t.scale_m;
-    largest = std::max(largest, dq.cwiseAbs().maxCoeff());
-  }
+  for (const robot::KinematicFrames& at : frames) largest = std::max(largest, gravity_deflection_mrad(f, at).cwiseAbs().maxCoeff());
   return largest;
 }
 
@@ -198,7 +201,7 @@ Eigen::Matrix<double, 6, 1> JointErrorFunctions::angle_error_mrad(const robot::J
   if (model && !gravity_terms.empty()) {
     robot::KinematicFrames frames;
     robot::forward_kinematics_all(*model, q_deg, frames);
-    for (const GravityLoadTerm& t : gravity_terms) dq[t.joint] += t.coefficient_mrad * gravity_lever_m(frames, t.joint, t.frame) / t.scale_m;
+    dq += gravity_deflection_mrad(*this, frames);
   }
   return dq;
 }
