@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
@@ -124,11 +126,11 @@ Eigen::MatrixXd mapped_by_anisotropy(const Eigen::MatrixXd& x, const Anisotropy&
   return out;
 }
 
-/// Prior covariance of the field plus the constant mean's variance, between the rows of a and b.
 // Components of a reading in VarianceReductionOptions::linear_term (3 for a position): their
 // per-candidate systems live on the stack up to this size.
 constexpr int kMaxLinearComponents = 8;
 
+/// Prior covariance of the field plus the constant mean's variance, between the rows of a and b.
 struct PriorCovariance {
   VariogramModel isotropic;
   double field_variance = 0.0;  ///< structured sill (nugget excluded): C(0) of the noise-free field
@@ -144,6 +146,172 @@ struct PriorCovariance {
       for (Eigen::Index i = 0; i < a.rows(); ++i) k(i, j) = (*this)((a.row(i) - b.row(j)).norm());
     return k;
   }
+};
+
+/// The linear term beside the field (VarianceReductionOptions::LinearTerm) under the joint model
+/// reading = D beta + field + noise. The field's kriging at a location takes back the part of the
+/// term's error that its neighbours' readings share: what is left of the design there is
+/// D~_c = D_c - k(c,S) K_S^-1 D_S over the set S of measured and picked locations (the drift part of
+/// universal kriging's variance), and a reading at b informs beta by D~_b alone. Kept current here:
+/// D~ at every candidate and beta's covariance A; each member's rows are kept as they were when it
+/// joined (see variance_sum). Rows are component-major: component k of candidate c is row k·C + c,
+/// of member i row k·S_max + i.
+class LinearTermPosterior {
+ public:
+  LinearTermPosterior(const VarianceReductionOptions::LinearTerm& term, Eigen::Index candidates, Eigen::Index set_capacity)
+      : k_(term.components), c_(candidates), capacity_(set_capacity) {
+    const Eigen::Index p = term.covariance.rows();
+    // A = F F', F from A's eigenvectors (A may be singular: a coefficient the data barely see).
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(0.5 * (term.covariance + term.covariance.transpose()));
+    factor_ = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+    covariance_ = factor_ * factor_.transpose();
+    residual_ = component_major(term.candidate_rows, c_);
+    member_rows_ = Eigen::MatrixXd::Zero(k_ * capacity_, p);
+    refresh();
+  }
+
+  /// Conditions D~ on the M measured locations, whose design rows are `measured_rows` (interleaved,
+  /// as LinearTerm's): `llt` factors K_DD + noise I, `w` is L^-1 K_DC (M x C) and `inverse`
+  /// (K_DD + noise I)^-1. A measured location's own rows are those left given the other measured
+  /// ones, (K^-1 D)_i / (K^-1)_ii.
+  void condition_on_measured(const Eigen::MatrixXd& measured_rows, const Eigen::LLT<Eigen::MatrixXd>& llt,
+                             const Eigen::MatrixXd& w, const Eigen::MatrixXd& inverse) {
+    const Eigen::Index m = w.rows();
+    const Eigen::MatrixXd design = component_major(measured_rows, m);
+    for (Eigen::Index k = 0; k < k_; ++k) {
+      const auto d = design.middleRows(k * m, m);
+      residual_.middleRows(k * c_, c_).noalias() -= w.transpose() * llt.matrixL().solve(Eigen::MatrixXd(d));
+      member_rows_.middleRows(k * capacity_, m) = inverse.diagonal().cwiseInverse().asDiagonal() * (inverse * d);
+    }
+    refresh();
+  }
+
+  /// Per candidate not taken: how much a reading there (field variance var_c + noise) lowers the
+  /// term's mean variance tr(A Q~) / K, Q~ the mean of D~_c' D~_c over the candidates, through A
+  /// alone: tr((var + noise + G D~')^-1 G Q~ G') / K with G = D~_c A.
+  Eigen::VectorXd reductions(const Eigen::VectorXd& var_c, double noise, const std::vector<char>& taken) const {
+    Eigen::VectorXd out = Eigen::VectorXd::Zero(c_);
+    using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxLinearComponents, kMaxLinearComponents>;
+#pragma omp parallel for schedule(static)
+    for (Eigen::Index c = 0; c < c_; ++c) {
+      if (taken[static_cast<std::size_t>(c)]) continue;
+      Small m(k_, k_), t(k_, k_);
+      for (Eigen::Index i = 0; i < k_; ++i)
+        for (Eigen::Index j = 0; j < k_; ++j) {
+          m(i, j) = residual_a_.row(i * c_ + c).dot(residual_.row(j * c_ + c));
+          t(i, j) = residual_aq_.row(i * c_ + c).dot(residual_a_.row(j * c_ + c));
+        }
+      m.diagonal().array() += std::max(var_c[c], 0.0) + noise;
+      out[c] = m.llt().solve(t).trace() / static_cast<double>(k_);
+    }
+    return out;
+  }
+
+  /// After picking candidate b as member `s` of the set: `reading_variance` is its field variance
+  /// before the pick plus the noise, and alpha_c = Σ(c, b) / reading_variance the field's weight of
+  /// the reading at every candidate.
+  void pick(Eigen::Index b, double reading_variance, const Eigen::VectorXd& alpha, Eigen::Index s) {
+    const Eigen::Index p = covariance_.rows();
+    Eigen::MatrixXd d(k_, p);  // D~_b, before the pick
+    for (Eigen::Index k = 0; k < k_; ++k) d.row(k) = residual_.row(k * c_ + b);
+    for (Eigen::Index k = 0; k < k_; ++k) member_rows_.row(k * capacity_ + s) = d.row(k);
+    // A <- A - G' H, H = (reading_variance I + G D~_b')^-1 G, G = D~_b A, in square-root form: with
+    // Z = D~_b F, A's new factor is F U^-1, U'U = I + Z'Z / reading_variance. Subtracting G' H from
+    // A itself lost A's positive definiteness within 15 picks on a 40-pose fit, whose coefficient
+    // covariance spans 20 orders of magnitude, and the plan's predictions turned negative.
+    const Eigen::MatrixXd z = d * factor_;
+    const Eigen::MatrixXd g = z * factor_.transpose();
+    Eigen::MatrixXd m = z * z.transpose();
+    m.diagonal().array() += reading_variance;
+    const Eigen::MatrixXd h = m.llt().solve(g);
+    Eigen::MatrixXd n = z.transpose() * z / reading_variance;
+    n.diagonal().array() += 1.0;
+    const Eigen::LLT<Eigen::MatrixXd> n_llt(n);
+    n_llt.matrixU().solveInPlace<Eigen::OnTheRight>(factor_);
+    covariance_.noalias() = factor_ * factor_.transpose();
+    // D~ <- D~ - alpha D~_b per component. D~ A, Q~ and D~ A Q~ follow by the same low-rank
+    // changes (recomputing them took three K·C x p x p products per pick, 13.5 s of the 10,000-
+    // candidate benchmark); every kRefreshPicks picks they are recomputed whole, so the rounding
+    // of the updates does not build up.
+    const double alpha2 = alpha.squaredNorm() / static_cast<double>(c_);
+    Eigen::MatrixXd v(k_, p);  // v_k = alpha' D~_k / C, before the change
+    for (Eigen::Index k = 0; k < k_; ++k) v.row(k) = alpha.transpose() * residual_.middleRows(k * c_, c_) / static_cast<double>(c_);
+    // Q~ <- Q~ + dQ, dQ = sum_k -(v_k' d_k + d_k' v_k) + |alpha|^2 / C d_k' d_k.
+    const Eigen::MatrixXd dq = -v.transpose() * d - d.transpose() * v + alpha2 * d.transpose() * d;
+    const Eigen::MatrixXd g_gram = g * gram_, h_gram = h * gram_;
+    // The components' blocks are disjoint: one thread each, the same sums whatever the threads.
+#pragma omp parallel for schedule(static)
+    for (Eigen::Index k = 0; k < k_; ++k) {
+      auto residual = residual_.middleRows(k * c_, c_);
+      auto residual_a = residual_a_.middleRows(k * c_, c_);
+      auto residual_aq = residual_aq_.middleRows(k * c_, c_);
+      residual.noalias() -= alpha * d.row(k);
+      // (D~ - alpha d) (A - G' H) = D~ A - alpha g_k - (D~_new G') H.
+      const Eigen::MatrixXd lever = residual * g.transpose();  // C x K
+      residual_a.noalias() -= alpha * g.row(k);
+      residual_a.noalias() -= lever * h;
+      // Then (D~ A)_new Q~_new = [D~ A Q~ - alpha g_k Q~ - lever H Q~] + (D~ A)_new dQ, and dQ has
+      // rank 2K at most: (D~ A)_new dQ = -(G_new v') d - (G_new d')(v - |alpha|^2 / C d).
+      residual_aq.noalias() -= alpha * g_gram.row(k);
+      residual_aq.noalias() -= lever * h_gram;
+      const Eigen::MatrixXd on_v = residual_a * v.transpose(), on_d = residual_a * d.transpose();
+      residual_aq.noalias() -= on_v * d;
+      residual_aq.noalias() -= on_d * (v - alpha2 * d);
+    }
+    gram_ += dq;
+    if (++picks_ % kRefreshPicks == 0) refresh();
+  }
+
+  /// Sum over the candidates not picked of tr(D~_c A D~_c'), and over the members counted (the
+  /// first `measured_counted` measured ones and the `picked` picks after the `measured` ones) of
+  /// tr(R_i A R_i') with R_i a member's rows as kept when it joined: a pick's D~ given the members
+  /// before it, a measured location's given the other measured ones. A member's rows are not
+  /// updated by later picks: the leave-one-out rows (K_S^-1 D_S)_i / (K_S^-1)_ii over the whole
+  /// set came out hundreds of times too large on a 40-pose fit whose K_S was near singular (a
+  /// Gaussian model of range 10^5 degrees), where the kept rows stay bounded; what later picks
+  /// would take back of a member's term is left out, a slight overstatement.
+  double variance_sum(const std::vector<Eigen::Index>& set_of_candidate, Eigen::Index measured, Eigen::Index measured_counted,
+                      Eigen::Index picked) const {
+    const Eigen::VectorXd per_row = (residual_a_.array() * residual_.array()).rowwise().sum();
+    double sum = 0.0;
+    for (Eigen::Index c = 0; c < c_; ++c)
+      if (set_of_candidate[static_cast<std::size_t>(c)] < 0)
+        for (Eigen::Index k = 0; k < k_; ++k) sum += per_row[k * c_ + c];
+    auto member = [&](Eigen::Index i) {
+      for (Eigen::Index k = 0; k < k_; ++k) sum += member_rows_.row(k * capacity_ + i) * covariance_ * member_rows_.row(k * capacity_ + i).transpose();
+    };
+    for (Eigen::Index i = 0; i < measured_counted; ++i) member(i);
+    for (Eigen::Index i = measured; i < measured + picked; ++i) member(i);
+    return sum;
+  }
+
+ private:
+  // Interleaved rows (component k of location i at row K·i + k) to component-major.
+  Eigen::MatrixXd component_major(const Eigen::MatrixXd& rows, Eigen::Index locations) const {
+    Eigen::MatrixXd out(rows.rows(), rows.cols());
+    for (Eigen::Index i = 0; i < locations; ++i)
+      for (Eigen::Index k = 0; k < k_; ++k) out.row(k * locations + i) = rows.row(k_ * i + k);
+    return out;
+  }
+  void refresh() {
+    residual_a_.noalias() = residual_ * covariance_;
+    gram_.noalias() = residual_.transpose() * residual_;
+    gram_ /= static_cast<double>(c_);
+    residual_aq_.noalias() = residual_a_ * gram_;
+  }
+  static constexpr int kRefreshPicks = 64;
+
+  // Row-major: a candidate's K rows are read one by one in its K x K systems.
+  using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  Eigen::Index k_, c_, capacity_;
+  Eigen::MatrixXd factor_;       // F, A = F F'
+  Eigen::MatrixXd covariance_;   // A, p x p
+  RowMajorMatrix residual_;      // D~_c, K·C x p
+  RowMajorMatrix residual_a_;    // D~_c A
+  Eigen::MatrixXd gram_;         // Q~ = mean over the candidates of D~_c' D~_c (components summed)
+  RowMajorMatrix residual_aq_;   // D~_c A Q~
+  Eigen::MatrixXd member_rows_;  // each member's rows as kept when it joined, K·S_max x p
+  long picks_ = 0;
 };
 
 }  // namespace
@@ -208,10 +376,11 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
   Eigen::VectorXd var_c = Eigen::VectorXd::Constant(C, k(0.0));  // Σ(c, c)
   Eigen::MatrixXd w_c;  // M x C, kept for the candidate-candidate covariances of later picks
   Eigen::MatrixXd measured_inverse;  // (K_DD + noise I)^-1, for the leave-one-out variances below
+  Eigen::LLT<Eigen::MatrixXd> llt;
   if (xd.rows() > 0) {
     Eigen::MatrixXd kdd = k.between(xd, xd);
     kdd.diagonal().array() += noise;
-    const Eigen::LLT<Eigen::MatrixXd> llt(kdd);
+    llt.compute(kdd);
     if (llt.info() != Eigen::Success)
       throw ArgumentError("the measured locations' covariance is not positive definite under " + model.to_string());
     w_c = llt.matrixL().solve(k.between(xd, xc));
@@ -238,18 +407,28 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
     x_set.topRows(M) = xd;
   }
   std::vector<Eigen::Index> set_of_candidate(static_cast<std::size_t>(C), -1);  // a pick's index in S
-  auto loo = [&](Eigen::Index i) { return std::max(1.0 / k_inverse(i, i) - noise, 0.0); };
+  // A member's variance can only fall as readings are added: at most what it was when the member
+  // joined (a pick: its variance before its pick; a measured location: given the other measured
+  // ones). The bordered inverse's rounding breaks that where K_S is near singular (a Gaussian
+  // model of range 10^5 degrees fitted on 40 poses gave (K_S^-1)_ii of either sign, and the
+  // prediction jumped by 20 % between two picks); the cap keeps what exact arithmetic guarantees.
+  std::vector<double> member_cap(static_cast<std::size_t>(S_max), 0.0);
+  for (Eigen::Index i = 0; i < M; ++i) member_cap[static_cast<std::size_t>(i)] = std::max(1.0 / measured_inverse(i, i) - noise, 0.0);
+  auto loo = [&](Eigen::Index i) {
+    const double cap = member_cap[static_cast<std::size_t>(i)];
+    return k_inverse(i, i) > 0.0 ? std::clamp(1.0 / k_inverse(i, i) - noise, 0.0, cap) : cap;
+  };
   // A new reading's error variance, (field + nugget) times the local scale, averaged over every
   // candidate (and measured location): the pool as a whole, which the poses asked for later
   // resemble. Averaged over the candidates not picked alone it was biased low after a greedy
   // batch, which leaves the candidates whose variance it did not need to reduce.
   std::vector<char> taken(static_cast<std::size_t>(C), 0);
   const double scale_all = (scale_c.sum() + scale_e.sum()) / static_cast<double>(C + E);
-  // The linear term's coefficient covariance (updated with each pick) and the mean of D_c' D_c.
+  // The linear term, conditioned on the measured locations (LinearTermPosterior).
   const auto& lin = options.linear_term;
   const bool linear = lin.covariance.size() > 0;
   const Eigen::Index K = linear ? lin.components : 1;
-  Eigen::MatrixXd lin_cov, lin_q;
+  std::optional<LinearTermPosterior> linear_posterior;
   if (linear) {
     const Eigen::Index p = lin.covariance.rows();
     if (K < 1 || K > kMaxLinearComponents || lin.covariance.cols() != p || lin.candidate_rows.rows() != K * C || lin.candidate_rows.cols() != p ||
@@ -259,18 +438,13 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
                           std::to_string(C) + " candidate rows of p columns, got " + std::to_string(lin.covariance.rows()) +
                           " x " + std::to_string(lin.covariance.cols()) + " and " + std::to_string(lin.candidate_rows.rows()) +
                           " x " + std::to_string(lin.candidate_rows.cols()));
-    lin_cov = lin.covariance;
-    lin_q = lin.candidate_rows.transpose() * lin.candidate_rows / static_cast<double>(C);
+    if (lin.measured_rows.rows() != K * M || (M > 0 && lin.measured_rows.cols() != p) || !lin.measured_rows.allFinite())
+      throw ArgumentError("linear_term.measured_rows: expected " + std::to_string(K) + " x " + std::to_string(M) +
+                          " finite rows of " + std::to_string(p) + " columns (the term's design at the measured locations), got " +
+                          std::to_string(lin.measured_rows.rows()) + " x " + std::to_string(lin.measured_rows.cols()));
+    linear_posterior.emplace(lin, C, S_max);
+    if (M > 0) linear_posterior->condition_on_measured(lin.measured_rows, llt, w_c, measured_inverse);
   }
-  // G = D A and G Q for every candidate, kept current through each pick's rank-K update of A
-  // (recomputing them was two C K x p x p products per pick: 9 of the 10,000-candidate benchmark's
-  // seconds).
-  Eigen::MatrixXd g_all, gq_all;
-  if (linear) {
-    g_all = lin.candidate_rows * lin_cov;
-    gq_all = g_all * lin_q;
-  }
-  auto linear_mse = [&] { return linear ? (lin_cov * lin_q).trace() / static_cast<double>(K) : 0.0; };
   auto mse = [&] {
     double sum = 0.0;
     for (Eigen::Index c = 0; c < C; ++c) {
@@ -278,7 +452,9 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
       sum += scale_c[c] * (i >= 0 ? loo(i) : std::max(var_c[c], 0.0));
     }
     for (Eigen::Index e = 0; e < E; ++e) sum += scale_e[e] * loo(e);
-    return sum / static_cast<double>(C + E) + scale_all * nugget + linear_mse();
+    if (linear_posterior)
+      sum += linear_posterior->variance_sum(set_of_candidate, M, E, S - M) / static_cast<double>(K);
+    return sum / static_cast<double>(C + E) + scale_all * nugget;
   };
   plan.predicted_mse.push_back(xd.rows() > 0 ? mse() : std::numeric_limits<double>::quiet_NaN());
 
@@ -317,22 +493,11 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
       Eigen::VectorXd reduction(C);
 #pragma omp parallel for schedule(static)
       for (Eigen::Index c = 0; c < C; ++c) reduction[c] = (cross.col(c).array().square() * scale_r.array()).sum();
-      // The linear term's reduction of the mean variance over the candidates (per component,
-      // times the references: the field's reduction is summed over them), each candidate alone.
-      Eigen::VectorXd linear_reduction = Eigen::VectorXd::Zero(C);
-      if (linear) {
-        // Each candidate's K x K system: reduction tr((S + G D')^-1 G Q G').
-        using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxLinearComponents, kMaxLinearComponents>;
-#pragma omp parallel for schedule(static)
-        for (Eigen::Index c = 0; c < C; ++c) {
-          if (taken[static_cast<std::size_t>(c)]) continue;
-          const auto g = g_all.middleRows(K * c, K);
-          Small m = g * lin.candidate_rows.middleRows(K * c, K).transpose();
-          m.diagonal().array() += std::max(var_c[c], 0.0) + noise;
-          const Small t = gq_all.middleRows(K * c, K) * g.transpose();
-          linear_reduction[c] = m.llt().solve(t).trace() * static_cast<double>(R) / static_cast<double>(K);
-        }
-      }
+      // The linear term's reduction of its mean variance over the candidates, times the
+      // references (the field's reduction is summed over them), each candidate alone.
+      const Eigen::VectorXd linear_reduction = linear_posterior
+                                                   ? Eigen::VectorXd(linear_posterior->reductions(var_c, noise, taken) * static_cast<double>(R))
+                                                   : Eigen::VectorXd::Zero(C);
       // Eligible under the spacing floor: at least the floor's fraction of the largest distance.
       double min_spacing2 = -1.0;
       if (nearest2_spacing.size() > 0) {
@@ -369,28 +534,15 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
       for (Eigen::Index i = 0; i < S; ++i) b[i] = k((x_set.row(i) - xc.row(best)).norm());
       const Eigen::VectorXd a = k_inverse.topLeftCorner(S, S) * b;
       const double schur = k(0.0) + noise - b.dot(a);
+      // The linear term sees the pick's reading with the field's variance before it.
+      if (linear_posterior) linear_posterior->pick(best, denominator * denominator, uc / denominator, S);
       k_inverse.topLeftCorner(S, S).noalias() += (a / schur) * a.transpose();
       k_inverse.block(0, S, S, 1) = -a / schur;
       k_inverse.block(S, 0, 1, S) = (-a / schur).transpose();
       k_inverse(S, S) = 1.0 / schur;
       x_set.row(S) = xc.row(best);
+      member_cap[static_cast<std::size_t>(S)] = std::max(var_c[best], 0.0);
       set_of_candidate[static_cast<std::size_t>(best)] = S++;
-    }
-    if (linear) {
-      // beta's covariance given the pick (before var_c is updated: the pick's reading has the
-      // field's variance as it was before it).
-      // A <- A - G_b' H with H = M^-1 G_b, M = S + G_b D_b'; then D A and D A Q follow by the
-      // same rank-K update: G <- G - (D G_b') H.
-      const auto d = lin.candidate_rows.middleRows(K * best, K);
-      const Eigen::MatrixXd g = g_all.middleRows(K * best, K);
-      Eigen::MatrixXd m = g * d.transpose();
-      m.diagonal().array() += std::max(var_c[best], 0.0) + noise;
-      const Eigen::MatrixXd h = m.llt().solve(g);
-      lin_cov -= g.transpose() * h;
-      lin_cov = 0.5 * (lin_cov + lin_cov.transpose());
-      const Eigen::MatrixXd t = lin.candidate_rows * g.transpose();
-      g_all.noalias() -= t * h;
-      gq_all.noalias() -= t * (h * lin_q);
     }
     var_c -= uc.cwiseAbs2();
     u_c.push_back(uc);

@@ -183,64 +183,142 @@ TEST(VarianceReduction, GreedyPicksAndPredictionsMatchABruteForcePosterior) {
     EXPECT_NEAR(whole.predicted_mse[q], whole_mse(q), 1e-9) << "after " << q << " picks";
 }
 
-// A linear term (readings = D_c beta + field + noise): the picks minimize the pool's field variance
-// plus the term's mean variance tr(A Q), A beta's covariance after the sequential GLS updates with
-// each pick's field variance at the time of its pick, written out here from brute-force posteriors.
-TEST(VarianceReduction, ALinearTermAddsItsVarianceAndItsReductionToTheChoice) {
+// A linear term (readings = D_x beta + field + noise, two components sharing beta), by universal
+// kriging written out here from scratch for every set S: the field's kriging leaves
+// D~_x = D_x - k(x,S) K_S^-1 D_S of the design at x, and beta's covariance given S is
+// (A^-1 + sum_k D_S^k' K_S^-1 D_S^k - D_M^k' K_M^-1 D_M^k)^-1, A its covariance given the measured
+// set M. The prediction adds tr(D~_x A_S D~_x') / K at every pool row, a picked row with D~ given the
+// members before it (and its field variance given S without itself); the choice is the field's variance reduction plus the pool's size times the fall of
+// tr(A Q~) / K, Q~ the pool's mean of D~' D~ given S, from beta's covariance alone.
+TEST(VarianceReduction, ALinearTermIsTakenBackByTheFieldWhereReadingsAreNear) {
   const Eigen::MatrixXd pool = uniform_points(20, 2, 8.0, 17);
   const Eigen::MatrixXd measured = uniform_points(3, 2, 8.0, 18);
   const VariogramModel model = VariogramModel::parse("exp(sill=1,range=2)+nug(0.1)");
+  static constexpr int K = 2;
   auto rows_of = [](const Eigen::RowVectorXd& x) {
-    Eigen::RowVectorXd d(3);
-    d << x[0] / 8.0, x[1] / 8.0, (x[0] / 8.0) * (x[0] / 8.0);
+    Eigen::MatrixXd d(K, 3);
+    d << x[0] / 8.0, x[1] / 8.0, (x[0] / 8.0) * (x[0] / 8.0),  //
+        std::sin(x[1] / 3.0), x[0] * x[1] / 64.0, 0.0;
     return d;
   };
   VarianceReductionOptions o;
   o.count = 4;
   o.lookahead = 1;
   o.max_references = 100;
-  o.linear_term.components = 1;
+  o.linear_term.components = K;
   o.linear_term.covariance = Eigen::Matrix3d::Identity() * 0.5;
-  o.linear_term.candidate_rows.resize(20, 3);
-  for (int c = 0; c < 20; ++c) o.linear_term.candidate_rows.row(c) = rows_of(pool.row(c));
+  o.linear_term.covariance(0, 1) = o.linear_term.covariance(1, 0) = 0.1;
+  o.linear_term.candidate_rows.resize(K * 20, 3);
+  for (int c = 0; c < 20; ++c) o.linear_term.candidate_rows.middleRows(K * c, K) = rows_of(pool.row(c));
+  o.linear_term.measured_rows.resize(K * 3, 3);
+  for (int m = 0; m < 3; ++m) o.linear_term.measured_rows.middleRows(K * m, K) = rows_of(measured.row(m));
   const VarianceReductionPlan plan = select_by_variance_reduction(pool, measured, model, o);
   ASSERT_EQ(plan.predicted_mse.size(), 6u);
+
   const TestCovariance k;
-  Eigen::Matrix3d q = Eigen::Matrix3d::Zero();
-  for (int c = 0; c < 20; ++c) q += rows_of(pool.row(c)).transpose() * rows_of(pool.row(c)) / 20.0;
-  Eigen::Matrix3d a = Eigen::Matrix3d::Identity() * 0.5;
-  std::vector<Eigen::RowVectorXd> set;
-  for (int j = 0; j < measured.rows(); ++j) set.push_back(measured.row(j));
-  EXPECT_NEAR(plan.predicted_mse[0], brute_force_mse(pool, set, k) + (a * q).trace(), 1e-9);
-  // beta's covariance after a reading at x, whose field variance given `given` is its posterior.
-  auto updated = [&](const Eigen::Matrix3d& cov, const Eigen::RowVectorXd& x, const std::vector<Eigen::RowVectorXd>& given) {
-    const double field = brute_force_mse(x, given, k) - k.nugget;  // posterior variance of the field at x
-    const Eigen::RowVectorXd d = rows_of(x);
-    const double s = field + k.nugget + d * cov * d.transpose();
-    return Eigen::Matrix3d(cov - (cov * d.transpose()) * (d * cov) / s);
+  using Set = std::vector<Eigen::RowVectorXd>;
+  auto system = [&](const Set& s) {  // K_S + nugget I, inverted
+    Eigen::MatrixXd kss(s.size(), s.size());
+    for (std::size_t i = 0; i < s.size(); ++i)
+      for (std::size_t j = 0; j < s.size(); ++j) kss(i, j) = k(s[i], s[j]) + (i == j ? k.nugget : 0.0);
+    return Eigen::MatrixXd(kss.inverse());
   };
-  std::vector<bool> used(20, false);
+  auto design = [&](const Set& s, int component) {
+    Eigen::MatrixXd d(s.size(), 3);
+    for (std::size_t i = 0; i < s.size(); ++i) d.row(static_cast<Eigen::Index>(i)) = rows_of(s[i]).row(component);
+    return d;
+  };
+  auto residual_design = [&](const Eigen::RowVectorXd& x, const Set& s) {
+    const Eigen::MatrixXd inv = system(s);
+    Eigen::RowVectorXd kx(s.size());
+    for (std::size_t i = 0; i < s.size(); ++i) kx[static_cast<Eigen::Index>(i)] = k(x, s[i]);
+    Eigen::MatrixXd d = rows_of(x);
+    for (int c = 0; c < K; ++c) d.row(c) -= kx * inv * design(s, c);
+    return d;
+  };
+  auto information = [&](const Set& s) {
+    Eigen::Matrix3d info = Eigen::Matrix3d::Zero();
+    for (int c = 0; c < K; ++c) info += design(s, c).transpose() * system(s) * design(s, c);
+    return info;
+  };
+  Set set;
+  for (int j = 0; j < measured.rows(); ++j) set.push_back(measured.row(j));
+  const Eigen::Matrix3d a0 = o.linear_term.covariance;
+  const Eigen::Matrix3d info_measured = information(set);
+  auto beta_covariance = [&](const Set& s) { return Eigen::Matrix3d((a0.inverse() + information(s) - info_measured).inverse()); };
+  auto linear_variance = [&](const Eigen::RowVectorXd& x, const Set& given, const Eigen::Matrix3d& a) {
+    const Eigen::MatrixXd d = residual_design(x, given);
+    return (d * a * d.transpose()).trace() / K;
+  };
+  auto field_variance = [&](const Eigen::RowVectorXd& x, const Set& given) { return brute_force_mse(x, given, k) - k.nugget; };
+  auto pool_mse = [&](const Set& s, const std::vector<int>& picked) {
+    const Eigen::Matrix3d a = beta_covariance(s);
+    double sum = 0.0;
+    for (int r = 0; r < 20; ++r) {
+      Set given = s, before = s;
+      const auto it = std::find(picked.begin(), picked.end(), r);
+      if (it != picked.end()) {
+        given.erase(given.begin() + 3 + (it - picked.begin()));
+        before.erase(before.begin() + 3 + (it - picked.begin()), before.end());
+      }
+      sum += field_variance(pool.row(r), given) + linear_variance(pool.row(r), before, a);
+    }
+    return sum / 20.0 + k.nugget;
+  };
   std::vector<int> picked;
+  EXPECT_NEAR(plan.predicted_mse[0], pool_mse(set, picked), 1e-9);
+  std::vector<bool> used(20, false);
   std::vector<std::size_t> all = plan.chosen;
   all.insert(all.end(), plan.lookahead_rows.begin(), plan.lookahead_rows.end());
   for (std::size_t step = 0; step < all.size(); ++step) {
+    const Eigen::Matrix3d a = beta_covariance(set);
+    Eigen::Matrix3d q = Eigen::Matrix3d::Zero();
+    for (int r = 0; r < 20; ++r) {
+      const Eigen::MatrixXd d = residual_design(pool.row(r), set);
+      q += d.transpose() * d / 20.0;
+    }
     int best = -1;
-    double best_total = std::numeric_limits<double>::infinity();
+    double best_score = -std::numeric_limits<double>::infinity();
     for (int c = 0; c < 20; ++c) {
       if (used[static_cast<std::size_t>(c)]) continue;
-      auto with = set;
+      Set with = set;
       with.push_back(pool.row(c));
-      const double total = brute_force_mse(pool, with, k) + (updated(a, pool.row(c), set) * q).trace();
-      if (total < best_total - 1e-12) best_total = total, best = c;
+      double field_fall = 0.0;
+      for (int r = 0; r < 20; ++r) field_fall += field_variance(pool.row(r), set) - field_variance(pool.row(r), with);
+      const double score = field_fall + 20.0 * ((a * q).trace() - (beta_covariance(with) * q).trace()) / K;
+      if (score > best_score + 1e-12) best_score = score, best = c;
     }
     EXPECT_EQ(all[step], static_cast<std::size_t>(best)) << "pick " << step;
-    a = updated(a, pool.row(best), set);
     used[static_cast<std::size_t>(best)] = true;
     set.push_back(pool.row(best));
     picked.push_back(best);
-    EXPECT_NEAR(plan.predicted_mse[step + 1], brute_force_pool_mse(pool, set, picked, 3, k) + (a * q).trace(), 1e-9)
-        << "after pick " << step;
+    EXPECT_NEAR(plan.predicted_mse[step + 1], pool_mse(set, picked), 1e-9) << "after pick " << step;
   }
+  const Set measured_only(set.begin(), set.begin() + 3);
+  // With the measured locations in the prediction too: the field's variance given every other
+  // member, the term's rows given the other measured locations.
+  VarianceReductionOptions whole = o;
+  whole.measured_in_prediction = true;
+  const VarianceReductionPlan with_measured = select_by_variance_reduction(pool, measured, model, whole);
+  EXPECT_EQ(with_measured.chosen, plan.chosen);
+  for (std::size_t q = 0; q < with_measured.predicted_mse.size(); ++q) {
+    const Set s(set.begin(), set.begin() + 3 + static_cast<std::ptrdiff_t>(q));
+    const std::vector<int> first(picked.begin(), picked.begin() + static_cast<std::ptrdiff_t>(q));
+    const Eigen::Matrix3d a = beta_covariance(s);
+    double measured_sum = 0.0;
+    for (int m = 0; m < 3; ++m) {
+      Set given = s, others = measured_only;
+      given.erase(given.begin() + m);
+      others.erase(others.begin() + m);
+      measured_sum += field_variance(measured.row(m), given) + linear_variance(measured.row(m), others, a);
+    }
+    const double expected = ((pool_mse(s, first) - k.nugget) * 20.0 + measured_sum) / 23.0 + k.nugget;
+    EXPECT_NEAR(with_measured.predicted_mse[q], expected, 1e-9) << "after " << q << " picks";
+  }
+  // The take-back is real: next to a reading, what the term adds is a small part of what it adds
+  // far from every reading (the same design, measured location 0 moved by 0.05).
+  const Eigen::RowVectorXd near = measured.row(0) + Eigen::RowVectorXd::Constant(2, 0.05);
+  EXPECT_LT(linear_variance(near, measured_only, a0), 0.2 * (rows_of(near) * a0 * rows_of(near).transpose()).trace() / K);
   // A term with no uncertainty changes nothing: the picks are those without it.
   VarianceReductionOptions none = o;
   none.linear_term.covariance = Eigen::Matrix3d::Zero();
@@ -248,10 +326,59 @@ TEST(VarianceReduction, ALinearTermAddsItsVarianceAndItsReductionToTheChoice) {
   plain.linear_term = {};
   EXPECT_EQ(select_by_variance_reduction(pool, measured, model, plain).chosen,
             select_by_variance_reduction(pool, measured, model, none).chosen);
-  // Shapes are checked.
+  // Shapes are checked: the candidates' rows and the measured locations' rows.
   VarianceReductionOptions bad = o;
   bad.linear_term.candidate_rows.resize(19, 3);
   EXPECT_THROW(select_by_variance_reduction(pool, measured, model, bad), ArgumentError);
+  VarianceReductionOptions no_measured_rows = o;
+  no_measured_rows.linear_term.measured_rows.resize(0, 0);
+  EXPECT_THROW(select_by_variance_reduction(pool, measured, model, no_measured_rows), ArgumentError);
+}
+
+// What `fit` can hand to `plan` after 40 poses: a Gaussian model of enormous range and sill (K_S near
+// singular) and joint error functions whose coefficient covariance spans 20 orders of magnitude.
+// Picking the whole pool, the prediction stays finite and does not rise: in exact arithmetic every
+// added reading lowers it (a member counts with at most its variance when it joined). On a fit like
+// this (tests/python, test_plan_matches_cli) the plan once gave NaN after 72 picks, and jumps of
+// 20 %; these data are synthetic and need not reproduce that. Rounding is not zero here: the field's own
+// variances are differences of numbers 10^7 times larger (the prior of the mean), and the field
+// alone, without the term, rises by up to 0.5 % between two picks on these data; so a rise of at
+// most 1 % is allowed, with or without the term.
+TEST(VarianceReduction, PredictionsStayFiniteAndFallOnANearSingularModel) {
+  const Eigen::MatrixXd pool = uniform_points(120, 3, 100.0, 61), measured = uniform_points(40, 3, 100.0, 62);
+  const VariogramModel model = VariogramModel::parse("gau(sill=510,range=1e5)+nug(sill=0.0055)");
+  static constexpr int p = 12;
+  auto rows_at = [](const Eigen::MatrixXd& x) {
+    Eigen::MatrixXd rows(3 * x.rows(), p);
+    for (Eigen::Index i = 0; i < x.rows(); ++i)
+      for (int k = 0; k < 3; ++k)
+        for (int j = 0; j < p; ++j) rows(3 * i + k, j) = std::cos(x(i, j % 3) / 40.0 * (1 + j / 3) + k);
+    return rows;
+  };
+  VarianceReductionOptions o;
+  o.count = 10;
+  o.lookahead = 110;
+  o.measured_in_prediction = true;
+  o.linear_term.components = 3;
+  o.linear_term.candidate_rows = rows_at(pool);
+  o.linear_term.measured_rows = rows_at(measured);
+  Eigen::MatrixXd q = Eigen::MatrixXd::Zero(p, p);
+  for (int j = 0; j < p; ++j) q(j, j) = 1.0;
+  for (int j = 0; j + 1 < p; ++j) q(j + 1, j) = 0.6;  // a lower-triangular mix of the axes
+  Eigen::VectorXd spread(p);
+  for (int j = 0; j < p; ++j) spread[j] = std::pow(10.0, 5.0 - 20.0 * j / (p - 1));  // 1e5 .. 1e-15
+  o.linear_term.covariance = q * spread.asDiagonal() * q.transpose();
+  VarianceReductionOptions field_only = o;
+  field_only.linear_term = {};
+  for (const VarianceReductionOptions& options : {o, field_only}) {
+    const VarianceReductionPlan plan = select_by_variance_reduction(pool, measured, model, options);
+    ASSERT_EQ(plan.predicted_mse.size(), 121u);
+    for (std::size_t i = 0; i < plan.predicted_mse.size(); ++i) {
+      ASSERT_TRUE(std::isfinite(plan.predicted_mse[i])) << i;
+      EXPECT_GT(plan.predicted_mse[i], 0.0) << i;
+      if (i > 0) EXPECT_LE(plan.predicted_mse[i], plan.predicted_mse[i - 1] * 1.01) << "after pick " << i;
+    }
+  }
 }
 
 TEST(VarianceReduction, PredictedErrorHoldsForOrdinaryKrigingOnDrawsOfTheModel) {
@@ -387,11 +514,16 @@ TEST(VarianceReduction, SamePicksAndPredictionsForOneAndTwoThreads) {
     if (linear) {  // with a linear term, whose per-candidate reductions run in parallel too
       o.linear_term.components = 2;
       o.linear_term.covariance = Eigen::MatrixXd::Identity(4, 4);
-      o.linear_term.candidate_rows = Eigen::MatrixXd::Zero(600, 4);
-      for (Eigen::Index c = 0; c < 300; ++c) {
-        o.linear_term.candidate_rows.row(2 * c) << pool(c, 0) / 10.0, pool(c, 1) / 10.0, 0.0, 0.0;
-        o.linear_term.candidate_rows.row(2 * c + 1) << 0.0, 0.0, pool(c, 2) / 10.0, pool(c, 0) * pool(c, 1) / 100.0;
-      }
+      auto rows_at = [](const Eigen::MatrixXd& x) {
+        Eigen::MatrixXd rows = Eigen::MatrixXd::Zero(2 * x.rows(), 4);
+        for (Eigen::Index c = 0; c < x.rows(); ++c) {
+          rows.row(2 * c) << x(c, 0) / 10.0, x(c, 1) / 10.0, 0.0, 0.0;
+          rows.row(2 * c + 1) << 0.0, 0.0, x(c, 2) / 10.0, x(c, 0) * x(c, 1) / 100.0;
+        }
+        return rows;
+      };
+      o.linear_term.candidate_rows = rows_at(pool);
+      o.linear_term.measured_rows = rows_at(measured);
     }
     const int before = omp_get_max_threads();
     omp_set_num_threads(1);

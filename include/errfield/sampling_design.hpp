@@ -70,15 +70,25 @@ struct VarianceReductionOptions {
   std::vector<double> measured_scale;
   /// A linear term beside the field (e.g. a regression fitted to the data before the field was,
   /// with coefficients beta): a reading at candidate c is D_c beta + field + noise, with D_c the
-  /// candidate's `components` x p rows of `candidate_rows` (rows [components·c, components·(c+1))).
-  /// `covariance` is beta's covariance now (p x p). A pick informs beta as a reading whose other
-  /// parts have the field's current variance at c plus the noise, per component (the GLS update
-  /// A <- A - A D' (S + D A D')^-1 D A); the choice adds the term's integrated variance reduction
-  /// over the candidates, and predicted_mse its mean variance tr(A Q) / components, Q the mean of
-  /// D_c' D_c over the candidates. Empty `covariance`: no term. At most 8 components.
+  /// candidate's `components` x p rows of `candidate_rows` (rows [components·c, components·(c+1))),
+  /// and `measured_rows` the same rows at the measured locations. `covariance` is beta's covariance
+  /// given the measured readings (p x p). The field's kriging takes back the part of the term's
+  /// error that nearby readings share: what is left at c is D~_c = D_c - k(c,S) K_S^-1 D_S over the
+  /// set S measured or picked (universal kriging's drift term), and the term adds tr(D~_c A D~_c')
+  /// to c's predictive variance, per component. A pick b informs beta by D~_b with its field
+  /// variance plus the noise (A <- A - A D~_b' (S_b + D~_b A D~_b')^-1 D~_b A). The choice adds
+  /// the resulting fall of the term's mean variance tr(A Q~) / components, Q~ the mean of
+  /// D~_c' D~_c over the candidates (the pick's effect on the other candidates' D~ counts in
+  /// predicted_mse, not in the choice); predicted_mse adds the term's variance at every location it
+  /// averages over, a member's with its rows as they were when it joined (a pick's D~ given the
+  /// members before it, a measured location's given the other measured ones: what later picks
+  /// would take back of it is not counted). beta's covariance is updated in square-root form, so it
+  /// stays positive semi-definite however ill-conditioned. Empty `covariance`: no term. At most 8
+  /// components.
   struct LinearTerm {
     Eigen::MatrixXd covariance;
     Eigen::MatrixXd candidate_rows;
+    Eigen::MatrixXd measured_rows;
     int components = 1;
   };
   LinearTerm linear_term;
@@ -103,8 +113,8 @@ struct VarianceReductionPlan {
   /// Mean over every candidate (and, with measured_in_prediction, measured location) of the
   /// predictive variance of a new measurement (field + nugget, times its variance scale), per
   /// component: [0] with the measured locations only, [k] after the first k picks (count +
-  /// lookahead entries after [0], fewer if the candidates ran out). A picked candidate counts with
-  /// its variance before its own pick, a measured location with its leave-one-out variance: what a
+  /// lookahead entries after [0], fewer if the candidates ran out). A picked candidate and a
+  /// measured location count with their leave-one-out variance given every other member: what a
   /// new location near them would see. The references serve the choice only.
   std::vector<double> predicted_mse;
   /// The lookahead picks' rows (after `chosen`), for "how many more would it take".

@@ -114,12 +114,18 @@ PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
     // part of every prediction, and a pose informs them by its lever on each joint at each angle,
     // wherever the field is; the choice weighs both. Measured: without this term, adaptive
     // selection lost to maximin at every count once the functions were in the model (docs/robot.md).
+    // The field's kriging takes back the functions' error where measured poses are near, so the
+    // design at the measured poses is given too.
     vo.linear_term.components = 3;
     vo.linear_term.covariance = f->coefficient_covariance_mrad2;
-    vo.linear_term.candidate_rows.resize(3 * static_cast<Eigen::Index>(candidates.size()), f->coefficient_covariance_mrad2.cols());
-    for (std::size_t c = 0; c < candidates.size(); ++c)
-      vo.linear_term.candidate_rows.middleRows(3 * static_cast<Eigen::Index>(c), 3) =
-          f->design_rows(model->command_model(), candidates[c]);
+    auto design_at = [&](const std::vector<robot::JointVector>& poses) {
+      Eigen::MatrixXd rows(3 * static_cast<Eigen::Index>(poses.size()), f->coefficient_covariance_mrad2.cols());
+      for (std::size_t i = 0; i < poses.size(); ++i)
+        rows.middleRows(3 * static_cast<Eigen::Index>(i), 3) = f->design_rows(model->command_model(), poses[i]);
+      return rows;
+    };
+    vo.linear_term.candidate_rows = design_at(candidates);
+    vo.linear_term.measured_rows = design_at(known);
   }
   vo.spacing_floor = options.spacing_floor;
   vo.count = options.count;
