@@ -18,6 +18,8 @@
 /// Both are deterministic (ties go to the lower candidate index), independent of the thread count.
 /// Cost of the variance reduction: O(M·(R + C)·M) to condition on M measured locations, then per
 /// pick O(R·C) over R references and C candidates; memory R·C doubles (80 MB at 1,000 × 10,000).
+/// A linear term of p coefficients and K components adds O(C·M·p·K) to condition and O(C·p·K²
+/// + p³) per pick, memory 3·K·C·p doubles.
 
 #include <cstddef>
 #include <optional>

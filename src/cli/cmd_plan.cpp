@@ -116,7 +116,7 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
     text << "  predicted 3-D RMS of a new reading over the pool: " << three_digits(now) << " mm with the "
          << sel.conditioned_on << " poses measured, " << three_digits(after) << " mm after these " << a.count
          << " (the field's own variance with its nugget"
-         << (model->joint_error_functions() ? ", plus the joint error functions' estimation variance" : "")
+         << (model->joint_error_functions() ? ", plus what the field's correction leaves of the joint error functions' estimation variance" : "")
          << "; calibration and registration uncertainty not included)\n";
     summary["predicted_rms_mm"] = {{"now", now}, {"after", after}, {"by_pose", sel.predicted_rms_mm}};
     if (o.target_rms_mm) {
