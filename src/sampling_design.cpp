@@ -547,6 +547,7 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
     var_c -= uc.cwiseAbs2();
     u_c.push_back(uc);
     plan.predicted_mse.push_back(mse());
+    if (pick + 1 >= options.count && options.lookahead_done && options.lookahead_done(plan.predicted_mse.back())) break;
   }
   return plan;
 }

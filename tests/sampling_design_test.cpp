@@ -381,6 +381,33 @@ TEST(VarianceReduction, PredictionsStayFiniteAndFallOnANearSingularModel) {
   }
 }
 
+TEST(VarianceReduction, TheLookaheadEndsWhereItsPredicateHoldsNotBeforeTheBatchEnds) {
+  const Eigen::MatrixXd pool = uniform_points(60, 2, 8.0, 71), measured = uniform_points(5, 2, 8.0, 72);
+  const VariogramModel model = VariogramModel::parse("exp(sill=1,range=2)+nug(0.1)");
+  VarianceReductionOptions o;
+  o.count = 4;
+  o.lookahead = 30;
+  const VarianceReductionPlan whole = select_by_variance_reduction(pool, measured, model, o);
+  ASSERT_EQ(whole.predicted_mse.size(), 35u);
+  // A threshold first met after the 12th pick: the plan stops there, with the same picks and
+  // predictions as far as it went.
+  const double threshold = 0.5 * (whole.predicted_mse[11] + whole.predicted_mse[12]);
+  ASSERT_GT(whole.predicted_mse[11], threshold);
+  o.lookahead_done = [&](double mse) { return mse <= threshold; };
+  const VarianceReductionPlan stopped = select_by_variance_reduction(pool, measured, model, o);
+  ASSERT_EQ(stopped.predicted_mse.size(), 13u);
+  for (std::size_t i = 0; i < 13; ++i) EXPECT_EQ(stopped.predicted_mse[i], whole.predicted_mse[i]) << i;
+  EXPECT_EQ(stopped.chosen, whole.chosen);
+  EXPECT_EQ(stopped.lookahead_rows,
+            std::vector<std::size_t>(whole.lookahead_rows.begin(), whole.lookahead_rows.begin() + 8));
+  // Met from the start: the batch is still chosen whole, and nothing beyond it.
+  o.lookahead_done = [](double) { return true; };
+  const VarianceReductionPlan batch_only = select_by_variance_reduction(pool, measured, model, o);
+  EXPECT_EQ(batch_only.chosen, whole.chosen);
+  EXPECT_TRUE(batch_only.lookahead_rows.empty());
+  EXPECT_EQ(batch_only.predicted_mse.size(), 5u);
+}
+
 TEST(VarianceReduction, PredictedErrorHoldsForOrdinaryKrigingOnDrawsOfTheModel) {
   // Gaussian fields of the model with a constant mean the predictor does not know (5 mm), read
   // with the nugget as noise; ordinary kriging (written here) predicts a new reading at each

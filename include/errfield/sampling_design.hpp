@@ -22,6 +22,7 @@
 /// + p³) per pick, memory 3·K·C·p doubles.
 
 #include <cstddef>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -49,6 +50,9 @@ struct VarianceReductionOptions {
   /// Picks beyond `count` only to predict how the error would fall with more measurements (they
   /// are reported in predicted_mse, not in chosen); 0 = none.
   std::size_t lookahead = 0;
+  /// Ends the look-ahead early: after the first look-ahead pick (or at once after the last of
+  /// `count`) whose predicted_mse this returns true for. Empty: all `lookahead` picks.
+  std::function<bool(double predicted_mse)> lookahead_done;
   /// The reference set over which variance is integrated: every candidate when there are at most
   /// this many, else a deterministic, evenly spread subset of this size (maximin order).
   std::size_t max_references = 1000;

@@ -1,6 +1,7 @@
 #include "errfield/compensation/pose_selection.hpp"
 
 #include <cmath>
+
 #include <nlohmann/json.hpp>
 
 #include "errfield/compensation/kriging_fields.hpp"
@@ -130,6 +131,10 @@ PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
   vo.spacing_floor = options.spacing_floor;
   vo.count = options.count;
   vo.lookahead = options.target_rms_mm ? options.max_lookahead : 0;
+  // The look-ahead only serves "how many more poses": it ends where the prediction reaches the
+  // target (an unreachable target still costs all of it: 17.6 s at 10,000 candidates, 500 measured).
+  if (options.target_rms_mm)
+    vo.lookahead_done = [target = *options.target_rms_mm](double mse) { return std::sqrt(3.0 * mse) <= target; };
   vo.max_references = options.max_references;
   const VarianceReductionPlan plan = select_by_variance_reduction(pool, done, vm, vo);
   out.chosen = plan.chosen;
