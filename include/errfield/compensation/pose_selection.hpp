@@ -54,7 +54,8 @@ struct PoseSelection {
   /// Model-based only: predicted 3-D RMS (mm) of a new reading over the pool and the measured poses
   /// (these and the chosen ones with their leave-one-out variance: VarianceReductionPlan), [0] with the poses
   /// measured so far, [k] after the first k chosen (and lookahead) poses; with joint error functions
-  /// in the model, their estimation variance (averaged over the pool, as it is now) is included.
+  /// in the model, what the field's correction leaves of their estimation variance is included
+  /// (VarianceReductionOptions::LinearTerm). With target_rms_mm, it ends where it reaches the target.
   std::vector<double> predicted_rms_mm;
   /// With target_rms_mm: how many poses (counted from now) the prediction needs to reach it; empty
   /// when not reached within count + max_lookahead poses of this pool.
