@@ -528,14 +528,14 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
     const Eigen::VectorXd ur = cross.col(best) / denominator;
 #pragma omp parallel for schedule(static)
     for (Eigen::Index c = 0; c < C; ++c) cross.col(c) -= uc[c] * ur;
+    // The linear term sees the pick's reading with the field's variance before it.
+    if (linear_posterior) linear_posterior->pick(best, denominator * denominator, uc / denominator, S);
     {
       // K_S^-1 bordered by the pick: b = k(S, pick), a = K_S^-1 b, s = k(pick, pick) + noise - b'a.
       Eigen::VectorXd b(S);
       for (Eigen::Index i = 0; i < S; ++i) b[i] = k((x_set.row(i) - xc.row(best)).norm());
       const Eigen::VectorXd a = k_inverse.topLeftCorner(S, S) * b;
       const double schur = k(0.0) + noise - b.dot(a);
-      // The linear term sees the pick's reading with the field's variance before it.
-      if (linear_posterior) linear_posterior->pick(best, denominator * denominator, uc / denominator, S);
       k_inverse.topLeftCorner(S, S).noalias() += (a / schur) * a.transpose();
       k_inverse.block(0, S, S, 1) = -a / schur;
       k_inverse.block(S, 0, 1, S) = (-a / schur).transpose();
