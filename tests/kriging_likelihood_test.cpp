@@ -152,6 +152,33 @@ TEST(KrigingLikelihood, RemlFitIsALocalOptimumNearTheTruth) {
   EXPECT_LT(c[0].sill, 2.0);
 }
 
+// A held range (issue 36, gstat's fit.ranges = FALSE for the likelihood): the range comes back as
+// given, and the free sill and nugget are a local optimum under the independent reference.
+TEST(KrigingLikelihood, HeldRangeStaysAndTheFreeParametersAreALocalOptimum) {
+  const auto truth = VariogramModel::parse("exp(sill=1,range=20)+nug(0.05)");
+  const Field f = simulate(120, truth, 4);
+  LikelihoodFitOptions o;
+  o.hold_range = {true};
+  o.nugget_start = 0.1;
+  const auto fit = fit_likelihood(f.x, f.z, {{ModelKind::Exponential, 0.5, 30.0, 0.5}}, o);
+  ASSERT_TRUE(fit.converged) << fit.message;
+  const auto& c = fit.model.components();
+  ASSERT_EQ(c.size(), 2u);
+  EXPECT_EQ(c[0].range, 30.0);
+  EXPECT_EQ(fit.parameters, 2);  // the sill and the nugget
+  const double best = reference_nll(f, fit.model, true, 0);
+  EXPECT_NEAR(best, fit.negative_log_likelihood, 1e-7);
+  for (int p = 0; p < 2; ++p)
+    for (double factor : {0.97, 1.03}) {
+      auto moved = c;
+      if (p == 0) moved[0].sill *= factor;
+      if (p == 1) moved[1].sill *= factor;
+      EXPECT_GE(reference_nll(f, VariogramModel(moved), true, 0), best - 1e-9) << "parameter " << p << " x" << factor;
+    }
+  o.anisotropy = LikelihoodFitOptions::Anisotropy::Ard;
+  EXPECT_THROW(fit_likelihood(f.x, f.z, {{ModelKind::Exponential, 0.5, 30.0, 0.5}}, o), ArgumentError);
+}
+
 TEST(KrigingLikelihood, RejectsBadInput) {
   Eigen::MatrixXd x(2, 3);
   x.setZero();

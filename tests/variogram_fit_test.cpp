@@ -4,6 +4,7 @@
 #include <random>
 #include <vector>
 
+#include <Eigen/Dense>
 #include <gtest/gtest.h>
 
 #include "errfield/error.hpp"
@@ -151,6 +152,96 @@ TEST(VariogramFit, RejectsBadInput) {
   o = {};
   o.starts = 0;
   EXPECT_THROW(fit_variogram(h, g, n, structure(ModelKind::Spherical), o), ArgumentError);
+}
+
+
+// A nested template (gstat's vgm(..., add.to = ...)): two spherical structures and a nugget, from
+// starting values near but not at the truth, on bins taken from the nested model itself.
+TEST(VariogramFit, NestedStructuresFromATemplateRecoverTheModel) {
+  const VariogramModel truth = VariogramModel::parse("nug(sill=2e4)+sph(sill=3e4,range=25)+sph(sill=4e4,range=80)");
+  const Bins b = from_model(truth, 120.0, 24);
+  const std::vector<ModelComponent> tmpl = {{ModelKind::Spherical, 2e4, 15.0, 0.5}, {ModelKind::Spherical, 6e4, 100.0, 0.5}};
+  VariogramFitOptions o;
+  o.nugget_start = 1e4;
+  const VariogramFitResult r = fit_variogram(b.h, b.g, b.n, tmpl, o);
+  ASSERT_EQ(r.status, FitStatus::Converged) << r.message;
+  // The weighted SSE of the truth is 0: the fit must reach (nearly) that, and the model's values.
+  double sse_scale = 0.0;
+  for (std::size_t j = 0; j < b.h.size(); ++j) sse_scale += b.n[j] / (b.h[j] * b.h[j]) * b.g[j] * b.g[j];
+  EXPECT_LT(r.weighted_sse, 1e-10 * sse_scale) << r.model.to_string();
+  for (double h : {1.0, 10.0, 25.0, 50.0, 80.0, 110.0})
+    EXPECT_NEAR(r.model.gamma(h), truth.gamma(h), 1e-4 * truth.sill()) << "h = " << h << ", " << r.model.to_string();
+}
+
+// With every range held, gamma(h) is linear in the sills and the nugget: the weighted least squares
+// has a closed form, written out here (normal equations), which the fit must reproduce.
+TEST(VariogramFit, HeldRangesGiveTheLinearLeastSquaresSills) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  const VariogramModel truth = VariogramModel::parse("nug(sill=0.2)+sph(sill=1,range=30)+exp(sill=0.5,range=200)");
+  Bins b = from_model(truth, 400.0, 30);
+  for (double& g : b.g) g *= 1.0 + noise(rng);
+  const std::vector<ModelComponent> tmpl = {{ModelKind::Spherical, 0.7, 30.0, 0.5},
+                                            {ModelKind::Exponential, 0.7, 200.0, 0.5}};
+  for (const FitWeighting w : {FitWeighting::Nj, FitWeighting::NjOverH2}) {
+    VariogramFitOptions o;
+    o.weighting = w;
+    o.hold_range = {true, true};
+    const VariogramFitResult r = fit_variogram(b.h, b.g, b.n, tmpl, o);
+    ASSERT_EQ(r.status, FitStatus::Converged) << r.message;
+    // Columns: unit-sill sph(30), unit-sill exp(200), nugget.
+    Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d atb = Eigen::Vector3d::Zero();
+    for (std::size_t j = 0; j < b.h.size(); ++j) {
+      const Eigen::Vector3d a(ModelComponent{ModelKind::Spherical, 1.0, 30.0, 0.5}.gamma(b.h[j]),
+                              ModelComponent{ModelKind::Exponential, 1.0, 200.0, 0.5}.gamma(b.h[j]), 1.0);
+      const double wj = w == FitWeighting::Nj ? double(b.n[j]) : double(b.n[j]) / (b.h[j] * b.h[j]);
+      ata += wj * a * a.transpose();
+      atb += wj * b.g[j] * a;
+    }
+    const Eigen::Vector3d sills = ata.ldlt().solve(atb);
+    ASSERT_TRUE((sills.array() > 0.0).all()) << "the test's data must keep the unconstrained optimum feasible";
+    const auto& c = r.model.components();
+    ASSERT_EQ(c.size(), 3u);
+    EXPECT_EQ(c[0].range, 30.0);  // held: exactly as given
+    EXPECT_EQ(c[1].range, 200.0);
+    EXPECT_NEAR(c[0].sill, sills[0], 1e-6 * sills[0]);
+    EXPECT_NEAR(c[1].sill, sills[1], 1e-6 * sills[1]);
+    EXPECT_NEAR(c[2].sill, sills[2], 1e-6 * sills[2]);
+  }
+}
+
+// Held sills: only the ranges move; the held values come back bit for bit and the SSE is no worse
+// than any other range on a fine scan (a one-parameter brute force).
+TEST(VariogramFit, HeldSillLeavesTheRangeToTheFit) {
+  const VariogramModel truth = VariogramModel::parse("sph(sill=2,range=50)");
+  const Bins b = from_model(truth, 100.0, 20);
+  VariogramFitOptions o;
+  o.nugget = NuggetMode::None;
+  o.hold_sill = {true};
+  const VariogramFitResult r = fit_variogram(b.h, b.g, b.n, {{ModelKind::Spherical, 1.5, 20.0, 0.5}}, o);
+  ASSERT_EQ(r.status, FitStatus::Converged) << r.message;
+  ASSERT_EQ(r.model.components().size(), 1u);
+  EXPECT_EQ(r.model.components()[0].sill, 1.5);
+  double best_scan = 1e300;
+  for (double range = 1.0; range <= 200.0; range += 0.01) {
+    const VariogramModel m({{ModelKind::Spherical, 1.5, range, 0.5}});
+    best_scan = std::min(best_scan, weighted_sse(b.h, b.g, b.n, m, o.weighting));
+  }
+  EXPECT_LE(r.weighted_sse, best_scan * (1 + 1e-9));
+}
+
+TEST(VariogramFit, HoldsAreChecked) {
+  const Bins b = from_model(VariogramModel::parse("sph(sill=2,range=50)"), 100.0, 20);
+  VariogramFitOptions o;
+  o.hold_range = {true};
+  EXPECT_THROW(fit_variogram(b.h, b.g, b.n, {{ModelKind::Spherical, 1.0, 0.0, 0.5}}, o), ArgumentError);  // no value
+  o.hold_range = {true, false};
+  EXPECT_THROW(fit_variogram(b.h, b.g, b.n, {{ModelKind::Spherical, 1.0, 10.0, 0.5}}, o), ArgumentError);  // size
+  o.hold_range = {true};
+  o.hold_sill = {true};
+  o.nugget = NuggetMode::None;
+  EXPECT_THROW(fit_variogram(b.h, b.g, b.n, {{ModelKind::Spherical, 1.0, 10.0, 0.5}}, o), ArgumentError);  // all held
 }
 
 }  // namespace

@@ -87,6 +87,14 @@ struct LikelihoodFitOptions {
   /// samples (choose_likelihood_model, which fits on a subset, does not take them).
   Eigen::MatrixXd covariates;
   bool fit_nugget = true;                   ///< estimate a nugget (else none)
+  /// fit_nugget: the nugget's starting value (value unit^2; > 0) for the derivative-free path
+  /// (nested templates); <= 0: 5 % of the values' variance.
+  double nugget_start = 0.0;
+  /// Parameters held at the structure's given values (> 0) instead of fitted, per non-nugget
+  /// component (empty = none held), as VariogramFitOptions::hold_sill / hold_range. A fit with a held
+  /// parameter takes the derivative-free path; not with ARD or rotated anisotropy.
+  std::vector<bool> hold_sill;
+  std::vector<bool> hold_range;
   /// Ard: one range per coordinate (the model gets an Anisotropy::ard); needs the gradient path.
   /// Rotated (2-D/3-D): gstat's anis, angle(s) and ratio(s) fitted too (the model gets an
   /// Anisotropy::rotated): the ARD fit of rotated coordinates, the angles found around it by a

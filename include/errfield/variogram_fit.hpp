@@ -50,6 +50,16 @@ struct VariogramFitOptions {
   double range_min = 0.0;
   double range_max = 0.0;
   double sill_max = 0.0;
+  /// NuggetMode::Free: a starting value of the nugget (value unit^2; > 0), tried beside the
+  /// automatic starts with the structure's own parameters (a template such as
+  /// `nug(sill=2e4)+sph(sill=3e4,range=25)`); <= 0: none.
+  double nugget_start = 0.0;
+  /// Parameters held at the structure's given values instead of fitted (gstat's fit.sills = FALSE /
+  /// fit.ranges = FALSE, per structure): entry i is for the i-th non-nugget component of the
+  /// structure. Empty = nothing held; otherwise one entry per component. A held parameter must be
+  /// given (> 0) in the structure; a held power exponent is the component's `range`.
+  std::vector<bool> hold_sill;
+  std::vector<bool> hold_range;
   int starts = 6;                      ///< starting points of the multistart (>= 1)
   double relative_tolerance = 1e-12;   ///< NLopt ftol_rel and xtol_rel of each local run
   int max_evaluations = 20000;         ///< per local run
@@ -73,7 +83,8 @@ struct VariogramFitResult {
 };
 
 /// Fits the components of `structure` (kinds, and nu for mat; non-zero parameters are used as one
-/// of the starting points; a nug component in it is ignored, the nugget follows options.nugget)
+/// of the starting points, and held ones are kept; a nug component in it is ignored, the nugget
+/// follows options.nugget and options.nugget_start). Nested structures (sph + sph, ...) fit alike.
 /// to the bins with lags `lag` (> 0 for nj_h2), semivariances `gamma` and pair counts `pairs`
 /// (bins with 0 pairs are skipped). Throws ArgumentError for mismatched sizes, an empty
 /// structure, fewer usable bins than free parameters, or invalid options; InputError for a

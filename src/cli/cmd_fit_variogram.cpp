@@ -34,7 +34,94 @@ struct FitVariogramArgs {
   bool lmc = false;                         // --lmc: fit a linear model of coregionalization
   std::string lmc_method = "goulard-voltz";
   bool lmc_method_given = false;
+  bool nugget_given = false;
+  std::string fix;  // --fix: parameters held at the template's values
 };
+
+/// --model as a nested template with starting values, in the model text interpolate reads
+/// (`nug(sill=2e4)+sph(sill=3e4,range=25)+sph(sill=4e4,range=80)`, gstat's vgm(..., add.to = ...)):
+/// the non-nugget components are the structure, the nug term the nugget's starting value.
+struct FitTemplate {
+  std::vector<ModelComponent> structure;
+  double nugget_start = 0.0;  ///< the template's nug sill; 0: the template has none
+  bool has_nugget = false;
+};
+
+bool is_template(const std::string& model) { return model.find('(') != std::string::npos; }
+
+FitTemplate parse_fit_template(const FitVariogramArgs& a) {
+  if (a.nu_given)
+    throw ArgumentError("--nu with a model template: give the Matérn nu in the template, e.g. mat(sill=1,range=50,nu=1.5)");
+  VariogramModel m = [&] {
+    try {
+      return VariogramModel::parse(a.model);
+    } catch (const ArgumentError& e) {
+      throw ArgumentError(std::string("--model: ") + e.what());
+    }
+  }();
+  if (!m.anisotropy().isotropic())
+    throw ArgumentError("--model " + a.model + ": fit-variogram fits an isotropic model to an empirical variogram (or "
+                        "--anisotropy for ml/reml); leave the @... anisotropy out of the template");
+  FitTemplate t;
+  for (const ModelComponent& c : m.components()) {
+    if (c.kind == ModelKind::Nugget) {
+      if (t.has_nugget) throw ArgumentError("--model " + a.model + ": more than one nug term; expected at most one");
+      t.has_nugget = true;
+      t.nugget_start = c.sill;
+    } else {
+      t.structure.push_back(c);
+    }
+  }
+  if (t.structure.empty())
+    throw ArgumentError("--model " + a.model + ": no structure besides the nugget; nothing to fit");
+  return t;
+}
+
+/// --fix LIST: `sill`, `range` (every structure), `sillK`, `rangeK` (the K-th structure of the
+/// template, 1-based, nugget not counted), `nugget` (held at the template's nug). gstat's
+/// fit.sills / fit.ranges = FALSE.
+struct Holds {
+  std::vector<bool> sill, range;
+  bool nugget = false;
+};
+
+Holds parse_holds(const std::string& text, const FitTemplate& t, const std::string& model) {
+  Holds h;
+  if (text.empty()) return h;
+  const std::size_t k = t.structure.size();
+  h.sill.assign(k, false);
+  h.range.assign(k, false);
+  for (const std::string& item : split_column_list(text, "--fix")) {
+    auto index_after = [&](const std::string& prefix) -> std::size_t {
+      const std::string rest = item.substr(prefix.size());
+      if (rest.empty()) return 0;
+      std::size_t i = 0;
+      const auto res = std::from_chars(rest.data(), rest.data() + rest.size(), i);
+      if (res.ec != std::errc() || res.ptr != rest.data() + rest.size() || i < 1 || i > k)
+        throw ArgumentError("--fix: '" + item + "'; the template " + model + " has " + std::to_string(k) +
+                            " structure(s) besides the nugget: expected " + prefix + " or " + prefix + "1.." +
+                            prefix + std::to_string(k));
+      return i;
+    };
+    auto mark = [&](std::vector<bool>& v, std::size_t i) {
+      if (i == 0) std::fill(v.begin(), v.end(), true);
+      else v[i - 1] = true;
+    };
+    if (item == "nugget" || item == "nug") {
+      if (!t.has_nugget)
+        throw ArgumentError("--fix nugget: the template " + model + " has no nug term to hold; add e.g. nug(sill=0.1)");
+      h.nugget = true;
+    } else if (item.rfind("sill", 0) == 0) {
+      mark(h.sill, index_after("sill"));
+    } else if (item.rfind("range", 0) == 0) {
+      mark(h.range, index_after("range"));
+    } else {
+      throw ArgumentError("--fix: '" + item + "'; expected sill, range, sillK, rangeK (K = a structure of the "
+                          "template, 1-based) or nugget");
+    }
+  }
+  return h;
+}
 
 double parse_cell(const CsvTable& t, std::size_t r, std::size_t c) {
   return t.numeric_cell(r, c);
@@ -130,6 +217,31 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   if (a.nugget == "free") o.fit_nugget = true;
   else if (a.nugget == "none") o.fit_nugget = false;
   else throw ArgumentError("--nugget: '" + a.nugget + "'; with --method " + a.method + " expected free or none");
+  std::vector<ModelComponent> structure;
+  if (is_template(a.model)) {
+    const FitTemplate tmpl = parse_fit_template(a);
+    structure = tmpl.structure;
+    const Holds holds = parse_holds(a.fix, tmpl, a.model);
+    if (holds.nugget)
+      throw ArgumentError("--fix nugget applies to --method wls; the likelihood fit estimates the nugget (free) or "
+                          "has none (--nugget none)");
+    o.hold_sill = holds.sill;
+    o.hold_range = holds.range;
+    if (!a.nugget_given) o.fit_nugget = tmpl.has_nugget;
+    if (o.fit_nugget) o.nugget_start = tmpl.nugget_start;
+    if (structure.size() > 1 && o.anisotropy != LikelihoodFitOptions::Anisotropy::None)
+      throw ArgumentError("--anisotropy " + a.anisotropy + " fits one structure; the template " + a.model + " has " +
+                          std::to_string(structure.size()));
+  } else {
+    if (!a.fix.empty())
+      throw ArgumentError("--fix holds parameters at a template's values: give --model as a template with values, "
+                          "e.g. 'nug(sill=0.1)+sph(sill=1,range=400)'");
+    structure = {structure_from(a)};
+  }
+  for (const ModelComponent& c : structure)
+    if (c.kind == ModelKind::Power || c.kind == ModelKind::Linear)
+      throw ArgumentError("--model " + a.model + ": the likelihood needs a covariance, i.e. a bounded model for every structure "
+                          "(sph, exp, gau, mat, wen)");
   o.method = likelihood_method_from(a.likelihood);
   o.vecchia_ordering = vecchia_ordering_from(a.ordering);
   o.vecchia_neighbours = a.neighbours;
@@ -137,10 +249,6 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
     throw ArgumentError("--vecchia-neighbours: " + std::to_string(a.neighbours) + "; expected 1 to " +
                         std::to_string(kMaxVecchiaNeighbours));
   o.validate();
-  const ModelComponent structure = structure_from(a);
-  if (structure.kind == ModelKind::Power || structure.kind == ModelKind::Linear)
-    throw ArgumentError("--model " + a.model + ": the likelihood needs a covariance, i.e. a bounded model "
-                        "(sph, exp, gau, mat, wen)");
   const auto coord_names = split_column_list(a.coords, "--coords");
   const auto value_names = split_column_list(a.value, "--value");
   const CsvTable t = CsvTable::read(a.input);
@@ -169,7 +277,7 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   stage(std::string(restricted ? "REML" : "ML") + " fit of " + std::to_string(t.row_count()) + " samples by the " +
         (vecchia_fit ? "Vecchia likelihood (" + std::to_string(o.vecchia_neighbours) + " neighbours per sample)"
                      : std::string("exact likelihood (O(N^3) per evaluation)")));
-  const LikelihoodFitResult r = with_source(a.input, [&] { return fit_likelihood(x, z, {structure}, o); });
+  const LikelihoodFitResult r = with_source(a.input, [&] { return fit_likelihood(x, z, structure, o); });
   stage("done");
   print_components(r.model);
   std::cout << (restricted ? "REML" : "ML") << " negative log-likelihood = " << format_number(r.negative_log_likelihood)
@@ -410,8 +518,33 @@ void run_fit_variogram(const FitVariogramArgs& a) {
   if (a.range_max_given && !(std::isfinite(a.range_max) && a.range_max > 0.0))
     throw ArgumentError("--range-max: " + format_number(a.range_max) + "; expected a finite range > 0 (lag unit)");
   o.range_max = a.range_max;
+  std::vector<ModelComponent> structure;
+  if (is_template(a.model)) {
+    const FitTemplate tmpl = parse_fit_template(a);
+    structure = tmpl.structure;
+    const Holds holds = parse_holds(a.fix, tmpl, a.model);
+    o.hold_sill = holds.sill;
+    o.hold_range = holds.range;
+    // The template's nug: the nugget's starting value (free), or its value when held. An explicit
+    // --nugget fixed=V|none overrides it.
+    if (holds.nugget) {
+      if (a.nugget_given && a.nugget != "free")
+        throw ArgumentError("--fix nugget and --nugget " + a.nugget + ": hold the template's nug, or give --nugget, not both");
+      o.nugget = NuggetMode::Fixed;
+      o.nugget_value = tmpl.nugget_start;
+    } else if (!a.nugget_given) {
+      o.nugget = tmpl.has_nugget ? NuggetMode::Free : NuggetMode::None;
+      o.nugget_start = tmpl.nugget_start;
+    } else if (o.nugget == NuggetMode::Free) {
+      o.nugget_start = tmpl.nugget_start;
+    }
+  } else {
+    if (!a.fix.empty())
+      throw ArgumentError("--fix holds parameters at a template's values: give --model as a template with values, "
+                          "e.g. 'nug(sill=0.1)+sph(sill=1,range=400)'");
+    structure = {structure_from(a)};
+  }
   o.validate();
-  const ModelComponent structure = structure_from(a);
 
   // Columns of `errfield variogram` (lag_mean, gamma, pairs), or gstat's (dist, gamma, np).
   const CsvTable t = CsvTable::read(a.input);
@@ -459,7 +592,7 @@ void run_fit_variogram(const FitVariogramArgs& a) {
   }
   if (h.empty()) throw InputError(a.input + ": no bin with pairs > 0; nothing to fit", a.input);
 
-  const VariogramFitResult r = fit_variogram(h, g, n, {structure}, o);
+  const VariogramFitResult r = fit_variogram(h, g, n, structure, o);
   const char* status = r.status == FitStatus::Converged        ? "converged"
                        : r.status == FitStatus::MaxEvaluations ? "max_evaluations"
                                                                : "failed";
@@ -471,6 +604,8 @@ void run_fit_variogram(const FitVariogramArgs& a) {
     nlohmann::json j = r.model;
     j["fit"] = {{"weights", std::string(weighting_name(o.weighting))},
                 {"nugget", a.nugget},
+                {"template", is_template(a.model) ? a.model : std::string()},
+                {"fix", a.fix},
                 {"weighted_sse", r.weighted_sse},
                 {"bins_used", r.bins_used},
                 {"evaluations", r.evaluations},
@@ -518,14 +653,23 @@ void add_fit_variogram_command(CLI::App& app) {
                   "ml/reml: columns COL[,COL...] of --input added to the drift F (with --kind ordinary: the "
                   "likelihood of kriging with external drift, interpolate --method kriging --covariates)");
   cmd->add_option("--model", args->model,
-                  "sph, exp, gau, mat (needs --nu), wen, pow or lin; with --lmc a template of bounded structures, "
-                  "e.g. nug(0)+sph(1,400) or nug+sph")
+                  "sph, exp, gau, mat (needs --nu), wen, pow or lin; or a nested template with starting values in "
+                  "the model text interpolate reads, e.g. 'nug(sill=2e4)+sph(sill=3e4,range=25)+sph(sill=4e4,range=80)' "
+                  "(gstat's vgm(..., add.to=...); its nug term is the nugget's start, or leave it out for no nugget); "
+                  "with --lmc a template of bounded structures, e.g. nug(0)+sph(1,400) or nug+sph")
       ->required();
+  cmd->add_option("--fix", args->fix,
+                  "with a --model template: parameters held at the template's values instead of fitted (gstat's "
+                  "fit.sills/fit.ranges = FALSE): sill, range (every structure), sillK, rangeK (the K-th structure, "
+                  "1-based, nugget not counted) or nugget (wls); a list, e.g. --fix range or --fix range1,sill2");
   cmd->add_option("--nu", args->nu_text,
                   "Matérn smoothness nu (gstat's kappa), fixed during the fit; ml/reml: 'auto' = the most likely of "
                   "0.5, 1.5, 2.5")
       ->each([args](const std::string&) { args->nu_given = true; });
-  cmd->add_option("--nugget", args->nugget, "free (default), fixed=V (value unit^2) or none");
+  cmd->add_option("--nugget", args->nugget,
+                  "free (default), fixed=V (value unit^2) or none; with a --model template the default follows the "
+                  "template: free from its nug term's value, none without one")
+      ->each([args](const std::string&) { args->nugget_given = true; });
   cmd->add_option("--weights", args->weights,
                   "wls: nj (N_j, gstat fit.method 1), nj_h2 (N_j/h_j^2, method 7, default), cressie "
                   "(N_j/model(h_j)^2, method 2); --lmc: nj, nj_h2 or unweighted (method 6)")
@@ -559,6 +703,8 @@ void add_fit_variogram_command(CLI::App& app) {
       "Example:\n"
       "  errfield variogram --input errors.csv --coords x,y,z --value dL --bins 0:2200:200 --out vario.csv\n"
       "  errfield fit-variogram --input vario.csv --model sph --nugget free --weights nj_h2 --out model.json\n"
+      "  errfield fit-variogram --input vario.csv --model 'nug(sill=0.1)+sph(sill=1,range=300)+sph(sill=1,range=1500)' \\\n"
+      "      --fix range1 --out nested.json   # nested structures; the first range held at 300\n"
       "  errfield fit-variogram --method reml --input errors.csv --coords x,y,z --value dL --model exp --out model.json\n"
       "  errfield variogram --input errors.csv --coords x,y,z --value dx,dy,dz --cross --out cross.csv\n"
       "  errfield fit-variogram --lmc --input cross.csv --value dx,dy,dz --model 'nug(0)+sph(1,400)' --out lmc.json\n"

@@ -1,5 +1,6 @@
 #include "errfield/kriging_likelihood.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -115,7 +116,26 @@ struct Problem {
   const LikelihoodFitOptions* options = nullptr;
   const detail::VecchiaNeighbours* neighbours = nullptr;  // Vecchia: isotropic, so fixed
   int evaluations = 0;
-  VariogramModel model_of(const double* theta) const {
+  // Held parameters: the optimizer sees only the entries of the full vector (log sill, log range
+  // per component, then log nugget) whose is_free is set; the others stay at full's values.
+  std::vector<double> full;
+  std::vector<bool> is_free;
+  std::vector<double> expand(const double* x) const {
+    std::vector<double> f = full;
+    std::size_t k = 0;
+    for (std::size_t p = 0; p < f.size(); ++p)
+      if (is_free[p]) f[p] = x[k++];
+    return f;
+  }
+  std::vector<double> compress(const std::vector<double>& f) const {
+    std::vector<double> x;
+    for (std::size_t p = 0; p < f.size(); ++p)
+      if (is_free[p]) x.push_back(f[p]);
+    return x;
+  }
+  VariogramModel model_of(const double* x) const {
+    const std::vector<double> f = expand(x);
+    const double* theta = f.data();
     std::vector<ModelComponent> c = structure;
     std::size_t t = 0;
     for (auto& comp : c) {
@@ -282,6 +302,12 @@ LikelihoodFitResult fit_likelihood_checked(const Eigen::MatrixXd& coordinates, c
   for (const auto& c : structure)
     if (c.kind != ModelKind::Nugget) non_nugget.push_back(c);
   const bool ard = options.anisotropy != LikelihoodFitOptions::Anisotropy::None;
+  const auto any = [](const std::vector<bool>& v) { return std::find(v.begin(), v.end(), true) != v.end(); };
+  const bool holds = any(options.hold_sill) || any(options.hold_range);
+  if (holds && ard)
+    throw ArgumentError("likelihood: held parameters (hold_sill / hold_range) are for isotropic fits; not with ARD or "
+                        "rotated anisotropy");
+  if (holds) return fit_bobyqa(coordinates, values, structure, options);
   if (non_nugget.size() == 1 && non_nugget[0].kind == ModelKind::Matern && !options.matern_nu_choices.empty()) {
     LikelihoodFitResult best;
     bool have = false;
@@ -365,24 +391,55 @@ LikelihoodFitResult fit_bobyqa(const Eigen::MatrixXd& coordinates, const Eigen::
   const double span = extent;
   std::vector<double> x0, lb, ub;
   const double ns = static_cast<double>(pr.structure.size());
-  for (const auto& c : pr.structure) {
+  for (const auto* hold : {&options.hold_sill, &options.hold_range})
+    if (!hold->empty() && hold->size() != pr.structure.size())
+      throw ArgumentError("likelihood: " + std::to_string(hold->size()) + " hold flags for " +
+                          std::to_string(pr.structure.size()) + " structure component(s); expected one per non-nugget "
+                          "component");
+  for (std::size_t i = 0; i < pr.structure.size(); ++i) {
+    const ModelComponent& c = pr.structure[i];
+    const bool hold_sill = !options.hold_sill.empty() && options.hold_sill[i];
+    const bool hold_range = !options.hold_range.empty() && options.hold_range[i];
+    const std::string name = std::string(model_kind_name(c.kind)) + " (structure " + std::to_string(i + 1) + ")";
+    if (hold_sill && !(c.sill > 0.0 && std::isfinite(c.sill)))
+      throw ArgumentError("likelihood: the sill of " + name + " is held but given as " + format_number(c.sill) +
+                          "; a held sill needs a value > 0");
+    if (hold_range && !(c.range > 0.0 && std::isfinite(c.range)))
+      throw ArgumentError("likelihood: the range of " + name + " is held but given as " + format_number(c.range) +
+                          "; a held range needs a value > 0");
     x0.push_back(std::log(c.sill > 0.0 ? c.sill : var / ns));
     lb.push_back(std::log(var * 1e-6));
     ub.push_back(std::log(var * 100.0));
+    pr.is_free.push_back(!hold_sill);
     x0.push_back(std::log(c.range > 0.0 ? c.range : span / 4.0));
     lb.push_back(std::log(span * 1e-4));
     ub.push_back(std::log(span * 10.0));
+    pr.is_free.push_back(!hold_range);
   }
   if (options.fit_nugget) {
-    x0.push_back(std::log(var * 0.05));
+    x0.push_back(std::log(options.nugget_start > 0.0 ? options.nugget_start : var * 0.05));
     lb.push_back(std::log(var * 1e-10));
     ub.push_back(std::log(var * 10.0));
+    pr.is_free.push_back(true);
   }
-  for (std::size_t i = 0; i < x0.size(); ++i) x0[i] = std::min(std::max(x0[i], lb[i]), ub[i]);
-  detail::Bobyqa bobyqa(lb, ub, options.relative_tolerance, options.max_evaluations, "fit_likelihood");
+  for (std::size_t i = 0; i < x0.size(); ++i)
+    if (pr.is_free[i]) x0[i] = std::min(std::max(x0[i], lb[i]), ub[i]);  // held: as given, even outside
+  pr.full = x0;
+  if (std::count(pr.is_free.begin(), pr.is_free.end(), true) == 0)
+    throw ArgumentError("likelihood: every parameter is held; nothing to fit");
+  const std::vector<double> lb_free = pr.compress(lb), ub_free = pr.compress(ub);
+  x0 = pr.compress(x0);
+  detail::Bobyqa bobyqa(lb_free, ub_free, options.relative_tolerance, options.max_evaluations, "fit_likelihood");
   const detail::BobyqaOutcome outcome = bobyqa.minimize(&objective, &pr, x0);
   LikelihoodFitResult res;
-  res.model = pr.model_of(x0.data());
+  res.model = [&] {  // held values exactly as given (exp(log(v)) may change the last bit)
+    std::vector<ModelComponent> c = pr.model_of(x0.data()).components();
+    for (std::size_t i = 0; i < pr.structure.size(); ++i) {
+      if (!options.hold_sill.empty() && options.hold_sill[i]) c[i].sill = pr.structure[i].sill;
+      if (!options.hold_range.empty() && options.hold_range[i]) c[i].range = pr.structure[i].range;
+    }
+    return VariogramModel(std::move(c));
+  }();
   res.negative_log_likelihood = nll_of_model(coordinates, z, f, res.model, options, pr.neighbours);
   res.evaluations = pr.evaluations;
   res.converged = outcome.converged;
@@ -392,7 +449,7 @@ LikelihoodFitResult fit_bobyqa(const Eigen::MatrixXd& coordinates, const Eigen::
                 " at the best parameters found (" + res.model.to_string() +
                 "): the covariance matrix is singular there (duplicate locations without a nugget?); no model to "
                 "report");
-  res.parameters = static_cast<int>(x0.size());
+  res.parameters = static_cast<int>(x0.size());  // the free ones
   for (const auto& c : res.model.components())
     if (c.kind != ModelKind::Nugget) {
       res.ranges.push_back(c.range);

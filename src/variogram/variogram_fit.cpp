@@ -42,6 +42,7 @@ void VariogramFitOptions::validate() const {
   if (range_min > 0.0 && range_max > 0.0 && !(range_max > range_min))
     fail("range_max", range_max, "> range_min = " + format_number(range_min));
   if (starts < 1) fail("starts", starts, "an integer >= 1");
+  if (!std::isfinite(nugget_start)) fail("nugget_start", nugget_start, "a finite value (<= 0: none)");
   if (!(relative_tolerance > 0.0 && relative_tolerance < 1.0))
     fail("relative_tolerance", relative_tolerance, "0 < tolerance < 1");
   if (max_evaluations < 10) fail("max_evaluations", max_evaluations, "an integer >= 10");
@@ -69,24 +70,44 @@ struct Problem {
   FitWeighting weighting;
   bool free_nugget;
   double fixed_nugget;  // scaled
+  // The full parameter vector (sill[, range] per component, then a free nugget), scaled; the
+  // optimizer sees only the entries whose `is_free` is set, the others stay at `full`'s values.
+  std::vector<double> full;
+  std::vector<bool> is_free;
   int evaluations = 0;
 
-  // x -> scaled components (structure, then a nugget if any).
-  std::vector<ModelComponent> components(const double* x) const {
+  // Optimizer's x (free entries only) -> the full parameter vector.
+  std::vector<double> expand(const double* x) const {
+    std::vector<double> f = full;
+    std::size_t k = 0;
+    for (std::size_t p = 0; p < f.size(); ++p)
+      if (is_free[p]) f[p] = x[k++];
+    return f;
+  }
+  std::vector<double> compress(const std::vector<double>& f) const {
+    std::vector<double> x;
+    for (std::size_t p = 0; p < f.size(); ++p)
+      if (is_free[p]) x.push_back(f[p]);
+    return x;
+  }
+
+  // Full parameter vector -> scaled components (structure, then a nugget if any).
+  std::vector<ModelComponent> components_of_full(const double* f) const {
     std::vector<ModelComponent> out = structure;
     std::size_t p = 0;
     for (auto& c : out) {
-      c.sill = x[p++];
-      if (has_range(c.kind)) c.range = x[p++];
+      c.sill = f[p++];
+      if (has_range(c.kind)) c.range = f[p++];
     }
-    const double nug = free_nugget ? x[p] : fixed_nugget;
+    const double nug = free_nugget ? f[p] : fixed_nugget;
     if (free_nugget || fixed_nugget > 0.0) out.push_back({ModelKind::Nugget, nug, 0.0, 0.5});
     return out;
   }
 
   double sse(const double* x) {
     ++evaluations;
-    const auto comps = components(x);
+    const std::vector<double> f = expand(x);
+    const auto comps = components_of_full(f.data());
     double s = 0.0;
     for (std::size_t j = 0; j < h.size(); ++j) {
       double m = 0.0;
@@ -185,7 +206,62 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
   }
   for (auto& u : ub)
     if (u > 1e6) u = 1e6;  // BOBYQA wants finite bounds; 10^6 x the scaled data is far outside
-  const std::size_t dim = lb.size();
+
+  // The caller's own parameters in scaled units (0 where not given): one of the starts, and the
+  // values of held parameters.
+  std::vector<double> given;
+  for (const auto& c : structure) {
+    if (c.kind == ModelKind::Power) {
+      given.push_back(c.sill > 0.0 ? c.sill * std::pow(h_scale, c.range) / g_scale : 0.0);
+      given.push_back(c.range);
+    } else if (c.kind == ModelKind::Linear) {
+      given.push_back(c.sill > 0.0 ? c.sill * h_scale / g_scale : 0.0);
+    } else {
+      given.push_back(c.sill > 0.0 ? c.sill / g_scale : 0.0);
+      given.push_back(c.range > 0.0 ? c.range / h_scale : 0.0);
+    }
+  }
+  const double nugget_given = options.nugget_start > 0.0 ? options.nugget_start / g_scale : 0.0;
+  if (pr.free_nugget) given.push_back(nugget_given);
+
+  // Held parameters (gstat's fit.sills / fit.ranges = FALSE).
+  const std::size_t n_full = lb.size();
+  pr.is_free.assign(n_full, true);
+  for (const auto* hold : {&options.hold_sill, &options.hold_range}) {
+    if (!hold->empty() && hold->size() != structure.size())
+      throw ArgumentError("fit_variogram: " + std::to_string(hold->size()) + " hold flags for " +
+                          std::to_string(structure.size()) +
+                          " structure component(s); expected one per non-nugget component");
+  }
+  {
+    std::size_t p = 0;
+    for (std::size_t i = 0; i < structure.size(); ++i) {
+      const ModelComponent& c = structure[i];
+      const std::string name = std::string(model_kind_name(c.kind)) + " (structure " + std::to_string(i + 1) + ")";
+      if (!options.hold_sill.empty() && options.hold_sill[i]) {
+        if (!(c.sill > 0.0 && std::isfinite(c.sill)))
+          throw ArgumentError("fit_variogram: the sill of " + name + " is held but given as " +
+                              format_number(c.sill) + "; a held sill needs a value > 0");
+        pr.is_free[p] = false;
+      }
+      ++p;
+      if (has_range(c.kind)) {
+        if (!options.hold_range.empty() && options.hold_range[i]) {
+          if (!(c.range > 0.0 && std::isfinite(c.range)))
+            throw ArgumentError("fit_variogram: the range of " + name + " is held but given as " +
+                                format_number(c.range) + "; a held range needs a value > 0");
+          pr.is_free[p] = false;
+        }
+        ++p;
+      } else if (!options.hold_range.empty() && options.hold_range[i]) {
+        throw ArgumentError("fit_variogram: " + name + " has no range to hold");
+      }
+    }
+  }
+  pr.full = given;
+  const std::size_t dim = static_cast<std::size_t>(std::count(pr.is_free.begin(), pr.is_free.end(), true));
+  if (dim == 0)
+    throw ArgumentError("fit_variogram: every parameter is held; nothing to fit");
   if (pr.h.size() < dim)
     throw ArgumentError("fit_variogram: " + std::to_string(pr.h.size()) + " usable bin(s) for " +
                         std::to_string(dim) + " free parameter(s); need at least as many bins");
@@ -195,7 +271,7 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
   const double g_first = pr.g.front();
   const double nug0 = pr.free_nugget ? std::min(0.5 * g_first, 0.5 * g_max) : 0.0;
   const double fractions[] = {1.0 / 3.0, 0.1, 0.6, 1.0, 0.03, 2.0, 0.2, 0.45, 1.5, 5.0};
-  std::vector<std::vector<double>> starts;
+  std::vector<std::vector<double>> starts;  // full vectors
   const int n_starts = std::min<int>(options.starts, static_cast<int>(std::size(fractions)));
   const double k = static_cast<double>(structure.size());
   for (int s = 0; s < n_starts; ++s) {
@@ -217,29 +293,23 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
     if (pr.free_nugget) x.push_back(nug0);
     starts.push_back(std::move(x));
   }
-  {  // the caller's own parameters, when complete
-    std::vector<double> x;
+  {  // the caller's own parameters, when every free one is given (a free nugget may be left out)
     bool usable = true;
-    for (const auto& c : structure) {
-      if (!(c.sill > 0.0)) usable = false;
-      if (c.kind == ModelKind::Power) {
-        x.push_back(c.sill * std::pow(h_scale, c.range) / g_scale);
-        x.push_back(c.range);
-      } else if (c.kind == ModelKind::Linear) {
-        x.push_back(c.sill * h_scale / g_scale);
-      } else {
-        if (!(c.range > 0.0)) usable = false;
-        x.push_back(c.sill / g_scale);
-        x.push_back(c.range / h_scale);
-      }
-    }
-    if (pr.free_nugget) x.push_back(nug0);
+    std::vector<double> x = given;
+    for (std::size_t p = 0; p + (pr.free_nugget ? 1 : 0) < n_full; ++p)
+      if (!(x[p] > 0.0)) usable = false;
+    if (pr.free_nugget && !(x.back() > 0.0)) x.back() = nug0;
     if (usable) starts.insert(starts.begin(), std::move(x));
   }
   for (auto& x : starts)
-    for (std::size_t p = 0; p < dim; ++p) x[p] = std::clamp(x[p], lb[p], ub[p]);
+    for (std::size_t p = 0; p < n_full; ++p) {
+      if (!pr.is_free[p]) x[p] = given[p];  // held: exactly the given value, even outside the box
+      else x[p] = std::clamp(x[p], lb[p], ub[p]);
+    }
+  std::vector<double> lb_free = pr.compress(lb), ub_free = pr.compress(ub);
+  for (auto& x : starts) x = pr.compress(x);
 
-  detail::Bobyqa bobyqa(lb, ub, options.relative_tolerance, options.max_evaluations, "fit_variogram");
+  detail::Bobyqa bobyqa(lb_free, ub_free, options.relative_tolerance, options.max_evaluations, "fit_variogram");
   auto local = [&](std::vector<double>& x) {
     // Initial steps: a tenth of the parameter's size, at least a small absolute one.
     std::vector<double> step(dim);
@@ -282,11 +352,12 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
                                                  : FitStatus::Failed;
   // A parameter stuck at an upper bound usually means the structure does not fit the data (e.g. a
   // bounded model on a variogram that keeps rising): say so.
-  for (std::size_t p = 0; p < dim; ++p)
-    if (ub[p] > lb[p] && best[p] >= ub[p] * (1 - 1e-9))
+  const std::vector<double> best_full = pr.expand(best.data());
+  for (std::size_t p = 0; p < n_full; ++p)
+    if (pr.is_free[p] && ub[p] > lb[p] && best_full[p] >= ub[p] * (1 - 1e-9))
       result.message += "; parameter " + std::to_string(p + 1) + " at its upper bound";
   // Back to the data's units.
-  std::vector<ModelComponent> comps = pr.components(best.data());
+  std::vector<ModelComponent> comps = pr.components_of_full(best_full.data());
   for (auto& c : comps) {
     switch (c.kind) {
       case ModelKind::Power: c.sill = c.sill * g_scale / std::pow(h_scale, c.range); break;
@@ -296,6 +367,10 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
         c.sill *= g_scale;
         c.range *= h_scale;
     }
+  }
+  for (std::size_t i = 0; i < structure.size(); ++i) {  // held values exactly as given
+    if (!options.hold_sill.empty() && options.hold_sill[i]) comps[i].sill = structure[i].sill;
+    if (!options.hold_range.empty() && options.hold_range[i]) comps[i].range = structure[i].range;
   }
   if (options.nugget == NuggetMode::Fixed) {
     // Keep the exact fixed value (scaling round trip may change the last bit).

@@ -202,6 +202,72 @@ TEST_F(VariogramCli, FitVariogramPrintsAndWritesALoadableModel) {
   EXPECT_EQ(run("fit-variogram --help").exit_code, 0);
 }
 
+// A nested template with starting values and held parameters (issue 36): the CLI writes the
+// library's fit of the same template, keeps held values as given, and names what it refuses.
+TEST_F(VariogramCli, FitVariogramTakesANestedTemplateAndHeldParameters) {
+  Eigen::MatrixXd x, z;
+  write("in.csv", simulated_csv(200, 11, &x, &z));
+  ASSERT_EQ(run("variogram --input " + path("in.csv") + " --coords x,y,z --value dL --bins 0:1200:100 --out " +
+                path("v.csv"))
+                .exit_code,
+            0);
+  const std::string tmpl = "nug(sill=0.01)+sph(sill=0.2,range=150)+sph(sill=0.3,range=700)";
+  const auto r = run("fit-variogram --input " + path("v.csv") + " --model '" + tmpl + "' --fix range1 --out " +
+                     path("m.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto lib_vg = empirical_variogram(x, z.col(0), LagBins::uniform(0.0, 1200.0, 100.0));
+  VariogramFitOptions o;
+  o.nugget_start = 0.01;
+  o.hold_range = {true, false};
+  const auto lib = fit_variogram(lib_vg, {{ModelKind::Spherical, 0.2, 150, 0.5}, {ModelKind::Spherical, 0.3, 700, 0.5}}, o);
+  const auto model = nlohmann::json::parse(read("m.json")).get<VariogramModel>();
+  EXPECT_EQ(model.to_string(), lib.model.to_string());
+  ASSERT_EQ(model.components().size(), 3u);
+  EXPECT_EQ(model.components()[0].range, 150.0);
+  // Without a nug term the template has no nugget; --fix nugget holds the template's.
+  const auto none = run("fit-variogram --input " + path("v.csv") + " --model 'sph(sill=0.2,range=150)' --out " +
+                        path("n.json"));
+  ASSERT_EQ(none.exit_code, 0) << none.err;
+  EXPECT_EQ(nlohmann::json::parse(read("n.json")).get<VariogramModel>().nugget(), 0.0);
+  const auto held = run("fit-variogram --input " + path("v.csv") + " --model '" + tmpl + "' --fix nugget,sill2 --out " +
+                        path("h.json"));
+  ASSERT_EQ(held.exit_code, 0) << held.err;
+  const auto hm = nlohmann::json::parse(read("h.json")).get<VariogramModel>();
+  EXPECT_EQ(hm.nugget(), 0.01);
+  EXPECT_EQ(hm.components()[1].sill, 0.3);
+
+  auto bad = run("fit-variogram --input " + path("v.csv") + " --model sph --fix range");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("template"), std::string::npos) << bad.err;
+  bad = run("fit-variogram --input " + path("v.csv") + " --model '" + tmpl + "' --fix range3");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("range1..range2"), std::string::npos) << bad.err;
+  bad = run("fit-variogram --input " + path("v.csv") + " --model '" + tmpl + "' --fix speed");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--fix: 'speed'"), std::string::npos) << bad.err;
+  bad = run("fit-variogram --input " + path("v.csv") + " --model 'sph(sill=0.2,range=150)' --fix nugget");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("no nug term"), std::string::npos) << bad.err;
+  bad = run("fit-variogram --input " + path("v.csv") + " --model 'sph(sill=0.2,range=150)@anis(30,0.5)'");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("isotropic"), std::string::npos) << bad.err;
+  bad = run("fit-variogram --method reml --input " + path("in.csv") + " --coords x,y,z --value dL --model '" + tmpl +
+            "' --fix nugget");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--fix nugget applies to --method wls"), std::string::npos) << bad.err;
+  // REML with a held range: the CLI writes the library's fit, the range as given.
+  const auto reml = run("fit-variogram --method reml --input " + path("in.csv") + " --coords x,y,z --value dL --model '" +
+                        tmpl + "' --fix range2 --out " + path("r.json"));
+  ASSERT_EQ(reml.exit_code, 0) << reml.err;
+  LikelihoodFitOptions lo;
+  lo.nugget_start = 0.01;
+  lo.hold_range = {false, true};
+  const auto rlib = fit_likelihood(x, z.col(0), {{ModelKind::Spherical, 0.2, 150, 0.5}, {ModelKind::Spherical, 0.3, 700, 0.5}}, lo);
+  const auto rm = nlohmann::json::parse(read("r.json")).get<VariogramModel>();
+  EXPECT_EQ(rm.to_string(), rlib.model.to_string());
+  EXPECT_EQ(rm.components()[1].range, 700.0);
+}
+
 TEST_F(VariogramCli, FitVariogramByLikelihoodMatchesTheLibraryAndRefusesWhatDoesNotApply) {
   // (The optimum itself is checked against scipy in tests/peers/scipy_likelihood_test.cpp.)
   Eigen::MatrixXd x, z;

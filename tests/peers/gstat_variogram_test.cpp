@@ -154,5 +154,57 @@ TEST_F(GstatPeer, FitIsAtLeastAsGoodAsGstatFitVariogram) {
   }
 }
 
+
+// Nested fits (issue 36): nug + sph + sph from one template, as gstat's vgm(..., add.to = ...), on a
+// variogram that follows a nested model (gstat_variogram.R). Every parameter free: our weighted SSE
+// reaches gstat's or lower. Ranges held (fit.ranges = FALSE): the sills solve a linear weighted
+// least squares whose optimum is inside the feasible set here, unique, so both give the same sills.
+TEST_F(GstatPeer, NestedTemplateFitsReachGstatsSse) {
+  const CsvTable vg = CsvTable::read((dir_ / "gstat_nested_vario.csv").string());
+  const auto h = vg.numeric_column("dist");
+  const auto g = vg.numeric_column("gamma");
+  std::vector<std::uint64_t> n;
+  for (double v : vg.numeric_column("np")) n.push_back(static_cast<std::uint64_t>(v));
+  const CsvTable fits = CsvTable::read((dir_ / "gstat_nested.csv").string());
+  const auto method = fits.numeric_column("method");
+  const auto structure = fits.numeric_column("structure");
+  const auto start_psill = fits.numeric_column("start_psill");
+  const auto start_range = fits.numeric_column("start_range");
+  const auto psill = fits.numeric_column("psill");
+  const auto range = fits.numeric_column("range");
+  ASSERT_EQ(fits.row_count(), 12u);  // 2 cases x 2 methods x 3 rows
+  for (std::size_t r0 = 0; r0 < fits.row_count(); r0 += 3) {
+    const std::string fit_case = fits.row(r0)[fits.column_index("case")];
+    SCOPED_TRACE(fit_case + " fit.method " + format_number(method[r0]));
+    ASSERT_EQ(structure[r0], 0.0);  // gstat's first row is the nugget
+    VariogramFitOptions o;
+    o.weighting = weighting_from_name(format_number(method[r0]));
+    o.nugget_start = start_psill[r0];
+    std::vector<ModelComponent> tmpl, theirs;
+    for (std::size_t r = r0 + 1; r < r0 + 3; ++r) {
+      tmpl.push_back({ModelKind::Spherical, start_psill[r], start_range[r], 0.5});
+      theirs.push_back({ModelKind::Spherical, psill[r], range[r], 0.5});
+    }
+    theirs.push_back({ModelKind::Nugget, psill[r0], 0.0, 0.5});
+    if (fit_case == "fixed_ranges") o.hold_range = {true, true};
+    const auto ours = fit_variogram(h, g, n, tmpl, o);
+    ASSERT_EQ(ours.status, FitStatus::Converged) << ours.message;
+    const double sse_theirs = weighted_sse(h, g, n, VariogramModel(theirs), o.weighting);
+    EXPECT_LE(ours.weighted_sse, sse_theirs * (1 + 1e-6))
+        << "ours " << ours.model.to_string() << "; gstat " << VariogramModel(theirs).to_string();
+    if (fit_case == "fixed_ranges") {
+      const auto& c = ours.model.components();
+      ASSERT_EQ(c.size(), 3u);
+      for (int k = 0; k < 2; ++k) {
+        EXPECT_EQ(c[k].range, theirs[k].range);
+        EXPECT_NEAR(c[k].sill, theirs[k].sill, 1e-6 * VariogramModel(theirs).sill());
+      }
+      EXPECT_NEAR(ours.model.nugget(), psill[r0], 1e-6 * VariogramModel(theirs).sill());
+    }
+    RecordProperty(fit_case + "_" + format_number(method[r0]) + "_sse_ratio",
+                   format_number(ours.weighted_sse / sse_theirs));
+  }
+}
+
 }  // namespace
 }  // namespace errfield
