@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <random>
 
@@ -220,6 +221,88 @@ INSTANTIATE_TEST_SUITE_P(SimpleOrdinaryUniversal, KrigingVariants, ::testing::Va
                                                                           : info.param == 1 ? "universal1"
                                                                                             : "universal2");
                          });
+
+// Simulated: an 11 x 11 integer grid (z = 0) with a smooth field + a deterministic wiggle, so that
+// many samples lie at exactly the same distance from an integer or half-integer target. The grid
+// points kIntegerTargets are left out: a target on a sample would be predicted exactly whatever
+// its neighbours.
+const std::vector<P3> kIntegerTargets{{5, 5, 0}, {0, 3, 0}, {7, 2, 0}, {3, 7, 0}, {8, 1, 0}};
+Data integer_grid() {
+  Data d;
+  for (int x = 0; x <= 10; ++x)
+    for (int y = 0; y <= 10; ++y) {
+      if (std::find(kIntegerTargets.begin(), kIntegerTargets.end(), P3(x, y, 0)) != kIntegerTargets.end()) continue;
+      d.points.emplace_back(x, y, 0.0);
+      d.values.push_back(std::sin(0.4 * x) + 0.3 * y + 0.05 * ((x * 7 + y * 13) % 5));
+    }
+  return d;
+}
+
+// The brute-force neighbourhood: samples at squared distance <= r * r (the same sum of squares
+// gstat forms), the k nearest of them by (squared distance, index) when k > 0.
+Data brute_force_neighbours(const Data& d, const P3& target, double r, std::size_t k) {
+  std::vector<std::pair<double, std::size_t>> ranked;
+  for (std::size_t i = 0; i < d.points.size(); ++i) {
+    const double dx = d.points[i].x() - target.x(), dy = d.points[i].y() - target.y(), dz = d.points[i].z() - target.z();
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    if (d2 <= r * r) ranked.emplace_back(d2, i);
+  }
+  std::sort(ranked.begin(), ranked.end());
+  if (k > 0 && ranked.size() > k) ranked.resize(k);
+  Data sub;
+  for (const auto& [d2, i] : ranked) {
+    sub.points.push_back(d.points[i]);
+    sub.values.push_back(d.values[i]);
+  }
+  return sub;
+}
+
+TEST(Kriging, LocalRadiusIncludesSamplesAtExactlyTheRadius) {
+  const Data d = integer_grid();
+  const auto model = VariogramModel::parse("sph(sill=1,range=6)+nug(0.05)");
+  // Integer targets: ties at 2 (up to 4 samples) and 5 (up to 12: 5-0 and 3-4); (x + 0.5, y)
+  // targets: ties at 1.5 (2) and 2.5 (6: 2.5-0 and 1.5-2). Inside, at the border, at a corner.
+  std::vector<P3> targets = kIntegerTargets;
+  for (const P3& t : {P3(4.5, 6, 0), P3(0.5, 0, 0), P3(9.5, 10, 0), P3(2.5, 3, 0)}) targets.push_back(t);
+  for (double r : {1.5, 2.0, 2.5, 5.0}) {
+    KrigingOptions opt;
+    opt.backend = KrigingBackend::Local;
+    opt.radius = r;
+    const auto pred = Kriging<P3, double>(d.points, d.values, model, opt).predict(targets);
+    ASSERT_TRUE(pred.usable()) << pred.message;
+    for (std::size_t t = 0; t < targets.size(); ++t) {
+      const Data sub = brute_force_neighbours(d, targets[t], r, 0);
+      const auto ref = reference(sub, targets[t], model, 0);
+      // Both solve the same well-conditioned (< 100 unknowns) system: rounding only.
+      EXPECT_NEAR(pred.mean[t], ref.mean, 1e-10) << "radius " << r << ", target " << t << ", " << sub.points.size()
+                                                 << " samples within";
+      EXPECT_NEAR(pred.variance[t], ref.variance, 1e-10) << "radius " << r << ", target " << t;
+    }
+  }
+}
+
+TEST(Kriging, LocalNearestTiesAreBrokenBySampleOrder) {
+  // With k = 6 at an integer target (off the samples) the cut falls among the 4 samples at sqrt(2)
+  // (at the border: among those at 2): which of them the kd-tree returns first is its internal
+  // order; the selection must not depend on it.
+  const Data d = integer_grid();
+  const auto model = VariogramModel::parse("exp(sill=1,range=4)+nug(0.02)");
+  const std::vector<P3>& targets = kIntegerTargets;
+  for (double r : {std::numeric_limits<double>::infinity(), 1.5}) {
+    KrigingOptions opt;
+    opt.backend = KrigingBackend::Local;
+    opt.neighbors = 6;
+    opt.radius = r;
+    const auto pred = Kriging<P3, double>(d.points, d.values, model, opt).predict(targets);
+    ASSERT_TRUE(pred.usable()) << pred.message;
+    for (std::size_t t = 0; t < targets.size(); ++t) {
+      const Data sub = brute_force_neighbours(d, targets[t], r, 6);
+      const auto ref = reference(sub, targets[t], model, 0);
+      EXPECT_NEAR(pred.mean[t], ref.mean, 1e-10) << "radius " << r << ", target " << t;
+      EXPECT_NEAR(pred.variance[t], ref.variance, 1e-10) << "radius " << r << ", target " << t;
+    }
+  }
+}
 
 TEST(Kriging, OrdinaryWeightsSumToOne) {
   const Data d = make_data(70, 31);

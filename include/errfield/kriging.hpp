@@ -151,7 +151,9 @@ struct KrigingOptions {
   /// Local: number of nearest samples per target (gstat's nmax); 0 = no limit (then radius must
   /// be finite). Must be at least the number of drift terms.
   std::size_t neighbors = 0;
-  /// Local: only samples at lag < radius (gstat's maxdist), lag unit; infinity = no limit.
+  /// Local: only samples at lag <= radius (gstat's maxdist: a sample at exactly the radius is
+  /// included), lag unit; infinity = no limit. With `neighbors`, the k nearest of those; equal
+  /// distances are taken in increasing sample order.
   double radius = std::numeric_limits<double>::infinity();
   /// Local: which distance chooses the neighbours and measures `radius` (NeighbourMetric).
   NeighbourMetric neighbour_metric = NeighbourMetric::Model;
