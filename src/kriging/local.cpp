@@ -69,6 +69,10 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
   const bool want_w = (options_.keep_weights || with_weights) && !leave_one_out;
   const double c00 = block_variance(embedded, block_weights);  // the target's own variance (a block's average)
   const double zero_lag = target_variance();          // C(0) between a sample and a target point
+  // Between a sample and a point of a block's discretization: the nugget (micro-scale variation or
+  // noise) averages out over the block, so a discretization point on a sample contributes C(0+),
+  // as gstat has it; with C(0) the result would jump as the block moves by a hair.
+  const double block_zero_lag = kernel_.sill() - kernel_.nugget();
   // Blocks: the neighbours of the block's centre (the mean of its points), as gstat does.
   Eigen::MatrixXd centre_embedded, centre_raw;
   if (group > 1) {
@@ -188,7 +192,7 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
           for (Eigen::Index j = 0; j < group; ++j)
             sum += block_weights[j] * kernel_(kernels::column_distance(points_.col(s).data(),
                                                                       embedded.col(t * group + j).data(), dimension_),
-                                              zero_lag);
+                                              block_zero_lag);
           c0[i] = sum;
         }
         y.row(i) = values_.row(s);
