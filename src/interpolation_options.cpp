@@ -3,6 +3,7 @@
 #include "errfield/interpolation_options.hpp"
 
 #include <cmath>
+#include <tuple>
 
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
@@ -70,6 +71,15 @@ KrigingOptions kriging_options_from_text(const KrigingOptionText& t, const Optio
     if (*t.neighbour_metric == "model") o.neighbour_metric = NeighbourMetric::Model;
     else if (*t.neighbour_metric == "euclidean") o.neighbour_metric = NeighbourMetric::Euclidean;
     else throw ArgumentError(n.neighbour_metric + " is " + quoted(*t.neighbour_metric) + "; expected model or euclidean");
+  }
+
+  for (const auto& [value, name, field] :
+       {std::tuple{t.min_neighbours, n.min_neighbours, &o.min_neighbours}, std::tuple{t.octant_max, n.octant_max, &o.octant_max}}) {
+    if (!value || *value == 0) continue;
+    if (o.backend != KrigingBackend::Local)
+      throw ArgumentError(name + " applies to the neighbourhood of " + n.backend + " local (with " + n.neighbors + " or " +
+                          n.radius + ")");
+    *field = *value;
   }
 
   if (t.nugget == "micro") o.nugget = NuggetTreatment::MicroScale;

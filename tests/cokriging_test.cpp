@@ -5,6 +5,7 @@
 
 #include "errfield/cokriging.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -282,6 +283,45 @@ TEST(Cokriging, LocalWithAllSamplesEqualsDense) {
         EXPECT_LT((dc.residual[i] - lc.residual[i]).cwiseAbs().maxCoeff(), 1e-9) << "sample " << i;
         EXPECT_LT((dc.covariance[i] - lc.covariance[i]).cwiseAbs().maxCoeff(), 1e-9) << "sample " << i;
       }
+    }
+  }
+}
+
+TEST(Cokriging, LocalRadiusIncludesSamplesAtExactlyTheRadius) {
+  // An 8 x 8 integer grid without the integer targets (a target on a sample is predicted exactly
+  // whatever its neighbours): they have up to 4 samples at exactly 2, (x + 0.5, y) targets up to 6
+  // at exactly 2.5. The local back end must equal the bordered system on the samples at distance
+  // <= R (chosen by brute force here, with the sum of squares gstat's maxdist compares).
+  const std::vector<Point> integer_targets{{3, 4}, {0, 2}, {7, 7}};
+  std::vector<Point> x;
+  for (int i = 0; i < 8; ++i)
+    for (int j = 0; j < 8; ++j)
+      if (std::find(integer_targets.begin(), integer_targets.end(), Point(i, j)) == integer_targets.end()) x.emplace_back(i, j);
+  const auto values = some_values<Eigen::Vector2d>(x);
+  const CoregionalizationModel model = heterogeneous_model(2);
+  std::vector<Point> targets = integer_targets;
+  targets.insert(targets.end(), {Point(2.5, 5), Point(0.5, 0), Point(4.5, 3)});
+  for (double r : {2.0, 2.5}) {
+    KrigingOptions o;
+    o.backend = KrigingBackend::Local;
+    o.radius = r;
+    const auto pred = Cokriging<Point, Eigen::Vector2d>(x, values, model, o).predict(targets);
+    ASSERT_TRUE(pred.usable()) << pred.message;
+    for (std::size_t t = 0; t < targets.size(); ++t) {
+      std::vector<Point> near;
+      std::vector<Eigen::Vector2d> near_values;
+      for (std::size_t i = 0; i < x.size(); ++i) {
+        const double dx = x[i].x() - targets[t].x(), dy = x[i].y() - targets[t].y();
+        if (dx * dx + dy * dy <= r * r) {
+          near.push_back(x[i]);
+          near_values.push_back(values[i]);
+        }
+      }
+      const Reference ref = bordered_cokriging(near, as_matrix(near_values), model, targets[t], KrigingKind::Ordinary, 0,
+                                               Eigen::VectorXd::Zero(2), false);
+      // O(1) values and sills, systems of at most 2 x 13 unknowns: rounding only.
+      EXPECT_LT((pred.mean[t] - ref.mean).cwiseAbs().maxCoeff(), 1e-10) << "radius " << r << ", target " << t;
+      EXPECT_LT((pred.covariance[t] - ref.cov).cwiseAbs().maxCoeff(), 1e-10) << "radius " << r << ", target " << t;
     }
   }
 }

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <random>
 
@@ -220,6 +221,157 @@ INSTANTIATE_TEST_SUITE_P(SimpleOrdinaryUniversal, KrigingVariants, ::testing::Va
                                                                           : info.param == 1 ? "universal1"
                                                                                             : "universal2");
                          });
+
+// Simulated: an 11 x 11 integer grid (z = 0) with a smooth field + a deterministic wiggle, so that
+// many samples lie at exactly the same distance from an integer or half-integer target. The grid
+// points kIntegerTargets are left out: a target on a sample would be predicted exactly whatever
+// its neighbours.
+const std::vector<P3> kIntegerTargets{{5, 5, 0}, {0, 3, 0}, {7, 2, 0}, {3, 7, 0}, {8, 1, 0}};
+Data integer_grid() {
+  Data d;
+  for (int x = 0; x <= 10; ++x)
+    for (int y = 0; y <= 10; ++y) {
+      if (std::find(kIntegerTargets.begin(), kIntegerTargets.end(), P3(x, y, 0)) != kIntegerTargets.end()) continue;
+      d.points.emplace_back(x, y, 0.0);
+      d.values.push_back(std::sin(0.4 * x) + 0.3 * y + 0.05 * ((x * 7 + y * 13) % 5));
+    }
+  return d;
+}
+
+// The brute-force neighbourhood: samples at squared distance <= r * r (the same sum of squares
+// gstat forms), the k nearest of them by (squared distance, index) when k > 0.
+Data brute_force_neighbours(const Data& d, const P3& target, double r, std::size_t k) {
+  std::vector<std::pair<double, std::size_t>> ranked;
+  for (std::size_t i = 0; i < d.points.size(); ++i) {
+    const double dx = d.points[i].x() - target.x(), dy = d.points[i].y() - target.y(), dz = d.points[i].z() - target.z();
+    const double d2 = dx * dx + dy * dy + dz * dz;
+    if (d2 <= r * r) ranked.emplace_back(d2, i);
+  }
+  std::sort(ranked.begin(), ranked.end());
+  if (k > 0 && ranked.size() > k) ranked.resize(k);
+  Data sub;
+  for (const auto& [d2, i] : ranked) {
+    sub.points.push_back(d.points[i]);
+    sub.values.push_back(d.values[i]);
+  }
+  return sub;
+}
+
+TEST(Kriging, LocalRadiusIncludesSamplesAtExactlyTheRadius) {
+  const Data d = integer_grid();
+  const auto model = VariogramModel::parse("sph(sill=1,range=6)+nug(0.05)");
+  // Integer targets: ties at 2 (up to 4 samples) and 5 (up to 12: 5-0 and 3-4); (x + 0.5, y)
+  // targets: ties at 1.5 (2) and 2.5 (6: 2.5-0 and 1.5-2). Inside, at the border, at a corner.
+  std::vector<P3> targets = kIntegerTargets;
+  for (const P3& t : {P3(4.5, 6, 0), P3(0.5, 0, 0), P3(9.5, 10, 0), P3(2.5, 3, 0)}) targets.push_back(t);
+  for (double r : {1.5, 2.0, 2.5, 5.0}) {
+    KrigingOptions opt;
+    opt.backend = KrigingBackend::Local;
+    opt.radius = r;
+    const auto pred = Kriging<P3, double>(d.points, d.values, model, opt).predict(targets);
+    ASSERT_TRUE(pred.usable()) << pred.message;
+    for (std::size_t t = 0; t < targets.size(); ++t) {
+      const Data sub = brute_force_neighbours(d, targets[t], r, 0);
+      const auto ref = reference(sub, targets[t], model, 0);
+      // Both solve the same well-conditioned (< 100 unknowns) system: rounding only.
+      EXPECT_NEAR(pred.mean[t], ref.mean, 1e-10) << "radius " << r << ", target " << t << ", " << sub.points.size()
+                                                 << " samples within";
+      EXPECT_NEAR(pred.variance[t], ref.variance, 1e-10) << "radius " << r << ", target " << t;
+    }
+  }
+}
+
+TEST(Kriging, LocalNearestTiesAreBrokenBySampleOrder) {
+  // With k = 6 at an integer target (off the samples) the cut falls among the 4 samples at sqrt(2)
+  // (at the border: among those at 2): which of them the kd-tree returns first is its internal
+  // order; the selection must not depend on it.
+  const Data d = integer_grid();
+  const auto model = VariogramModel::parse("exp(sill=1,range=4)+nug(0.02)");
+  const std::vector<P3>& targets = kIntegerTargets;
+  for (double r : {std::numeric_limits<double>::infinity(), 1.5}) {
+    KrigingOptions opt;
+    opt.backend = KrigingBackend::Local;
+    opt.neighbors = 6;
+    opt.radius = r;
+    const auto pred = Kriging<P3, double>(d.points, d.values, model, opt).predict(targets);
+    ASSERT_TRUE(pred.usable()) << pred.message;
+    for (std::size_t t = 0; t < targets.size(); ++t) {
+      const Data sub = brute_force_neighbours(d, targets[t], r, 6);
+      const auto ref = reference(sub, targets[t], model, 0);
+      EXPECT_NEAR(pred.mean[t], ref.mean, 1e-10) << "radius " << r << ", target " << t;
+      EXPECT_NEAR(pred.variance[t], ref.variance, 1e-10) << "radius " << r << ", target " << t;
+    }
+  }
+}
+
+// gstat's quadrant of sample p around target q (its which_octant, 2-D): a sample on a dividing axis
+// goes to the quadrant that the axis starts when turning counter-clockwise around the target.
+int quadrant_around(const P3& p, const P3& q) {
+  const double dx = p.x() - q.x(), dy = p.y() - q.y();
+  const int x = dy < 0 ? dx > 0 : dx >= 0;
+  const int y = dx < 0 ? dy >= 0 : dy > 0;
+  return x + 2 * y;
+}
+
+TEST(Kriging, LocalMinimumAndOctantSearchAreGstatsNminAndOmax) {
+  const Data d = integer_grid();
+  const auto model = VariogramModel::parse("sph(sill=1,range=6)+nug(0.05)");
+  std::vector<P3> targets = kIntegerTargets;
+  for (const P3& t : {P3(4.5, 6, 0), P3(0.5, 0, 0), P3(9.5, 10, 0), P3(2.5, 3, 0)}) targets.push_back(t);
+  for (const std::size_t k : {std::size_t{0}, std::size_t{12}})
+    for (const std::size_t min_count : {std::size_t{0}, std::size_t{14}})
+      for (const std::size_t omax : {std::size_t{0}, std::size_t{1}, std::size_t{2}, std::size_t{3}}) {
+        const double r = 2.5;
+        KrigingOptions opt;
+        opt.backend = KrigingBackend::Local;
+        opt.radius = r;
+        opt.neighbors = k;
+        opt.min_neighbours = min_count;
+        opt.octant_max = omax;
+        const auto pred = Kriging<P3, double>(d.points, d.values, model, opt).predict(targets);
+        std::size_t refused = 0;
+        for (std::size_t t = 0; t < targets.size(); ++t) {
+          // Brute force: the k nearest within r by (squared distance, index); none if fewer than
+          // min_count; then per quadrant the omax nearest.
+          std::vector<std::pair<double, std::size_t>> ranked;
+          for (std::size_t i = 0; i < d.points.size(); ++i) {
+            const double dx = d.points[i].x() - targets[t].x(), dy = d.points[i].y() - targets[t].y();
+            if (dx * dx + dy * dy <= r * r) ranked.emplace_back(dx * dx + dy * dy, i);
+          }
+          std::sort(ranked.begin(), ranked.end());
+          if (k > 0 && ranked.size() > k) ranked.resize(k);
+          const std::string where = "k " + std::to_string(k) + ", min " + std::to_string(min_count) + ", omax " +
+                                    std::to_string(omax) + ", target " + std::to_string(t);
+          if (ranked.size() < min_count) {
+            ++refused;
+            EXPECT_TRUE(std::isnan(pred.mean[t]) && std::isnan(pred.variance[t])) << where;
+            continue;
+          }
+          Data sub;
+          std::size_t per_quadrant[4] = {};
+          for (const auto& [d2, i] : ranked)
+            if (omax == 0 || per_quadrant[quadrant_around(d.points[i], targets[t])]++ < omax) {
+              sub.points.push_back(d.points[i]);
+              sub.values.push_back(d.values[i]);
+            }
+          const auto ref = reference(sub, targets[t], model, 0);
+          EXPECT_NEAR(pred.mean[t], ref.mean, 1e-10) << where << ", " << sub.points.size() << " neighbours";
+          EXPECT_NEAR(pred.variance[t], ref.variance, 1e-10) << where;
+        }
+        EXPECT_EQ(pred.failed_targets, refused);
+        if (refused > 0) {
+          EXPECT_EQ(pred.status, KrigingStatus::TooFewSamples);
+          EXPECT_NE(pred.message.find("min_neighbours = 14"), std::string::npos) << pred.message;
+        }
+      }
+  // Octant search needs at most 3 coordinates, and both need the local back end.
+  KrigingOptions dense;
+  dense.octant_max = 2;
+  EXPECT_THROW(dense.validate(), ArgumentError);
+  dense.octant_max = 0;
+  dense.min_neighbours = 3;
+  EXPECT_THROW(dense.validate(), ArgumentError);
+}
 
 TEST(Kriging, OrdinaryWeightsSumToOne) {
   const Data d = make_data(70, 31);

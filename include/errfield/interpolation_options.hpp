@@ -25,6 +25,8 @@ struct OptionNames {
   std::string neighbors = "neighbors";
   std::string radius = "radius";
   std::string neighbour_metric = "neighbour_metric";
+  std::string min_neighbours = "min_neighbours";
+  std::string octant_max = "octant_max";
   std::string nugget = "nugget";
   std::string duplicates = "duplicates";
   std::string power = "power";
@@ -41,13 +43,17 @@ struct KrigingOptionText {
   std::optional<std::vector<double>> mean;
   /// dense | local | sparse; unset: local when neighbors or radius is given, else dense.
   std::optional<std::string> backend;
-  /// Local back end: k nearest samples (gstat's nmax) and/or lag < radius (gstat's maxdist). Only
+  /// Local back end: k nearest samples (gstat's nmax) and/or lag <= radius (gstat's maxdist). Only
   /// with the local back end, which needs at least one of them.
   std::optional<std::size_t> neighbors;
   std::optional<double> radius;
   /// Local back end: model (default: neighbours by the model's lag) | euclidean (by the plain
   /// distance of the coordinates, as gstat); see NeighbourMetric.
   std::optional<std::string> neighbour_metric;
+  /// Local back end: fewer neighbours than this -> no prediction (gstat's nmin); 0 or unset = none.
+  std::optional<std::size_t> min_neighbours;
+  /// Local back end: at most this many neighbours per quadrant/octant (gstat's omax); 0 or unset = none.
+  std::optional<std::size_t> octant_max;
   /// micro (gstat's krige: exact at the samples) | error (the nugget is measurement error).
   std::string nugget = "micro";
   /// error | average (samples closer than duplicate_distance).

@@ -151,10 +151,21 @@ struct KrigingOptions {
   /// Local: number of nearest samples per target (gstat's nmax); 0 = no limit (then radius must
   /// be finite). Must be at least the number of drift terms.
   std::size_t neighbors = 0;
-  /// Local: only samples at lag < radius (gstat's maxdist), lag unit; infinity = no limit.
+  /// Local: only samples at lag <= radius (gstat's maxdist: a sample at exactly the radius is
+  /// included), lag unit; infinity = no limit. With `neighbors`, the k nearest of those; equal
+  /// distances are taken in increasing sample order.
   double radius = std::numeric_limits<double>::infinity();
   /// Local: which distance chooses the neighbours and measures `radius` (NeighbourMetric).
   NeighbourMetric neighbour_metric = NeighbourMetric::Model;
+  /// Local: a target with fewer neighbours than this (the k nearest within the radius, before the
+  /// octant limit) is not predicted: NaN and status TooFewSamples (gstat's nmin, without its
+  /// `force`). 0 = no minimum.
+  std::size_t min_neighbours = 0;
+  /// Local: keep at most this many of the neighbours (nearest first) in each quadrant (2-D), octant
+  /// (3-D) or half (1-D) around the target, in the space `neighbour_metric` measures in (gstat's
+  /// omax, applied after nmax/maxdist as gstat does; a sample on a dividing axis counts in one
+  /// quadrant, turning around the target as gstat's rule). 0 = no limit. 1 to 3 coordinates.
+  std::size_t octant_max = 0;
 
   bool compute_variance = true;
   /// Return the kriging weights of every target (dense: N per target; local: k per target).

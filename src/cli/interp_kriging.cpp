@@ -30,6 +30,8 @@ struct KrigingCliOptions {
   double mean = std::numeric_limits<double>::quiet_NaN();  // NaN = not given
   std::string backend;
   std::string neighbour_metric;  // "" = not given
+  std::size_t min_neighbours = 0;  // 0 = none
+  std::size_t octant_max = 0;      // 0 = no limit
   std::string nugget_as = "micro";
   std::string measurement_variance;
   std::vector<std::string> covariates;  // --covariates: external-drift columns
@@ -80,6 +82,14 @@ void add_kriging_options(CLI::App& cmd) {
                  "local back end: model (default: the K nearest by the model's lag, anisotropy applied) | euclidean "
                  "(by the plain distance of the coordinates, as R gstat's nmax/maxdist; --radius then in that "
                  "distance). They differ only with an anisotropic model")
+      ->group(group);
+  cmd.add_option("--min-neighbours", o.min_neighbours,
+                 "local back end: a target with fewer than N neighbours (the --neighbors nearest within --radius) "
+                 "gets empty cells and the run says how many (gstat's nmin; default 0 = no minimum)")
+      ->group(group);
+  cmd.add_option("--octant-max", o.octant_max,
+                 "local back end: keep at most K of the neighbours, nearest first, per quadrant (2-D) or octant "
+                 "(3-D) around the target (gstat's omax, after --neighbors/--radius; default 0 = no limit)")
       ->group(group);
   cmd.add_option("--nugget-as", o.nugget_as,
                  "micro (default, gstat's krige: exact at the samples) | error (the nugget is measurement error, like "
@@ -208,6 +218,8 @@ KrigingOptions kriging_options_from_cli(const SharedInterpolationOptions& shared
   text.neighbors = shared.neighbors;
   text.radius = shared.radius;
   if (!o.neighbour_metric.empty()) text.neighbour_metric = o.neighbour_metric;
+  text.min_neighbours = o.min_neighbours;
+  text.octant_max = o.octant_max;
   text.nugget = o.nugget_as;
   return kriging_options_from_text(text, cli_option_names());
 }

@@ -70,6 +70,8 @@ OptionNames cli_option_names() {
   n.neighbors = "--neighbors";
   n.radius = "--radius";
   n.neighbour_metric = "--neighbour-metric";
+  n.min_neighbours = "--min-neighbours";
+  n.octant_max = "--octant-max";
   n.nugget = "--nugget-as";
   n.duplicates = "--duplicates";
   n.power = "--power";

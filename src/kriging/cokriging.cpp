@@ -35,7 +35,7 @@ namespace errfield::detail {
 
 namespace {
 
-enum class CokrigingOutcome : std::uint8_t { Ok, TooFew, NotPositiveDefinite, SingularDrift, OverBudget };
+enum class CokrigingOutcome : std::uint8_t { Ok, TooFew, BelowMinimum, NotPositiveDefinite, SingularDrift, OverBudget };
 
 // One thread's matrices, grown but never shrunk, so that warm targets allocate nothing.
 struct CokrigingWorkspace : NeighbourBuffers {
@@ -155,6 +155,10 @@ CokrigingEngine::CokrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, 
   refuse_duplicates();
   if (options_.backend == KrigingBackend::Local && options_.neighbour_metric == NeighbourMetric::Euclidean)
     search_tree_ = std::make_unique<PointTree>(raw_);
+  if (options_.octant_max > 0 && (search_tree_ ? *search_tree_ : *tree_).dimension() > 3)
+    throw ArgumentError("cokriging options: octant_max = " + std::to_string(options_.octant_max) + " with " +
+                        std::to_string((search_tree_ ? *search_tree_ : *tree_).dimension()) +
+                        " coordinates; octant search is defined for 1 to 3 coordinates");
   if (options_.backend == KrigingBackend::Local && options_.neighbors > 0 &&
       options_.neighbors < static_cast<std::size_t>(std::max(drift_terms_, 1)))
     throw ArgumentError("cokriging options: neighbors = " + std::to_string(options_.neighbors) + " but " +
@@ -522,7 +526,8 @@ CokrigingOutput CokrigingEngine::predict_local(const Eigen::MatrixXd& embedded, 
   const bool want_cov = options_.compute_variance || leave_one_out;
   const std::size_t n_samples = static_cast<std::size_t>(points_.cols());
   const std::size_t k_max = options_.neighbors;
-  const double r2 = std::isfinite(options_.radius) ? options_.radius * options_.radius : std::numeric_limits<double>::infinity();
+  const NeighbourRule rule =
+      NeighbourRule::from(options_.neighbors, options_.radius, options_.min_neighbours, options_.octant_max);
   const int threads = thread_count();
   const double budget = static_cast<double>(options_.dense_memory_budget_bytes);
   // One kP x kP system per thread (plus its kP-row blocks).
@@ -559,9 +564,10 @@ CokrigingOutput CokrigingEngine::predict_local(const Eigen::MatrixXd& embedded, 
       const double* target = embedded.col(t).data();
       const double* query = search_tree_ ? raw.col(t).data() : target;
       const std::size_t self = leave_one_out ? static_cast<std::size_t>(t) : n_samples;
-      select_neighbours(tree, query, k_max, r2, self, ws);
       CokrigingOutcome o = CokrigingOutcome::Ok;
-      if (k_max == 0 && system_bytes(ws.chosen.size()) > budget) {
+      if (!select_neighbours(tree, query, rule, self, ws)) {
+        o = CokrigingOutcome::BelowMinimum;
+      } else if (k_max == 0 && system_bytes(ws.chosen.size()) > budget) {
         std::size_t seen = largest_over.load();
         while (ws.chosen.size() > seen && !largest_over.compare_exchange_weak(seen, ws.chosen.size())) {
         }
@@ -602,6 +608,11 @@ CokrigingOutput CokrigingEngine::predict_local(const Eigen::MatrixXd& embedded, 
       case CokrigingOutcome::TooFew:
         out.status = KrigingStatus::TooFewSamples;
         why = "fewer neighbours than drift terms (or none) within the search radius";
+        break;
+      case CokrigingOutcome::BelowMinimum:
+        out.status = KrigingStatus::TooFewSamples;
+        why = "fewer than min_neighbours = " + std::to_string(options_.min_neighbours) +
+              " neighbours within the search radius";
         break;
       case CokrigingOutcome::NotPositiveDefinite:
         out.status = KrigingStatus::NotPositiveDefinite;

@@ -92,6 +92,9 @@ KrigingOutput KrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, cons
   const bool want_var = options_.compute_variance, want_w = options_.keep_weights || with_weights;
   const double c00 = block_variance(embedded, block_weights);      // the target's own variance (a block's average)
   const double zero_lag = target_variance();              // C(0) between a sample and a target point
+  // ... and between a sample and a block's point: C(0+), the nugget averages out over a block (as in
+  // gstat; C(0) would make the result jump when a discretization point meets a sample).
+  const double block_zero_lag = kernel_.sill() - kernel_.nugget();
   const Eigen::MatrixXd f0_all = block_drift_matrix(raw, block_weights);  // p x M (validated before the parallel region)
   KrigingOutput out;
   out.status = report_.status;
@@ -116,7 +119,7 @@ KrigingOutput KrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, cons
                                   static_cast<std::size_t>(cnt), dimension_, zero_lag, c0.data(), static_cast<std::size_t>(n));
       } else {
         kernels::covariance_block(kernel_, points_.data(), static_cast<std::size_t>(n), embedded.col(start * group).data(),
-                                  static_cast<std::size_t>(cnt * group), dimension_, zero_lag, block_points.data(),
+                                  static_cast<std::size_t>(cnt * group), dimension_, block_zero_lag, block_points.data(),
                                   static_cast<std::size_t>(n));
         for (Eigen::Index t = 0; t < cnt; ++t) c0.col(t).noalias() = block_points.middleCols(t * group, group) * block_weights;
       }

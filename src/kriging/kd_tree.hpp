@@ -27,6 +27,10 @@ class PointTree {
   std::size_t nearest(const double* query, std::size_t k, std::size_t* index, double* d2) const {
     return tree_->knnSearch(query, k, index, d2);
   }
+  /// Coordinates per point (the rows of the matrix).
+  int dimension() const { return static_cast<int>(cloud_.m->rows()); }
+  /// The coordinates of point i (`dimension()` doubles).
+  const double* point(std::size_t i) const { return cloud_.m->col(static_cast<Eigen::Index>(i)).data(); }
   /// All points at squared distance < r2 (unsorted), as (index, squared distance).
   std::size_t within(const double* query, double r2,
                      std::vector<std::pair<std::size_t, double>>& out) const {

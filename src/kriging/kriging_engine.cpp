@@ -86,6 +86,10 @@ void KrigingOptions::validate() const {
   if (!(radius > 0.0)) fail("radius", format_number(radius), "a value > 0 (infinity = no limit)");
   if (backend == KrigingBackend::Local && neighbors == 0 && !std::isfinite(radius))
     fail("neighbors", "0 with radius = infinity", "a neighbour count k > 0 or a finite radius for the local back end");
+  if (backend != KrigingBackend::Local && min_neighbours > 0)
+    fail("min_neighbours", std::to_string(min_neighbours), "0 unless the back end is Local");
+  if (backend != KrigingBackend::Local && octant_max > 0)
+    fail("octant_max", std::to_string(octant_max), "0 unless the back end is Local");
   if (backend == KrigingBackend::Sparse && keep_weights)
     fail("keep_weights", "true", "false with the sparse back end (its weights are dense); use dense or local");
   if (!(duplicate_distance >= 0.0) || !std::isfinite(duplicate_distance))
@@ -148,6 +152,10 @@ KrigingEngine::KrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, Eige
   observed_ = values_;
   if (options_.kind == KrigingKind::Simple) values_.rowwise() -= simple_mean_.transpose();
 
+  if (options_.octant_max > 0 && (search_tree_ ? *search_tree_ : *tree_).dimension() > 3)
+    throw ArgumentError("kriging options: octant_max = " + std::to_string(options_.octant_max) + " with " +
+                        std::to_string((search_tree_ ? *search_tree_ : *tree_).dimension()) +
+                        " coordinates; octant search is defined for 1 to 3 coordinates");
   build_drift();
   report_.samples_used = static_cast<std::size_t>(points_.cols());
   report_.drift_terms = static_cast<std::size_t>(drift_terms_);

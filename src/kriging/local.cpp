@@ -40,7 +40,7 @@ struct LocalWorkspace : NeighbourBuffers {
   }
 };
 
-enum class TargetOutcome : std::uint8_t { Ok, TooFew, NotPositiveDefinite, SingularDrift, OverBudget };
+enum class TargetOutcome : std::uint8_t { Ok, TooFew, BelowMinimum, NotPositiveDefinite, SingularDrift, OverBudget };
 
 // One thread's workspace for an n-neighbour system: the n x n matrix, the n-row blocks and the
 // drift's small matrices.
@@ -69,6 +69,10 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
   const bool want_w = (options_.keep_weights || with_weights) && !leave_one_out;
   const double c00 = block_variance(embedded, block_weights);  // the target's own variance (a block's average)
   const double zero_lag = target_variance();          // C(0) between a sample and a target point
+  // Between a sample and a point of a block's discretization: the nugget (micro-scale variation or
+  // noise) averages out over the block, so a discretization point on a sample contributes C(0+),
+  // as gstat has it; with C(0) the result would jump as the block moves by a hair.
+  const double block_zero_lag = kernel_.sill() - kernel_.nugget();
   // Blocks: the neighbours of the block's centre (the mean of its points), as gstat does.
   Eigen::MatrixXd centre_embedded, centre_raw;
   if (group > 1) {
@@ -79,8 +83,8 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
       centre_raw.col(b) = raw.middleCols(b * group, group).rowwise().mean();
     }
   }
-  const double r2 = std::isfinite(options_.radius) ? options_.radius * options_.radius
-                                                   : std::numeric_limits<double>::infinity();
+  const NeighbourRule rule =
+      NeighbourRule::from(options_.neighbors, options_.radius, options_.min_neighbours, options_.octant_max);
   const std::size_t k_max = options_.neighbors;
   const std::size_t n_samples = static_cast<std::size_t>(points_.cols());
   const Eigen::MatrixXd f0_all = block_drift_matrix(raw, block_weights);  // validated before the parallel region
@@ -130,7 +134,7 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
       const double* target = group > 1 ? centre_embedded.col(t).data() : embedded.col(t).data();  // the model's lag
       const double* query = search_tree_ ? (group > 1 ? centre_raw.col(t).data() : raw.col(t).data()) : target;
       const std::size_t self = leave_one_out ? static_cast<std::size_t>(t) : n_samples;
-      select_neighbours(tree, query, k_max, r2, self, ws);
+      const bool enough = select_neighbours(tree, query, rule, self, ws);
       const auto nn = static_cast<Eigen::Index>(ws.chosen.size());
       auto fail = [&](TargetOutcome o) {
         outcome[static_cast<std::size_t>(t)] = o;
@@ -138,6 +142,10 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
         if (want_var) out.variance[t] = nan;
         if (leave_one_out) out.residual.row(t).setConstant(nan);
       };
+      if (!enough) {
+        fail(TargetOutcome::BelowMinimum);
+        continue;
+      }
       if (nn == 0 || nn < p) {
         fail(TargetOutcome::TooFew);
         continue;
@@ -188,7 +196,7 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
           for (Eigen::Index j = 0; j < group; ++j)
             sum += block_weights[j] * kernel_(kernels::column_distance(points_.col(s).data(),
                                                                       embedded.col(t * group + j).data(), dimension_),
-                                              zero_lag);
+                                              block_zero_lag);
           c0[i] = sum;
         }
         y.row(i) = values_.row(s);
@@ -267,6 +275,11 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
       case TargetOutcome::TooFew:
         out.status = KrigingStatus::TooFewSamples;
         why = "fewer neighbours than drift terms (or none) within the search radius";
+        break;
+      case TargetOutcome::BelowMinimum:
+        out.status = KrigingStatus::TooFewSamples;
+        why = "fewer than min_neighbours = " + std::to_string(options_.min_neighbours) +
+              " neighbours within the search radius";
         break;
       case TargetOutcome::NotPositiveDefinite:
         out.status = KrigingStatus::NotPositiveDefinite;

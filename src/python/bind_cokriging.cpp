@@ -107,7 +107,8 @@ class PyCokriging {
   PyCokriging(const py::object& coords, const py::object& values, const py::object& model, const std::string& kind,
               const std::optional<std::string>& backend, const py::object& mean, const std::optional<int>& drift_order,
               const std::string& nugget, const std::optional<std::size_t>& neighbors, const std::optional<double>& radius,
-              int threads, const std::optional<std::string>& neighbour_metric) {
+              int threads, const std::optional<std::string>& neighbour_metric,
+              const std::optional<std::size_t>& min_neighbours, const std::optional<std::size_t>& octant_max) {
     x_ = matrix_arg(coords, "coords", ArraySpec{1, 2, -1, 1}).data;
     const MatrixArg z = matrix_arg(values, "values", ArraySpec{1, 2, -1, 1});
     if (z.data.rows() != x_.rows())
@@ -128,6 +129,8 @@ class PyCokriging {
     text.neighbors = neighbors;
     text.radius = radius;
     text.neighbour_metric = neighbour_metric;
+    text.min_neighbours = min_neighbours;
+    text.octant_max = octant_max;
     text.nugget = nugget;
     KrigingOptions o = kriging_options_from_text(text);
     o.threads = threads;
@@ -185,14 +188,17 @@ void bind_cokriging(py::module_& m) {
                           "Cokriging): every component at every sample (isotopic). model: the LMC as a JSON string or dict\n"
                           "({'type': 'lmc', 'components': [...], 'structures': [{'kind': 'nug', 'sills': [[...]]}, ...]}, what\n"
                           "fit-variogram --lmc writes). Options as Kriging's: kind simple | ordinary | universal1 | universal2\n"
-                          "(one mean or drift per component), nugget micro | error, backend dense | local (neighbors, radius).")
+                          "(one mean or drift per component), nugget micro | error, backend dense | local (neighbors, radius,\n"
+                          "min_neighbours, octant_max).")
       .def(py::init<const py::object&, const py::object&, const py::object&, const std::string&,
                     const std::optional<std::string>&, const py::object&, const std::optional<int>&, const std::string&,
-                    const std::optional<std::size_t>&, const std::optional<double>&, int, const std::optional<std::string>&>(),
+                    const std::optional<std::size_t>&, const std::optional<double>&, int, const std::optional<std::string>&,
+                    const std::optional<std::size_t>&, const std::optional<std::size_t>&>(),
            py::arg("coords"), py::arg("values"), py::arg("model"), py::kw_only(), py::arg("kind") = "ordinary",
            py::arg("backend") = py::none(), py::arg("mean") = py::none(), py::arg("drift_order") = py::none(),
            py::arg("nugget") = "micro", py::arg("neighbors") = py::none(), py::arg("radius") = py::none(),
-           py::arg("threads") = 0, py::arg("neighbour_metric") = py::none())
+           py::arg("threads") = 0, py::arg("neighbour_metric") = py::none(), py::arg("min_neighbours") = py::none(),
+           py::arg("octant_max") = py::none())
       .def("predict", &PyCokriging::predict, py::arg("targets"),
            "At targets (M, D): returns (mean, var, cov): mean (M, P), var (M, P) the prediction variance of each\n"
            "component, cov (M, P, P) the prediction error covariance (var on its diagonal).")

@@ -235,7 +235,8 @@ class PyKriging {
             const std::optional<double>& radius, const py::object& measurement_variance,
             const std::string& duplicates, double duplicate_distance, int threads,
             const std::optional<std::string>& neighbour_metric, const py::object& covariates,
-            const std::optional<std::vector<std::string>>& covariate_names)
+            const std::optional<std::vector<std::string>>& covariate_names,
+            const std::optional<std::size_t>& min_neighbours, const std::optional<std::size_t>& octant_max)
       : samples_(samples_arg(coords, values)) {
     const VariogramModel model = py::isinstance<py::str>(model_arg)
                                      ? VariogramModel::parse(model_arg.cast<std::string>())
@@ -251,6 +252,8 @@ class PyKriging {
     text.neighbors = neighbors;
     text.radius = radius;
     text.neighbour_metric = neighbour_metric;
+    text.min_neighbours = min_neighbours;
+    text.octant_max = octant_max;
     text.nugget = nugget;
     text.duplicates = duplicates;
     KrigingOptions o = kriging_options_from_text(text);
@@ -541,14 +544,16 @@ void bind_interpolation(py::module_& m) {
                     const std::optional<std::string>&, const py::object&, const std::optional<int>&, const std::string&,
                     const std::optional<std::size_t>&, const std::optional<double>&, const py::object&,
                     const std::string&, double, int, const std::optional<std::string>&, const py::object&,
-                    const std::optional<std::vector<std::string>>&>(),
+                    const std::optional<std::vector<std::string>>&, const std::optional<std::size_t>&,
+                    const std::optional<std::size_t>&>(),
            py::arg("coords"), py::arg("values"), py::arg("model"), py::kw_only(), py::arg("kind") = "ordinary",
            py::arg("backend") = py::none(), py::arg("mean") = py::none(), py::arg("drift_order") = py::none(),
            py::arg("nugget") = "micro", py::arg("neighbors") = py::none(), py::arg("radius") = py::none(),
            py::arg("measurement_variance") = py::none(),
            py::arg("duplicates") = "error", py::arg("duplicate_distance") = 0.0, py::arg("threads") = 0,
            py::arg("neighbour_metric") = py::none(), py::arg("covariates") = py::none(),
-           py::arg("covariate_names") = py::none(),
+           py::arg("covariate_names") = py::none(), py::arg("min_neighbours") = py::none(),
+           py::arg("octant_max") = py::none(),
            "coords: (N, D) sample locations (mm, deg, ...). values: (N,) or (N, K), K <= 3 (mm).\n"
            "model: VariogramModel or its text (sill mm^2, range in the coordinates' unit).\n"
            "kind: 'simple' (needs mean) | 'ordinary' | 'universal' (drift_order 0, 1, 2; default 1) | 'universal1' | 'universal2'.\n"
@@ -558,6 +563,8 @@ void bind_interpolation(py::module_& m) {
            "measurement_variance: (N,) per-sample variances (value unit^2) or None.\n"
            "duplicates: 'error' | 'average' samples closer than duplicate_distance.\n"
            "neighbour_metric (local back end): 'model' (default: neighbours by the model's lag) | 'euclidean' (gstat's).\n"
+           "radius (local): samples at distance <= radius (gstat's maxdist). min_neighbours (local): fewer -> NaN\n"
+           "(gstat's nmin). octant_max (local): at most this many per quadrant/octant (gstat's omax).\n"
            "covariates: (N,) or (N, k) external-drift covariate values at the samples, each one more drift term\n"
            "(kind='ordinary': kriging with external drift, gstat's krige(z ~ cov)); predict() then needs them at the\n"
            "targets. covariate_names: their names for messages (default covariate0, ...).\n"

@@ -164,6 +164,8 @@ class Cokriging:
         radius: float | None = None,
         threads: int = 0,
         neighbour_metric: Literal["model", "euclidean"] | None = None,
+        min_neighbours: int | None = None,
+        octant_max: int | None = None,
     ) -> None: ...
     def predict(self, targets: ArrayLike) -> tuple[F64, F64, F64]: ...
     def cross_validate(self) -> tuple[F64, F64, F64]: ...
@@ -191,6 +193,8 @@ class Kriging:
         neighbour_metric: Literal["model", "euclidean"] | None = None,
         covariates: ArrayLike | None = None,
         covariate_names: Sequence[str] | None = None,
+        min_neighbours: int | None = None,
+        octant_max: int | None = None,
     ) -> None: ...
     def predict(
         self,

@@ -36,6 +36,9 @@ def write_samples(tmp_path, x, z, t):
     ("ordinary", {"backend": "local", "neighbors": 12}, ["--backend", "local", "--neighbors", "12"]),
     # No backend but a neighbourhood: the local back end, for both (one shared option mapping).
     ("ordinary", {"neighbors": 9, "radius": 400.0}, ["--neighbors", "9", "--radius", "400"]),
+    # gstat's nmin and omax: the same words on both sides (targets with too few neighbours: NaN / empty).
+    ("ordinary", {"radius": 250.0, "min_neighbours": 4, "octant_max": 2},
+     ["--radius", "250", "--min-neighbours", "4", "--octant-max", "2"]),
 ])
 def test_kriging_matches_cli(tmp_path, kind, extra, cli_extra):
     x, z, t = data()
@@ -47,6 +50,19 @@ def test_kriging_matches_cli(tmp_path, kind, extra, cli_extra):
     assert mean.shape == (len(t),) and var.shape == (len(t),)
     assert same(mean, numbers(csv["pred"]))
     assert same(var, numbers(csv["var"]))
+
+
+def test_local_radius_includes_samples_at_exactly_the_radius():
+    # An integer grid without the target points: each has 4 samples at exactly 2 (gstat's maxdist
+    # keeps them). Local kriging within radius 2 = dense kriging of the samples at distance <= 2.
+    g = np.array([(i, j) for i in range(9) for j in range(9) if (i, j) not in ((4, 4), (1, 6))], dtype=float)
+    z = np.sin(0.6 * g[:, 0]) + 0.2 * g[:, 1]
+    for target in ([4.0, 4.0], [1.0, 6.0]):
+        inside = ((g - target) ** 2).sum(axis=1) <= 4.0
+        local = errfield.Kriging(g, z, MODEL, radius=2.0).predict(np.array([target]))
+        dense = errfield.Kriging(g[inside], z[inside], MODEL).predict(np.array([target]))
+        assert np.allclose(local[0], dense[0], rtol=0, atol=1e-10)
+        assert np.allclose(local[1], dense[1], rtol=0, atol=1e-10)
 
 
 def test_vector_values_match_cli_and_componentwise_kriging(tmp_path):
