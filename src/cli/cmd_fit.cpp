@@ -138,10 +138,10 @@ void add_fit_command(CLI::App& app) {
   cmd->add_option("--outlier-limit", a->outlier_limit,
                   "kinematic methods from positions: refit without gross outliers (a lost reflector, a wrong row; all "
                   "listed in a warning and the model file): a row is dropped whose reading is beyond this many robust "
-                  "sigmas from what its neighbours in a joint-space kinematic+kriging field predict (leave-one-out "
-                  "against the predictive sigma, nugget included), so rows where the robot departs smoothly from its "
-                  "kinematic model are kept; --method kinematic and --space task judge with such a field fitted to "
-                  "the same rows; 0 keeps every row; "
+                  "sigmas from what its neighbours in the kinematic+kriging field predict (leave-one-out against the "
+                  "predictive sigma, nugget included), so rows where the robot departs smoothly from its kinematic "
+                  "model are kept; --method kinematic judges with a joint-space field fitted to the same rows when "
+                  "--model gives its variogram, and screens nothing without; 0 keeps every row; "
                   "docs/robot.md says which data decided the default")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

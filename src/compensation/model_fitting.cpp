@@ -494,37 +494,41 @@ std::vector<std::size_t> beyond_robust_limit(const std::vector<double>& standard
   return rows;
 }
 
-/// The fit whose field judges gross outliers: the joint-space kinematic+kriging field, whichever
-/// method was asked for. `fit` itself when it is one; otherwise (kinematic, task space) the same
-/// options fitted as joint-space kinematic+kriging on the same rows, with the variogram given by
-/// --model where that is a joint-space one (kinematic). Judging by the calibration residual alone
-/// (kinematic) dropped the same 11 real edge rows on all three reflectors of a real arm and doubled
-/// the held-out maximum; task space fell back to it too (issue 35). Empty when that fit fails (too
-/// few rows for the field): then no row is screened.
+/// The fit whose field judges gross outliers by leave-one-out against the predictive σ. For
+/// kinematic+kriging, `fit` itself, in either space (a field without per-row leave-one-out, e.g.
+/// repeated locations merged in task space, screens nothing). For kinematic (no field of its own),
+/// the same options fitted as joint-space kinematic+kriging on the same rows, only to judge them,
+/// when --model gives that field's variogram; estimating one would multiply the fit's time by 10-30
+/// (measured on 60 and 150 rows), so without --model nothing is screened, and `why_none` says so.
+/// Judging by the calibration residual alone (kinematic, and task space's fallback) dropped the
+/// same 11 real edge rows on all three reflectors of a real arm and doubled the held-out maximum
+/// (issue 35).
 std::optional<FitResult> screening_fit(const FitResult& fit, const MdhModel& robot, const MeasurementSet& d,
-                                       const FitOptions& o) {
-  if (o.method == CompensationMethod::kinematic_kriging && o.space == FieldSpace::joint) return fit;
+                                       const FitOptions& o, std::string& why_none) {
+  if (o.method == CompensationMethod::kinematic_kriging) return fit;
+  if (!o.model) {
+    why_none = "gross-outlier screen: none for --method kinematic without --model (rows are judged by a joint-space "
+               "kinematic+kriging field; give its variogram with --model to screen them)";
+    return std::nullopt;
+  }
   FitOptions screen = o;
   screen.method = CompensationMethod::kinematic_kriging;
-  if (o.space != FieldSpace::joint) {
-    // A task-space variogram (mm) and margin mean nothing in joint space: the screen's are estimated.
-    screen.model.reset();
-    screen.region_margin.reset();
-  }
   screen.space = FieldSpace::joint;
   screen.outlier_limit = 0.0;
   try {
     return fit_checked(robot, d, screen);
-  } catch (const Error&) {
+  } catch (const Error& e) {
+    why_none = std::string("gross-outlier screen: none (the joint-space field that judges the rows could not be "
+                           "fitted: ") + e.what() + ")";
     return std::nullopt;
   }
 }
 
 /// Rows of `d` (all of them, also those a previous round excluded: `excluded`, sorted) that are
-/// gross outliers (FitOptions::outlier_limit), judged by `fit`'s joint-space field
-/// (screening_fit): a row is judged by how far its reading is from what its neighbours in joint
-/// space predict, in units of the predictive σ (nugget included): the leave-one-out residual for the
-/// rows the field holds, the field's prediction for excluded rows. A row at the edge of the data, or
+/// gross outliers (FitOptions::outlier_limit), judged by `fit`'s field (screening_fit): a row is
+/// judged by how far its reading is from what its neighbours in the field's space predict, in units
+/// of the predictive σ (nugget included): the leave-one-out residual for the rows the field holds,
+/// the field's prediction for excluded rows. A row at the edge of the data, or
 /// in a corner where the robot departs smoothly from its kinematic model, has a large σ or
 /// neighbours that agree with it, so it is kept; a reading off among consistent neighbours is not.
 /// The residual after calibration alone took real behaviour at the workspace extremes for outliers
@@ -611,11 +615,12 @@ FitResult fit_compensation_model(const robot::MdhModel& robot, const Measurement
   // of 5 mm tracker errors made the joint-space default 2.3x worse on clean held-out points.
   std::vector<std::size_t> excluded;
   MeasurementSet kept;
-  const bool screened_by_own_field = o.method == CompensationMethod::kinematic_kriging && o.space == FieldSpace::joint;
+  const bool screened_by_own_field = o.method == CompensationMethod::kinematic_kriging;
   for (int round = 0; round < 3; ++round) {
-    const std::optional<FitResult> screen = screening_fit(out, robot, excluded.empty() ? d : kept, o);
+    std::string why_none;
+    const std::optional<FitResult> screen = screening_fit(out, robot, excluded.empty() ? d : kept, o, why_none);
     if (!screen) {
-      out.notes.push_back("gross-outlier screen skipped: the joint-space field that judges the rows could not be fitted");
+      out.notes.push_back(why_none);
       break;
     }
     const std::vector<std::size_t> rows = gross_outliers(*screen, d, excluded, o.outlier_limit);
