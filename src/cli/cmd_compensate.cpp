@@ -24,10 +24,11 @@ namespace errfield::cli {
 namespace {
 
 struct CompensateArgs {
-  std::string robot, model, targets, out, seed;
+  std::string robot, model, targets, out, seed, config;
   double tolerance = 0.25, max_registration_rms = robot::kRegistrationRmsLimitMm;
   double max_correction = 0.0;  // 0: compensation::default_max_correction_mm
   bool strict = false;
+  bool joints_are_degrees = false;  // skip the radians check (check_joints_not_radians)
 };
 
 void run_compensate(const CompensateArgs& a) {
@@ -48,6 +49,12 @@ void run_compensate(const CompensateArgs& a) {
     const auto v = parse_numbers(a.seed, 6, "--seed");
     targets.seed_deg = JointVector(v.data());
   }
+  if (!a.config.empty()) {
+    targets.config = parse_arm_configuration(a.config);
+    if (!targets.config)
+      throw ArgumentError("--config: '" + a.config +
+                          "'; expected s, e and w each followed by + or -, e.g. s+e+w- (docs/robot.md, \"Arm configuration\")");
+  }
   const CsvTable t = CsvTable::read(a.targets);
   const bool joints = has_joint_columns(t);
   const std::vector<std::string> pose_cols{"x", "y", "z", "rx", "ry", "rz"};
@@ -63,6 +70,7 @@ void run_compensate(const CompensateArgs& a) {
                            {true, a.robot.empty() ? "the command model of " + a.model : "--robot " + a.robot},
                            a.max_registration_rms);
     targets.joints_deg = read_joint_columns(t);
+    if (!a.joints_are_degrees) check_joints_not_radians(targets.joints_deg, model, a.targets, "--joints-are-degrees");
     if (const auto w = joints_outside_limits(targets.joints_deg, nominal, row_labels_of(t, "row")))
       std::cerr << "errfield compensate: warning: " << *w << " (status outside-limits: no joints written)\n";
   } else {
@@ -71,6 +79,7 @@ void run_compensate(const CompensateArgs& a) {
     targets.seed_rows_deg = seed_rows_of(t);
     warn_if_metres(t, nominal, "compensate", kNominalXyz);
   }
+  check_seed_joints(targets, nominal, &t);
   if (!(std::isfinite(a.max_correction) && a.max_correction >= 0.0))
     throw ArgumentError("--max-correction: " + format_number(a.max_correction) +
                         "; expected a ceiling > 0 (mm), or 0 for the default");
@@ -95,6 +104,10 @@ void run_compensate(const CompensateArgs& a) {
   std::cout << "compensate: " << n - refused << " of " << n << " targets compensated with " << method_name(model.method())
             << (refused ? "; " + std::to_string(refused) + " refused (status column): no joints written for them" : "")
             << "\n  written to " << a.out << "\n";
+  std::cout << "  arm configuration from (column config_source):";
+  for (std::size_t k = 0; k < step.config_sources.size(); ++k)
+    std::cout << (k ? "," : "") << " " << step.config_sources[k].second << " " << step.config_sources[k].first;
+  std::cout << "\n";
   std::cout << "  tool point moved by at most " << format_number(step.max_correction_mm) << " mm ("
             << (a.max_correction > 0.0 ? std::string("--max-correction")
                                        : "default: " + format_number(kMaxCorrectionFactor) +
@@ -106,6 +119,10 @@ void run_compensate(const CompensateArgs& a) {
               << "than " << format_number(step.max_correction_mm)
               << " mm (status correction-too-large, no joints written): far beyond the corrections the model "
                  "predicts on its own data; check the robot, tool and model (or raise --max-correction)\n";
+  if (step.singular)
+    std::cerr << "errfield compensate: warning: " << step.singular << " target(s) near a singular configuration "
+              << "(status wrist-singular, elbow-singular, shoulder-singular or near-singular, no joints written): "
+                 "their compensated joints turn by far more than the correction warrants\n";
   if (no_prediction)
     std::cerr << "errfield compensate: warning: " << no_prediction
               << " target(s) got no finite prediction from the model's field (status no-prediction); no joints "
@@ -126,8 +143,12 @@ void add_compensate_command(CLI::App& app) {
       "the model's range of errors (not-credible) and pose targets whose IK left the data's branch\n"
       "(branch-change: solved from the nearest training sample, or --seed, along the pose path). Pose targets\n"
       "may carry seed joints sq1..sq6 per row (e.g. the taught joints); a solution on another arm configuration\n"
-      "than the seed's (or the training sample's, or given joints') is refused (config-change); columns nconfig,\n"
-      "config (s+e+w- style, docs/robot.md).\n"
+      "than the seed's (or the training sample's, or given joints', or --config's) is refused (config-change);\n"
+      "columns nconfig, config (s+e+w- style, docs/robot.md) and config_source: where the configuration a row is\n"
+      "held to came from (seed, given, nearest-training, config-option, none), counted in the summary. Rows whose\n"
+      "joints swing far more than the correction warrants (a singular wrist, elbow or shoulder) are refused\n"
+      "(wrist-singular, ...). Joint targets that look like radians (all within +-2 pi, spread far less than the\n"
+      "model's training joints) are an error (exit 2; --joints-are-degrees if they are degrees).\n"
       "Example: errfield compensate --model model.json --targets targets.csv --out joints.csv");
   cmd->add_option("--robot", a->robot, "nominal robot JSON or built-in name (er20-c10, kr16, ur5e; default: the model's command model)");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();
@@ -136,6 +157,13 @@ void add_compensate_command(CLI::App& app) {
   cmd->add_option("--seed", a->seed,
                   "Q1,...,Q6 (deg): solve pose targets from these joints (default: the model's nearest training "
                   "sample), on their branch");
+  cmd->add_option("--config", a->config,
+                  "s+e+w- style (docs/robot.md, \"Arm configuration\"): hold every row to this arm configuration; pose "
+                  "targets are solved from the nearest training sample on it (or their seed, which must be on it); "
+                  "rows that end on another are refused (config-change)");
+  cmd->add_flag("--joints-are-degrees", a->joints_are_degrees,
+                "joint targets: skip the check that refuses joints that look like radians (all within +-2 pi and "
+                "spread far less than the model's training joints); give it when such small angles are meant");
   cmd->add_option("--max-registration-rms", a->max_registration_rms,
                   "joint targets with x,y,z or mx,my,mz: refuse (exit 2) data that are not this robot's "
                   "(registration RMS above this, mm; docs/robot.md)")

@@ -137,10 +137,11 @@ void add_fit_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--outlier-limit", a->outlier_limit,
                   "kinematic methods from positions: refit without gross outliers (a lost reflector, a wrong row; all "
-                  "listed in a warning and the model file): kinematic+kriging drops a row whose reading is beyond this "
-                  "many robust sigmas from what its neighbours in the field predict (leave-one-out against the "
+                  "listed in a warning and the model file): a row is dropped whose reading is beyond this many robust "
+                  "sigmas from what its neighbours in the kinematic+kriging field predict (leave-one-out against the "
                   "predictive sigma, nugget included), so rows where the robot departs smoothly from its kinematic "
-                  "model are kept; kinematic drops a row whose residual after calibration is; 0 keeps every row; "
+                  "model are kept; --method kinematic judges with a joint-space field fitted to the same rows when "
+                  "--model gives its variogram, and screens nothing without; 0 keeps every row; "
                   "docs/robot.md says which data decided the default")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

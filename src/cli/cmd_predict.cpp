@@ -16,6 +16,7 @@ namespace {
 struct PredictArgs {
   std::string model, joints, out;
   double max_registration_rms = robot::kRegistrationRmsLimitMm;
+  bool joints_are_degrees = false;  // skip the radians check (check_joints_not_radians)
 };
 
 void run_predict(const PredictArgs& a) {
@@ -24,6 +25,8 @@ void run_predict(const PredictArgs& a) {
   const CsvTable table = CsvTable::read(a.joints);
   const std::vector<robot::JointVector> q = read_joint_columns(table);
   const std::size_t n = q.size();
+  // Radians read as degrees lie inside any training box and pass every other check.
+  if (!a.joints_are_degrees) compensation::check_joints_not_radians(q, model, a.joints, "--joints-are-degrees");
   const bool tracker = model.registration().has_value();
   // Joints files that carry measurements (a held-out set) must be of the model's robot.
   compensation::check_table_fits_robot(table, model.nominal_model(), {true, "the nominal robot of " + a.model},
@@ -66,7 +69,8 @@ void add_predict_command(CLI::App& app) {
       "registration; where the model has a variance (kriging): var_mm2, the variance of a new tracker reading\n"
       "at those joints (field + nugget, summed over x,y,z), var_field_mm2, the field's part alone, and r95_mm,\n"
       "the radius around the predicted point that holds a new reading with 95 % probability (vector fields);\n"
-      "status ok, outside-region or not-credible (refused rows get no position).\n"
+      "status ok, outside-region or not-credible (refused rows get no position). Joints are degrees: input that\n"
+      "looks like radians (all within +-2 pi, spread far less than the model's training joints) is an error (exit 2).\n"
       "Example: errfield predict --model model.json --joints joints.csv --out predicted.csv");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit' or robot JSON from 'errfield calibrate'")->required();
   cmd->add_option("--joints", a->joints, "CSV with columns q1..q6 (deg); other columns are carried through")->required();
@@ -74,6 +78,9 @@ void add_predict_command(CLI::App& app) {
                   "when --joints has x,y,z or mx,my,mz: refuse (exit 2) data that are not the model's robot's "
                   "(registration RMS above this, mm; docs/robot.md)")
       ->capture_default_str();
+  cmd->add_flag("--joints-are-degrees", a->joints_are_degrees,
+                "skip the check that refuses joints that look like radians (all within +-2 pi and spread far less "
+                "than the model's training joints, exit 2); give it when such small angles are meant");
   cmd->add_option("--out", a->out, "output CSV (written atomically)")->required();
   cmd->callback([a] { run_predict(*a); });
 }

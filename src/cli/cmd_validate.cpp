@@ -25,6 +25,7 @@ struct ValidateArgs {
   std::vector<std::string> base_points;
   bool targets = false;
   double max_registration_rms = robot::kRegistrationRmsLimitMm;
+  double max_tool_point_shift = compensation::kToolPointShiftLimitMm;
 };
 
 /// A file written by `errfield simulate` says so in a leading comment; its report must too.
@@ -58,6 +59,10 @@ void run_validate(const ValidateArgs& a) {
                            a.max_registration_rms);
     const MeasurementSet data = MeasurementSet::from_table(table, nominal, fixed);
     warn_if_metres(table, nominal, "validate");
+    // The registration check above fits a free reflector offset, so readings of another reflector
+    // pass it; scored against the model's point they gave 150 mm "after" errors with exit 0.
+    if (!data.measured_mm.empty())
+      check_readings_of_tool_point(model, data.q_deg, data.measured_mm, a.data, a.max_tool_point_shift);
     if (const auto w = joints_outside_limits(read_joint_columns(table), model.nominal_model(), row_labels_of(table, "row")))
       std::cerr << "errfield validate: warning: " << *w << " (status outside-limits: not scored)\n";
     r = with_source(a.data, [&] { return compensation::validate_predictions(model, data); });
@@ -112,6 +117,12 @@ void add_validate_command(CLI::App& app) {
   cmd->add_option("--max-registration-rms", a->max_registration_rms,
                   "refuse (exit 2) data whose tracker readings mx,my,mz register to the robot with a larger RMS (mm): "
                   "data of another robot, joints in radians, metres (docs/robot.md)")
+      ->capture_default_str();
+  cmd->add_option("--max-tool-point-shift", a->max_tool_point_shift,
+                  "refuse (exit 2) readings of another point than the model's tool point: when a free reflector "
+                  "offset fitted to them lies more than this (mm) from the model's and the model's registration "
+                  "leaves them more than this RMS off (docs/robot.md)")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   cmd->add_flag("--targets", a->targets, "validation-run mode: error = measured - intended target");
   cmd->add_option("--out", a->out, "per-point CSV: point,status,before_mm,after_mm, the error components and, for "

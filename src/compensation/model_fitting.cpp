@@ -494,32 +494,53 @@ std::vector<std::size_t> beyond_robust_limit(const std::vector<double>& standard
   return rows;
 }
 
-/// How gross outliers were judged: against the field's held-out prediction (kinematic+kriging) or
-/// against the calibrated model alone (kinematic, or a field without per-row leave-one-out).
-enum class OutlierCriterion { held_out_field, calibration_residual };
+/// The fit whose field judges gross outliers by leave-one-out against the predictive σ. For
+/// kinematic+kriging, `fit` itself, in either space (a field without per-row leave-one-out, e.g.
+/// repeated locations merged in task space, screens nothing). For kinematic (no field of its own),
+/// the same options fitted as joint-space kinematic+kriging on the same rows, only to judge them,
+/// when --model gives that field's variogram; estimating one would multiply the fit's time by 10-30
+/// (measured on 60 and 150 rows), so without --model nothing is screened, and `why_none` says so.
+/// Judging by the calibration residual alone (kinematic, and task space's fallback) dropped the
+/// same 11 real edge rows on all three reflectors of a real arm and doubled the held-out maximum
+/// (issue 35).
+std::optional<FitResult> screening_fit(const FitResult& fit, const MdhModel& robot, const MeasurementSet& d,
+                                       const FitOptions& o, std::string& why_none) {
+  if (o.method == CompensationMethod::kinematic_kriging) return fit;
+  if (!o.model) {
+    why_none = "gross-outlier screen: none for --method kinematic without --model (rows are judged by a joint-space "
+               "kinematic+kriging field; give its variogram with --model to screen them)";
+    return std::nullopt;
+  }
+  FitOptions screen = o;
+  screen.method = CompensationMethod::kinematic_kriging;
+  screen.space = FieldSpace::joint;
+  screen.outlier_limit = 0.0;
+  try {
+    return fit_checked(robot, d, screen);
+  } catch (const Error& e) {
+    why_none = std::string("gross-outlier screen: none (the joint-space field that judges the rows could not be "
+                           "fitted: ") + e.what() + ")";
+    return std::nullopt;
+  }
+}
 
 /// Rows of `d` (all of them, also those a previous round excluded: `excluded`, sorted) that are
-/// gross outliers (FitOptions::outlier_limit). With a kriging field, a row is judged by how far its
-/// reading is from what its neighbours in the field's space predict, in units of the predictive σ
-/// (nugget included): the leave-one-out residual for the rows the field holds, the field's
-/// prediction for excluded rows. A row at the edge of the data, or in a corner where the robot
-/// departs smoothly from its kinematic model, has a large σ or neighbours that agree with it, so it
-/// is kept; a reading off among consistent neighbours is not. The residual after calibration alone
-/// took real behaviour at the workspace extremes for outliers (issue 19: 11 real rows at
-/// |q1| > 110 deg dropped, held-out maximum 3-4x worse). Without a field: the calibration residual.
+/// gross outliers (FitOptions::outlier_limit), judged by `fit`'s field (screening_fit): a row is
+/// judged by how far its reading is from what its neighbours in the field's space predict, in units
+/// of the predictive σ (nugget included): the leave-one-out residual for the rows the field holds,
+/// the field's prediction for excluded rows. A row at the edge of the data, or
+/// in a corner where the robot departs smoothly from its kinematic model, has a large σ or
+/// neighbours that agree with it, so it is kept; a reading off among consistent neighbours is not.
+/// The residual after calibration alone took real behaviour at the workspace extremes for outliers
+/// (issue 19: 11 real rows at |q1| > 110 deg dropped, held-out maximum 3-4x worse), so it is never
+/// used: without a per-row leave-one-out nothing is flagged.
 std::vector<std::size_t> gross_outliers(const FitResult& fit, const MeasurementSet& d,
-                                        const std::vector<std::size_t>& excluded, double limit,
-                                        OutlierCriterion& criterion) {
+                                        const std::vector<std::size_t>& excluded, double limit) {
   const std::size_t n = d.q_deg.size();
-  std::vector<double> r(n);
-  for (std::size_t i = 0; i < n; ++i)
-    r[i] = (fit.registration->robot_from_tracker * d.measured_mm[i] - forward_position(fit.model.command_model(), d.q_deg[i]))
-               .norm();
-  criterion = OutlierCriterion::calibration_residual;
   const ErrorField* field = fit.model.field();
-  if (!field) return beyond_robust_limit(r, limit);
+  if (!field || !fit.registration) return {};
   const std::vector<SampleHoldOut> loo = leave_one_out_by_sample(*field);
-  if (loo.size() + excluded.size() != n) return beyond_robust_limit(r, limit);
+  if (loo.size() + excluded.size() != n) return {};
   std::vector<double> standardized(n);
   std::size_t next_excluded = 0, next_kept = 0;
   for (std::size_t i = 0; i < n; ++i) {
@@ -538,7 +559,6 @@ std::vector<std::size_t> gross_outliers(const FitResult& fit, const MeasurementS
     const SampleHoldOut& h = loo[next_kept++];
     standardized[i] = h.variance_mm2 > 0 ? h.residual_mm.norm() / std::sqrt(h.variance_mm2) : 0.0;
   }
-  criterion = OutlierCriterion::held_out_field;
   return beyond_robust_limit(standardized, limit);
 }
 
@@ -595,9 +615,15 @@ FitResult fit_compensation_model(const robot::MdhModel& robot, const Measurement
   // of 5 mm tracker errors made the joint-space default 2.3x worse on clean held-out points.
   std::vector<std::size_t> excluded;
   MeasurementSet kept;
-  OutlierCriterion criterion = OutlierCriterion::calibration_residual;
+  const bool screened_by_own_field = o.method == CompensationMethod::kinematic_kriging;
   for (int round = 0; round < 3; ++round) {
-    const std::vector<std::size_t> rows = gross_outliers(out, d, excluded, o.outlier_limit, criterion);
+    std::string why_none;
+    const std::optional<FitResult> screen = screening_fit(out, robot, excluded.empty() ? d : kept, o, why_none);
+    if (!screen) {
+      out.notes.push_back(why_none);
+      break;
+    }
+    const std::vector<std::size_t> rows = gross_outliers(*screen, d, excluded, o.outlier_limit);
     if (rows == excluded) break;
     if (rows.size() * 5 > d.q_deg.size()) {
       out.warnings.push_back(std::to_string(rows.size()) + " of " + std::to_string(d.q_deg.size()) +
@@ -612,11 +638,12 @@ FitResult fit_compensation_model(const robot::MdhModel& robot, const Measurement
     out = fit_checked(robot, kept, o);
   }
   if (excluded.empty()) return attach_artifacts(std::move(out), robot, d);
-  const std::string how = criterion == OutlierCriterion::held_out_field
-                              ? "reading beyond " + format_number(o.outlier_limit) +
-                                    " robust sigma from what its neighbours in the field predict (leave-one-out, "
-                                    "in units of the predictive sigma, nugget included)"
-                              : "residual after calibration beyond " + format_number(o.outlier_limit) + " robust sigma";
+  const std::string how = "reading beyond " + format_number(o.outlier_limit) +
+                          " robust sigma from what its neighbours in the field predict (leave-one-out, in units of "
+                          "the predictive sigma, nugget included" +
+                          (screened_by_own_field ? std::string(")")
+                                                 : std::string("; judged by a joint-space kinematic+kriging field "
+                                                               "fitted to the same rows)"));
   const std::string what = std::to_string(excluded.size()) + " row(s) excluded as gross outliers (" + how +
                            "; --outlier-limit): " + point_list(d, excluded);
   out.notes.insert(out.notes.begin(), what);

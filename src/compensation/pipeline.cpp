@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <optional>
 
 #include "errfield/compensation/error_ball.hpp"
@@ -14,6 +15,7 @@
 #include "errfield/compensation/target_ik.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/arm_configuration.hpp"
+#include "errfield/robot/calibration.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/pose.hpp"
 
@@ -25,6 +27,19 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 OutputColumn numbers(std::string name, std::vector<double> v) { return {std::move(name), std::move(v), {}}; }
 OutputColumn words(std::string name, std::vector<std::string> v) { return {std::move(name), {}, std::move(v), true}; }
+
+/// "ok", or the status of a compensation whose joints swing far more than its move warrants
+/// (kSingularSwingDegPerMm), named after the flag of the nominal configuration that is at its
+/// boundary: a singular configuration lets a small move of the tool point turn joints by tens of
+/// degrees (pipeline.hpp).
+std::string singular_swing(const robot::MdhModel& nominal, const robot::JointVector& q_nominal_deg,
+                           const robot::JointVector& q_command_deg, double move_mm) {
+  const double swing_deg = (q_command_deg - q_nominal_deg).cwiseAbs().maxCoeff();
+  if (swing_deg <= std::max(kSingularSwingFloorDeg, kSingularSwingDegPerMm * move_mm)) return "ok";
+  const robot::ArmConfiguration c = robot::arm_configuration(nominal, q_nominal_deg);
+  return c.wrist == 0 ? "wrist-singular" : c.elbow == 0 ? "elbow-singular" : c.shoulder == 0 ? "shoulder-singular"
+                                                                                           : "near-singular";
+}
 
 }  // namespace
 
@@ -214,30 +229,57 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
   // same pose (the wrist flipped: q4, q6 180 deg away, q5 negated) without crossing a singularity
   // on its path; a robot sent those joints would flip its wrist between moves.
   std::vector<std::optional<ArmConfiguration>> wanted(n);
+  std::vector<std::string> source(n);
   if (joints) {
     qn = targets.joints_deg;
-    for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t i = 0; i < n; ++i) {
       if (qn[i].allFinite()) wanted[i] = arm_configuration(nominal, qn[i]);
+      source[i] = kConfigSourceGiven;
+      if (targets.config) {
+        // Given joints on another configuration than the pinned one are refused below.
+        if (wanted[i] && !wanted[i]->compatible_with(*targets.config)) ik_status[i] = "config-change";
+        wanted[i] = targets.config;
+      }
+    }
   } else {
+    // --config: pose paths start from the training samples on that configuration only.
+    std::vector<JointVector> pinned_reference;
+    if (targets.config) {
+      for (const JointVector& q : reference)
+        if (arm_configuration(nominal, q).compatible_with(*targets.config)) pinned_reference.push_back(q);
+    }
+    const std::vector<JointVector>& start_from = targets.config ? pinned_reference : reference;
     for (std::size_t i = 0; i < n; ++i) {
       const auto r = targets.poses.row(static_cast<Eigen::Index>(i));
       std::optional<JointVector> seed = targets.seed_deg;
       if (!targets.seed_rows_deg.empty() && targets.seed_rows_deg[i].allFinite()) seed = targets.seed_rows_deg[i];
-      const BranchIkResult ik = solve_on_branch(nominal, to_isometry({r[0], r[1], r[2], r[3], r[4], r[5]}), reference, seed);
+      if (targets.config && !seed && start_from.empty())
+        throw ArgumentError("--config " + targets.config->to_string() + ": none of the model's " +
+                            std::to_string(reference.size()) +
+                            " training poses is on this configuration, so pose targets have no start on it; give "
+                            "seed joints on it per row (columns sq1..sq6) or --seed");
+      const BranchIkResult ik = solve_on_branch(nominal, to_isometry({r[0], r[1], r[2], r[3], r[4], r[5]}), start_from, seed);
       qn[i] = ik.ik.q_deg;
       ik_ok[i] = ik.ok();
       ik_status[i] = ik.branch_changed ? "branch-change" : ik.ik.ok() ? "" : to_string(ik.ik.status);
-      if (seed) wanted[i] = arm_configuration(nominal, *seed);
-      else if (ik.start_sample) wanted[i] = arm_configuration(nominal, reference[*ik.start_sample]);
+      source[i] = targets.config ? kConfigSourcePinned : seed ? kConfigSourceSeed
+                  : ik.start_sample ? kConfigSourceNearestTraining : kConfigSourceNone;
+      if (targets.config) wanted[i] = targets.config;
+      else if (seed) wanted[i] = arm_configuration(nominal, *seed);
+      else if (ik.start_sample) wanted[i] = arm_configuration(nominal, start_from[*ik.start_sample]);
       if (ik_ok[i] && wanted[i] && !arm_configuration(nominal, qn[i]).compatible_with(*wanted[i])) {
         ik_ok[i] = false;
         ik_status[i] = "config-change";
       }
     }
   }
+  if (joints)
+    for (std::size_t i = 0; i < n; ++i)
+      if (ik_status[i] == "config-change") ik_ok[i] = false;
   std::vector<std::string> nconfig(n), config(n);
   for (std::size_t i = 0; i < n; ++i)
-    if (ik_ok[i] || ik_status[i] == "config-change") nconfig[i] = arm_configuration(nominal, qn[i]).to_string();
+    if ((ik_ok[i] || ik_status[i] == "config-change") && qn[i].allFinite())
+      nconfig[i] = arm_configuration(nominal, qn[i]).to_string();
   std::vector<std::vector<double>> cols(31, std::vector<double>(n, kNaN));  // see `names` below
   std::vector<std::string> status(n);
   StepColumns out;
@@ -282,8 +324,9 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
                 // tool or model, not a correction (NaN: no move known, never ok either).
                 : !(c.move_mm <= ceiling) ? "correction-too-large"
                 : wanted[i] && !arm_configuration(nominal, c.q_command_deg).compatible_with(*wanted[i]) ? "config-change"
-                                                                                          : "ok";
+                : singular_swing(nominal, qn[i], c.q_command_deg, c.move_mm);
     out.too_large += status[i] == "correction-too-large";
+    out.singular += status[i].ends_with("singular");
     if (status[i] != "ok") {
       ++out.refused;
       continue;  // compensated joints stay empty: nothing is sent for a refused target
@@ -298,8 +341,117 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
   for (std::size_t c = 0; c < 31; ++c) out.columns.push_back(numbers(names[c], std::move(cols[c])));
   out.columns.push_back(words("nconfig", std::move(nconfig)));
   out.columns.push_back(words("config", std::move(config)));
+  for (const std::string& w : source) {
+    auto it = std::find_if(out.config_sources.begin(), out.config_sources.end(), [&](const auto& e) { return e.first == w; });
+    if (it == out.config_sources.end()) out.config_sources.emplace_back(w, 1);
+    else ++it->second;
+  }
+  out.columns.push_back(words("config_source", std::move(source)));
   out.columns.push_back(words("status", std::move(status)));
   return out;
+}
+
+void check_seed_joints(const CompensationTargets& targets, const robot::MdhModel& nominal, const CsvTable* table) {
+  const robot::JointVector lo = nominal.q_min_deg(), hi = nominal.q_max_deg();
+  auto limits = [&](int k) {
+    return "joint " + std::to_string(k + 1) + "'s limits [" + format_number(lo[k]) + ", " + format_number(hi[k]) +
+           "] deg of robot '" + nominal.name() + "'";
+  };
+  if (targets.seed_deg) {
+    if (const auto k = robot::joint_outside_limits(*targets.seed_deg, nominal))
+      throw ArgumentError("--seed: joint " + std::to_string(*k + 1) + " = " + format_number((*targets.seed_deg)[*k]) +
+                          " deg is outside " + limits(*k) + "; a seed must be joints the robot can take (degrees)");
+    if (targets.config && !robot::arm_configuration(nominal, *targets.seed_deg).compatible_with(*targets.config))
+      throw ArgumentError("--seed is on configuration " + robot::arm_configuration(nominal, *targets.seed_deg).to_string() +
+                          ", not on --config " + targets.config->to_string());
+  }
+  for (std::size_t i = 0; i < targets.seed_rows_deg.size(); ++i) {
+    const robot::JointVector& q = targets.seed_rows_deg[i];
+    if (q.array().isNaN().all()) continue;  // no seed for this row
+    const std::string source = table ? table->source() : std::string("targets");
+    const std::string where = table ? source + ":" + std::to_string(table->line_of_row(i)) : "seed row " + std::to_string(i + 1);
+    if (const auto k = robot::joint_outside_limits(q, nominal))
+      throw InputError(where + ": seed column sq" + std::to_string(*k + 1) + " = " + format_number(q[*k]) +
+                           " deg is outside " + limits(*k) +
+                           "; seeds are joints the robot can take, in degrees (the taught joints)",
+                       source);
+    if (targets.config && !robot::arm_configuration(nominal, q).compatible_with(*targets.config))
+      throw InputError(where + ": seed joints sq1..sq6 are on configuration " +
+                           robot::arm_configuration(nominal, q).to_string() + ", not on --config " +
+                           targets.config->to_string(),
+                       source);
+  }
+}
+
+void check_joints_not_radians(std::span<const robot::JointVector> q, const CompensationModel& model,
+                              const std::string& source, const std::string& override_option) {
+  const std::vector<robot::JointVector>& train = model.data_joints();
+  if (q.empty() || train.size() < 2) return;
+  double largest = 0.0;
+  for (const robot::JointVector& row : q) {
+    if (!row.allFinite()) return;  // rows the other checks name
+    largest = std::max(largest, row.cwiseAbs().maxCoeff());
+  }
+  // Within one turn either way: the radians of any joint range up to +-360 deg (UR).
+  if (largest > 2.0 * std::numbers::pi + 1e-6) return;
+  auto spread = [](auto rows, int k) {
+    double mean = 0.0, sq = 0.0;
+    for (const robot::JointVector& r : rows) mean += r[k];
+    mean /= static_cast<double>(rows.size());
+    for (const robot::JointVector& r : rows) sq += (r[k] - mean) * (r[k] - mean);
+    return std::sqrt(sq / static_cast<double>(rows.size()));
+  };
+  int spread_joints = 0;
+  std::string evidence;
+  for (int k = 0; k < robot::kJointCount; ++k) {
+    const double t = spread(train, k);
+    if (t < kRadiansSuspectTrainingSpreadDeg) continue;
+    const double in = spread(q, k);
+    if (in >= 0.1 * t) return;  // this joint moves as much as in training: degrees
+    ++spread_joints;
+    evidence += (evidence.empty() ? "" : ", ") + ("q" + std::to_string(k + 1)) + " " + format_number(std::round(in * 100) / 100) +
+                " here vs " + format_number(std::round(t * 10) / 10) + " in training";
+  }
+  if (spread_joints < kRadiansSuspectJoints) return;
+  throw InputError(source + ": the joints look like radians: all " + std::to_string(q.size()) +
+                       " rows lie within +-2 pi (largest |q| " + format_number(std::round(largest * 1000) / 1000) +
+                       ") and spread far less than the model's " + std::to_string(train.size()) +
+                       " training joints (standard deviation, deg: " + evidence +
+                       "). errfield reads joints q1..q6 in degrees: convert (x 180/pi), or give " + override_option +
+                       " if these really are degrees",
+                   source);
+}
+
+void check_readings_of_tool_point(const CompensationModel& model, std::span<const robot::JointVector> q,
+                                  std::span<const Eigen::Vector3d> measured, const std::string& source,
+                                  double limit_mm) {
+  if (!model.registration() || measured.size() < 6 || q.size() != measured.size()) return;
+  const robot::MdhModel& command = model.command_model();
+  double sq = 0.0;
+  std::vector<robot::PositionMeasurement> data;
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    const Eigen::Vector3d r = model.registration()->robot_from_tracker * measured[i] - robot::forward_position(command, q[i]);
+    sq += r.squaredNorm();
+    data.push_back({q[i], measured[i]});
+  }
+  const double rms = std::sqrt(sq / static_cast<double>(q.size()));
+  if (!(rms > limit_mm)) return;
+  const robot::CalibrationResult reg = robot::register_tracker(command, data);
+  const Eigen::Vector3d found = reg.model.tool().translation(), fitted = command.tool().translation();
+  const double shift = (found - fitted).norm();
+  if (!(shift > limit_mm)) return;
+  auto xyz = [](const Eigen::Vector3d& v) {
+    return "(" + format_number(std::round(v.x() * 10) / 10) + ", " + format_number(std::round(v.y() * 10) / 10) +
+           ", " + format_number(std::round(v.z() * 10) / 10) + ")";
+  };
+  throw InputError(source + ": these readings are of another point than the model's tool point: registered with a "
+                       "free reflector offset they put the reflector at " + xyz(found) + " mm in the flange frame, " +
+                       format_number(std::round(shift * 10) / 10) + " mm from the point the model was fitted for " +
+                       xyz(fitted) + " (limit " + format_number(limit_mm) +
+                       " mm), and the model's registration leaves them " + format_number(std::round(rms * 10) / 10) +
+                       " mm RMS from it. Validate a model with readings of the reflector or tool it was fitted on "
+                       "(or fit a model for this one)",
+                   source);
 }
 
 StepColumns validation_point_columns(const ValidationReport& r) {

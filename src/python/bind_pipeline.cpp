@@ -169,10 +169,12 @@ py::dict compensate_py(const PyModel& m, const py::object& targets, const py::ob
       t.poses = columns_matrix(table, kPoseCols);
       // Per-row seeds (the CLI's sq1..sq6): each row solved from, and kept on, its seed's configuration.
       t.seed_rows_deg = seed_rows_of(table);
+      check_seed_joints(t, nominal, &table);
     } else throw InputError("targets: need columns q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg)", "targets");
   } else {
     t.joints_deg = joint_vectors_arg(targets, "targets");
   }
+  check_seed_joints(t, nominal);  // --seed: within the joint limits
   if (!(std::isfinite(max_correction) && max_correction >= 0.0))
     throw ArgumentError("max_correction: " + format_number(max_correction) +
                         "; expected a ceiling > 0 (mm), or 0 for the default");

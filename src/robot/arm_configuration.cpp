@@ -20,6 +20,17 @@ std::string ArmConfiguration::to_string() const {
   return std::string{'s', configuration_sign_char(shoulder), 'e', configuration_sign_char(elbow), 'w', configuration_sign_char(wrist)};
 }
 
+std::optional<ArmConfiguration> parse_arm_configuration(std::string_view text) {
+  if (text.size() != 6 || text[0] != 's' || text[2] != 'e' || text[4] != 'w') return std::nullopt;
+  int sign[3] = {0, 0, 0};
+  for (int k = 0; k < 3; ++k) {
+    const char c = text[static_cast<std::size_t>(2 * k + 1)];
+    if (c != '+' && c != '-') return std::nullopt;
+    sign[k] = c == '+' ? 1 : -1;
+  }
+  return ArmConfiguration{sign[0], sign[1], sign[2]};
+}
+
 ArmConfiguration arm_configuration(const MdhModel& model, const JointVector& q_deg) {
   KinematicFrames f;
   forward_kinematics_all(model, q_deg, f);

@@ -595,5 +595,220 @@ TEST_F(WrongCommand, PoseTargetsKeepTheirSeedsArmConfiguration) {
   }
 }
 
+// ---- issue 35: data that do not fit the model, configuration never silent -------------------
+
+// UR5e joints (deg), scattered: not the built-in ER20-C10 set-up, wrists bent both ways.
+constexpr const char* kUrBox = "-90,90,-120,-40,40,120,-120,-40,40,120,-90,90";
+
+TEST_F(WrongCommand, JointsInRadiansAreRefusedAgainstTheTrainingJoints) {
+  // A calibrated UR5e (SIMULATED). Held-out joints written in radians lie within +-2 pi "deg",
+  // inside the training box: before, predict and compensate gave every row ok.
+  ASSERT_EQ(run("simulate --robot ur5e --seed 41 --sample scattered:40 --joint-box " + std::string(kUrBox) +
+                " --measure positions --robot-out " + path("r.json") + " --out " + path("train.csv")).exit_code,
+            0);
+  ASSERT_EQ(run("fit --robot " + path("r.json") + " --data " + path("train.csv") + " --method kinematic --out " +
+                path("k.json")).exit_code,
+            0);
+  ASSERT_EQ(run("simulate --robot ur5e --seed 42 --sample scattered:12 --joint-box " + std::string(kUrBox) +
+                " --measure positions --out " + path("held.csv")).exit_code,
+            0);
+  auto q_only = [](const std::string& c) { return c.size() == 2 && c[0] == 'q'; };
+  rewrite("held.csv", "deg.csv", [](const CsvTable&, std::size_t, std::vector<std::string>&) {}, q_only);
+  rewrite("held.csv", "rad.csv", [](const CsvTable& t, std::size_t i, std::vector<std::string>& row) {
+    for (int k = 1; k <= 6; ++k) {
+      const std::size_t c = t.column_index("q" + std::to_string(k));
+      row[c] = format_number(t.numeric_cell(i, c) * std::numbers::pi / 180.0);
+    }
+  }, q_only);
+  const auto pr = run("predict --model " + path("k.json") + " --joints " + path("rad.csv") + " --out " + path("p.csv"));
+  expect_refused(pr, 2, {"rad.csv", "radians", "--joints-are-degrees"});
+  EXPECT_FALSE(std::filesystem::exists(path("p.csv")));
+  expect_refused(run("compensate --model " + path("k.json") + " --targets " + path("rad.csv") + " --out " + path("c.csv")),
+                 2, {"rad.csv", "radians", "--joints-are-degrees"});
+  // The same joints in degrees, the override, and a model file without training joints (older
+  // files) go through.
+  EXPECT_EQ(run("predict --model " + path("k.json") + " --joints " + path("deg.csv") + " --out " + path("p.csv")).exit_code, 0);
+  EXPECT_EQ(run("compensate --model " + path("k.json") + " --targets " + path("deg.csv") + " --out " + path("c.csv")).exit_code, 0);
+  EXPECT_EQ(run("predict --model " + path("k.json") + " --joints " + path("rad.csv") + " --joints-are-degrees --out " +
+                path("p2.csv")).exit_code,
+            0);
+  nlohmann::json old = read_json("k.json");
+  ASSERT_TRUE(old.contains("data_joints_deg"));
+  old.erase("data_joints_deg");
+  write_json("old.json", old);
+  EXPECT_EQ(run("predict --model " + path("old.json") + " --joints " + path("rad.csv") + " --out " + path("p3.csv")).exit_code, 0);
+}
+
+TEST_F(WrongCommand, ValidateRefusesReadingsOfAnotherPointNamingTheDistance) {
+  // One SIMULATED KR16 measured at the same scattered joints with two reflectors 150 mm apart
+  // (same seed: same robot, same joints). A model of reflector A scored on B's readings exited 0
+  // with 150 mm "after" errors: the registration check fits a free reflector offset.
+  const std::string box = "-50,50,-90,-30,10,70,-90,90,-100,-20,-120,120";
+  for (const char* which : {"a", "b"})
+    ASSERT_EQ(run("simulate --robot kr16 --seed 51 --sample scattered:70 --joint-box " + box + " --tool-offset " +
+                  (which[0] == 'a' ? "10,0,40" : "160,0,40") + " --measure positions --robot-out " + path("r.json") +
+                  " --out " + path(std::string(which) + ".csv")).exit_code,
+              0);
+  const CsvTable a = CsvTable::read(path("a.csv")), b = CsvTable::read(path("b.csv"));
+  ASSERT_EQ(a.row_count(), b.row_count());
+  for (std::size_t i = 0; i < a.row_count(); ++i) ASSERT_EQ(a.cell(i, a.column_index("q5")), b.cell(i, b.column_index("q5")));
+  auto keep = [](const std::string&) { return true; };
+  auto none = [](const CsvTable&, std::size_t, std::vector<std::string>&) {};
+  rewrite("a.csv", "train.csv", none, keep, [](std::size_t i) { return i < 50; });
+  rewrite("a.csv", "held_a.csv", none, keep, [](std::size_t i) { return i >= 50; });
+  rewrite("b.csv", "held_b.csv", none, keep, [](std::size_t i) { return i >= 50; });
+  ASSERT_EQ(run("fit --robot " + path("r.json") + " --data " + path("train.csv") + " --method kinematic --out " +
+                path("k.json")).exit_code,
+            0);
+  const auto same = run("validate --model " + path("k.json") + " --data " + path("held_a.csv"));
+  EXPECT_EQ(same.exit_code, 0) << same.err;
+  const auto other = run("validate --model " + path("k.json") + " --data " + path("held_b.csv") + " --out " + path("v.csv"));
+  expect_refused(other, 2, {"held_b.csv", "another point", "mm from the point the model was fitted for"});
+  EXPECT_FALSE(std::filesystem::exists(path("v.csv")));
+  // The distance named is the reflectors' 150 mm (to the calibration's absorption of a few mm).
+  const std::size_t at = other.err.find(" mm from the point");
+  ASSERT_NE(at, std::string::npos);
+  const std::size_t start = other.err.rfind(' ', at - 1) + 1;
+  EXPECT_NEAR(std::stod(other.err.substr(start, at - start)), 150.0, 3.0) << other.err;
+}
+
+TEST_F(WrongCommand, CompensateSaysWhereEachConfigurationCameFromAndPinsOne) {
+  // A calibrated KR16 (SIMULATED) with wrists bent both ways; pose targets from taught joints, half
+  // of them with the taught joints as seeds. Before: no column said where a row's configuration
+  // came from, and there was no way to ask for one.
+  const std::string box = "-40,40,-80,-30,0,60,-90,90,-100,100,-90,90";
+  ASSERT_EQ(run("simulate --robot kr16 --seed 31 --sample scattered:60 --joint-box " + box +
+                " --measure positions --robot-out " + path("r.json") + " --out " + path("train.csv")).exit_code,
+            0);
+  ASSERT_EQ(run("fit --robot " + path("r.json") + " --data " + path("train.csv") + " --method kinematic --out " +
+                path("k.json")).exit_code,
+            0);
+  const robot::MdhModel nominal = robot::MdhModel::load(path("r.json"));
+  std::string seeded = "x,y,z,rx,ry,rz,sq1,sq2,sq3,sq4,sq5,sq6\n", bare = "x,y,z,rx,ry,rz\n", joints = "q1,q2,q3,q4,q5,q6\n";
+  const int n = 8;
+  for (int i = 0; i < n; ++i) {
+    robot::JointVector q;
+    q << -30.0 + 7.0 * i, -60.0 + 2.0 * (i % 5), 20.0 + 3.0 * (i % 4), -60.0 + 15.0 * i,
+        (i % 2 ? 1 : -1) * (30.0 + 5.0 * i), -50.0 + 12.0 * i;
+    const robot::PoseXyzRpy p = robot::to_xyz_rpy(robot::forward_kinematics(nominal, q));
+    std::string pose;
+    for (double v : {p.x_mm, p.y_mm, p.z_mm, p.rx_deg, p.ry_deg, p.rz_deg}) pose += format_number(v) + ",";
+    std::string seed, qs;
+    for (int k = 0; k < 6; ++k) {
+      seed += (i < n / 2 ? format_number(q[k]) : std::string()) + (k < 5 ? "," : "\n");
+      qs += format_number(q[k]) + (k < 5 ? "," : "\n");
+    }
+    seeded += pose + seed;
+    bare += pose.substr(0, pose.size() - 1) + "\n";
+    joints += qs;
+  }
+  write("seeded.csv", seeded);
+  write("bare.csv", bare);
+  write("joints.csv", joints);
+  const auto c = run("compensate --model " + path("k.json") + " --targets " + path("seeded.csv") + " --out " + path("c.csv"));
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const auto source = column("c.csv", "config_source");
+  ASSERT_EQ(source.size(), static_cast<std::size_t>(n));
+  for (int i = 0; i < n; ++i) EXPECT_EQ(source[static_cast<std::size_t>(i)], i < n / 2 ? "seed" : "nearest-training") << i;
+  EXPECT_NE(c.out.find("4 seed, 4 nearest-training"), std::string::npos) << c.out;
+  ASSERT_EQ(run("compensate --model " + path("k.json") + " --targets " + path("joints.csv") + " --out " + path("j.csv")).exit_code, 0);
+  for (const auto& w : column("j.csv", "config_source")) EXPECT_EQ(w, "given");
+
+  // --config: every ok row on the pinned configuration, whichever wrist the pose was taught with.
+  // Independent of errfield's flags: the wrist solutions of one pose differ in q5's sign, so all ok
+  // rows of one pin share q5's sign, and the two pins' signs differ.
+  std::string shoulder_elbow;
+  for (const auto& cfg : column("j.csv", "nconfig"))
+    if (cfg.size() == 6 && shoulder_elbow.empty()) shoulder_elbow = cfg.substr(0, 4);
+  ASSERT_EQ(shoulder_elbow.size(), 4u);
+  int sign_of_pin[2] = {0, 0};
+  for (int w = 0; w < 2; ++w) {
+    const std::string pin = shoulder_elbow + (w ? "w-" : "w+");
+    const auto r = run("compensate --model " + path("k.json") + " --targets " + path("bare.csv") + " --config " + pin +
+                       " --out " + path("pin.csv"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find(std::to_string(n) + " config-option"), std::string::npos) << r.out;
+    const CsvTable out = CsvTable::read(path("pin.csv"));
+    int ok = 0;
+    for (std::size_t i = 0; i < out.row_count(); ++i) {
+      if (out.cell(i, out.column_index("status")) != "ok") continue;
+      ++ok;
+      EXPECT_EQ(out.cell(i, out.column_index("config")), pin) << i;
+      const int sign = cell_of(out, i, "cq5") > 0 ? 1 : -1;
+      if (sign_of_pin[w] == 0) sign_of_pin[w] = sign;
+      EXPECT_EQ(sign, sign_of_pin[w]) << pin << " row " << i;
+    }
+    EXPECT_GE(ok, n / 2) << pin << "\n" << r.out << r.err;
+  }
+  EXPECT_EQ(sign_of_pin[0], -sign_of_pin[1]);
+  // A pinned configuration the given joints are not on is refused, row by row.
+  const auto jp = run("compensate --model " + path("k.json") + " --targets " + path("joints.csv") + " --config " +
+                      shoulder_elbow + "w+ --out " + path("jp.csv"));
+  ASSERT_EQ(jp.exit_code, 0) << jp.err;
+  const auto jstatus = column("jp.csv", "status");
+  const auto jconfig = column("jp.csv", "nconfig");
+  for (std::size_t i = 0; i < jstatus.size(); ++i)
+    if (jconfig[i].size() == 6 && jconfig[i].substr(4) == "w-") EXPECT_EQ(jstatus[i], "config-change") << i;
+    else EXPECT_NE(jstatus[i], "config-change") << i;
+
+  // Seeds the robot cannot take and bad --config text: exit 2 naming the row, column or option.
+  rewrite("seeded.csv", "bad_seed.csv", [](const CsvTable& t, std::size_t i, std::vector<std::string>& row) {
+    if (i == 2) row[t.column_index("sq5")] = "400";
+  });
+  expect_refused(run("compensate --model " + path("k.json") + " --targets " + path("bad_seed.csv") + " --out " + path("x.csv")),
+                 2, {"bad_seed.csv:" + std::to_string(CsvTable::read(path("bad_seed.csv")).line_of_row(2)), "sq5", "400",
+                     "limits"});
+  expect_refused(run("compensate --model " + path("k.json") + " --targets " + path("bare.csv") +
+                     " --seed 0,-60,20,0,1e6,0 --out " + path("x.csv")),
+                 2, {"--seed", "joint 5"});
+  expect_refused(run("compensate --model " + path("k.json") + " --targets " + path("bare.csv") + " --config s+e+w0 --out " +
+                     path("x.csv")),
+                 2, {"--config", "s+e+w0"});
+  EXPECT_FALSE(std::filesystem::exists(path("x.csv")));
+}
+
+TEST_F(WrongCommand, CompensateRefusesJointSwingsAtASingularWrist) {
+  // A calibrated UR5e (SIMULATED). At q5 = +-1e-7 (axes 4 and 6 aligned) a few-mm correction with
+  // the orientation kept turned q4 and q6 by 47-81 deg, status ok. The same joints at q5 = 30 and
+  // -45 deg are ordinary rows.
+  ASSERT_EQ(run("simulate --robot ur5e --seed 41 --sample scattered:40 --joint-box " + std::string(kUrBox) +
+                " --measure positions --robot-out " + path("r.json") + " --out " + path("train.csv")).exit_code,
+            0);
+  ASSERT_EQ(run("fit --robot " + path("r.json") + " --data " + path("train.csv") + " --method kinematic --out " +
+                path("k.json")).exit_code,
+            0);
+  const double base[3][6] = {{10, -70, 90, -60, 0, -40}, {40, -100, 70, -80, 0, 60}, {-20, -90, 80, -70, 0, 30}};
+  std::string text = "q1,q2,q3,q4,q5,q6\n";
+  std::vector<double> q5s;
+  for (const auto& b : base)
+    for (double q5 : {1e-7, -1e-7, 30.0, -45.0}) {
+      for (int k = 0; k < 6; ++k) text += format_number(k == 4 ? q5 : b[k]) + (k < 5 ? "," : "\n");
+      q5s.push_back(q5);
+    }
+  write("sing.csv", text);
+  const auto c = run("compensate --model " + path("k.json") + " --targets " + path("sing.csv") + " --out " + path("c.csv"));
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  const CsvTable out = CsvTable::read(path("c.csv"));
+  int singular = 0, ordinary_ok = 0;
+  for (std::size_t i = 0; i < out.row_count(); ++i) {
+    const std::string status(out.cell(i, out.column_index("status")));
+    if (std::abs(q5s[i]) < 1e-3) {
+      EXPECT_NE(status, "ok") << "row " << i << " at the wrist singularity";
+      singular += status == "wrist-singular";
+      continue;
+    }
+    // Away from it: ok, and the joints turn by about move / reach (here < 1 deg for < 5 mm),
+    // computed from the written joints, far below the bound.
+    EXPECT_EQ(status, "ok") << "row " << i;
+    if (status != "ok") continue;
+    ++ordinary_ok;
+    const double swing = (joints_of(out, i, "cq") - joints_of(out, i, "nq")).cwiseAbs().maxCoeff();
+    EXPECT_LT(swing, 0.5 * std::max(2.0, 2.865 * cell_of(out, i, "move_mm"))) << "row " << i;
+  }
+  EXPECT_GE(singular, 2) << c.err;  // some rows at q5 = 0 do not converge at all (ik-max_iterations)
+  EXPECT_EQ(ordinary_ok, 6);
+  EXPECT_NE(c.err.find("singular configuration"), std::string::npos) << c.err;
+}
+
 }  // namespace wrong_command_cli_test
 }  // namespace errfield

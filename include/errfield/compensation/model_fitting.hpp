@@ -106,11 +106,15 @@ struct FitOptions {
   /// reflector, a wrong row — are excluded and the model fitted again without them (repeated until
   /// no new row is flagged, at most 3 times; noted and warned, every row listed). A row is flagged
   /// when u = s / (√3 σ0) is above this, σ0 = median s / 1.5382 (the robust scale of IGG3 for 3-D
-  /// residuals), where s is, for kinematic+kriging, the row's held-out residual against the field
-  /// (leave-one-out; the field's prediction for a row already excluded) divided by its predictive
-  /// σ per component (nugget included) — a reading its neighbours in joint space contradict — and,
-  /// for kinematic (no field), the residual after calibration. Judging kinematic+kriging by the
-  /// calibration residual dropped real robot behaviour at the workspace extremes (issue 19). 0 keeps
+  /// residuals), where s is the row's held-out residual against a kinematic+kriging field
+  /// (leave-one-out; the field's prediction for a row already excluded) divided by its predictive σ
+  /// per component (nugget included) — a reading its neighbours contradict. For kinematic+kriging
+  /// that field is the model's own (a field without per-row leave-one-out screens nothing); for
+  /// kinematic it is a joint-space one fitted with the same options to the same rows only to judge
+  /// them, when `model` gives its variogram — without, kinematic screens nothing (estimating one
+  /// multiplied the fit's time by 10-30). Judging by the calibration residual dropped real robot
+  /// behaviour at the workspace extremes (issues 19 and 35: the same 11 real rows on three
+  /// reflectors, held-out maximum doubled), so it is never used. 0 keeps
   /// every row. At most a fifth of the rows is excluded: more is not "a few gross outliers" and is
   /// only warned about. Why on at 5: on SIMULATED KR 16 sets with realistic systematic effects and
   /// 2 % × 3 mm outliers it dropped exactly the outliers and matched the oracle (docs/robot.md,

@@ -11,6 +11,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -18,6 +19,7 @@
 #include "errfield/compensation/model_fitting.hpp"
 #include "errfield/compensation/validation.hpp"
 #include "errfield/csv_table.hpp"
+#include "errfield/robot/arm_configuration.hpp"
 #include "errfield/robot/input_checks.hpp"
 #include "errfield/robot/mdh_model.hpp"
 
@@ -44,7 +46,34 @@ struct StepColumns {
   /// (status correction-too-large).
   double max_correction_mm = 0.0;
   std::size_t too_large = 0;
+  /// compensate: where each row's arm configuration came from (the config_source column's words,
+  /// kConfigSource*), and how many rows each, in order of first appearance.
+  std::vector<std::pair<std::string, std::size_t>> config_sources;
+  /// compensate: rows refused because the compensated joints swing far more than the correction
+  /// warrants (a singular configuration; status wrist-singular, elbow-singular, shoulder-singular or
+  /// near-singular).
+  std::size_t singular = 0;
 };
+
+/// compensate's config_source words: the configuration a row is held to came from its seed joints
+/// (sq1..sq6, or --seed), from the given nominal joints (joint targets), from the training sample
+/// nearest the pose (the pose path's start), from `compensate --config`, or from nowhere (a model
+/// without training joints and no seed: multistart, any configuration).
+inline constexpr const char* kConfigSourceSeed = "seed";
+inline constexpr const char* kConfigSourceGiven = "given";
+inline constexpr const char* kConfigSourceNearestTraining = "nearest-training";
+inline constexpr const char* kConfigSourcePinned = "config-option";
+inline constexpr const char* kConfigSourceNone = "none";
+
+/// A compensated row is refused as singular when some joint changes by more than
+/// max(kSingularSwingFloorDeg, kSingularSwingDegPerMm x move_mm) from the nominal joints. Away from
+/// singularities a correction of d mm with the orientation kept turns each joint by about d / reach
+/// (0.1-0.5 deg for 4 mm on an industrial arm); 2.865 deg per mm is the turn of a 20 mm lever, shorter
+/// than any link, so only a Jacobian near rank loss gets there (at q5 = 1e-7 a 4 mm correction
+/// swung q4 and q6 by 49.5 deg, issue 35). The floor keeps tiny corrections from tripping it by
+/// the solver's rounding.
+inline constexpr double kSingularSwingDegPerMm = 2.865;
+inline constexpr double kSingularSwingFloorDeg = 2.0;
 
 /// `compensate --max-correction` by default: this many times the largest total correction the model
 /// predicts at its own training poses (CompensationModel::largest_training_correction_mm) ...
@@ -125,7 +154,46 @@ struct CompensationTargets {
   /// on their arm configuration; empty = none, a row with a NaN = none for that row (then seed_deg or
   /// the nearest training sample).
   std::vector<robot::JointVector> seed_rows_deg;
+  /// `compensate --config`: every row is held to this arm configuration. Pose targets are solved
+  /// from the nearest training sample on it (or their seed, which must be on it); a row whose
+  /// nominal or compensated joints are on another is refused (config-change).
+  std::optional<robot::ArmConfiguration> config;
 };
+
+/// Seeds must be joints the robot can take: --seed (`targets.seed_deg`) and every per-row seed
+/// within `nominal`'s joint limits (a NaN row is "no seed"). Throws ArgumentError naming --seed, or
+/// InputError naming `table`'s file, line (without a table: "seed row N", 1-based), column sq<k>
+/// and the value (exit 2 in the CLI): a seed
+/// outside the limits gave odd statuses (unreachable, branch-change) rather than saying the seed
+/// was wrong. Also checks that seeds are on `targets.config` where one is pinned.
+void check_seed_joints(const CompensationTargets& targets, const robot::MdhModel& nominal,
+                       const CsvTable* table = nullptr);
+
+/// Joint input in radians read as degrees lies within +-3.2 "deg", inside any training box, and
+/// passes every other check. Throws InputError naming `source` when the joints look like radians
+/// against the model's training joints (data_joints): every value of `q_deg` is within +-2 pi, at
+/// least kRadiansSuspectJoints joints spread (standard deviation) over at least
+/// kRadiansSuspectTrainingSpreadDeg in training, and on each of those the input spreads over less
+/// than a tenth of the training's. Models without training joints (older files) are not checked.
+void check_joints_not_radians(std::span<const robot::JointVector> q_deg, const CompensationModel& model,
+                              const std::string& source, const std::string& override_option);
+inline constexpr int kRadiansSuspectJoints = 3;
+inline constexpr double kRadiansSuspectTrainingSpreadDeg = 10.0;
+
+/// `validate` on readings of another point than the model's tool point (another reflector, another
+/// tool): the free reflector offset the registration check fits hides it, and validate scored 150 mm
+/// "after" errors with exit 0. Registers `measured_mm` at `q_deg` onto the model's command model with
+/// a free reflector offset (robot::register_tracker) and throws InputError naming `source` and the
+/// distance when that offset lies more than `limit_mm` from the command model's tool (the point the
+/// model was fitted for) AND the model's stored registration leaves those readings more than
+/// `limit_mm` RMS from the command model's FK (so a weakly determined offset on data of the same
+/// point never trips it). Nothing without a stored registration or with fewer than 6 readings.
+void check_readings_of_tool_point(const CompensationModel& model, std::span<const robot::JointVector> q_deg,
+                                  std::span<const Eigen::Vector3d> measured_mm, const std::string& source,
+                                  double limit_mm);
+/// check_readings_of_tool_point's default limit (mm): a free offset fitted to readings of the same
+/// point lands within ~1 mm of it on robots with mm-level errors.
+inline constexpr double kToolPointShiftLimitMm = 5.0;
 
 /// The per-row seed joints of pose targets, columns sq1..sq6 (deg), as CompensationTargets::seed_rows_deg
 /// holds them: empty when `table` has no sq1 column; a row whose six cells are all empty is NaN (no seed
@@ -137,11 +205,15 @@ std::vector<robot::JointVector> seed_rows_of(const CsvTable& table);
 /// var_field_mm2 (field only), r95_mm (vector fields), total_dx..dz and total_mm (the whole predicted
 /// error of the tool point, calibration + field), move_mm (how far the compensated joints move the
 /// tool point), nconfig and config (robot/arm_configuration.hpp: of the nominal and of the
-/// compensated joints), status. `tolerance_mm` > 0 (ArgumentError otherwise). A refused target (unreachable,
+/// compensated joints), config_source (where the configuration the row is held to came from,
+/// kConfigSource*), status. `tolerance_mm` > 0 (ArgumentError otherwise). A refused target (unreachable,
 /// branch-change, config-change: the nominal or compensated joints on another arm configuration than
-/// the row's seed, --seed, the training sample a pose target was solved from, or given nominal joints,
-/// outside-region, not-credible, no-prediction, ik-*, correction-too-large: move_mm
-/// above `max_correction_mm`; 0 = default_max_correction_mm) has no joints.
+/// the row's seed, --seed, --config, the training sample a pose target was solved from, or given
+/// nominal joints, outside-region, not-credible, no-prediction, ik-*, correction-too-large: move_mm
+/// above `max_correction_mm`; 0 = default_max_correction_mm; wrist-singular, elbow-singular,
+/// shoulder-singular, near-singular: a joint swings more than kSingularSwingDegPerMm x move_mm) has
+/// no joints. Throws ArgumentError when `targets.config` is set and no training sample is on it
+/// for a pose target without a seed.
 StepColumns compensate_columns(const CompensationModel& model, const robot::MdhModel& nominal,
                                const CompensationTargets& targets, double tolerance_mm, double max_correction_mm = 0.0);
 

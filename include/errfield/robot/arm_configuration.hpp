@@ -21,7 +21,9 @@
 /// (a compensation near the wrist singularity) have not changed configuration.
 /// Two solutions of the same pose on different configurations differ in at least one flag.
 
+#include <optional>
 #include <string>
+#include <string_view>
 
 #include "errfield/robot/mdh_model.hpp"
 
@@ -41,6 +43,11 @@ struct ArmConfiguration {
     return shoulder * other.shoulder >= 0 && elbow * other.elbow >= 0 && wrist * other.wrist >= 0;
   }
 };
+
+/// The configuration a user names, in ArmConfiguration::to_string()'s format with every flag given
+/// ("s+e-w+"; `compensate --config`); nothing for any other text (a "0" flag included: a
+/// configuration to keep is one side of each boundary).
+std::optional<ArmConfiguration> parse_arm_configuration(std::string_view text);
 
 /// The configuration of joints `q_deg` on `model`. ~3 FK evaluations' cost; no allocation.
 ArmConfiguration arm_configuration(const MdhModel& model, const JointVector& q_deg);
