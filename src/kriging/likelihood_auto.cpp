@@ -314,7 +314,10 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
     confirmed = order;
   } else {
     LikelihoodFitOptions confirm = fit;
-    if (!o.confirm_with_plain_starts) confirm.local_runs = 1;
+    // By Vecchia's likelihood the plain fit's neighbour sets differ from the warm-started fit's, so
+    // more runs would not make that guarantee; one run from the best screened start (nearly always
+    // the subset estimate) keeps the cost of large N near the single refit it was.
+    if (!o.confirm_with_plain_starts || likelihood_uses_vecchia(fit, static_cast<long>(n))) confirm.local_runs = 1;
     else confirm.local_runs = fit.local_runs + 1;
     std::size_t next = 0;
     auto plausible_confirmed = [&] {
