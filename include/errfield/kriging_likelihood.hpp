@@ -23,6 +23,7 @@
 /// fitted isotropically by BOBYQA without gradients. The mathematics: docs/kriging.md.
 
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -113,6 +114,10 @@ struct LikelihoodFitOptions {
   /// Lower bound of nugget / total sill when the nugget is fitted: a floor keeps the kriging system
   /// well conditioned (its condition number is then below ~ N / min_nugget_ratio).
   double min_nugget_ratio = 1e-9;
+  /// Gradient path: the ranges' standard errors (range_standard_errors), which cost np + 2 more
+  /// evaluations with their gradients (8 for an ARD fit in 6-D). The model choice's ranking fits,
+  /// which only compare likelihoods, leave them out (NaN).
+  bool standard_errors = true;
   int max_evaluations = 3000;
   double relative_tolerance = 1e-9;
   /// Exact, Vecchia, or Auto (exact up to kExactLikelihoodMaxSamples). Vecchia applies to every
@@ -189,12 +194,33 @@ namespace errfield {
 /// Automatic model choice by likelihood: every family in `kinds` (mat with each nu in
 /// `matern_nu`) with a free nugget, isotropic and (if `try_ard` and D > 1) ARD, fitted by
 /// fit_likelihood with `fit`'s kind and REML/ML; the candidate with the smallest criterion
-/// (AIC = 2 nll + 2 k, or BIC = 2 nll + k log(N C)) wins among those whose covariance matrix at the
-/// samples has an estimated 1-norm condition number <= max_condition_number. A candidate beyond
-/// it is never returned; if all are, the nugget floor is raised tenfold and the choice repeated.
-/// Cost: one likelihood fit per candidate (O(n^3) per evaluation, n = min(N, choice_subsample)),
-/// plus one refit on all N samples when N > choice_subsample.
+/// (AIC = 2 nll + 2 k, or BIC = 2 nll + k log(N C)) *as fitted on all samples* wins among those
+/// whose covariance matrix at the samples has an estimated 1-norm condition number <=
+/// max_condition_number and that are not implausible (below). A candidate beyond the limit is never
+/// returned; if all are, the nugget floor is raised and the choice repeated.
+///
+/// Two stages (docs/kriging.md, "Automatic model choice"):
+///  1. Ranking: every candidate is fitted on a deterministic random subset of `choice_subsample`
+///     samples (all samples when there are no more), with `fit`'s starts and local runs unless
+///     ranking_starts / ranking_local_runs say fewer. The candidates' fits run on the OpenMP threads
+///     (each fit is the same computation on any number of threads, so the choice does not depend on it).
+///  2. Confirmation (when the ranking saw a subset or used fewer starts or runs than fit): the `confirmed` best-ranked candidates (and
+///     more until one is plausible) are fitted again on all samples, each starting from its subset
+///     estimate as well as from `fit`'s own starts, with one more local run than `fit` has
+///     (confirm_with_plain_starts), so that their likelihood is at least that of a plain
+///     fit_likelihood(coordinates, values, {family}, fit) on the exact path; the smallest criterion
+///     among those all-sample fits wins. When the ranking saw every sample and used `fit`'s starts,
+///     each candidate *is* the plain fit of its family, so none of them beats the choice either.
+///
+/// Implausible winners (set aside for the next candidate, with the reason in `reason` and
+/// `warnings`; kept, with a warning, only when every fitted candidate is implausible): every range
+/// beyond pathological_range_factor x the samples' extent along its coordinate (a trend, not a
+/// range); an anisotropy ratio beyond pathological_anisotropy_ratio between ranges that lie within
+/// that factor of their extent (a longer ARD range only says the field is flat along that
+/// coordinate); a kriging system near singular (condition number > near_singular_condition).
 struct ModelChoiceOptions {
+  /// The plain fit of one family: the ranking fits (unless ranking_starts / ranking_local_runs) and
+  /// the confirming fits start from these options.
   LikelihoodFitOptions fit;
   std::vector<ModelKind> kinds{ModelKind::Spherical, ModelKind::Exponential, ModelKind::Gaussian, ModelKind::Matern};
   std::vector<double> matern_nu{1.5, 2.5};  ///< mat(0.5) is exp, so it is not repeated by default
@@ -202,29 +228,46 @@ struct ModelChoiceOptions {
   bool try_ard = true;
   enum class Criterion { Aic, Bic } criterion = Criterion::Aic;
   double max_condition_number = 1e12;
-  /// With more samples than this, the candidates are compared on a deterministic random subset of
-  /// this size (the choice needs the family, not the last digit) and the winner is refitted on all
-  /// samples; 0 = always all. The subset depends on the samples, not on their order. 700 covers a
-  /// campaign of the real data's size whole: with 300, on SIMULATED KR 16 fits of 400 / 560 / 687
-  /// poses (3 draws, docs/robot.md "More data, same model"), the subset's family scored a held-out
-  /// RMS 2 % worse on average and up to 9 % worse at 687 poses, for a third of the fit time.
+  /// With more samples than this, the candidates are ranked on a deterministic random subset of
+  /// this size and the best `confirmed` are fitted again on all samples; 0 = always all. The subset
+  /// depends on the samples, not on their order.
   std::size_t choice_subsample = 700;
+  /// Ranking fits' screened starts and local L-BFGS runs (0 = fit's). Fewer than fit's make the
+  /// ranking cheaper; when the ranking sees every sample its fits are then not plain fits.
+  int ranking_starts = 0;
+  int ranking_local_runs = 0;
+  /// How many of the best-ranked candidates are fitted again on all samples (>= 1).
+  std::size_t confirmed = 3;
+  /// true: a confirming fit screens the subset estimate with fit's starts and runs fit.local_runs +
+  /// 1 local runs (never worse than the plain fit on the exact path). false: one local run from the
+  /// best screened start (nearly always the subset estimate): cheaper, without that guarantee.
+  bool confirm_with_plain_starts = true;
+  double pathological_range_factor = 10.0;
+  double pathological_anisotropy_ratio = 100.0;
+  double near_singular_condition = 1e10;
+  /// Throws ArgumentError naming the field.
+  void validate() const;
 };
 
 struct ModelChoiceCandidate {
-  VariogramModel model;
+  VariogramModel model;           ///< as fitted on all samples when confirmed, else as ranked
   double negative_log_likelihood = 0.0;
-  double criterion = 0.0;         ///< AIC or BIC as asked
+  double criterion = 0.0;         ///< AIC or BIC as asked, of the ranking fit (on the subset when there was one)
+  /// The criterion of the fit on all samples: the ranking's when it saw every sample, the
+  /// confirming fit's when confirmed, NaN otherwise.
+  double all_samples_criterion = std::numeric_limits<double>::quiet_NaN();
   double condition_number = 0.0;  ///< of the covariance at the samples (1-norm estimate)
   bool accepted = false;          ///< fitted and well conditioned
+  std::string implausible;        ///< why the model is implausible (empty: plausible)
   std::string note;               ///< why rejected, or the optimizer's outcome
 };
 
 struct ModelChoice {
   VariogramModel model;
-  LikelihoodFitResult fit;                       ///< of the chosen candidate
+  LikelihoodFitResult fit;                       ///< of the chosen candidate, on all samples
   std::vector<ModelChoiceCandidate> candidates;  ///< every candidate tried, in order
-  std::string reason;                            ///< one line: what won and by which criterion
+  std::string reason;                            ///< one line: what won, by which criterion, what was set aside
+  std::vector<std::string> warnings;             ///< implausible candidates set aside, or an implausible winner kept
 };
 
 /// Throws InputError when no candidate can be fitted; ArgumentError for bad options.

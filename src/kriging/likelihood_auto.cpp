@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <exception>
+#include <optional>
 #include <random>
 #include <limits>
 
@@ -79,121 +81,350 @@ double condition_number(const Eigen::MatrixXd& all, const VariogramModel& model)
   return rc > 0.0 ? 1.0 / rc : std::numeric_limits<double>::infinity();
 }
 
-ModelChoice choose_among_candidates(const Eigen::MatrixXd& x, const Eigen::MatrixXd& values,
+// One candidate: a family (mat with its nu) and whether it has one range per coordinate.
+struct CandidateSpec {
+  ModelComponent structure;
+  bool ard = false;
+};
+
+std::string spec_name(const CandidateSpec& c) {
+  std::string s(model_kind_name(c.structure.kind));
+  if (c.structure.kind == ModelKind::Matern) s += "(" + format_number(c.structure.nu) + ")";
+  return s + (c.ard ? "@ard" : "@iso");
+}
+
+std::vector<CandidateSpec> candidate_specs(const ModelChoiceOptions& o, Eigen::Index dims) {
+  std::vector<CandidateSpec> specs;
+  for (const ModelKind kind : o.kinds) {
+    std::vector<double> nus{0.5};
+    if (kind == ModelKind::Matern) nus = o.matern_nu;
+    for (const double nu : nus)
+      for (int ard = 0; ard < 2; ++ard) {
+        if ((ard == 0 && !o.try_isotropic) || (ard == 1 && (!o.try_ard || dims < 2))) continue;
+        CandidateSpec c;
+        c.structure.kind = kind;
+        c.structure.nu = nu;
+        c.ard = ard == 1;
+        specs.push_back(c);
+      }
+  }
+  return specs;
+}
+
+// A fit of one candidate, or why the data refused it.
+struct CandidateFit {
+  std::optional<LikelihoodFitResult> fit;
+  std::string refusal;
+};
+
+// Fits the candidates `which` of `specs` on (x, values), candidate i from initial[i] as well when
+// given. The fits run on the OpenMP threads, one candidate each (their own inner parallel regions
+// then run on one thread; every fit is the same computation on any number of threads). Nothing is
+// thrown inside the parallel region: an InputError is the candidate's refusal, anything else is
+// rethrown after it.
+std::vector<CandidateFit> fit_candidates(const Eigen::MatrixXd& x, const Eigen::MatrixXd& values,
+                                         const std::vector<CandidateSpec>& specs, const std::vector<std::size_t>& which,
+                                         const LikelihoodFitOptions& options,
+                                         const std::vector<std::optional<VariogramModel>>& initial) {
+  std::vector<CandidateFit> out(which.size());
+  std::vector<std::exception_ptr> failures(which.size());
+  const auto count = static_cast<long>(which.size());
+#pragma omp parallel for schedule(dynamic, 1)
+  for (long i = 0; i < count; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const CandidateSpec& c = specs[which[k]];
+    LikelihoodFitOptions f = options;
+    f.anisotropy = c.ard ? LikelihoodFitOptions::Anisotropy::Ard : LikelihoodFitOptions::Anisotropy::None;
+    if (k < initial.size() && initial[k]) f.initial_model = initial[k];
+    try {
+      out[k].fit = fit_likelihood(x, values, {c.structure}, f);
+    } catch (const InputError& e) {
+      out[k].refusal = e.what();
+    } catch (...) {
+      failures[k] = std::current_exception();
+    }
+  }
+  for (const auto& e : failures)
+    if (e) std::rethrow_exception(e);
+  return out;
+}
+
+// Why `model` is implausible for samples spanning `extent` (max - min per coordinate) with this
+// condition number, or empty. Ranges are compared along each coordinate (ARD: range x multiplier;
+// isotropic: against the diagonal). A range far beyond its coordinate's extent only says that the
+// field is flat along it, so the anisotropy ratio is taken among the ranges within that factor.
+std::string implausibility(const VariogramModel& model, const Eigen::RowVectorXd& extent, double condition,
+                           const ModelChoiceOptions& o) {
+  double range = 0.0;
+  for (const auto& c : model.components())
+    if (c.kind != ModelKind::Nugget) range = std::max(range, c.range);
+  std::vector<std::string> why;
+  const Anisotropy& an = model.anisotropy();
+  const bool ard = an.type() == Anisotropy::Type::Ard && an.dimension() == extent.size();
+  const double diagonal = extent.norm();
+  std::vector<double> within;  // ranges within the factor of their coordinate's extent
+  bool all_beyond = true;
+  double longest = 0.0, longest_extent = 0.0;
+  for (Eigen::Index k = 0; k < (ard ? extent.size() : 1); ++k) {
+    const double a = ard ? range * an.parameters()[static_cast<std::size_t>(k)] : range;
+    const double e = ard ? extent[k] : diagonal;
+    if (!(e > 0.0)) continue;
+    if (a <= o.pathological_range_factor * e) {
+      all_beyond = false;
+      within.push_back(a);
+    } else if (a / e > longest / std::max(longest_extent, 1e-300) || longest == 0.0) {
+      longest = a;
+      longest_extent = e;
+    }
+  }
+  if (all_beyond && longest > 0.0)
+    why.push_back("range " + format_number(longest) + " beyond " + format_number(o.pathological_range_factor) +
+                  " x the samples' extent " + format_number(longest_extent) + (ard ? " along every coordinate" : ""));
+  if (within.size() >= 2) {
+    const auto [lo, hi] = std::minmax_element(within.begin(), within.end());
+    if (*hi > o.pathological_anisotropy_ratio * *lo)
+      why.push_back("anisotropy ratio " + format_number(*hi / *lo) + " > " + format_number(o.pathological_anisotropy_ratio) +
+                    " (ranges " + format_number(*hi) + " and " + format_number(*lo) + ")");
+  }
+  if (condition > o.near_singular_condition)
+    why.push_back("near-singular kriging system (condition number " + format_number(condition) + " > " +
+                  format_number(o.near_singular_condition) + ")");
+  std::string s;
+  for (const auto& w : why) s += (s.empty() ? "" : "; ") + w;
+  return s;
+}
+
+// Fills candidate `cand` from a fit of it on samples x.
+void record_fit(ModelChoiceCandidate& cand, const LikelihoodFitResult& r, const Eigen::MatrixXd& x,
+                const Eigen::RowVectorXd& extent, bool use_bic, const ModelChoiceOptions& o) {
+  cand.model = r.model;
+  cand.negative_log_likelihood = r.negative_log_likelihood;
+  const double criterion = use_bic ? r.bic : r.aic;
+  cand.condition_number = condition_number(x, r.model);
+  cand.accepted = std::isfinite(criterion) && cand.condition_number <= o.max_condition_number;
+  cand.implausible = cand.accepted ? implausibility(r.model, extent, cand.condition_number, o) : std::string();
+  cand.note = cand.accepted ? r.message
+                            : "refused: condition number " + format_number(cand.condition_number) + " > " +
+                                  format_number(o.max_condition_number);
+  cand.criterion = criterion;
+}
+
+}  // namespace
+
+void ModelChoiceOptions::validate() const {
+  fit.validate();
+  if (kinds.empty()) throw ArgumentError("model choice: no model families to try");
+  if (!try_isotropic && !try_ard) throw ArgumentError("model choice: neither isotropic nor ARD candidates");
+  if (!(max_condition_number > 1.0)) throw ArgumentError("model choice: max_condition_number must be > 1");
+  if (ranking_starts < 0 || ranking_local_runs < 0)
+    throw ArgumentError("model choice: ranking_starts and ranking_local_runs must be >= 0 (0 = fit's)");
+  if (confirmed < 1) throw ArgumentError("model choice: confirmed must be >= 1");
+  if (!(pathological_range_factor > 1.0) || !(pathological_anisotropy_ratio > 1.0) || !(near_singular_condition > 1.0))
+    throw ArgumentError("model choice: pathological_range_factor, pathological_anisotropy_ratio and "
+                        "near_singular_condition must be > 1");
+}
+
+ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::MatrixXd& values,
                                     const ModelChoiceOptions& o) {
-  o.fit.validate();
-  if (o.kinds.empty()) throw ArgumentError("model choice: no model families to try");
-  if (!o.try_isotropic && !o.try_ard) throw ArgumentError("model choice: neither isotropic nor ARD candidates");
-  if (!(o.max_condition_number > 1.0)) throw ArgumentError("model choice: max_condition_number must be > 1");
+  o.validate();
   const bool use_bic = o.criterion == ModelChoiceOptions::Criterion::Bic;
+  const std::string criterion_name = use_bic ? "BIC" : "AIC";
+  const auto n = static_cast<std::size_t>(x.rows());
+  const bool subset = o.choice_subsample > 0 && n > o.choice_subsample;
+  Eigen::MatrixXd xs, vs;
+  if (subset) {
+    const std::vector<Eigen::Index> order = order_independent_subset(x, values, o.choice_subsample, 20261123);
+    xs = x(order, Eigen::all);
+    vs = values(order, Eigen::all);
+  }
+  const Eigen::MatrixXd& xr = subset ? xs : x;
+  const Eigen::MatrixXd& vr = subset ? vs : values;
+  const Eigen::RowVectorXd extent = x.colwise().maxCoeff() - x.colwise().minCoeff();
+  const Eigen::RowVectorXd extent_r = xr.colwise().maxCoeff() - xr.colwise().minCoeff();
+  const std::vector<CandidateSpec> specs = candidate_specs(o, x.cols());
+  std::vector<std::size_t> every(specs.size());
+  for (std::size_t i = 0; i < every.size(); ++i) every[i] = i;
+
   LikelihoodFitOptions fit = o.fit;
   fit.fit_nugget = true;
-  std::string last_notes;  // why the last attempt's candidates were refused, for the message
-  for (int attempt = 0; attempt < 4; ++attempt) {
-    ModelChoice choice;
-    int best = -1;
-    std::string first_refusal;  // why the data could not be fitted, if no candidate could
+  LikelihoodFitOptions rank = fit;
+  if (o.ranking_starts > 0) rank.starts = o.ranking_starts;
+  if (o.ranking_local_runs > 0) rank.local_runs = o.ranking_local_runs;
+  // Ranking fits that are not the plain fits on all samples are confirmed (stage 2).
+  const bool confirm_needed = subset || rank.starts != fit.starts || rank.local_runs != fit.local_runs;
+  // The ranking only compares likelihoods; the standard errors, where wanted, come from the fit on all samples.
+  if (confirm_needed) rank.standard_errors = false;
+
+  // Stage 1: rank every candidate; while every one is ill-conditioned, raise the nugget floor
+  // (with nugget/sill >= N / limit the 2-norm condition number of the correlation matrix is below ~limit).
+  ModelChoice choice;
+  std::vector<CandidateFit> ranked;
+  std::string last_notes;
+  bool any_accepted = false;
+  int attempt = 0;
+  for (; attempt < 4 && !any_accepted; ++attempt) {
+    if (attempt > 0) {
+      rank.min_nugget_ratio = std::max(rank.min_nugget_ratio * 100.0, static_cast<double>(xr.rows()) / o.max_condition_number);
+      fit.min_nugget_ratio = std::max(fit.min_nugget_ratio, rank.min_nugget_ratio);
+    }
+    ranked = fit_candidates(xr, vr, specs, every, rank, {});
+    choice.candidates.assign(specs.size(), {});
     int fitted = 0;
-    std::vector<LikelihoodFitResult> fits;
-    for (const ModelKind kind : o.kinds) {
-      std::vector<double> nus{0.5};
-      if (kind == ModelKind::Matern) nus = o.matern_nu;
-      for (const double nu : nus)
-        for (int ard = 0; ard < 2; ++ard) {
-          if ((ard == 0 && !o.try_isotropic) || (ard == 1 && (!o.try_ard || x.cols() < 2))) continue;
-          ModelComponent c;
-          c.kind = kind;
-          c.nu = nu;
-          LikelihoodFitOptions f = fit;
-          f.anisotropy = ard ? LikelihoodFitOptions::Anisotropy::Ard : LikelihoodFitOptions::Anisotropy::None;
-          ModelChoiceCandidate cand;
-          LikelihoodFitResult r;
-          try {
-            r = fit_likelihood(x, values, {c}, f);
-          } catch (const InputError& e) {
-            if (first_refusal.empty()) first_refusal = e.what();
-            cand.note = e.what();
-            choice.candidates.push_back(std::move(cand));
-            fits.emplace_back();
-            continue;
-          }
-          ++fitted;
-          cand.model = r.model;
-          cand.negative_log_likelihood = r.negative_log_likelihood;
-          cand.criterion = use_bic ? r.bic : r.aic;
-          cand.condition_number = condition_number(x, r.model);
-          cand.accepted = std::isfinite(cand.criterion) && cand.condition_number <= o.max_condition_number;
-          cand.note = cand.accepted ? r.message
-                                    : "refused: condition number " + format_number(cand.condition_number) + " > " +
-                                          format_number(o.max_condition_number);
-          const int index = static_cast<int>(choice.candidates.size());
-          if (cand.accepted && (best < 0 || cand.criterion < choice.candidates[static_cast<std::size_t>(best)].criterion))
-            best = index;
-          choice.candidates.push_back(std::move(cand));
-          fits.push_back(std::move(r));
-        }
+    std::string first_refusal;
+    for (std::size_t i = 0; i < specs.size(); ++i) {
+      auto& cand = choice.candidates[i];
+      if (!ranked[i].fit) {
+        cand.note = ranked[i].refusal;
+        if (first_refusal.empty()) first_refusal = ranked[i].refusal;
+        continue;
+      }
+      ++fitted;
+      record_fit(cand, *ranked[i].fit, xr, extent_r, use_bic, o);
+      if (!confirm_needed) cand.all_samples_criterion = cand.criterion;
+      any_accepted = any_accepted || cand.accepted;
     }
     // Every candidate refused the data itself (e.g. values that are all equal): a higher nugget
     // floor cannot help, and the data's own reason is the message.
     if (fitted == 0 && !first_refusal.empty())
       throw InputError("model choice: no candidate model could be fitted: " + first_refusal);
-    if (best >= 0) {
-      const auto& w = choice.candidates[static_cast<std::size_t>(best)];
-      choice.model = w.model;
-      choice.fit = fits[static_cast<std::size_t>(best)];
-      choice.reason = "smallest " + std::string(use_bic ? "BIC" : "AIC") + " (" + format_number(w.criterion) +
-                      ") of " + std::to_string(choice.candidates.size()) + " " + (fit.restricted ? "REML" : "ML") +
-                      " fits (sph/exp/gau/mat with a nugget, isotropic and ARD), condition number " +
-                      format_number(w.condition_number);
-      if (attempt > 0) choice.reason += ", nugget floor raised to " + format_number(fit.min_nugget_ratio) + " x sill";
-      return choice;
-    }
     last_notes.clear();
     for (std::size_t i = 0; i < choice.candidates.size() && i < 3; ++i)
       last_notes += (i ? "; " : "") + choice.candidates[i].note;
-    // Every candidate ill-conditioned (or unfittable): raise the nugget floor. With nugget/sill
-    // >= N / limit the 2-norm condition number of the correlation matrix is below ~limit.
-    fit.min_nugget_ratio = std::max(fit.min_nugget_ratio * 100.0, static_cast<double>(x.rows()) / o.max_condition_number);
   }
-  throw InputError("model choice: no candidate model gave a kriging system with condition number <= " +
-                   format_number(o.max_condition_number) + " (the first candidates of the last attempt: " + last_notes +
-                   ")");
-}
+  if (!any_accepted)
+    throw InputError("model choice: no candidate model gave a kriging system with condition number <= " +
+                     format_number(o.max_condition_number) + " (the first candidates of the last attempt: " + last_notes +
+                     ")");
+  const bool floor_raised = attempt > 1;
 
-}  // namespace
+  // The accepted candidates, best ranked first.
+  std::vector<std::size_t> order;
+  for (std::size_t i = 0; i < specs.size(); ++i)
+    if (choice.candidates[i].accepted) order.push_back(i);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return choice.candidates[a].criterion < choice.candidates[b].criterion;
+  });
 
-ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::MatrixXd& values,
-                                    const ModelChoiceOptions& o) {
-  const auto n = static_cast<std::size_t>(x.rows());
-  if (o.choice_subsample == 0 || n <= o.choice_subsample) return choose_among_candidates(x, values, o);
-  const std::vector<Eigen::Index> order = order_independent_subset(x, values, o.choice_subsample, 20261123);
-  const Eigen::MatrixXd xs = x(order, Eigen::all), vs = values(order, Eigen::all);
-  ModelChoice choice = choose_among_candidates(xs, vs, o);
-  // Refit the winning family (and isotropy) on every sample, with the nugget floor it needed.
-  ModelComponent structure = choice.model.components().front();
-  LikelihoodFitOptions f = o.fit;
-  f.fit_nugget = true;
-  f.anisotropy = choice.model.anisotropy().isotropic() ? LikelihoodFitOptions::Anisotropy::None
-                                                       : LikelihoodFitOptions::Anisotropy::Ard;
-  // Vecchia (beyond kExactLikelihoodMaxSamples): from the subset's estimate as well, so that the
-  // neighbour sets are found in nearly the right metric from the start. (The exact refit keeps its
-  // data-based starts, as before.)
-  if (likelihood_uses_vecchia(f, static_cast<long>(n))) f.initial_model = choice.model;
-  double cond = std::numeric_limits<double>::infinity();
-  for (int attempt = 0; attempt < 4; ++attempt) {
-    LikelihoodFitResult r = fit_likelihood(x, values, {structure}, f);
-    cond = condition_number(x, r.model);
-    if (cond <= o.max_condition_number) {
-      choice.model = r.model;
-      choice.fit = std::move(r);
-      choice.reason += " on a random subset of " + std::to_string(o.choice_subsample) + " of the " +
-                       std::to_string(n) + " samples, then refitted on all (condition number " + format_number(cond) + ")";
-      return choice;
+  // Stage 2: confirm on all samples the best ranked (and the next, batch by batch, until one is
+  // plausible and well conditioned on all samples).
+  std::vector<std::optional<LikelihoodFitResult>> final_fit(specs.size());
+  std::vector<std::size_t> confirmed;
+  if (!confirm_needed) {
+    for (std::size_t i : order) final_fit[i] = ranked[i].fit;
+    confirmed = order;
+  } else {
+    LikelihoodFitOptions confirm = fit;
+    // By Vecchia's likelihood the plain fit's neighbour sets differ from the warm-started fit's, so
+    // more runs would not make that guarantee; one run from the best screened start (nearly always
+    // the subset estimate) keeps the cost of large N near the single refit it was.
+    if (!o.confirm_with_plain_starts || likelihood_uses_vecchia(fit, static_cast<long>(n))) confirm.local_runs = 1;
+    else confirm.local_runs = fit.local_runs + 1;
+    std::size_t next = 0;
+    auto plausible_confirmed = [&] {
+      for (std::size_t i : confirmed)
+        if (choice.candidates[i].accepted && choice.candidates[i].implausible.empty()) return true;
+      return false;
+    };
+    while (next < order.size() && !plausible_confirmed()) {
+      std::vector<std::size_t> batch;
+      std::vector<std::optional<VariogramModel>> initial;
+      const std::size_t want = confirmed.empty() ? o.confirmed : 1;
+      while (next < order.size() && batch.size() < want) {
+        const std::size_t i = order[next++];
+        batch.push_back(i);
+        initial.emplace_back(choice.candidates[i].model);
+      }
+      const std::vector<CandidateFit> r = fit_candidates(x, values, specs, batch, confirm, initial);
+      for (std::size_t k = 0; k < batch.size(); ++k) {
+        const std::size_t i = batch[k];
+        auto& cand = choice.candidates[i];
+        confirmed.push_back(i);
+        if (!r[k].fit) {
+          cand.accepted = false;
+          cand.note = "refused on all samples: " + r[k].refusal;
+          continue;
+        }
+        const double ranking_criterion = cand.criterion;
+        record_fit(cand, *r[k].fit, x, extent, use_bic, o);
+        cand.all_samples_criterion = cand.criterion;
+        cand.criterion = ranking_criterion;
+        final_fit[i] = r[k].fit;
+      }
     }
-    f.min_nugget_ratio = std::max(f.min_nugget_ratio * 100.0, static_cast<double>(n) / o.max_condition_number);
   }
-  throw InputError("model choice: the refit of " + choice.model.to_string() + " on all " + std::to_string(n) +
-                   " samples stays ill-conditioned (condition number " + format_number(cond) + ")");
+
+  // The winner: the smallest all-sample criterion among the confirmed, accepted, plausible fits;
+  // if none is plausible, the smallest among the accepted, with a warning.
+  int best = -1, best_any = -1;
+  for (std::size_t i : confirmed) {
+    const auto& c = choice.candidates[i];
+    if (!c.accepted || !final_fit[i]) continue;
+    if (best_any < 0 || c.all_samples_criterion < choice.candidates[static_cast<std::size_t>(best_any)].all_samples_criterion)
+      best_any = static_cast<int>(i);
+    if (c.implausible.empty() &&
+        (best < 0 || c.all_samples_criterion < choice.candidates[static_cast<std::size_t>(best)].all_samples_criterion))
+      best = static_cast<int>(i);
+  }
+  if (best_any < 0) {
+    // Every confirmed candidate ill-conditioned on all samples: the best ranked, with the nugget
+    // floor raised until it is not (as the ranking does).
+    const std::size_t i = order.front();
+    LikelihoodFitOptions f = fit;
+    f.initial_model = choice.candidates[i].model;
+    double cond = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 4; ++k) {
+      f.min_nugget_ratio = std::max(f.min_nugget_ratio * 100.0, static_cast<double>(n) / o.max_condition_number);
+      const std::vector<CandidateFit> r = fit_candidates(x, values, specs, {i}, f, {});
+      if (!r[0].fit) break;
+      cond = condition_number(x, r[0].fit->model);
+      if (cond <= o.max_condition_number) {
+        record_fit(choice.candidates[i], *r[0].fit, x, extent, use_bic, o);
+        choice.candidates[i].all_samples_criterion = choice.candidates[i].criterion;
+        final_fit[i] = r[0].fit;
+        best_any = static_cast<int>(i);
+        if (choice.candidates[i].implausible.empty()) best = best_any;
+        break;
+      }
+    }
+    if (best_any < 0)
+      throw InputError("model choice: the refit of " + choice.candidates[i].model.to_string() + " on all " +
+                       std::to_string(n) + " samples stays ill-conditioned (condition number " + format_number(cond) + ")");
+  }
+  const bool kept_implausible = best < 0;
+  const auto w = static_cast<std::size_t>(kept_implausible ? best_any : best);
+  const auto& winner = choice.candidates[w];
+  choice.model = final_fit[w]->model;
+  choice.fit = *final_fit[w];
+  choice.reason = "smallest " + criterion_name + " (" + format_number(winner.all_samples_criterion) + ") of ";
+  if (subset)
+    choice.reason += std::to_string(specs.size()) + " " + (fit.restricted ? "REML" : "ML") +
+                     " fits (sph/exp/gau/mat with a nugget, isotropic and ARD) ranked on a random subset of " +
+                     std::to_string(o.choice_subsample) + " of the " + std::to_string(n) + " samples, the best " +
+                     std::to_string(confirmed.size()) + " refitted on all";
+  else if (confirm_needed)
+    choice.reason += std::to_string(specs.size()) + " " + (fit.restricted ? "REML" : "ML") +
+                     " fits (sph/exp/gau/mat with a nugget, isotropic and ARD), the best " +
+                     std::to_string(confirmed.size()) + " refitted with more starts";
+  else
+    choice.reason += std::to_string(specs.size()) + " " + (fit.restricted ? "REML" : "ML") +
+                     " fits (sph/exp/gau/mat with a nugget, isotropic and ARD)";
+  choice.reason += ", condition number " + format_number(winner.condition_number);
+  if (floor_raised) choice.reason += ", nugget floor raised to " + format_number(fit.min_nugget_ratio) + " x sill";
+  // What was set aside as implausible although its criterion was smaller.
+  for (std::size_t i : confirmed) {
+    const auto& c = choice.candidates[i];
+    if (i == w || !c.accepted || c.implausible.empty() || !(c.all_samples_criterion < winner.all_samples_criterion)) continue;
+    const std::string note = spec_name(specs[i]) + " (" + criterion_name + " " + format_number(c.all_samples_criterion) +
+                             ") set aside as implausible: " + c.implausible;
+    choice.reason += "; " + note;
+    choice.warnings.push_back(note);
+  }
+  if (kept_implausible) {
+    const std::string note = "every candidate fitted is implausible; kept " + spec_name(specs[w]) + ": " + winner.implausible;
+    choice.reason += "; " + note;
+    choice.warnings.push_back(note);
+  }
+  return choice;
 }
 
 }  // namespace errfield

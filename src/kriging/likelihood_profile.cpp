@@ -324,8 +324,11 @@ LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eige
     best_theta = t;
     best_outcome = out;
   }
-  std::vector<double> se_log = log_range_errors(pr, best_theta);
-  evaluations += np + 2;
+  std::vector<double> se_log(static_cast<std::size_t>(nr), std::numeric_limits<double>::quiet_NaN());
+  if (o.standard_errors) {
+    se_log = log_range_errors(pr, best_theta);
+    evaluations += np + 2;
+  }
   pr.evaluate(best_theta.data(), nullptr);
 
   std::vector<double> ranges(nr);
