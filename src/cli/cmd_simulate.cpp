@@ -25,7 +25,7 @@ namespace {
 
 struct SimulateArgs {
   std::string config, robot, joints, cube, orientation, sample = "grid", out, truth_out, config_out, robot_out,
-      joint_box, tool_offset, outliers;
+      joint_box, tool_offset, outliers, reflectors;
   double orientation_spread = 0.0;
   int joint_decimals = -1;
   std::vector<std::string> bases, fixed_bases;
@@ -71,6 +71,25 @@ std::pair<double, double> parse_pair(const std::string& text, const std::string&
   const auto colon = text.find(':');
   if (colon == std::string::npos) throw ArgumentError(what + ": expected FRACTION:MM, got '" + text + "'");
   return {parse_number(text.substr(0, colon), what + " FRACTION"), parse_number(text.substr(colon + 1), what + " MM")};
+}
+
+// --reflectors "X1,Y1,Z1;X2,Y2,Z2;...": points on the flange (flange frame, mm), labelled r1, r2, ...
+std::vector<Eigen::Vector3d> parse_reflectors(const std::string& text) {
+  std::vector<Eigen::Vector3d> out;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    const std::size_t end = std::min(text.find(';', start), text.size());
+    const std::string item = text.substr(start, end - start);
+    const std::string what = "--reflectors (reflector " + std::to_string(out.size() + 1) + ")";
+    const Eigen::Vector3d v = parse_vec3(item, what);
+    // As --tool-offset: a point on the flange, not 10 m away.
+    if (!(v.norm() <= 1e4)) throw ArgumentError(what + ": '" + item + "' is " + format_number(v.norm()) + " mm from the flange; expected at most 10000 mm");
+    out.push_back(v);
+    start = end + 1;
+  }
+  if (out.size() < 2)
+    throw ArgumentError("--reflectors: expected at least two points X1,Y1,Z1;X2,Y2,Z2 (flange frame, mm), got '" + text + "'");
+  return out;
 }
 
 // Streams of their own for the offset and the outliers, so that switching them on leaves every
@@ -203,6 +222,13 @@ void run_simulate(const SimulateArgs& a) {
     std::tie(outlier_fraction, outlier_mm) = parse_pair(a.outliers, "--outliers");
     if (!(outlier_fraction >= 0 && outlier_fraction <= 1) || !(outlier_mm > 0))
       throw ArgumentError("--outliers: expected FRACTION in [0, 1] and MM > 0, got '" + a.outliers + "'");
+  }
+  std::vector<Eigen::Vector3d> reflectors;
+  if (!a.reflectors.empty()) {
+    reflectors = parse_reflectors(a.reflectors);
+    if (want_distances)
+      throw ArgumentError("--reflectors: only with --measure positions (distances to base points from several "
+                          "reflectors are not simulated)");
   }
   const std::string systematic =
       apply_systematic_effects(config, a.systematic, a.compliance_mrad_per_knm, a.end_range_errors, a.mass_offset);
@@ -366,15 +392,38 @@ void run_simulate(const SimulateArgs& a) {
   // Visit every row once (bases first, as the paper's reference is measured before the targets):
   // fresh repeatability noise per move, one tracker reading per visit. The robot moves at the
   // commanded joints; the file records them to --joint-decimals.
-  const std::size_t n = rows.size();
+  // With --reflectors every visit is read at each reflector on the flange: K rows per pose that
+  // share the joints, the move (one repeatability draw, a translation of the flange) and the robot's
+  // errors, each with its own tracker reading. The pose's joint deflections turn the flange, so each
+  // point sees its own error: what a model of one point cannot tell.
+  const std::size_t per_pose = reflectors.empty() ? 1 : reflectors.size();
+  const std::size_t n = rows.size() * per_pose;
   std::vector<Eigen::Vector3d> nominal(n), truth(n), measured(n);
   std::vector<JointVector> recorded(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    recorded[i] = a.joint_decimals >= 0 ? round_joints(rows[i].q, a.joint_decimals) : rows[i].q;
-    nominal[i] = forward_position(config.nominal, recorded[i]);
-    const Eigen::Vector3d reached = robot.move(rows[i].q, rng);
-    truth[i] = reached;
-    measured[i] = robot.measure(reached, rng);
+  std::vector<std::size_t> pose_of(n);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const JointVector q = a.joint_decimals >= 0 ? round_joints(rows[i].q, a.joint_decimals) : rows[i].q;
+    if (reflectors.empty()) {
+      recorded[i] = q;
+      pose_of[i] = i;
+      nominal[i] = forward_position(config.nominal, q);
+      const Eigen::Vector3d reached = robot.move(rows[i].q, rng);
+      truth[i] = reached;
+      measured[i] = robot.measure(reached, rng);
+      continue;
+    }
+    const Eigen::Isometry3d nominal_flange = forward_kinematics(config.nominal, q, EndFrame::flange);
+    const Eigen::Isometry3d true_flange = robot.true_pose(rows[i].q, EndFrame::flange);
+    const double s = config.repeatability_sigma_mm;
+    const Eigen::Vector3d repeat(rng.normal(0, s), rng.normal(0, s), rng.normal(0, s));
+    for (std::size_t k = 0; k < per_pose; ++k) {
+      const std::size_t r = i * per_pose + k;
+      recorded[r] = q;
+      pose_of[r] = i;
+      nominal[r] = nominal_flange * reflectors[k];
+      truth[r] = true_flange * reflectors[k] + repeat;
+      measured[r] = robot.measure(truth[r], rng);
+    }
   }
   std::vector<Eigen::Vector3d> fixed_measured;
   for (const auto& f : fixed) fixed_measured.push_back(robot.measure(f, rng));
@@ -384,7 +433,7 @@ void run_simulate(const SimulateArgs& a) {
   std::size_t outlier_count = 0;
   if (outlier_fraction > 0) {
     SimulationRng orng(config.seed ^ kOutlierStream);
-    const std::size_t first_target = base_nominal.size();
+    const std::size_t first_target = base_nominal.size() * per_pose;
     for (std::size_t k : choose_outliers(n - first_target, outlier_fraction, orng)) {
       measured[first_target + k] += outlier_mm * random_unit_vector(orng);
       is_outlier[first_target + k] = 1;
@@ -392,12 +441,14 @@ void run_simulate(const SimulateArgs& a) {
     }
   }
   OutputTable out;
-  std::vector<std::string> ids(n), kinds(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    ids[i] = rows[i].id;
-    kinds[i] = rows[i].kind;
+  std::vector<std::string> ids(n), kinds(n), labels(n);
+  for (std::size_t r = 0; r < n; ++r) {
+    ids[r] = rows[pose_of[r]].id;
+    kinds[r] = rows[pose_of[r]].kind;
+    labels[r] = "r" + std::to_string(r % per_pose + 1);
   }
   out.add_column("point", ids);
+  if (!reflectors.empty()) out.add_column("reflector", labels);
   out.add_column("kind", kinds);
   const auto qn = joint_column_names();
   for (int k = 0; k < kJointCount; ++k) {
@@ -450,6 +501,14 @@ void run_simulate(const SimulateArgs& a) {
     if (outlier_count > 0)
       text << " " << outlier_count << " gross outlier(s) of " << format_number(outlier_mm) << " mm in the tracker readings;";
     text << systematic << "\n";
+  }
+  if (!reflectors.empty()) {
+    text << "# SIMULATED reflectors on the flange, each pose read at every one (flange frame, mm):";
+    for (std::size_t k = 0; k < reflectors.size(); ++k)
+      text << (k ? ";" : "") << " r" << k + 1 << " = " << format_number(reflectors[k].x()) << ","
+           << format_number(reflectors[k].y()) << "," << format_number(reflectors[k].z());
+    text << "; rows of one pose share point and q1..q6; x,y,z are the nominal position of the row's reflector (FK of "
+            "the flange times its offset), not of the robot's tool\n";
   }
   text << "# q1..q6 commanded joints (deg); x,y,z nominal tool position (FK of q1..q6, robot base frame, mm)";
   if (want_positions) text << "; mx,my,mz measured position (tracker frame, mm)";
@@ -522,6 +581,12 @@ void add_simulate_command(CLI::App& app) {
                   "X,Y,Z (mm, nominal tool frame) or random:MM (random direction, length MM): the true tool/reflector "
                   "differs from the nominal robot's by this offset, unknown to --robot-out (written to --truth-out "
                   "and --config-out)");
+  cmd->add_option("--reflectors", args->reflectors,
+                  "X1,Y1,Z1;X2,Y2,Z2;... (flange frame, mm; at least two): every pose is read at each of these "
+                  "points on the flange (nests on one plate), one row each with column 'reflector' = r1, r2, ... "
+                  "beside 'point'; the rows of a pose share the joints, the move and the robot's errors. "
+                  "x,y,z are the nominal FK of each point. Only with --measure positions. Fit one reflector at a "
+                  "time (its rows, a robot JSON whose tool is that point; docs/robot.md)");
   cmd->add_option("--outliers", args->outliers,
                   "FRACTION:MM: that fraction of the target rows gets a gross tracker error of MM in a random "
                   "direction (mx,my,mz and the distances); --truth-columns marks them in column 'outlier'");

@@ -19,6 +19,9 @@ namespace errfield::compensation {
 using namespace errfield::robot;
 namespace joint_error_functions_test {
 
+// A prior so wide it changes nothing: the exact formulas of the ridge and GLS fits underneath it.
+const JointFunctionPrior kNoPrior{1e12, 1e12, 0.0};
+
 // KR 16 with a 150 mm tool offset from the flange axis, so that every joint moves the point.
 MdhModel robot_with_tool() {
   Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
@@ -233,7 +236,7 @@ TEST(JointErrorFunctions, CoefficientCovarianceIsTheSandwichUnderTheCentredField
   std::vector<Eigen::Vector3d> r(q.size());
   for (std::size_t i = 0; i < q.size(); ++i)  // a smooth joint-1 effect, so that some functions are fitted
     r[i] = Eigen::Vector3d(0.2 * std::sin(q[i][0] / 40.0), 0.1 * std::cos(q[i][4] / 30.0), 0.05);
-  JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 3);
+  JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 3, false, kNoPrior);
   ASSERT_GT(fit.ridge_inverse.size(), 0);
   const VariogramModel field = VariogramModel::parse("sph(sill=0.01,range=200)+nug(0.0004)@ard(1,0.5,2,1,1,0.3)");
   set_coefficient_covariance(fit, q, field);
@@ -271,11 +274,11 @@ TEST(JointErrorFunctions, GeneralizedRefitIsTheRidgeGlsUnderTheFieldCovariance) 
   std::vector<Eigen::Vector3d> r(q.size());
   for (std::size_t i = 0; i < q.size(); ++i)
     r[i] = Eigen::Vector3d(0.2 * std::sin(q[i][0] / 40.0) + 0.03, 0.1 * std::cos(q[i][4] / 30.0), 0.05 * std::sin(q[i][1] / 25.0));
-  JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 3);
+  JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 3, false, kNoPrior);
   ASSERT_GT(fit.ridge_inverse.size(), 0);
   const Eigen::MatrixXd design = fit.design;
   const VariogramModel field = VariogramModel::parse("sph(sill=0.01,range=200)+nug(0.0004)@ard(1,0.5,2,1,1,0.3)");
-  ASSERT_TRUE(refit_by_generalized_least_squares(fit, q, r, field));
+  ASSERT_TRUE(refit_by_generalized_least_squares(fit, q, r, field, kNoPrior));
   EXPECT_TRUE(fit.generalized);
   const auto n = static_cast<Eigen::Index>(q.size());
   const Eigen::MatrixXd si = full_residual_covariance(q).inverse();
@@ -438,6 +441,42 @@ TEST(JointErrorFunctions, OnlyKinematicKrigingModelsCarryThem) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("only kinematic+kriging"), std::string::npos) << e.what();
   }
+}
+
+}  // namespace joint_error_functions_test
+}  // namespace errfield::compensation
+
+namespace errfield::compensation {
+using namespace errfield::robot;
+namespace joint_error_functions_test {
+
+// Poses where only q1 turns: every gravity lever is constant (checked here from the levers
+// themselves), so each gravity term is a joint offset over these poses and the data cannot tell them
+// apart: the fit leaves them out and says which. Over poses that move q2..q5 they stay.
+TEST(JointFunctionPrior, GravityTermsWhoseLeverDoesNotVaryAreLeftOut) {
+  const MdhModel m = robot_with_tool();
+  std::vector<JointVector> q;
+  for (int k = 0; k < 25; ++k) q.push_back((JointVector() << -150.0 + 12.5 * k, -80, 110, 20, 40, 30).finished());
+  std::vector<Eigen::Vector3d> r(q.size());
+  for (std::size_t i = 0; i < q.size(); ++i) r[i] = Eigen::Vector3d(0.1 * std::sin(q[i][0] / 40.0), 0.02, -0.03);
+  const JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 4, true);
+  const JointErrorFunctionFit kept = fit_joint_error_functions(m, random_poses(25, 3), r, 4, true);
+  EXPECT_TRUE(kept.undetermined_gravity_terms.empty());
+  ASSERT_FALSE(kept.functions.gravity_terms.empty());
+  for (int joint = 0; joint < 6; ++joint)
+    for (int frame = joint + 2; frame <= 7; ++frame) {
+      double lo = 1e300, hi = -1e300;
+      for (const JointVector& at : q) {
+        KinematicFrames frames;
+        forward_kinematics_all(m, at, frames);
+        lo = std::min(lo, gravity_lever_m(frames, joint, frame));
+        hi = std::max(hi, gravity_lever_m(frames, joint, frame));
+      }
+      EXPECT_LT(hi - lo, 1e-9) << "joint " << joint + 1 << " frame " << frame << ": the premise, a constant lever";
+    }
+  EXPECT_TRUE(fit.functions.gravity_terms.empty());
+  ASSERT_FALSE(fit.undetermined_gravity_terms.empty());
+  EXPECT_EQ(fit.undetermined_gravity_terms.front().rfind("joint ", 0), 0u);
 }
 
 }  // namespace joint_error_functions_test

@@ -5,8 +5,10 @@
 
 #include <cmath>
 #include <numbers>
+#include <sstream>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "errfield/csv_table.hpp"
 #include "errfield/robot/builtin_robots.hpp"
@@ -129,6 +131,69 @@ TEST_F(SimulateRealLike, Kr16DefaultCubeAndJointBox) {
       EXPECT_GE(qb[i][j], lo[j]);
       EXPECT_LE(qb[i][j], hi[j]);
     }
+}
+
+// --reflectors: every pose read at several points on one flange (issue 34 item 6). Checked against
+// FK of the written joints (x,y,z), the plate's rigidity (the true points keep their distances: one
+// move, one robot), and the point-to-point difference of the error a kinematic model of one point
+// cannot see; fit refuses the mixed file and reads one reflector's rows.
+TEST_F(SimulateRealLike, ReflectorsReadEveryPoseAtEachPointOfTheFlange) {
+  const std::vector<Eigen::Vector3d> r = {{0, 0, 100}, {150, 0, 100}, {0, 150, 60}};
+  auto res = run("simulate --robot kr16 --seed 4 --sample scattered:12 --measure positions --systematic realistic "
+                 "--reflectors \"0,0,100;150,0,100;0,150,60\" --truth-columns --robot-out " + path("n.json") +
+                 " --out " + path("d.csv"));
+  ASSERT_EQ(res.exit_code, 0) << res.err;
+  EXPECT_NE(read("d.csv").find("# SIMULATED reflectors"), std::string::npos);
+  const CsvTable t = CsvTable::read(path("d.csv"));
+  ASSERT_EQ(t.row_count(), 13u * 3u);  // (one base row + 12 targets) x 3 reflectors
+  EXPECT_EQ(t.column_index("reflector"), 1u) << "beside point";
+  const MdhModel nominal = MdhModel::load(path("n.json"));
+  const auto q = joints(t);
+  double largest_difference = 0.0;
+  for (std::size_t pose = 0; pose < 13; ++pose) {
+    const Eigen::Isometry3d flange = forward_kinematics(nominal, q[3 * pose], EndFrame::flange);
+    for (std::size_t k = 0; k < 3; ++k) {
+      const std::size_t i = 3 * pose + k;
+      EXPECT_EQ(t.cell(i, t.column_index("reflector")), "r" + std::to_string(k + 1));
+      EXPECT_EQ(t.cell(i, t.column_index("point")), t.cell(3 * pose, t.column_index("point")));
+      EXPECT_EQ(q[i], q[3 * pose]) << "rows of a pose share the joints";
+      EXPECT_LT((xyz(t, i) - flange * r[k]).norm(), 1e-9) << "x,y,z: FK of the flange times the offset";
+      for (std::size_t m = 0; m < k; ++m)
+        EXPECT_NEAR((xyz(t, i, "true_") - xyz(t, 3 * pose + m, "true_")).norm(), (r[k] - r[m]).norm(), 1e-9)
+            << "one rigid plate, one move";
+      const Eigen::Vector3d error_k = xyz(t, i, "true_") - xyz(t, i), error_1 = xyz(t, 3 * pose, "true_") - xyz(t, 3 * pose);
+      largest_difference = std::max(largest_difference, (error_k - error_1).norm());
+    }
+  }
+  // The flange turns by the geometric and joint errors (tenths of a mrad and more): 150 mm away that
+  // is tens of micrometres at least.
+  EXPECT_GT(largest_difference, 0.02);
+
+  res = run("fit --robot " + path("n.json") + " --data " + path("d.csv") + " --method kinematic --out " + path("m.json"));
+  EXPECT_EQ(res.exit_code, 2) << res.err;
+  EXPECT_NE(res.err.find("column 'reflector'"), std::string::npos) << res.err;
+  // One reflector's rows (r2), with a robot whose tool is r2: readable.
+  std::string kept;
+  {
+    std::istringstream in(read("d.csv"));
+    for (std::string line; std::getline(in, line);)
+      if (line.rfind("#", 0) == 0 || line.rfind("point,", 0) == 0 || line.find(",r2,") != std::string::npos) kept += line + "\n";
+  }
+  write("r2.csv", kept);
+  Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
+  tool.translation() = r[1];
+  write("r2.json", nominal.with_tool(tool).to_json().dump());
+  res = run("fit --robot " + path("r2.json") + " --data " + path("r2.csv") + " --method kinematic --out " + path("m.json"));
+  EXPECT_EQ(res.exit_code, 0) << res.err;
+}
+
+TEST_F(SimulateRealLike, ReflectorsNeedTwoPointsAndPositionsOnly) {
+  for (const char* opt : {"--reflectors 0,0,100 --measure positions", "--reflectors \"0,0,100;1,2\" --measure positions",
+                          "--reflectors \"0,0,100;150,0,100\""}) {
+    const auto r = run(std::string("simulate --sample random:3 ") + opt + " --out " + path("x.csv"));
+    EXPECT_EQ(r.exit_code, 2) << opt << "\n" << r.err;
+    EXPECT_NE(r.err.find("--reflectors"), std::string::npos) << opt << "\n" << r.err;
+  }
 }
 
 TEST_F(SimulateRealLike, BadOptionsAreUsageErrors) {
