@@ -44,6 +44,9 @@ struct StepColumns {
   /// (status correction-too-large).
   double max_correction_mm = 0.0;
   std::size_t too_large = 0;
+  /// compensate: the largest move_mm among the rows compensated (status ok; 0 when none): what the
+  /// ceiling above allowed and what the joints actually did are two numbers.
+  double largest_move_mm = 0.0;
 };
 
 /// `compensate --max-correction` by default: this many times the largest total correction the model
