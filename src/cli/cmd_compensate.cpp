@@ -81,7 +81,7 @@ void run_compensate(const CompensateArgs& a) {
   // a file of empty joints (every row refused exited 0).
   if (n > 0 && refused == n)
     throw Error("compensate: none of the " + std::to_string(n) + " targets of " + a.targets +
-                " could be compensated with " + method_name(model.method()) + " from " + a.model + " (" +
+                " could be compensated with " + std::string(method_name(model.method())) + " from " + a.model + " (" +
                 refusal_tally(status) + "); " + a.out + " not written");
   OutputTable out;
   out.add_all_columns(t);
