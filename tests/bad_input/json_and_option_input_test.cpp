@@ -416,7 +416,8 @@ TEST_F(RobotFiles, AFullStandardOutputKeepsThePreviousFilesOfEveryCommand) {
       {"compensate", "--model", path("m.json"), "--targets", path("t.csv"), "--out", path("prev.txt")},
       {"fit", "--robot", path("robot.json"), "--data", path("g.csv"), "--method", "position-idw", "--out", path("prev.txt")},
       {"plan", "--robot", path("robot.json"), "--cube", "750,-250,350,500", "--step", "250", "--out", path("prev.txt")},
-      {"calibrate", "--robot", path("robot.json"), "--data", path("g.csv"), "--out", path("prev.txt")}};
+      {"calibrate", "--robot", path("robot.json"), "--data", path("g.csv"), "--model", "position", "--out",
+       path("prev.txt")}};
   for (const auto& args : commands) {
     write("prev.txt", "previous\n");
     const CliResult r = testing::run_errfield_to_full_stdout(args, dir_);
