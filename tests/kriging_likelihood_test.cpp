@@ -4,6 +4,7 @@
 
 #include "errfield/kriging_likelihood.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -191,6 +192,90 @@ TEST(KrigingLikelihood, RejectsBadInput) {
   p.range = 1.0;
   Eigen::MatrixXd x5 = Eigen::MatrixXd::Random(5, 3);
   EXPECT_THROW(fit_likelihood(x5, Eigen::VectorXd::Ones(5), {p}), ArgumentError);
+}
+
+// Issue 35: rotated anisotropy had no budget (500 3-D samples, exact: 241 s; 1,000: > 600 s).
+// Refused at once beyond kMaxRotatedLikelihoodWork, naming the samples that fit; the boundary is
+// computed here from the documented work model (fits x N^3, fits x N m^3).
+TEST(KrigingLikelihood, RotatedAnisotropyBeyondItsBudgetIsRefusedAtOnce) {
+  LikelihoodFitOptions o;
+  o.anisotropy = LikelihoodFitOptions::Anisotropy::Rotated;
+  o.method = LikelihoodMethod::Exact;
+  const long n3 = static_cast<long>(std::floor(std::cbrt(kMaxRotatedLikelihoodWork / kRotatedProfileFits3d)));
+  const long n2 = static_cast<long>(std::floor(std::cbrt(kMaxRotatedLikelihoodWork / kRotatedProfileFits2d)));
+  EXPECT_NO_THROW(check_likelihood_budget(n3, 1, o, 3));
+  EXPECT_THROW(check_likelihood_budget(n3 + 1, 1, o, 3), ResourceError);
+  EXPECT_NO_THROW(check_likelihood_budget(n2, 1, o, 2));
+  EXPECT_THROW(check_likelihood_budget(n2 + 1, 1, o, 2), ResourceError);
+  o.method = LikelihoodMethod::Vecchia;
+  o.vecchia_neighbours = 30;
+  const double m3 = 30.0 * 30.0 * 30.0;
+  const long nv = static_cast<long>(std::floor(kMaxRotatedLikelihoodWork / (kRotatedProfileFits3d * m3)));
+  EXPECT_NO_THROW(check_likelihood_budget(nv, 1, o, 3));
+  EXPECT_THROW(check_likelihood_budget(nv + 1, 1, o, 3), ResourceError);
+  // Through fit_likelihood, 1,000 3-D samples by the exact likelihood: at once, naming what fits.
+  o.method = LikelihoodMethod::Exact;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 100.0);
+  Eigen::MatrixXd x(1000, 3);
+  Eigen::VectorXd z(1000);
+  for (Eigen::Index i = 0; i < 1000; ++i) {
+    for (int k = 0; k < 3; ++k) x(i, k) = u(rng);
+    z[i] = u(rng);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    fit_likelihood(x, z, {VariogramModel::parse("exp(sill=1,range=10)").components()[0]}, o);
+    FAIL() << "expected ResourceError";
+  } catch (const ResourceError& e) {
+    EXPECT_NE(std::string(e.what()).find("at most " + std::to_string(n3) + " samples"), std::string::npos) << e.what();
+  }
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 1.0);
+}
+
+// Issue 35: a row given twice (same location, same value) was fitted and read as "a pure nugget
+// effect"; it is named as what it is, with its rows.
+TEST(KrigingLikelihood, RepeatedRowsAreNamedAsDuplicates) {
+  Field f = simulate(20, VariogramModel::parse("exp(sill=1,range=20)+nug(0.05)"), 9);
+  f.x.row(12) = f.x.row(3);
+  f.z[12] = f.z[3];
+  try {
+    fit_likelihood(f.x, f.z, {VariogramModel::parse("exp(sill=1,range=10)").components()[0]});
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("samples 4 and 13 (data rows, 1-based) are duplicates"), std::string::npos)
+        << e.what();
+  }
+  // The same location with another value is a second measurement: fitted (the nugget's evidence).
+  f.z[12] += 0.1;
+  EXPECT_NO_THROW(fit_likelihood(f.x, f.z, {VariogramModel::parse("exp(sill=1,range=10)").components()[0]}));
+}
+
+// Issue 35: collinear covariates (b = 2a + 1) were blamed on "duplicate locations without a
+// nugget"; they are named, with what they depend on.
+TEST(KrigingLikelihood, CollinearCovariatesAreNamed) {
+  const Field f = simulate(25, VariogramModel::parse("exp(sill=1,range=20)+nug(0.05)"), 4);
+  LikelihoodFitOptions o;
+  o.covariates.resize(25, 3);
+  std::mt19937 rng(2);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (int i = 0; i < 25; ++i) {
+    o.covariates(i, 0) = g(rng);
+    o.covariates(i, 1) = g(rng);
+    o.covariates(i, 2) = 2.0 * o.covariates(i, 0) + 1.0;
+  }
+  o.covariate_names = {"a", "c", "b"};
+  try {
+    fit_likelihood(f.x, f.z, {VariogramModel::parse("exp(sill=1,range=10)").components()[0]}, o);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("collinear covariates"), std::string::npos) << m;
+    EXPECT_NE(m.find("'a'"), std::string::npos) << m;
+    EXPECT_NE(m.find("'b'"), std::string::npos) << m;
+    EXPECT_EQ(m.find("'c'"), std::string::npos) << m;  // independent: not blamed
+    EXPECT_EQ(m.find("duplicate locations"), std::string::npos) << m;
+  }
 }
 
 }  // namespace

@@ -92,7 +92,7 @@ struct CoregionalizationFitResult {
 /// `table`. `component_names` (empty or P names) go into the model. Throws ArgumentError for an
 /// empty structure list, an unbounded kind (pow, lin), a missing range, mismatched sizes, fewer
 /// than 2 components, fewer usable bins than structures, or invalid options; InputError for a
-/// non-finite or asymmetric gamma matrix or a negative lag.
+/// non-finite or asymmetric gamma matrix or a negative lag, or a component with no spatial variation (its direct variogram 0 in every bin).
 CoregionalizationFitResult fit_coregionalization(const CrossVariogramTable& table,
                                                  const std::vector<ModelComponent>& structures,
                                                  const CoregionalizationFitOptions& options = {},
@@ -101,10 +101,11 @@ CoregionalizationFitResult fit_coregionalization(const CrossVariogramTable& tabl
 /// The structures with their ranges fitted (sills ignored) to the mean of the direct variograms,
 /// (1/P) sum_i gamma_ii, by fit_variogram with the same weighting; a nug structure makes the
 /// nugget free, otherwise there is none. Throws like fit_coregionalization, and
-/// ArgumentError when the fit fails.
+/// ArgumentError when the fit fails. `component_names` (optional) name the components in messages.
 std::vector<ModelComponent> fit_coregionalization_ranges(const CrossVariogramTable& table,
                                                          const std::vector<ModelComponent>& structures,
-                                                         LmcWeighting weighting = LmcWeighting::NjOverH2);
+                                                         LmcWeighting weighting = LmcWeighting::NjOverH2,
+                                                         const std::vector<std::string>& component_names = {});
 
 /// The structures of an LMC fit from text: a model in VariogramModel's text form
 /// ("nug(0)+sph(1,400)": kinds, ranges and nu kept, sills ignored; ranges_given = true) or

@@ -6,7 +6,12 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <condition_variable>
+#include <cstdlib>
 #include <iostream>
+#include <mutex>
+#include <string_view>
+#include <thread>
 
 namespace errfield::cli {
 
@@ -61,16 +66,89 @@ void Progress::finish() {
   printed_ = false;
 }
 
-StageLog::StageLog(std::string label, bool long_job)
-    : label_(std::move(label)),
-      enabled_(long_job && ::isatty(STDERR_FILENO) != 0),
-      start_(std::chrono::steady_clock::now()) {}
+namespace {
+
+bool progress_wanted() {
+  const char* forced = std::getenv("ERRFIELD_PROGRESS");
+  if (forced && *forced) return std::string_view(forced) != "0";
+  return ::isatty(STDERR_FILENO) != 0;
+}
+
+double progress_after_seconds() {
+  const char* text = std::getenv("ERRFIELD_PROGRESS_AFTER");
+  if (!text || !*text) return StageLog::kProgressAfter;
+  char* end = nullptr;
+  const double v = std::strtod(text, &end);
+  return end != text && *end == '\0' && v >= 0.0 && v <= 3600.0 ? v : StageLog::kProgressAfter;
+}
+
+}  // namespace
+
+struct StageLog::State {
+  using Clock = std::chrono::steady_clock;
+  std::string label;
+  bool every_stage = false;  // long_job: a line at each stage's start
+  double after_s = kProgressAfter;
+  Clock::time_point start = Clock::now();
+  std::mutex mutex;
+  std::condition_variable wake;
+  std::string stage;               // the stage running ("" before the first)
+  Clock::time_point stage_start;   // when it began
+  Clock::time_point next_line;     // when the watcher says it again
+  bool stop = false;
+  std::thread watcher;
+
+  void print(const std::string& what, Clock::time_point now) const {
+    std::fprintf(stderr, "%s: %s (%.1f s)\n", label.c_str(), what.c_str(),
+                 std::chrono::duration<double>(now - start).count());
+    std::fflush(stderr);
+  }
+  void watch() {
+    std::unique_lock lock(mutex);
+    while (!stop) {
+      if (stage.empty()) {
+        wake.wait(lock);
+        continue;
+      }
+      if (wake.wait_until(lock, next_line) == std::cv_status::timeout && !stop && Clock::now() >= next_line) {
+        const auto now = Clock::now();
+        print(stage + ", still running", now);
+        next_line = now + std::chrono::seconds(5);
+      }
+    }
+  }
+  ~State() {
+    if (!watcher.joinable()) return;
+    {
+      std::lock_guard lock(mutex);
+      stop = true;
+    }
+    wake.notify_all();
+    watcher.join();
+  }
+};
+
+StageLog::StageLog(std::string label, bool long_job) {
+  if (!progress_wanted()) return;
+  state_ = std::make_shared<State>();
+  state_->label = std::move(label);
+  state_->every_stage = long_job;
+  state_->after_s = progress_after_seconds();
+  state_->watcher = std::thread([s = state_.get()] { s->watch(); });
+}
 
 void StageLog::operator()(const std::string& stage) const {
-  if (!enabled_) return;
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  std::fprintf(stderr, "%s: %s (%.1f s)\n", label_.c_str(), stage.c_str(), s);
-  std::fflush(stderr);
+  if (!state_) return;
+  State& s = *state_;
+  const auto now = State::Clock::now();
+  {
+    std::lock_guard lock(s.mutex);
+    s.stage = stage;
+    s.stage_start = now;
+    s.next_line = now + std::chrono::duration_cast<State::Clock::duration>(std::chrono::duration<double>(s.after_s));
+    if (s.every_stage) s.print(stage, now);
+  }
+  s.wake.notify_all();
 }
 
 }  // namespace errfield::cli

@@ -3,6 +3,7 @@
 // and a progress line on the terminal for long runs.
 
 #include <chrono>
+#include <memory>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -16,6 +17,7 @@
 #include "errfield/atomic_file.hpp"
 #include "errfield/thread_count.hpp"
 #include "errfield/csv_table.hpp"
+#include "errfield/csv_writing.hpp"
 #include "errfield/error.hpp"
 
 namespace errfield::cli {
@@ -80,17 +82,16 @@ struct OutputTable {
       put_column(input.header()[c], std::move(cells));
     }
   }
+  /// The table as CSV text; every cell goes through csv_cell (a point named "p,1" is quoted, so
+  /// errfield reads its own outputs back).
   std::string to_csv() const {
     std::string out;
-    for (std::size_t c = 0; c < header.size(); ++c) out += (c ? "," : "") + header[c];
-    out += "\n";
+    append_csv_line(out, header);
     const std::size_t rows = columns.empty() ? 0 : columns.front().size();
+    std::vector<std::string> cells(columns.size());
     for (std::size_t r = 0; r < rows; ++r) {
-      for (std::size_t c = 0; c < columns.size(); ++c) {
-        if (c) out += ",";
-        out += columns[c][r];
-      }
-      out += "\n";
+      for (std::size_t c = 0; c < columns.size(); ++c) cells[c] = columns[c][r];
+      append_csv_line(out, cells);
     }
     return out;
   }
@@ -138,17 +139,21 @@ auto with_source(const std::string& file, F f) {
   }
 }
 
-/// Prints "label: stage (12.3 s)" lines to stderr as a long job enters each stage, only when
-/// stderr is a terminal and `long_job` (logs and tests see nothing).
+/// Progress of a job in stages on stderr, when stderr is a terminal (or ERRFIELD_PROGRESS=1):
+/// "label: stage (12.3 s)" as the job enters each stage when `long_job` (known to be long from its
+/// size), and, whatever the size, a line for a stage once it has run kProgressAfter (5 s; the
+/// environment's ERRFIELD_PROGRESS_AFTER, in seconds, overrides it) and again every 5 s after,
+/// from a watcher thread: a 687-pose fit ran 12-24 s silently because only 1,000 rows counted as
+/// long. Copies share one log (it is kept in a std::function); the watcher ends with the last copy.
 class StageLog {
  public:
+  static constexpr double kProgressAfter = 5.0;
   StageLog(std::string label, bool long_job);
   void operator()(const std::string& stage) const;
 
  private:
-  std::string label_;
-  bool enabled_;
-  std::chrono::steady_clock::time_point start_;
+  struct State;
+  std::shared_ptr<State> state_;
 };
 
 /// Refuses, before any work, two output options naming one file in any spelling (`--out c.json

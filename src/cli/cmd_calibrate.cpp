@@ -162,6 +162,7 @@ void run_calibrate(const CalibrateArgs& a) {
     }
     outputs.add(a.robot_out, nominal_json.dump(2) + "\n");
   }
+  require_standard_output();  // the report went to standard output: all or nothing
   outputs.commit();
   std::cerr << "calibrate: identified model written to " << a.out << "\n";
 }

@@ -86,6 +86,12 @@ void run_compensate(const CompensateArgs& a) {
   const StepColumns step = compensate_columns(model, nominal, targets, a.tolerance, a.max_correction);
   const std::size_t refused = step.refused, no_prediction = step.no_prediction;
   const std::vector<std::string>& status = step.columns.back().words;
+  // Nothing compensated is a failed job, as in predict, validate and cv: a script must not send
+  // a file of empty joints (every row refused exited 0).
+  if (n > 0 && refused == n)
+    throw Error("compensate: none of the " + std::to_string(n) + " targets of " + a.targets +
+                " could be compensated with " + std::string(method_name(model.method())) + " from " + a.model + " (" +
+                refusal_tally(status) + "); " + a.out + " not written");
   OutputTable out;
   out.add_all_columns(t);
   add_step_columns(out, step);
@@ -100,7 +106,6 @@ void run_compensate(const CompensateArgs& a) {
     throw Error("--strict: " + std::to_string(refused) + " of " + std::to_string(n) + " target(s) refused (" + rows +
                 (refused > named ? "; ..." : "") + "); " + a.out + " not written");
   }
-  out.write(a.out);
   std::cout << "compensate: " << n - refused << " of " << n << " targets compensated with " << method_name(model.method())
             << (refused ? "; " + std::to_string(refused) + " refused (status column): no joints written for them" : "")
             << "\n  written to " << a.out << "\n";
@@ -108,12 +113,16 @@ void run_compensate(const CompensateArgs& a) {
   for (std::size_t k = 0; k < step.config_sources.size(); ++k)
     std::cout << (k ? "," : "") << " " << step.config_sources[k].second << " " << step.config_sources[k].first;
   std::cout << "\n";
-  std::cout << "  tool point moved by at most " << format_number(step.max_correction_mm) << " mm ("
+  // Two numbers: what the joints did (the largest move_mm written) and the ceiling that was
+  // allowed (the ceiling alone read as the largest move).
+  std::cout << "  tool point moved by " << format_number(std::round(step.largest_move_mm * 1000.0) / 1000.0)
+            << " mm at most (column move_mm); ceiling " << format_number(std::round(step.max_correction_mm * 1000.0) / 1000.0)
+            << " mm ("
             << (a.max_correction > 0.0 ? std::string("--max-correction")
                                        : "default: " + format_number(kMaxCorrectionFactor) +
                                              " x the largest correction at the model's training poses, at least " +
                                              format_number(kMaxCorrectionFloorMm) + " mm")
-            << "; column move_mm)\n";
+            << ")\n";
   if (step.too_large)
     std::cerr << "errfield compensate: warning: " << step.too_large << " target(s) would move the tool point by more "
               << "than " << format_number(step.max_correction_mm)
@@ -127,6 +136,8 @@ void run_compensate(const CompensateArgs& a) {
     std::cerr << "errfield compensate: warning: " << no_prediction
               << " target(s) got no finite prediction from the model's field (status no-prediction); no joints "
                  "written for them\n";
+  require_standard_output();  // before the write: a run that fails leaves the previous file
+  out.write(a.out);
 }
 
 void add_compensate_command(CLI::App& app) {
@@ -149,6 +160,8 @@ void add_compensate_command(CLI::App& app) {
       "joints swing far more than the correction warrants (a singular wrist, elbow or shoulder) are refused\n"
       "(wrist-singular, ...). Joint targets that look like radians (all within +-2 pi, spread far less than the\n"
       "model's training joints) are an error (exit 2; --joints-are-degrees if they are degrees).\n"
+      "Prints the largest move of the tool point and the ceiling (--max-correction). If every target is\n"
+      "refused, nothing is written and the exit status is 1.\n"
       "Example: errfield compensate --model model.json --targets targets.csv --out joints.csv");
   cmd->add_option("--robot", a->robot, "nominal robot JSON or built-in name (er20-c10, kr16, ur5e; default: the model's command model)");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();

@@ -56,7 +56,6 @@ void run_fit(const FitArgs& a) {
   fo.on_measurements_read = [&] { warn_if_metres(table, model, "fit"); };
   const TableFit fit = with_source(a.data, [&] { return fit_table(model, table, fo); });
   const FitResult& r = fit.result;
-  write_file_atomically(a.out, r.model.to_json().dump(1) + "\n");
   std::cout << "fit: method " << method_name(r.model.method()) << " on " << fit.points << " points of " << a.data << "\n";
   if (r.model.field()) std::cout << "  field: " << r.model.field()->describe() << "\n";
   for (const auto& n : r.notes) std::cout << "  " << n << "\n";
@@ -72,6 +71,8 @@ void run_fit(const FitArgs& a) {
     std::cout << "  registration tracker -> robot stored in the model (residual RMS "
               << format_number(r.registration->residual_rms_mm) << " mm on " << r.registration->points << " points)\n";
   std::cout << "  model written to " << a.out << "\n";
+  require_standard_output();  // before the write: a run that fails leaves the previous model
+  write_file_atomically(a.out, r.model.to_json().dump(1) + "\n");
   for (const auto& w : r.warnings) std::cerr << "errfield fit: warning: " << w << "\n";
 }
 

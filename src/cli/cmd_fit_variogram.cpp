@@ -30,6 +30,7 @@ struct FitVariogramArgs {
   std::string likelihood = "auto", ordering = "maxmin";
   int neighbours = LikelihoodFitOptions{}.vecchia_neighbours;
   bool likelihood_given = false;
+  std::vector<std::string> vecchia_given;  // --vecchia-neighbours / --vecchia-ordering, as given
   double range_max = 0.0;
   bool lmc = false;                         // --lmc: fit a linear model of coregionalization
   std::string lmc_method = "goulard-voltz";
@@ -259,7 +260,26 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
                         std::to_string(kMaxLikelihoodSamples) +
                         ": use --likelihood vecchia (or auto), --method wls on the empirical variogram ('errfield "
                         "variogram'), or a subsample");
-  check_likelihood_budget(static_cast<Eigen::Index>(t.row_count()), static_cast<Eigen::Index>(value_names.size()), o);
+  // Options of the Vecchia likelihood on a fit that uses the exact one did nothing, silently.
+  if (!a.vecchia_given.empty() && !likelihood_uses_vecchia(o, static_cast<long>(t.row_count()))) {
+    std::string given;
+    for (const auto& g : a.vecchia_given) given += (given.empty() ? "" : ", ") + g;
+    throw ArgumentError(given + ": " + (a.vecchia_given.size() > 1 ? "they apply" : "it applies") +
+                        " to the Vecchia likelihood, but this fit uses the exact one (" +
+                        (o.method == LikelihoodMethod::Exact
+                             ? std::string("--likelihood exact")
+                             : "--likelihood auto with " + std::to_string(t.row_count()) + " samples: exact up to " +
+                                   std::to_string(kExactLikelihoodMaxSamples)) +
+                        "); drop " + (a.vecchia_given.size() > 1 ? "them" : "it") + " or give --likelihood vecchia");
+  }
+  naming_options(
+      [&] {
+        check_likelihood_budget(static_cast<Eigen::Index>(t.row_count()), static_cast<Eigen::Index>(value_names.size()),
+                                o, static_cast<int>(coord_names.size()));
+      },
+      {{"(vecchia_neighbours)", "(--vecchia-neighbours)"},
+       {"(anisotropy ard:", "(--anisotropy ard:"},
+       {"(likelihood vecchia,", "(--likelihood vecchia,"}});
   if (t.row_count() < static_cast<std::size_t>(kMinLikelihoodSamples))
     throw InputError(a.input + ": " + std::to_string(t.row_count()) + " data row(s); the likelihood fit needs "
                      "at least " + std::to_string(kMinLikelihoodSamples) + " samples", a.input);
@@ -270,6 +290,7 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
     if (o.kind == KrigingKind::Simple)
       throw ArgumentError("--covariates with --kind simple0; expected --kind ordinary (external drift) or universal1/2");
     o.covariates = t.numeric_columns(covariate_names);
+    o.covariate_names = covariate_names;
   }
   // A terminal sees what a long fit is doing (a 50,000-sample Vecchia fit takes tens of seconds).
   const bool vecchia_fit = likelihood_uses_vecchia(o, static_cast<long>(t.row_count()));
@@ -335,6 +356,7 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
       j["fit"]["angles_deg"] = angles;
       j["fit"]["angle_standard_errors_deg"] = angle_errors;
     }
+    require_standard_output();  // the fit went to standard output: all or nothing
     write_file_atomically(a.out, j.dump(2) + "\n");
   }
   if (!r.converged) std::cerr << "errfield fit-variogram: warning: " << r.message << "\n";
@@ -439,7 +461,7 @@ void run_lmc_fit(const FitVariogramArgs& a) {
     if (table.lag.empty()) throw InputError(a.input + ": no bin with pairs > 0; nothing to fit", a.input);
   }
   if (!ranges_given) {
-    structures = with_source(a.input, [&] { return fit_coregionalization_ranges(table, structures, o.weighting); });
+    structures = with_source(a.input, [&] { return fit_coregionalization_ranges(table, structures, o.weighting, names); });
     std::cout << "ranges fitted to the mean of the " << P << " direct variograms:";
     for (const ModelComponent& c : structures)
       if (c.kind != ModelKind::Nugget) std::cout << " " << model_kind_name(c.kind) << " " << format_number(c.range);
@@ -479,6 +501,7 @@ void run_lmc_fit(const FitVariogramArgs& a) {
                 {"smallest_eigenvalue_before_projection", r.smallest_eigenvalue_before_projection},
                 {"bins_used", r.bins_used},
                 {"input", a.input}};
+    require_standard_output();  // the fit went to standard output: all or nothing
     write_file_atomically(a.out, j.dump(2) + "\n");
   }
   if (!r.converged) std::cerr << "errfield fit-variogram: warning: " << r.message << "\n";
@@ -612,6 +635,7 @@ void run_fit_variogram(const FitVariogramArgs& a) {
                 {"status", status},
                 {"message", r.message},
                 {"input", a.input}};
+    require_standard_output();  // the fit went to standard output: all or nothing
     write_file_atomically(a.out, j.dump(2) + "\n");
   }
   if (r.status == FitStatus::Failed) throw Error("fit-variogram: the optimizer failed: " + r.message);
@@ -684,10 +708,16 @@ void add_fit_variogram_command(CLI::App& app) {
       ->each([args](const std::string&) { args->likelihood_given = true; });
   cmd->add_option("--vecchia-neighbours", args->neighbours,
                   "ml/reml with the Vecchia likelihood: neighbours per sample, m (default 30)")
-      ->each([args](const std::string&) { args->likelihood_given = true; });
+      ->each([args](const std::string& v) {
+        args->likelihood_given = true;
+        args->vecchia_given.push_back("--vecchia-neighbours " + v);
+      });
   cmd->add_option("--vecchia-ordering", args->ordering,
                   "ml/reml with the Vecchia likelihood: maxmin (default), random or coordinate")
-      ->each([args](const std::string&) { args->likelihood_given = true; });
+      ->each([args](const std::string& v) {
+        args->likelihood_given = true;
+        args->vecchia_given.push_back("--vecchia-ordering " + v);
+      });
   cmd->add_flag("--lmc", args->lmc,
                 "fit a linear model of coregionalization to the direct and cross variograms of the --value columns "
                 "(>= 2): --input is the CSV of 'errfield variogram --cross' (or the samples, with --coords); --model "

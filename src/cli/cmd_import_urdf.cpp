@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/csv_table.hpp"
@@ -85,6 +86,7 @@ void run_import_urdf(const ImportUrdfArgs& a) {
                 " not written (consecutive joint axes that are almost but not quite parallel or intersecting can "
                 "cause this; please report the URDF)");
   std::cout << "verification: " << check << ": ok\n";
+  require_standard_output();  // the table went to standard output: all or nothing
   write_file_atomically(a.out, j.dump(2) + "\n");
   std::cerr << "import-urdf: robot JSON written to " << a.out << "\n";
 }

@@ -105,6 +105,17 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
   out.add_all_columns(targets);
   std::size_t missing = 0;
   for (Eigen::Index i = 0; i < m; ++i) missing += std::isnan(result.pred(i, 0)) ? 1 : 0;
+  // Nothing predicted is a failed job, as in predict, validate and cv (a file of empty cells exited 0).
+  if (m > 0 && missing == static_cast<std::size_t>(m)) {
+    std::string why;
+    for (const auto& note : result.notes) why += "; " + note;
+    if (r.shared.radius)
+      why += "; no target has a sample within --radius " + format_number(*r.shared.radius) +
+             " (in the scaled coordinates, where an anisotropy applies): a larger --radius or fewer targets far "
+             "from the samples";
+    throw Error("interpolate: none of the " + std::to_string(m) + " targets of " + a.targets +
+                " got a prediction with --method " + method.name + why + "; " + a.out + " not written");
+  }
   for (std::size_t c = 0; c < pred_names.size(); ++c) {
     std::vector<std::string> cells(static_cast<std::size_t>(m));
     for (Eigen::Index i = 0; i < m; ++i) cells[static_cast<std::size_t>(i)] = cell(result.pred(i, static_cast<Eigen::Index>(c)));
@@ -115,12 +126,13 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
     for (std::size_t i = 0; i < values.size(); ++i) cells[i] = cell(values[i]);
     out.add_column(name, std::move(cells));
   }
-  out.write(a.out);
   for (const auto& note : result.notes) std::cerr << "errfield interpolate: " << note << "\n";
   std::cout << "interpolate: " << m << " targets from " << samples.row_count() << " samples with --method "
             << method.name << "; " << (static_cast<std::size_t>(m) - missing) << " predicted";
   if (missing) std::cout << ", " << missing << " without prediction (empty cells)";
   std::cout << "; wrote " << a.out << "\n";
+  require_standard_output();  // before the write: a run that fails leaves the previous file
+  out.write(a.out);
 }
 
 void add_interpolate_command(CLI::App& app) {
@@ -136,7 +148,8 @@ void add_interpolate_command(CLI::App& app) {
         return s;
       }() +
       "\nThe output has every column of the targets file plus 'pred' (for --value dx,dy,dz: pred_dx,pred_dy,pred_dz);\n"
-      "a target without a prediction gets empty cells. The output is written atomically.\n\n"
+      "a target without a prediction gets empty cells; if no target gets one, nothing is written and the exit\n"
+      "status is 1, with the reason. The output is written atomically.\n\n"
       "Example (errors.csv, scattered.csv, targets.csv: SIMULATED, from scripts/make_example_error_field.py):\n"
       "  # the paper's method: distance errors measured on a 125 mm grid, interpolated to targets\n"
       "  errfield interpolate --method idw-grid --samples errors.csv --targets targets.csv \\\n"

@@ -141,8 +141,9 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
   AtomicFileSet outputs;
   outputs.add(a.out, out.to_csv());
   if (!a.summary_out.empty()) outputs.add(a.summary_out, summary.dump(2) + "\n");
-  outputs.commit();
   std::cout << text.str() << "  written to " << a.out << "\n";
+  require_standard_output();  // before the commit: a run that fails leaves the previous files
+  outputs.commit();
 }
 
 /// Best of sph/exp/gau/pow (free nugget, N_j weights) fitted to an `errfield variogram` CSV.
@@ -235,13 +236,14 @@ void run_plan(const PlanArgs& a, CLI::App* cmd) {
   AtomicFileSet outputs;  // --out and --samples-out all or none
   outputs.add(a.out, table(main_rows));
   if (!a.samples_out.empty()) outputs.add(a.samples_out, table(sample_rows));
-  outputs.commit();
   std::size_t grid = 0, bases = 0;
   for (const auto* p : main_rows) (p->kind == "grid" ? grid : bases)++;
   std::cout << "plan: " << grid << " grid points (step " << o.step_mm << " mm) and " << bases
             << " base point(s), all reachable at the orientation; written to " << a.out << "\n";
   if (!a.samples_out.empty())
     std::cout << "  " << sample_rows.size() << " validation samples (one per cell) written to " << a.samples_out << "\n";
+  require_standard_output();  // before the commit: a run that fails leaves the previous files
+  outputs.commit();
 }
 
 void add_plan_command(CLI::App& app) {

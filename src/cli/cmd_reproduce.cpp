@@ -71,6 +71,7 @@ void add_reproduce_command(CLI::App& app) {
     const auto result = reproduction::reproduce_paper(options);
     if (progress) progress->finish();
     std::cout << reproduction::reproduction_summary(result);
+    require_standard_output();  // before the files: a run that fails leaves the previous ones
     const auto files = reproduction::write_reproduction(result, args->out);
     std::cout << "\nwritten (SIMULATED data):\n";
     for (const auto& f : files) std::cout << "  " << f.string() << "\n";

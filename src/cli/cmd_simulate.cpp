@@ -1,6 +1,7 @@
 // `errfield simulate`: measurement files from the simulated robot and laser tracker, in the
 // columns `errfield calibrate` (and the pipeline's `fit`) read. Every file says it is SIMULATED.
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -220,8 +221,13 @@ void run_simulate(const SimulateArgs& a) {
   double outlier_fraction = 0.0, outlier_mm = 0.0;
   if (!a.outliers.empty()) {
     std::tie(outlier_fraction, outlier_mm) = parse_pair(a.outliers, "--outliers");
-    if (!(outlier_fraction >= 0 && outlier_fraction <= 1) || !(outlier_mm > 0))
-      throw ArgumentError("--outliers: expected FRACTION in [0, 1] and MM > 0, got '" + a.outliers + "'");
+    // A gross outlier is a reading off by up to a reflector's knock or a beam break: metres at
+    // most. 10 m (the --tool-offset ceiling) bounds it far above that and keeps every derived
+    // number (distances, squared errors) finite: 1e300 overflowed later, exit 1 with no option named.
+    constexpr double kMaxOutlier_mm = 1e4;
+    if (!(outlier_fraction >= 0 && outlier_fraction <= 1) || !(outlier_mm > 0) || !(outlier_mm <= kMaxOutlier_mm))
+      throw ArgumentError("--outliers: expected FRACTION in [0, 1] and MM in (0, " + format_number(kMaxOutlier_mm) +
+                          "] (a gross outlier of at most 10 m), got '" + a.outliers + "'");
   }
   std::vector<Eigen::Vector3d> reflectors;
   if (!a.reflectors.empty()) {
@@ -488,8 +494,14 @@ void run_simulate(const SimulateArgs& a) {
   }
 
   std::ostringstream text;
+  // A name or path with a line break would end the comment line and start a data line.
+  const auto one_line = [](std::string s) {
+    std::replace_if(s.begin(), s.end(), [](char c) { return c == '\n' || c == '\r'; }, ' ');
+    return s;
+  };
   text << "# SIMULATED data (errfield simulate; not a real robot): seed " << config.seed << ", robot '"
-       << config.nominal.name() << "'" << (a.config.empty() ? ", default simulation" : ", config " + a.config) << "\n";
+       << one_line(config.nominal.name()) << "'" << (a.config.empty() ? ", default simulation" : ", config " + one_line(a.config))
+       << "\n";
   if (scattered || a.orientation_spread > 0 || a.joint_decimals >= 0 || !a.tool_offset.empty() || outlier_count > 0 ||
       !systematic.empty()) {
     text << "# SIMULATED like real data:";
@@ -588,7 +600,7 @@ void add_simulate_command(CLI::App& app) {
                   "x,y,z are the nominal FK of each point. Only with --measure positions. Fit one reflector at a "
                   "time (its rows, a robot JSON whose tool is that point; docs/robot.md)");
   cmd->add_option("--outliers", args->outliers,
-                  "FRACTION:MM: that fraction of the target rows gets a gross tracker error of MM in a random "
+                  "FRACTION:MM: that fraction of the target rows gets a gross tracker error of MM (at most 10,000) in a random "
                   "direction (mx,my,mz and the distances); --truth-columns marks them in column 'outlier'");
   cmd->add_option("--systematic", args->systematic,
                   "config (default: the config's joint compliance and cyclic transmission error; the paper's by "

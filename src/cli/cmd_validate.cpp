@@ -89,10 +89,11 @@ void run_validate(const ValidateArgs& a) {
   if (!a.report.empty())
     outputs.add(a.report, compensation::validation_report_html(r, "errfield validate: " + loaded.description + " on " + a.data,
                                                                 marked_simulated(a.data)));
-  outputs.commit();
   std::cout << "validate: " << loaded.description << " from " << a.model << " on " << a.data << "\n" << r.summary_text();
   for (const auto& f : {a.out, a.summary_out, a.report})
     if (!f.empty()) std::cout << "  written " << f << "\n";
+  require_standard_output();  // before the commit: a run that fails leaves the previous files
+  outputs.commit();
 }
 
 void add_validate_command(CLI::App& app) {

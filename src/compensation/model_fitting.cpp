@@ -243,6 +243,24 @@ VariogramModel chosen_model(const FitOptions& o, const FieldSamples& samples, co
   return choose_field_model(samples, values, ko, reason);
 }
 
+/// The grid detector's refusal said as what the IDW methods need: "the x values are not evenly
+/// spaced ... would need 719866 planes" on scattered poses read as a tolerance problem, not as a
+/// method that needs the paper's grid. The file (or row) prefix stays in front.
+[[noreturn]] void throw_grid_needed(const InputError& e, CompensationMethod method, std::size_t poses) {
+  std::string found = e.what(), prefix;
+  if (!e.file().empty() && found.rfind(e.file(), 0) == 0)
+    if (const auto colon = found.find(": ", e.file().size()); colon != std::string::npos) {
+      prefix = found.substr(0, colon + 2);
+      found = found.substr(colon + 2);
+    }
+  throw InputError(prefix + std::string(method_name(method)) +
+                       " needs the paper's regular grid of poses (one pose per node of an evenly spaced x,y,z grid, "
+                       "as 'errfield plan' writes); the " +
+                       std::to_string(poses) + " poses given are not one: " + found +
+                       ". For scattered poses use --method auto, vector-kriging or distance-kriging",
+                   e.file(), e.row(), e.column());
+}
+
 RegularGrid3 detect_grid(const MeasurementSet& d, std::vector<std::size_t>& sample_of_node) {
   Eigen::MatrixXd pts(static_cast<Eigen::Index>(d.nominal_mm.size()), 3);
   for (std::size_t i = 0; i < d.nominal_mm.size(); ++i) pts.row(static_cast<Eigen::Index>(i)) = d.nominal_mm[i].transpose();
@@ -312,15 +330,15 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       bool base_as_vertex = false;
       try {
         found = detect_grid(d, order);
-      } catch (const InputError&) {
-        if (o.base >= d.base_q_deg.size()) throw;
+      } catch (const InputError& e) {
+        if (o.base >= d.base_q_deg.size()) throw_grid_needed(e, method, d.nominal_mm.size());
         MeasurementSet with_base = d;
         with_base.nominal_mm.push_back(d.base_nominal_mm[o.base]);
         try {
           found = detect_grid(with_base, order);
         } catch (const InputError&) {
         }
-        if (!found) throw;  // the targets' own grid error
+        if (!found) throw_grid_needed(e, method, d.nominal_mm.size());  // the targets' own grid error
         node_values.push_back(0.0);
         base_as_vertex = true;
       }
@@ -341,7 +359,13 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       FitResult out{CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {}, {}};
       const auto dp = registered_errors(out);
       std::vector<std::size_t> order;
-      const RegularGrid3 grid = detect_grid(d, order);
+      const RegularGrid3 grid = [&] {
+        try {
+          return detect_grid(d, order);
+        } catch (const InputError& e) {
+          throw_grid_needed(e, method, d.nominal_mm.size());
+        }
+      }();
       std::vector<Eigen::Vector3d> node(order.size());
       for (std::size_t n = 0; n < order.size(); ++n) node[n] = dp[order[n]];
       out.model = CompensationModel(method, robot, make_position_idw_field(grid, node, idw));

@@ -335,6 +335,7 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
     }
     for (int k = 0; k < 6; ++k) cols[static_cast<std::size_t>(18 + k)][i] = c.q_command_deg[k];
     config[i] = arm_configuration(nominal, c.q_command_deg).to_string();
+    out.largest_move_mm = std::max(out.largest_move_mm, c.move_mm);
   }
   const char* names[] = {"nq1", "nq2", "nq3", "nq4", "nq5", "nq6", "nx", "ny", "nz", "pred_dx", "pred_dy", "pred_dz",
                          "pred_dl", "var_mm2", "p_inside", "cmd_x", "cmd_y", "cmd_z", "cq1", "cq2", "cq3", "cq4",

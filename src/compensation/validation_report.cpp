@@ -25,15 +25,20 @@ void add_rows(report::TextTable& t, const std::string& what, const std::optional
   row("after", b->after);
 }
 
-/// Histogram of |e| before and after on common bins (counts per bin).
-BarChart histogram(const std::string& title, const std::vector<double>& before, const std::vector<double>& after) {
+double largest_magnitude(const std::vector<double>& v) {
   double hi = 0.0;
-  for (double v : before) hi = std::isfinite(v) ? std::max(hi, std::abs(v)) : hi;
-  for (double v : after) hi = std::isfinite(v) ? std::max(hi, std::abs(v)) : hi;
-  if (!(hi > 0.0)) hi = 1.0;
-  const std::vector<double> ticks = report::nice_ticks(0.0, hi, 12);
-  const double step = ticks.size() >= 2 ? ticks[1] - ticks[0] : hi;
-  const std::size_t bins = static_cast<std::size_t>(std::floor(hi / step)) + 1;
+  for (double x : v) hi = std::isfinite(x) ? std::max(hi, std::abs(x)) : hi;
+  return hi;
+}
+
+/// Histogram of |e| before and after on common bins (counts per bin), the bins chosen from the
+/// data (report::histogram_bins).
+BarChart histogram(const std::string& title, const std::vector<double>& before, const std::vector<double>& after) {
+  std::vector<double> all = before;
+  all.insert(all.end(), after.begin(), after.end());
+  const report::HistogramBins hb = report::histogram_bins(all);
+  const double step = hb.width;
+  const std::size_t bins = hb.count;
   BarChart c;
   c.title = title;
   // Each bin is labelled by its lower edge: "0.05–0.1" labels ran into each other at 12 bins.
@@ -49,8 +54,20 @@ BarChart histogram(const std::string& title, const std::vector<double>& before, 
   bool any_before = false;
   for (double v : before) any_before = any_before || std::isfinite(v);
   if (any_before) c.series.push_back(BarSeries{"before", counts(before), ""});
-  c.series.push_back(BarSeries{"after", counts(after), ""});
+  // The colour "after" has beside "before", also in a chart of its own.
+  if (!after.empty())
+    c.series.push_back(BarSeries{"after", counts(after), any_before ? "" : std::string(report::palette_color(1))});
   return c;
+}
+
+/// One chart on common bins, or, when the errors after are far smaller than before (largest
+/// after below a quarter of the largest before), one chart each: on bins that hold the
+/// errors before, the errors after are all one bar at 0.
+std::vector<BarChart> histograms(const std::string& title, const std::vector<double>& before,
+                                 const std::vector<double>& after) {
+  const double hb = largest_magnitude(before), ha = largest_magnitude(after);
+  if (!(hb > 0.0) || ha >= 0.25 * hb) return {histogram(title, before, after)};
+  return {histogram(title + ", before compensation", before, {}), histogram(title + ", after compensation", {}, after)};
 }
 
 LinePlot per_point(const std::string& title, const std::vector<double>& before, const std::vector<double>& after) {
@@ -97,7 +114,7 @@ std::optional<LinePlot> against_joint(const ValidationReport& r, int j) {
   p.x_axis = report::AxisSpec("q" + std::to_string(j + 1), "deg");
   p.y_axis = report::AxisSpec(r.position ? "3-D error after" : "max |distance error| after", "mm", std::nullopt,
                               std::nullopt, true);
-  p.width_px = 380;
+  p.width_px = 460;  // the legend takes 200 px: 380 left a 104 px plot
   p.height_px = 260;
   if (!scored.x.empty()) p.series.push_back(std::move(scored));
   if (!refused.x.empty()) p.series.push_back(std::move(refused));
@@ -139,12 +156,12 @@ std::string validation_report_html(const ValidationReport& r, const std::string&
   }
   if (r.position && !pa.empty()) {
     html.add_heading("3-D position error");
-    html.add_figure(histogram("Histogram of the 3-D position error", pb, pa));
+    for (const BarChart& h : histograms("Histogram of the 3-D position error", pb, pa)) html.add_figure(h);
     html.add_figure(per_point("3-D position error per point", pb, pa));
   }
   if (r.distance && !da.empty()) {
     html.add_heading("Distance error");
-    html.add_figure(histogram("Histogram of |distance error|", db, da));
+    for (const BarChart& h : histograms("Histogram of |distance error|", db, da)) html.add_figure(h);
     html.add_figure(per_point("|distance error| per point and base point", db, da));
   }
   std::vector<LinePlot> joint_views;

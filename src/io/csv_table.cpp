@@ -1,4 +1,5 @@
 #include "errfield/csv_table.hpp"
+#include "errfield/csv_writing.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -140,14 +141,29 @@ CsvTable CsvTable::parse(std::string_view text, std::string source) {
     auto end = text.find('\n', pos);
     if (end == std::string_view::npos) end = text.size();
     std::string_view line = text.substr(pos, end - pos);
-    pos = end + 1;
     ++line_number;
-    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-    const auto first = line.find_first_not_of(" \t");  // blank or comment line: skipped
-    if (first == std::string_view::npos || line[first] == '#') {
-      if (end == text.size()) break;
-      continue;
+    {
+      std::string_view first_line = line;
+      if (!first_line.empty() && first_line.back() == '\r') first_line.remove_suffix(1);
+      const auto first = first_line.find_first_not_of(" \t");  // blank or comment line: skipped
+      if (first == std::string_view::npos || first_line[first] == '#') {
+        pos = end + 1;
+        if (end == text.size()) break;
+        continue;
+      }
     }
+    std::size_t continued_lines = 0;
+    // A quoted cell may hold line breaks (RFC 4180; csv_cell writes them so): while the quotes
+    // are unbalanced, the row goes on on the next line.
+    if (line.find('"') != std::string_view::npos)
+      while (std::count(line.begin(), line.end(), '"') % 2 == 1 && end < text.size()) {
+        end = text.find('\n', end + 1);
+        if (end == std::string_view::npos) end = text.size();
+        line = text.substr(pos, end - pos);
+        ++continued_lines;
+      }
+    pos = end + 1;
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
     if (!have_header) {
       if (line.find(',') == std::string_view::npos && line.find(';') != std::string_view::npos)
         delimiter = ';';
@@ -185,6 +201,7 @@ CsvTable CsvTable::parse(std::string_view text, std::string source) {
                          src, line_number);
       table.lines_.push_back(line_number);
     }
+    line_number += continued_lines;
     if (end == text.size()) break;
   }
   if (!have_header) throw InputError(src + ": file is empty; expected a header line", src);
@@ -287,6 +304,35 @@ std::string format_number(double value) {
   char buf[64];
   const auto res = std::to_chars(buf, buf + sizeof buf, value);
   return std::string(buf, res.ptr);
+}
+
+std::string csv_cell(std::string_view cell) {
+  const bool needs_quotes =
+      cell.find_first_of(",;\"\r\n") != std::string_view::npos ||
+      (!cell.empty() && (cell.front() == ' ' || cell.front() == '\t' || cell.back() == ' ' || cell.back() == '\t' ||
+                         cell.front() == '#'));
+  if (!needs_quotes) return std::string(cell);
+  std::string out;
+  out.reserve(cell.size() + 2);
+  out += '"';
+  for (const char c : cell) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  out += '"';
+  return out;
+}
+
+void append_csv_line(std::string& out, const std::vector<std::string>& cells) {
+  if (cells.size() == 1 && cells.front().empty()) {
+    out += "\"\"\n";
+    return;
+  }
+  for (std::size_t c = 0; c < cells.size(); ++c) {
+    if (c) out += ',';
+    out += csv_cell(cells[c]);
+  }
+  out += '\n';
 }
 
 std::vector<std::string> split_list(std::string_view text, std::string_view what) {

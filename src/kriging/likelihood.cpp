@@ -7,6 +7,7 @@
 #include <numbers>
 
 #include <Eigen/Cholesky>
+#include <Eigen/QR>
 
 #include "covariance_kernel.hpp"
 #include "errfield/csv_table.hpp"
@@ -49,6 +50,82 @@ Eigen::MatrixXd drift(const Eigen::MatrixXd& x, const LikelihoodFitOptions& o) {
   Eigen::MatrixXd f(n, static_cast<Eigen::Index>(cols.size()));
   for (std::size_t c = 0; c < cols.size(); ++c) f.col(static_cast<Eigen::Index>(c)) = cols[c];
   return f;
+}
+
+// The same row twice (location and values): the covariance of the pair is singular without a
+// nugget while their equal values say there is none, and the fit ended on "a pure nugget effect".
+// Said as what it is, naming the rows (1-based sample numbers, the data rows in input order).
+void refuse_repeated_rows(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z) {
+  const Eigen::Index n = x.rows();
+  std::vector<Eigen::Index> order(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) order[static_cast<std::size_t>(i)] = i;
+  const auto key_less = [&](Eigen::Index a, Eigen::Index b) {
+    for (Eigen::Index c = 0; c < x.cols(); ++c)
+      if (x(a, c) != x(b, c)) return x(a, c) < x(b, c);
+    for (Eigen::Index c = 0; c < z.cols(); ++c)
+      if (z(a, c) != z(b, c)) return z(a, c) < z(b, c);
+    return a < b;
+  };
+  std::sort(order.begin(), order.end(), key_less);
+  std::size_t repeats = 0;
+  Eigen::Index first = -1, later = -1;
+  for (std::size_t k = 1; k < order.size(); ++k) {
+    const Eigen::Index a = order[k - 1], b = order[k];
+    if (x.row(a) != x.row(b) || z.row(a) != z.row(b)) continue;
+    ++repeats;
+    if (later < 0 || std::max(a, b) < later) first = std::min(a, b), later = std::max(a, b);
+  }
+  if (repeats == 0) return;
+  throw InputError("likelihood: samples " + std::to_string(first + 1) + " and " + std::to_string(later + 1) +
+                   " (data rows, 1-based) are duplicates: the same location and the same value" +
+                   (repeats > 1 ? " (" + std::to_string(repeats) + " such repeated rows in all)" : std::string()) +
+                   "; a row given twice is not a second measurement (a file concatenated twice?) and would read as "
+                   "a pure nugget effect: drop the repeats");
+}
+
+// Covariates that are a linear combination of the other drift columns (another covariate, the
+// constant or the coordinate terms) leave F without full rank; the fit then failed blaming
+// "duplicate locations". Named, with what each depends on.
+void refuse_collinear_covariates(const Eigen::MatrixXd& x, const LikelihoodFitOptions& o) {
+  const Eigen::Index k = o.covariates.cols();
+  if (k == 0 || o.covariates.rows() != x.rows()) return;
+  const Eigen::MatrixXd f = drift(x, o);
+  const Eigen::Index p = f.cols(), first_cov = p - k;
+  const auto name = [&](Eigen::Index c) {
+    if (c < first_cov) return c == 0 ? std::string("the constant") : "the coordinate term " + std::to_string(c);
+    const auto j = static_cast<std::size_t>(c - first_cov);
+    return j < o.covariate_names.size() ? "covariate '" + o.covariate_names[j] + "'"
+                                        : "covariate " + std::to_string(j + 1);
+  };
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(f);
+  qr.setThreshold(1e-10);
+  if (qr.rank() == p) return;
+  const auto& perm = qr.colsPermutation().indices();
+  std::vector<Eigen::Index> independent;
+  for (Eigen::Index r = 0; r < qr.rank(); ++r) independent.push_back(perm(r));
+  std::sort(independent.begin(), independent.end());
+  std::string what;
+  for (Eigen::Index r = qr.rank(); r < p; ++r) {
+    Eigen::Index c = perm(r);
+    if (c < first_cov) continue;  // a coordinate term found dependent: a covariate is the culprit below
+    std::string on;
+    if (f.col(c).squaredNorm() == 0.0) {
+      on = " is constant (the constant term already holds it)";
+    } else {
+      Eigen::MatrixXd basis(f.rows(), static_cast<Eigen::Index>(independent.size()));
+      for (std::size_t i = 0; i < independent.size(); ++i) basis.col(static_cast<Eigen::Index>(i)) = f.col(independent[i]);
+      const Eigen::VectorXd coef = basis.colPivHouseholderQr().solve(f.col(c));
+      std::string terms;
+      for (std::size_t i = 0; i < independent.size(); ++i)
+        if (std::abs(coef(static_cast<Eigen::Index>(i))) > 1e-8) terms += (terms.empty() ? "" : ", ") + name(independent[i]);
+      on = " is a linear combination of " + (terms.empty() ? std::string("the other drift columns") : terms);
+    }
+    what += (what.empty() ? "" : "; ") + name(c) + on;
+  }
+  if (what.empty()) what = "the covariates repeat the coordinate terms of the drift (--kind universal1/2)";
+  throw InputError("likelihood: collinear covariates: " + what +
+                   "; the drift matrix has rank " + std::to_string(qr.rank()) + " for " + std::to_string(p) +
+                   " columns, so their coefficients are not determined: drop the redundant covariate(s)");
 }
 
 double nll(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const Eigen::MatrixXd& f, const VariogramModel& model,
@@ -198,8 +275,42 @@ bool likelihood_uses_vecchia(const LikelihoodFitOptions& options, long samples) 
          (options.method == LikelihoodMethod::Auto && samples > kExactLikelihoodMaxSamples);
 }
 
-void check_likelihood_budget(Eigen::Index samples, Eigen::Index columns, const LikelihoodFitOptions& options) {
+namespace {
+
+// The rotated fit's work (kMaxRotatedLikelihoodWork's units) and, beyond the budget, the refusal
+// naming what fits: the samples at these options, and for Vecchia the neighbours at these samples.
+void check_rotated_budget(long n, int dimension, const LikelihoodFitOptions& options) {
+  if (options.anisotropy != LikelihoodFitOptions::Anisotropy::Rotated || (dimension != 2 && dimension != 3)) return;
+  const double fits = dimension == 2 ? kRotatedProfileFits2d : kRotatedProfileFits3d;
+  const bool vecchia = likelihood_uses_vecchia(options, n);
+  const double m = options.vecchia_neighbours;
+  const double nd = static_cast<double>(n);
+  const double work = vecchia ? fits * nd * m * m * m : fits * nd * nd * nd;
+  if (work <= kMaxRotatedLikelihoodWork) return;
+  const double n_fit = vecchia ? std::floor(kMaxRotatedLikelihoodWork / (fits * m * m * m))
+                               : std::floor(std::cbrt(kMaxRotatedLikelihoodWork / fits));
+  std::string advice = "a subsample of at most " + format_number(n_fit) + " samples";
+  if (vecchia) {
+    const double m_fit = std::floor(std::cbrt(kMaxRotatedLikelihoodWork / (fits * nd)));
+    if (m_fit >= 1) advice += ", or at most " + format_number(m_fit) + " Vecchia neighbours (vecchia_neighbours)";
+  } else if (fits * nd * m * m * m <= kMaxRotatedLikelihoodWork) {
+    advice += ", or the Vecchia likelihood (likelihood vecchia, " + format_number(m) + " neighbours)";
+  }
+  throw ResourceError("likelihood: rotated anisotropy in " + std::to_string(dimension) + "-D searches the angles with ~" +
+                      format_number(fits) + " ARD fits, each of hundreds of " +
+                      (vecchia ? "Vecchia evaluations of O(N m^3) (m = " + format_number(m) + ")"
+                               : std::string("exact evaluations of O(N^3)")) +
+                      ": for N = " + std::to_string(n) + " samples that is ~" + format_number(std::round(work / 6e8) / 10) +
+                      " minutes' work on 2 cores, over the budget of about one; fits: " + advice +
+                      "; or ARD (anisotropy ard: the axes' ranges, no angles, one fit)");
+}
+
+}  // namespace
+
+void check_likelihood_budget(Eigen::Index samples, Eigen::Index columns, const LikelihoodFitOptions& options,
+                             int dimension) {
   const long n = static_cast<long>(samples);
+  check_rotated_budget(n, dimension, options);
   if (!likelihood_uses_vecchia(options, n)) {
     if (n > kMaxLikelihoodSamples)
       throw ResourceError("likelihood: " + std::to_string(n) +
@@ -272,7 +383,7 @@ LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eig
     if (c.kind != ModelKind::Nugget && !c.bounded())
       throw ArgumentError("likelihood: component '" + std::string(model_kind_name(c.kind)) +
                           "' has no covariance (pow, lin); use nug, sph, exp, gau, mat or wen");
-  check_likelihood_budget(coordinates.rows(), values.cols(), options);
+  check_likelihood_budget(coordinates.rows(), values.cols(), options, static_cast<int>(coordinates.cols()));
   if (coordinates.rows() < kMinLikelihoodSamples)
     throw InputError("likelihood: " + std::to_string(coordinates.rows()) + " samples; need at least " +
                      std::to_string(kMinLikelihoodSamples));
@@ -286,6 +397,8 @@ LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eig
                      " (max - min); the likelihood overflows or underflows a double beyond [" +
                      format_number(kMinLikelihoodValueSpread) + ", " + format_number(kMaxLikelihoodValueSpread) +
                      "]: rescale the values (e.g. to units where they are of order 1) and scale the sill back");
+  refuse_repeated_rows(coordinates, values);
+  refuse_collinear_covariates(coordinates, options);
   LikelihoodFitResult res = fit_likelihood_checked(coordinates, values, structure, options);
   const double n = static_cast<double>(coordinates.rows() * values.cols());
   res.aic = 2.0 * res.negative_log_likelihood + 2.0 * res.parameters;

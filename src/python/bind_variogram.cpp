@@ -185,7 +185,7 @@ py::dict run_fit_lmc(const py::object& variogram, const std::string& model, cons
   {
     py::gil_scoped_release release;
     const std::vector<ModelComponent> structures =
-        t.ranges_given ? t.structures : fit_coregionalization_ranges(table, t.structures, o.weighting);
+        t.ranges_given ? t.structures : fit_coregionalization_ranges(table, t.structures, o.weighting, component_names);
     r = fit_coregionalization(table, structures, o, component_names);
   }
   py::list structures;

@@ -47,7 +47,7 @@ struct Range {
 };
 
 /// Axis range: explicit limits win, otherwise the data extended to the outer ticks.
-Range make_range(const AxisSpec& spec, double data_lo, double data_hi) {
+Range make_range(const AxisSpec& spec, double data_lo, double data_hi, int tick_target = 6) {
   double lo = spec.min.value_or(data_lo);
   double hi = spec.max.value_or(data_hi);
   if (!std::isfinite(lo) || !std::isfinite(hi)) lo = 0.0, hi = 1.0;
@@ -60,7 +60,7 @@ Range make_range(const AxisSpec& spec, double data_lo, double data_hi) {
     if (!spec.min) lo -= pad;
     if (!spec.max || hi <= lo) hi = lo + 2.0 * pad;
   }
-  Range r{lo, hi, nice_ticks(lo, hi)};
+  Range r{lo, hi, nice_ticks(lo, hi, tick_target)};
   if (!spec.min) r.lo = std::min(r.lo, r.ticks.front());
   if (!spec.max) r.hi = std::max(r.hi, r.ticks.back());
   std::erase_if(r.ticks, [&](double t) {
@@ -68,6 +68,16 @@ Range make_range(const AxisSpec& spec, double data_lo, double data_hi) {
     return t < r.lo - eps || t > r.hi + eps;
   });
   return r;
+}
+
+/// The x range with as many ticks (about 6 at most) as leave room between their labels in
+/// `frame_px`: a 104 px wide plot (the per-joint views of the validation report) had 7 labels
+/// like "-150" running into each other.
+Range x_range_fitting(const AxisSpec& spec, double data_lo, double data_hi, double frame_px) {
+  for (int target = 6;; --target) {
+    Range r = make_range(spec, data_lo, data_hi, target);
+    if (target <= 2 || x_labels_fit(r.ticks, frame_px)) return r;
+  }
 }
 
 struct Frame {
@@ -194,6 +204,41 @@ std::vector<double> nice_ticks(double lo, double hi, int target) {
   return ticks;
 }
 
+HistogramBins histogram_bins(const std::vector<double>& values) {
+  std::vector<double> v;
+  v.reserve(values.size());
+  for (double x : values)
+    if (std::isfinite(x)) v.push_back(std::abs(x));
+  if (v.empty()) return {};
+  std::sort(v.begin(), v.end());
+  const double hi = v.back();
+  if (!(hi > 0.0)) return {};
+  const auto quantile = [&](double p) {
+    const double at = p * static_cast<double>(v.size() - 1);
+    const auto k = static_cast<std::size_t>(std::floor(at));
+    const double f = at - static_cast<double>(k);
+    return k + 1 < v.size() ? v[k] + f * (v[k + 1] - v[k]) : v[k];
+  };
+  const double fd = 2.0 * (quantile(0.75) - quantile(0.25)) / std::cbrt(static_cast<double>(v.size()));
+  const double wanted = fd > 0.0 ? hi / fd : 20.0;
+  const int target = static_cast<int>(std::clamp(std::round(wanted), 8.0, 30.0));
+  const std::vector<double> ticks = nice_ticks(0.0, hi, target);
+  HistogramBins b;
+  b.width = ticks.size() >= 2 ? ticks[1] - ticks[0] : hi;
+  b.count = static_cast<std::size_t>(std::floor(hi / b.width)) + 1;
+  return b;
+}
+
+bool x_labels_fit(const std::vector<double>& ticks, double frame_px) {
+  if (ticks.size() < 2) return true;
+  const double step = ticks[1] - ticks[0];
+  std::size_t widest = 0;
+  for (double t : ticks) widest = std::max(widest, tick_label(t, step).size());
+  // Evenly spaced ticks across the frame: neighbouring label centres are frame_px / (ticks - 1) apart.
+  const double room = frame_px / static_cast<double>(ticks.size() - 1);
+  return static_cast<double>(widest) * kLabelCharWidthPx + kLabelGapPx <= room;
+}
+
 std::string tick_label(double value, double step) {
   step = std::abs(step);
   int decimals = 0;
@@ -243,9 +288,9 @@ std::string render_svg(const LinePlot& plot) {
       ylo = std::min(ylo, s.y[i]), yhi = std::max(yhi, s.y[i]);
     }
   }
-  const Range xr = make_range(plot.x_axis, xlo, xhi);
-  const Range yr = make_range(plot.y_axis, ylo, yhi);
   const Frame f{76.0, plot.width_px - (legend ? 200.0 : 24.0), 40.0, plot.height_px - 52.0};
+  const Range xr = x_range_fitting(plot.x_axis, xlo, xhi, f.x1 - f.x0);
+  const Range yr = make_range(plot.y_axis, ylo, yhi);
 
   std::string out;
   open_svg(out, plot.width_px, plot.height_px, plot.title);
@@ -331,7 +376,12 @@ std::string render_svg(const BarChart& chart) {
   open_svg(out, chart.width_px, chart.height_px, chart.title);
   draw_y_axis(out, f, yr, chart.y_axis);
   const double slot = n ? (f.x1 - f.x0) / static_cast<double>(n) : 0.0;
-  const std::size_t label_every = n > 24 ? (n + 23) / 24 : 1;
+  // Every k-th category labelled, k as small as leaves room between the labels (at most 24 labels).
+  std::size_t widest = 0;
+  for (const auto& c : chart.categories) widest = std::max(widest, c.size());
+  const double label_px = static_cast<double>(widest) * kLabelCharWidthPx + kLabelGapPx;
+  std::size_t label_every = n > 24 ? (n + 23) / 24 : 1;
+  while (slot > 0.0 && label_every < n && static_cast<double>(label_every) * slot < label_px) ++label_every;
   for (std::size_t c = 0; c < n; ++c) {
     if (c % label_every) continue;
     const double px = f.x0 + (c + 0.5) * slot;

@@ -5,6 +5,7 @@
 
 #include "errfield/atomic_file.hpp"
 #include "errfield/csv_table.hpp"
+#include "errfield/csv_writing.hpp"
 #include "errfield/error.hpp"
 #include "errfield/report/html_report.hpp"
 #include "errfield/robot/paper_reference.hpp"
@@ -257,6 +258,7 @@ std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& 
     written.push_back(dir / name);
   };
   auto n = [](double v) { return std::isfinite(v) ? format_number(v) : std::string(); };
+  // Text cells (method and stage names) go through csv_cell like every CSV writer's.
 
   for (const auto* v : {&r.joint_variogram, &r.task_variogram}) {
     std::string csv = "lag_lo,lag_hi,lag_mean,gamma,pairs,model_gamma,paper_gamma\n";
@@ -279,11 +281,11 @@ std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& 
     std::string spread = "method,metric,figure,median_mm,q25_mm,q75_mm,min_mm,max_mm,runs,refused_targets\n";
     for (const auto& row : r.table6.rows) {
       if (row.metric == "distance" || row.metric == "position")
-        csv += row.method + "," + row.metric + "," + n(row.max_mm.median) + "," + n(row.mean_mm.median) + "," +
+        csv += csv_cell(row.method) + "," + csv_cell(row.metric) + "," + n(row.max_mm.median) + "," + n(row.mean_mm.median) + "," +
              n(row.std_mm.median) + "\n";
       for (auto [fig, s] : {std::pair<const char*, const Spread*>{"max", &row.max_mm}, {"mean", &row.mean_mm},
                             {"std", &row.std_mm}})
-        spread += row.method + "," + row.metric + "," + fig + "," + n(s->median) + "," + n(s->q25) + "," +
+        spread += csv_cell(row.method) + "," + csv_cell(row.metric) + "," + fig + "," + n(s->median) + "," + n(s->q25) + "," +
                   n(s->q75) + "," + n(s->min) + "," + n(s->max) + "," + std::to_string(r.table6.runs) + "," +
                   std::to_string(row.failed_targets) + "\n";
     }
@@ -292,14 +294,14 @@ std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& 
     std::string points = "method,sample,distance_error_mm,position_error_mm\n";
     for (const auto& m : r.table6.first_run)
       for (std::size_t i = 0; i < m.distance_error_mm.size(); ++i)
-        points += m.method + "," + std::to_string(i + 1) + "," + n(m.distance_error_mm[i]) + "," +
+        points += csv_cell(m.method) + "," + std::to_string(i + 1) + "," + n(m.distance_error_mm[i]) + "," +
                   n(m.position_error_mm[i]) + "\n";
     put("table6_points.csv", points);
   }
   {
     std::string csv = "stage,max_mm,mean_mm,std_mm\n";
     for (const auto& a : r.assembly)
-      csv += a.stage + "," + n(a.deviation.max_mm) + "," + n(a.deviation.mean_mm) + "," + n(a.deviation.std_mm) + "\n";
+      csv += csv_cell(a.stage) + "," + n(a.deviation.max_mm) + "," + n(a.deviation.mean_mm) + "," + n(a.deviation.std_mm) + "\n";
     put("table8.csv", csv);
   }
   {
@@ -308,8 +310,8 @@ std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& 
         "orientation,orientation_spread_deg,method,space,training_poses,validation_poses,max_mm,mean_mm,std_mm,"
         "refused_targets\n";
     for (const auto& row : e.rows)
-      csv += row.orientation + "," + n(row.orientation == "varying" ? e.options.orientation_spread_deg : 0.0) + "," +
-             row.method + "," + row.space + "," + std::to_string(e.options.training_poses) + "," +
+      csv += csv_cell(row.orientation) + "," + n(row.orientation == "varying" ? e.options.orientation_spread_deg : 0.0) + "," +
+             csv_cell(row.method) + "," + csv_cell(row.space) + "," + std::to_string(e.options.training_poses) + "," +
              std::to_string(e.options.validation_poses) + "," + n(row.max_mm) + "," + n(row.mean_mm) + "," +
              n(row.std_mm) + "," + std::to_string(row.refused) + "\n";
     put("beyond_orientation.csv", csv);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <numbers>
@@ -93,6 +94,41 @@ std::size_t line_of(const std::string& text, std::size_t offset) {
   return 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(offset), '\n'));
 }
 
+// The angles of an <origin rpy="R P Y"> start tag, as written: urdfdom turns them into a quaternion
+// at once, where 1e20 rad (or an angle in degrees) is some rotation and no longer visible.
+// `xml` from `begin` is the start tag, which ends at `last` ('>'). `line_of` is computed only for
+// a refusal (it counts from the file's start).
+void check_origin_angles(const std::string& xml, std::size_t begin, std::size_t last, const std::string& source) {
+  if (xml.compare(begin, 7, "<origin") != 0 || !std::isspace(static_cast<unsigned char>(xml[begin + 7]))) return;
+  const std::string tag = xml.substr(begin, last - begin + 1);
+  std::size_t at = 0;
+  while ((at = tag.find("rpy", at)) != std::string::npos) {
+    const bool word_start = std::isspace(static_cast<unsigned char>(tag[at - 1])) != 0;
+    at += 3;
+    std::size_t k = tag.find_first_not_of(" \t\r\n", at);
+    if (!word_start || k == std::string::npos || tag[k] != '=') continue;
+    k = tag.find_first_not_of(" \t\r\n", k + 1);
+    if (k == std::string::npos || (tag[k] != '"' && tag[k] != '\'')) continue;
+    const std::size_t end = tag.find(tag[k], k + 1);
+    if (end == std::string::npos) return;  // malformed: the parser reports it
+    std::istringstream values(tag.substr(k + 1, end - k - 1));
+    std::string item;
+    for (int component = 1; values >> item; ++component) {
+      char* stop = nullptr;
+      const double v = std::strtod(item.c_str(), &stop);
+      if (stop == item.c_str() || *stop != '\0') continue;  // not a number: the parser reports it
+      if (!(std::abs(v) <= kMaxUrdfOriginAngle_rad))
+        throw InputError(source + ":" + std::to_string(line_of(xml, begin)) + ": <origin rpy=\"" + tag.substr(k + 1, end - k - 1) +
+                             "\">: component " + std::to_string(component) + " = " + item +
+                             (std::isfinite(v) ? " rad is beyond " + std::to_string(static_cast<int>(kMaxUrdfOriginAngle_rad)) +
+                                                     " rad (about 16 turns); URDF angles are in radians, within one turn"
+                                               : " is not a finite angle"),
+                         source, line_of(xml, begin));
+    }
+    return;
+  }
+}
+
 // One linear pass over the markup before the recursive parser sees it: refuses a nesting deeper
 // than kMaxUrdfDepth (the parser would recurse once per level, in quadratic time, and overflow the
 // stack at ~100,000 levels) and a <!DOCTYPE> (urdfdom then finds no <robot> element and says only
@@ -139,6 +175,7 @@ void check_markup(const std::string& xml, const std::string& source) {
         }
       }
       if (j >= xml.size()) return;  // unterminated: the parser reports it
+      check_origin_angles(xml, i, j, source);
       if (xml[j - 1] != '/' && ++depth > kMaxUrdfDepth)
         throw InputError(source + ":" + std::to_string(line_of(xml, start)) + ": elements nested more than " +
                              std::to_string(kMaxUrdfDepth) +

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
@@ -115,6 +117,29 @@ LmcBins usable_bins(const CrossVariogramTable& t, LmcWeighting weighting) {
   return b;
 }
 
+/// A component whose direct variogram is 0 in every used bin (constant values) has no spatial
+/// variation to fit: its LMC row would be all zeros, a model that predicts nothing and reads as a
+/// fit (written with exit 0). Refused, naming the component(s). `names` may be empty.
+void check_spatial_variation(const LmcBins& b, const std::vector<std::string>& names) {
+  std::string flat;
+  int count = 0;
+  for (int i = 0; i < b.components; ++i) {
+    bool zero = true;
+    for (const Eigen::MatrixXd& g : b.gamma) zero = zero && g(i, i) == 0.0;
+    if (!zero) continue;
+    ++count;
+    const auto k = static_cast<std::size_t>(i);
+    flat += std::string(flat.empty() ? "" : ", ") +
+            (k < names.size() ? "'" + names[k] + "'" : "component " + std::to_string(i + 1));
+  }
+  if (count == 0 || b.gamma.empty()) return;
+  throw InputError("LMC fit: no spatial variation in " + flat + ": the direct variogram is 0 in all " +
+                   std::to_string(b.gamma.size()) + " bins (constant values" +
+                   (count == b.components ? ", every component" : "") +
+                   "); an LMC of it is all zeros and predicts nothing: drop " + (count == 1 ? "it" : "them") +
+                   " or check the data");
+}
+
 void check_structures(const std::vector<ModelComponent>& structures) {
   if (structures.empty()) throw ArgumentError("LMC fit: no structures; expected e.g. nug(0)+sph(1,400)");
   for (std::size_t k = 0; k < structures.size(); ++k) {
@@ -208,6 +233,7 @@ CoregionalizationFitResult fit_coregionalization(const CrossVariogramTable& tabl
   options.validate();
   check_structures(structures);
   const LmcBins b = usable_bins(table, options.weighting);
+  check_spatial_variation(b, component_names);
   const std::size_t K = structures.size();
   if (b.lag.size() < K)
     throw ArgumentError("LMC fit: " + std::to_string(b.lag.size()) + " usable bin(s) for " + std::to_string(K) +
@@ -283,9 +309,11 @@ CoregionalizationFitResult fit_coregionalization(const CrossVariogramTable& tabl
 
 std::vector<ModelComponent> fit_coregionalization_ranges(const CrossVariogramTable& table,
                                                          const std::vector<ModelComponent>& structures,
-                                                         LmcWeighting weighting) {
+                                                         LmcWeighting weighting,
+                                                         const std::vector<std::string>& component_names) {
   check_structures(structures);
   const LmcBins b = usable_bins(table, weighting);
+  check_spatial_variation(b, component_names);
   std::vector<ModelComponent> ranged;
   bool nugget = false;
   for (const ModelComponent& s : structures) {

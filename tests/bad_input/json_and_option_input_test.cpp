@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -17,6 +18,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "errfield/csv_table.hpp"
+#include "errfield/csv_writing.hpp"
 #include "errfield/error.hpp"
 #include "errfield/json_file.hpp"
 #include "errfield/robot/mdh_model.hpp"
@@ -401,6 +404,115 @@ TEST(RowMessages, UniversalDriftFailureNamesTheFile) {
                                dir.path());
   EXPECT_EQ(cv.exit_code, 1) << cv.err;
   EXPECT_THAT(cv.err, HasSubstr("line.csv: kriging failed"));
+}
+
+// ---- issue 35: outputs and messages -------------------------------------------------------------
+
+// Round three, still open then: `validate --out pts.csv > /dev/full` replaced pts.csv and exited 1.
+// Every command that prints to standard output and writes files: all or nothing.
+TEST_F(RobotFiles, AFullStandardOutputKeepsThePreviousFilesOfEveryCommand) {
+  const std::vector<std::vector<std::string>> commands{
+      {"validate", "--model", path("m.json"), "--data", path("g.csv"), "--out", path("prev.txt")},
+      {"compensate", "--model", path("m.json"), "--targets", path("t.csv"), "--out", path("prev.txt")},
+      {"fit", "--robot", path("robot.json"), "--data", path("g.csv"), "--method", "position-idw", "--out", path("prev.txt")},
+      {"plan", "--robot", path("robot.json"), "--cube", "750,-250,350,500", "--step", "250", "--out", path("prev.txt")},
+      {"calibrate", "--robot", path("robot.json"), "--data", path("g.csv"), "--model", "position", "--out",
+       path("prev.txt")}};
+  for (const auto& args : commands) {
+    write("prev.txt", "previous\n");
+    const CliResult r = testing::run_errfield_to_full_stdout(args, dir_);
+    ASSERT_EQ(r.signal, 0) << args[0];
+    EXPECT_EQ(r.exit_code, 1) << args[0] << ": " << r.err;
+    EXPECT_THAT(r.err, HasSubstr("cannot write to standard output")) << args[0];
+    EXPECT_EQ(read("prev.txt"), "previous\n") << args[0] << ": a run that failed replaced its output";
+  }
+}
+
+// Point names are the user's text: "p,1" made validate and fk write files errfield itself refused.
+TEST_F(RobotFiles, PointNamesWithDelimitersAndQuotesReadBackFromEveryOutput) {
+  const CsvTable g = CsvTable::read(path("g.csv"));
+  const std::size_t point = g.column_index("point");
+  const std::vector<std::string> names{"p,1", "say \"x\"", " spaced ", "#4"};
+  std::string text;
+  append_csv_line(text, g.header());
+  for (std::size_t i = 0; i < g.row_count(); ++i) {
+    std::vector<std::string> cells = g.row(i);
+    if (i >= 1 && i <= names.size()) cells[point] = names[i - 1];
+    append_csv_line(text, cells);
+  }
+  write("named.csv", text);
+  const auto v = run({"validate", "--model", path("m.json"), "--data", path("named.csv"), "--out", path("named_pts.csv")});
+  ASSERT_EQ(v.exit_code, 0) << v.err;
+  const auto fk = run({"fk", "--input", path("named.csv"), "--robot", path("robot.json"), "--out", path("named_fk.csv")});
+  ASSERT_EQ(fk.exit_code, 0) << fk.err;
+  // fk on its own output: errfield reads what it wrote.
+  const auto again = run({"fk", "--input", path("named_fk.csv"), "--robot", path("robot.json"), "--out", path("named_fk2.csv")});
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  for (const char* file : {"named_pts.csv", "named_fk.csv", "named_fk2.csv"}) {
+    const CsvTable out = CsvTable::read(path(file));
+    const std::size_t c = out.column_index("point");
+    std::vector<std::string> seen;
+    for (std::size_t i = 0; i < out.row_count(); ++i) seen.emplace_back(out.cell(i, c));
+    for (const auto& n : names) EXPECT_NE(std::find(seen.begin(), seen.end(), n), seen.end()) << file << ": '" << n << "'";
+  }
+}
+
+// compensate exited 0 when it compensated nothing (predict, validate and cv exit 1).
+TEST_F(RobotFiles, CompensateThatCompensatesNothingExitsOneAndSaysWhy) {
+  write("far.csv", "x,y,z,rx,ry,rz\n9000,0,500,180,0,180\n0,9000,500,180,0,180\n");
+  const auto r = run({"compensate", "--model", path("m.json"), "--targets", path("far.csv"), "--out", path("far_out.csv")});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("none of the 2 targets"), HasSubstr("far_out.csv not written")));
+  EXPECT_FALSE(fs::exists(path("far_out.csv")));
+}
+
+// "tool point moved by at most 10.463 mm" was the ceiling; the largest move was 3.61 mm. Both said.
+TEST_F(RobotFiles, CompensateSaysTheLargestMoveAndTheCeilingApart) {
+  const auto r = run({"compensate", "--model", path("m.json"), "--targets", path("t.csv"), "--out", path("moved.csv"),
+                      "--max-correction", "7"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CsvTable out = CsvTable::read(path("moved.csv"));
+  double largest = 0.0;
+  for (std::size_t i = 0; i < out.row_count(); ++i)
+    if (out.cell(i, out.column_index("status")) == "ok") largest = std::max(largest, out.numeric_cell(i, out.column_index("move_mm")));
+  ASSERT_GT(largest, 0.0);
+  EXPECT_THAT(r.out, HasSubstr("moved by " + format_number(std::round(largest * 1000.0) / 1000.0) + " mm at most"));
+  EXPECT_THAT(r.out, HasSubstr("ceiling 7 mm (--max-correction)"));
+}
+
+// position-idw on scattered poses said "the x values are not evenly spaced ... would need 719866
+// planes"; it says what the method needs, keeping what it found.
+TEST_F(RobotFiles, PositionIdwOnScatteredPosesSaysItNeedsTheGrid) {
+  const auto s = run({"simulate", "--seed", "3", "--sample", "scattered:40", "--out", "scattered.csv"});
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  const auto r = run({"fit", "--robot", path("robot.json"), "--data", path("scattered.csv"), "--method", "position-idw",
+                      "--out", path("scattered.json")});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("position-idw needs the paper's regular grid of poses"),
+                           HasSubstr("poses given are not one"), HasSubstr("--method auto")));
+  EXPECT_FALSE(fs::exists(path("scattered.json")));
+}
+
+// Progress by elapsed time, whatever the row count: a 687-pose fit printed nothing for 12-24 s
+// (only 1,000 rows counted as long). ERRFIELD_PROGRESS=1 stands in for a terminal and
+// ERRFIELD_PROGRESS_AFTER=0 for a stage that has run 5 s.
+TEST_F(RobotFiles, AStageThatRunsLongSaysSoWhateverTheRowCount) {
+  const auto r = testing::run_errfield({"fit", "--robot", path("robot.json"), "--data", path("g.csv"), "--method",
+                                        "vector-kriging", "--out", path("progress.json")},
+                                       dir_, {"ERRFIELD_PROGRESS=1", "ERRFIELD_PROGRESS_AFTER=0"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("fit: "), HasSubstr("still running")));
+  const auto quiet = run({"fit", "--robot", path("robot.json"), "--data", path("g.csv"), "--method", "vector-kriging",
+                          "--out", path("progress.json")});
+  EXPECT_THAT(quiet.err, Not(HasSubstr("still running")));  // not a terminal, not asked: nothing
+}
+
+// Round three: a bad option value exited 1 (the outliers overflowed later).
+TEST_F(RobotFiles, SimulateOutliersBeyondTenMetresNameTheOption) {
+  const auto r = run({"simulate", "--step", "250", "--outliers", "0.1:1e300", "--out", "outliers.csv"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("--outliers"), HasSubstr("1e300")));
+  EXPECT_FALSE(fs::exists(path("outliers.csv")));
 }
 
 }  // namespace

@@ -43,6 +43,18 @@ TEST_F(ScatteredCli, IdwInTwoCoordinatesMatchesClosedForm) {
   EXPECT_EQ(CsvTable::read(path("p1.csv")).numeric_column("pred")[0], 1.0);
 }
 
+// Issue 35: interpolate exited 0 with every target empty (predict, validate and cv exit 1).
+TEST_F(ScatteredCli, RadiusThatLeavesEveryTargetEmptyFailsAndSaysWhy) {
+  write("s.csv", "x,y,z,v\n0,0,0,1\n1,0,0,2\n");
+  write("t.csv", "x,y,z\n9,9,9\n8,8,8\n");
+  const auto r = run("interpolate --method idw --samples " + path("s.csv") + " --targets " + path("t.csv") +
+                     " --coords x,y,z --value v --radius 2 --out " + path("p.csv"));
+  EXPECT_EQ(r.exit_code, 1) << r.output();
+  EXPECT_THAT(r.err, HasSubstr("none of the 2 targets"));
+  EXPECT_THAT(r.err, HasSubstr("within --radius 2"));
+  EXPECT_FALSE(std::filesystem::exists(path("p.csv")));
+}
+
 TEST_F(ScatteredCli, RadiusLeavesEmptyCellsAndSaysSo) {
   write("s.csv", "x,y,z,v\n0,0,0,1\n1,0,0,2\n");
   write("t.csv", "x,y,z\n0.5,0,0\n9,9,9\n");

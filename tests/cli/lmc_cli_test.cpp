@@ -83,6 +83,33 @@ TEST_F(LmcCli, CrossRefusesOneColumnAndTheRobustEstimators) {
   EXPECT_NE(r.err.find("Matheron"), std::string::npos) << r.err;
 }
 
+// Issue 35: an LMC of constant data was written as all zeros with exit 0. A component with no
+// spatial variation (its direct variogram 0 in every bin) is refused, named.
+TEST_F(LmcCli, ConstantComponentIsRefusedNotFittedAsZeros) {
+  Eigen::MatrixXd x, z;
+  (void)simulated_csv(60, &x, &z);  // the points and values
+  std::string flat = "x,y,ex,ey,ez\n", all = flat;
+  for (Eigen::Index i = 0; i < x.rows(); ++i) {
+    const std::string xy = format_number(x(i, 0)) + "," + format_number(x(i, 1));
+    flat += xy + "," + format_number(z(i, 0)) + ",5," + format_number(z(i, 2)) + "\n";
+    all += xy + ",1,2,3\n";
+  }
+  write("flat.csv", flat);
+  write("all.csv", all);
+  for (const char* model : {"nug(0)+sph(1,400)", "nug+sph"}) {
+    auto r = run("fit-variogram --lmc --input " + path("flat.csv") + " --coords x,y --value ex,ey,ez --model " + model +
+                 " --out " + path("flat.json"));
+    EXPECT_EQ(r.exit_code, 2) << r.output();
+    EXPECT_THAT(r.err, HasSubstr("no spatial variation in 'ey'")) << model;
+    EXPECT_FALSE(std::filesystem::exists(path("flat.json")));
+    r = run("fit-variogram --lmc --input " + path("all.csv") + " --coords x,y --value ex,ey,ez --model " + model +
+            " --out " + path("all.json"));
+    EXPECT_EQ(r.exit_code, 2) << r.output();
+    EXPECT_THAT(r.err, HasSubstr("no spatial variation in 'ex', 'ey', 'ez'")) << model;
+    EXPECT_THAT(r.err, HasSubstr("every component")) << model;
+  }
+}
+
 TEST_F(LmcCli, FitLmcWritesTheModelTheLibraryFitsAndReportsTheProjection) {
   Eigen::MatrixXd x, z;
   write("in.csv", simulated_csv(150, &x, &z));

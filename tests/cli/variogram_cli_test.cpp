@@ -330,6 +330,21 @@ TEST_F(VariogramCli, FitVariogramByLikelihoodMatchesTheLibraryAndRefusesWhatDoes
             " --coords x,y,z --value dL --model exp --vecchia-neighbours 0");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("--vecchia-neighbours"), std::string::npos) << bad.err;
+  // Issue 35: Vecchia's options on an exact fit did nothing, silently (exit 0).
+  bad = run("fit-variogram --method reml --likelihood exact --input " + path("in.csv") +
+            " --coords x,y,z --value dL --model exp --vecchia-neighbours 12 --vecchia-ordering random");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--vecchia-neighbours 12, --vecchia-ordering random: they apply to the Vecchia likelihood"),
+            std::string::npos)
+      << bad.err;
+  // Issue 35: rotated anisotropy had no budget (3,001 3-D samples by Vecchia ran past 150 s); now
+  // refused at once (exit 3) naming what fits: 6e9 / (204 fits x 30^3) = 1,089 samples.
+  bad = run("fit-variogram --method reml --anisotropy rotated --input " + path("big.csv") +
+            " --coords x,y,z --value dL --model exp --out " + path("big.json"));
+  EXPECT_EQ(bad.exit_code, 3) << bad.err;
+  EXPECT_NE(bad.err.find("at most 1089 samples"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("--vecchia-neighbours"), std::string::npos) << bad.err;
+  EXPECT_NE(bad.err.find("--anisotropy ard"), std::string::npos) << bad.err;
   bad = run("fit-variogram --input " + path("in.csv") + " --model exp --likelihood vecchia");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("apply to --method ml or reml"), std::string::npos) << bad.err;

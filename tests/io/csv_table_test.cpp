@@ -1,4 +1,5 @@
 #include "errfield/csv_table.hpp"
+#include "errfield/csv_writing.hpp"
 
 #include <gtest/gtest.h>
 
@@ -71,6 +72,45 @@ TEST(SplitColumnList, ANameGivenTwiceIsAnErrorNamingTheOptionAndTheColumn) {
   } catch (const ArgumentError& e) {
     EXPECT_STREQ(e.what(), "--coords: column 'x' is named twice in 'x, y, x' (items 1 and 3)");
   }
+}
+
+// Issue 35: cells were written as they were, so a point named "p,1" made fk, plan and validate
+// write files errfield itself refused ("row has 3 cells; the header has 2"). Every writer goes
+// through csv_cell/append_csv_line; what they write must read back cell for cell.
+TEST(CsvCell, EveryWrittenCellReadsBackExactly) {
+  const std::vector<std::string> header{"point", "note", "v"};
+  const std::vector<std::vector<std::string>> rows{{"p,1", "say \"hi\"", "1"},
+                                                   {" lead", "trail ", "2"},
+                                                   {"#3", "a;b", "3"},
+                                                   {"two\nlines", "cr\rinside", "4"},
+                                                   {"plain", "", "5"}};
+  std::string text;
+  append_csv_line(text, header);
+  for (const auto& r : rows) append_csv_line(text, r);
+  const auto t = CsvTable::parse(text, "w.csv");
+  ASSERT_EQ(t.row_count(), rows.size()) << text;
+  for (std::size_t r = 0; r < rows.size(); ++r)
+    for (std::size_t c = 0; c < header.size(); ++c) EXPECT_EQ(t.cell(r, c), rows[r][c]) << "row " << r << " column " << c;
+  // The row after a cell of two lines is on line 7 of the file (header 1, rows on 2, 3, 4, 5-6).
+  EXPECT_EQ(t.line_of_row(4), 7u);
+  EXPECT_EQ(csv_cell("plain"), "plain");  // nothing quoted that needs no quotes
+  EXPECT_EQ(csv_cell("p,1"), "\"p,1\"");
+  EXPECT_EQ(csv_cell("a\"b"), "\"a\"\"b\"");
+}
+
+TEST(CsvCell, OneEmptyCellIsNotABlankLine) {
+  std::string text;
+  append_csv_line(text, {"a"});
+  append_csv_line(text, {""});
+  append_csv_line(text, {"1"});
+  const auto t = CsvTable::parse(text, "one.csv");
+  ASSERT_EQ(t.row_count(), 2u);
+  EXPECT_EQ(t.cell(0, 0), "");
+}
+
+TEST(CsvTable, AQuoteInACommentSwallowsNoRow) {
+  const auto t = CsvTable::parse("# a 5\" reflector\nx,v\n1,2\n3,4\n", "c.csv");
+  EXPECT_EQ(t.row_count(), 2u);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <regex>
@@ -125,6 +126,57 @@ TEST(RenderSvg, RejectsMismatchedSeries) {
   p = two_series();
   p.width_px = 50;
   EXPECT_THROW(render_svg(p), ArgumentError);
+}
+
+// Issue 35: the validation report's 0.2 mm bins put all 294 "after" errors (0.02-0.1 mm) into one
+// bar. The bins follow the data: on such errors most bars hold points, none holds half of them.
+TEST(HistogramBins, FollowTheDataNotAFixedWidth) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> g(0.06, 0.015);
+  std::vector<double> v;
+  for (int i = 0; i < 294; ++i) v.push_back(std::abs(g(rng)));
+  const HistogramBins b = histogram_bins(v);
+  const double hi = *std::max_element(v.begin(), v.end());
+  ASSERT_GT(b.width, 0.0);
+  EXPECT_GT(static_cast<double>(b.count) * b.width, hi);  // every value has a bin
+  std::vector<int> n(b.count, 0);
+  for (double e : v) ++n.at(static_cast<std::size_t>(std::floor(e / b.width)));
+  EXPECT_LT(*std::max_element(n.begin(), n.end()), 294 / 2);
+  EXPECT_GE(std::count_if(n.begin(), n.end(), [](int k) { return k > 0; }), 6);
+  // A far outlier: bins over the whole range, but not hundreds of them.
+  v.push_back(10.0);
+  const HistogramBins tail = histogram_bins(v);
+  EXPECT_GT(static_cast<double>(tail.count) * tail.width, 10.0);
+  EXPECT_LE(tail.count, 46u);
+  EXPECT_EQ(histogram_bins({}).count, 1u);
+}
+
+// Issue 35: the validation report's per-joint plots (a 104 px plot beside a legend) had x labels
+// "-150", "-100", ... 17 px apart, running into each other. Neighbouring labels now keep apart by
+// their half widths at the label font (7 px a character) plus a gap.
+TEST(LinePlot, XTickLabelsOfANarrowPlotDoNotOverlap) {
+  for (int width : {380, 460}) {
+    LinePlot p;
+    p.title = "q1";
+    p.x_axis = AxisSpec("q1", "deg");
+    p.y_axis = AxisSpec("error", "mm");
+    p.width_px = width;
+    p.height_px = 260;
+    p.series.push_back(Series{"after (scored)", {-150.0, 0.0, 150.0}, {0.1, 0.2, 0.3}, SeriesStyle::Points, ""});
+    const std::string svg = render_svg(p);
+    // x tick labels sit 19 px below the plot area (whose bottom is 52 px above the figure's).
+    const std::regex label("<text x=\"([-0-9.]+)\" y=\"" + std::to_string(260 - 52 + 19) +
+                           "\" text-anchor=\"middle\">([^<]*)</text>");
+    std::vector<std::pair<double, std::string>> labels;
+    for (auto it = std::sregex_iterator(svg.begin(), svg.end(), label); it != std::sregex_iterator(); ++it)
+      labels.emplace_back(std::stod((*it)[1]), (*it)[2]);
+    ASSERT_GE(labels.size(), 2u) << svg;
+    for (std::size_t i = 1; i < labels.size(); ++i) {
+      const double half_widths = 0.5 * 7.0 * static_cast<double>(labels[i - 1].second.size() + labels[i].second.size());
+      EXPECT_GE(labels[i].first - labels[i - 1].first, half_widths + 4.0)
+          << width << " px: '" << labels[i - 1].second << "' and '" << labels[i].second << "' overlap";
+    }
+  }
 }
 
 }  // namespace

@@ -416,5 +416,26 @@ TEST_F(UrdfImportCli, DocsExample) {
   EXPECT_LT((m.tool().matrix() - Eigen::Matrix4d::Identity()).cwiseAbs().maxCoeff(), 1e-12);
 }
 
+// Issue 35: an <origin rpy> of 1e20 rad was accepted (urdfdom turns it into some quaternion at
+// once, where the value no longer shows); angles beyond kMaxUrdfOriginAngle_rad or not finite are
+// refused from the text, naming the line, the element and the value.
+TEST_F(UrdfImportCli, RefusesAbsurdOriginAngles) {
+  for (const char* angle : {"1e20", "-250", "nan", "inf"}) {
+    auto js = messy_arm();
+    joint(js, "j3").rpy_rad = Eigen::Vector3d(0.25, 0.5, 0.75);
+    std::string xml = urdf_xml("a", js);
+    const std::string written = "rpy=\"0.25 0.5 0.75\"";
+    const auto at = xml.find(written);
+    ASSERT_NE(at, std::string::npos) << xml;
+    xml.replace(at, written.size(), std::string("rpy=\"0.25 ") + angle + " 0.75\"");
+    const std::size_t line = 1 + static_cast<std::size_t>(std::count(xml.begin(), xml.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+    expect_refused(import_text(xml), {"arm.urdf:" + std::to_string(line) + ": <origin rpy=", "component 2 = " + std::string(angle)});
+  }
+  // Within one turn, or a few (xacro writes ${2*pi}), is accepted.
+  auto js = messy_arm();
+  joint(js, "j3").rpy_rad = Eigen::Vector3d(0.25, 6.5, 0.75);
+  EXPECT_EQ(import_text(urdf_xml("a", js)).exit_code, 0);
+}
+
 }  // namespace
 }  // namespace errfield::robot

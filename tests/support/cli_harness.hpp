@@ -22,6 +22,7 @@
 #include <gtest/gtest.h>
 
 #include "errfield/csv_table.hpp"
+#include "errfield/csv_writing.hpp"
 
 namespace errfield::testing {
 
@@ -200,8 +201,12 @@ class CliTest : public ::testing::Test {
     std::string text;
     auto line = [&](const std::vector<std::string>& cells) {
       std::string l;
+      bool first = true;
       for (std::size_t c = 0; c < cells.size(); ++c)
-        if (keep_column(t.header()[c])) l += (l.empty() ? "" : ",") + cells[c];
+        if (keep_column(t.header()[c])) {
+          l += (first ? "" : ",") + csv_cell(cells[c]);  // quoted as errfield writes
+          first = false;
+        }
       text += l + "\n";
     };
     line(t.header());

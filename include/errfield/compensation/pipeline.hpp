@@ -53,6 +53,9 @@ struct StepColumns {
   /// warrants (a singular configuration; status wrist-singular, elbow-singular, shoulder-singular or
   /// near-singular).
   std::size_t singular = 0;
+  /// compensate: the largest move_mm among the rows compensated (status ok; 0 when none): what the
+  /// ceiling above allowed and what the joints actually did are two numbers.
+  double largest_move_mm = 0.0;
 };
 
 /// compensate's config_source words: the configuration a row is held to came from its seed joints

@@ -9,7 +9,8 @@
 ///     vector, and any number of revolute joints other than six. Also refuses what is no model at
 ///     all: a file over kMaxUrdfBytes or nested deeper than kMaxUrdfDepth (before parsing), a
 ///     <!DOCTYPE>, a link that is the child of two joints (not a tree), joint limits beyond
-///     kMaxUrdfJointLimit_rad and origin values outside the rule of kMinUrdfNonzeroOrigin.
+///     kMaxUrdfJointLimit_rad, origin angles beyond kMaxUrdfOriginAngle_rad or not finite, and
+///     origin values outside the rule of kMinUrdfNonzeroOrigin.
 ///  2. mdh_from_urdf_chain: the equivalent modified D-H table (common normals between consecutive
 ///     joint axes), with what is left over in the model's base and tool transforms. Joint angles map
 ///     1:1: q_i of the model is the URDF joint position of the i-th revolute joint, in degrees.
@@ -62,6 +63,12 @@ inline constexpr int kMaxUrdfDepth = 64;                                ///< ele
 /// Largest |joint limit| accepted, in radians (about 16 turns): beyond it a limit is a stand-in for
 /// "unlimited" or a unit mistake, and the sampled verification and planning would be meaningless.
 inline constexpr double kMaxUrdfJointLimit_rad = 100.0;
+/// Largest |angle| accepted in an <origin rpy="..."> (radians), read from the text before urdfdom
+/// turns it into a quaternion (which hides the value: 1e20 rad was accepted as some rotation). The
+/// same ~16 turns as the joint limits: a URDF writer produces at most one turn (xacro's ${pi}); a
+/// larger value is a unit mistake or garbage, and from ~1e16 rad on the double cannot even hold the
+/// angle's remainder modulo 2 pi, so the rotation read would be arbitrary.
+inline constexpr double kMaxUrdfOriginAngle_rad = 100.0;
 /// An origin coordinate (metres or radians) is 0 or at least this in magnitude, and at most
 /// kMaxUrdfOriginOffset_m for xyz. Below 1e-30 a value is neither an exact zero nor physics nor the
 /// rounding residue of a printed angle (~1e-17): a corrupted or generated-by-mistake number.
