@@ -305,13 +305,15 @@ void add_plan_command(CLI::App& app) {
   cmd->add_option("--candidates", a->candidates,
                   "pool of candidate poses (CSV: point, q1..q6 deg, any other columns carried through): choose "
                   "--count of them instead of a grid");
-  cmd->add_option("--count", a->count, "--candidates: how many poses to choose (in measuring order)");
+  cmd->add_option("--count", a->count,
+                  "--candidates: how many poses to choose (in measuring order); a pool row repeating an earlier "
+                  "one's joints counts once");
   cmd->add_option("--model", a->model,
                   "--candidates: a model of errfield fit (kinematic+kriging or vector-kriging): choose the poses that "
                   "most reduce its predicted error, and predict the RMS; without it, maximin in joint space");
   cmd->add_option("--data", a->data,
                   "--candidates: the poses measured so far (CSV with point, q1..q6): never chosen again (matched by "
-                  "point), and the choice is conditioned on them");
+                  "point, and by joints), and the choice is conditioned on them");
   cmd->add_option("--target-rms", a->target_rms,
                   "--candidates with --model: the 3-D RMS wanted (mm); says whether the prediction reaches it and "
                   "roughly how many more poses it needs");
