@@ -50,21 +50,19 @@ std::string got(const nlohmann::json& object, const char* key) {
 
 /// A coefficient covariance read from a file must be one: symmetric (to rounding), positive
 /// semi-definite (an indefinite one gave a tool point variance of -823,050 mm² with status ok) and
-/// within the credible range of the coefficients (standard errors beyond a radian; 1e300 made
-/// plan's updates overflow).
+/// no variance beyond kMaxCoefficientVarianceMrad2 (1e300 made plan's updates overflow).
 void check_coefficient_covariance(const Eigen::MatrixXd& c, const std::string& source) {
   const std::string member = ".coefficient_covariance_mrad2\"";
   const double largest = c.cwiseAbs().maxCoeff();
-  constexpr double kLargestVariance = kMaxCredibleAngleErrorMrad * kMaxCredibleAngleErrorMrad;
+  constexpr double kLargestVariance = kMaxCoefficientVarianceMrad2;
   for (Eigen::Index r = 0; r < c.rows(); ++r) {
     if (c(r, r) < 0.0)
       bad_functions_member(source, member + "[" + std::to_string(r) + "][" + std::to_string(r) + "]: a variance below 0 (" +
                                        format_number(c(r, r)) + ")");
     if (c(r, r) > kLargestVariance)
       bad_functions_member(source, member + "[" + std::to_string(r) + "][" + std::to_string(r) + "]: variance " +
-                                       format_number(c(r, r)) + " mrad², a standard error beyond " +
-                                       format_number(kMaxCredibleAngleErrorMrad) +
-                                       " mrad (about 57 degrees); refit the model with 'errfield fit'");
+                                       format_number(c(r, r)) + " mrad², beyond " + format_number(kLargestVariance) +
+                                       " (no fit leaves a coefficient that uncertain); refit the model with 'errfield fit'");
     for (Eigen::Index k = 0; k < r; ++k)
       if (std::abs(c(r, k) - c(k, r)) > 1e-9 * largest)
         bad_functions_member(source, member + ": not symmetric: [" + std::to_string(r) + "][" + std::to_string(k) + "] = " +
@@ -366,10 +364,16 @@ JointErrorFunctions JointErrorFunctions::from_json(const nlohmann::json& j, cons
         bad_functions_member(source, ".coefficients_mrad\"[" + std::to_string(r) + "][" + std::to_string(k) + "]: expected a finite number");
       f.coefficients_mrad(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k)) = c[r][k].get<double>();
     }
-    // Legendre polynomials are bounded by 1 on the fitted range: the coefficients' absolute sum
-    // bounds the joint's angle error there.
-    const double largest = f.coefficients_mrad.row(static_cast<Eigen::Index>(r)).cwiseAbs().sum();
-    if (largest > kMaxCredibleAngleErrorMrad)
+    // The joint's largest angle error over its fitted range (sampled as largest_angle_error_mrad).
+    double largest = 0.0;
+    std::vector<double> basis(static_cast<std::size_t>(f.degree));
+    for (int s = 0; s <= 200; ++s) {
+      legendre(-1.0 + s / 100.0, f.degree, basis.data());
+      double dq = 0.0;
+      for (int k = 0; k < f.degree; ++k) dq += f.coefficients_mrad(static_cast<Eigen::Index>(r), k) * basis[static_cast<std::size_t>(k)];
+      largest = std::max(largest, std::abs(dq));
+    }
+    if (!(largest <= kMaxCredibleAngleErrorMrad))
       bad_functions_member(source, ".coefficients_mrad\"[" + std::to_string(r) + "]: angle errors up to " +
                                        format_number(largest) + " mrad; a joint error function beyond " +
                                        format_number(kMaxCredibleAngleErrorMrad) +

@@ -212,7 +212,7 @@ TEST(JointErrorFunctions, JsonRoundTripAndRefusals) {
   j["degree"] = 2.0;
   refused(j, "joint_error_functions.degree");
   j = f.to_json();
-  j["coefficients_mrad"][4] = {600.0, -600.0};  // up to 1200 mrad on joint 5
+  j["coefficients_mrad"][4] = {600.0, -600.0};  // 600 P1 - 600 P2: 1200 mrad at u = -1 (joint 5)
   refused(j, "joint_error_functions.coefficients_mrad\"[4]: angle errors up to 1200 mrad");
   j = f.to_json();
   j["coefficients_mrad"][4] = {400.0, -400.0};  // 800 mrad: absurd for a robot, but within the limit
