@@ -167,7 +167,10 @@ class LinearTermPosterior {
     covariance_ = factor_ * factor_.transpose();
     residual_ = component_major(term.candidate_rows, c_);
     member_rows_ = Eigen::MatrixXd::Zero(k_ * capacity_, p);
+    covariance_scale_ = term.covariance.cwiseAbs().maxCoeff();
+    rows_scale_ = term.candidate_rows.cwiseAbs().maxCoeff();
     refresh();
+    check_finite(nullptr);
   }
 
   /// Conditions D~ on the M measured locations, whose design rows are `measured_rows` (interleaved,
@@ -184,6 +187,7 @@ class LinearTermPosterior {
       member_rows_.middleRows(k * capacity_, m) = inverse.diagonal().cwiseInverse().asDiagonal() * (inverse * d);
     }
     refresh();
+    check_finite(nullptr);
   }
 
   /// Per candidate not taken: how much a reading there (field variance var_c + noise) lowers the
@@ -204,6 +208,7 @@ class LinearTermPosterior {
       m.diagonal().array() += std::max(var_c[c], 0.0) + noise;
       out[c] = m.llt().solve(t).trace() / static_cast<double>(k_);
     }
+    check_finite(&out);
     return out;
   }
 
@@ -260,6 +265,7 @@ class LinearTermPosterior {
     }
     gram_ += dq;
     if (++picks_ % kRefreshPicks == 0) refresh();
+    check_finite(nullptr);
   }
 
   /// Sum over the candidates not picked of tr(D~_c A D~_c'), and over the members counted (the
@@ -301,6 +307,18 @@ class LinearTermPosterior {
   }
   static constexpr int kRefreshPicks = 64;
 
+  /// Finite inputs can still overflow on the way (a hand-edited covariance of 1e300 squared in
+  /// D~ A Q~, or design rows divided by a gravity scale of 1e-300): every score after it would be
+  /// NaN, and plan corrupted its heap picking "none" (index -1). Refused as the input it is.
+  void check_finite(const Eigen::VectorXd* reductions) const {
+    if (residual_a_.allFinite() && residual_aq_.allFinite() && gram_.allFinite() && covariance_.allFinite() &&
+        (!reductions || reductions->allFinite()))
+      return;
+    throw ArgumentError("linear_term: its variances overflow double precision (covariance up to " +
+                        format_number(covariance_scale_) + ", design rows up to " + format_number(rows_scale_) +
+                        "); no choice can be made from them");
+  }
+
   // Row-major: a candidate's K rows are read one by one in its K x K systems.
   using RowMajorMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   Eigen::Index k_, c_, capacity_;
@@ -312,6 +330,7 @@ class LinearTermPosterior {
   RowMajorMatrix residual_aq_;   // D~_c A Q~
   Eigen::MatrixXd member_rows_;  // each member's rows as kept when it joined, K·S_max x p
   long picks_ = 0;
+  double covariance_scale_ = 0.0, rows_scale_ = 0.0;  // for check_finite's message
 };
 
 }  // namespace
@@ -513,6 +532,11 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
         const double score = reduction[c] / (std::max(var_c[c], 0.0) + noise) + linear_reduction[c];
         if (score > best_score) best_score = score, best = c;
       }
+      // Every score NaN (variances that overflowed on the way) chose nothing: index -1 was written
+      // as taken, a heap corruption (plan --candidates aborted with "double free").
+      if (best < 0)
+        throw Error("variance reduction: no candidate has a finite score at pick " + std::to_string(pick + 1) +
+                    " (the model's variances overflow double precision: " + model.to_string() + ")");
     }
     taken[static_cast<std::size_t>(best)] = 1;
     if (nearest2_spacing.size() > 0)

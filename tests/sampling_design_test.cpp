@@ -381,6 +381,32 @@ TEST(VarianceReduction, PredictionsStayFiniteAndFallOnANearSingularModel) {
   }
 }
 
+// Issue 35: a finite but huge linear-term covariance (1e300, as in a hand-edited model file) made
+// every score NaN; no candidate won, and index -1 was marked taken: heap corruption ("double free").
+// Now it is refused as the argument it is, whatever the scale that overflows.
+TEST(VarianceReduction, AnOverflowingLinearTermIsRefusedNotACrash) {
+  const Eigen::MatrixXd pool = uniform_points(30, 3, 100.0, 71), measured = uniform_points(5, 3, 100.0, 72);
+  const VariogramModel model = VariogramModel::parse("sph(sill=1,range=50)+nug(0.01)");
+  VarianceReductionOptions o;
+  o.count = 5;
+  o.linear_term.components = 3;
+  o.linear_term.candidate_rows = Eigen::MatrixXd::Constant(3 * 30, 4, 1.0);
+  o.linear_term.measured_rows = Eigen::MatrixXd::Constant(3 * 5, 4, 1.0);
+  for (double scale : {1e300, 1e200}) {
+    o.linear_term.covariance = Eigen::MatrixXd::Identity(4, 4) * scale;
+    EXPECT_THROW(select_by_variance_reduction(pool, measured, model, o), ArgumentError) << scale;
+  }
+  // Finite covariance, design rows that overflow its products instead (a gravity scale of 1e-300).
+  o.linear_term.covariance = Eigen::MatrixXd::Identity(4, 4);
+  o.linear_term.candidate_rows *= 1e200;
+  o.linear_term.measured_rows *= 1e200;
+  EXPECT_THROW(select_by_variance_reduction(pool, measured, model, o), ArgumentError);
+  // The same term at a sane scale still plans.
+  o.linear_term.candidate_rows /= 1e200;
+  o.linear_term.measured_rows /= 1e200;
+  EXPECT_EQ(select_by_variance_reduction(pool, measured, model, o).chosen.size(), 5u);
+}
+
 TEST(VarianceReduction, TheLookaheadEndsWhereItsPredicateHoldsNotBeforeTheBatchEnds) {
   const Eigen::MatrixXd pool = uniform_points(60, 2, 8.0, 71), measured = uniform_points(5, 2, 8.0, 72);
   const VariogramModel model = VariogramModel::parse("exp(sill=1,range=2)+nug(0.1)");

@@ -39,6 +39,12 @@ std::string_view model_kind_name(ModelKind kind);
 /// Inverse of model_kind_name; throws ArgumentError listing the known names.
 ModelKind model_kind_from_name(std::string_view name);
 
+/// The largest Matérn smoothness errfield evaluates: beyond it Gamma(nu) and K_nu leave double range
+/// at ordinary lags (`--nu 1e8` hung a WLS fit, 1e10 threw from the Bessel function), and the model is
+/// the Gaussian one to plotting accuracy anyway (use gau). Every fit and model refuses nu outside
+/// (0, kMaxMaternNu], naming it.
+inline constexpr double kMaxMaternNu = 100.0;
+
 /// One term of a variogram model. `range` is unused by nug and lin; `nu` only by mat.
 struct ModelComponent {
   ModelKind kind = ModelKind::Spherical;

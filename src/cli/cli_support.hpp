@@ -6,6 +6,7 @@
 #include <memory>
 #include <cmath>
 #include <cstdio>
+#include <iostream>
 #include <string>
 #include <utility>
 #include <string_view>
@@ -165,6 +166,17 @@ inline void refuse_same_output(std::initializer_list<std::pair<const char*, cons
       if (!i->second->empty() && !j->second->empty() && same_output_file(*i->second, *j->second))
         throw ArgumentError(std::string(i->first) + " " + *i->second + " and " + j->first + " " + *j->second +
                             ": the same output file is given twice");
+}
+
+/// Prints `text` (the command's report) to standard output and only then commits `outputs`: when
+/// standard output cannot be written (a full disk, `> /dev/full`) the job fails (Error, exit 1)
+/// before any file is replaced - all or nothing (`plan --out X > /dev/full` replaced X, then
+/// exited 1). The text may say "written to X": if the commit fails after it, the exit status and
+/// the error message say so.
+inline void commit_after_standard_output(AtomicFileSet& outputs, const std::string& text) {
+  std::cout << text;
+  require_standard_output();
+  outputs.commit();
 }
 
 /// CLI11 check for an option read into an unsigned integer (--neighbors, --seed): CLI11 would

@@ -146,8 +146,8 @@ ModelComponent structure_from(const FitVariogramArgs& a) {
   if (a.nu_given && a.nu_text != "auto") {
     const auto res = std::from_chars(a.nu_text.data(), a.nu_text.data() + a.nu_text.size(), structure.nu);
     if (a.nu_text.empty() || res.ec != std::errc() || res.ptr != a.nu_text.data() + a.nu_text.size() ||
-        !(structure.nu > 0.0))
-      throw ArgumentError("--nu: '" + a.nu_text + "'; expected a number > 0" +
+        !(structure.nu > 0.0 && structure.nu <= kMaxMaternNu))
+      throw ArgumentError("--nu: '" + a.nu_text + "'; expected a number in (0, " + format_number(kMaxMaternNu) + "]" +
                           (a.method == "wls" ? std::string() : std::string(" or auto")));
   } else if (a.nu_given && a.method == "wls") {
     throw ArgumentError("--nu auto applies to --method ml or reml; give --nu a number with --method wls");
@@ -386,8 +386,8 @@ void run_lmc_fit(const FitVariogramArgs& a) {
   double nu = 0.0;
   if (a.nu_given) {
     const auto res = std::from_chars(a.nu_text.data(), a.nu_text.data() + a.nu_text.size(), nu);
-    if (res.ec != std::errc() || res.ptr != a.nu_text.data() + a.nu_text.size() || !(nu > 0.0))
-      throw ArgumentError("--nu: '" + a.nu_text + "'; with --lmc expected a number > 0");
+    if (res.ec != std::errc() || res.ptr != a.nu_text.data() + a.nu_text.size() || !(nu > 0.0 && nu <= kMaxMaternNu))
+      throw ArgumentError("--nu: '" + a.nu_text + "'; with --lmc expected a number in (0, " + format_number(kMaxMaternNu) + "]");
   }
   CoregionalizationTemplate tmpl;
   try {

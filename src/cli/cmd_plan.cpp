@@ -15,6 +15,7 @@
 #include "errfield/error.hpp"
 #include "errfield/robot/cube_budget.hpp"
 #include "errfield/compensation/measurement_plan.hpp"
+#include "errfield/compensation/pipeline.hpp"
 #include "errfield/compensation/pose_selection.hpp"
 #include "errfield/json_file.hpp"
 #include "errfield/robot/input_checks.hpp"
@@ -64,22 +65,34 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
   }
   const MdhModel robot = !a.robot.empty() || !model ? load_robot_or_default(a.robot)
                          : model->has_nominal_model() ? model->nominal_model() : model->command_model();
+  // A --robot beside a model must be the robot the model was fitted on: its joint limits and FK
+  // judge the pool ("93.7 mm now -> 0.0455 after 5 poses" came from another robot's model).
+  if (model && !a.robot.empty())
+    if (const auto why = differs_beyond_calibration(model->nominal_model(), robot))
+      throw ArgumentError("--robot " + a.robot + " is not the robot of --model " + a.model + " ('" +
+                          model->nominal_model().name() + "'): " + *why + "; leave --robot out (the model's robot is used)");
+  const RobotOrigin origin{!a.robot.empty() || model.has_value(),
+                           !a.robot.empty() ? "--robot " + a.robot
+                           : model         ? "the nominal robot of " + a.model
+                                           : std::string("the built-in ER20-C10 (no --robot)")};
   const CsvTable pool = CsvTable::read(a.candidates);
   const std::vector<JointVector> pool_q = read_joint_columns(pool);
   if (const auto w = joints_outside_limits(pool_q, robot, row_labels_of(pool, "row")))
     throw InputError(a.candidates + ": " + *w + "; check units (degrees), joint order and --robot", a.candidates);
-  // Measured so far: conditioned on, and never chosen again (matched by `point`).
+  // A pool or data that carry positions (x,y,z or mx,my,mz) must be this robot's (the check of
+  // fit, validate, predict and compensate): another robot's pool was planned in silence.
+  check_table_fits_robot(pool, robot, origin);
+  // Measured so far: conditioned on, and never chosen again (matched by `point`, and by joints in
+  // select_poses: data without a point column had 39 measured poses chosen again).
   std::vector<JointVector> measured;
   std::set<std::string> measured_points;
   if (!a.data.empty()) {
     const CsvTable d = CsvTable::read(a.data);
     measured = read_joint_columns(d);
-    if (d.has_column("point"))
+    check_table_fits_robot(d, robot, origin);
+    if (d.has_column("point") && pool.has_column("point"))
       for (std::size_t i = 0; i < d.row_count(); ++i) measured_points.emplace(d.cell(i, d.column_index("point")));
   }
-  if (!measured_points.empty() && !pool.has_column("point"))
-    throw InputError(a.candidates + ": no column 'point', so the poses of --data (matched by point) cannot be left out",
-                     a.candidates, 0, "point");
   std::vector<std::size_t> rows;  // pool rows still to choose from
   std::vector<JointVector> open;
   for (std::size_t i = 0; i < pool.row_count(); ++i) {
@@ -91,6 +104,7 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
     throw InputError(a.candidates + ": " + std::to_string(open.size()) + " candidate poses not yet measured, --count " +
                          std::to_string(a.count),
                      a.candidates);
+  const RowLabels labels = row_labels_of(pool, "row");
   PoseSelectionOptions o;
   o.count = a.count;
   if (a.local_scale != "on" && a.local_scale != "off")
@@ -102,6 +116,18 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
   naming_options([&] { sel = select_poses(open, measured, model ? &*model : nullptr, o); },
                  {{"PoseSelectionOptions::count", "--count"}, {"PoseSelectionOptions::target_rms_mm", "--target-rms"},
                   {"PoseSelectionOptions::spacing_floor", "--spacing-floor"}});
+  // Pool rows left out as repeats: said, naming the first few (a warning: the choice is still right).
+  auto name_rows = [&](const std::vector<std::size_t>& ks) {
+    std::string s;
+    for (std::size_t n = 0; n < ks.size() && n < 5; ++n) s += (n ? ", " : "") + labels(rows[ks[n]]);
+    return s + (ks.size() > 5 ? ", ..." : "");
+  };
+  if (!sel.repeated.empty())
+    std::cerr << "errfield plan: warning: " << sel.repeated.size() << " pool row(s) repeat the joints of an earlier row and "
+              << "were left out (" << name_rows(sel.repeated) << ")\n";
+  if (!sel.already_measured.empty())
+    std::cerr << "errfield plan: warning: " << sel.already_measured.size() << " pool row(s) have the joints of a pose in "
+              << a.data << " and were left out as measured (" << name_rows(sel.already_measured) << ")\n";
   OutputTable out;
   std::vector<std::size_t> picked;
   for (std::size_t k : sel.chosen) picked.push_back(rows[k]);
@@ -141,9 +167,8 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
   AtomicFileSet outputs;
   outputs.add(a.out, out.to_csv());
   if (!a.summary_out.empty()) outputs.add(a.summary_out, summary.dump(2) + "\n");
-  std::cout << text.str() << "  written to " << a.out << "\n";
-  require_standard_output();  // before the commit: a run that fails leaves the previous files
-  outputs.commit();
+  text << "  written to " << a.out << "\n";
+  commit_after_standard_output(outputs, text.str());
 }
 
 /// Best of sph/exp/gau/pow (free nugget, N_j weights) fitted to an `errfield variogram` CSV.
@@ -238,12 +263,12 @@ void run_plan(const PlanArgs& a, CLI::App* cmd) {
   if (!a.samples_out.empty()) outputs.add(a.samples_out, table(sample_rows));
   std::size_t grid = 0, bases = 0;
   for (const auto* p : main_rows) (p->kind == "grid" ? grid : bases)++;
-  std::cout << "plan: " << grid << " grid points (step " << o.step_mm << " mm) and " << bases
-            << " base point(s), all reachable at the orientation; written to " << a.out << "\n";
+  std::ostringstream text;
+  text << "plan: " << grid << " grid points (step " << o.step_mm << " mm) and " << bases
+       << " base point(s), all reachable at the orientation; written to " << a.out << "\n";
   if (!a.samples_out.empty())
-    std::cout << "  " << sample_rows.size() << " validation samples (one per cell) written to " << a.samples_out << "\n";
-  require_standard_output();  // before the commit: a run that fails leaves the previous files
-  outputs.commit();
+    text << "  " << sample_rows.size() << " validation samples (one per cell) written to " << a.samples_out << "\n";
+  commit_after_standard_output(outputs, text.str());
 }
 
 void add_plan_command(CLI::App& app) {
@@ -280,13 +305,15 @@ void add_plan_command(CLI::App& app) {
   cmd->add_option("--candidates", a->candidates,
                   "pool of candidate poses (CSV: point, q1..q6 deg, any other columns carried through): choose "
                   "--count of them instead of a grid");
-  cmd->add_option("--count", a->count, "--candidates: how many poses to choose (in measuring order)");
+  cmd->add_option("--count", a->count,
+                  "--candidates: how many poses to choose (in measuring order); a pool row repeating an earlier "
+                  "one's joints counts once");
   cmd->add_option("--model", a->model,
                   "--candidates: a model of errfield fit (kinematic+kriging or vector-kriging): choose the poses that "
                   "most reduce its predicted error, and predict the RMS; without it, maximin in joint space");
   cmd->add_option("--data", a->data,
                   "--candidates: the poses measured so far (CSV with point, q1..q6): never chosen again (matched by "
-                  "point), and the choice is conditioned on them");
+                  "point, and by joints), and the choice is conditioned on them");
   cmd->add_option("--target-rms", a->target_rms,
                   "--candidates with --model: the 3-D RMS wanted (mm); says whether the prediction reaches it and "
                   "roughly how many more poses it needs");

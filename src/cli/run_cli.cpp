@@ -7,6 +7,7 @@
 #include <new>
 #include <iostream>
 
+#include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
 #include "errfield/error.hpp"
 
@@ -16,6 +17,19 @@ std::vector<CommandEntry>& command_registry() {
   static std::vector<CommandEntry> entries;
   return entries;
 }
+
+namespace {
+
+/// Every option read into an unsigned integer refuses a negative value (kUnsignedInteger): CLI11
+/// 2.1 reads "-1" as 2^64 - 1 (`plan --count -1`, `--seed -1` wrapped). Done here, over the whole
+/// command tree, so that no option (nor one added later) can miss it.
+void refuse_negative_unsigned_options(CLI::App& app) {
+  for (CLI::Option* option : app.get_options())
+    if (option->get_type_name() == "UINT") option->check(kUnsignedInteger);
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) refuse_negative_unsigned_options(*sub);
+}
+
+}  // namespace
 
 int run_cli(int argc, const char* const* argv) {
   CLI::App app{
@@ -33,6 +47,7 @@ int run_cli(int argc, const char* const* argv) {
   std::sort(entries.begin(), entries.end(),
             [](const auto& a, const auto& b) { return a.order != b.order ? a.order < b.order : a.name < b.name; });
   for (const auto& e : entries) e.add(app);
+  refuse_negative_unsigned_options(app);
   // CLI11 would answer a mistyped command with "A subcommand is required"; name it instead.
   if (argc > 1 && argv[1][0] != '-' &&
       std::none_of(entries.begin(), entries.end(), [&](const auto& e) { return e.name == argv[1]; })) {

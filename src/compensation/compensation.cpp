@@ -6,6 +6,7 @@
 #include "compensation/fit_checks.hpp"
 #include "errfield/compensation/error_ball.hpp"
 #include "errfield/error.hpp"
+#include "errfield/json_file.hpp"
 #include "errfield/compensation/error_fields.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/input_checks.hpp"
@@ -369,7 +370,7 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
   if (!j.is_object()) fail_model(source, "expected a JSON object (an errfield compensation model)");
   if (j.value("format", std::string()) != "errfield-compensation-model")
     fail_model(source, "member \"format\" must be \"errfield-compensation-model\" (is this a model written by 'errfield fit'?)");
-  if (!j.contains("version") || !j["version"].is_number_integer() || j["version"].get<int>() != 1)
+  if (!j.contains("version") || json_integer_in(j["version"], 1, 1) != 1)
     fail_model(source, "member \"version\": expected 1");
   if (!j.contains("method") || !j["method"].is_string()) fail_model(source, "member \"method\": expected a string");
   CompensationMethod method;
@@ -398,8 +399,16 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
                            std::string(method_name(method)) + "\" fits a \"" + std::string(field_kind_of(method)) +
                            "\" field; the file was edited or mixed from two models: refit it with 'errfield fit'");
   CompensationModel model(method, std::move(command), std::move(field));
-  if (j.contains("nominal_model"))
+  if (j.contains("nominal_model")) {
     model.nominal_model_ = robot::detail::json_nested_model(j, "nominal_model", source);
+    // The command model is the nominal one calibrated: millimetres and tenths of a degree apart.
+    // The stored samples are checked against the nominal model below, so a command model of
+    // another robot (a UR5e inside a KR16 model) passed and gave 126/126 rows ok, 1,066 mm off.
+    if (const auto why = robot::differs_beyond_calibration(*model.nominal_model_, model.command_model_))
+      fail_model(source, "member \"command_model\" ('" + model.command_model_.name() + "') is not a calibration of the "
+                         "\"nominal_model\" ('" + model.nominal_model_->name() + "'): " + *why +
+                         "; the file was edited or mixed from two models: refit it with 'errfield fit'");
+  }
   model.registration_ = compensation::find_registration(j, source);
   // Informative members: read back so a model loaded and saved again keeps them.
   auto strings = [&](const char* key, std::vector<std::string>& into) {

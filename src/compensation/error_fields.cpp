@@ -1,8 +1,11 @@
 #include "errfield/compensation/error_fields.hpp"
 
+#include <limits>
+
 #include <nlohmann/json.hpp>
 
 #include "errfield/error.hpp"
+#include "errfield/json_file.hpp"
 #include "errfield/compensation/kriging_fields.hpp"
 
 namespace errfield::compensation {
@@ -42,8 +45,11 @@ RegularGrid3 grid_from_json(const nlohmann::json& j, const std::string& source) 
   if (!counts.is_array() || counts.size() != 3) bad(source, "member \"grid.counts\": expected 3 integers");
   std::array<int, 3> c{};
   for (int i = 0; i < 3; ++i) {
-    if (!counts[i].is_number_integer()) bad(source, "member \"grid.counts\": expected 3 integers");
-    c[i] = counts[i].get<int>();
+    // Range-checked as read: get<int>() keeps the low 32 bits (4294967298 would be read as 2).
+    const auto n = json_integer_in(counts[i], 0, std::numeric_limits<int>::max());
+    if (!n) bad(source, "member \"grid.counts\"[" + std::to_string(i) + "]: expected an integer from 0 to " +
+                        std::to_string(std::numeric_limits<int>::max()) + ", got " + counts[i].dump());
+    c[i] = static_cast<int>(*n);
   }
   try {
     return RegularGrid3(vec3(member(j, source, "origin_mm"), source, "grid.origin_mm"),

@@ -11,7 +11,9 @@
 #include <Eigen/QR>
 #include <nlohmann/json.hpp>
 
+#include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
+#include "errfield/json_file.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/variogram_model.hpp"
 
@@ -42,6 +44,43 @@ double scaled(double q, double lo, double hi) {
 
 [[noreturn]] void bad_functions_member(const std::string& source, const std::string& what) {
   throw InputError(source + ": member \"joint_error_functions" + what, source);
+}
+
+/// ", got V" for a member that is there (the value as written), "" otherwise.
+std::string got(const nlohmann::json& object, const char* key) {
+  return object.contains(key) ? ", got " + object[key].dump() : std::string();
+}
+
+/// A coefficient covariance read from a file must be one: symmetric (to rounding), positive
+/// semi-definite (an indefinite one gave a tool point variance of -823,050 mm² with status ok) and
+/// no variance beyond kMaxCoefficientVarianceMrad2 (1e300 made plan's updates overflow).
+void check_coefficient_covariance(const Eigen::MatrixXd& c, const std::string& source) {
+  const std::string member = ".coefficient_covariance_mrad2\"";
+  const double largest = c.cwiseAbs().maxCoeff();
+  constexpr double kLargestVariance = kMaxCoefficientVarianceMrad2;
+  for (Eigen::Index r = 0; r < c.rows(); ++r) {
+    if (c(r, r) < 0.0)
+      bad_functions_member(source, member + "[" + std::to_string(r) + "][" + std::to_string(r) + "]: a variance below 0 (" +
+                                       format_number(c(r, r)) + ")");
+    if (c(r, r) > kLargestVariance)
+      bad_functions_member(source, member + "[" + std::to_string(r) + "][" + std::to_string(r) + "]: variance " +
+                                       format_number(c(r, r)) + " mrad², beyond " + format_number(kLargestVariance) +
+                                       " (no fit leaves a coefficient that uncertain); refit the model with 'errfield fit'");
+    for (Eigen::Index k = 0; k < r; ++k)
+      if (std::abs(c(r, k) - c(k, r)) > 1e-9 * largest)
+        bad_functions_member(source, member + ": not symmetric: [" + std::to_string(r) + "][" + std::to_string(k) + "] = " +
+                                         format_number(c(r, k)) + " but [" + std::to_string(k) + "][" + std::to_string(r) +
+                                         "] = " + format_number(c(k, r)));
+  }
+  if (c.rows() == 0 || largest == 0.0) return;
+  // Eigenvalues below -1e-9 of the largest are no rounding of a covariance fit computed.
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(0.5 * (c + c.transpose()), Eigen::EigenvaluesOnly);
+  const double lowest = eigen.eigenvalues().minCoeff(), highest = eigen.eigenvalues().maxCoeff();
+  if (lowest < -1e-9 * std::max(highest, 0.0))
+    bad_functions_member(source, member + ": not positive semi-definite (eigenvalue " + format_number(lowest) +
+                                     " mrad² beside " + format_number(highest) +
+                                     "): some combination of the coefficients would have a negative variance; refit the "
+                                     "model with 'errfield fit'");
 }
 
 /// Ridge least squares of y on the design's columns with the penalty that minimizes generalized
@@ -398,10 +437,9 @@ nlohmann::json JointErrorFunctions::to_json() const {
 JointErrorFunctions JointErrorFunctions::from_json(const nlohmann::json& j, const std::string& source) {
   if (!j.is_object()) bad_functions_member(source, "\": expected an object {degree, lo_deg, hi_deg, coefficients_mrad}");
   JointErrorFunctions f;
-  if (!j.contains("degree") || !j["degree"].is_number_integer() || j["degree"].get<int>() < 1 ||
-      j["degree"].get<int>() > 20)
-    bad_functions_member(source, ".degree\": expected an integer 1..20");
-  f.degree = j["degree"].get<int>();
+  const auto degree = j.contains("degree") ? json_integer_in(j["degree"], 1, 20) : std::nullopt;
+  if (!degree) bad_functions_member(source, ".degree\": expected an integer 1..20" + got(j, "degree"));
+  f.degree = static_cast<int>(*degree);
   auto six = [&](const char* key, std::array<double, 6>& into) {
     if (!j.contains(key) || !j[key].is_array() || j[key].size() != 6) bad_functions_member(source, std::string(".") + key + "\": expected 6 numbers (deg)");
     for (std::size_t k = 0; k < 6; ++k) {
@@ -426,6 +464,20 @@ JointErrorFunctions JointErrorFunctions::from_json(const nlohmann::json& j, cons
         bad_functions_member(source, ".coefficients_mrad\"[" + std::to_string(r) + "][" + std::to_string(k) + "]: expected a finite number");
       f.coefficients_mrad(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k)) = c[r][k].get<double>();
     }
+    // The joint's largest angle error over its fitted range (sampled as largest_angle_error_mrad).
+    double largest = 0.0;
+    std::vector<double> basis(static_cast<std::size_t>(f.degree));
+    for (int s = 0; s <= 200; ++s) {
+      legendre(-1.0 + s / 100.0, f.degree, basis.data());
+      double dq = 0.0;
+      for (int k = 0; k < f.degree; ++k) dq += f.coefficients_mrad(static_cast<Eigen::Index>(r), k) * basis[static_cast<std::size_t>(k)];
+      largest = std::max(largest, std::abs(dq));
+    }
+    if (!(largest <= kMaxCredibleAngleErrorMrad))
+      bad_functions_member(source, ".coefficients_mrad\"[" + std::to_string(r) + "]: angle errors up to " +
+                                       format_number(largest) + " mrad; a joint error function beyond " +
+                                       format_number(kMaxCredibleAngleErrorMrad) +
+                                       " mrad (about 57 degrees) is no calibration residual: refit the model with 'errfield fit'");
   }
   if (j.contains("gravity_terms")) {
     const auto& g = j["gravity_terms"];
@@ -435,19 +487,28 @@ JointErrorFunctions JointErrorFunctions::from_json(const nlohmann::json& j, cons
       const auto& e = g[t];
       if (!e.is_object()) bad_functions_member(source, at + ": expected {joint, frame, scale_m, coefficient_mrad}");
       GravityLoadTerm term;
-      if (!e.contains("joint") || !e["joint"].is_number_integer() || e["joint"].get<int>() < 1 || e["joint"].get<int>() > 6)
-        bad_functions_member(source, at + ".joint: expected an integer 1..6");
-      term.joint = e["joint"].get<int>() - 1;
+      const auto joint = e.contains("joint") ? json_integer_in(e["joint"], 1, 6) : std::nullopt;
+      if (!joint) bad_functions_member(source, at + ".joint: expected an integer 1..6" + got(e, "joint"));
+      term.joint = static_cast<int>(*joint) - 1;
       // The loaded point lies beyond the joint: frames joint+1 .. 7 (1-based joint; 7 = the tool point).
-      if (!e.contains("frame") || !e["frame"].is_number_integer() || e["frame"].get<int>() < term.joint + 2 || e["frame"].get<int>() > 7)
+      const auto frame = e.contains("frame") ? json_integer_in(e["frame"], term.joint + 2, 7) : std::nullopt;
+      if (!frame)
         bad_functions_member(source, at + ".frame: expected an integer " + std::to_string(term.joint + 2) + "..7 (a frame beyond joint " +
-                                         std::to_string(term.joint + 1) + "; 7 = the tool point)");
-      term.frame = e["frame"].get<int>();
-      if (!e.contains("scale_m") || !e["scale_m"].is_number() || !(e["scale_m"].get<double>() > 0.0) || !std::isfinite(e["scale_m"].get<double>()))
-        bad_functions_member(source, at + ".scale_m: expected a finite number above 0 (m)");
+                                         std::to_string(term.joint + 1) + "; 7 = the tool point)" + got(e, "frame"));
+      term.frame = static_cast<int>(*frame);
+      // fit sets scale_m to the lever's RMS over the fitted poses: millimetres to metres on any arm.
+      // The design divides by it, so 1e-300 made every design row overflow (plan crashed on it).
+      if (!e.contains("scale_m") || !e["scale_m"].is_number() || !(e["scale_m"].get<double>() >= kMinGravityScaleM) ||
+          !(e["scale_m"].get<double>() <= kMaxGravityScaleM))
+        bad_functions_member(source, at + ".scale_m: expected a lever scale from " + format_number(kMinGravityScaleM) + " to " +
+                                         format_number(kMaxGravityScaleM) + " m" + got(e, "scale_m"));
       term.scale_m = e["scale_m"].get<double>();
-      if (!e.contains("coefficient_mrad") || !e["coefficient_mrad"].is_number() || !std::isfinite(e["coefficient_mrad"].get<double>()))
-        bad_functions_member(source, at + ".coefficient_mrad: expected a finite number");
+      if (!e.contains("coefficient_mrad") || !e["coefficient_mrad"].is_number() ||
+          !(std::abs(e["coefficient_mrad"].get<double>()) <= kMaxCredibleAngleErrorMrad))
+        bad_functions_member(source, at + ".coefficient_mrad: expected a deflection within +-" +
+                                         format_number(kMaxCredibleAngleErrorMrad) + " mrad (about 57 degrees at the "
+                                         "fitted poses' RMS lever; beyond it is no calibration residual)" +
+                                         got(e, "coefficient_mrad"));
       term.coefficient_mrad = e["coefficient_mrad"].get<double>();
       f.gravity_terms.push_back(term);
     }
@@ -467,11 +528,7 @@ JointErrorFunctions JointErrorFunctions::from_json(const nlohmann::json& j, cons
         f.coefficient_covariance_mrad2(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(k)) = v[r][k].get<double>();
       }
     }
-    // A hand-edited covariance could make a variance negative: it must be symmetric with a
-    // non-negative diagonal.
-    for (std::size_t r = 0; r < p; ++r)
-      if (f.coefficient_covariance_mrad2(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(r)) < 0.0)
-        bad_functions_member(source, ".coefficient_covariance_mrad2\"[" + std::to_string(r) + "][" + std::to_string(r) + "]: a variance below 0");
+    check_coefficient_covariance(f.coefficient_covariance_mrad2, source);
   }
   return f;
 }

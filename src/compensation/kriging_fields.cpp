@@ -6,6 +6,7 @@
 #include <optional>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <utility>
 
 #include <nlohmann/json.hpp>
@@ -14,6 +15,7 @@
 #include "errfield/csv_table.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
+#include "errfield/json_file.hpp"
 #include "errfield/kriging.hpp"
 #include "errfield/metrics.hpp"
 #include "errfield/variogram_fit.hpp"
@@ -657,7 +659,13 @@ std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& 
       c.factor = number("factor");
       c.mean_squared_z_before = number("mean_squared_z_before");
       c.tail_factor = number("tail_factor");
-      c.samples = static_cast<std::size_t>(std::max(0.0, number("samples")));
+      // A count: 1e30 cast to size_t is undefined behaviour, 12.5 no count.
+      const auto samples = json_integer_in(vc.contains("samples") ? vc["samples"] : nlohmann::json(), 0,
+                                           std::numeric_limits<std::int64_t>::max());
+      if (!samples)
+        bad_field(source, "member \"field.variance_calibration.samples\": expected a count (an integer >= 0), got " +
+                              (vc.contains("samples") ? vc["samples"].dump() : std::string("nothing")));
+      c.samples = static_cast<std::size_t>(*samples);
       if (vc.contains("model_before")) {
         if (!vc["model_before"].is_string())
           bad_field(source, "member \"field.variance_calibration.model_before\": expected a model string");
@@ -669,10 +677,11 @@ std::shared_ptr<const ErrorField> kriging_field_from_json(const nlohmann::json& 
     if (kk != "ordinary" && kk != "universal") bad_field(source, "member \"field.kriging_kind\": '" + kk + "'; expected ordinary or universal");
     o.kind = kk == "universal" ? KrigingKind::Universal : KrigingKind::Ordinary;
     if (optional("drift_order", &nlohmann::json::is_number_integer, "an integer")) {
-      o.drift_order = j["drift_order"].get<int>();
-      // Whatever the kind: 9 or -1 in an ordinary model is a file nobody wrote with errfield fit.
-      if (o.drift_order < 0 || o.drift_order > 2)
-        bad_field(source, "member \"field.drift_order\": " + std::to_string(o.drift_order) + "; expected 0, 1 or 2");
+      // Whatever the kind: 9 or -1 in an ordinary model is a file nobody wrote with errfield fit
+      // (and 4294967297 is not 1: read range-checked, not through get<int>()).
+      const auto order = json_integer_in(j["drift_order"], 0, 2);
+      if (!order) bad_field(source, "member \"field.drift_order\": " + j["drift_order"].dump() + "; expected 0, 1 or 2");
+      o.drift_order = static_cast<int>(*order);
     }
     if (!j.contains("samples") || !j.contains("values")) bad_field(source, "member \"field\": needs \"samples\" and \"values\"");
     if (!j["samples"].is_object())

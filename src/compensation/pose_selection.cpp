@@ -1,5 +1,6 @@
 #include "errfield/compensation/pose_selection.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include <nlohmann/json.hpp>
@@ -40,10 +41,68 @@ Eigen::MatrixXd position_rows(const std::vector<robot::JointVector>& q, const ro
 
 }  // namespace
 
+namespace {
+
+bool joints_less(const robot::JointVector& a, const robot::JointVector& b) {
+  return std::lexicographical_compare(a.data(), a.data() + robot::kJointCount, b.data(), b.data() + robot::kJointCount);
+}
+
+PoseSelection select_distinct_poses(const std::vector<robot::JointVector>& candidates,
+                                    const std::vector<robot::JointVector>& measured, const CompensationModel* model,
+                                    const PoseSelectionOptions& options);
+
+}  // namespace
+
 PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
                            const std::vector<robot::JointVector>& measured, const CompensationModel* model,
                            const PoseSelectionOptions& options) {
   options.validate();
+  // Repeats of an earlier candidate or of a measured pose are left out before the choice (sorted
+  // once: pools run to 10,000 poses).
+  std::vector<std::size_t> order(candidates.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return joints_less(candidates[a], candidates[b]); });
+  std::vector<robot::JointVector> done = measured;
+  std::sort(done.begin(), done.end(), joints_less);
+  std::vector<char> left_out(candidates.size(), 0);
+  std::vector<std::size_t> repeated, already_measured;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const std::size_t i = order[k];
+    if (k > 0 && candidates[order[k - 1]] == candidates[i]) {
+      repeated.push_back(i);
+      left_out[i] = 1;
+    } else if (std::binary_search(done.begin(), done.end(), candidates[i], joints_less)) {
+      already_measured.push_back(i);
+      left_out[i] = 1;
+    }
+  }
+  // The first of equal candidates is the one kept (stable sort), and a kept repeat's later copies
+  // still count as repeats, not as measured.
+  std::vector<robot::JointVector> open;
+  std::vector<std::size_t> row_of_open;
+  for (std::size_t i = 0; i < candidates.size(); ++i)
+    if (!left_out[i]) open.push_back(candidates[i]), row_of_open.push_back(i);
+  if (open.size() < options.count)
+    throw ArgumentError("PoseSelectionOptions::count: " + std::to_string(options.count) + " poses asked, but " +
+                        std::to_string(open.size()) + " of the " + std::to_string(candidates.size()) +
+                        " candidates are distinct poses not measured yet (" + std::to_string(repeated.size()) +
+                        " repeat an earlier candidate, " + std::to_string(already_measured.size()) +
+                        " a measured pose)");
+  PoseSelection out = select_distinct_poses(open, measured, model, options);
+  for (std::size_t& c : out.chosen) c = row_of_open[c];
+  std::sort(repeated.begin(), repeated.end());
+  std::sort(already_measured.begin(), already_measured.end());
+  out.repeated = std::move(repeated);
+  out.already_measured = std::move(already_measured);
+  return out;
+}
+
+namespace {
+
+PoseSelection select_distinct_poses(const std::vector<robot::JointVector>& candidates,
+                                    const std::vector<robot::JointVector>& measured, const CompensationModel* model,
+                                    const PoseSelectionOptions& options) {
   PoseSelection out;
   if (!model || !model->field()) {
     if (model)
@@ -159,5 +218,7 @@ PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
                " measured poses; predicted RMS over " + std::to_string(plan.references) + " pool poses";
   return out;
 }
+
+}  // namespace
 
 }  // namespace errfield::compensation

@@ -159,6 +159,18 @@ nlohmann::json parse_json_text(std::string_view text, const std::string& source)
   return json::parse(text.begin(), text.end());
 }
 
+std::optional<std::int64_t> json_integer_in(const nlohmann::json& v, std::int64_t lo, std::int64_t hi) {
+  if (v.is_number_unsigned()) {
+    const std::uint64_t u = v.get<std::uint64_t>();  // may exceed INT64_MAX: compare unsigned
+    if (hi < 0 || u > static_cast<std::uint64_t>(hi)) return std::nullopt;
+    const auto i = static_cast<std::int64_t>(u);
+    return i >= lo ? std::optional<std::int64_t>(i) : std::nullopt;
+  }
+  if (!v.is_number_integer()) return std::nullopt;
+  const std::int64_t i = v.get<std::int64_t>();
+  return i >= lo && i <= hi ? std::optional<std::int64_t>(i) : std::nullopt;
+}
+
 nlohmann::json read_json_file(const std::filesystem::path& path, const std::string& what) {
   const std::string name = path.string();
   std::error_code ec;

@@ -383,6 +383,12 @@ LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eig
     if (c.kind != ModelKind::Nugget && !c.bounded())
       throw ArgumentError("likelihood: component '" + std::string(model_kind_name(c.kind)) +
                           "' has no covariance (pow, lin); use nug, sph, exp, gau, mat or wen");
+  std::vector<double> nus = options.matern_nu_choices;
+  for (const auto& c : structure)
+    if (c.kind == ModelKind::Matern) nus.push_back(c.nu);
+  for (double nu : nus)
+    if (!(nu > 0.0 && nu <= kMaxMaternNu))
+      throw ArgumentError("likelihood: Matérn nu = " + format_number(nu) + "; expected 0 < nu <= " + format_number(kMaxMaternNu));
   check_likelihood_budget(coordinates.rows(), values.cols(), options, static_cast<int>(coordinates.cols()));
   if (coordinates.rows() < kMinLikelihoodSamples)
     throw InputError("likelihood: " + std::to_string(coordinates.rows()) + " samples; need at least " +

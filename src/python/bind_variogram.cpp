@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "errfield/coregionalization_fit.hpp"
+#include "errfield/csv_table.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
 #include "errfield/interpolation_options.hpp"
@@ -259,7 +260,8 @@ std::vector<ModelComponent> structure_arg(const std::string& model, std::optiona
   c.kind = model_kind_from_name(model);
   if (c.kind == ModelKind::Nugget) throw ArgumentError("model: 'nug' alone has nothing to fit; use nugget= for the nugget");
   if (c.kind == ModelKind::Matern && !nu) throw ArgumentError("nu: model 'mat' needs nu (the Matérn smoothness, e.g. 1.5)");
-  if (nu && !(*nu > 0.0)) throw ArgumentError("nu: " + std::to_string(*nu) + "; expected > 0");
+  if (nu && !(*nu > 0.0 && *nu <= kMaxMaternNu))
+    throw ArgumentError("nu: " + format_number(*nu) + "; expected 0 < nu <= " + format_number(kMaxMaternNu));
   if (nu) c.nu = *nu;
   s.push_back(c);
   return s;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
 
@@ -17,6 +18,32 @@ double reach_scale_mm(const MdhModel& model) {
   double s = 0.0;
   for (const auto& l : model.links()) s += std::abs(l.a_mm) + std::abs(l.d_mm);
   return s;
+}
+
+std::optional<std::string> differs_beyond_calibration(const MdhModel& nominal, const MdhModel& other) {
+  auto text = [](double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.6g", v);
+    return std::string(buf);
+  };
+  for (int i = 0; i < kJointCount; ++i) {
+    const MdhLink &n = nominal.link(i), &o = other.link(i);
+    const std::string at = "links[" + std::to_string(i) + "].";
+    const std::pair<const char*, std::pair<double, double>> lengths[] = {{"a_mm", {n.a_mm, o.a_mm}}, {"d_mm", {n.d_mm, o.d_mm}}};
+    for (const auto& [name, v] : lengths)
+      if (!(std::abs(v.first - v.second) <= kMaxCalibrationLengthChangeMm))
+        return at + name + " is " + text(v.second) + " against " + text(v.first) + " (more than " +
+               text(kMaxCalibrationLengthChangeMm) + " mm apart)";
+    const std::pair<const char*, std::pair<double, double>> angles[] = {
+        {"alpha_deg", {n.alpha_deg, o.alpha_deg}}, {"theta0_deg", {n.theta0_deg, o.theta0_deg}}, {"beta_deg", {n.beta_deg, o.beta_deg}}};
+    for (const auto& [name, v] : angles) {
+      const double turn = std::remainder(v.first - v.second, 360.0);
+      if (!(std::abs(turn) <= kMaxCalibrationAngleChangeDeg))
+        return at + name + " is " + text(v.second) + " against " + text(v.first) + " (more than " +
+               text(kMaxCalibrationAngleChangeDeg) + " degrees apart)";
+    }
+  }
+  return std::nullopt;
 }
 
 std::optional<std::string> metres_instead_of_mm(const Eigen::MatrixXd& positions_mm, const MdhModel& model,

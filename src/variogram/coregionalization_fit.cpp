@@ -12,6 +12,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 
+#include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
 #include "errfield/variogram_fit.hpp"
 
@@ -369,8 +370,9 @@ CoregionalizationTemplate parse_coregionalization_template(std::string_view text
         throw ArgumentError("LMC template '" + std::string(text) + "': " + e.what() + hint);
       }
       if (c.kind == ModelKind::Matern) {
-        if (!(nu > 0.0))
-          throw ArgumentError("LMC template '" + std::string(text) + "' has mat: give its smoothness nu (> 0)");
+        if (!(nu > 0.0 && nu <= kMaxMaternNu))
+          throw ArgumentError("LMC template '" + std::string(text) + "' has mat: give its smoothness nu, 0 < nu <= " +
+                              format_number(kMaxMaternNu) + (nu > 0.0 ? ", got " + format_number(nu) : std::string()));
         c.nu = nu;
       }
       t.structures.push_back(c);

@@ -153,8 +153,9 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
     throw ArgumentError("fit_variogram: the model structure has no non-nugget component; "
                         "expected e.g. sph, exp, gau, mat, pow or lin");
   for (const auto& c : structure)
-    if (c.kind == ModelKind::Matern && !(c.nu > 0.0 && std::isfinite(c.nu)))
-      throw ArgumentError("fit_variogram: Matérn nu = " + format_number(c.nu) + "; expected > 0");
+    if (c.kind == ModelKind::Matern && !(c.nu > 0.0 && c.nu <= kMaxMaternNu))
+      throw ArgumentError("fit_variogram: Matérn nu = " + format_number(c.nu) + "; expected 0 < nu <= " +
+                          format_number(kMaxMaternNu) + " (kMaxMaternNu: beyond it the model is gau's)");
 
   Problem pr;
   pr.weighting = options.weighting;

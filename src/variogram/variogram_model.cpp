@@ -14,8 +14,6 @@
 namespace errfield {
 namespace {
 
-constexpr double kMaxMaternNu = 100.0;
-
 constexpr ModelKind kAllKinds[] = {ModelKind::Nugget,   ModelKind::Spherical, ModelKind::Exponential,
                                    ModelKind::Gaussian, ModelKind::Matern,    ModelKind::Wendland,
                                    ModelKind::Power,    ModelKind::Linear};
@@ -40,7 +38,7 @@ void validate(const ModelComponent& c, std::size_t index) {
     case ModelKind::Matern:
       // Beyond nu = 100 Gamma(nu) and K_nu(r) leave double range for ordinary lags (and libstdc++'s
       // K_nu throws for huge nu); such a model is flat at every practical lag anyway.
-      if (!(c.nu > 0.0 && c.nu <= kMaxMaternNu)) fail("nu", c.nu, "0 < nu <= 100");
+      if (!(c.nu > 0.0 && c.nu <= kMaxMaternNu)) fail("nu", c.nu, "0 < nu <= " + format_number(kMaxMaternNu));
       [[fallthrough]];
     default:
       if (!(c.range > 0.0) || !std::isfinite(c.range)) fail("range", c.range, "a finite value > 0");

@@ -11,6 +11,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -288,6 +290,50 @@ TEST(OptionValues, NegativeCountsAreRefusedNotWrapped) {
   EXPECT_FALSE(fs::exists(dir.path() / "o.csv"));
 }
 
+// Issue 35: `plan --count -1` and `--seed -1` wrapped to 2^64 - 1 (CLI11 2.1 reads "-1" into an
+// unsigned option). Every command's every unsigned option (its help's type UINT) refuses "-1"
+// naming the option, so that one added later cannot miss the check.
+TEST(OptionValues, EveryUnsignedOptionOfEveryCommandRefusesANegativeValue) {
+  ScratchDir dir;
+  const auto top = run_errfield({"--help"}, dir.path());
+  ASSERT_EQ(top.exit_code, 0);
+  std::vector<std::string> commands;
+  {
+    std::istringstream lines(top.out.substr(top.out.find("Subcommands:")));
+    std::string line;
+    std::getline(lines, line);
+    while (std::getline(lines, line) && line.rfind("  ", 0) == 0) {
+      std::istringstream words(line);
+      std::string name;
+      if (words >> name) commands.push_back(name);
+    }
+  }
+  ASSERT_GT(commands.size(), 10u) << top.out;
+  std::size_t checked = 0;
+  std::set<std::string> seeds;
+  for (const auto& command : commands) {
+    const auto help = run_errfield({command, "--help"}, dir.path());
+    std::istringstream lines(help.out);
+    std::string line;
+    while (std::getline(lines, line)) {
+      std::istringstream words(line);
+      std::string option, type;
+      if (!(words >> option >> type) || option.rfind("--", 0) != 0 || type.rfind("UINT", 0) != 0) continue;
+      option = option.substr(0, option.find(','));
+      const auto r = run_errfield({command, option, "-1"}, dir.path());
+      EXPECT_EQ(r.exit_code, 2) << command << " " << option << " -1\n" << r.err;
+      // kUnsignedInteger's words, or those of a range check that comes first (--simulations).
+      EXPECT_THAT(r.err, AllOf(HasSubstr(option), AnyOf(HasSubstr("negative"), HasSubstr("not in range"))))
+          << command << " " << option;
+      ++checked;
+      if (option == "--seed") seeds.insert(command);
+    }
+  }
+  // plan's --count and the seeds of simulate, plan, cv, variogram, fit and reproduce at least.
+  EXPECT_GE(checked, 10u);
+  for (const char* c : {"plan", "simulate", "cv", "variogram", "reproduce"}) EXPECT_TRUE(seeds.count(c)) << c;
+}
+
 TEST(OptionValues, FitVariogramRangeMaxAndNu) {
   ScratchDir dir;
   dir.write("v.csv", "lag_lo,lag_hi,lag_mean,gamma,pairs\n0,1,0.5,0.1,10\n1,2,1.5,0.3,20\n2,3,2.5,0.45,30\n"
@@ -301,6 +347,15 @@ TEST(OptionValues, FitVariogramRangeMaxAndNu) {
   EXPECT_EQ(r.exit_code, 2) << r.output();
   EXPECT_THAT(r.err, AllOf(HasSubstr("--nu"), HasSubstr("mat")));
   r = run_errfield({"fit-variogram", "--input", "v.csv", "--model", "sph", "--range-max", "10"}, dir.path());
+  EXPECT_EQ(r.exit_code, 0) << r.output();
+  // Issue 35: a Matérn nu of 1e8 hung the WLS fit, 1e10 exited 70 (the Bessel function threw):
+  // nu beyond kMaxMaternNu (100) is refused naming --nu and the range, as for --lmc.
+  for (const char* nu : {"1e10", "1e8", "101"}) {
+    r = run_errfield({"fit-variogram", "--input", "v.csv", "--model", "mat", "--nu", nu}, dir.path());
+    EXPECT_EQ(r.exit_code, 2) << nu << ": " << r.output();
+    EXPECT_THAT(r.err, AllOf(HasSubstr("--nu"), HasSubstr("(0, 100]"))) << nu;
+  }
+  r = run_errfield({"fit-variogram", "--input", "v.csv", "--model", "mat", "--nu", "100"}, dir.path());
   EXPECT_EQ(r.exit_code, 0) << r.output();
 }
 

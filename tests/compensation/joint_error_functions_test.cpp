@@ -206,6 +206,31 @@ TEST(JointErrorFunctions, JsonRoundTripAndRefusals) {
   j = f.to_json();
   j["lo_deg"] = "wide";
   refused(j, "joint_error_functions.lo_deg");
+  // Issue 35: integers beyond 32 bits were read modulo 2^32 (degree 4294967304 as 8), and joint
+  // functions of any size were taken (1e5 mrad moved the tool 297 mm, status ok).
+  j = f.to_json();
+  j["degree"] = 4294967298ULL;  // 2^32 + 2: would be read as 2, which matches the coefficients
+  refused(j, "joint_error_functions.degree\": expected an integer 1..20, got 4294967298");
+  j = f.to_json();
+  j["degree"] = 2.0;
+  refused(j, "joint_error_functions.degree");
+  j = f.to_json();
+  j["coefficients_mrad"][4] = {600.0, -600.0};  // 600 P1 - 600 P2: 1200 mrad at u = -1 (joint 5)
+  refused(j, "joint_error_functions.coefficients_mrad\"[4]: angle errors up to 1200 mrad");
+  j = f.to_json();
+  j["coefficients_mrad"][4] = {400.0, -400.0};  // 800 mrad: absurd for a robot, but within the limit
+  EXPECT_NO_THROW(JointErrorFunctions::from_json(j, "m.json"));
+  // Gravity terms: joint and frame read range-checked, the scale and the coefficient credible.
+  JointErrorFunctions g = f;
+  g.gravity_terms = {GravityLoadTerm{1, 4, 0.8, 0.3}};
+  EXPECT_EQ(JointErrorFunctions::from_json(g.to_json(), "m.json").gravity_terms.size(), 1u);
+  const std::pair<const char*, nlohmann::json> bad_terms[] = {
+      {"joint", 4294967298ULL}, {"frame", 4294967300ULL}, {"scale_m", 1e-300}, {"scale_m", 1e9}, {"coefficient_mrad", 1e5}};
+  for (const auto& [key, value] : bad_terms) {
+    j = g.to_json();
+    j["gravity_terms"][0][key] = value;
+    refused(j, std::string("joint_error_functions.gravity_terms\"[0].") + key);
+  }
   EXPECT_THROW(fit_joint_error_functions(robot_with_tool(), random_poses(3, 1), std::vector<Eigen::Vector3d>(2), 2),
                ArgumentError);
   EXPECT_THROW(fit_joint_error_functions(robot_with_tool(), random_poses(3, 1), std::vector<Eigen::Vector3d>(3), 0),
@@ -263,6 +288,26 @@ TEST(JointErrorFunctions, CoefficientCovarianceIsTheSandwichUnderTheCentredField
   nlohmann::json j = fit.functions.to_json();
   j["coefficient_covariance_mrad2"][2][2] = -1.0;
   EXPECT_THROW(JointErrorFunctions::from_json(j, "m.json"), InputError);
+  // Issue 35: a positive diagonal is not enough. Indefinite (a correlation of 3 between two
+  // coefficients: var_mm2 of -823,050 came out with status ok), asymmetric and huge are refused.
+  const auto edited = [&](auto change) {
+    nlohmann::json e = fit.functions.to_json();
+    change(e["coefficient_covariance_mrad2"]);
+    return e;
+  };
+  refused(edited([](nlohmann::json& c) {
+            const double s = std::sqrt(c[0][0].get<double>() * c[1][1].get<double>());
+            c[0][1] = c[1][0] = 3.0 * s;
+          }),
+          "coefficient_covariance_mrad2\": not positive semi-definite");
+  refused(edited([](nlohmann::json& c) { c[0][1] = c[0][1].get<double>() + 1.0; }),
+          "coefficient_covariance_mrad2\": not symmetric: [1][0]");
+  refused(edited([](nlohmann::json& c) {
+            for (std::size_t r = 0; r < c.size(); ++r)
+              for (std::size_t k = 0; k < c.size(); ++k) c[r][k] = c[r][k].get<double>() * 1e18;
+          }),
+          "coefficient_covariance_mrad2\"[");
+  refused(edited([](nlohmann::json& c) { c[3][3] = 1e300; }), "coefficient_covariance_mrad2\"[3][3]: variance 1e+300");
 }
 
 // The generalized least squares refit against the GLS written out with the full 3N x 3N covariance:

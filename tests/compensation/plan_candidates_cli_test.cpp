@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "errfield/csv_table.hpp"
+#include "errfield/robot/builtin_robots.hpp"
 #include "support/cli_harness.hpp"
 
 namespace errfield {
@@ -192,6 +193,108 @@ TEST_F(PlanCandidates, MisuseIsRefusedNamingTheOption) {
   const auto k = run("plan --candidates pool.csv --count 5 --model k.json --data measured.csv --out n.csv");
   EXPECT_EQ(k.exit_code, 2) << k.err;
   EXPECT_NE(k.err.find("no error field"), std::string::npos) << k.err;
+}
+
+// Issue 35: poses measured already (data without a point column) or repeated in the pool were
+// chosen again, and --count -1 wrapped to 2^64 - 1. Joints match exactly as read.
+TEST_F(PlanCandidates, MeasuredAndRepeatedPosesAreNeverChosenAgain) {
+  make_pool(40);
+  take_rows("all.csv", "pool.csv", 1, 41);
+  // The first 20 pool poses measured, written without their point labels.
+  rewrite("all.csv", "measured.csv", [](const CsvTable&, std::size_t, std::vector<std::string>&) {},
+          [](const std::string& c) { return c != "point"; }, [](std::size_t i) { return i >= 1 && i < 21; });
+  const auto r = run("plan --robot r.json --candidates pool.csv --count 15 --data measured.csv --out next.csv");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("20 pool row(s) have the joints of a pose in measured.csv"), std::string::npos) << r.err;
+  const auto all = points("pool.csv");
+  const std::set<std::string> measured(all.begin(), all.begin() + 20);
+  for (const auto& p : points("next.csv")) EXPECT_FALSE(measured.count(p)) << p << " was measured already";
+  // 20 poses are left: 25 cannot be chosen without repeating measured ones (before: 5 were).
+  const auto over = run("plan --robot r.json --candidates pool.csv --count 25 --data measured.csv --out over.csv");
+  EXPECT_EQ(over.exit_code, 2) << over.err;
+  EXPECT_NE(over.err.find("--count: 25 poses asked, but 20 of the 40 candidates"), std::string::npos) << over.err;
+  EXPECT_FALSE(std::filesystem::exists(path("over.csv")));
+  // A pool whose row 3 comes four more times (other labels): never chosen twice.
+  std::string text = read("pool.csv");
+  const CsvTable pool = CsvTable::read(path("pool.csv"));
+  for (int copy = 0; copy < 4; ++copy) {
+    std::vector<std::string> row = pool.row(2);
+    row[pool.column_index("point")] = "copy" + std::to_string(copy);
+    std::string line;
+    for (const auto& c : row) line += (line.empty() ? "" : ",") + c;
+    text += line + "\n";
+  }
+  write("repeats.csv", text);
+  const auto d = run("plan --robot r.json --candidates repeats.csv --count 44 --out d.csv");
+  EXPECT_EQ(d.exit_code, 2) << d.err;
+  EXPECT_NE(d.err.find("4 repeat an earlier candidate"), std::string::npos) << d.err;
+  const auto e = run("plan --robot r.json --candidates repeats.csv --count 40 --out e.csv");
+  ASSERT_EQ(e.exit_code, 0) << e.err;
+  EXPECT_NE(e.err.find("4 pool row(s) repeat the joints of an earlier row and were left out (repeats.csv:42"),
+            std::string::npos)
+      << e.err;
+  const auto chosen = points("e.csv");
+  EXPECT_EQ(std::set<std::string>(chosen.begin(), chosen.end()).size(), 40u);
+  for (const auto& p : chosen) EXPECT_NE(p.rfind("copy", 0), 0u) << p;
+  // Negative counts are refused, not wrapped.
+  const auto neg = run("plan --robot r.json --candidates pool.csv --count -1 --out neg.csv");
+  EXPECT_EQ(neg.exit_code, 2) << neg.err;
+  EXPECT_NE(neg.err.find("--count"), std::string::npos) << neg.err;
+  EXPECT_NE(neg.err.find("negative"), std::string::npos) << neg.err;
+}
+
+// Issue 35: hand-edited models crashed plan (a coefficient covariance x1e18, a gravity scale of
+// 1e-300: heap corruption) or planned in silence for another robot (its pool, --robot, a swapped
+// command model); `plan --out X > /dev/full` replaced X, then exited 1.
+TEST_F(PlanCandidates, HandEditedModelsAnotherRobotAndAFullStandardOutputAreRefused) {
+  make_pool(40);
+  take_rows("all.csv", "pool.csv", 1, 41);
+  take_rows("all.csv", "measured.csv", 1, 31);
+  ASSERT_EQ(run("fit --robot r.json --data measured.csv --out m.json").exit_code, 0);
+  const nlohmann::json m = nlohmann::json::parse(read("m.json"));
+  ASSERT_TRUE(m["joint_error_functions"].contains("gravity_terms"));
+  auto refused = [&](const std::string& line, const std::string& word) {
+    const auto r = run(line);
+    EXPECT_EQ(r.signal, 0) << line;
+    EXPECT_EQ(r.exit_code, 2) << line << "\n" << r.err;
+    EXPECT_NE(r.err.find(word), std::string::npos) << line << "\n" << r.err;
+    EXPECT_FALSE(std::filesystem::exists(path("n.csv"))) << line;
+  };
+  nlohmann::json scaled = m;
+  for (auto& row : scaled["joint_error_functions"]["coefficient_covariance_mrad2"])
+    for (auto& v : row) v = v.get<double>() * 1e18;
+  write("scaled.json", scaled.dump());
+  refused("plan --candidates pool.csv --count 5 --model scaled.json --data measured.csv --out n.csv",
+          "scaled.json: member \"joint_error_functions.coefficient_covariance_mrad2\"");
+  nlohmann::json tiny = m;
+  tiny["joint_error_functions"]["gravity_terms"][0]["scale_m"] = 1e-300;
+  write("tiny.json", tiny.dump());
+  refused("plan --candidates pool.csv --count 5 --model tiny.json --data measured.csv --out n.csv",
+          "gravity_terms\"[0].scale_m");
+  // A UR5e's command model inside this KR16 model.
+  nlohmann::json swapped = m;
+  swapped["command_model"] = robot::find_builtin_robot("ur5e")->model.to_json();
+  write("swapped.json", swapped.dump());
+  refused("plan --candidates pool.csv --count 5 --model swapped.json --data measured.csv --out n.csv",
+          "member \"command_model\" ('UR5e') is not a calibration of the \"nominal_model\"");
+  refused("plan --robot ur5e --candidates pool.csv --count 5 --model m.json --data measured.csv --out n.csv",
+          "--robot ur5e is not the robot of --model m.json");
+  // Another robot's poses (measured, within both robots' joint limits) as the pool.
+  ASSERT_EQ(run("simulate --robot ur5e --seed 6 --sample scattered:12 --joint-box " + std::string(kBox) +
+                " --measure positions --out ur.csv")
+                .exit_code,
+            0);
+  take_rows("ur.csv", "ur_pool.csv", 1, 13);
+  refused("plan --robot r.json --candidates ur_pool.csv --count 5 --out n.csv", "ur_pool.csv");
+  refused("plan --candidates ur_pool.csv --count 5 --model m.json --data measured.csv --out n.csv", "ur_pool.csv");
+  // All or nothing with a standard output that cannot be written.
+  write("n.csv", "previous\n");
+  const auto full = errfield::testing::run_errfield_to_full_stdout(
+      {"plan", "--robot", path("r.json"), "--candidates", path("pool.csv"), "--count", "5", "--out", path("n.csv")}, dir());
+  ASSERT_EQ(full.signal, 0);
+  EXPECT_EQ(full.exit_code, 1) << full.err;
+  EXPECT_NE(full.err.find("cannot write to standard output"), std::string::npos) << full.err;
+  EXPECT_EQ(read("n.csv"), "previous\n") << "a run that failed replaced its output";
 }
 
 TEST_F(PlanCandidates, PredictedRmsHoldsOnHeldOutPoses) {

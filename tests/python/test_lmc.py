@@ -80,5 +80,9 @@ def test_fit_lmc_fits_ranges_and_rejects_misuse():
         errfield.fit_lmc(v, "nug+pow")
     with pytest.raises(errfield.ArgumentError, match="goulard-voltz or gstat"):
         errfield.fit_lmc(v, "nug(0)+sph(1,300)", method="fast")
+    # Issue 35: a Matern nu of 1e8 hung the fit and 1e10 threw from the Bessel function.
+    for nu in (1e10, 1e8, 101.0):
+        with pytest.raises(errfield.ArgumentError, match="0 < nu <= 100"):
+            errfield.fit_lmc(v, "nug+mat", nu=nu)
     with pytest.raises(errfield.ArgumentError, match="at least 2 components"):
         errfield.cross_variogram(x, z[:, :1], np.arange(0.0, 451.0, 50.0))

@@ -277,5 +277,13 @@ def test_plan_matches_cli(tmp_path):
     assert "at least 0.7" in second["design"] and "at least" not in free["design"]
     with pytest.raises(errfield.ArgumentError, match="count"):
         errfield.plan(pool, count=0)
+    # Issue 35: more poses than the pool has were clamped in silence; a repeated pose counts once.
+    n = len(pool["q1"])
+    with pytest.raises(errfield.ArgumentError, match=f"count: {n + 1} poses asked, but {n} of the {n}"):
+        errfield.plan(pool, count=n + 1)
+    twice = {k: np.concatenate([v, v[:3]]) for k, v in pool.items() if k.startswith("q")}
+    with pytest.raises(errfield.ArgumentError, match="3 repeat an earlier candidate"):
+        errfield.plan(twice, count=n + 1)
+    assert sorted(errfield.plan(twice, count=n)["chosen"]) == list(range(n))
     with pytest.raises(errfield.ArgumentError, match="spacing_floor"):
         errfield.plan(pool, count=5, model=loaded, measured=measured, spacing_floor=1.0)

@@ -61,6 +61,19 @@ struct JointFunctionPrediction {
   Eigen::Vector3d axis_variance_mm2 = Eigen::Vector3d::Zero();
 };
 
+/// The credible range of what a model file may hold (JointErrorFunctions::from_json refuses beyond
+/// it, naming the member): a joint error function (its largest value over the fitted range) or a
+/// gravity coefficient up to a radian (about 57°; real joint errors are a few mrad), a coefficient
+/// variance up to 1e12 mrad² (the ridge leaves a barely-seen coefficient a large variance: about
+/// 1e5 mrad² on a 40-pose fit; this bound only refuses what no fit writes), and a gravity term's
+/// lever scale (`scale_m`, fit writes the lever's RMS over its poses) from 0.1 mm to 1 km. A
+/// hand-edited 1e5 mrad moved the tool 297 mm with status ok; a scale of 1e-300 or a covariance of
+/// 1e300 overflowed plan's updates.
+inline constexpr double kMaxCredibleAngleErrorMrad = 1000.0;
+inline constexpr double kMaxCoefficientVarianceMrad2 = 1e12;
+inline constexpr double kMinGravityScaleM = 1e-4;
+inline constexpr double kMaxGravityScaleM = 1e3;
+
 /// One gravity-load term: joint `joint`'s deflection proportional to the gravity lever about its
 /// axis of the origin of KinematicFrames::frames[frame] (7: the tool point).
 struct GravityLoadTerm {

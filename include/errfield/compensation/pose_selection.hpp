@@ -62,13 +62,20 @@ struct PoseSelection {
   std::optional<std::size_t> poses_for_target;
   std::size_t conditioned_on = 0;  ///< measured poses the model-based choice was conditioned on
   std::size_t region_extending = 0;  ///< model-based: how many of `chosen` (the first) extend the region
+  /// Candidates never chosen because their joints equal (exactly, as read) an earlier candidate's
+  /// (`repeated`) or a measured pose's (`already_measured`): a pool with one pose five times had it
+  /// chosen five times, and a pool holding the poses of measured data without a point label had 39
+  /// measured poses chosen again. Indices into the candidates, ascending.
+  std::vector<std::size_t> repeated, already_measured;
 };
 
-/// Chooses `options.count` of `candidates` (joints, deg). `measured` are the poses measured so far
-/// (excluded from nothing here - the caller drops pool rows already measured - but conditioned on
-/// and kept away from). `model` may be null (maximin); with a model, its field must be vector
-/// kriging (ArgumentError naming the method otherwise; a `kinematic` model has no field to plan
-/// for) and the field's own training poses are conditioned on too.
+/// Chooses `options.count` of `candidates` (joints, deg), each distinct pose at most once. `measured`
+/// are the poses measured so far: conditioned on, kept away from, and never chosen (a candidate
+/// whose joints equal a measured pose's is left out; PoseSelection::already_measured). `model` may
+/// be null (maximin); with a model, its field must be vector kriging (ArgumentError naming the
+/// method otherwise; a `kinematic` model has no field to plan for) and the field's own training
+/// poses are conditioned on too. ArgumentError naming PoseSelectionOptions::count when fewer
+/// distinct candidates are left than `count` (never fewer chosen in silence).
 PoseSelection select_poses(const std::vector<robot::JointVector>& candidates,
                            const std::vector<robot::JointVector>& measured, const CompensationModel* model,
                            const PoseSelectionOptions& options);

@@ -27,6 +27,19 @@ namespace errfield::robot {
 /// Reach scale of a model: sum over links of |a| + |d| (mm). 2478 mm for the ER20-C10.
 double reach_scale_mm(const MdhModel& model);
 
+/// How far a calibration may move an MD-H parameter from the nominal robot's and still be a
+/// calibration of that robot: lengths (a, d) by kMaxCalibrationLengthChangeMm, angles (alpha,
+/// theta0, beta) by kMaxCalibrationAngleChangeDeg. Real corrections are millimetres and tenths of a
+/// degree; another robot's table differs by hundreds of millimetres or by 90 degrees.
+inline constexpr double kMaxCalibrationLengthChangeMm = 50.0;
+inline constexpr double kMaxCalibrationAngleChangeDeg = 10.0;
+
+/// Why `other` is not a calibration of (or the same robot as) `nominal`, naming the first link
+/// parameter that differs beyond the limits above (base and tool are free: a registration and a
+/// tool or reflector), or nothing. A model whose command_model was swapped for another robot's
+/// (a UR5e inside a KR16 model) gave 126/126 rows ok, 1,066 mm off.
+std::optional<std::string> differs_beyond_calibration(const MdhModel& nominal, const MdhModel& other);
+
 /// A warning when every position (rows of `positions_mm`, columns x, y, z in the model's world
 /// frame) lies within reach_scale_mm(model) / 100 of both the world origin and the robot base
 /// (25 mm for the ER20-C10): no real robot measures all its poses there, while metres read as
