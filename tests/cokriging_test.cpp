@@ -131,7 +131,7 @@ Reference bordered_cokriging(const std::vector<Point>& x, const Eigen::MatrixXd&
       if (!std::isnan(z(i, u))) keep.push_back(u * n + i);
   const auto measured = static_cast<Eigen::Index>(keep.size());
   for (int k = n * p; k < size; ++k) keep.push_back(k);
-  const Eigen::MatrixXd kept_rhs = rhs(keep, Eigen::placeholders::all);
+  const Eigen::MatrixXd kept_rhs = rhs(keep, Eigen::all);
   const Eigen::MatrixXd sol = Eigen::MatrixXd(a(keep, keep)).fullPivLu().solve(kept_rhs);
   Eigen::VectorXd zz(measured);
   for (Eigen::Index k = 0; k < measured; ++k) {
