@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -79,7 +80,8 @@ std::vector<V> some_values(const std::vector<Point>& x) {
 
 // The cokriging system written out, ordered component-major (row a*N + i: component a at sample
 // i; the engine orders sample-major), with the drift as explicit columns of a bordered matrix,
-// solved by LU. Returns the mean (P) and the prediction error covariance (P x P).
+// solved by LU. Returns the mean (P) and the prediction error covariance (P x P). A NaN in z (a
+// component not measured at a sample) removes that row and column from the system.
 struct Reference {
   Eigen::VectorXd mean;
   Eigen::MatrixXd cov;
@@ -124,14 +126,23 @@ Reference bordered_cokriging(const std::vector<Point>& x, const Eigen::MatrixXd&
   const std::vector<double> f0 = drift(x0);
   for (int v = 0; v < p; ++v)
     for (int k = 0; k < t; ++k) rhs(n * p + v * t + k, v) = f0[static_cast<std::size_t>(k)];
-  const Eigen::MatrixXd sol = a.fullPivLu().solve(rhs);
-  Eigen::VectorXd zz(n * p);
+  std::vector<int> keep;
   for (int u = 0; u < p; ++u)
-    for (int i = 0; i < n; ++i) zz[u * n + i] = z(i, u) - (kind == KrigingKind::Simple ? simple_mean[u] : 0.0);
+    for (int i = 0; i < n; ++i)
+      if (!std::isnan(z(i, u))) keep.push_back(u * n + i);
+  const auto measured = static_cast<Eigen::Index>(keep.size());
+  for (int k = n * p; k < size; ++k) keep.push_back(k);
+  const Eigen::MatrixXd kept_rhs = rhs(keep, Eigen::all);
+  const Eigen::MatrixXd sol = Eigen::MatrixXd(a(keep, keep)).fullPivLu().solve(kept_rhs);
+  Eigen::VectorXd zz(measured);
+  for (Eigen::Index k = 0; k < measured; ++k) {
+    const int u = keep[static_cast<std::size_t>(k)] / n, i = keep[static_cast<std::size_t>(k)] % n;
+    zz[k] = z(i, u) - (kind == KrigingKind::Simple ? simple_mean[u] : 0.0);
+  }
   Reference r;
-  r.mean = sol.topRows(n * p).transpose() * zz;
+  r.mean = sol.topRows(measured).transpose() * zz;
   if (kind == KrigingKind::Simple) r.mean += simple_mean;
-  r.cov = signal_zero - sol.transpose() * rhs;
+  r.cov = signal_zero - sol.transpose() * kept_rhs;
   return r;
 }
 
@@ -195,6 +206,135 @@ TEST(Cokriging, MeasurementErrorNuggetMatchesTheBorderedSystem) {
   expect_matches_bordered_system<Eigen::Vector2d>(KrigingKind::Simple, 0, true, KrigingBackend::Dense);
   expect_matches_bordered_system<Eigen::Vector3d>(KrigingKind::Ordinary, 0, true, KrigingBackend::Dense);
   expect_matches_bordered_system<Eigen::Vector2d>(KrigingKind::Ordinary, 0, true, KrigingBackend::Local);
+}
+
+// Heterotopic data: each component missing at its own samples (about 40 % of the second's, 25 %
+// of the third's), never all at one sample.
+template <class V>
+std::vector<V> with_gaps(std::vector<V> values, std::uint64_t seed) {
+  Gaussian g{seed};
+  for (V& v : values)
+    for (int c = 1; c < ValueTraits<V>::kComponents; ++c)
+      if (g.uniform() < (c == 1 ? 0.4 : 0.25)) v[c] = std::numeric_limits<double>::quiet_NaN();
+  return values;
+}
+
+TEST(Cokriging, HeterotopicMatchesTheBorderedSystemWithoutTheMissingRows) {
+  const auto x = scattered_points(14, 100.0, 21);
+  const std::vector<Point> targets{{50, 50}, {10, 90}, {120, -10}, x[3], x[5]};
+  const auto check = [&]<class V>(KrigingKind kind, int drift_order, KrigingBackend backend) {
+    constexpr int P = ValueTraits<V>::kComponents;
+    const auto values = with_gaps(some_values<V>(x), 22);
+    const CoregionalizationModel model = heterogeneous_model(P);
+    KrigingOptions o;
+    o.kind = kind;
+    o.drift_order = drift_order;
+    o.backend = backend;
+    o.neighbors = backend == KrigingBackend::Local ? x.size() : 0;
+    const Eigen::VectorXd mean = Eigen::VectorXd::LinSpaced(P, -0.2, 0.4);
+    if (kind == KrigingKind::Simple) o.simple_mean.assign(mean.data(), mean.data() + P);
+    const auto pred = Cokriging<Point, V>(x, values, model, o).predict(targets);
+    ASSERT_TRUE(pred.usable()) << pred.message;
+    for (std::size_t t = 0; t < targets.size(); ++t) {
+      const Reference r = bordered_cokriging(x, as_matrix(values), model, targets[t], kind, drift_order, mean, false);
+      // O(1) values and sills, backward-stable solves of systems of ~30 unknowns: rounding only.
+      EXPECT_LT((pred.mean[t] - r.mean).cwiseAbs().maxCoeff(), 1e-10) << kriging_kind_name(kind) << ", target " << t;
+      EXPECT_LT((pred.covariance[t] - r.cov).cwiseAbs().maxCoeff(), 1e-10) << kriging_kind_name(kind) << ", target " << t;
+    }
+  };
+  for (KrigingBackend backend : {KrigingBackend::Dense, KrigingBackend::Local}) {
+    check.template operator()<Eigen::Vector2d>(KrigingKind::Ordinary, 0, backend);
+    check.template operator()<Eigen::Vector3d>(KrigingKind::Ordinary, 0, backend);
+    check.template operator()<Eigen::Vector3d>(KrigingKind::Simple, 0, backend);
+    check.template operator()<Eigen::Vector2d>(KrigingKind::Universal, 1, backend);
+  }
+}
+
+// With the secondary everywhere the data are isotopic, and the engine builds the same rows for
+// them (the bordered-system tests above); with the secondary nowhere, ordinary cokriging of the
+// primary is ordinary kriging with the primary's direct variogram.
+TEST(Cokriging, HeterotopicWithTheSecondaryNowhereIsKrigingOfThePrimary) {
+  const auto x = scattered_points(30, 100.0, 31);
+  const auto targets = scattered_points(12, 110.0, 32);
+  const CoregionalizationModel lmc = heterogeneous_model(2);
+  const auto full = some_values<Eigen::Vector2d>(x);
+  // The primary's own variogram: the (0, 0) entries of the LMC's structures.
+  const VariogramModel primary = VariogramModel::parse("nug(0.05)+sph(sill=1,range=40)+exp(sill=0.3,range=15)");
+  std::vector<double> primary_values;
+  auto alone = full;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    primary_values.push_back(full[i][0]);
+    alone[i][1] = std::numeric_limits<double>::quiet_NaN();
+  }
+  for (KrigingBackend backend : {KrigingBackend::Dense, KrigingBackend::Local}) {
+    KrigingOptions o;
+    o.backend = backend;
+    o.neighbors = backend == KrigingBackend::Local ? 12 : 0;
+    const auto none = Cokriging<Point, Eigen::Vector2d>(x, alone, lmc, o).predict(targets);
+    const auto ok = Kriging<Point, double>(x, primary_values, primary, o).predict(targets);
+    ASSERT_TRUE(none.usable() && ok.usable()) << none.message;
+    for (std::size_t t = 0; t < targets.size(); ++t) {
+      EXPECT_NEAR(none.mean[t][0], ok.mean[t], 1e-10) << "target " << t;
+      EXPECT_NEAR(none.variance(t, 0), ok.variance[t], 1e-10) << "target " << t;
+      // No secondary anywhere: ordinary cokriging has no unbiased predictor of it.
+      EXPECT_TRUE(std::isnan(none.mean[t][1])) << "target " << t;
+      EXPECT_TRUE(std::isnan(none.covariance[t](1, 1))) << "target " << t;
+    }
+  }
+  // Simple cokriging (known means) predicts the secondary from the primary alone: the simple
+  // kriging of the secondary by the cross-covariance, whose variance is sill - c' K^-1 c.
+  KrigingOptions simple;
+  simple.kind = KrigingKind::Simple;
+  const auto s = Cokriging<Point, Eigen::Vector2d>(x, alone, lmc, simple).predict(targets);
+  ASSERT_TRUE(s.usable());
+  for (std::size_t t = 0; t < targets.size(); ++t) EXPECT_TRUE(std::isfinite(s.mean[t][1]) && s.variance(t, 1) > 0.0);
+}
+
+TEST(Cokriging, HeterotopicLeaveOneOutEqualsRefittingWithoutTheSample) {
+  const auto x = scattered_points(20, 100.0, 41);
+  const auto values = with_gaps(some_values<Eigen::Vector2d>(x), 42);
+  const CoregionalizationModel model = heterogeneous_model(2);
+  KrigingOptions o;
+  const auto cv = Cokriging<Point, Eigen::Vector2d>(x, values, model, o).leave_one_out();
+  KrigingOptions local = o;
+  local.backend = KrigingBackend::Local;
+  local.neighbors = x.size();
+  const auto lcv = Cokriging<Point, Eigen::Vector2d>(x, values, model, local).leave_one_out();
+  std::size_t gaps = 0;
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    std::vector<Point> xs = x;
+    std::vector<Eigen::Vector2d> vs = values;
+    xs.erase(xs.begin() + static_cast<std::ptrdiff_t>(i));
+    vs.erase(vs.begin() + static_cast<std::ptrdiff_t>(i));
+    const auto p = Cokriging<Point, Eigen::Vector2d>(xs, vs, model, o).predict(std::vector<Point>{x[i]});
+    for (int a = 0; a < 2; ++a) {
+      if (std::isnan(values[i][a])) {
+        ++gaps;
+        EXPECT_TRUE(std::isnan(cv.residual[i][a]) && std::isnan(lcv.residual[i][a])) << "sample " << i;
+        continue;
+      }
+      EXPECT_NEAR(cv.prediction[i][a], p.mean[0][a], 1e-9) << "sample " << i << ", component " << a;
+      EXPECT_NEAR(lcv.prediction[i][a], p.mean[0][a], 1e-9) << "sample " << i << ", component " << a;
+      EXPECT_NEAR(cv.covariance[i](a, a), p.covariance[0](a, a), 1e-9) << "sample " << i << ", component " << a;
+    }
+  }
+  EXPECT_GT(gaps, 3u);
+  EXPECT_TRUE(std::isfinite(cv.rms_error) && cv.rms_error > 0.0);
+}
+
+TEST(Cokriging, HeterotopicRefusesASampleWithNothingMeasured) {
+  const auto x = scattered_points(10, 100.0, 51);
+  auto values = some_values<Eigen::Vector2d>(x);
+  values[6].setConstant(std::numeric_limits<double>::quiet_NaN());
+  try {
+    Cokriging<Point, Eigen::Vector2d>(x, values, heterogeneous_model(2));
+    FAIL() << "no exception";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("sample 6 has no measured component"), std::string::npos) << e.what();
+  }
+  values[6][0] = 1.0;
+  values[6][1] = std::numeric_limits<double>::infinity();
+  EXPECT_THROW((Cokriging<Point, Eigen::Vector2d>(x, values, heterogeneous_model(2))), InputError);
 }
 
 TEST(Cokriging, IntrinsicModelGivesKrigingWithTheSharedModel) {

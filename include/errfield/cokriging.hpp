@@ -6,10 +6,19 @@
 /// differently at different ranges: Kriging then uses one shared variogram for every component
 /// and ignores the cross-covariances; cokriging lets a component borrow from the others.
 ///
-/// Isotopic data only: every component is observed at every sample. Each component's value at a
-/// target is a linear combination of all components at all (or the k nearest) samples; the NP x NP
-/// system has the P x P blocks C(h_ij) of the model. The system and its variance are in
-/// docs/kriging.md ("Cokriging").
+/// Each component's value at a target is a linear combination of all components at all (or the k
+/// nearest) samples; the NP x NP system has the P x P blocks C(h_ij) of the model. The system and
+/// its variance are in docs/kriging.md ("Cokriging").
+///
+/// Heterotopic data: a component that was not measured at a sample is NaN there (gstat's separate
+/// data sets per variable, e.g. the secondary at 60 % of the primary's locations). The system then
+/// has one row per measured (sample, component) only, so a sample with fewer components gives fewer
+/// rows; a sample needs at least one measured component. Ordinary and universal cokriging keep one
+/// unbiasedness condition per component (the weights of the predicted component sum to 1, of each
+/// other component to 0, as gstat); a component measured at none of the samples used (all of them,
+/// or the local back end's neighbours) cannot be predicted there: its mean and covariance entries
+/// are NaN, while the other components are predicted as if it did not exist. In leave-one-out, a
+/// component not measured at the left-out sample has NaN prediction, residual and covariance.
 ///
 /// Options are KrigingOptions; what cokriging supports of them:
 ///   - kind: Simple (known mean per component, simple_mean: empty = 0, 1 entry for all or one per
@@ -143,7 +152,8 @@ class Cokriging {
  public:
   static constexpr int kComponents = ValueTraits<V>::kComponents;
 
-  /// samples: N locations; values: N values of P = kComponents components each.
+  /// samples: N locations; values: N values of P = kComponents components each, NaN where a
+  /// component was not measured (at least one measured per sample; InputError otherwise).
   Cokriging(std::span<const L> samples, std::span<const V> values, const CoregionalizationModel& model,
             const KrigingOptions& options = {}, const M& metric = {})
       : scales_(EuclideanEmbedding<M>::scales(metric)), anisotropy_(model.anisotropy()) {
@@ -168,9 +178,9 @@ class Cokriging {
     for (std::size_t i = 0; i < values.size(); ++i)
       for (int c = 0; c < kComponents; ++c) {
         const double v = ValueTraits<V>::component(values[i], c);
-        if (!std::isfinite(v))
+        if (std::isinf(v))
           throw InputError("cokriging: value of sample " + std::to_string(i) + " (component " + std::to_string(c) +
-                           ") is " + std::to_string(v) + "; expected a finite number");
+                           ") is " + std::to_string(v) + "; expected a finite number (or NaN where not measured)");
         z(static_cast<Eigen::Index>(i), c) = v;
       }
     Eigen::MatrixXd embedded = detail::cokriging_embedding(raw, scales_, anisotropy_);
@@ -209,13 +219,14 @@ class Cokriging {
       cv.prediction.push_back(row_value(out.mean, i));
       cv.residual.push_back(row_value(out.residual, i));
       cv.covariance.push_back(row_matrix(out.covariance, i));
-      const double norm2 = out.residual.row(i).squaredNorm();
-      if (!std::isfinite(norm2)) continue;
+      // Components not measured at sample i (NaN residual) do not count.
+      const double norm2 = out.residual.row(i).unaryExpr([](double r) { return std::isnan(r) ? 0.0 : r; }).squaredNorm();
+      if (!std::isfinite(norm2) || out.residual.row(i).array().isNaN().all()) continue;
       sum_sq += norm2;
       max_abs = std::max(max_abs, std::sqrt(norm2));
       for (int c = 0; c < kComponents; ++c) {
         const double v = cv.covariance.back()(c, c);
-        if (v > 0.0) {
+        if (v > 0.0 && !std::isnan(out.residual(i, c))) {
           z2 += out.residual(i, c) * out.residual(i, c) / v;
           ++z_count;
         }

@@ -440,6 +440,10 @@ void run_lmc_fit(const FitVariogramArgs& a) {
                            a.input, 0, name);
         col[i][j] = col[j][i] = t.column_index(name);
       }
+    if (t.has_column("pairs_" + names[0]))
+      throw InputError(a.input + ": column 'pairs_" + names[0] + "': the variograms of heterotopic data (each over its "
+                           "own pairs and lags); --lmc fits one lag and pair count per bin and does not fit these yet",
+                       a.input, 0, "pairs_" + names[0]);
     for (const char* label : {"direction", "dip", "coordinate"})
       if (t.has_column(label))
         throw InputError(a.input + ": column '" + label + "': a directional variogram; --lmc fits one isotropic LMC",

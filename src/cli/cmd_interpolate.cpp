@@ -9,6 +9,7 @@
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
 #include "cli/interpolation_methods.hpp"
+#include "cli/value_cells.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
 
@@ -82,7 +83,9 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
   r.samples = &samples;
   r.targets = &targets;
   r.sample_coords = samples.numeric_columns(r.coord_columns);
-  r.sample_values = samples.numeric_columns(r.value_columns);
+  r.sample_values = method.takes_missing_values && method.takes_missing_values()
+                        ? numeric_columns_with_gaps(samples, r.value_columns)
+                        : samples.numeric_columns(r.value_columns);
   r.target_coords = targets.numeric_columns(r.coord_columns);
   r.sample_labels = row_labels_of(samples, "sample");
   r.target_labels = row_labels_of(targets, "target");

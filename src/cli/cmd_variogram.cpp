@@ -9,7 +9,9 @@
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
+#include "cli/value_cells.hpp"
 #include "errfield/empirical_variogram.hpp"
+#include "errfield/heterotopic_variogram.hpp"
 #include "errfield/error.hpp"
 #include "errfield/trend_residuals.hpp"
 #include "errfield/variogram_direction.hpp"
@@ -148,7 +150,12 @@ void run_variogram(const VariogramArgs& a) {
                      a.input);
   const std::vector<DirectionalRun> runs = directions(a, coord_names);
   const Eigen::MatrixXd x = table.numeric_columns(coord_names);
-  Eigen::MatrixXd z = table.numeric_columns(value_names);
+  // With 2 or more --value columns an empty cell is that column not measured there (heterotopic
+  // data); each variogram is then over its own pairs. One column, or the trend of --covariates
+  // (which needs every value), keeps refusing empty cells.
+  Eigen::MatrixXd z = a.covariates.empty() && value_names.size() >= 2 ? numeric_columns_with_gaps(table, value_names)
+                                                                      : table.numeric_columns(value_names);
+  const bool heterotopic = z.array().isNaN().any();
   if (!a.covariates.empty()) {
     // gstat's variogram(z ~ cov): the variogram of the residuals of the ordinary least-squares trend.
     const auto covariate_names = split_column_list(a.covariates, "--covariates");
@@ -162,11 +169,22 @@ void run_variogram(const VariogramArgs& a) {
   std::vector<std::string> lo, hi, mean, gamma, pairs, alpha, beta, coordinate;
   std::vector<std::vector<std::string>> per_component(value_names.size());
   std::vector<std::vector<std::string>> cross(value_names.size() * (value_names.size() - 1) / 2);
+  // Heterotopic: pairs and mean lag of each direct and cross variogram.
+  std::vector<std::vector<std::string>> component_pairs(value_names.size()), component_lag(value_names.size());
+  std::vector<std::vector<std::string>> cross_pairs(cross.size()), cross_lag(cross.size());
   std::uint64_t total = 0;
   for (const DirectionalRun& run : runs) {
     options.direction = run.direction;
     EmpiricalVariogram v;
-    naming_options([&] { v = empirical_variogram(x, z, bins, options); },
+    HeterotopicVariogram h;
+    naming_options([&] {
+                     if (heterotopic) {
+                       h = heterotopic_variogram(x, z, bins, options);
+                       v = h.variogram;
+                     } else {
+                       v = empirical_variogram(x, z, bins, options);
+                     }
+                   },
                    {{"max_stored_differences", "--max-stored"}, {"pair_fraction (--subsample)", "--subsample"},
                     {"variogram direction: alpha/beta", "--alpha/--beta"},
                     {"variogram direction: tol_ver", "--tol-ver"}});
@@ -184,6 +202,17 @@ void run_variogram(const VariogramArgs& a) {
         per_component[static_cast<std::size_t>(c)].push_back(cell(v.component_gamma(static_cast<Eigen::Index>(b), c)));
       for (std::size_t c = 0; c < cross.size() && a.cross; ++c)
         cross[c].push_back(cell(v.cross_gamma(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(c))));
+      if (heterotopic) {
+        const auto k = static_cast<Eigen::Index>(b);
+        for (std::size_t c = 0; c < value_names.size(); ++c) {
+          component_pairs[c].push_back(format_number(h.component_pairs(k, static_cast<Eigen::Index>(c))));
+          component_lag[c].push_back(cell(h.component_lag(k, static_cast<Eigen::Index>(c))));
+        }
+        for (std::size_t c = 0; c < cross.size() && a.cross; ++c) {
+          cross_pairs[c].push_back(format_number(h.cross_pairs(k, static_cast<Eigen::Index>(c))));
+          cross_lag[c].push_back(cell(h.cross_lag(k, static_cast<Eigen::Index>(c))));
+        }
+      }
       total += bin.pairs;
     }
   }
@@ -202,6 +231,19 @@ void run_variogram(const VariogramArgs& a) {
     for (std::size_t i = 0; i < value_names.size(); ++i)
       for (std::size_t j = i + 1; j < value_names.size(); ++j)
         out.add_column("gamma_" + value_names[i] + "_" + value_names[j], cross[c++]);
+  }
+  if (heterotopic) {
+    // Each variogram's own pairs: pairs_<A>, lag_mean_<A>, then pairs_<A>_<B>, lag_mean_<A>_<B>.
+    for (std::size_t c = 0; c < value_names.size(); ++c) {
+      out.add_column("pairs_" + value_names[c], component_pairs[c]);
+      out.add_column("lag_mean_" + value_names[c], component_lag[c]);
+    }
+    std::size_t c = 0;
+    for (std::size_t i = 0; i < value_names.size() && a.cross; ++i)
+      for (std::size_t j = i + 1; j < value_names.size(); ++j, ++c) {
+        out.add_column("pairs_" + value_names[i] + "_" + value_names[j], cross_pairs[c]);
+        out.add_column("lag_mean_" + value_names[i] + "_" + value_names[j], cross_lag[c]);
+      }
   }
   if (!a.alpha.empty()) out.add_column("direction", alpha);
   if (!a.beta.empty()) out.add_column("dip", beta);

@@ -498,6 +498,8 @@ InterpolationMethodRegistration kriging_method{{
     &add_kriging_options,
     &interpolate_kriging,
     &cross_validate_kriging,
+    // Heterotopic cokriging: a component with an empty cell is not measured at that sample.
+    [] { return model_file_is_lmc(cli_options.model); },
 }};
 
 }  // namespace

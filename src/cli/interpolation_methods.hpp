@@ -93,6 +93,10 @@ struct InterpolationMethod {
   void (*add_options)(CLI::App& command) = nullptr;  ///< its own options (may be null)
   InterpolationResult (*interpolate)(const InterpolationRequest&) = nullptr;  ///< null: not for interpolate
   CrossValidationOutput (*cross_validate)(const CrossValidationRequest&) = nullptr;  ///< null: not for cv
+  /// True when the method, as its options are set, takes empty --value cells of the samples as
+  /// "not measured" (NaN in sample_values; heterotopic cokriging). Null or false: an empty cell is
+  /// an input error naming file, line and column, as before.
+  bool (*takes_missing_values)() = nullptr;
 };
 
 std::vector<InterpolationMethod>& interpolation_methods();

@@ -13,6 +13,13 @@
 //   cov  = C00 - W'W + R' G^-1 R              (P x P prediction error covariance)
 // Simple kriging is p = 0 on values with the known means subtracted. Kriging's engine is the case
 // P = 1 (kriging_engine.hpp).
+//
+// Heterotopic data (a component not measured at some samples: NaN in values): the system has a row
+// only for each (sample, component) that is measured, sample-major as above, so "i*P + a" reads as
+// "the row of component a of sample i, if it exists" (row_start_, row_component_). The drift of a
+// component with no row in the system has no column in F: its unbiasedness constraint cannot be
+// met (no weights to sum to 1), so its prediction is NaN under ordinary and universal cokriging,
+// while the others' constraints (their weights of it sum to 0) hold trivially.
 
 #include "errfield/cokriging.hpp"
 
@@ -41,6 +48,9 @@ enum class CokrigingOutcome : std::uint8_t { Ok, TooFew, BelowMinimum, NotPositi
 struct CokrigingWorkspace : NeighbourBuffers {
   Eigen::MatrixXd k, q, w, g, r, f0;
   Eigen::VectorXd y, beta;
+  std::vector<Eigen::Index> row_sample;  // the local system's rows: sample and component
+  std::vector<int> row_component;
+  std::vector<int> slot;                 // drift slot of each component in this system, -1: none
   Eigen::MatrixXd cov;
   Eigen::VectorXd mean;
 };
@@ -80,6 +90,8 @@ class CokrigingEngine {
   // Target-side covariance block with sample s (zero lag: target_zero_).
   void target_block(const double* target, Eigen::Index s, double* out) const;
   void drift_row(const double* raw_point, double* out) const;
+  void index_rows();
+  Eigen::Index rows_of(Eigen::Index s) const { return row_start_[static_cast<std::size_t>(s) + 1] - row_start_[static_cast<std::size_t>(s)]; }
   int thread_count() const { return options_.threads > 0 ? options_.threads : omp_get_max_threads(); }
   // Local back end: the kP x kP system of the samples in ws.chosen for one target.
   CokrigingOutcome solve_local(const double* target, const double* target_raw, CokrigingWorkspace& ws) const;
@@ -97,6 +109,13 @@ class CokrigingEngine {
   Eigen::MatrixXd observed_;      // N x P as given
   Eigen::VectorXd simple_mean_;   // P
   int dimension_ = 0, components_ = 0, drift_terms_ = 0;
+  // Rows of the (global) system: sample s owns rows row_start_[s] .. row_start_[s + 1] - 1, one
+  // per measured component, component row_component_[r]; drift_slot_[a] is the index of component
+  // a's block of drift columns (-1: the component is measured nowhere, no drift columns).
+  std::vector<Eigen::Index> row_start_;
+  std::vector<int> row_component_;
+  std::vector<int> drift_slot_;
+  int drift_components_ = 0;
   Eigen::VectorXd drift_center_, drift_scale_;
   std::unique_ptr<PointTree> tree_, search_tree_;
   KrigingReport report_;
@@ -131,6 +150,7 @@ CokrigingEngine::CokrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, 
   nugget_ = model.nugget();
   target_zero_ = options_.nugget == NuggetTreatment::MicroScale ? sill_ : Eigen::MatrixXd(sill_ - nugget_);
   observed_ = values_;
+  index_rows();
   simple_mean_ = Eigen::VectorXd::Zero(components_);
   if (options_.kind == KrigingKind::Simple) {
     simple_mean_ = simple_mean_per_component(options_.simple_mean, components_, "cokriging");
@@ -166,7 +186,7 @@ CokrigingEngine::CokrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, 
                         std::to_string(drift_terms_) + " drift terms per component; expected neighbors >= " +
                         std::to_string(std::max(drift_terms_, 1)));
   report_.samples_used = static_cast<std::size_t>(points_.cols());
-  report_.drift_terms = static_cast<std::size_t>(drift_terms_ * components_);
+  report_.drift_terms = static_cast<std::size_t>(drift_terms_ * drift_components_);
   if (points_.cols() < std::max(drift_terms_, 1)) {
     report_.status = KrigingStatus::TooFewSamples;
     report_.message = std::to_string(points_.cols()) + " samples for the " + std::to_string(drift_terms_) +
@@ -174,6 +194,34 @@ CokrigingEngine::CokrigingEngine(Eigen::MatrixXd embedded, Eigen::MatrixXd raw, 
     return;
   }
   if (options_.backend == KrigingBackend::Dense) setup_dense();
+}
+
+void CokrigingEngine::index_rows() {
+  const Eigen::Index n = values_.rows();
+  row_start_.assign(static_cast<std::size_t>(n) + 1, 0);
+  row_component_.clear();
+  row_component_.reserve(static_cast<std::size_t>(n * components_));
+  std::vector<std::size_t> measured(static_cast<std::size_t>(components_), 0);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (int a = 0; a < components_; ++a)
+      if (!std::isnan(values_(i, a))) {
+        row_component_.push_back(a);
+        ++measured[static_cast<std::size_t>(a)];
+      }
+    row_start_[static_cast<std::size_t>(i) + 1] = static_cast<Eigen::Index>(row_component_.size());
+    if (rows_of(i) == 0) {
+      const auto row = static_cast<std::size_t>(i);
+      const bool labelled = options_.sample_labels.lines.size() == static_cast<std::size_t>(n);
+      throw InputError((labelled ? options_.sample_labels(row) + ": cokriging: this sample"
+                                 : "cokriging: sample " + std::to_string(i)) +
+                           " has no measured component (every value missing); expected at least one, or leave the sample out",
+                       labelled ? options_.sample_labels.source : std::string(), labelled ? options_.sample_labels.line(row) : 0);
+    }
+  }
+  drift_slot_.assign(static_cast<std::size_t>(components_), -1);
+  drift_components_ = 0;
+  for (int a = 0; a < components_; ++a)
+    if (measured[static_cast<std::size_t>(a)] > 0) drift_slot_[static_cast<std::size_t>(a)] = drift_components_++;
 }
 
 void CokrigingEngine::validate_options() const {
@@ -228,7 +276,8 @@ void CokrigingEngine::drift_row(const double* raw_point, double* out) const {
 }
 
 void CokrigingEngine::setup_dense() {
-  const Eigen::Index n = points_.cols(), P = components_, np = n * P, pp = drift_terms_ * P;
+  const Eigen::Index n = points_.cols(), P = components_, np = static_cast<Eigen::Index>(row_component_.size()),
+                     pp = drift_terms_ * drift_components_;
   // K and its factor side by side while factoring; leave-one-out needs one more NP x NP.
   const double bytes = 2.0 * static_cast<double>(np) * static_cast<double>(np) * sizeof(double);
   const double budget = static_cast<double>(options_.dense_memory_budget_bytes);
@@ -238,14 +287,21 @@ void CokrigingEngine::setup_dense() {
                         " x " + std::to_string(np) + " system), over dense_memory_budget_bytes = " + cokriging_mib(budget) +
                         " MiB; use the local back end (k nearest neighbours)");
   Eigen::MatrixXd k(np, np);
+  // The P x P block of samples i, j restricted to the rows the two samples have.
+  const auto put = [&](const Eigen::MatrixXd& block, Eigen::Index i, Eigen::Index j) {
+    const Eigen::Index ri = row_start_[static_cast<std::size_t>(i)], rj = row_start_[static_cast<std::size_t>(j)];
+    for (Eigen::Index v = 0; v < rows_of(j); ++v)
+      for (Eigen::Index u = 0; u < rows_of(i); ++u)
+        k(ri + u, rj + v) = block(row_component_[static_cast<std::size_t>(ri + u)], row_component_[static_cast<std::size_t>(rj + v)]);
+  };
 #pragma omp parallel for schedule(dynamic, 16) num_threads(thread_count())
   for (Eigen::Index j = 0; j < n; ++j) {
     Eigen::MatrixXd block(P, P);
     for (Eigen::Index i = j + 1; i < n; ++i) {
       covariance_at((points_.col(i) - points_.col(j)).norm(), block.data());
-      k.block(i * P, j * P, P, P) = block;
+      put(block, i, j);
     }
-    k.block(j * P, j * P, P, P) = sill_;
+    put(sill_, j, j);
   }
   const double scale = sill_.diagonal().maxCoeff();
   double jitter = 0.0;
@@ -277,15 +333,19 @@ void CokrigingEngine::setup_dense() {
                       "; predictions are returned but may be inaccurate";
   }
   z_.resize(np);
-  for (Eigen::Index i = 0; i < n; ++i) z_.segment(i * P, P) = values_.row(i).transpose();
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index r = row_start_[static_cast<std::size_t>(i)]; r < row_start_[static_cast<std::size_t>(i) + 1]; ++r)
+      z_[r] = values_(i, row_component_[static_cast<std::size_t>(r)]);
   Eigen::VectorXd y = llt_.matrixL().solve(z_);
   f_ = Eigen::MatrixXd::Zero(np, pp);
   if (pp > 0) {
     std::vector<double> row(static_cast<std::size_t>(drift_terms_));
     for (Eigen::Index i = 0; i < n; ++i) {
       drift_row(raw_.col(i).data(), row.data());
-      for (Eigen::Index a = 0; a < P; ++a)
-        for (Eigen::Index t = 0; t < drift_terms_; ++t) f_(i * P + a, a * drift_terms_ + t) = row[static_cast<std::size_t>(t)];
+      for (Eigen::Index r = row_start_[static_cast<std::size_t>(i)]; r < row_start_[static_cast<std::size_t>(i) + 1]; ++r) {
+        const int slot = drift_slot_[static_cast<std::size_t>(row_component_[static_cast<std::size_t>(r)])];
+        for (Eigen::Index t = 0; t < drift_terms_; ++t) f_(r, slot * drift_terms_ + t) = row[static_cast<std::size_t>(t)];
+      }
     }
     q_ = llt_.matrixL().solve(f_);
     g_llt_.compute(q_.transpose() * q_);
@@ -324,7 +384,9 @@ CokrigingOutput CokrigingEngine::leave_one_out() const {
 }
 
 CokrigingOutput CokrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) const {
-  const Eigen::Index m = embedded.cols(), n = points_.cols(), P = components_, np = n * P, p = drift_terms_;
+  const Eigen::Index m = embedded.cols(), n = points_.cols(), P = components_,
+                     np = static_cast<Eigen::Index>(row_component_.size()), p = drift_terms_;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
   CokrigingOutput out;
   out.status = report_.status;
   out.message = report_.message;
@@ -339,7 +401,7 @@ CokrigingOutput CokrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, 
   const Eigen::Index batches = (m + batch - 1) / batch;
 #pragma omp parallel num_threads(thread_count())
   {
-    Eigen::MatrixXd w, r(p * P, P), cov(P, P), block(P, P);
+    Eigen::MatrixXd w, r(p * drift_components_, P), cov(P, P), block(P, P);
     Eigen::VectorXd mean(P), frow(p);
 #pragma omp for schedule(dynamic, 1)
     for (Eigen::Index bt = 0; bt < batches; ++bt) {
@@ -349,7 +411,8 @@ CokrigingOutput CokrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, 
         const double* target = embedded.col(t0 + k).data();
         for (Eigen::Index i = 0; i < n; ++i) {
           target_block(target, i, block.data());
-          w.block(i * P, k * P, P, P) = block;
+          for (Eigen::Index row = row_start_[static_cast<std::size_t>(i)]; row < row_start_[static_cast<std::size_t>(i) + 1]; ++row)
+            w.block(row, k * P, 1, P) = block.row(row_component_[static_cast<std::size_t>(row)]);
         }
       }
       // Without variances the means are C0' alpha: no solve.
@@ -360,7 +423,10 @@ CokrigingOutput CokrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, 
         mean.noalias() = wt.transpose() * (options_.compute_variance ? ry_ : alpha_);
         if (p > 0) {
           drift_row(raw.col(t).data(), frow.data());
-          for (Eigen::Index b = 0; b < P; ++b) mean[b] += frow.dot(beta_.segment(b * p, p));
+          for (Eigen::Index b = 0; b < P; ++b) {
+            const int slot = drift_slot_[static_cast<std::size_t>(b)];
+            mean[b] = slot < 0 ? nan : mean[b] + frow.dot(beta_.segment(slot * p, p));
+          }
         }
         out.mean.row(t) = mean.transpose();
         if (!options_.compute_variance) continue;
@@ -368,10 +434,16 @@ CokrigingOutput CokrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, 
         cov.noalias() -= wt.transpose() * wt;
         if (p > 0) {
           r.setZero();
-          for (Eigen::Index b = 0; b < P; ++b) r.block(b * p, b, p, 1) = frow;
+          for (Eigen::Index b = 0; b < P; ++b)
+            if (const int slot = drift_slot_[static_cast<std::size_t>(b)]; slot >= 0) r.block(slot * p, b, p, 1) = frow;
           r.noalias() -= q_.transpose() * wt;
           g_llt_.matrixL().solveInPlace(r);
           cov.noalias() += r.transpose() * r;
+          for (Eigen::Index b = 0; b < P; ++b)
+            if (drift_slot_[static_cast<std::size_t>(b)] < 0) {
+              cov.row(b).setConstant(nan);
+              cov.col(b).setConstant(nan);
+            }
         }
         for (Eigen::Index b = 0; b < P; ++b)
           for (Eigen::Index a = 0; a < P; ++a) out.covariance(t, a + P * b) = cov(a, b);
@@ -387,7 +459,7 @@ CokrigingOutput CokrigingEngine::loo_dense() const {
   // residual of sample i's P observations when they are left out is B_ii^-1 (B [z; 0])_i and its
   // covariance is B_ii^-1, B_ii the P x P diagonal block of sample i in B's top-left NP x NP part,
   // K^-1 - K^-1 F G^-1 F'K^-1.
-  const Eigen::Index n = points_.cols(), P = components_, np = n * P;
+  const Eigen::Index n = points_.cols(), P = components_, np = static_cast<Eigen::Index>(row_component_.size());
   const double bytes = 2.0 * static_cast<double>(np) * static_cast<double>(np) * sizeof(double);
   if (bytes > static_cast<double>(options_.dense_memory_budget_bytes))
     throw ResourceError("cokriging: leave-one-out with the dense back end needs ~" + cokriging_mib(bytes) +
@@ -406,35 +478,63 @@ CokrigingOutput CokrigingEngine::loo_dense() const {
   out.mean.resize(n, P);
   out.residual.resize(n, P);
   out.covariance.resize(n, P * P);
+  // A component not measured at sample i has no residual there: NaN in every output.
+  out.mean.setConstant(std::numeric_limits<double>::quiet_NaN());
+  out.residual.setConstant(std::numeric_limits<double>::quiet_NaN());
+  out.covariance.setConstant(std::numeric_limits<double>::quiet_NaN());
   for (Eigen::Index i = 0; i < n; ++i) {
-    const Eigen::MatrixXd bii = b.block(i * P, i * P, P, P);
-    const Eigen::MatrixXd cov = bii.llt().solve(Eigen::MatrixXd::Identity(P, P));
-    const Eigen::VectorXd e = cov * alpha.segment(i * P, P);
-    out.residual.row(i) = e.transpose();
-    out.mean.row(i) = observed_.row(i) - e.transpose();
-    for (Eigen::Index c = 0; c < P; ++c)
-      for (Eigen::Index a = 0; a < P; ++a) out.covariance(i, a + P * c) = cov(a, c);
+    const Eigen::Index r0 = row_start_[static_cast<std::size_t>(i)], mi = rows_of(i);
+    const Eigen::MatrixXd bii = b.block(r0, r0, mi, mi);
+    const Eigen::MatrixXd cov = bii.llt().solve(Eigen::MatrixXd::Identity(mi, mi));
+    const Eigen::VectorXd e = cov * alpha.segment(r0, mi);
+    for (Eigen::Index u = 0; u < mi; ++u) {
+      const int a = row_component_[static_cast<std::size_t>(r0 + u)];
+      out.residual(i, a) = e[u];
+      out.mean(i, a) = observed_(i, a) - e[u];
+      for (Eigen::Index v = 0; v < mi; ++v)
+        out.covariance(i, a + P * row_component_[static_cast<std::size_t>(r0 + v)]) = cov(u, v);
+    }
   }
   return out;
 }
 
 CokrigingOutcome CokrigingEngine::solve_local(const double* target, const double* target_raw, CokrigingWorkspace& ws) const {
   const auto nn = static_cast<Eigen::Index>(ws.chosen.size());
-  const Eigen::Index P = components_, p = drift_terms_, np = nn * P, pp = p * P;
-  if (nn == 0 || nn < p) return CokrigingOutcome::TooFew;
+  const Eigen::Index P = components_, p = drift_terms_;
+  // The rows of the chosen samples (one per measured component) and the components they cover.
+  ws.row_sample.clear();
+  ws.row_component.clear();
+  ws.slot.assign(static_cast<std::size_t>(P), 0);
+  for (Eigen::Index j = 0; j < nn; ++j) {
+    const auto sj = static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(j)]);
+    for (Eigen::Index r = row_start_[static_cast<std::size_t>(sj)]; r < row_start_[static_cast<std::size_t>(sj) + 1]; ++r) {
+      ws.row_sample.push_back(sj);
+      ws.row_component.push_back(row_component_[static_cast<std::size_t>(r)]);
+      ++ws.slot[static_cast<std::size_t>(row_component_[static_cast<std::size_t>(r)])];
+    }
+  }
+  const auto np = static_cast<Eigen::Index>(ws.row_sample.size());
+  if (np == 0) return CokrigingOutcome::TooFew;
+  Eigen::Index present = 0;
+  for (Eigen::Index a = 0; a < P; ++a) {
+    const int count = ws.slot[static_cast<std::size_t>(a)];
+    if (count > 0 && count < p) return CokrigingOutcome::TooFew;
+    ws.slot[static_cast<std::size_t>(a)] = count > 0 ? static_cast<int>(present++) : -1;
+  }
+  const Eigen::Index pp = p * present;
   if (ws.k.rows() < np) {
     ws.k.resize(np, np);
     ws.w.resize(np, P);
-    ws.q.resize(np, pp);
+    ws.q.resize(np, p * P);
     ws.y.resize(np);
   }
   if (ws.cov.rows() != P) {
     ws.cov.resize(P, P);
     ws.mean.resize(P);
-    ws.f0.resize(pp, P);
-    ws.g.resize(pp, pp);
-    ws.r.resize(pp, P);
-    ws.beta.resize(pp);
+    ws.f0.resize(p * P, P);
+    ws.g.resize(p * P, p * P);
+    ws.r.resize(p * P, P);
+    ws.beta.resize(p * P);
   }
   auto kb = ws.k.topLeftCorner(np, np);
   double block[64];  // P * P doubles for P <= 8, else big_block
@@ -444,16 +544,30 @@ CokrigingOutcome CokrigingEngine::solve_local(const double* target, const double
     big_block.resize(P, P);
     bp = big_block.data();
   }
+  const auto entry = [&](Eigen::Index r, Eigen::Index c) {
+    return bp[ws.row_component[static_cast<std::size_t>(r)] + P * ws.row_component[static_cast<std::size_t>(c)]];
+  };
   const auto build = [&](double jitter) {
-    for (Eigen::Index j = 0; j < nn; ++j) {
-      const auto sj = static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(j)]);
-      kb.block(j * P, j * P, P, P) = sill_;
-      for (Eigen::Index a = 0; a < P; ++a) kb(j * P + a, j * P + a) += jitter;
-      for (Eigen::Index i = j + 1; i < nn; ++i) {
-        const auto si = static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(i)]);
-        covariance_at((points_.col(si) - points_.col(sj)).norm(), bp);
-        kb.block(i * P, j * P, P, P) = Eigen::Map<const Eigen::MatrixXd>(bp, P, P);
+    // Rows of one sample are adjacent; a sample's block with another is computed once.
+    for (Eigen::Index c0 = 0; c0 < np;) {
+      const Eigen::Index sc = ws.row_sample[static_cast<std::size_t>(c0)];
+      Eigen::Index c1 = c0;
+      while (c1 < np && ws.row_sample[static_cast<std::size_t>(c1)] == sc) ++c1;
+      std::copy(sill_.data(), sill_.data() + P * P, bp);
+      for (Eigen::Index c = c0; c < c1; ++c) {
+        for (Eigen::Index r = c0; r < c1; ++r) kb(r, c) = entry(r, c);
+        kb(c, c) += jitter;
       }
+      for (Eigen::Index r0 = c1; r0 < np;) {
+        const Eigen::Index sr = ws.row_sample[static_cast<std::size_t>(r0)];
+        Eigen::Index r1 = r0;
+        while (r1 < np && ws.row_sample[static_cast<std::size_t>(r1)] == sr) ++r1;
+        covariance_at((points_.col(sr) - points_.col(sc)).norm(), bp);
+        for (Eigen::Index c = c0; c < c1; ++c)
+          for (Eigen::Index r = r0; r < r1; ++r) kb(r, c) = entry(r, c);
+        r0 = r1;
+      }
+      c0 = c1;
     }
   };
   const double scale = sill_.diagonal().maxCoeff();
@@ -472,20 +586,27 @@ CokrigingOutcome CokrigingEngine::solve_local(const double* target, const double
   const auto lower = kb.triangularView<Eigen::Lower>();
   auto w = ws.w.topRows(np);
   auto y = ws.y.head(np);
-  for (Eigen::Index i = 0; i < nn; ++i) {
-    const auto s = static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(i)]);
+  for (Eigen::Index r0 = 0; r0 < np;) {
+    const Eigen::Index s = ws.row_sample[static_cast<std::size_t>(r0)];
     target_block(target, s, bp);
-    w.middleRows(i * P, P) = Eigen::Map<const Eigen::MatrixXd>(bp, P, P);
-    y.segment(i * P, P) = values_.row(s).transpose();
+    const Eigen::Map<const Eigen::MatrixXd> tb(bp, P, P);
+    for (; r0 < np && ws.row_sample[static_cast<std::size_t>(r0)] == s; ++r0) {
+      const int a = ws.row_component[static_cast<std::size_t>(r0)];
+      w.row(r0) = tb.row(a);
+      y[r0] = values_(s, a);
+    }
   }
   lower.solveInPlace(w);
   lower.solveInPlace(y);
   ws.cov = target_zero_;
   ws.cov.noalias() -= w.transpose() * w;
   if (p > 0) {
-    auto q = ws.q.topRows(np);
+    auto q = ws.q.topLeftCorner(np, pp);
+    auto f0 = ws.f0.topRows(pp);
+    auto beta = ws.beta.head(pp);
+    auto r = ws.r.topRows(pp);
     q.setZero();
-    ws.f0.setZero();
+    f0.setZero();
     double frow[16];
     std::vector<double> frow_big;
     double* fp = frow;
@@ -493,27 +614,37 @@ CokrigingOutcome CokrigingEngine::solve_local(const double* target, const double
       frow_big.resize(static_cast<std::size_t>(p));
       fp = frow_big.data();
     }
-    for (Eigen::Index i = 0; i < nn; ++i) {
-      drift_row(raw_.col(static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(i)])).data(), fp);
-      for (Eigen::Index a = 0; a < P; ++a)
-        for (Eigen::Index t = 0; t < p; ++t) q(i * P + a, a * p + t) = fp[t];
+    for (Eigen::Index i = 0; i < np; ++i) {
+      drift_row(raw_.col(ws.row_sample[static_cast<std::size_t>(i)]).data(), fp);
+      const int slot = ws.slot[static_cast<std::size_t>(ws.row_component[static_cast<std::size_t>(i)])];
+      for (Eigen::Index t = 0; t < p; ++t) q(i, slot * p + t) = fp[t];
     }
     drift_row(target_raw, fp);
     for (Eigen::Index b = 0; b < P; ++b)
-      for (Eigen::Index t = 0; t < p; ++t) ws.f0(b * p + t, b) = fp[t];
+      if (const int slot = ws.slot[static_cast<std::size_t>(b)]; slot >= 0)
+        for (Eigen::Index t = 0; t < p; ++t) f0(slot * p + t, b) = fp[t];
     lower.solveInPlace(q);
-    ws.g.noalias() = q.transpose() * q;
-    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> g_llt(ws.g);
+    auto g = ws.g.topLeftCorner(pp, pp);
+    g.noalias() = q.transpose() * q;
+    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> g_llt(g);
     if (g_llt.info() != Eigen::Success || !(g_llt.rcond() > 1e-14)) return CokrigingOutcome::SingularDrift;
-    ws.beta.noalias() = q.transpose() * y;
-    g_llt.solveInPlace(ws.beta);
-    y.noalias() -= q * ws.beta;
-    ws.mean.noalias() = ws.f0.transpose() * ws.beta;
+    beta.noalias() = q.transpose() * y;
+    g_llt.solveInPlace(beta);
+    y.noalias() -= q * beta;
+    ws.mean.noalias() = f0.transpose() * beta;
     ws.mean.noalias() += w.transpose() * y;
-    ws.r = ws.f0;
-    ws.r.noalias() -= q.transpose() * w;
-    g_llt.matrixL().solveInPlace(ws.r);
-    ws.cov.noalias() += ws.r.transpose() * ws.r;
+    r = f0;
+    r.noalias() -= q.transpose() * w;
+    g_llt.matrixL().solveInPlace(r);
+    ws.cov.noalias() += r.transpose() * r;
+    // A component with no row here has no unbiased predictor (see the top of the file).
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (Eigen::Index b = 0; b < P; ++b)
+      if (ws.slot[static_cast<std::size_t>(b)] < 0) {
+        ws.mean[b] = nan;
+        ws.cov.row(b).setConstant(nan);
+        ws.cov.col(b).setConstant(nan);
+      }
   } else {
     ws.mean.noalias() = w.transpose() * y;
   }

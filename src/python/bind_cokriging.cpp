@@ -110,7 +110,11 @@ class PyCokriging {
               int threads, const std::optional<std::string>& neighbour_metric,
               const std::optional<std::size_t>& min_neighbours, const std::optional<std::size_t>& octant_max) {
     x_ = matrix_arg(coords, "coords", ArraySpec{1, 2, -1, 1}).data;
-    const MatrixArg z = matrix_arg(values, "values", ArraySpec{1, 2, -1, 1});
+    // NaN: the component was not measured at that location (heterotopic cokriging); the library
+    // refuses infinities and samples with every component NaN.
+    ArraySpec value_spec{1, 2, -1, 1};
+    value_spec.finite = false;
+    const MatrixArg z = matrix_arg(values, "values", value_spec);
     if (z.data.rows() != x_.rows())
       throw ArgumentError("values: " + std::to_string(z.data.rows()) + " rows but coords has " + std::to_string(x_.rows()) +
                           "; expected one row of components per location");
@@ -185,7 +189,8 @@ class PyCokriging {
 void bind_cokriging(py::module_& m) {
   py::class_<PyCokriging>(m, "Cokriging",
                           "Cokriging of P = 1..3 value components under a linear model of coregionalization (docs/kriging.md,\n"
-                          "Cokriging): every component at every sample (isotopic). model: the LMC as a JSON string or dict\n"
+                          "Cokriging): NaN in values where a component was not measured (heterotopic: each\n"
+                          "component taken where it exists; at least one per sample). model: the LMC as a JSON string or dict\n"
                           "({'type': 'lmc', 'components': [...], 'structures': [{'kind': 'nug', 'sills': [[...]]}, ...]}, what\n"
                           "fit-variogram --lmc writes). Options as Kriging's: kind simple | ordinary | universal1 | universal2\n"
                           "(one mean or drift per component), nugget micro | error, backend dense | local (neighbors, radius,\n"

@@ -1,4 +1,5 @@
 #include "errfield/empirical_variogram.hpp"
+#include "errfield/heterotopic_variogram.hpp"
 
 #include "errfield/thread_count.hpp"
 
@@ -627,6 +628,80 @@ EmpiricalVariogram empirical_variogram(const Eigen::MatrixXd& coordinates,
     default: return run(Eigen::VectorXd{});
   }
 }
+
+namespace {
+
+// The rows (locations) where every one of `components` is measured.
+std::vector<Eigen::Index> rows_measuring(const Eigen::MatrixXd& values, std::initializer_list<Eigen::Index> components) {
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index i = 0; i < values.rows(); ++i) {
+    bool all = true;
+    for (Eigen::Index c : components) all = all && !std::isnan(values(i, c));
+    if (all) rows.push_back(i);
+  }
+  return rows;
+}
+
+}  // namespace
+
+HeterotopicVariogram heterotopic_variogram(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
+                                           const LagBins& bins, const EmpiricalVariogramOptions& options) {
+  options.validate();
+  for (Eigen::Index i = 0; i < values.rows(); ++i)
+    for (Eigen::Index c = 0; c < values.cols(); ++c)
+      if (std::isinf(values(i, c)))
+        throw InputError("empirical variogram: value row " + std::to_string(i) + ", component " + std::to_string(c) +
+                         " is " + format_number(values(i, c)) + "; expected a finite number (or NaN where not measured)");
+  const Eigen::Index K = values.cols(), B = static_cast<Eigen::Index>(bins.size());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // The pairs of all locations: counts and lags of bins[k].
+  EmpiricalVariogramOptions plain = options;
+  plain.cross_variograms = false;
+  EmpiricalVariogramOptions locations_only = plain;
+  locations_only.estimator = VariogramEstimator::Matheron;
+  HeterotopicVariogram out;
+  out.variogram = empirical_variogram(coordinates, Eigen::MatrixXd::Zero(coordinates.rows(), 1), bins, locations_only);
+  out.variogram.estimator = options.estimator;
+  out.variogram.component_gamma.setConstant(B, K, nan);
+  out.component_pairs.setZero(B, K);
+  out.component_lag.setConstant(B, K, nan);
+  // One variogram of the rows that measure `components`, into column `col` of gamma, pairs, lag.
+  const auto run = [&](std::initializer_list<Eigen::Index> components, Eigen::MatrixXd& gamma, Eigen::MatrixXd& pairs,
+                       Eigen::MatrixXd& lag, Eigen::Index col) {
+    const std::vector<Eigen::Index> rows = rows_measuring(values, components);
+    if (rows.size() < 2) return;  // no pair: counts 0, gamma and lag NaN
+    Eigen::MatrixXd x(static_cast<Eigen::Index>(rows.size()), coordinates.cols());
+    Eigen::MatrixXd z(static_cast<Eigen::Index>(rows.size()), static_cast<Eigen::Index>(components.size()));
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      x.row(static_cast<Eigen::Index>(r)) = coordinates.row(rows[r]);
+      Eigen::Index k = 0;
+      for (Eigen::Index c : components) z(static_cast<Eigen::Index>(r), k++) = values(rows[r], c);
+    }
+    EmpiricalVariogramOptions o = plain;
+    o.cross_variograms = components.size() == 2;
+    const EmpiricalVariogram v = empirical_variogram(x, z, bins, o);
+    for (Eigen::Index b = 0; b < B; ++b) {
+      gamma(b, col) = o.cross_variograms ? v.cross_gamma(b, 0) : v.component_gamma(b, 0);
+      pairs(b, col) = static_cast<double>(v.bins[static_cast<std::size_t>(b)].pairs);
+      lag(b, col) = v.bins[static_cast<std::size_t>(b)].lag_mean;
+    }
+  };
+  for (Eigen::Index c = 0; c < K; ++c) run({c}, out.variogram.component_gamma, out.component_pairs, out.component_lag, c);
+  for (Eigen::Index b = 0; b < B; ++b)
+    out.variogram.bins[static_cast<std::size_t>(b)].gamma = out.variogram.component_gamma.row(b).sum();
+  if (options.cross_variograms) {
+    const Eigen::Index pairs_of_components = K * (K - 1) / 2;
+    out.variogram.cross_gamma.setConstant(B, pairs_of_components, nan);
+    out.cross_pairs.setZero(B, pairs_of_components);
+    out.cross_lag.setConstant(B, pairs_of_components, nan);
+    for (Eigen::Index a = 0; a < K; ++a)
+      for (Eigen::Index c = a + 1; c < K; ++c)
+        run({a, c}, out.variogram.cross_gamma, out.cross_pairs, out.cross_lag,
+            EmpiricalVariogram::cross_column(static_cast<int>(a), static_cast<int>(c), static_cast<int>(K)));
+  }
+  return out;
+}
+
 
 #define ERRFIELD_VARIOGRAM_INSTANTIATE(L, M)                                                    \
   template EmpiricalVariogram empirical_variogram<L, M>(std::span<const L>,                     \

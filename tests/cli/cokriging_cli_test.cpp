@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <random>
 
 #include <gmock/gmock.h>
@@ -155,6 +156,58 @@ TEST_F(CokrigingCli, AnUnnamedModelTakesTheValueColumnsInOrder) {
   const auto r = run(interpolate(""));
   ASSERT_EQ(r.exit_code, 0) << r.output();
   EXPECT_THAT(r.output(), HasSubstr("does not name its components; taken in --value order (dx,dy,dz)"));
+}
+
+// Heterotopic samples: an empty value cell is "not measured" for cokriging only; every command
+// that needs every value still refuses it naming file, line and column, and so does cokriging for
+// a row with nothing measured or a non-numeric cell.
+TEST_F(CokrigingCli, EmptyValueCellsAreNotMeasuredForCokrigingAndRefusedElsewhere) {
+  const CsvTable full = CsvTable::read(path("S.csv"));
+  std::ofstream s(path("H.csv"));
+  s << "x,y,z,dx,dy,dz\n";
+  std::vector<Eigen::Vector3d> gappy = vals_;
+  for (std::size_t i = 0; i < full.row_count(); ++i) {
+    for (std::size_t c = 0; c < 6; ++c) {
+      // dy missing at every third sample, dz at every fourth (never both with dx).
+      const bool gap = (c == 4 && i % 3 == 1) || (c == 5 && i % 4 == 2);
+      if (gap) gappy[i][static_cast<int>(c) - 3] = std::numeric_limits<double>::quiet_NaN();
+      s << (c ? "," : "") << (gap ? std::string() : std::string(full.cell(i, c)));
+    }
+    s << "\n";
+  }
+  s.close();
+  const std::string tail = " --coords x,y,z --value dx,dy,dz --model " + path("lmc.json");
+  const auto r = run("interpolate --method kriging --samples " + path("H.csv") + " --targets " + path("T.csv") + tail +
+                     " --out " + path("P.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output();
+  const auto pred = Cokriging<P3, Eigen::Vector3d>(pts_, gappy, model()).predict(targets_);
+  const Eigen::MatrixXd got = CsvTable::read(path("P.csv")).numeric_columns({"pred_dy", "var_dz"});
+  for (std::size_t t = 0; t < targets_.size(); ++t) {
+    EXPECT_DOUBLE_EQ(got(static_cast<Eigen::Index>(t), 0), pred.mean[t][1]);
+    EXPECT_DOUBLE_EQ(got(static_cast<Eigen::Index>(t), 1), pred.covariance[t](2, 2));
+  }
+  const auto cv = run("cv --method kriging --samples " + path("H.csv") + tail);
+  EXPECT_EQ(cv.exit_code, 2);
+  EXPECT_THAT(cv.output(), HasSubstr("H.csv:3: column 'dy' is empty; expected a number"));
+  const auto shared = run("interpolate --method kriging --samples " + path("H.csv") + " --targets " + path("T.csv") +
+                          " --coords x,y,z --value dx,dy,dz --model sph(1,500) --out " + path("Q.csv"));
+  EXPECT_EQ(shared.exit_code, 2);
+  EXPECT_THAT(shared.output(), HasSubstr("H.csv:3: column 'dy' is empty"));
+  const auto idw = run("interpolate --method idw --samples " + path("H.csv") + " --targets " + path("T.csv") +
+                       " --coords x,y,z --value dx,dy,dz --out " + path("Q.csv"));
+  EXPECT_EQ(idw.exit_code, 2);
+  EXPECT_THAT(idw.output(), HasSubstr("H.csv:3: column 'dy' is empty"));
+  // A word where a number belongs is still an error, and so is a row with no value at all.
+  write("W.csv", "x,y,z,dx,dy,dz\n0,0,0,1,abc,2\n1,1,1,2,3,4\n5,0,0,1,2,3\n");
+  const auto word = run("interpolate --method kriging --samples " + path("W.csv") + " --targets " + path("T.csv") + tail +
+                        " --out " + path("Q.csv"));
+  EXPECT_EQ(word.exit_code, 2);
+  EXPECT_THAT(word.output(), HasSubstr("W.csv:2: column 'dy': 'abc' is not a number"));
+  write("E.csv", "x,y,z,dx,dy,dz\n0,0,0,1,2,2\n1,1,1,,,\n5,0,0,1,2,3\n");
+  const auto empty = run("interpolate --method kriging --samples " + path("E.csv") + " --targets " + path("T.csv") + tail +
+                         " --out " + path("Q.csv"));
+  EXPECT_EQ(empty.exit_code, 2);
+  EXPECT_THAT(empty.output(), HasSubstr("E.csv:3: cokriging: this sample has no measured component"));
 }
 
 }  // namespace cokriging_cli_test

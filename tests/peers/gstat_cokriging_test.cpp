@@ -120,5 +120,93 @@ TEST_F(GstatCokriging, LeaveOneOutCokriging) {
   std::cout << "gstat.cv: largest relative difference " << worst << "\n";
 }
 
+// Heterotopic cokriging (tests/peers/gstat_heterotopic.R): SIMULATED data, V at 80 locations, U at
+// about 60 % of them (empty cells elsewhere); gstat with one data set per variable.
+class GstatHeterotopicCokriging : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    gstat_.start(ERRFIELD_SOURCE_DIR "/tests/peers/gstat_heterotopic.R", "errfield_gstat_heterotopic");
+    if (gstat_.available())
+      std::ofstream(gstat_.root() / "lmc.json") << R"({"type": "lmc", "components": ["V", "U"],
+  "structures": [{"kind": "nug", "sills": [[0.05, 0.02], [0.02, 0.04]]},
+                 {"kind": "sph", "range": 40, "sills": [[0.8, 0.4], [0.4, 0.5]]}]})";
+  }
+  static void TearDownTestSuite() { gstat_.finish(); }
+  void SetUp() override {
+    if (!gstat_.available()) GTEST_SKIP() << errfield::testing::kGstatMissing;
+    ASSERT_TRUE(gstat_.succeeded()) << "tests/peers/gstat_heterotopic.R failed";
+  }
+  static std::string file(const std::string& name) { return gstat_.file(name); }
+  inline static errfield::testing::GstatScriptRun gstat_;
+
+  static void cokrige(const std::vector<std::string>& extra, const std::string& reference) {
+    std::vector<std::string> args{"interpolate", "--method", "kriging", "--samples", file("samples.csv"), "--targets",
+                                  file("targets.csv"), "--coords", "x,y", "--value", "V,U", "--model", file("lmc.json"),
+                                  "--out", file("ours.csv")};
+    args.insert(args.end(), extra.begin(), extra.end());
+    const auto r = run_errfield(args, gstat_.root());
+    ASSERT_EQ(r.exit_code, 0) << r.output();
+    const Eigen::MatrixXd ours = csv_columns(file("ours.csv"), {"pred_V", "var_V", "pred_U", "var_U", "cov_V_U"});
+    const Eigen::MatrixXd theirs = csv_columns(file(reference), {"V_pred", "V_var", "U_pred", "U_var", "cov"});
+    ASSERT_EQ(ours.rows(), theirs.rows());
+    // Values and variances are O(0.1..2); both solve the same ~130-unknown system: relative 1e-8.
+    double worst = 0.0;
+    for (Eigen::Index t = 0; t < ours.rows(); ++t)
+      for (Eigen::Index j = 0; j < ours.cols(); ++j) {
+        const double scale = std::max(std::abs(theirs(t, j)), 1e-3);
+        worst = std::max(worst, std::abs(ours(t, j) - theirs(t, j)) / scale);
+        EXPECT_NEAR(ours(t, j), theirs(t, j), 1e-8 * scale) << reference << ", target " << t << ", column " << j;
+      }
+    std::cout << reference << ": largest relative difference " << worst << "\n";
+  }
+};
+
+TEST_F(GstatHeterotopicCokriging, PredictionsMatchGstat) {
+  {
+    SCOPED_TRACE("global ordinary cokriging, U at ~60 % of the samples");
+    cokrige({}, "cok.csv");
+  }
+  {
+    // gstat's maxdist takes each variable's data within 35; errfield's radius the samples within
+    // 35 and, of each, the components it has: the same rows (no sample at exactly 35).
+    SCOPED_TRACE("local ordinary cokriging, maxdist 35");
+    cokrige({"--backend", "local", "--radius", "35", "--neighbour-metric", "euclidean"}, "cok_local.csv");
+  }
+}
+
+TEST_F(GstatHeterotopicCokriging, VariogramsMatchGstat) {
+  const auto r = run_errfield({"variogram", "--input", file("samples.csv"), "--coords", "x,y", "--value", "V,U", "--cross",
+                               "--bins", "0,10,20,30,40,50,60", "--convention", "gstat", "--out", file("vario.csv")},
+                              gstat_.root());
+  ASSERT_EQ(r.exit_code, 0) << r.output();
+  const CsvTable direct = CsvTable::read(file("direct.csv"));
+  const Eigen::MatrixXd theirs_direct = csv_columns(file("direct.csv"), {"np", "dist", "gamma"});
+  const Eigen::MatrixXd theirs_cross = csv_columns(file("cross.csv"), {"np", "dist", "gamma"});
+  // Every bin has pairs here, so gstat's rows are the 6 bins in order for each variogram.
+  for (const std::string id : {"V", "U"}) {
+    const Eigen::MatrixXd ours = csv_columns(file("vario.csv"), {"pairs_" + id, "lag_mean_" + id, "gamma_" + id});
+    Eigen::Index b = 0;
+    for (std::size_t row = 0; row < direct.row_count(); ++row) {
+      if (direct.cell(row, direct.column_index("id")) != id) continue;
+      ASSERT_LT(b, ours.rows());
+      const auto k = static_cast<Eigen::Index>(row);
+      EXPECT_EQ(ours(b, 0), theirs_direct(k, 0)) << id << ", bin " << b;
+      // Means of up to ~450 terms of size ~1: relative 1e-12 covers the summation order.
+      EXPECT_NEAR(ours(b, 1), theirs_direct(k, 1), 1e-10 * theirs_direct(k, 1)) << id << ", bin " << b;
+      EXPECT_NEAR(ours(b, 2), theirs_direct(k, 2), 1e-10 * theirs_direct(k, 2)) << id << ", bin " << b;
+      ++b;
+    }
+    EXPECT_EQ(b, 6) << id;
+  }
+  const Eigen::MatrixXd ours = csv_columns(file("vario.csv"), {"pairs_V_U", "lag_mean_V_U", "gamma_V_U"});
+  ASSERT_EQ(ours.rows(), theirs_cross.rows());
+  for (Eigen::Index b = 0; b < ours.rows(); ++b) {
+    // gstat counts a cross-variogram's pairs in both orders.
+    EXPECT_EQ(2 * ours(b, 0), theirs_cross(b, 0)) << "bin " << b;
+    EXPECT_NEAR(ours(b, 1), theirs_cross(b, 1), 1e-10 * theirs_cross(b, 1)) << "bin " << b;
+    EXPECT_NEAR(ours(b, 2), theirs_cross(b, 2), 1e-10 * std::abs(theirs_cross(b, 2))) << "bin " << b;
+  }
+}
+
 }  // namespace gstat_cokriging_test
 }  // namespace errfield

@@ -100,3 +100,43 @@ def test_refuses_a_model_of_another_component_count_and_bad_json():
         errfield.Cokriging(x, z, "{not json")
     with pytest.raises(errfield.ArgumentError, match="sparse back end"):
         errfield.Cokriging(x, z, LMC, backend="sparse")
+
+
+def test_nan_is_a_component_not_measured_there(tmp_path):
+    # Heterotopic: b measured at about 60 % of the samples. Simple cokriging is then the Gaussian-process
+    # posterior of the observations that exist (the joint covariance without the rows of the NaNs), and
+    # the CLI with empty cells gives the same numbers as the binding with NaN.
+    x, z, t = data(n=30, m=10, seed=5)
+    rng = np.random.default_rng(6)
+    z[rng.uniform(size=len(x)) < 0.4, 1] = np.nan
+    assert np.isnan(z[:, 1]).sum() >= 5
+    mu = np.array([0.1, -0.2])
+    mean, _, cov = errfield.Cokriging(x, z, LMC, kind="simple", mean=list(mu)).predict(t)
+    n, p = len(x), 2
+    keep = ~np.isnan(z.reshape(-1))  # sample-major rows that exist
+    k = lmc_covariance(np.linalg.norm(x[:, None] - x[None], axis=2)).transpose(0, 2, 1, 3).reshape(n * p, n * p)
+    ks = lmc_covariance(np.linalg.norm(t[:, None] - x[None], axis=2)).transpose(0, 2, 1, 3).reshape(len(t) * p, n * p)
+    k, ks = k[np.ix_(keep, keep)], ks[:, keep]
+    alpha = np.linalg.solve(k, (z - mu).reshape(-1)[keep])
+    gp_mean = mu + (ks @ alpha).reshape(len(t), p)
+    sill = sum(np.array(s["sills"]) for s in LMC["structures"])
+    gp_cov = np.array([sill - ks[i * p:(i + 1) * p] @ np.linalg.solve(k, ks[i * p:(i + 1) * p].T) for i in range(len(t))])
+    np.testing.assert_allclose(mean, gp_mean, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(cov, gp_cov, rtol=0, atol=1e-10)
+
+    s = write_csv(tmp_path / "s.csv", {"x": x[:, 0], "y": x[:, 1], "a": z[:, 0], "b": z[:, 1]})
+    tt = write_csv(tmp_path / "t.csv", {"x": t[:, 0], "y": t[:, 1]})
+    (tmp_path / "lmc.json").write_text(json.dumps(LMC))
+    run_cli("interpolate", "--method", "kriging", "--samples", s, "--targets", tt, "--coords", "x,y", "--value", "a,b",
+            "--model", tmp_path / "lmc.json", "--out", tmp_path / "o.csv")
+    csv = read_csv(tmp_path / "o.csv")
+    mean, var, _ = errfield.Cokriging(x, z, LMC).predict(t)
+    assert np.isfinite(mean).all()
+    assert same(mean[:, 1], numbers(csv["pred_b"])) and same(var[:, 1], numbers(csv["var_b"]))
+    # A row with nothing measured, or an infinity, is still refused.
+    z[3] = np.nan
+    with pytest.raises(errfield.InputError, match="sample 3 has no measured component"):
+        errfield.Cokriging(x, z, LMC)
+    z[3] = [1.0, np.inf]
+    with pytest.raises(errfield.InputError, match="expected a finite number"):
+        errfield.Cokriging(x, z, LMC)
