@@ -14,19 +14,21 @@ namespace errfield::cli {
 namespace {
 
 struct PredictArgs {
-  std::string model, joints, out;
+  std::string model, joints, out, tool;
   double max_registration_rms = robot::kRegistrationRmsLimitMm;
 };
 
 void run_predict(const PredictArgs& a) {
   const compensation::LoadedModel loaded = compensation::load_model(a.model);
-  const compensation::CompensationModel& model = loaded.model;
+  const auto tool = parse_tool_option(a.tool, loaded.model.command_model().tool());
+  const compensation::CompensationModel model = tool ? loaded.model.with_working_tool(tool) : loaded.model;
   const CsvTable table = CsvTable::read(a.joints);
   const std::vector<robot::JointVector> q = read_joint_columns(table);
   const std::size_t n = q.size();
   const bool tracker = model.registration().has_value();
   // Joints files that carry measurements (a held-out set) must be of the model's robot.
-  compensation::check_table_fits_robot(table, model.nominal_model(), {true, "the nominal robot of " + a.model},
+  compensation::check_table_fits_robot(table, tool ? model.nominal_model().with_tool(*tool) : model.nominal_model(),
+                                       {true, "the nominal robot of " + a.model + (tool ? " with --tool" : "")},
                                        a.max_registration_rms);
   if (const auto w = robot::joints_outside_limits(q, model.nominal_model(), row_labels_of(table, "row")))
     std::cerr << "errfield predict: warning: " << *w << " (status outside-limits: nothing predicted there)\n";
@@ -53,6 +55,7 @@ void run_predict(const PredictArgs& a) {
             << (any_variance ? ", var_mm2 (a new reading: field + nugget), var_field_mm2 (field only)" : "")
             << (any_radius ? ", r95_mm (95 % radius of a new reading around the prediction)" : "") << "\n  written to "
             << a.out << "\n";
+  print_working_tool(std::cout, model);
   require_standard_output();  // before the commit: a failing run must not replace a.out
   out.write(a.out);
 }
@@ -74,6 +77,7 @@ void add_predict_command(CLI::App& app) {
                   "when --joints has x,y,z or mx,my,mz: refuse (exit 2) data that are not the model's robot's "
                   "(registration RMS above this, mm; docs/robot.md)")
       ->capture_default_str();
+  add_tool_option(cmd, a->tool, "the point predicted");
   cmd->add_option("--out", a->out, "output CSV (written atomically)")->required();
   cmd->callback([a] { run_predict(*a); });
 }

@@ -21,7 +21,7 @@ namespace errfield::cli {
 namespace {
 
 struct ValidateArgs {
-  std::string model, data, robot, out, summary_out, report;
+  std::string model, data, robot, out, summary_out, report, tool;
   std::vector<std::string> base_points;
   bool targets = false;
   double max_registration_rms = robot::kRegistrationRmsLimitMm;
@@ -40,7 +40,8 @@ void run_validate(const ValidateArgs& a) {
   using namespace robot;
   using namespace compensation;
   const compensation::LoadedModel loaded = compensation::load_model(a.model);
-  const CompensationModel& model = loaded.model;
+  const auto tool = parse_tool_option(a.tool, loaded.model.command_model().tool());
+  const CompensationModel model = tool ? loaded.model.with_working_tool(tool) : loaded.model;
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.base_points) {
     const auto v = parse_numbers(b, 3, "--base-point");
@@ -51,7 +52,9 @@ void run_validate(const ValidateArgs& a) {
   if (a.targets) {
     r = with_source(a.data, [&] { return compensation::validate_targets(table, model.registration(), fixed); });
   } else {
-    const MdhModel nominal = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
+    const MdhModel nominal_robot = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
+    // The readings are of the working tool's point: so is the nominal robot's 'before'.
+    const MdhModel nominal = model.working_tool() ? nominal_robot.with_tool(*model.working_tool()) : nominal_robot;
     // Data of another robot, or joints in radians, scored "after" errors of a metre (exit 0).
     check_table_fits_robot(table, nominal,
                            {true, a.robot.empty() ? "the nominal robot of " + a.model : "--robot " + a.robot},
@@ -86,6 +89,7 @@ void run_validate(const ValidateArgs& a) {
                                                                 marked_simulated(a.data)));
   outputs.commit();
   std::cout << "validate: " << loaded.description << " from " << a.model << " on " << a.data << "\n" << r.summary_text();
+  print_working_tool(std::cout, model);
   for (const auto& f : {a.out, a.summary_out, a.report})
     if (!f.empty()) std::cout << "  written " << f << "\n";
 }
@@ -113,6 +117,7 @@ void add_validate_command(CLI::App& app) {
                   "refuse (exit 2) data whose tracker readings mx,my,mz register to the robot with a larger RMS (mm): "
                   "data of another robot, joints in radians, metres (docs/robot.md)")
       ->capture_default_str();
+  add_tool_option(cmd, a->tool, "the point the held-out readings measured");
   cmd->add_flag("--targets", a->targets, "validation-run mode: error = measured - intended target");
   cmd->add_option("--out", a->out, "per-point CSV: point,status,before_mm,after_mm, the error components and, for "
                   "kriging models, var_mm2, var_field_mm2, r95_mm, nees");
