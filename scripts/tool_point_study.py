@@ -121,7 +121,7 @@ def main():
                 pb = [float(rb_.split(",")[i]) for i in ix]
                 worst = max(worst, abs(math.dist(pa, pb) - math.hypot(*offset)))
             trainB, holdB, locB = (os.path.join(W, f"s{seed}_B{tag}_{k}.csv") for k in ("train", "hold", "locate"))
-            write_rows(trainB, hb, tb[:N_TRAIN], drop=())
+            write_rows(trainB, hb, tb[:N_TRAIN])
             write_rows(holdB, hb, tb[N_TRAIN:])
             write_rows(locB, hb, tb[:N_LOCATE])
             point = tool_point(robot, offset)

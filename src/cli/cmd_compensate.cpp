@@ -39,14 +39,14 @@ void run_compensate(const CompensateArgs& a) {
   const nlohmann::json j = read_json_file(a.model, "model file");
   const CompensationModel stored = with_json_source(a.model, [&] { return CompensationModel::from_json(j, a.model); });
   const auto tool = parse_tool_option(a.tool, stored.aimed_model().tool());
-  const CompensationModel model = tool ? stored.with_working_tool(tool) : stored;
+  const CompensationModel model = tool ? stored.with_working_tool(stored.tool_in_model_frame(*tool)) : stored;
   const bool kinematic = model.method() == CompensationMethod::kinematic ||
                          model.method() == CompensationMethod::kinematic_kriging;
   if (kinematic && a.robot.empty() && !model.has_nominal_model())
     throw ArgumentError("--robot: a kinematic model's command model is the calibrated robot; give the nominal robot JSON");
   const MdhModel nominal_robot = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
   // Targets are poses (or the FK) of the working tool.
-  const MdhModel nominal = tool ? nominal_robot.with_tool(*tool) : nominal_robot;
+  const MdhModel nominal = nominal_at_working_tool(model, nominal_robot);
   CompensationTargets targets;
   if (!a.seed.empty()) {
     const auto v = parse_numbers(a.seed, 6, "--seed");

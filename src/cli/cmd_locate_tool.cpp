@@ -50,7 +50,8 @@ void run_locate_tool(const LocateToolArgs& a) {
             << " distinct flange orientations";
   if (t.left_out) std::cout << " (" << t.left_out << " left out: outside the model's region)";
   std::cout << "\n  tool point " << rounded(t.tool_mm.x()) << "," << rounded(t.tool_mm.y()) << "," << rounded(t.tool_mm.z())
-            << " mm (flange frame), standard deviation " << rounded(t.sd_mm.x()) << ", " << rounded(t.sd_mm.y()) << ", "
+            << " mm (the calibrated model's flange frame; --tool " << tool_option_text(located.tool_in_robot_frame(tool))
+            << " in the robot description's), standard deviation " << rounded(t.sd_mm.x()) << ", " << rounded(t.sd_mm.y()) << ", "
             << rounded(t.sd_mm.z()) << " mm per axis (least squares, readings taken as independent)\n"
             << "  fit residual RMS " << rounded(t.residual_rms_mm) << " mm (" << t.expected_basis << " explains "
             << rounded(t.expected_rms_mm) << " mm)\n"

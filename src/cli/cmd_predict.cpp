@@ -21,14 +21,15 @@ struct PredictArgs {
 void run_predict(const PredictArgs& a) {
   const compensation::LoadedModel loaded = compensation::load_model(a.model);
   const auto tool = parse_tool_option(a.tool, loaded.model.command_model().tool());
-  const compensation::CompensationModel model = tool ? loaded.model.with_working_tool(tool) : loaded.model;
+  const compensation::CompensationModel model =
+      tool ? loaded.model.with_working_tool(loaded.model.tool_in_model_frame(*tool)) : loaded.model;
   const CsvTable table = CsvTable::read(a.joints);
   const std::vector<robot::JointVector> q = read_joint_columns(table);
   const std::size_t n = q.size();
   const bool tracker = model.registration().has_value();
   // Joints files that carry measurements (a held-out set) must be of the model's robot.
-  compensation::check_table_fits_robot(table, tool ? model.nominal_model().with_tool(*tool) : model.nominal_model(),
-                                       {true, "the nominal robot of " + a.model + (tool ? " with --tool" : "")},
+  compensation::check_table_fits_robot(table, compensation::nominal_at_working_tool(model, model.nominal_model()),
+                                       {true, "the nominal robot of " + a.model + (model.working_tool() ? " at the working tool" : "")},
                                        a.max_registration_rms);
   if (const auto w = robot::joints_outside_limits(q, model.nominal_model(), row_labels_of(table, "row")))
     std::cerr << "errfield predict: warning: " << *w << " (status outside-limits: nothing predicted there)\n";

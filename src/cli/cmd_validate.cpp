@@ -41,7 +41,8 @@ void run_validate(const ValidateArgs& a) {
   using namespace compensation;
   const compensation::LoadedModel loaded = compensation::load_model(a.model);
   const auto tool = parse_tool_option(a.tool, loaded.model.command_model().tool());
-  const CompensationModel model = tool ? loaded.model.with_working_tool(tool) : loaded.model;
+  const CompensationModel model =
+      tool ? loaded.model.with_working_tool(loaded.model.tool_in_model_frame(*tool)) : loaded.model;
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.base_points) {
     const auto v = parse_numbers(b, 3, "--base-point");
@@ -54,7 +55,7 @@ void run_validate(const ValidateArgs& a) {
   } else {
     const MdhModel nominal_robot = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
     // The readings are of the working tool's point: so is the nominal robot's 'before'.
-    const MdhModel nominal = model.working_tool() ? nominal_robot.with_tool(*model.working_tool()) : nominal_robot;
+    const MdhModel nominal = nominal_at_working_tool(model, nominal_robot);
     // Data of another robot, or joints in radians, scored "after" errors of a metre (exit 0).
     check_table_fits_robot(table, nominal,
                            {true, a.robot.empty() ? "the nominal robot of " + a.model : "--robot " + a.robot},

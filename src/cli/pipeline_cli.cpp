@@ -67,7 +67,7 @@ void print_working_tool(std::ostream& out, const compensation::CompensationModel
   if (!model.working_tool()) return;
   const double lever = (model.working_tool()->translation() - model.measured_point_mm()).norm();
   const compensation::OrientationPrior& prior = model.orientation_prior();
-  out << "  working tool " << tool_option_text(*model.working_tool()) << " (flange frame): "
+  out << "  working tool " << tool_option_text(model.tool_in_robot_frame(*model.working_tool())) << " (--tool, flange frame): "
       << format_number(std::round(lever * 10) / 10) << " mm from the reflector the model was measured with";
   if (prior.known())
     out << "; orientation prior " << format_number(std::round(prior.sigma_rad * 1e6) / 1e3)

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "compensation/fit_checks.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 #include "errfield/compensation/error_ball.hpp"
 #include "errfield/error.hpp"
 #include "errfield/compensation/error_fields.hpp"
@@ -175,6 +176,10 @@ double CompensationModel::largest_training_correction_mm() const {
   return largest;
 }
 
+MdhModel nominal_at_working_tool(const CompensationModel& model, const MdhModel& nominal) {
+  return model.working_tool() ? nominal.with_tool(model.tool_in_robot_frame(*model.working_tool())) : nominal;
+}
+
 void check_tool_point(const Eigen::Isometry3d& tool, const std::string& what) {
   const Eigen::Vector3d t = tool.translation();
   if (!tool.matrix().allFinite())
@@ -274,6 +279,24 @@ CompensationModel CompensationModel::with_working_tool(std::optional<Eigen::Isom
   return m;
 }
 
+Eigen::Isometry3d CompensationModel::tool_in_model_frame(const Eigen::Isometry3d& tool) const {
+  // Where the calibration moved the robot description's tool (the reflector, when the two are one
+  // point): the same correction of the flange holds for any point on it.
+  if (!has_nominal_model()) return tool;
+  const Eigen::Vector3d shift = measured_point_mm() - nominal_model().tool().translation();
+  if (!(shift.norm() < kReflectorAtToolMm)) return tool;
+  Eigen::Isometry3d t = tool;
+  t.translation() += shift;
+  return t;
+}
+
+Eigen::Isometry3d CompensationModel::tool_in_robot_frame(const Eigen::Isometry3d& tool) const {
+  const Eigen::Isometry3d there = tool_in_model_frame(Eigen::Isometry3d::Identity());
+  Eigen::Isometry3d t = tool;
+  t.translation() -= there.translation();
+  return t;
+}
+
 MdhModel CompensationModel::scored_model() const {
   return working_tool_ ? command_model_.with_tool(*working_tool_) : command_model_;
 }
@@ -335,23 +358,27 @@ const OrientationPrior& CompensationModel::orientation_prior() const {
     const Eigen::MatrixXd e = compensation::fitted_errors(*field_);
     if (q.empty() || e.cols() != 3 || e.rows() != static_cast<Eigen::Index>(q.size())) return;
     // The kinematic residual at the reflector (what the field and the functions model together),
-    // read as independent angle errors of equal variance s² in the six joints: E|r|² = s² sum_k
-    // |J_k|², J_k the position column of joint k at the reflector. The flange then turns by
-    // w = sum_k z_k dq_k, of trace covariance 6 s²: 2 s² per axis.
+    // read as independent angle errors of equal variance s² in the three wrist joints, the joints
+    // with the shortest levers to the reflector, so the largest rotation the residual allows:
+    // E|r|² = s² sum_k |J_k|² over joints 4..6, J_k the position column of joint k at the reflector.
+    // The flange then turns by w = sum_k z_k dq_k, of trace covariance 3 s²: s² per axis. Errors
+    // of the long axes (the shoulder, the elbow) turn it by less; a joint whose axis passes through
+    // the reflector (J6 for a reflector on the flange's axis) leaves no trace at all, which is what
+    // the floor is for (docs/robot.md, "Tool points and orientation").
     double residual_ss = 0.0, lever_ss = 0.0;
     for (std::size_t i = 0; i < q.size(); ++i) {
       Eigen::Vector3d r = e.row(static_cast<Eigen::Index>(i)).transpose();
       if (joint_functions_) r += joint_functions_->position_error_mm(command_model_, q[i]);
       residual_ss += r.squaredNorm();
-      lever_ss += geometric_jacobian(command_model_, q[i], EndFrame::tool).topRows<3>().squaredNorm();
+      lever_ss += geometric_jacobian(command_model_, q[i], EndFrame::tool).block<3, 3>(0, 3).squaredNorm();
     }
     if (!(lever_ss > 0.0) || !std::isfinite(residual_ss)) return;
     OrientationPrior& p = s.value;
     p.samples = q.size();
     p.residual_rms_mm = std::sqrt(residual_ss / static_cast<double>(q.size()));
-    p.data_sigma_rad = std::sqrt(2.0 * residual_ss / lever_ss);
+    p.data_sigma_rad = std::sqrt(residual_ss / lever_ss);
     p.sigma_rad = std::hypot(p.data_sigma_rad, kOrientationPriorFloorRad);
-    p.max_lever_mm = p.residual_rms_mm / (std::sqrt(2.0) * p.sigma_rad);
+    p.max_lever_mm = kMaxLeverResidualRatio * p.residual_rms_mm / (std::sqrt(2.0) * p.sigma_rad);
   });
   return s.value;
 }

@@ -126,7 +126,7 @@ CompensationModel with_tool_arg(const CompensationModel& model, const py::object
   if (v.size() == 6) t = robot::to_isometry({x[0], x[1], x[2], x[3], x[4], x[5]});
   t.translation() = Eigen::Vector3d(x[0], x[1], x[2]);
   check_tool_point(t, "tool");
-  return model.with_working_tool(t);
+  return model.with_working_tool(model.tool_in_model_frame(t));
 }
 
 PyModel fit_py(const py::object& data, const py::object& robot, const std::string& method, const std::string& space,
@@ -178,7 +178,7 @@ py::dict compensate_py(const PyModel& m, const py::object& targets, const py::ob
   if (kinematic && robot.is_none() && !model.has_nominal_model())
     throw ArgumentError("robot: a kinematic model's command model is the calibrated robot; give the nominal robot");
   const MdhModel nominal_robot = robot.is_none() ? model.nominal_model() : robot_arg(robot);
-  const MdhModel nominal = model.working_tool() ? nominal_robot.with_tool(*model.working_tool()) : nominal_robot;
+  const MdhModel nominal = nominal_at_working_tool(model, nominal_robot);
   CompensationTargets t;
   if (!seed.is_none()) t.seed_deg = matrix_arg(seed, "seed", ArraySpec{1, 1, -1, robot::kJointCount}).data.col(0);
   if (is_columns(targets)) {
@@ -209,7 +209,7 @@ py::dict validate_py(const PyModel& m, const py::object& data, const py::object&
   const CsvTable table = table_arg(data, "data");
   const auto fixed = base_points_arg(base_points);
   const MdhModel nominal_robot = robot.is_none() ? model.nominal_model() : robot_arg(robot);
-  const MdhModel nominal = model.working_tool() ? nominal_robot.with_tool(*model.working_tool()) : nominal_robot;
+  const MdhModel nominal = nominal_at_working_tool(model, nominal_robot);
   ValidationReport r;
   {
     py::gil_scoped_release release;

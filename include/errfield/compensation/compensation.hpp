@@ -101,12 +101,13 @@ struct OrientationPrior {
   /// Per-axis standard deviation of the orientation residual (rad); NaN when the model has no
   /// residuals to scale it from (no vector field): then nothing is added and nothing refused.
   double sigma_rad = std::numeric_limits<double>::quiet_NaN();
-  /// The part of sigma_rad from the model's residuals (joint-angle errors of equal size that would
-  /// leave the residual RMS at the reflector) and the documented floor (kOrientationPriorFloorRad).
+  /// The part of sigma_rad from the model's residuals (wrist angle errors of equal size that would
+  /// leave the residual RMS at the reflector); sigma_rad adds the floor kOrientationPriorFloorRad.
   double data_sigma_rad = std::numeric_limits<double>::quiet_NaN();
   /// Rows whose working point is further than this from the reflector (mm) are refused
-  /// (orientation-unknown): the lever at which the orientation term's RMS, sqrt(2) sigma L, equals
-  /// residual_rms_mm, the error the model corrects at the reflector; infinite without a prior.
+  /// (orientation-unknown): the lever at which the orientation term's RMS, sqrt(2) sigma L, is
+  /// kMaxLeverResidualRatio x residual_rms_mm, the error the model corrects at the reflector;
+  /// infinite without a prior.
   double max_lever_mm = std::numeric_limits<double>::infinity();
   /// RMS of the kinematic residuals at the reflector the prior is scaled from (mm), and how many.
   double residual_rms_mm = std::numeric_limits<double>::quiet_NaN();
@@ -119,6 +120,9 @@ struct OrientationPrior {
 /// tool) are not seen in the residuals; 0.1 mrad is a tool flange's typical angular tolerance
 /// (docs/robot.md, "Tool points and orientation").
 inline constexpr double kOrientationPriorFloorRad = 1e-4;
+/// OrientationPrior::max_lever_mm: the lever at which the orientation term's RMS is this many times
+/// the RMS of the residual the model corrects at the reflector (docs/robot.md).
+inline constexpr double kMaxLeverResidualRatio = 2.0;
 /// `--tool`: a tool point further than this from the flange origin (mm) is refused as a typo (metres
 /// for mm, a wrong column): no robot tool is 2 m long.
 inline constexpr double kMaxToolPointMm = 2000.0;
@@ -246,6 +250,13 @@ class CompensationModel {
   /// tool_point_mm(). Its lever from the reflector brings in the orientation term (OrientationPrior).
   const std::optional<Eigen::Isometry3d>& working_tool() const noexcept { return working_tool_; }
   CompensationModel with_working_tool(std::optional<Eigen::Isometry3d> tool) const;
+  /// A tool given in the robot description's flange frame (`--tool`), in the calibrated model's: moved
+  /// by the calibration's correction of the reflector (measured_point_mm() − the nominal robot's tool)
+  /// when the two are one point (closer than kReflectorAtToolMm), since the flange it corrects carries
+  /// every point; unchanged otherwise and for models without a stored nominal robot.
+  Eigen::Isometry3d tool_in_model_frame(const Eigen::Isometry3d& tool_in_robot_description) const;
+  /// The inverse of tool_in_model_frame (for printing a located tool as `--tool` takes it).
+  Eigen::Isometry3d tool_in_robot_frame(const Eigen::Isometry3d& tool_in_model) const;
   /// The reflector the data measured (flange frame, mm): the command model's tool.
   Eigen::Vector3d measured_point_mm() const { return command_model_.tool().translation(); }
   /// The model compensate aims with: the command model, with its tool set to working_tool() or else
@@ -332,6 +343,10 @@ class CompensationModel {
   std::vector<std::string> excluded_rows_, notes_;
   void set_function_rows_at_samples();
 };
+
+/// The nominal robot `nominal` with the model's working tool in the robot description's frame (what
+/// the readings' or targets' nominal positions are of); `nominal` itself without a working tool.
+robot::MdhModel nominal_at_working_tool(const CompensationModel& model, const robot::MdhModel& nominal);
 
 /// A working tool (flange frame) as `--tool` and a model's "working_tool" must be: finite, and its
 /// point at most kMaxToolPointMm from the flange origin; ArgumentError starting with `what` otherwise.
