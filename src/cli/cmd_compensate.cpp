@@ -24,7 +24,7 @@ namespace errfield::cli {
 namespace {
 
 struct CompensateArgs {
-  std::string robot, model, targets, out, seed, config;
+  std::string robot, model, targets, out, seed, config, tool;
   double tolerance = 0.25, max_registration_rms = robot::kRegistrationRmsLimitMm;
   double max_correction = 0.0;  // 0: compensation::default_max_correction_mm
   bool strict = false;
@@ -38,12 +38,16 @@ void run_compensate(const CompensateArgs& a) {
   if (!(std::isfinite(a.tolerance) && a.tolerance > 0.0))
     throw ArgumentError("--tolerance: " + format_number(a.tolerance) + "; expected a finite tolerance > 0 (mm)");
   const nlohmann::json j = read_json_file(a.model, "model file");
-  const CompensationModel model = with_json_source(a.model, [&] { return CompensationModel::from_json(j, a.model); });
+  const CompensationModel stored = with_json_source(a.model, [&] { return CompensationModel::from_json(j, a.model); });
+  const auto tool = parse_tool_option(a.tool, stored.aimed_model().tool());
+  const CompensationModel model = tool ? stored.with_working_tool(stored.tool_in_model_frame(*tool)) : stored;
   const bool kinematic = model.method() == CompensationMethod::kinematic ||
                          model.method() == CompensationMethod::kinematic_kriging;
   if (kinematic && a.robot.empty() && !model.has_nominal_model())
     throw ArgumentError("--robot: a kinematic model's command model is the calibrated robot; give the nominal robot JSON");
-  const MdhModel nominal = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
+  const MdhModel nominal_robot = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
+  // Targets are poses (or the FK) of the working tool.
+  const MdhModel nominal = nominal_at_working_tool(model, nominal_robot);
   CompensationTargets targets;
   if (!a.seed.empty()) {
     const auto v = parse_numbers(a.seed, 6, "--seed");
@@ -123,6 +127,7 @@ void run_compensate(const CompensateArgs& a) {
                                              " x the largest correction at the model's training poses, at least " +
                                              format_number(kMaxCorrectionFloorMm) + " mm")
             << ")\n";
+  print_working_tool(std::cout, model);
   if (step.too_large)
     std::cerr << "errfield compensate: warning: " << step.too_large << " target(s) would move the tool point by more "
               << "than " << format_number(step.max_correction_mm)
@@ -186,6 +191,7 @@ void add_compensate_command(CLI::App& app) {
                   "correction-too-large; column move_mm). Default (0): 3 x the largest total correction the model "
                   "predicts at its own training poses, at least 1 mm (docs/robot.md)")
       ->capture_default_str();
+  add_tool_option(cmd, a->tool, "the point compensated (targets are its poses)");
   cmd->add_flag("--strict", a->strict,
                 "if any target is refused: write nothing, name the refused rows and exit with status 1");
   cmd->add_option("--out", a->out, "output CSV (written atomically)")->required();

@@ -14,14 +14,16 @@ namespace errfield::cli {
 namespace {
 
 struct PredictArgs {
-  std::string model, joints, out;
+  std::string model, joints, out, tool;
   double max_registration_rms = robot::kRegistrationRmsLimitMm;
   bool joints_are_degrees = false;  // skip the radians check (check_joints_not_radians)
 };
 
 void run_predict(const PredictArgs& a) {
   const compensation::LoadedModel loaded = compensation::load_model(a.model);
-  const compensation::CompensationModel& model = loaded.model;
+  const auto tool = parse_tool_option(a.tool, loaded.model.command_model().tool());
+  const compensation::CompensationModel model =
+      tool ? loaded.model.with_working_tool(loaded.model.tool_in_model_frame(*tool)) : loaded.model;
   const CsvTable table = CsvTable::read(a.joints);
   const std::vector<robot::JointVector> q = read_joint_columns(table);
   const std::size_t n = q.size();
@@ -29,7 +31,8 @@ void run_predict(const PredictArgs& a) {
   if (!a.joints_are_degrees) compensation::check_joints_not_radians(q, model, a.joints, "--joints-are-degrees");
   const bool tracker = model.registration().has_value();
   // Joints files that carry measurements (a held-out set) must be of the model's robot.
-  compensation::check_table_fits_robot(table, model.nominal_model(), {true, "the nominal robot of " + a.model},
+  compensation::check_table_fits_robot(table, compensation::nominal_at_working_tool(model, model.nominal_model()),
+                                       {true, "the nominal robot of " + a.model + (model.working_tool() ? " at the working tool" : "")},
                                        a.max_registration_rms);
   if (const auto w = robot::joints_outside_limits(q, model.nominal_model(), row_labels_of(table, "row")))
     std::cerr << "errfield predict: warning: " << *w << " (status outside-limits: nothing predicted there)\n";
@@ -56,6 +59,7 @@ void run_predict(const PredictArgs& a) {
             << (any_variance ? ", var_mm2 (a new reading: field + nugget), var_field_mm2 (field only)" : "")
             << (any_radius ? ", r95_mm (95 % radius of a new reading around the prediction)" : "") << "\n  written to "
             << a.out << "\n";
+  print_working_tool(std::cout, model);
   require_standard_output();  // before the commit: a failing run must not replace a.out
   out.write(a.out);
 }
@@ -81,6 +85,7 @@ void add_predict_command(CLI::App& app) {
   cmd->add_flag("--joints-are-degrees", a->joints_are_degrees,
                 "skip the check that refuses joints that look like radians (all within +-2 pi and spread far less "
                 "than the model's training joints, exit 2); give it when such small angles are meant");
+  add_tool_option(cmd, a->tool, "the point predicted");
   cmd->add_option("--out", a->out, "output CSV (written atomically)")->required();
   cmd->callback([a] { run_predict(*a); });
 }

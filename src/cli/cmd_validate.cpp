@@ -21,7 +21,7 @@ namespace errfield::cli {
 namespace {
 
 struct ValidateArgs {
-  std::string model, data, robot, out, summary_out, report;
+  std::string model, data, robot, out, summary_out, report, tool;
   std::vector<std::string> base_points;
   bool targets = false;
   double max_registration_rms = robot::kRegistrationRmsLimitMm;
@@ -41,7 +41,9 @@ void run_validate(const ValidateArgs& a) {
   using namespace robot;
   using namespace compensation;
   const compensation::LoadedModel loaded = compensation::load_model(a.model);
-  const CompensationModel& model = loaded.model;
+  const auto tool = parse_tool_option(a.tool, loaded.model.command_model().tool());
+  const CompensationModel model =
+      tool ? loaded.model.with_working_tool(loaded.model.tool_in_model_frame(*tool)) : loaded.model;
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.base_points) {
     const auto v = parse_numbers(b, 3, "--base-point");
@@ -52,7 +54,9 @@ void run_validate(const ValidateArgs& a) {
   if (a.targets) {
     r = with_source(a.data, [&] { return compensation::validate_targets(table, model.registration(), fixed); });
   } else {
-    const MdhModel nominal = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
+    const MdhModel nominal_robot = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
+    // The readings are of the working tool's point: so is the nominal robot's 'before'.
+    const MdhModel nominal = nominal_at_working_tool(model, nominal_robot);
     // Data of another robot, or joints in radians, scored "after" errors of a metre (exit 0).
     check_table_fits_robot(table, nominal,
                            {true, a.robot.empty() ? "the nominal robot of " + a.model : "--robot " + a.robot},
@@ -90,6 +94,7 @@ void run_validate(const ValidateArgs& a) {
     outputs.add(a.report, compensation::validation_report_html(r, "errfield validate: " + loaded.description + " on " + a.data,
                                                                 marked_simulated(a.data)));
   std::cout << "validate: " << loaded.description << " from " << a.model << " on " << a.data << "\n" << r.summary_text();
+  print_working_tool(std::cout, model);
   for (const auto& f : {a.out, a.summary_out, a.report})
     if (!f.empty()) std::cout << "  written " << f << "\n";
   require_standard_output();  // before the commit: a run that fails leaves the previous files
@@ -125,6 +130,7 @@ void add_validate_command(CLI::App& app) {
                   "leaves them more than this RMS off (docs/robot.md)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  add_tool_option(cmd, a->tool, "the point the held-out readings measured");
   cmd->add_flag("--targets", a->targets, "validation-run mode: error = measured - intended target");
   cmd->add_option("--out", a->out, "per-point CSV: point,status,before_mm,after_mm, the error components and, for "
                   "kriging models, var_mm2, var_field_mm2, r95_mm, nees");

@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ostream>
 #include <utility>
 
 #include "errfield/csv_table.hpp"
+#include "errfield/compensation/compensation.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/pose.hpp"
 
 namespace errfield::cli {
 
@@ -26,6 +29,53 @@ std::vector<double> parse_numbers(const std::string& text, std::size_t count, co
     v.push_back(x);
   }
   return v;
+}
+
+std::optional<Eigen::Isometry3d> parse_tool_option(const std::string& text, const Eigen::Isometry3d& current_tool,
+                                                   const std::string& what) {
+  if (text.empty()) return std::nullopt;
+  const std::size_t count = split_list(text, what).size();
+  if (count != 3 && count != 6)
+    throw ArgumentError(what + ": expected X,Y,Z or X,Y,Z,RX,RY,RZ (flange frame; mm, deg), got '" + text + "'");
+  const std::vector<double> v = parse_numbers(text, count, what);
+  Eigen::Isometry3d tool = current_tool;
+  if (count == 6) tool = robot::to_isometry({v[0], v[1], v[2], v[3], v[4], v[5]});
+  tool.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
+  compensation::check_tool_point(tool, what);
+  return tool;
+}
+
+std::string tool_option_text(const Eigen::Isometry3d& tool) {
+  const robot::PoseXyzRpy p = robot::to_xyz_rpy(tool);
+  std::string text;
+  for (double v : {p.x_mm, p.y_mm, p.z_mm, p.rx_deg, p.ry_deg, p.rz_deg})
+    text += (text.empty() ? "" : ",") + format_number(std::round(v * 1e6) / 1e6);
+  return text;
+}
+
+void add_tool_option(CLI::App* cmd, std::string& into, const std::string& role) {
+  cmd->add_option("--tool", into,
+                  "X,Y,Z[,RX,RY,RZ]: the working tool for this run (flange frame; mm, deg; three numbers keep the "
+                  "tool's orientation), " + role + ", instead of the model's; at most " +
+                  format_number(compensation::kMaxToolPointMm) +
+                  " mm from the flange. Away from the measured reflector the variance includes the flange's "
+                  "unobservable orientation error, and rows too far from it are refused (orientation-unknown; "
+                  "docs/robot.md, \"Tool points and orientation\")");
+}
+
+void print_working_tool(std::ostream& out, const compensation::CompensationModel& model) {
+  if (!model.working_tool()) return;
+  const double lever = (model.working_tool()->translation() - model.measured_point_mm()).norm();
+  const compensation::OrientationPrior& prior = model.orientation_prior();
+  out << "  working tool " << tool_option_text(model.tool_in_robot_frame(*model.working_tool())) << " (--tool, flange frame): "
+      << format_number(std::round(lever * 10) / 10) << " mm from the reflector the model was measured with";
+  if (prior.known())
+    out << "; orientation prior " << format_number(std::round(prior.sigma_rad * 1e6) / 1e3)
+        << " mrad per axis, refused beyond " << format_number(std::round(prior.max_lever_mm)) << " mm"
+        << (lever > prior.max_lever_mm ? " (every row: orientation-unknown)" : "");
+  else if (lever > 0.0)
+    out << "; the model has no variance to widen for the flange's orientation error";
+  out << "\n";
 }
 
 void add_step_columns(OutputTable& out, const compensation::StepColumns& step) {

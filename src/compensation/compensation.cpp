@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "compensation/fit_checks.hpp"
+#include "errfield/compensation/model_fitting.hpp"
 #include "errfield/compensation/error_ball.hpp"
 #include "errfield/error.hpp"
 #include "errfield/json_file.hpp"
@@ -107,13 +108,17 @@ CompensatedTarget CompensationModel::compensate_joints(const MdhModel& nominal_m
   out.q_command_deg = q_nominal_deg;
   Eigen::Isometry3d pose = forward_kinematics(nominal_model, q_nominal_deg, ik.frame);
   const Eigen::Vector3d p_nominal = pose.translation();
+  // The tool point, not the reflector the data measured (when the model knows both).
+  const MdhModel aimed = aimed_model();
   if (field_) {
     // The field lives on the nominal robot the model was fitted with (the caller's, unless the model
-    // stored its own).
-    out.prediction = has_nominal_model() ? predict_error(q_nominal_deg) : field_->predict(p_nominal, q_nominal_deg);
-    if (!has_nominal_model() && credible_ && out.prediction.inside_region)
+    // stored its own; with a working tool the caller's nominal robot carries that tool, not the
+    // reflector the field was fitted at).
+    out.prediction = has_nominal_model() || working_tool_ ? predict_error_at(q_nominal_deg, aimed)
+                                                          : field_->predict(p_nominal, q_nominal_deg);
+    if (!has_nominal_model() && !working_tool_ && credible_ && out.prediction.inside_region)
       out.prediction.credible = credible_->contains(out.prediction);
-    if (!out.prediction.inside_region || !out.prediction.credible) {
+    if (!out.prediction.inside_region || !out.prediction.credible || !out.prediction.orientation_supported) {
       out.command_position_mm = p_nominal;
       return out;
     }
@@ -128,8 +133,6 @@ CompensatedTarget CompensationModel::compensate_joints(const MdhModel& nominal_m
   // The calibration's share of the error: where the calibrated model puts the tool point at the
   // nominal joints (pred_dx..dz leave it out; the joints move by both).
   out.total_error_mm = out.prediction.position_error_mm;
-  // The tool point, not the reflector the data measured (when the model knows both).
-  const MdhModel aimed = calibrated ? aimed_model() : command_model_;
   if (calibrated) out.total_error_mm += forward_kinematics(aimed, q_nominal_deg, ik.frame).translation() - p_nominal;
   if (method_ == CompensationMethod::none) {
     out.move_mm = 0.0;
@@ -139,7 +142,7 @@ CompensatedTarget CompensationModel::compensate_joints(const MdhModel& nominal_m
   // A calibrated model is used through compensated_joints (its orientation parameters are weakly
   // determined by position/distance data, so full-pose IK of it would follow them).
   const IkResult cmd = calibrated ? compensated_joints(nominal_model, aimed, pose, q_nominal_deg)
-                                  : inverse_kinematics(command_model_, pose, q_nominal_deg, ik);
+                                  : inverse_kinematics(aimed, pose, q_nominal_deg, ik);
   out.ik_status = cmd.status;
   out.ik_residual_mm = cmd.position_residual_mm;
   if (cmd.ok()) {
@@ -153,8 +156,9 @@ Eigen::Vector3d CompensationModel::total_error(const MdhModel& nominal_model, co
   const Eigen::Vector3d p_nominal = forward_position(nominal_model, q_deg);
   Eigen::Vector3d e = Eigen::Vector3d::Zero();
   if (field_) {
-    ErrorPrediction p = has_nominal_model() ? predict_error(q_deg) : field_->predict(p_nominal, q_deg);
-    if (!has_nominal_model() && credible_ && p.inside_region) p.credible = credible_->contains(p);
+    ErrorPrediction p = has_nominal_model() || working_tool_ ? predict_error_at(q_deg, aimed_model())
+                                                             : field_->predict(p_nominal, q_deg);
+    if (!has_nominal_model() && !working_tool_ && credible_ && p.inside_region) p.credible = credible_->contains(p);
     if (!p.inside_region || !p.credible) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
     e = p.position_error_mm;
   }
@@ -164,11 +168,27 @@ Eigen::Vector3d CompensationModel::total_error(const MdhModel& nominal_model, co
 
 double CompensationModel::largest_training_correction_mm() const {
   double largest = 0.0;
+  // The nominal robot with the point aimed, so that only errors count, not the lever to it.
+  const MdhModel nominal = working_tool_ ? nominal_model().with_tool(*working_tool_) : nominal_model();
   for (const JointVector& q : data_joints_) {
-    const double e = total_error(nominal_model(), q).norm();
+    const double e = total_error(nominal, q).norm();
     if (std::isfinite(e)) largest = std::max(largest, e);
   }
   return largest;
+}
+
+MdhModel nominal_at_working_tool(const CompensationModel& model, const MdhModel& nominal) {
+  return model.working_tool() ? nominal.with_tool(model.tool_in_robot_frame(*model.working_tool())) : nominal;
+}
+
+void check_tool_point(const Eigen::Isometry3d& tool, const std::string& what) {
+  const Eigen::Vector3d t = tool.translation();
+  if (!tool.matrix().allFinite())
+    throw ArgumentError(what + ": the tool point is not finite");
+  if (t.norm() > kMaxToolPointMm)
+    throw ArgumentError(what + ": the tool point (" + format_number(t.x()) + ", " + format_number(t.y()) + ", " +
+                        format_number(t.z()) + ") mm is " + format_number(t.norm()) + " mm from the flange; expected at most " +
+                        format_number(kMaxToolPointMm) + " mm (millimetres, flange frame)");
 }
 
 bool CredibleRange::contains(const ErrorPrediction& p) const {
@@ -254,7 +274,36 @@ void CompensationModel::set_function_rows_at_samples() {
   function_rows_at_samples_ = std::move(rows);
 }
 
+CompensationModel CompensationModel::with_working_tool(std::optional<Eigen::Isometry3d> tool) const {
+  CompensationModel m = *this;
+  m.working_tool_ = std::move(tool);
+  return m;
+}
+
+Eigen::Isometry3d CompensationModel::tool_in_model_frame(const Eigen::Isometry3d& tool) const {
+  // Where the calibration moved the robot description's tool (the reflector, when the two are one
+  // point): the same correction of the flange holds for any point on it.
+  if (!has_nominal_model()) return tool;
+  const Eigen::Vector3d shift = measured_point_mm() - nominal_model().tool().translation();
+  if (!(shift.norm() < kReflectorAtToolMm)) return tool;
+  Eigen::Isometry3d t = tool;
+  t.translation() += shift;
+  return t;
+}
+
+Eigen::Isometry3d CompensationModel::tool_in_robot_frame(const Eigen::Isometry3d& tool) const {
+  const Eigen::Isometry3d there = tool_in_model_frame(Eigen::Isometry3d::Identity());
+  Eigen::Isometry3d t = tool;
+  t.translation() -= there.translation();
+  return t;
+}
+
+MdhModel CompensationModel::scored_model() const {
+  return working_tool_ ? command_model_.with_tool(*working_tool_) : command_model_;
+}
+
 MdhModel CompensationModel::aimed_model() const {
+  if (working_tool_) return command_model_.with_tool(*working_tool_);
   if (!tool_point_) return command_model_;
   Eigen::Isometry3d tool = command_model_.tool();
   tool.translation() = *tool_point_;
@@ -267,7 +316,79 @@ CompensationModel CompensationModel::with_credible_range(std::optional<CredibleR
   return m;
 }
 
+namespace {
+
+/// The joint error functions' prediction at the tool point of `at`, with their angle errors as fitted
+/// at the reflector (`reflector`'s tool): a gravity term's load point stays where the fit put it (the
+/// reflector), only the lever from each joint's axis to the point changes. Each design column is a
+/// scalar times one joint's position column at the reflector (joint_error_functions.cpp), so it
+/// becomes the same scalar times that joint's column at the point. A column that vanishes at the
+/// reflector (the joint's axis through it) was not fitted and contributes nothing.
+JointFunctionPrediction functions_at_point(const JointErrorFunctions& f, const MdhModel& reflector, const MdhModel& at,
+                                           const JointVector& q_deg, const Eigen::MatrixXd* taken_back) {
+  JointFunctionPrediction out;
+  const Eigen::Index count = f.parameter_count();
+  if (count == 0) return out;
+  Eigen::MatrixXd d = f.design_rows(reflector, q_deg);
+  const Eigen::Matrix<double, 3, kJointCount> ja = geometric_jacobian(reflector, q_deg, EndFrame::tool).topRows<3>();
+  const Eigen::Matrix<double, 3, kJointCount> jb = geometric_jacobian(at, q_deg, EndFrame::tool).topRows<3>();
+  const Eigen::Index polynomial = kJointCount * static_cast<Eigen::Index>(f.degree);
+  Eigen::VectorXd beta(count);
+  for (Eigen::Index c = 0; c < count; ++c) {
+    const int j = c < polynomial ? static_cast<int>(c / f.degree) : f.gravity_terms[static_cast<std::size_t>(c - polynomial)].joint;
+    beta[c] = c < polynomial ? f.coefficients_mrad(j, c % f.degree)
+                             : f.gravity_terms[static_cast<std::size_t>(c - polynomial)].coefficient_mrad;
+    const double n2 = ja.col(j).squaredNorm();
+    d.col(c) = n2 > 0.0 ? Eigen::Vector3d(jb.col(j) * (ja.col(j).dot(d.col(c)) / n2)) : Eigen::Vector3d::Zero();
+  }
+  out.position_error_mm = d * beta;
+  if (f.coefficient_covariance_mrad2.size() > 0) {
+    if (taken_back) d -= *taken_back;
+    out.axis_variance_mm2 = (d * f.coefficient_covariance_mrad2 * d.transpose()).diagonal();
+  }
+  return out;
+}
+
+}  // namespace
+
+const OrientationPrior& CompensationModel::orientation_prior() const {
+  LazyOrientationPrior::State& s = *orientation_prior_.state;
+  std::call_once(s.once, [&] {
+    if (!field_) return;
+    const std::vector<JointVector> q = field_->sample_joints();
+    const Eigen::MatrixXd e = compensation::fitted_errors(*field_);
+    if (q.empty() || e.cols() != 3 || e.rows() != static_cast<Eigen::Index>(q.size())) return;
+    // The kinematic residual at the reflector (what the field and the functions model together),
+    // read as independent angle errors of equal variance s² in the three wrist joints, the joints
+    // with the shortest levers to the reflector, so the largest rotation the residual allows:
+    // E|r|² = s² sum_k |J_k|² over joints 4..6, J_k the position column of joint k at the reflector.
+    // The flange then turns by w = sum_k z_k dq_k, of trace covariance 3 s²: s² per axis. Errors
+    // of the long axes (the shoulder, the elbow) turn it by less; a joint whose axis passes through
+    // the reflector (J6 for a reflector on the flange's axis) leaves no trace at all, which is what
+    // the floor is for (docs/robot.md, "Tool points and orientation").
+    double residual_ss = 0.0, lever_ss = 0.0;
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      Eigen::Vector3d r = e.row(static_cast<Eigen::Index>(i)).transpose();
+      if (joint_functions_) r += joint_functions_->position_error_mm(command_model_, q[i]);
+      residual_ss += r.squaredNorm();
+      lever_ss += geometric_jacobian(command_model_, q[i], EndFrame::tool).block<3, 3>(0, 3).squaredNorm();
+    }
+    if (!(lever_ss > 0.0) || !std::isfinite(residual_ss)) return;
+    OrientationPrior& p = s.value;
+    p.samples = q.size();
+    p.residual_rms_mm = std::sqrt(residual_ss / static_cast<double>(q.size()));
+    p.data_sigma_rad = std::sqrt(residual_ss / lever_ss);
+    p.sigma_rad = std::hypot(p.data_sigma_rad, kOrientationPriorFloorRad);
+    p.max_lever_mm = kMaxLeverResidualRatio * p.residual_rms_mm / (std::sqrt(2.0) * p.sigma_rad);
+  });
+  return s.value;
+}
+
 ErrorPrediction CompensationModel::predict_error(const JointVector& q_deg) const {
+  return predict_error_at(q_deg, scored_model());
+}
+
+ErrorPrediction CompensationModel::predict_error_at(const JointVector& q_deg, const MdhModel& point) const {
   if (!field_) return {};
   std::vector<double> w;  // the field's weights, when the functions' variance needs them
   const Eigen::Vector3d at = forward_position(nominal_model(), q_deg);
@@ -285,13 +406,32 @@ ErrorPrediction CompensationModel::predict_error(const JointVector& q_deg) const
           Eigen::Map<const Eigen::RowVectorXd>(w.data(), static_cast<Eigen::Index>(w.size())) * *function_rows_at_samples_;
       taken_back = Eigen::Map<const Eigen::MatrixXd>(sum.data(), 3, sum.size() / 3);
     }
-    const JointFunctionPrediction f = joint_functions_->predict(command_model_, q_deg, taken_back ? &*taken_back : nullptr);
+    const bool at_reflector = point.tool().isApprox(command_model_.tool(), 1e-12);
+    const JointFunctionPrediction f =
+        at_reflector ? joint_functions_->predict(command_model_, q_deg, taken_back ? &*taken_back : nullptr)
+                     : functions_at_point(*joint_functions_, command_model_, point, q_deg, taken_back ? &*taken_back : nullptr);
     p.position_error_mm += f.position_error_mm;
     // Their estimation error is part of the field's error (the `var_field_mm2` column) and of a
     // new reading's.
     const Eigen::Vector3d& v = f.axis_variance_mm2;
     if (std::isfinite(p.variance_mm2)) p.variance_mm2 += v.sum();
     if (p.axis_variance_mm2.allFinite()) p.axis_variance_mm2 += v;
+  }
+  // Away from the reflector: the flange's orientation residual w, unobservable with one reflector,
+  // moves the point by w x L. Its covariance under an isotropic prior sigma² is
+  // sigma² (|L|² I - L Lᵀ) (the diagonal is what the error ball uses).
+  const Eigen::Vector3d lever_flange = point.tool().translation() - measured_point_mm();
+  if (p.inside_region && lever_flange.norm() > 0.0) {
+    const OrientationPrior& prior = orientation_prior();
+    if (prior.known()) {
+      const Eigen::Vector3d lever = forward_kinematics(point, q_deg, EndFrame::flange).linear() * lever_flange;
+      const double s2 = prior.sigma_rad * prior.sigma_rad, l2 = lever.squaredNorm();
+      p.orientation_variance_mm2 = 2.0 * s2 * l2;
+      if (std::isfinite(p.variance_mm2)) p.variance_mm2 += p.orientation_variance_mm2;
+      if (p.axis_variance_mm2.allFinite())
+        p.axis_variance_mm2 += s2 * (Eigen::Vector3d::Constant(l2) - lever.cwiseAbs2());
+      p.orientation_supported = lever_flange.norm() <= prior.max_lever_mm;
+    }
   }
   return p;
 }
@@ -315,6 +455,7 @@ nlohmann::json CompensationModel::to_json() const {
   if (tool_point_) j["tool_point_mm"] = {tool_point_->x(), tool_point_->y(), tool_point_->z()};
   if (reflector_) j["reflector_mm"] = {reflector_->x(), reflector_->y(), reflector_->z()};
   if (joint_functions_) j["joint_error_functions"] = joint_functions_->to_json();
+  if (working_tool_) j["working_tool"] = robot::detail::pose_json(*working_tool_);
   if (!notes_.empty()) j["notes"] = notes_;
   if (!excluded_rows_.empty()) j["excluded_rows"] = excluded_rows_;
   return j;
@@ -476,6 +617,14 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
   if (model.tool_point_ && method != CompensationMethod::kinematic && method != CompensationMethod::kinematic_kriging)
     fail_model(source, "member \"tool_point_mm\": only calibrated models (kinematic, kinematic+kriging) aim a tool "
                        "point on their calibrated flange; method \"" + std::string(method_name(method)) + "\" has none");
+  if (j.contains("working_tool")) {
+    model.working_tool_ = robot::detail::json_pose(j["working_tool"], "working_tool", source);
+    try {
+      check_tool_point(*model.working_tool_, "member \"working_tool\"");
+    } catch (const ArgumentError& e) {
+      fail_model(source, e.what());
+    }
+  }
   if (j.contains("joint_error_functions")) {
     // Evaluated through the calibrated command model's Jacobian and added to a field's prediction:
     // meaningless for any other method (a hand-edited or mixed file).

@@ -21,6 +21,7 @@ std::string_view status_name(PredictionStatus s) {
     case PredictionStatus::outside_region: return "outside-region";
     case PredictionStatus::not_credible: return "not-credible";
     case PredictionStatus::outside_limits: return "outside-limits";
+    case PredictionStatus::orientation_unknown: return "orientation-unknown";
   }
   return "unknown";
 }
@@ -40,7 +41,11 @@ PointPrediction predict_position(const CompensationModel& model, const JointVect
     out.status = PredictionStatus::not_credible;
     return out;
   }
-  out.position_mm = forward_position(model.command_model(), q_deg) + out.error.position_error_mm;
+  if (!out.error.orientation_supported) {
+    out.status = PredictionStatus::orientation_unknown;
+    return out;
+  }
+  out.position_mm = forward_position(model.scored_model(), q_deg) + out.error.position_error_mm;
   if (model.registration()) out.tracker_mm = model.registration()->robot_from_tracker.inverse() * out.position_mm;
   return out;
 }

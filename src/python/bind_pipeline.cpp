@@ -18,6 +18,8 @@
 #include "errfield/compensation/pipeline.hpp"
 #include "errfield/compensation/pose_selection.hpp"
 #include "errfield/compensation/prediction.hpp"
+#include "errfield/compensation/tool_location.hpp"
+#include "errfield/robot/pose.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/builtin_robots.hpp"
@@ -112,6 +114,21 @@ std::vector<Eigen::Vector3d> base_points_arg(const py::object& o) {
   return fixed;
 }
 
+/// tool=: None, or 3 (X,Y,Z; the tool's orientation kept) or 6 (X,Y,Z mm, RX,RY,RZ deg) numbers in the
+/// flange frame, as the CLI's --tool.
+CompensationModel with_tool_arg(const CompensationModel& model, const py::object& tool, const Eigen::Isometry3d& current) {
+  if (tool.is_none()) return model;
+  const Eigen::MatrixXd v = matrix_arg(tool, "tool", ArraySpec{1, 1, -1, 0, true, true}).data;
+  if (v.size() != 3 && v.size() != 6)
+    throw ArgumentError("tool: expected 3 numbers (X,Y,Z mm) or 6 (X,Y,Z mm, RX,RY,RZ deg), got " + std::to_string(v.size()));
+  const double* x = v.data();  // one row or one column: the numbers in order
+  Eigen::Isometry3d t = current;
+  if (v.size() == 6) t = robot::to_isometry({x[0], x[1], x[2], x[3], x[4], x[5]});
+  t.translation() = Eigen::Vector3d(x[0], x[1], x[2]);
+  check_tool_point(t, "tool");
+  return model.with_working_tool(model.tool_in_model_frame(t));
+}
+
 PyModel fit_py(const py::object& data, const py::object& robot, const std::string& method, const std::string& space,
                double power, const std::optional<std::string>& model, const std::string& kind, std::size_t base,
                const py::object& base_points, std::optional<double> region_margin,
@@ -142,24 +159,26 @@ PyModel fit_py(const py::object& data, const py::object& robot, const std::strin
   return m;
 }
 
-py::dict predict_py(const PyModel& m, const py::object& joints) {
+py::dict predict_py(const PyModel& m, const py::object& joints, const py::object& tool) {
   const std::vector<JointVector> q = joint_vectors_arg(joints, "joints");
+  const CompensationModel model = with_tool_arg(m.loaded.model, tool, m.loaded.model.command_model().tool());
   std::optional<StepColumns> step;
   {
     py::gil_scoped_release release;
-    step = predict_columns(m.loaded.model, q);
+    step = predict_columns(model, q);
   }
   return columns_dict(*step);
 }
 
 py::dict compensate_py(const PyModel& m, const py::object& targets, const py::object& robot, double tolerance,
-                       const py::object& seed, double max_correction) {
-  const CompensationModel& model = m.loaded.model;
+                       const py::object& seed, double max_correction, const py::object& tool) {
+  const CompensationModel model = with_tool_arg(m.loaded.model, tool, m.loaded.model.aimed_model().tool());
   const bool kinematic =
       model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging;
   if (kinematic && robot.is_none() && !model.has_nominal_model())
     throw ArgumentError("robot: a kinematic model's command model is the calibrated robot; give the nominal robot");
-  const MdhModel nominal = robot.is_none() ? model.nominal_model() : robot_arg(robot);
+  const MdhModel nominal_robot = robot.is_none() ? model.nominal_model() : robot_arg(robot);
+  const MdhModel nominal = nominal_at_working_tool(model, nominal_robot);
   CompensationTargets t;
   if (!seed.is_none()) t.seed_deg = matrix_arg(seed, "seed", ArraySpec{1, 1, -1, robot::kJointCount}).data.col(0);
   if (is_columns(targets)) {
@@ -187,11 +206,12 @@ py::dict compensate_py(const PyModel& m, const py::object& targets, const py::ob
 }
 
 py::dict validate_py(const PyModel& m, const py::object& data, const py::object& robot, const py::object& base_points,
-                     bool targets) {
-  const CompensationModel& model = m.loaded.model;
+                     bool targets, const py::object& tool) {
+  const CompensationModel model = with_tool_arg(m.loaded.model, tool, m.loaded.model.command_model().tool());
   const CsvTable table = table_arg(data, "data");
   const auto fixed = base_points_arg(base_points);
-  const MdhModel nominal = robot.is_none() ? model.nominal_model() : robot_arg(robot);
+  const MdhModel nominal_robot = robot.is_none() ? model.nominal_model() : robot_arg(robot);
+  const MdhModel nominal = nominal_at_working_tool(model, nominal_robot);
   ValidationReport r;
   {
     py::gil_scoped_release release;
@@ -211,6 +231,42 @@ py::dict validate_py(const PyModel& m, const py::object& data, const py::object&
   d["summary"] = py::module_::import("json").attr("loads")(summary);
   d["text"] = r.summary_text();
   return d;
+}
+
+py::tuple locate_tool_py(const PyModel& m, const py::object& data, std::size_t min_orientations,
+                         double distinct_orientation, double not_rigid_factor) {
+  const CompensationModel& model = m.loaded.model;
+  if (m.loaded.is_robot_json)
+    throw ArgumentError("model: a robot JSON has no registration to put readings in the robot frame; give a model from fit()");
+  const CsvTable table = table_arg(data, "data");
+  ToolLocationOptions o;
+  o.min_orientations = min_orientations;
+  o.distinct_orientation_deg = distinct_orientation;
+  o.not_rigid_factor = not_rigid_factor;
+  std::optional<ToolLocation> t;
+  {
+    py::gil_scoped_release release;
+    t = locate_tool(model, MeasurementSet::from_table(table, model.nominal_model()), o);
+  }
+  Eigen::Isometry3d tool = model.command_model().tool();
+  tool.translation() = t->tool_mm;
+  CompensationModel located = model.with_working_tool(tool);
+  if (model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging)
+    located = located.with_tool_point(t->tool_mm, model.reflector_mm() ? model.reflector_mm() : model.measured_point_mm());
+  py::dict r;
+  r["tool_mm"] = to_numpy(std::vector<double>{t->tool_mm.x(), t->tool_mm.y(), t->tool_mm.z()});
+  r["sd_mm"] = to_numpy(std::vector<double>{t->sd_mm.x(), t->sd_mm.y(), t->sd_mm.z()});
+  r["residual_rms_mm"] = t->residual_rms_mm;
+  r["expected_rms_mm"] = t->expected_rms_mm;
+  r["readings"] = t->readings;
+  r["left_out"] = t->left_out;
+  r["orientations"] = t->orientations;
+  r["lever_mm"] = t->lever_mm;
+  const OrientationPrior& prior = located.orientation_prior();
+  r["orientation_sigma_mrad"] = prior.known() ? py::object(py::float_(prior.sigma_rad * 1e3)) : py::object(py::none());
+  r["max_lever_mm"] = prior.known() ? py::object(py::float_(prior.max_lever_mm)) : py::object(py::none());
+  const std::string what = std::string(method_name(located.method())) + " model";
+  return py::make_tuple(PyModel{LoadedModel{std::move(located), false, what}, py::none()}, r);
 }
 
 py::dict plan_py(const py::object& candidates, std::size_t count, const py::object& model, const py::object& measured,
@@ -277,15 +333,25 @@ void bind_pipeline(py::module_& m) {
         "--max-condition, --max-registration-rms mm, --outlier-limit, --reflector-far-ok, --variance-calibration,\n"
         "--joint-functions, --gravity-load as a bool); method='auto' chooses from the data as the\n"
         "CLI does (kinematic+kriging in joint space with tracker positions, kinematic from distances). The fit's warnings are RuntimeWarnings. Releases the GIL.");
-  m.def("predict", &predict_py, py::arg("model"), py::arg("joints"),
+  m.def("locate_tool", &locate_tool_py, py::arg("model"), py::arg("data"), py::kw_only(),
+        py::arg("min_orientations") = ToolLocationOptions{}.min_orientations,
+        py::arg("distinct_orientation") = ToolLocationOptions{}.distinct_orientation_deg,
+        py::arg("not_rigid_factor") = ToolLocationOptions{}.not_rigid_factor,
+        "`errfield locate-tool`: locates a point rigidly attached to the flange from readings of it (dict of\n"
+        "columns point, q1..q6 deg, mx,my,mz tracker mm) through the model. Returns (model, report): the model with\n"
+        "that working tool (everything else kept) and a dict tool_mm (flange frame), sd_mm (per axis), residual_rms_mm,\n"
+        "expected_rms_mm, readings, left_out, orientations, lever_mm, orientation_sigma_mrad, max_lever_mm.\n"
+        "InputError for fewer than min_orientations distinct orientations or readings that are not one rigid point.");
+  m.def("predict", &predict_py, py::arg("model"), py::arg("joints"), py::kw_only(), py::arg("tool") = py::none(),
         "`errfield predict`: where the tool goes at joints ((N, 6) deg or a dict with q1..q6). Returns a dict:\n"
         "px,py,pz (robot frame, mm), tx,ty,tz (tracker frame; models with a registration), where the model has a\n"
         "variance var_mm2 (a new reading: field + nugget, mm²), var_field_mm2 (field only) and r95_mm (95 % radius\n"
-        "of a new reading, vector fields), status (ok | outside-region | not-credible; refused rows are NaN).");
+        "of a new reading, vector fields), status (ok | outside-region | not-credible | orientation-unknown; refused\n"
+        "rows are NaN). tool: the CLI's --tool, 3 or 6 numbers (flange frame, mm, deg).");
   m.def("compensate", &compensate_py, py::arg("model"), py::arg("targets"), py::kw_only(),
         py::arg("robot") = py::none(), py::arg("tolerance") = 0.25, py::arg("seed") = py::none(),
-        py::arg("max_correction") = 0.0,
-        "`errfield compensate`: joints to send. targets: (N, 6) nominal joints (deg) or a dict with q1..q6 or\n"
+        py::arg("max_correction") = 0.0, py::arg("tool") = py::none(),
+        "`errfield compensate` (tool: the CLI's --tool): joints to send. targets: (N, 6) nominal joints (deg) or a dict with q1..q6 or\n"
         "x,y,z,rx,ry,rz (mm, deg), optionally with per-row seed joints sq1..sq6 (deg; a row of NaN = none) whose arm\n"
         "configuration the solution keeps. max_correction: ceiling (mm) on move_mm, 0 = the CLI's default. Returns a dict: nq1..nq6, nx,ny,nz, pred_dx..dz, pred_dl, var_mm2 (new reading:\n"
         "field + nugget), p_inside (P(|3-D error| <= tolerance mm) of a new reading; distance models: the distance\n"
@@ -301,8 +367,8 @@ void bind_pipeline(py::module_& m) {
         "predicted_rms_mm ([0] now, [k] after k more poses; model only), poses_for_target (target_rms given: poses\n"
         "from now the prediction needs, None if not reached), conditioned_on. Releases the GIL.");
   m.def("validate", &validate_py, py::arg("model"), py::arg("data"), py::kw_only(), py::arg("robot") = py::none(),
-        py::arg("base_points") = py::none(), py::arg("targets") = false,
-        "`errfield validate` on held-out measurements (dict of columns). Returns a dict: points (the columns of\n"
+        py::arg("base_points") = py::none(), py::arg("targets") = false, py::arg("tool") = py::none(),
+        "`errfield validate` (tool: the CLI's --tool) on held-out measurements (dict of columns). Returns a dict: points (the columns of\n"
         "--out: point, status, before_mm, after_mm, before_dx.., after_dx.., before_dl_bK, after_dl_bK; mm; kriging\n"
         "models: var_mm2, var_field_mm2, r95_mm, nees),\n"
         "summary (dict) and summary_json (the text of --summary-out), text (the printed summary).");

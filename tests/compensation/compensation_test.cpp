@@ -3,9 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "errfield/error.hpp"
 #include "errfield/compensation/error_fields.hpp"
+#include "errfield/compensation/kriging_fields.hpp"
+#include "errfield/compensation/prediction.hpp"
+#include "errfield/compensation/tool_location.hpp"
+#include "errfield/variogram_model.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/simulator.hpp"
 
@@ -171,6 +176,225 @@ TEST(CompensationModelJson, NestedRobotErrorNamesFileAndMemberPath) {
     EXPECT_EQ(e.column(), "command_model.links[2].a_mm");
     EXPECT_EQ(std::string(e.what()).rfind("model.json: command_model.links[2].a_mm: expected a number", 0), 0u)
         << e.what();
+  }
+}
+
+
+// ---- Tool points away from the measured reflector (issue 34) ----------------------------------
+
+/// A kinematic+kriging model in joint space whose field holds `values` at joints `q` (reflector: the
+/// paper's ball), with a registration the tests map readings through.
+CompensationModel tool_point_model(const std::vector<JointVector>& q, const std::vector<Eigen::Vector3d>& values) {
+  const MdhModel robot = MdhModel::er20_c10().with_tool(paper_ball());
+  FieldSamples samples;
+  for (const JointVector& v : q) {
+    samples.joints_deg.push_back(v);
+    samples.position_mm.push_back(forward_position(robot, v));
+  }
+  KrigingFieldOptions o;
+  o.space = FieldSpace::joint;
+  o.model = VariogramModel::parse("gau(sill=0.01,range=60)+nug(0.0001)");
+  o.region_margin_deg = 90.0;
+  Registration reg;
+  reg.robot_from_tracker = Eigen::Translation3d(1500, -200, 300) * Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized());
+  reg.residual_rms_mm = 0.05;
+  reg.points = q.size();
+  return CompensationModel(CompensationMethod::kinematic_kriging, robot, make_vector_kriging_field(samples, values, o))
+      .with_nominal_model(robot)
+      .with_registration(reg);
+}
+
+std::vector<JointVector> joints_in_box(std::size_t n, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-30.0, 30.0);
+  std::vector<JointVector> q(n);
+  for (auto& v : q)
+    for (int k = 0; k < 6; ++k) v[k] = u(rng) + (k == 4 ? 45.0 : 0.0);
+  return q;
+}
+
+Eigen::Isometry3d tool_at(const CompensationModel& m, const Eigen::Vector3d& p) {
+  Eigen::Isometry3d t = m.command_model().tool();
+  t.translation() = p;
+  return t;
+}
+
+// The prior's reading of the residual, checked against the process it assumes: residuals made of
+// independent wrist-angle errors of standard deviation s give a per-axis orientation variance of the
+// flange, measured here over the same draws, of about s² (trace 3 s²): the prior must find it.
+TEST(ToolPoints, OrientationPriorFindsTheFlangeRotationOfEqualWristAngleErrors) {
+  const MdhModel robot = MdhModel::er20_c10().with_tool(paper_ball());
+  const std::vector<JointVector> q = joints_in_box(300, 11);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> z;
+  const double s = 1e-3;  // rad
+  std::vector<Eigen::Vector3d> r;
+  double w2 = 0.0;
+  for (const JointVector& v : q) {
+    Eigen::Matrix<double, 6, 1> dq;
+    for (int k = 0; k < 6; ++k) dq[k] = k >= 3 ? s * z(rng) : 0.0;
+    const Eigen::Matrix<double, 6, 6> j = geometric_jacobian(robot, v, EndFrame::tool);
+    r.push_back(j.topRows<3>() * dq);
+    w2 += (j.bottomRows<3>() * dq).squaredNorm();
+  }
+  const double per_axis = w2 / (3.0 * static_cast<double>(q.size()));  // measured
+  const OrientationPrior p = tool_point_model(q, r).orientation_prior();
+  ASSERT_TRUE(p.known());
+  EXPECT_EQ(p.samples, q.size());
+  // 900 residual numbers and 900 rotation numbers: a few % sampling error; 15 % is 3-4 of it.
+  EXPECT_NEAR(p.data_sigma_rad * p.data_sigma_rad / per_axis, 1.0, 0.15);
+  EXPECT_NEAR(p.sigma_rad, std::hypot(p.data_sigma_rad, kOrientationPriorFloorRad), 1e-15);
+  EXPECT_NEAR(p.max_lever_mm, kMaxLeverResidualRatio * p.residual_rms_mm / (std::sqrt(2.0) * p.sigma_rad), 1e-9);
+}
+
+// Away from the reflector the variance grows by sigma² (|L|² I - L Lᵀ) per axis (checked against
+// Monte Carlo of w x L, w ~ N(0, sigma² I)); beyond max_lever_mm the row is refused.
+TEST(ToolPoints, LeverAddsTheRotationCovarianceAndIsRefusedBeyondTheSupportedLever) {
+  const std::vector<JointVector> q = joints_in_box(40, 3);
+  std::vector<Eigen::Vector3d> v;
+  for (const JointVector& x : q) v.emplace_back(0.1 * std::sin(x[0] / 20), 0.05 * std::cos(x[1] / 15), 0.02 * x[2] / 30);
+  const CompensationModel model = tool_point_model(q, v);
+  const OrientationPrior& prior = model.orientation_prior();
+  ASSERT_TRUE(prior.known());
+  const JointVector at = (q[3] + q[4]) / 2;
+  const Eigen::Vector3d lever_flange(120, -40, 30);
+  const CompensationModel moved = model.with_working_tool(tool_at(model, model.measured_point_mm() + lever_flange));
+  const ErrorPrediction a = model.predict_error(at), b = moved.predict_error(at);
+  ASSERT_TRUE(a.inside_region && b.inside_region);
+  EXPECT_EQ(a.orientation_variance_mm2, 0.0);
+  // Monte Carlo of the projection
+  const Eigen::Vector3d lever = forward_kinematics(model.command_model(), at, EndFrame::flange).linear() * lever_flange;
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> z;
+  Eigen::Vector3d mc = Eigen::Vector3d::Zero();
+  const int draws = 200000;
+  for (int i = 0; i < draws; ++i) {
+    const Eigen::Vector3d w = prior.sigma_rad * Eigen::Vector3d(z(rng), z(rng), z(rng));
+    mc += w.cross(lever).cwiseAbs2();
+  }
+  mc /= draws;
+  const Eigen::Vector3d added = b.axis_variance_mm2 - a.axis_variance_mm2;
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(added[k] / mc[k], 1.0, 0.02) << k;  // MC error ~0.3 %
+  EXPECT_NEAR(b.variance_mm2 - a.variance_mm2, 2.0 * prior.sigma_rad * prior.sigma_rad * lever_flange.squaredNorm(), 1e-12);
+  EXPECT_NEAR(b.orientation_variance_mm2, b.variance_mm2 - a.variance_mm2, 1e-12);
+  // the field's value is the same at any point of the flange
+  EXPECT_NEAR((b.position_error_mm - a.position_error_mm).norm(), 0.0, 1e-12);
+  // refused just beyond the supported lever, ok just inside it
+  const Eigen::Vector3d dir = lever_flange.normalized();
+  const auto at_lever = [&](double l) {
+    return predict_position(model.with_working_tool(tool_at(model, model.measured_point_mm() + l * dir)), at).status;
+  };
+  EXPECT_EQ(at_lever(0.99 * prior.max_lever_mm), PredictionStatus::ok);
+  EXPECT_EQ(at_lever(1.01 * prior.max_lever_mm), PredictionStatus::orientation_unknown);
+  EXPECT_EQ(status_name(PredictionStatus::orientation_unknown), "orientation-unknown");
+}
+
+// Readings the model itself predicts at a point are located back to that point exactly: the field's
+// translation and the joint functions' displacement and rotation of the flange enter locate_tool as
+// they enter the prediction (a second, independent path: the functions through the Jacobian at the point).
+TEST(ToolPoints, LocateToolRecoversThePointTheModelPredicts) {
+  const std::vector<JointVector> q = joints_in_box(40, 4);
+  std::vector<Eigen::Vector3d> v;
+  for (const JointVector& x : q) v.emplace_back(0.1 * std::sin(x[0] / 20), 0.05 * std::cos(x[1] / 15), 0.02 * x[2] / 30);
+  JointErrorFunctions f;
+  f.degree = 2;
+  for (int k = 0; k < 6; ++k) {
+    f.lo_deg[static_cast<std::size_t>(k)] = -40.0 + (k == 4 ? 45.0 : 0.0);
+    f.hi_deg[static_cast<std::size_t>(k)] = 40.0 + (k == 4 ? 45.0 : 0.0);
+  }
+  f.coefficients_mrad = Eigen::MatrixXd(6, 2);
+  f.coefficients_mrad << 0.3, -0.2, 0.5, 0.1, -0.4, 0.2, 0.8, -0.3, 1.2, 0.4, -0.9, 0.6;
+  const CompensationModel model = tool_point_model(q, v).with_joint_error_functions(f);
+  const Eigen::Vector3d point = model.measured_point_mm() + Eigen::Vector3d(120, -40, 30);
+  const CompensationModel at_point = model.with_working_tool(tool_at(model, point));
+  MeasurementSet d;
+  d.source = "readings.csv";
+  for (const JointVector& x : joints_in_box(12, 8)) {
+    const PointPrediction p = predict_position(at_point, x);
+    ASSERT_TRUE(p.ok());
+    d.id.push_back("r");
+    d.q_deg.push_back(x);
+    d.measured_mm.push_back(*p.tracker_mm);
+  }
+  const ToolLocation t = locate_tool(model, d);
+  EXPECT_LT((t.tool_mm - point).norm(), 1e-6);
+  EXPECT_LT(t.residual_rms_mm, 1e-6);
+  EXPECT_EQ(t.readings, 12u);
+  EXPECT_GE(t.orientations, 3u);
+  EXPECT_NEAR(t.lever_mm, (point - model.measured_point_mm()).norm(), 1e-6);
+  // noise of 0.05 mm per coordinate: the point within a few standard deviations, which say so
+  std::mt19937_64 rng(2);
+  std::normal_distribution<double> z(0.0, 0.05);
+  for (auto& m : d.measured_mm) m += Eigen::Vector3d(z(rng), z(rng), z(rng));
+  const ToolLocation noisy = locate_tool(model, d);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_GT(noisy.sd_mm[k], 0.005);
+    EXPECT_LT(noisy.sd_mm[k], 0.05);
+    EXPECT_LT(std::abs(noisy.tool_mm[k] - point[k]), 4.0 * noisy.sd_mm[k]) << k;
+  }
+}
+
+TEST(ToolPoints, LocateToolRefusesTooFewOrientationsAndReadingsOfTwoPoints) {
+  const std::vector<JointVector> q = joints_in_box(40, 4);
+  std::vector<Eigen::Vector3d> v(q.size(), Eigen::Vector3d(0.01, 0.02, -0.01));
+  for (std::size_t i = 0; i < v.size(); ++i) v[i].x() += 0.001 * static_cast<double>(i % 7);
+  const CompensationModel model = tool_point_model(q, v);
+  const Eigen::Vector3d p1 = model.measured_point_mm() + Eigen::Vector3d(100, 0, 0);
+  const Eigen::Vector3d p2 = p1 + Eigen::Vector3d(0, 0, 60);
+  auto readings = [&](const std::vector<JointVector>& joints, bool mixed) {
+    MeasurementSet d;
+    d.source = "readings.csv";
+    for (std::size_t i = 0; i < joints.size(); ++i) {
+      const PointPrediction p =
+          predict_position(model.with_working_tool(tool_at(model, mixed && i % 2 ? p2 : p1)), joints[i]);
+      d.id.push_back("r" + std::to_string(i));
+      d.q_deg.push_back(joints[i]);
+      d.measured_mm.push_back(*p.tracker_mm);
+    }
+    return d;
+  };
+  // two orientations (the wrist's joints the same, only q1..q3 apart by a few degrees)
+  std::vector<JointVector> two = joints_in_box(2, 6);
+  for (int i = 0; i < 6; ++i) {
+    JointVector x = two[static_cast<std::size_t>(i % 2)];
+    x[0] += 0.5 * i;
+    two.push_back(x);
+  }
+  try {
+    locate_tool(model, readings(two, false));
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("distinct flange orientation"), std::string::npos) << e.what();
+    EXPECT_EQ(e.file(), "readings.csv");
+  }
+  try {
+    locate_tool(model, readings(joints_in_box(12, 8), true));
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not one point rigidly attached"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ToolPoints, WorkingToolRoundTripsThroughJsonAndIsChecked) {
+  const std::vector<JointVector> q = joints_in_box(40, 4);
+  std::vector<Eigen::Vector3d> v;
+  for (const JointVector& x : q) v.emplace_back(0.1 * std::sin(x[0] / 20), 0.0, 0.01);
+  const CompensationModel model =
+      tool_point_model(q, v).with_working_tool(Eigen::Translation3d(150, 20, 300) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()));
+  const CompensationModel back = CompensationModel::from_json(model.to_json(), "m.json");
+  ASSERT_TRUE(back.working_tool().has_value());
+  EXPECT_TRUE(back.working_tool()->isApprox(*model.working_tool(), 1e-12));
+  const PointPrediction a = predict_position(model, q[5]), b = predict_position(back, q[5]);
+  EXPECT_LT((a.position_mm - b.position_mm).norm(), 1e-9);
+  EXPECT_NEAR(a.error.variance_mm2, b.error.variance_mm2, 1e-12);
+  nlohmann::json j = model.to_json();
+  j["working_tool"]["x_mm"] = 2500.0;
+  try {
+    CompensationModel::from_json(j, "m.json");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("working_tool"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("2000"), std::string::npos) << e.what();
   }
 }
 

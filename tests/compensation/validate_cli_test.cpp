@@ -518,5 +518,61 @@ TEST_F(ValidateCli, CompensateSolvesPoseTargetsOnTheBranchOfTheData) {
   }
 }
 
+// --tool moves the point predicted by the FK lever alone (the field is the same at every point of the
+// flange; checked against FK here), widens the variance by the orientation term and is checked;
+// locate-tool finds a second reflector from readings of it and refuses readings at one orientation.
+TEST_F(ValidateCli, ToolOptionAndLocateToolWorkAtAnotherPointOfTheFlange) {
+  ASSERT_EQ(run("simulate --seed 1 --sample grid --step 125 --robot-out robot.json --out train.csv").exit_code, 0);
+  ASSERT_EQ(run("fit --robot robot.json --data train.csv --method vector-kriging --space task --model "
+                "\"sph(sill=0.5,range=600)+nug(0.001)\" --out model.json").exit_code, 0);
+  const MdhModel robot = MdhModel::load(path("robot.json"));
+  const Rows train = read_rows(path("train.csv"));
+  const JointVector q = (train.q[32] + train.q[33]) / 2;
+  std::string csv = "q1,q2,q3,q4,q5,q6\n";
+  for (int k = 0; k < 6; ++k) csv += format_number(q[k]) + (k < 5 ? "," : "\n");
+  write("joints.csv", csv);
+  // the tool moved by 100 mm along its own x axis
+  const Eigen::Vector3d b = robot.tool() * Eigen::Vector3d(100, 0, 0);
+  const std::string tool = format_number(b.x()) + "," + format_number(b.y()) + "," + format_number(b.z());
+  ASSERT_EQ(run("predict --model model.json --joints joints.csv --out a.csv").exit_code, 0);
+  const CliResult moved = run("predict --model model.json --joints joints.csv --tool " + tool + " --out b.csv");
+  ASSERT_EQ(moved.exit_code, 0) << moved.output();
+  EXPECT_NE(moved.out.find("100 mm from the reflector"), std::string::npos) << moved.out;
+  const CsvTable ta = CsvTable::read(path("a.csv")), tb = CsvTable::read(path("b.csv"));
+  Eigen::Isometry3d tool_b = robot.tool();
+  tool_b.translation() = b;
+  const Eigen::Vector3d fk_shift = forward_position(robot.with_tool(tool_b), q) - forward_position(robot, q);
+  for (int k = 0; k < 3; ++k) {
+    const std::string c = std::string("p") + "xyz"[k];
+    EXPECT_NEAR(tb.numeric_cell(0, tb.column_index(c)) - ta.numeric_cell(0, ta.column_index(c)), fk_shift[k], 1e-6) << c;
+  }
+  EXPECT_EQ(tb.row(0)[tb.column_index("status")], "ok");
+  EXPECT_GT(tb.numeric_cell(0, tb.column_index("var_mm2")), ta.numeric_cell(0, ta.column_index("var_mm2")));
+  EXPECT_GT(tb.numeric_cell(0, tb.column_index("r95_mm")), ta.numeric_cell(0, ta.column_index("r95_mm")));
+  // bad values: usage errors naming the option, nothing written
+  for (const char* bad : {"3000,0,0", "1,2", "1,2,x", "nan,0,0"}) {
+    const CliResult r = run(std::string("predict --model model.json --joints joints.csv --tool ") + bad + " --out c.csv");
+    EXPECT_EQ(r.exit_code, 2) << bad << "\n" << r.output();
+    EXPECT_NE(r.output().find("--tool"), std::string::npos) << r.output();
+  }
+  EXPECT_FALSE(std::filesystem::exists(path("c.csv")));
+  // the second reflector measured at several orientations (the same robot: the same seed)
+  ASSERT_EQ(run("simulate --seed 1 --sample grid --step 250 --orientation-spread 30 --tool-offset 100,0,0 --out b_all.csv")
+                .exit_code, 0);
+  const CliResult located = run("locate-tool --model model.json --data b_all.csv --out m_tool.json");
+  ASSERT_EQ(located.exit_code, 0) << located.output();
+  const nlohmann::json m = json("m_tool.json");
+  ASSERT_TRUE(m.contains("working_tool")) << m.dump();
+  const Eigen::Vector3d found(m["working_tool"].value("x_mm", 0.0), m["working_tool"].value("y_mm", 0.0),
+                              m["working_tool"].value("z_mm", 0.0));
+  // the simulated robot's tool differs from the nominal one by its geometric deviation (< 1 mm)
+  EXPECT_LT((found - b).norm(), 1.0) << found.transpose() << " vs " << b.transpose() << "\n" << located.out;
+  // readings at one orientation (the tool-down grid) cannot locate it
+  const CliResult one = run("locate-tool --model model.json --data train.csv --out m2.json");
+  EXPECT_EQ(one.exit_code, 2) << one.output();
+  EXPECT_NE(one.output().find("distinct flange orientation"), std::string::npos) << one.output();
+  EXPECT_FALSE(std::filesystem::exists(path("m2.json")));
+}
+
 }  // namespace
 }  // namespace errfield::compensation

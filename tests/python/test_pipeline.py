@@ -287,3 +287,31 @@ def test_plan_matches_cli(tmp_path):
     assert sorted(errfield.plan(twice, count=n)["chosen"]) == list(range(n))
     with pytest.raises(errfield.ArgumentError, match="spacing_floor"):
         errfield.plan(pool, count=5, model=loaded, measured=measured, spacing_floor=1.0)
+
+
+def test_locate_tool_and_tool_match_cli(sim, fitted, tmp_path):
+    """Issue 34: errfield.locate_tool writes the CLI's model byte for byte and reports its figures;
+    predict(tool=...) is the CLI's --tool; readings at one orientation are refused."""
+    run_cli("simulate", "--sample", "grid", "--step", "250", "--orientation-spread", "30", "--tool-offset", "100,0,0",
+            "--out", tmp_path / "b.csv")
+    out = run_cli("locate-tool", "--model", sim / "vk.json", "--data", tmp_path / "b.csv", "--out", tmp_path / "cli.json")
+    model, report = errfield.locate_tool(fitted, read_measurements(tmp_path / "b.csv"))
+    model.save(tmp_path / "py.json")
+    cli = json.loads((tmp_path / "cli.json").read_text())
+    py = json.loads((tmp_path / "py.json").read_text())
+    cli.pop("notes", None)  # the CLI's note names its file
+    py.pop("notes", None)
+    assert py == cli
+    t = cli["working_tool"]
+    assert np.allclose(report["tool_mm"], [t.get("x_mm", 0), t.get("y_mm", 0), t.get("z_mm", 0)], atol=1e-12)
+    assert report["readings"] > 0 and report["orientations"] >= 3
+    assert "fit residual RMS" in out and report["residual_rms_mm"] >= 0
+    assert all(s > 0 for s in report["sd_mm"])
+    # --tool: the same columns as the CLI's
+    tool = ",".join(repr(float(v)) for v in report["tool_mm"])
+    run_cli("predict", "--model", sim / "vk.json", "--joints", sim / "hold.csv", "--tool", tool, "--out", tmp_path / "p.csv")
+    check_columns(errfield.predict(fitted, read_measurements(sim / "hold.csv"), tool=report["tool_mm"]), tmp_path / "p.csv")
+    with pytest.raises(errfield.InputError, match="distinct flange orientation"):
+        errfield.locate_tool(fitted, read_measurements(sim / "grid.csv"))
+    with pytest.raises(errfield.ArgumentError, match="tool"):
+        errfield.predict(fitted, read_measurements(sim / "hold.csv"), tool=[3000.0, 0.0, 0.0])

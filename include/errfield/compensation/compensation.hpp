@@ -17,8 +17,10 @@
 /// in degrees; the target point is the model's tool point.
 /// Thread safety: models are immutable after construction; compensate() may run concurrently.
 
+#include <cmath>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -81,7 +83,49 @@ struct ErrorPrediction {
   /// False when the prediction lies far beyond the range of errors the model was fitted on
   /// (CredibleRange): compensate() and predict refuse it (status not-credible).
   bool credible = true;
+  /// False when the point predicted is so far from the reflector the model was measured with that
+  /// the flange's orientation error, which one reflector cannot observe, would dominate
+  /// (OrientationPrior::max_lever_mm): compensate() and predict refuse it (status orientation-unknown).
+  bool orientation_supported = true;
+  /// The part of variance_mm2 (and of axis_variance_mm2's sum) that is the unobservable orientation
+  /// residual of the flange times the lever from the reflector (OrientationPrior); 0 at the reflector.
+  double orientation_variance_mm2 = 0.0;
 };
+
+/// What one reflector's data say about the orientation error of the flange, which they cannot observe:
+/// a prior on the flange's orientation residual (a small rotation w, isotropic, sigma_rad per axis),
+/// so that a point at lever L (mm) from the reflector gets the covariance
+/// sigma² (|L|² I − L Lᵀ) (w × L) added to its predicted error, and a lever beyond which the model
+/// refuses instead (docs/robot.md, "Tool points and orientation", says how both are chosen).
+struct OrientationPrior {
+  /// Per-axis standard deviation of the orientation residual (rad); NaN when the model has no
+  /// residuals to scale it from (no vector field): then nothing is added and nothing refused.
+  double sigma_rad = std::numeric_limits<double>::quiet_NaN();
+  /// The part of sigma_rad from the model's residuals (wrist angle errors of equal size that would
+  /// leave the residual RMS at the reflector); sigma_rad adds the floor kOrientationPriorFloorRad.
+  double data_sigma_rad = std::numeric_limits<double>::quiet_NaN();
+  /// Rows whose working point is further than this from the reflector (mm) are refused
+  /// (orientation-unknown): the lever at which the orientation term's RMS, sqrt(2) sigma L, is
+  /// kMaxLeverResidualRatio x residual_rms_mm, the error the model corrects at the reflector;
+  /// infinite without a prior.
+  double max_lever_mm = std::numeric_limits<double>::infinity();
+  /// RMS of the kinematic residuals at the reflector the prior is scaled from (mm), and how many.
+  double residual_rms_mm = std::numeric_limits<double>::quiet_NaN();
+  std::size_t samples = 0;
+  bool known() const { return std::isfinite(sigma_rad); }
+};
+
+/// The floor of OrientationPrior::sigma_rad (rad): orientation errors of the flange that leave no
+/// position error at the reflector at all (a rotation about the axis through it, the mounting of a
+/// tool) are not seen in the residuals; 0.1 mrad is a tool flange's typical angular tolerance
+/// (docs/robot.md, "Tool points and orientation").
+inline constexpr double kOrientationPriorFloorRad = 1e-4;
+/// OrientationPrior::max_lever_mm: the lever at which the orientation term's RMS is this many times
+/// the RMS of the residual the model corrects at the reflector (docs/robot.md).
+inline constexpr double kMaxLeverResidualRatio = 2.0;
+/// `--tool`: a tool point further than this from the flange origin (mm) is refused as a typo (metres
+/// for mm, a wrong column): no robot tool is 2 m long.
+inline constexpr double kMaxToolPointMm = 2000.0;
 
 /// The range of errors a model's data showed, against which a prediction is judged credible:
 /// |prediction − center| <= radius_mm, with center the mean of the fitted errors (the distance error
@@ -141,9 +185,12 @@ struct CompensatedTarget {
   /// nominal model's FK: |FK(q_command) − FK(q_nominal)| (mm). What the robot will actually do
   /// differently; NaN when the command IK failed.
   double move_mm = std::numeric_limits<double>::quiet_NaN();
-  /// True when the target is inside the modelled region, the prediction is credible and both IK
-  /// solves converged.
-  bool ok() const { return prediction.inside_region && prediction.credible && ik_status == robot::IkStatus::converged; }
+  /// True when the target is inside the modelled region, the prediction is credible, the tool point
+  /// is within the lever the model's orientation supports and both IK solves converged.
+  bool ok() const {
+    return prediction.inside_region && prediction.credible && prediction.orientation_supported &&
+           ik_status == robot::IkStatus::converged;
+  }
 };
 
 class CompensationModel {
@@ -197,14 +244,38 @@ class CompensationModel {
   /// evaluated through the command model's Jacobian and added to the field's prediction.
   const std::optional<JointErrorFunctions>& joint_error_functions() const noexcept { return joint_functions_; }
   CompensationModel with_joint_error_functions(std::optional<JointErrorFunctions> functions) const;
-  /// The model compensate aims with: the command model, with its tool translation set to
-  /// tool_point_mm() where the model has one.
+  /// The working tool (flange frame: translation mm, rotation) predict, validate and compensate use
+  /// instead of the measured reflector: set by `--tool` for one run, or stored by `errfield
+  /// locate-tool` ("working_tool"). Empty: predict and validate score the reflector, compensate aims
+  /// tool_point_mm(). Its lever from the reflector brings in the orientation term (OrientationPrior).
+  const std::optional<Eigen::Isometry3d>& working_tool() const noexcept { return working_tool_; }
+  CompensationModel with_working_tool(std::optional<Eigen::Isometry3d> tool) const;
+  /// A tool given in the robot description's flange frame (`--tool`), in the calibrated model's: moved
+  /// by the calibration's correction of the reflector (measured_point_mm() − the nominal robot's tool)
+  /// when the two are one point (closer than kReflectorAtToolMm), since the flange it corrects carries
+  /// every point; unchanged otherwise and for models without a stored nominal robot.
+  Eigen::Isometry3d tool_in_model_frame(const Eigen::Isometry3d& tool_in_robot_description) const;
+  /// The inverse of tool_in_model_frame (for printing a located tool as `--tool` takes it).
+  Eigen::Isometry3d tool_in_robot_frame(const Eigen::Isometry3d& tool_in_model) const;
+  /// The reflector the data measured (flange frame, mm): the command model's tool.
+  Eigen::Vector3d measured_point_mm() const { return command_model_.tool().translation(); }
+  /// The model compensate aims with: the command model, with its tool set to working_tool() or else
+  /// its tool translation set to tool_point_mm() where the model has one.
   robot::MdhModel aimed_model() const;
+  /// The model predict and validate score: the command model with working_tool() where set, else
+  /// the command model (the reflector).
+  robot::MdhModel scored_model() const;
+  /// The prior on the flange's orientation residual (computed once from the field's samples).
+  const OrientationPrior& orientation_prior() const;
 
   /// The field's prediction at joints `q_deg` (evaluated at nominal_model()'s FK), with the credible
   /// range applied (to the field's part), plus the joint error functions where the model has them;
   /// zero prediction, inside the region, when the model has no field.
   ErrorPrediction predict_error(const robot::JointVector& q_deg) const;
+  /// Same, for the point `at` (a command model whose tool is that point, e.g. aimed_model()): the joint
+  /// error functions act through its Jacobian and the orientation term uses its lever from
+  /// measured_point_mm(). predict_error(q) is predict_error_at(q, scored_model()).
+  ErrorPrediction predict_error_at(const robot::JointVector& q_deg, const robot::MdhModel& at) const;
 
   /// The robot's whole predicted error of the tool point at nominal joints `q_deg` (CompensatedTarget::
   /// total_error_mm: calibration + field), with `nominal_model` giving the nominal tool point; NaN
@@ -248,6 +319,23 @@ class CompensationModel {
   std::optional<CredibleRange> credible_;
   std::optional<Eigen::Vector3d> tool_point_, reflector_;
   std::optional<JointErrorFunctions> joint_functions_;
+  std::optional<Eigen::Isometry3d> working_tool_;
+  /// orientation_prior(), computed on first use; a copy (every with_*) starts afresh, since what it
+  /// is computed from may change.
+  struct LazyOrientationPrior {
+    struct State {
+      std::once_flag once;
+      OrientationPrior value;
+    };
+    std::shared_ptr<State> state = std::make_shared<State>();
+    LazyOrientationPrior() = default;
+    LazyOrientationPrior(const LazyOrientationPrior&) : state(std::make_shared<State>()) {}
+    LazyOrientationPrior& operator=(const LazyOrientationPrior&) {
+      state = std::make_shared<State>();
+      return *this;
+    }
+  };
+  LazyOrientationPrior orientation_prior_;
   /// The functions' design at the field's samples (row i: sample i's 3 x P block, column-major):
   /// what the field's prediction takes back from their error near its samples (predict_error);
   /// empty without.
@@ -255,6 +343,14 @@ class CompensationModel {
   std::vector<std::string> excluded_rows_, notes_;
   void set_function_rows_at_samples();
 };
+
+/// The nominal robot `nominal` with the model's working tool in the robot description's frame (what
+/// the readings' or targets' nominal positions are of); `nominal` itself without a working tool.
+robot::MdhModel nominal_at_working_tool(const CompensationModel& model, const robot::MdhModel& nominal);
+
+/// A working tool (flange frame) as `--tool` and a model's "working_tool" must be: finite, and its
+/// point at most kMaxToolPointMm from the flange origin; ArgumentError starting with `what` otherwise.
+void check_tool_point(const Eigen::Isometry3d& tool, const std::string& what);
 
 /// Unit direction m = (p − base)/|p − base| of eq. 22. Precondition: p != base.
 Eigen::Vector3d radial_direction(const Eigen::Vector3d& p_mm, const Eigen::Vector3d& base_mm);

@@ -22,9 +22,11 @@ namespace errfield::compensation {
 
 /// outside_limits: a joint beyond the nominal robot's limits (robot/input_checks.hpp) - radians, a
 /// wrong joint order or a typo; the robot cannot be there, whatever the field says.
-enum class PredictionStatus { ok, outside_region, not_credible, outside_limits };
-/// "ok", "outside-region", "not-credible", "outside-limits" (the status column of predict,
-/// validate, compensate).
+/// orientation_unknown: the point predicted (a working tool, `--tool`) is further from the reflector the
+/// model was measured with than the model's orientation prior supports (OrientationPrior::max_lever_mm).
+enum class PredictionStatus { ok, outside_region, not_credible, outside_limits, orientation_unknown };
+/// "ok", "outside-region", "not-credible", "outside-limits", "orientation-unknown" (the status column
+/// of predict, validate, compensate).
 std::string_view status_name(PredictionStatus s);
 
 struct PointPrediction {
@@ -38,7 +40,8 @@ struct PointPrediction {
   bool ok() const { return status == PredictionStatus::ok; }
 };
 
-/// Prediction at commanded joints `q_deg`.
+/// Prediction at commanded joints `q_deg`, of the model's scored point (scored_model(): the working
+/// tool where the model has one, else the reflector).
 PointPrediction predict_position(const CompensationModel& model, const robot::JointVector& q_deg);
 
 /// A model file as validate, predict and fk read it: a compensation model (errfield fit) or a robot

@@ -1,0 +1,98 @@
+// `errfield locate-tool`: a model's working tool point located from a few readings of it (issue 34).
+#include <cmath>
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "cli/cli_support.hpp"
+#include "cli/command_registry.hpp"
+#include "cli/pipeline_cli.hpp"
+#include "errfield/atomic_file.hpp"
+#include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/tool_location.hpp"
+#include "errfield/error.hpp"
+#include "errfield/json_file.hpp"
+
+namespace errfield::cli {
+namespace {
+
+struct LocateToolArgs {
+  std::string model, data, out;
+  compensation::ToolLocationOptions options;
+};
+
+std::string rounded(double v, double scale = 1e4) { return format_number(std::round(v * scale) / scale); }
+
+void run_locate_tool(const LocateToolArgs& a) {
+  using namespace compensation;
+  refuse_same_output({{"--model", &a.model}, {"--out", &a.out}});
+  const nlohmann::json j = read_json_file(a.model, "model file");
+  const CompensationModel model = with_json_source(a.model, [&] { return CompensationModel::from_json(j, a.model); });
+  const CsvTable table = CsvTable::read(a.data);
+  const MeasurementSet readings = with_source(a.data, [&] { return MeasurementSet::from_table(table, model.nominal_model()); });
+  const ToolLocation t = with_source(a.data, [&] { return locate_tool(model, readings, a.options); });
+  Eigen::Isometry3d tool = model.command_model().tool();
+  tool.translation() = t.tool_mm;
+  CompensationModel located = model.with_working_tool(tool);
+  // Calibrated models also aim it when read by a version that knows no working tool.
+  const bool calibrated = model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging;
+  if (calibrated) located = located.with_tool_point(t.tool_mm, model.reflector_mm() ? model.reflector_mm() : model.measured_point_mm());
+  std::vector<std::string> notes = located.notes();
+  notes.push_back("locate-tool: working tool located from " + std::to_string(t.readings) + " readings of " + a.data +
+                  " at (" + rounded(t.tool_mm.x()) + ", " + rounded(t.tool_mm.y()) + ", " + rounded(t.tool_mm.z()) +
+                  ") mm (flange frame), residual RMS " + rounded(t.residual_rms_mm) + " mm");
+  located = located.with_notes(std::move(notes));
+  AtomicFileSet outputs;
+  outputs.add(a.out, located.to_json().dump(1) + "\n");
+  outputs.commit();
+  const OrientationPrior& prior = located.orientation_prior();
+  std::cout << "locate-tool: " << t.readings << " readings of " << a.data << " in " << t.orientations
+            << " distinct flange orientations";
+  if (t.left_out) std::cout << " (" << t.left_out << " left out: outside the model's region)";
+  std::cout << "\n  tool point " << rounded(t.tool_mm.x()) << "," << rounded(t.tool_mm.y()) << "," << rounded(t.tool_mm.z())
+            << " mm (the calibrated model's flange frame; --tool " << tool_option_text(located.tool_in_robot_frame(tool))
+            << " in the robot description's), standard deviation " << rounded(t.sd_mm.x()) << ", " << rounded(t.sd_mm.y()) << ", "
+            << rounded(t.sd_mm.z()) << " mm per axis (least squares, readings taken as independent)\n"
+            << "  fit residual RMS " << rounded(t.residual_rms_mm) << " mm (" << t.expected_basis << " explains "
+            << rounded(t.expected_rms_mm) << " mm)\n"
+            << "  " << rounded(t.lever_mm, 10) << " mm from the reflector the model was measured with"
+            << (t.field_used ? "; the flange position corrected by the model's field and joint functions"
+                             : "; the model's calibrated kinematics alone (no field)");
+  if (prior.known())
+    std::cout << "; orientation prior " << rounded(prior.sigma_rad * 1e3, 1e3) << " mrad, rows refused beyond "
+              << rounded(prior.max_lever_mm, 1) << " mm" << (t.lever_mm > prior.max_lever_mm ? " (this point: every row)" : "");
+  std::cout << "\n  model with this working tool written to " << a.out
+            << " (predict, validate and compensate use it; --tool overrides it)\n";
+}
+
+void add_locate_tool_command(CLI::App& app) {
+  auto a = std::make_shared<LocateToolArgs>();
+  auto* cmd = app.add_subcommand(
+      "locate-tool",
+      "Locate a point rigidly attached to the flange (a second reflector nest, a tool tip) from a few tracker\n"
+      "readings of it, through the model's calibrated kinematics, registration, field and joint functions\n"
+      "(least squares, linear in the point); writes the model with that working tool, everything else kept,\n"
+      "so predict, validate and compensate work at the new point. Reports the point (flange frame, mm), its\n"
+      "standard deviation per axis and the fit residual RMS; refuses readings in fewer than 3 distinct flange\n"
+      "orientations and readings that are not one rigid point (docs/robot.md, \"Tool points and orientation\").\n"
+      "Example: errfield locate-tool --model model.json --data tool_readings.csv --out model_tool.json");
+  cmd->add_option("--model", a->model, "model JSON from 'errfield fit' (with a registration)")->required();
+  cmd->add_option("--data", a->data, "readings of the point: point,q1..q6,mx,my,mz (tracker frame, mm; docs/data-formats.md)")
+      ->required();
+  cmd->add_option("--min-orientations", a->options.min_orientations,
+                  "at least this many distinct flange orientations among the readings")
+      ->capture_default_str();
+  cmd->add_option("--distinct-orientation", a->options.distinct_orientation_deg,
+                  "DEG: flange orientations closer than this count as one")
+      ->capture_default_str();
+  cmd->add_option("--not-rigid-factor", a->options.not_rigid_factor,
+                  "refuse readings whose residual RMS exceeds this many times what the model's own errors explain")
+      ->capture_default_str();
+  cmd->add_option("--out", a->out, "model JSON with the located working tool (written atomically)")->required();
+  cmd->callback([a] { run_locate_tool(*a); });
+}
+
+Registration register_locate_tool{"locate-tool", 75, &add_locate_tool_command};
+
+}  // namespace
+}  // namespace errfield::cli

@@ -1,0 +1,154 @@
+#include "errfield/compensation/tool_location.hpp"
+
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+
+#include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
+#include "errfield/robot/kinematics.hpp"
+
+namespace errfield::compensation {
+
+using namespace errfield::robot;
+
+void ToolLocationOptions::validate() const {
+  if (!(distinct_orientation_deg > 0.0 && distinct_orientation_deg < 180.0))
+    throw ArgumentError("ToolLocationOptions: distinct_orientation_deg must be in (0, 180), got " +
+                        format_number(distinct_orientation_deg));
+  if (min_orientations < 1) throw ArgumentError("ToolLocationOptions: min_orientations must be >= 1");
+  if (!(not_rigid_factor > 0.0 && std::isfinite(not_rigid_factor)))
+    throw ArgumentError("ToolLocationOptions: not_rigid_factor must be finite and > 0, got " + format_number(not_rigid_factor));
+}
+
+namespace {
+
+/// Greedy clusters of rotations: a rotation further than `limit_rad` from every cluster's first
+/// member starts a new one. Counts the clusters.
+std::size_t distinct_orientations(const std::vector<Eigen::Matrix3d>& r, double limit_rad) {
+  std::vector<Eigen::Matrix3d> seen;
+  for (const Eigen::Matrix3d& m : r) {
+    bool near = false;
+    for (const Eigen::Matrix3d& s : seen)
+      if (Eigen::AngleAxisd(s.transpose() * m).angle() <= limit_rad) {
+        near = true;
+        break;
+      }
+    if (!near) seen.push_back(m);
+  }
+  return seen.size();
+}
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& w) {
+  Eigen::Matrix3d s;
+  s << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
+  return s;
+}
+
+std::string mm(double v) { return format_number(std::round(v * 1e4) / 1e4); }
+
+}  // namespace
+
+ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d, const ToolLocationOptions& options) {
+  options.validate();
+  const std::string& src = d.source;
+  if (d.measured_mm.empty())
+    throw InputError(src + ": no tracker readings (columns mx,my,mz): locate-tool needs readings of the point", src);
+  if (!model.registration())
+    throw InputError(src + ": the model holds no tracker registration (fit or calibrate it from data with mx,my,mz), "
+                           "so readings cannot be put in the robot frame", src);
+  const Registration& reg = *model.registration();
+  const MdhModel& robot = model.command_model();
+  // The flange origin as the model's point: the field's correction and the functions' displacement there.
+  const MdhModel flange_model = robot.with_tool(Eigen::Isometry3d::Identity());
+  ToolLocation out;
+  out.field_used = model.field() != nullptr;
+  std::vector<Eigen::Matrix3d> a, rotations;
+  std::vector<Eigen::Vector3d> b;
+  std::vector<std::size_t> used;
+  for (std::size_t i = 0; i < d.q_deg.size(); ++i) {
+    const JointVector& q = d.q_deg[i];
+    const Eigen::Isometry3d flange = forward_kinematics(robot, q, EndFrame::flange);
+    Eigen::Vector3d shift = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d turn = Eigen::Matrix3d::Identity();
+    if (model.field()) {
+      const ErrorPrediction e = model.predict_error_at(q, flange_model);
+      if (!e.inside_region || !e.credible || !e.position_error_mm.allFinite()) {
+        ++out.left_out;
+        continue;
+      }
+      shift = e.position_error_mm;
+      if (const auto& f = model.joint_error_functions()) {
+        const Eigen::Matrix<double, 6, 1> dq_rad = 1e-3 * f->angle_error_mrad(q, &robot);
+        turn += skew(geometric_jacobian(robot, q, EndFrame::flange).bottomRows<3>() * dq_rad);
+      }
+    }
+    a.push_back(turn * flange.linear());
+    b.push_back(reg.robot_from_tracker * d.measured_mm[i] - flange.translation() - shift);
+    rotations.push_back(flange.linear());
+    used.push_back(i);
+  }
+  out.readings = used.size();
+  out.orientations = distinct_orientations(rotations, options.distinct_orientation_deg * M_PI / 180.0);
+  if (out.orientations < options.min_orientations)
+    throw InputError(src + ": " + std::to_string(out.readings) + " reading(s)" +
+                         (out.left_out ? " (" + std::to_string(out.left_out) + " more outside the model's region)" : "") +
+                         " in " + std::to_string(out.orientations) + " distinct flange orientation(s) (closer than " +
+                         format_number(options.distinct_orientation_deg) + " deg count as one); at least " +
+                         std::to_string(options.min_orientations) +
+                         " are needed to locate the point: with fewer, the model's error at those poses cannot be told "
+                         "from the point's offset. Measure the point at more orientations of the flange",
+                     src);
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    normal += a[k].transpose() * a[k];
+    rhs += a[k].transpose() * b[k];
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> solve(normal);
+  out.tool_mm = solve.solve(rhs);
+  double ss = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    out.residual_mm.push_back(a[k] * out.tool_mm - b[k]);
+    ss += out.residual_mm.back().squaredNorm();
+  }
+  const double n = static_cast<double>(a.size());
+  out.residual_rms_mm = std::sqrt(ss / n);
+  // Residual variance per coordinate with 3 parameters fitted from 3n numbers.
+  const double s2 = a.size() > 1 ? ss / (3.0 * n - 3.0) : 0.0;
+  out.sd_mm = (s2 * solve.solve(Eigen::Matrix3d::Identity())).diagonal().cwiseSqrt();
+  out.lever_mm = (out.tool_mm - model.measured_point_mm()).norm();
+
+  // What the model's own errors explain at the located point.
+  Eigen::Isometry3d tool = robot.tool();
+  tool.translation() = out.tool_mm;
+  const CompensationModel at_tool = model.with_working_tool(tool);
+  double var_sum = 0.0;
+  std::size_t var_count = 0;
+  for (std::size_t i : used) {
+    const double v = at_tool.predict_error(d.q_deg[i]).predictive_variance_mm2();
+    if (std::isfinite(v)) {
+      var_sum += v;
+      ++var_count;
+    }
+  }
+  if (var_count == used.size() && var_count > 0) {
+    out.expected_rms_mm = std::sqrt(var_sum / static_cast<double>(var_count));
+    out.expected_basis = "the model's predictive variance at the point";
+  } else {
+    out.expected_rms_mm = reg.residual_rms_mm;
+    out.expected_basis = "the model's registration residual";
+  }
+  if (out.residual_rms_mm > options.not_rigid_factor * out.expected_rms_mm)
+    throw InputError(src + ": the " + std::to_string(out.readings) + " readings are not one point rigidly attached to "
+                         "the flange: located at (" + mm(out.tool_mm.x()) + ", " + mm(out.tool_mm.y()) + ", " +
+                         mm(out.tool_mm.z()) + ") mm they leave a residual RMS of " + mm(out.residual_rms_mm) +
+                         " mm, more than " + format_number(options.not_rigid_factor) + " x the " +
+                         mm(out.expected_rms_mm) + " mm that " + out.expected_basis +
+                         " explains (readings of two points mixed, a moved nest, or another robot's)",
+                     src);
+  return out;
+}
+
+}  // namespace errfield::compensation
