@@ -90,12 +90,13 @@ void run_compensate(const CompensateArgs& a) {
   const StepColumns step = compensate_columns(model, nominal, targets, a.tolerance, a.max_correction);
   const std::size_t refused = step.refused, no_prediction = step.no_prediction;
   const std::vector<std::string>& status = step.columns.back().words;
-  // Nothing compensated is a failed job, as in predict, validate and cv: a script must not send
-  // a file of empty joints (every row refused exited 0).
+  // Nothing compensated: said on standard error with the refusals' tally. The file is still
+  // written with every row's status (as ik does), since scripts and tests read the statuses;
+  // `--strict` makes it a failed job (exit 1, nothing written).
   if (n > 0 && refused == n)
-    throw Error("compensate: none of the " + std::to_string(n) + " targets of " + a.targets +
-                " could be compensated with " + std::string(method_name(model.method())) + " from " + a.model + " (" +
-                refusal_tally(status) + "); " + a.out + " not written");
+    std::cerr << "errfield compensate: warning: none of the " << n << " targets of " << a.targets
+              << " could be compensated with " << method_name(model.method()) << " from " << a.model << " ("
+              << refusal_tally(status) << "); " << a.out << " holds their statuses only\n";
   OutputTable out;
   out.add_all_columns(t);
   add_step_columns(out, step);
@@ -166,7 +167,7 @@ void add_compensate_command(CLI::App& app) {
       "(wrist-singular, ...). Joint targets that look like radians (all within +-2 pi, spread far less than the\n"
       "model's training joints) are an error (exit 2; --joints-are-degrees if they are degrees).\n"
       "Prints the largest move of the tool point and the ceiling (--max-correction). If every target is\n"
-      "refused, nothing is written and the exit status is 1.\n"
+      "refused, a warning says so (with --strict: nothing is written and the exit status is 1).\n"
       "Example: errfield compensate --model model.json --targets targets.csv --out joints.csv");
   cmd->add_option("--robot", a->robot, "nominal robot JSON or built-in name (er20-c10, kr16, ur5e; default: the model's command model)");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();

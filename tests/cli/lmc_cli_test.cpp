@@ -100,13 +100,13 @@ TEST_F(LmcCli, ConstantComponentIsRefusedNotFittedAsZeros) {
     auto r = run("fit-variogram --lmc --input " + path("flat.csv") + " --coords x,y --value ex,ey,ez --model " + model +
                  " --out " + path("flat.json"));
     EXPECT_EQ(r.exit_code, 2) << r.output();
-    EXPECT_THAT(r.err, HasSubstr("no spatial variation in 'ey'")) << model;
+    EXPECT_THAT(r.err, ::testing::HasSubstr("no spatial variation in 'ey'")) << model;
     EXPECT_FALSE(std::filesystem::exists(path("flat.json")));
     r = run("fit-variogram --lmc --input " + path("all.csv") + " --coords x,y --value ex,ey,ez --model " + model +
             " --out " + path("all.json"));
     EXPECT_EQ(r.exit_code, 2) << r.output();
-    EXPECT_THAT(r.err, HasSubstr("no spatial variation in 'ex', 'ey', 'ez'")) << model;
-    EXPECT_THAT(r.err, HasSubstr("every component")) << model;
+    EXPECT_THAT(r.err, ::testing::HasSubstr("no spatial variation in 'ex', 'ey', 'ez'")) << model;
+    EXPECT_THAT(r.err, ::testing::HasSubstr("every component")) << model;
   }
 }
 
