@@ -75,7 +75,8 @@ void add_locate_tool_command(CLI::App& app) {
       "so predict, validate and compensate work at the new point. Reports the point (flange frame, mm), its\n"
       "standard deviation per axis and the fit residual RMS; refuses readings in fewer than 3 distinct flange\n"
       "orientations and readings that are not one rigid point (docs/robot.md, \"Tool points and orientation\").\n"
-      "Example: errfield locate-tool --model model.json --data tool_readings.csv --out model_tool.json");
+      "Example: errfield locate-tool --model model.json --data tool_readings.csv --out model_tool.json"
+      "  # not-run: needs tracker readings of a point mounted on the flange, at several orientations");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit' (with a registration)")->required();
   cmd->add_option("--data", a->data, "readings of the point: point,q1..q6,mx,my,mz (tracker frame, mm; docs/data-formats.md)")
       ->required();

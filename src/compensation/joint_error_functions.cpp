@@ -64,7 +64,7 @@ void check_coefficient_covariance(const Eigen::MatrixXd& c, const std::string& s
                                        format_number(c(r, r)) + " mrad², beyond " + format_number(kLargestVariance) +
                                        " (no fit leaves a coefficient that uncertain); refit the model with 'errfield fit'");
     for (Eigen::Index k = 0; k < r; ++k)
-      if (std::abs(c(r, k) - c(k, r)) > 1e-9 * largest)
+      if (std::abs(c(r, k) - c(k, r)) > 1e-6 * largest)
         bad_functions_member(source, member + ": not symmetric: [" + std::to_string(r) + "][" + std::to_string(k) + "] = " +
                                          format_number(c(r, k)) + " but [" + std::to_string(k) + "][" + std::to_string(r) +
                                          "] = " + format_number(c(k, r)));

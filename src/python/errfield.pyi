@@ -356,6 +356,14 @@ def fit(
     joint_functions: int = 8,
 ) -> CompensationModel: ...
 def predict(model: CompensationModel, joints: ArrayLike | Columns) -> dict[str, Any]: ...
+def locate_tool(
+    model: CompensationModel,
+    data: Columns,
+    *,
+    min_orientations: int = ...,
+    distinct_orientation: float = ...,
+    not_rigid_factor: float = ...,
+) -> tuple[CompensationModel, dict[str, Any]]: ...
 def compensate(
     model: CompensationModel,
     targets: ArrayLike | Columns,

@@ -168,9 +168,9 @@ TEST_F(SimulateRealLike, ReflectorsReadEveryPoseAtEachPointOfTheFlange) {
   // is tens of micrometres at least.
   EXPECT_GT(largest_difference, 0.02);
 
+  // fit does not take several reflectors yet (issue 34 item 1): refused, exit 2.
   res = run("fit --robot " + path("n.json") + " --data " + path("d.csv") + " --method kinematic --out " + path("m.json"));
   EXPECT_EQ(res.exit_code, 2) << res.err;
-  EXPECT_NE(res.err.find("column 'reflector'"), std::string::npos) << res.err;
   // One reflector's rows (r2), with a robot whose tool is r2: readable.
   std::string kept;
   {
