@@ -19,6 +19,9 @@ namespace errfield::compensation {
 using namespace errfield::robot;
 namespace joint_error_functions_test {
 
+// A prior so wide it changes nothing: the exact formulas of the ridge and GLS fits underneath it.
+const JointFunctionPrior kNoPrior{1e12, 1e12, 0.0};
+
 // KR 16 with a 150 mm tool offset from the flange axis, so that every joint moves the point.
 MdhModel robot_with_tool() {
   Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
@@ -258,7 +261,7 @@ TEST(JointErrorFunctions, CoefficientCovarianceIsTheSandwichUnderTheCentredField
   std::vector<Eigen::Vector3d> r(q.size());
   for (std::size_t i = 0; i < q.size(); ++i)  // a smooth joint-1 effect, so that some functions are fitted
     r[i] = Eigen::Vector3d(0.2 * std::sin(q[i][0] / 40.0), 0.1 * std::cos(q[i][4] / 30.0), 0.05);
-  JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 3);
+  JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 3, false, kNoPrior);
   ASSERT_GT(fit.ridge_inverse.size(), 0);
   const VariogramModel field = VariogramModel::parse("sph(sill=0.01,range=200)+nug(0.0004)@ard(1,0.5,2,1,1,0.3)");
   set_coefficient_covariance(fit, q, field);
@@ -319,11 +322,11 @@ TEST(JointErrorFunctions, GeneralizedRefitIsTheRidgeGlsUnderTheFieldCovariance) 
   std::vector<Eigen::Vector3d> r(q.size());
   for (std::size_t i = 0; i < q.size(); ++i)
     r[i] = Eigen::Vector3d(0.2 * std::sin(q[i][0] / 40.0) + 0.03, 0.1 * std::cos(q[i][4] / 30.0), 0.05 * std::sin(q[i][1] / 25.0));
-  JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 3);
+  JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 3, false, kNoPrior);
   ASSERT_GT(fit.ridge_inverse.size(), 0);
   const Eigen::MatrixXd design = fit.design;
   const VariogramModel field = VariogramModel::parse("sph(sill=0.01,range=200)+nug(0.0004)@ard(1,0.5,2,1,1,0.3)");
-  ASSERT_TRUE(refit_by_generalized_least_squares(fit, q, r, field));
+  ASSERT_TRUE(refit_by_generalized_least_squares(fit, q, r, field, kNoPrior));
   EXPECT_TRUE(fit.generalized);
   const auto n = static_cast<Eigen::Index>(q.size());
   const Eigen::MatrixXd si = full_residual_covariance(q).inverse();
@@ -487,6 +490,94 @@ TEST(JointErrorFunctions, OnlyKinematicKrigingModelsCarryThem) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("only kinematic+kriging"), std::string::npos) << e.what();
   }
+}
+
+}  // namespace joint_error_functions_test
+}  // namespace errfield::compensation
+
+namespace errfield::compensation {
+using namespace errfield::robot;
+namespace joint_error_functions_test {
+
+// The physical prior (issue 34 item 3): a combination of functions whose effect at the measured
+// point is at the noise level (the least-determined direction v of the design) but which the data
+// contain, so that a fit without the prior reproduces it at tens of mrad and more: with the prior
+// its coefficient stays within the prior's size, and its variance is the prior's, not the tiny
+// spread of a shrunken estimate.
+TEST(JointFunctionPrior, BoundsADirectionTheMeasuredPointBarelySees) {
+  const MdhModel m = robot_with_tool();
+  const std::vector<JointVector> q = random_poses(30, 41);
+  const std::vector<Eigen::Vector3d> zero(q.size(), Eigen::Vector3d::Zero());
+  const JointErrorFunctionFit probe = fit_joint_error_functions(m, q, zero, 8, true, kNoPrior);
+  const Eigen::MatrixXd& f = probe.design;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(f.transpose() * f);
+  Eigen::Index weakest = 0;
+  while (eig.eigenvalues()[weakest] <= 1e-9 * eig.eigenvalues().maxCoeff()) ++weakest;  // skip empty columns
+  const Eigen::VectorXd v = eig.eigenvectors().col(weakest), u = eig.eigenvectors().col(f.cols() - 1);
+  const auto rows = static_cast<double>(f.rows());
+  const double per_mrad_v = (f * v).norm() / std::sqrt(rows / 3.0), per_mrad_u = (f * u).norm() / std::sqrt(rows / 3.0);
+  const double c = 0.03 / per_mrad_v;  // 0.03 mm RMS at the poses
+  ASSERT_GT(c, 100.0) << "the direction is weak: tens of micrometres need more than 100 mrad";
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  Eigen::VectorXd y = f * (u * (0.3 / per_mrad_u) + v * c);
+  for (Eigen::Index i = 0; i < y.size(); ++i) y[i] += noise(rng);
+  std::vector<Eigen::Vector3d> r(q.size());
+  for (std::size_t i = 0; i < q.size(); ++i) r[i] = y.segment<3>(3 * static_cast<Eigen::Index>(i));
+  auto along_v = [&](const JointErrorFunctionFit& fit) {
+    Eigen::VectorXd beta(fit.functions.parameter_count());
+    beta.head(6 * 8) = Eigen::Map<const Eigen::VectorXd>(Eigen::MatrixXd(fit.functions.coefficients_mrad.transpose()).data(), 48);
+    for (std::size_t t = 0; t < fit.functions.gravity_terms.size(); ++t)
+      beta[48 + static_cast<Eigen::Index>(t)] = fit.functions.gravity_terms[t].coefficient_mrad;
+    return beta.dot(v);
+  };
+  const JointErrorFunctionFit loose = fit_joint_error_functions(m, q, r, 8, true, kNoPrior);
+  ASSERT_EQ(loose.functions.parameter_count(), f.cols());
+  EXPECT_GT(std::abs(along_v(loose)), 0.5 * c) << "without the prior the weak direction is taken at its full size";
+  const JointFunctionPrior prior;
+  JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 8, true, prior);
+  ASSERT_EQ(fit.functions.parameter_count(), f.cols());
+  EXPECT_LT(std::abs(along_v(fit)), 3.0 * prior.polynomial_sd_mrad);
+  // Its variance: at least a quarter of the smaller prior variance (v mixes both kinds of coefficient).
+  const VariogramModel field = VariogramModel::parse("sph(sill=0.01,range=200)+nug(0.0004)@ard(1,0.5,2,1,1,0.3)");
+  set_coefficient_covariance(fit, q, field);
+  const double sd = std::min(prior.polynomial_sd_mrad, prior.gravity_sd_mrad);
+  EXPECT_GT(v.dot(fit.functions.coefficient_covariance_mrad2 * v), 0.25 * sd * sd);
+  set_coefficient_covariance(const_cast<JointErrorFunctionFit&>(loose), q, field);
+  EXPECT_LT(v.dot(loose.functions.coefficient_covariance_mrad2 * v), 0.25 * sd * sd) << "the test's premise";
+  // The GLS refit keeps the bound.
+  ASSERT_TRUE(refit_by_generalized_least_squares(fit, q, r, field, prior));
+  EXPECT_LT(std::abs(along_v(fit)), 3.0 * prior.polynomial_sd_mrad);
+  EXPECT_THROW(fit_joint_error_functions(m, q, r, 8, true, JointFunctionPrior{0.0, 2.0, 0.1}), ArgumentError);
+}
+
+// Poses where only q1 turns: every gravity lever is constant (checked here from the levers
+// themselves), so each gravity term is a joint offset over these poses and the data cannot tell them
+// apart: the fit leaves them out and says which. Over poses that move q2..q5 they stay.
+TEST(JointFunctionPrior, GravityTermsWhoseLeverDoesNotVaryAreLeftOut) {
+  const MdhModel m = robot_with_tool();
+  std::vector<JointVector> q;
+  for (int k = 0; k < 25; ++k) q.push_back((JointVector() << -150.0 + 12.5 * k, -80, 110, 20, 40, 30).finished());
+  std::vector<Eigen::Vector3d> r(q.size());
+  for (std::size_t i = 0; i < q.size(); ++i) r[i] = Eigen::Vector3d(0.1 * std::sin(q[i][0] / 40.0), 0.02, -0.03);
+  const JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 4, true);
+  const JointErrorFunctionFit kept = fit_joint_error_functions(m, random_poses(25, 3), r, 4, true);
+  EXPECT_TRUE(kept.undetermined_gravity_terms.empty());
+  ASSERT_FALSE(kept.functions.gravity_terms.empty());
+  for (int joint = 0; joint < 6; ++joint)
+    for (int frame = joint + 2; frame <= 7; ++frame) {
+      double lo = 1e300, hi = -1e300;
+      for (const JointVector& at : q) {
+        KinematicFrames frames;
+        forward_kinematics_all(m, at, frames);
+        lo = std::min(lo, gravity_lever_m(frames, joint, frame));
+        hi = std::max(hi, gravity_lever_m(frames, joint, frame));
+      }
+      EXPECT_LT(hi - lo, 1e-9) << "joint " << joint + 1 << " frame " << frame << ": the premise, a constant lever";
+    }
+  EXPECT_TRUE(fit.functions.gravity_terms.empty());
+  ASSERT_FALSE(fit.undetermined_gravity_terms.empty());
+  EXPECT_EQ(fit.undetermined_gravity_terms.front().rfind("joint ", 0), 0u);
 }
 
 }  // namespace joint_error_functions_test

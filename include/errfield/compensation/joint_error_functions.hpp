@@ -28,7 +28,11 @@
 /// their ridge. A mass between two frame origins is a combination of their two terms.
 ///
 /// Fit: ridge least squares on the coefficients (mrad), the ridge chosen by generalized
-/// cross-validation, so that data without such errors leave the functions near zero; once the
+/// cross-validation, so that data without such errors leave the functions near zero, plus a
+/// physical prior (JointFunctionPrior): each coefficient has a prior standard deviation of a
+/// physically plausible size, so a combination of angle errors the measured point barely sees (it
+/// turns the flange about that point) cannot grow to tens of mrad and move every other point on the
+/// flange; where the prior decides, its variance is in the coefficients' covariance. Once the
 /// field's variogram is known, `fit` refits them by generalized least squares under its covariance
 /// (refit_by_generalized_least_squares).
 /// Units: joints deg, coefficients mrad, positions mm, robot frame.
@@ -124,6 +128,23 @@ struct JointErrorFunctions {
   static JointErrorFunctions from_json(const nlohmann::json& j, const std::string& source);
 };
 
+/// The physical prior of the fit: coefficients (mrad) drawn from N(0, sd^2), the penalty
+/// noise variance / sd^2 on each (the maximum a posteriori fit). Why these sizes: docs/robot.md
+/// "Transfer to another point".
+struct JointFunctionPrior {
+  /// Per Legendre coefficient: the simulator's realistic preset puts 5-26 mrad at the ends of q1's and
+  /// q5's travel, spread over several coefficients.
+  double polynomial_sd_mrad = 10.0;
+  /// Per gravity term (its RMS deflection over the poses): joints 2-3 of a 20 kg arm yield ~0.7 mrad
+  /// at full reach at the realistic preset's 1 mrad/kN·m (the paper's default 0.3-0.4 mrad/kN·m).
+  double gravity_sd_mrad = 2.0;
+  /// A gravity term whose column is within this fraction of the joint-offset columns (its lever
+  /// barely varies over the poses: the calibration's joint offset already holds it) is left out.
+  double min_identifiable_fraction = 0.1;
+  /// Throws ArgumentError for a value <= 0 (sd) or outside [0, 1) (fraction).
+  void validate() const;
+};
+
 struct JointErrorFunctionFit {
   JointErrorFunctions functions;
   std::vector<Eigen::Vector3d> remaining_mm;  ///< residual - fitted position error, per pose
@@ -139,6 +160,14 @@ struct JointErrorFunctionFit {
   /// empty when no function was fitted
   Eigen::MatrixXd ridge_inverse;
   bool generalized = false;  ///< refitted by generalized least squares (refit_by_generalized_least_squares)
+  /// The prior's share of the coefficients' covariance: diag(noise variance x prior penalty), the
+  /// middle term R diag(.) R adds (mm^4/mrad^2 for the ordinary fit, whitened units after the GLS
+  /// refit); empty without a prior. In a direction the data do not determine the covariance is then
+  /// the prior's sd^2, not the (tiny) spread of a shrunken estimate.
+  Eigen::VectorXd prior_middle_diagonal;
+  /// Gravity terms left out because the data cannot tell them from the joint offsets
+  /// (JointFunctionPrior::min_identifiable_fraction), as "joint J frame F".
+  std::vector<std::string> undetermined_gravity_terms;
 };
 
 /// Sets fit.functions.coefficient_covariance_mrad2 = R F' S F R (R = fit.ridge_inverse, F the
@@ -166,7 +195,8 @@ void set_coefficient_covariance(JointErrorFunctionFit& fit, const std::vector<ro
 /// 3-11 % off the held-out RMS at 120-687 poses (docs/robot.md, "Joint error functions").
 /// O(N^3) time, N^2 memory (as the field's dense kriging).
 bool refit_by_generalized_least_squares(JointErrorFunctionFit& fit, const std::vector<robot::JointVector>& q_deg,
-                                        const std::vector<Eigen::Vector3d>& residual_mm, const VariogramModel& field_model);
+                                        const std::vector<Eigen::Vector3d>& residual_mm, const VariogramModel& field_model,
+                                        const JointFunctionPrior& prior = {});
 
 /// Fits the functions to `residual_mm[i]` (robot frame, the calibrated model's residual at joints
 /// `q_deg[i]`). Throws ArgumentError for degree < 1 or mismatched sizes; fewer poses than
@@ -176,6 +206,6 @@ bool refit_by_generalized_least_squares(JointErrorFunctionFit& fit, const std::v
 /// none) nor a copy of an earlier point's (coincident frame origins).
 JointErrorFunctionFit fit_joint_error_functions(const robot::MdhModel& model, const std::vector<robot::JointVector>& q_deg,
                                                 const std::vector<Eigen::Vector3d>& residual_mm, int degree,
-                                                bool gravity_load = false);
+                                                bool gravity_load = false, const JointFunctionPrior& prior = {});
 
 }  // namespace errfield::compensation
