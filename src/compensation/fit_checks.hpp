@@ -28,4 +28,11 @@ FitResult check_fitted_model(FitResult fit, const FitOptions& options,
 /// fit already registered them) in fit.model.
 FitResult attach_artifacts(FitResult fit, const robot::MdhModel& nominal, const MeasurementSet& data);
 
+/// Refuses (InputError naming the file, line, column 'reflector' and the value) a measurement table
+/// whose rows carry more than one label in a column `reflector` (simulate --reflectors, nests on one
+/// plate): a model is fitted to one point at a time. One label (the user kept one reflector's rows)
+/// or no such column passes. Called before the check of x,y,z against the FK, which would blame the
+/// robot for the other reflectors' rows.
+void refuse_several_reflectors(const CsvTable& t);
+
 }  // namespace errfield::compensation

@@ -26,6 +26,20 @@ namespace errfield::compensation {
 
 using namespace errfield::robot;
 
+void refuse_several_reflectors(const CsvTable& t) {
+  // Rows of several points on the flange: one model of one point cannot take them together (each
+  // reflector has its own error at a pose), so refuse them unless the file holds one label.
+  if (!t.has_column("reflector")) return;
+  const std::size_t col = t.column_index("reflector");
+  for (std::size_t r = 1; r < t.row_count(); ++r)
+    if (t.row(r)[col] != t.row(0)[col])
+      throw InputError(t.source() + ":" + std::to_string(t.line_of_row(r)) + ": column 'reflector': '" + t.row(r)[col] +
+                           "' after '" + t.row(0)[col] +
+                           "': the file holds readings of several reflectors, and a model is fitted to one point at a "
+                           "time; keep one reflector's rows (and give a robot JSON whose tool is that reflector)",
+                       t.source(), t.line_of_row(r), "reflector");
+}
+
 MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& robot,
                                           const std::vector<Eigen::Vector3d>& fixed_bases) {
   MeasurementSet m;
@@ -40,19 +54,7 @@ MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& rob
     dist.push_back(t.numeric_column("dist_b" + std::to_string(k)));
   const bool has_kind = t.has_column("kind");
   const std::size_t kind_col = has_kind ? t.column_index("kind") : 0;
-  // Rows of several points on the flange (simulate --reflectors, nests on one plate): one model of
-  // one point cannot take them together (each reflector has its own error at a pose), so refuse
-  // them unless the file holds one label, as after the user kept one reflector's rows.
-  if (t.has_column("reflector")) {
-    const std::size_t col = t.column_index("reflector");
-    for (std::size_t r = 1; r < t.row_count(); ++r)
-      if (t.row(r)[col] != t.row(0)[col])
-        throw InputError(t.source() + ":" + std::to_string(t.line_of_row(r)) + ": column 'reflector': '" + t.row(r)[col] +
-                             "' after '" + t.row(0)[col] +
-                             "': the file holds readings of several reflectors, and a model is fitted to one point at a "
-                             "time; keep one reflector's rows (and give a robot JSON whose tool is that reflector)",
-                         t.source(), t.line_of_row(r), "reflector");
-  }
+  refuse_several_reflectors(t);
   const bool has_point = t.has_column("point");
   const std::size_t point_col = has_point ? t.column_index("point") : 0;
   m.distance_mm.assign(dist.size(), {});

@@ -14,6 +14,7 @@
 #include "errfield/compensation/registration.hpp"
 #include "errfield/compensation/target_ik.hpp"
 #include "errfield/error.hpp"
+#include "compensation/fit_checks.hpp"
 #include "errfield/robot/arm_configuration.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/kinematics.hpp"
@@ -100,6 +101,7 @@ void check_table_fits_robot(const CsvTable& table, const robot::MdhModel& robot,
 
 TableFit fit_table(const robot::MdhModel& robot, const CsvTable& table, const FitTableOptions& options) {
   // Misuse is an error with a reason (robot/input_checks.hpp), before any fitting.
+  refuse_several_reflectors(table);
   robot::check_distance_columns(table, &robot, options.fixed_bases);
   const robot::RobotOrigin origin{options.robot_given, ""};
   robot::check_nominal_positions(table, robot, origin.given);

@@ -499,58 +499,6 @@ namespace errfield::compensation {
 using namespace errfield::robot;
 namespace joint_error_functions_test {
 
-// The physical prior (issue 34 item 3): a combination of functions whose effect at the measured
-// point is at the noise level (the least-determined direction v of the design) but which the data
-// contain, so that a fit without the prior reproduces it at tens of mrad and more: with the prior
-// its coefficient stays within the prior's size, and its variance is the prior's, not the tiny
-// spread of a shrunken estimate.
-TEST(JointFunctionPrior, BoundsADirectionTheMeasuredPointBarelySees) {
-  const MdhModel m = robot_with_tool();
-  const std::vector<JointVector> q = random_poses(30, 41);
-  const std::vector<Eigen::Vector3d> zero(q.size(), Eigen::Vector3d::Zero());
-  const JointErrorFunctionFit probe = fit_joint_error_functions(m, q, zero, 8, true, kNoPrior);
-  const Eigen::MatrixXd& f = probe.design;
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(f.transpose() * f);
-  Eigen::Index weakest = 0;
-  while (eig.eigenvalues()[weakest] <= 1e-9 * eig.eigenvalues().maxCoeff()) ++weakest;  // skip empty columns
-  const Eigen::VectorXd v = eig.eigenvectors().col(weakest), u = eig.eigenvectors().col(f.cols() - 1);
-  const auto rows = static_cast<double>(f.rows());
-  const double per_mrad_v = (f * v).norm() / std::sqrt(rows / 3.0), per_mrad_u = (f * u).norm() / std::sqrt(rows / 3.0);
-  const double c = 0.03 / per_mrad_v;  // 0.03 mm RMS at the poses
-  ASSERT_GT(c, 100.0) << "the direction is weak: tens of micrometres need more than 100 mrad";
-  std::mt19937_64 rng(5);
-  std::normal_distribution<double> noise(0.0, 0.01);
-  Eigen::VectorXd y = f * (u * (0.3 / per_mrad_u) + v * c);
-  for (Eigen::Index i = 0; i < y.size(); ++i) y[i] += noise(rng);
-  std::vector<Eigen::Vector3d> r(q.size());
-  for (std::size_t i = 0; i < q.size(); ++i) r[i] = y.segment<3>(3 * static_cast<Eigen::Index>(i));
-  auto along_v = [&](const JointErrorFunctionFit& fit) {
-    Eigen::VectorXd beta(fit.functions.parameter_count());
-    beta.head(6 * 8) = Eigen::Map<const Eigen::VectorXd>(Eigen::MatrixXd(fit.functions.coefficients_mrad.transpose()).data(), 48);
-    for (std::size_t t = 0; t < fit.functions.gravity_terms.size(); ++t)
-      beta[48 + static_cast<Eigen::Index>(t)] = fit.functions.gravity_terms[t].coefficient_mrad;
-    return beta.dot(v);
-  };
-  const JointErrorFunctionFit loose = fit_joint_error_functions(m, q, r, 8, true, kNoPrior);
-  ASSERT_EQ(loose.functions.parameter_count(), f.cols());
-  EXPECT_GT(std::abs(along_v(loose)), 0.5 * c) << "without the prior the weak direction is taken at its full size";
-  const JointFunctionPrior prior;
-  JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 8, true, prior);
-  ASSERT_EQ(fit.functions.parameter_count(), f.cols());
-  EXPECT_LT(std::abs(along_v(fit)), 3.0 * prior.polynomial_sd_mrad);
-  // Its variance: at least a quarter of the smaller prior variance (v mixes both kinds of coefficient).
-  const VariogramModel field = VariogramModel::parse("sph(sill=0.01,range=200)+nug(0.0004)@ard(1,0.5,2,1,1,0.3)");
-  set_coefficient_covariance(fit, q, field);
-  const double sd = std::min(prior.polynomial_sd_mrad, prior.gravity_sd_mrad);
-  EXPECT_GT(v.dot(fit.functions.coefficient_covariance_mrad2 * v), 0.25 * sd * sd);
-  set_coefficient_covariance(const_cast<JointErrorFunctionFit&>(loose), q, field);
-  EXPECT_LT(v.dot(loose.functions.coefficient_covariance_mrad2 * v), 0.25 * sd * sd) << "the test's premise";
-  // The GLS refit keeps the bound.
-  ASSERT_TRUE(refit_by_generalized_least_squares(fit, q, r, field, prior));
-  EXPECT_LT(std::abs(along_v(fit)), 3.0 * prior.polynomial_sd_mrad);
-  EXPECT_THROW(fit_joint_error_functions(m, q, r, 8, true, JointFunctionPrior{0.0, 2.0, 0.1}), ArgumentError);
-}
-
 // Poses where only q1 turns: every gravity lever is constant (checked here from the levers
 // themselves), so each gravity term is a joint offset over these poses and the data cannot tell them
 // apart: the fit leaves them out and says which. Over poses that move q2..q5 they stay.

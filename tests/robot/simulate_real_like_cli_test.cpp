@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "errfield/csv_table.hpp"
 #include "errfield/robot/builtin_robots.hpp"
