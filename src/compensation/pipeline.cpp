@@ -430,7 +430,9 @@ void check_readings_of_tool_point(const CompensationModel& model, std::span<cons
                                   std::span<const Eigen::Vector3d> measured, const std::string& source,
                                   double limit_mm) {
   if (!model.registration() || measured.size() < 6 || q.size() != measured.size()) return;
-  const robot::MdhModel& command = model.command_model();
+  // The point validate scores: the working tool where `--tool` or locate-tool set one, else the
+  // reflector the model was fitted on.
+  const robot::MdhModel command = model.scored_model();
   double sq = 0.0;
   std::vector<robot::PositionMeasurement> data;
   for (std::size_t i = 0; i < q.size(); ++i) {
@@ -450,7 +452,8 @@ void check_readings_of_tool_point(const CompensationModel& model, std::span<cons
   };
   throw InputError(source + ": these readings are of another point than the model's tool point: registered with a "
                        "free reflector offset they put the reflector at " + xyz(found) + " mm in the flange frame, " +
-                       format_number(std::round(shift * 10) / 10) + " mm from the point the model was fitted for " +
+                       format_number(std::round(shift * 10) / 10) +
+                       (model.working_tool() ? " mm from the model's working tool point " : " mm from the point the model was fitted for ") +
                        xyz(fitted) + " (limit " + format_number(limit_mm) +
                        " mm), and the model's registration leaves them " + format_number(std::round(rms * 10) / 10) +
                        " mm RMS from it. Validate a model with readings of the reflector or tool it was fitted on "

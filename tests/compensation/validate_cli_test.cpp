@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <sstream>
 
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
@@ -567,6 +568,35 @@ TEST_F(ValidateCli, ToolOptionAndLocateToolWorkAtAnotherPointOfTheFlange) {
                               m["working_tool"].value("z_mm", 0.0));
   // the simulated robot's tool differs from the nominal one by its geometric deviation (< 1 mm)
   EXPECT_LT((found - b).norm(), 1.0) << found.transpose() << " vs " << b.transpose() << "\n" << located.out;
+  // validate scores the working tool: readings of it are its own point, whether located or given
+  // with --tool, while the model at its reflector refuses them as another point (100 mm away). The
+  // simulated x,y,z are the commanded reflector's nominal positions, so they go.
+  {
+    std::istringstream in(read("b_all.csv"));
+    std::string line, out;
+    std::vector<bool> keep;
+    while (std::getline(in, line)) {
+      if (line.empty() || line[0] == '#') continue;
+      std::vector<std::string> cells;
+      std::stringstream ss(line);
+      for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
+      if (keep.empty())
+        for (const std::string& c : cells) keep.push_back(c != "x" && c != "y" && c != "z");
+      std::string row;
+      for (std::size_t k = 0; k < cells.size(); ++k)
+        if (keep[k]) row += (row.empty() ? "" : ",") + cells[k];
+      out += row + "\n";
+    }
+    write("b_readings.csv", out);
+  }
+  const CliResult at_located = run("validate --model m_tool.json --data b_readings.csv --summary-out s_loc.json");
+  EXPECT_EQ(at_located.exit_code, 0) << at_located.output();
+  const CliResult at_tool = run("validate --model model.json --data b_readings.csv --tool " + tool + " --summary-out s_tool.json");
+  EXPECT_EQ(at_tool.exit_code, 0) << at_tool.output();
+  const CliResult at_reflector = run("validate --model model.json --data b_readings.csv --summary-out s_refl.json");
+  EXPECT_EQ(at_reflector.exit_code, 2) << at_reflector.output();
+  EXPECT_NE(at_reflector.output().find("another point"), std::string::npos) << at_reflector.output();
+  EXPECT_FALSE(std::filesystem::exists(path("s_refl.json")));
   // readings at one orientation (the tool-down grid) cannot locate it
   const CliResult one = run("locate-tool --model model.json --data train.csv --out m2.json");
   EXPECT_EQ(one.exit_code, 2) << one.output();
