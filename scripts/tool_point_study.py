@@ -7,6 +7,7 @@ random numbers, so the robot's errors, noise and poses are the same; the payload
 point, which moves the simulated payload by the offset too - checked below, it is < 0.01 mm).
 
 usage: scripts/tool_point_study.py ERRFIELD WORKDIR [--seeds 1,2,3] [--offsets 150,0,0;0,0,150]
+                                   [--train 210] [--fits "NAME=FIT OPTIONS;..."]
 Prints one table row per fit and offset: held-out RMS at B, 95 % coverage, refused rows, the
 kinematic part's RMS at B, and the reference fitted at B itself.
 """
@@ -81,7 +82,11 @@ def main():
     ap.add_argument("workdir")
     ap.add_argument("--seeds", default="1,2,3")
     ap.add_argument("--offsets", default="150,0,0")
+    ap.add_argument("--train", type=int, default=N_TRAIN, help="training poses at A (of 300; at most 260)")
+    ap.add_argument("--fits", default=None, help='"NAME=fit options;..." instead of the default four fits')
     a = ap.parse_args()
+    fits = FITS if a.fits is None else [tuple(f.split("=", 1)) for f in a.fits.split(";")]
+    n_train = a.train
     E, W = a.errfield, a.workdir
     os.makedirs(W, exist_ok=True)
     results = []
@@ -93,12 +98,12 @@ def main():
                   "--robot-out", robot, "--out", A])
         header, rows = rows_of(A)
         targets = [r for r in rows if r.split(",")[header.strip().split(",").index("kind")] == "target"]
-        trainA, holdA = os.path.join(W, f"s{seed}_A_train.csv"), os.path.join(W, f"s{seed}_A_hold.csv")
-        write_rows(trainA, header, targets[:N_TRAIN], drop=())
+        trainA, holdA = os.path.join(W, f"s{seed}_A_train{n_train}.csv"), os.path.join(W, f"s{seed}_A_hold.csv")
+        write_rows(trainA, header, targets[:n_train], drop=())
         write_rows(holdA, header, targets[N_TRAIN:], drop=())
         models = {}
-        for name, opts in FITS:
-            m = os.path.join(W, f"s{seed}_A_{name.replace(' ', '_')}.json")
+        for name, opts in fits:
+            m = os.path.join(W, f"s{seed}_A{n_train}_{name.replace(' ', '_')}.json")
             if not os.path.exists(m):
                 must([E, "fit", "--robot", robot, "--data", trainA, *opts.split(), "--out", m])
             models[name] = m

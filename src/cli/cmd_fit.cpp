@@ -1,5 +1,7 @@
 // `errfield fit`: a compensation model from measurements (step 3 of plan → measure → fit → compensate).
+#include <cmath>
 #include <iostream>
+#include <limits>
 #include <optional>
 
 #include <nlohmann/json.hpp>
@@ -17,6 +19,46 @@
 namespace errfield::cli {
 namespace {
 
+std::string default_prior_text() {
+  const compensation::JointFunctionPrior p;
+  return format_number(p.polynomial_sd_mrad) + "," + format_number(p.gravity_sd_mrad);
+}
+
+/// "off", "SD" (both groups) or "POLY_SD,GRAVITY_SD" (mrad, > 0; "inf" leaves a group to the ridge).
+compensation::JointFunctionPrior parse_joint_function_prior(const std::string& text) {
+  compensation::JointFunctionPrior p;
+  if (text == "off") {
+    p.polynomial_sd_mrad = p.gravity_sd_mrad = std::numeric_limits<double>::infinity();
+    return p;
+  }
+  std::vector<double> v;
+  std::size_t start = 0;
+  while (start <= text.size() && v.size() < 3) {
+    const std::size_t comma = std::min(text.find(',', start), text.size());
+    const std::string item = text.substr(start, comma - start);
+    std::size_t used = 0;
+    double x = NAN;
+    try {
+      x = item == "inf" ? std::numeric_limits<double>::infinity() : std::stod(item, &used);
+      if (item == "inf") used = item.size();
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (item.empty() || used != item.size() || std::isnan(x))
+      throw ArgumentError("--joint-function-prior '" + text + "': '" + item + "' is not a number (mrad) or inf");
+    v.push_back(x);
+    start = comma + 1;
+  }
+  if (v.empty() || v.size() > 2)
+    throw ArgumentError("--joint-function-prior '" + text + "': expected off, SD or POLY_SD,GRAVITY_SD (mrad)");
+  p.polynomial_sd_mrad = v[0];
+  p.gravity_sd_mrad = v.size() > 1 ? v[1] : v[0];
+  for (double sd : {p.polynomial_sd_mrad, p.gravity_sd_mrad})
+    if (!(sd > 0.0))
+      throw ArgumentError("--joint-function-prior '" + text + "': a prior sd must be > 0 mrad (inf: no prior for that group)");
+  return p;
+}
+
 struct FitArgs {
   std::string robot, data, method = "auto", space = "auto", out, model, calibration, robust, kind = "ordinary",
       variance_calibration = "auto";
@@ -28,6 +70,7 @@ struct FitArgs {
   bool reflector_far_ok = false;
   int joint_functions = compensation::FitOptions{}.joint_function_degree;
   std::string gravity_load = compensation::FitOptions{}.gravity_load ? "on" : "off";
+  std::string joint_function_prior = default_prior_text();
 };
 
 void run_fit(const FitArgs& a) {
@@ -39,6 +82,7 @@ void run_fit(const FitArgs& a) {
                                               a.variance_calibration});
   o.joint_function_degree = a.joint_functions;
   o.gravity_load = a.gravity_load == "on";
+  o.joint_function_prior = parse_joint_function_prior(a.joint_function_prior);
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.base_points) {
     const auto v = parse_numbers(b, 3, "--base-point");
@@ -170,6 +214,13 @@ void add_fit_command(CLI::App& app) {
                   "several joints at once, so no function of one angle expresses it; "
                   "off = the one-joint functions only; docs/robot.md says which data decided the default")
       ->check(CLI::IsMember({"on", "off"}))
+      ->capture_default_str();
+  cmd->add_option("--joint-function-prior", a->joint_function_prior,
+                  "kinematic+kriging with --joint-functions: POLY_SD[,GRAVITY_SD] (mrad), the physical prior's "
+                  "standard deviation of each Legendre coefficient and of each gravity term (its RMS deflection), or "
+                  "off: fitted freely, combinations of angle errors that barely move the measured point (they turn the "
+                  "flange about it) grow to tens of mrad and move every other point on the flange; docs/robot.md "
+                  "('Tool points and orientation') says which data decided the default")
       ->capture_default_str();
   cmd->add_flag("--reflector-far-ok", a->reflector_far_ok,
                 "kinematic methods from positions: accept a reflector found more than 50 mm from --robot's tool "

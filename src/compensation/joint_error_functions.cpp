@@ -542,9 +542,9 @@ JointErrorFunctions JointErrorFunctions::from_json(const nlohmann::json& j, cons
 }
 
 void JointFunctionPrior::validate() const {
-  if (!(polynomial_sd_mrad > 0.0) || !std::isfinite(polynomial_sd_mrad) || !(gravity_sd_mrad > 0.0) || !std::isfinite(gravity_sd_mrad))
+  if (!(polynomial_sd_mrad > 0.0) || !(gravity_sd_mrad > 0.0))
     throw ArgumentError("JointFunctionPrior: prior sd " + std::to_string(polynomial_sd_mrad) + " / " +
-                        std::to_string(gravity_sd_mrad) + " mrad; expected finite values > 0");
+                        std::to_string(gravity_sd_mrad) + " mrad; expected values > 0 (infinity: no prior)");
   if (!(min_identifiable_fraction >= 0.0 && min_identifiable_fraction < 1.0))
     throw ArgumentError("JointFunctionPrior: min_identifiable_fraction " + std::to_string(min_identifiable_fraction) +
                         "; expected 0 <= value < 1");

@@ -154,6 +154,7 @@ void FitOptions::validate() const {
   if (joint_function_degree < 0 || joint_function_degree > 20)
     throw ArgumentError("fit: joint function degree " + std::to_string(joint_function_degree) +
                         "; expected 0 (none) to 20");
+  joint_function_prior.validate();
   calibration.validate();
 }
 
@@ -448,7 +449,7 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       std::optional<JointErrorFunctionFit> jf;
       double inflation = 1.0;
       const std::vector<Eigen::Vector3d> calibration_residual = residual;
-      const JointFunctionPrior prior;  // joint_error_functions.hpp: why these sizes
+      const JointFunctionPrior& prior = o.joint_function_prior;
       if (o.joint_function_degree > 0) {
         jf = fit_joint_error_functions(kin.model, d.q_deg, residual, o.joint_function_degree, o.gravity_load, prior);
         if (!jf->undetermined_gravity_terms.empty()) {

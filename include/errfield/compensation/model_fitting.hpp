@@ -18,6 +18,7 @@
 
 #include "errfield/csv_table.hpp"
 #include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/joint_error_functions.hpp"
 #include "errfield/compensation/kriging_fields.hpp"
 #include "errfield/robot/calibration.hpp"
 
@@ -135,6 +136,9 @@ struct FitOptions {
   /// express exactly); they cost up to 2 % on arms whose weight matters little (ER20-C10's stiff
   /// config, UR5e) (docs/robot.md, "Gravity-load terms").
   bool gravity_load = true;
+  /// With the joint error functions: the physical prior on their coefficients and the gravity terms
+  /// (JointFunctionPrior: why its sizes); an infinite sd leaves that group to the ridge alone.
+  JointFunctionPrior joint_function_prior;
   /// Kriging methods: calibrate the predictive variance by leave-one-out (the variance the model
   /// states for a held-out reading, var_mm2 and r95_mm; docs/robot.md "Predictive uncertainty").
   VarianceCalibrationChoice variance_calibration = VarianceCalibrationChoice::automatic;
