@@ -7,7 +7,7 @@ random numbers, so the robot's errors, noise and poses are the same; the payload
 point, which moves the simulated payload by the offset too - checked below, it is < 0.01 mm).
 
 usage: scripts/tool_point_study.py ERRFIELD WORKDIR [--seeds 1,2,3] [--offsets 150,0,0;0,0,150]
-                                   [--train 210] [--fits "NAME=FIT OPTIONS;..."]
+                                   [--spread DEG] [--train 210] [--fits "NAME=FIT OPTIONS;..."]
 Prints one table row per fit and offset: held-out RMS at B, 95 % coverage, refused rows, the
 kinematic part's RMS at B, and the reference fitted at B itself.
 """
@@ -82,19 +82,21 @@ def main():
     ap.add_argument("workdir")
     ap.add_argument("--seeds", default="1,2,3")
     ap.add_argument("--offsets", default="150,0,0")
+    ap.add_argument("--spread", type=float, default=0.0, help="--orientation-spread of the poses (deg; 0: tool down)")
     ap.add_argument("--train", type=int, default=N_TRAIN, help="training poses at A (of 300; at most 260)")
     ap.add_argument("--fits", default=None, help='"NAME=fit options;..." instead of the default four fits')
     a = ap.parse_args()
     fits = FITS if a.fits is None else [tuple(f.split("=", 1)) for f in a.fits.split(";")]
     n_train = a.train
+    sim = SIM + (f" --orientation-spread {a.spread:g}" if a.spread > 0 else "")
     E, W = a.errfield, a.workdir
     os.makedirs(W, exist_ok=True)
     results = []
     for seed in a.seeds.split(","):
-        A = os.path.join(W, f"s{seed}_A.csv")
+        A = os.path.join(W, f"s{seed}_A{a.spread:g}.csv")
         robot = os.path.join(W, f"s{seed}_robot.json")
         if not os.path.exists(A):
-            must([E, "simulate", "--seed", seed, "--sample", f"scattered:{N_ALL}", *SIM.split(), "--truth-columns",
+            must([E, "simulate", "--seed", seed, "--sample", f"scattered:{N_ALL}", *sim.split(), "--truth-columns",
                   "--robot-out", robot, "--out", A])
         header, rows = rows_of(A)
         targets = [r for r in rows if r.split(",")[header.strip().split(",").index("kind")] == "target"]
@@ -110,9 +112,9 @@ def main():
         for off in a.offsets.split(";"):
             offset = [float(v) for v in off.split(",")]
             tag = "_".join(f"{v:g}" for v in offset)
-            B = os.path.join(W, f"s{seed}_B{tag}.csv")
+            B = os.path.join(W, f"s{seed}_B{tag}_{a.spread:g}.csv")
             if not os.path.exists(B):
-                must([E, "simulate", "--seed", seed, "--sample", f"scattered:{N_ALL}", *SIM.split(), "--truth-columns",
+                must([E, "simulate", "--seed", seed, "--sample", f"scattered:{N_ALL}", *sim.split(), "--truth-columns",
                       "--tool-offset", off, "--out", B])
             hb, rb = rows_of(B)
             cols = hb.strip().split(",")

@@ -499,6 +499,48 @@ namespace errfield::compensation {
 using namespace errfield::robot;
 namespace joint_error_functions_test {
 
+// The fit is the maximum a posteriori one: beta = (F'F + lambda I + diag(sigma^2 / sd_k^2))^-1 F'y,
+// written out here from the design, the ridge the fit reports (lambda / largest eigenvalue of F'F)
+// and sigma^2 read back from the prior's share of the covariance (sigma^2 x sigma^2 / sd^2).
+TEST(JointFunctionPrior, TheFitIsTheMaximumAPosterioriOne) {
+  const MdhModel m = robot_with_tool();
+  const std::vector<JointVector> q = random_poses(40, 17);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  std::vector<Eigen::Vector3d> r(q.size());
+  for (std::size_t i = 0; i < q.size(); ++i)
+    r[i] = Eigen::Vector3d(0.2 * std::sin(q[i][0] / 40.0) + noise(rng), 0.1 * std::cos(q[i][4] / 30.0) + noise(rng),
+                           0.05 * std::sin(q[i][1] / 25.0) + noise(rng));
+  const JointFunctionPrior prior{0.05, 0.02, 0.0};  // tight enough to bind
+  const JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 3, true, prior);
+  ASSERT_GT(fit.ridge_inverse.size(), 0);
+  const Eigen::MatrixXd& f = fit.design;
+  const Eigen::Index p = f.cols();
+  ASSERT_EQ(fit.prior_middle_diagonal.size(), p);
+  Eigen::VectorXd y(f.rows());
+  for (std::size_t i = 0; i < q.size(); ++i) y.segment<3>(3 * static_cast<Eigen::Index>(i)) = r[i];
+  const Eigen::MatrixXd gram = f.transpose() * f;
+  const double largest = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(gram).eigenvalues().maxCoeff();
+  const int polynomials = 6 * fit.functions.degree;
+  Eigen::VectorXd sd(p);
+  sd.head(polynomials).setConstant(prior.polynomial_sd_mrad);
+  sd.tail(p - polynomials).setConstant(prior.gravity_sd_mrad);
+  const double sigma2 = std::sqrt(fit.prior_middle_diagonal[0] * sd[0] * sd[0]);
+  Eigen::MatrixXd a = gram;
+  a.diagonal().array() += fit.ridge * largest;
+  for (Eigen::Index k = 0; k < p; ++k) {
+    EXPECT_NEAR(std::sqrt(fit.prior_middle_diagonal[k] * sd[k] * sd[k]), sigma2, 1e-9 * sigma2) << k;
+    a(k, k) += sigma2 / (sd[k] * sd[k]);
+  }
+  const Eigen::VectorXd beta = a.ldlt().solve(f.transpose() * y);
+  Eigen::VectorXd fitted(p);
+  for (int j = 0; j < 6; ++j)
+    for (int k = 0; k < fit.functions.degree; ++k) fitted[j * fit.functions.degree + k] = fit.functions.coefficients_mrad(j, k);
+  for (std::size_t t = 0; t < fit.functions.gravity_terms.size(); ++t)
+    fitted[polynomials + static_cast<Eigen::Index>(t)] = fit.functions.gravity_terms[t].coefficient_mrad;
+  EXPECT_LT((fitted - beta).norm(), 1e-8 * beta.norm()) << fitted.transpose() << "\n" << beta.transpose();
+}
+
 // Poses where only q1 turns: every gravity lever is constant (checked here from the levers
 // themselves), so each gravity term is a joint offset over these poses and the data cannot tell them
 // apart: the fit leaves them out and says which. Over poses that move q2..q5 they stay.

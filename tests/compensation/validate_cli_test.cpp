@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
-#include <sstream>
 
 #include <Eigen/Dense>
 #include <nlohmann/json.hpp>
@@ -571,24 +570,8 @@ TEST_F(ValidateCli, ToolOptionAndLocateToolWorkAtAnotherPointOfTheFlange) {
   // validate scores the working tool: readings of it are its own point, whether located or given
   // with --tool, while the model at its reflector refuses them as another point (100 mm away). The
   // simulated x,y,z are the commanded reflector's nominal positions, so they go.
-  {
-    std::istringstream in(read("b_all.csv"));
-    std::string line, out;
-    std::vector<bool> keep;
-    while (std::getline(in, line)) {
-      if (line.empty() || line[0] == '#') continue;
-      std::vector<std::string> cells;
-      std::stringstream ss(line);
-      for (std::string c; std::getline(ss, c, ',');) cells.push_back(c);
-      if (keep.empty())
-        for (const std::string& c : cells) keep.push_back(c != "x" && c != "y" && c != "z");
-      std::string row;
-      for (std::size_t k = 0; k < cells.size(); ++k)
-        if (keep[k]) row += (row.empty() ? "" : ",") + cells[k];
-      out += row + "\n";
-    }
-    write("b_readings.csv", out);
-  }
+  rewrite("b_all.csv", "b_readings.csv", [](const CsvTable&, std::size_t, std::vector<std::string>&) {},
+          [](const std::string& c) { return c != "x" && c != "y" && c != "z"; });
   const CliResult at_located = run("validate --model m_tool.json --data b_readings.csv --summary-out s_loc.json");
   EXPECT_EQ(at_located.exit_code, 0) << at_located.output();
   const CliResult at_tool = run("validate --model model.json --data b_readings.csv --tool " + tool + " --summary-out s_tool.json");
