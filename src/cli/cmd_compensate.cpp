@@ -90,27 +90,32 @@ void run_compensate(const CompensateArgs& a) {
   const StepColumns step = compensate_columns(model, nominal, targets, a.tolerance, a.max_correction);
   const std::size_t refused = step.refused, no_prediction = step.no_prediction;
   const std::vector<std::string>& status = step.columns.back().words;
-  // Nothing compensated: said on standard error with the refusals' tally. The file is still
-  // written with every row's status (as ik does), since scripts and tests read the statuses;
-  // `--strict` makes it a failed job (exit 1, nothing written).
-  if (n > 0 && refused == n)
-    std::cerr << "errfield compensate: warning: none of the " << n << " targets of " << a.targets
-              << " could be compensated with " << method_name(model.method()) << " from " << a.model << " ("
-              << refusal_tally(status) << "); " << a.out << " holds their statuses only\n";
-  OutputTable out;
-  out.add_all_columns(t);
-  add_step_columns(out, step);
-  if (a.strict && refused) {
-    // Checked before writing: a job that fails leaves any previous output as it was.
+  // The first refused rows, as file:line: status, for the messages below.
+  const auto refused_rows = [&] {
     std::string rows;
     std::size_t named = 0;
     for (std::size_t i = 0; i < n && named < 5; ++i) {
       if (status[i] == "ok") continue;
       rows += (named++ ? "; " : "") + a.targets + ":" + std::to_string(t.line_of_row(i)) + ": " + status[i];
     }
-    throw Error("--strict: " + std::to_string(refused) + " of " + std::to_string(n) + " target(s) refused (" + rows +
-                (refused > named ? "; ..." : "") + "); " + a.out + " not written");
-  }
+    return rows + (refused > named ? "; ..." : "");
+  };
+  // Nothing compensated is a failed job, as in predict, validate and cv (exit 1, nothing written,
+  // a previous output kept): a script that checks the exit status must not send a file of refusals
+  // to the robot. The message carries what the statuses would have said: the tally of the reasons
+  // and the first rows.
+  if (n > 0 && refused == n)
+    throw Error("compensate: none of the " + std::to_string(n) + " targets of " + a.targets + " could be compensated with " +
+                std::string(method_name(model.method())) + " from " + a.model + " (" + refusal_tally(status) + "; first rows: " +
+                refused_rows() + "); " + a.out + " not written");
+  OutputTable out;
+  out.add_all_columns(t);
+  add_step_columns(out, step);
+  // `--strict`: any refusal fails the job. Checked before writing: a job that fails leaves any
+  // previous output as it was.
+  if (a.strict && refused)
+    throw Error("--strict: " + std::to_string(refused) + " of " + std::to_string(n) + " target(s) refused (" +
+                refused_rows() + "); " + a.out + " not written");
   std::cout << "compensate: " << n - refused << " of " << n << " targets compensated with " << method_name(model.method())
             << (refused ? "; " + std::to_string(refused) + " refused (status column): no joints written for them" : "")
             << "\n  written to " << a.out << "\n";
@@ -167,7 +172,8 @@ void add_compensate_command(CLI::App& app) {
       "(wrist-singular, ...). Joint targets that look like radians (all within +-2 pi, spread far less than the\n"
       "model's training joints) are an error (exit 2; --joints-are-degrees if they are degrees).\n"
       "Prints the largest move of the tool point and the ceiling (--max-correction). If every target is\n"
-      "refused, a warning says so (with --strict: nothing is written and the exit status is 1).\n"
+      "refused, nothing is written and the exit status is 1 (as predict's): the error counts the refusals by\n"
+      "status and names the first rows; with --strict, so it is if any target is refused.\n"
       "Example: errfield compensate --model model.json --targets targets.csv --out joints.csv");
   cmd->add_option("--robot", a->robot, "nominal robot JSON or built-in name (er20-c10, kr16, ur5e; default: the model's command model)");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();
@@ -194,7 +200,8 @@ void add_compensate_command(CLI::App& app) {
       ->capture_default_str();
   add_tool_option(cmd, a->tool, "the point compensated (targets are its poses)");
   cmd->add_flag("--strict", a->strict,
-                "if any target is refused: write nothing, name the refused rows and exit with status 1");
+                "if any target is refused (not only all of them, the default): write nothing, name the refused rows "
+                "and exit with status 1");
   cmd->add_option("--out", a->out, "output CSV (written atomically)")->required();
   cmd->callback([a] { run_compensate(*a); });
 }
