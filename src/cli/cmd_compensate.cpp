@@ -34,11 +34,12 @@ struct CompensateArgs {
 
 // Pose targets that carry a `frame` column (a previous compensate's output) must be in the frame
 // --frame says: tracker coordinates read as robot coordinates are off by the whole registration.
+// An empty cell claims nothing.
 void check_frame_column(const CsvTable& t, const std::string& frame) {
   if (!t.has_column("frame")) return;
   const std::size_t c = t.column_index("frame");
   for (std::size_t i = 0; i < t.row_count(); ++i)
-    if (t.cell(i, c) != frame)
+    if (!t.cell(i, c).empty() && t.cell(i, c) != frame)
       throw InputError(t.source() + ":" + std::to_string(t.line_of_row(i)) + ": column frame is '" + std::string(t.cell(i, c)) +
                            "' but --frame is " + frame + "; give --frame " + std::string(t.cell(i, c)) +
                            " for targets in that frame",
@@ -56,7 +57,10 @@ std::string frame_line(const compensation::CompensationModel& model, const Compe
                                " points, residual RMS " + format_number(std::round(model.registration()->residual_rms_mm * 1000.0) / 1000.0) +
                                " mm: column nx,ny,nz is each target there); "
                          : std::string("targets x,y,z,rx,ry,rz in the robot base frame (the nominal model's") +
-                               (model.registration() ? ", placed by the model's tracker registration" : "") + "; --frame tracker for tracker coordinates); ";
+                               (model.registration() ? ", placed by the model's tracker registration; --frame tracker for "
+                                                       "tracker coordinates"
+                                                     : "") +
+                               "); ";
   line += "nx..nz, pred_d*, cmd_x..z and total_d* in the robot base frame";
   if (calibrated)
     line += " (total_* is against the nominal robot's FK: it includes any offset of the calibrated robot's base from the "
