@@ -74,10 +74,7 @@ void run_compensate(const CompensateArgs& a) {
   // p_inside is P(|error| <= tolerance): 0, a negative or a NaN tolerance makes it meaningless.
   if (!(std::isfinite(a.tolerance) && a.tolerance > 0.0))
     throw ArgumentError("--tolerance: " + format_number(a.tolerance) + "; expected a finite tolerance > 0 (mm)");
-  const bool tracker_frame = a.frame == "tracker";
-  if (!tracker_frame && a.frame != "robot")
-    throw ArgumentError("--frame: '" + a.frame + "'; expected robot (targets in the robot base frame, the default) or tracker "
-                        "(targets in the frame of the tracker readings the model was fitted on)");
+  const TargetFrame frame = parse_target_frame(a.frame, "--frame");
   const nlohmann::json j = read_json_file(a.model, "model file");
   const CompensationModel stored = with_json_source(a.model, [&] { return CompensationModel::from_json(j, a.model); });
   const auto tool = parse_tool_option(a.tool, stored.aimed_model().tool());
@@ -109,9 +106,6 @@ void run_compensate(const CompensateArgs& a) {
     throw InputError(a.targets + ": targets need columns q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg)",
                      a.targets);
   const std::size_t n = t.row_count();
-  if (joints && tracker_frame)
-    throw ArgumentError("--frame tracker: " + a.targets + " holds joint targets (q1..q6), which have no frame; --frame is "
-                        "for pose targets x,y,z,rx,ry,rz");
   if (joints) {
     // Targets that carry measurements must be of this robot (the check of fit and validate).
     check_table_fits_robot(t, nominal,
@@ -127,15 +121,8 @@ void run_compensate(const CompensateArgs& a) {
     targets.seed_rows_deg = seed_rows_of(t);
     warn_if_metres(t, nominal, "compensate", kNominalXyz);
     check_frame_column(t, a.frame);
-    if (tracker_frame) {
-      // A part measured with the tracker: the registration fit stored maps it into the frame the
-      // model's robots live in (the frame the tracker readings were fitted in).
-      if (!model.registration())
-        throw ArgumentError("--frame tracker: " + a.model + " holds no tracker registration (it was fitted without tracker "
-                            "positions mx,my,mz); give the targets in the robot base frame");
-      targets.poses = poses_in_robot_frame(*model.registration(), targets.poses);
-    }
   }
+  bring_targets_to_robot_frame(targets, model, frame, "--frame", a.targets, a.model);
   check_seed_joints(targets, nominal, &t);
   if (!(std::isfinite(a.max_correction) && a.max_correction >= 0.0))
     throw ArgumentError("--max-correction: " + format_number(a.max_correction) +

@@ -172,12 +172,7 @@ py::dict predict_py(const PyModel& m, const py::object& joints, const py::object
 
 py::dict compensate_py(const PyModel& m, const py::object& targets, const py::object& robot, double tolerance,
                        const py::object& seed, double max_correction, const py::object& tool, const std::string& frame) {
-  // The CLI's --frame: pose targets in the robot base frame, or in the tracker frame (mapped with the
-  // model's registration).
-  const bool tracker_frame = frame == "tracker";
-  if (!tracker_frame && frame != "robot")
-    throw ArgumentError("frame: '" + frame + "'; expected robot (targets in the robot base frame, the default) or tracker "
-                        "(targets in the frame of the tracker readings the model was fitted on)");
+  const TargetFrame target_frame = parse_target_frame(frame, "frame");
   const CompensationModel model = with_tool_arg(m.loaded.model, tool, m.loaded.model.aimed_model().tool());
   const bool kinematic =
       model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging;
@@ -199,15 +194,7 @@ py::dict compensate_py(const PyModel& m, const py::object& targets, const py::ob
   } else {
     t.joints_deg = joint_vectors_arg(targets, "targets");
   }
-  if (tracker_frame) {
-    if (!t.joints_deg.empty() || t.poses.rows() == 0)
-      throw ArgumentError("frame='tracker': the targets are joints (q1..q6), which have no frame; frame is for pose "
-                          "targets x,y,z,rx,ry,rz");
-    if (!model.registration())
-      throw ArgumentError("frame='tracker': the model holds no tracker registration (it was fitted without tracker "
-                          "positions mx,my,mz); give the targets in the robot base frame");
-    t.poses = poses_in_robot_frame(*model.registration(), t.poses);
-  }
+  bring_targets_to_robot_frame(t, model, target_frame, "frame", "targets", "the model");
   check_seed_joints(t, nominal);  // --seed: within the joint limits
   if (!(std::isfinite(max_correction) && max_correction >= 0.0))
     throw ArgumentError("max_correction: " + format_number(max_correction) +
