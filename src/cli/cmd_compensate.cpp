@@ -25,11 +25,48 @@ namespace {
 
 struct CompensateArgs {
   std::string robot, model, targets, out, seed, config, tool;
+  std::string frame = "robot";  // of pose targets: robot (the model's robot base frame) or tracker
   double tolerance = 0.25, max_registration_rms = robot::kRegistrationRmsLimitMm;
   double max_correction = 0.0;  // 0: compensation::default_max_correction_mm
   bool strict = false;
   bool joints_are_degrees = false;  // skip the radians check (check_joints_not_radians)
 };
+
+// Pose targets that carry a `frame` column (a previous compensate's output) must be in the frame
+// --frame says: tracker coordinates read as robot coordinates are off by the whole registration.
+// An empty cell claims nothing.
+void check_frame_column(const CsvTable& t, const std::string& frame) {
+  if (!t.has_column("frame")) return;
+  const std::size_t c = t.column_index("frame");
+  for (std::size_t i = 0; i < t.row_count(); ++i)
+    if (!t.cell(i, c).empty() && t.cell(i, c) != frame)
+      throw InputError(t.source() + ":" + std::to_string(t.line_of_row(i)) + ": column frame is '" + std::string(t.cell(i, c)) +
+                           "' but --frame is " + frame + "; give --frame " + std::string(t.cell(i, c)) +
+                           " for targets in that frame",
+                       t.source(), t.line_of_row(i), "frame");
+}
+
+// One line of the summary: in which frame the targets were read and the robot-frame columns are.
+std::string frame_line(const compensation::CompensationModel& model, const CompensateArgs& a, bool joints) {
+  const bool calibrated = model.method() == compensation::CompensationMethod::kinematic ||
+                          model.method() == compensation::CompensationMethod::kinematic_kriging;
+  std::string line = joints ? std::string("joint targets; ")
+                     : a.frame == "tracker"
+                         ? "targets x,y,z,rx,ry,rz in the tracker frame (--frame tracker), mapped into the robot base frame "
+                           "with the registration stored in " + a.model + " (" + std::to_string(model.registration()->points) +
+                               " points, residual RMS " + format_number(std::round(model.registration()->residual_rms_mm * 1000.0) / 1000.0) +
+                               " mm: column nx,ny,nz is each target there); "
+                         : std::string("targets x,y,z,rx,ry,rz in the robot base frame (the nominal model's") +
+                               (model.registration() ? ", placed by the model's tracker registration; --frame tracker for "
+                                                       "tracker coordinates"
+                                                     : "") +
+                               "); ";
+  line += "nx..nz, pred_d*, cmd_x..z and total_d* in the robot base frame";
+  if (calibrated)
+    line += " (total_* is against the nominal robot's FK: it includes any offset of the calibrated robot's base from the "
+            "nominal one)";
+  return line;
+}
 
 void run_compensate(const CompensateArgs& a) {
   using namespace robot;
@@ -37,6 +74,7 @@ void run_compensate(const CompensateArgs& a) {
   // p_inside is P(|error| <= tolerance): 0, a negative or a NaN tolerance makes it meaningless.
   if (!(std::isfinite(a.tolerance) && a.tolerance > 0.0))
     throw ArgumentError("--tolerance: " + format_number(a.tolerance) + "; expected a finite tolerance > 0 (mm)");
+  const TargetFrame frame = parse_target_frame(a.frame, "--frame");
   const nlohmann::json j = read_json_file(a.model, "model file");
   const CompensationModel stored = with_json_source(a.model, [&] { return CompensationModel::from_json(j, a.model); });
   const auto tool = parse_tool_option(a.tool, stored.aimed_model().tool());
@@ -82,7 +120,9 @@ void run_compensate(const CompensateArgs& a) {
     // Per-row seeds (e.g. the taught joints): solved from, and kept on, their arm configuration.
     targets.seed_rows_deg = seed_rows_of(t);
     warn_if_metres(t, nominal, "compensate", kNominalXyz);
+    check_frame_column(t, a.frame);
   }
+  bring_targets_to_robot_frame(targets, model, frame, "--frame", a.targets, a.model);
   check_seed_joints(targets, nominal, &t);
   if (!(std::isfinite(a.max_correction) && a.max_correction >= 0.0))
     throw ArgumentError("--max-correction: " + format_number(a.max_correction) +
@@ -90,30 +130,39 @@ void run_compensate(const CompensateArgs& a) {
   const StepColumns step = compensate_columns(model, nominal, targets, a.tolerance, a.max_correction);
   const std::size_t refused = step.refused, no_prediction = step.no_prediction;
   const std::vector<std::string>& status = step.columns.back().words;
-  // Nothing compensated: said on standard error with the refusals' tally. The file is still
-  // written with every row's status (as ik does), since scripts and tests read the statuses;
-  // `--strict` makes it a failed job (exit 1, nothing written).
-  if (n > 0 && refused == n)
-    std::cerr << "errfield compensate: warning: none of the " << n << " targets of " << a.targets
-              << " could be compensated with " << method_name(model.method()) << " from " << a.model << " ("
-              << refusal_tally(status) << "); " << a.out << " holds their statuses only\n";
-  OutputTable out;
-  out.add_all_columns(t);
-  add_step_columns(out, step);
-  if (a.strict && refused) {
-    // Checked before writing: a job that fails leaves any previous output as it was.
+  // The first refused rows, as file:line: status, for the messages below.
+  const auto refused_rows = [&] {
     std::string rows;
     std::size_t named = 0;
     for (std::size_t i = 0; i < n && named < 5; ++i) {
       if (status[i] == "ok") continue;
       rows += (named++ ? "; " : "") + a.targets + ":" + std::to_string(t.line_of_row(i)) + ": " + status[i];
     }
-    throw Error("--strict: " + std::to_string(refused) + " of " + std::to_string(n) + " target(s) refused (" + rows +
-                (refused > named ? "; ..." : "") + "); " + a.out + " not written");
-  }
+    return rows + (refused > named ? "; ..." : "");
+  };
+  // Nothing compensated is a failed job, as in predict, validate and cv (exit 1, nothing written,
+  // a previous output kept): a script that checks the exit status must not send a file of refusals
+  // to the robot. The message carries what the statuses would have said: the tally of the reasons
+  // and the first rows.
+  if (n > 0 && refused == n)
+    throw Error("compensate: none of the " + std::to_string(n) + " targets of " + a.targets + " could be compensated with " +
+                std::string(method_name(model.method())) + " from " + a.model + " (" + refusal_tally(status) + "; first rows: " +
+                refused_rows() + "); " + a.out + " not written");
+  OutputTable out;
+  out.add_all_columns(t);
+  add_step_columns(out, step);
+  // The frame of the row's own x,y,z,rx,ry,rz (written as given): a later run on this file, or a
+  // reader of it, need not guess (check_frame_column).
+  if (!joints) out.add_column("frame", std::vector<std::string>(n, a.frame));
+  // `--strict`: any refusal fails the job. Checked before writing: a job that fails leaves any
+  // previous output as it was.
+  if (a.strict && refused)
+    throw Error("--strict: " + std::to_string(refused) + " of " + std::to_string(n) + " target(s) refused (" +
+                refused_rows() + "); " + a.out + " not written");
   std::cout << "compensate: " << n - refused << " of " << n << " targets compensated with " << method_name(model.method())
             << (refused ? "; " + std::to_string(refused) + " refused (status column): no joints written for them" : "")
             << "\n  written to " << a.out << "\n";
+  std::cout << "  " << frame_line(model, a, joints) << "\n";
   std::cout << "  arm configuration from (column config_source):";
   for (std::size_t k = 0; k < step.config_sources.size(); ++k)
     std::cout << (k ? "," : "") << " " << step.config_sources[k].second << " " << step.config_sources[k].first;
@@ -166,8 +215,15 @@ void add_compensate_command(CLI::App& app) {
       "joints swing far more than the correction warrants (a singular wrist, elbow or shoulder) are refused\n"
       "(wrist-singular, ...). Joint targets that look like radians (all within +-2 pi, spread far less than the\n"
       "model's training joints) are an error (exit 2; --joints-are-degrees if they are degrees).\n"
+      "Frames: pose targets are in the robot base frame of the model's nominal robot (mm, deg) - the frame\n"
+      "its stored tracker registration maps readings into - or, with --frame tracker, in the tracker frame\n"
+      "(e.g. a part measured with the tracker), mapped with that registration; column frame says which.\n"
+      "nx..nz (the target), pred_d*, cmd_x..z and total_d* are always in the robot base frame; total_* is\n"
+      "against the nominal robot's FK, so for calibrated models it includes any offset of the calibrated\n"
+      "robot's base from the nominal one (docs/robot.md).\n"
       "Prints the largest move of the tool point and the ceiling (--max-correction). If every target is\n"
-      "refused, a warning says so (with --strict: nothing is written and the exit status is 1).\n"
+      "refused, nothing is written and the exit status is 1 (as predict's): the error counts the refusals by\n"
+      "status and names the first rows; with --strict, so it is if any target is refused.\n"
       "Example: errfield compensate --model model.json --targets targets.csv --out joints.csv");
   cmd->add_option("--robot", a->robot, "nominal robot JSON or built-in name (er20-c10, kr16, ur5e; default: the model's command model)");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();
@@ -193,8 +249,14 @@ void add_compensate_command(CLI::App& app) {
                   "predicts at its own training poses, at least 1 mm (docs/robot.md)")
       ->capture_default_str();
   add_tool_option(cmd, a->tool, "the point compensated (targets are its poses)");
+  cmd->add_option("--frame", a->frame,
+                  "robot or tracker: the frame of pose targets x,y,z,rx,ry,rz. robot (default): the nominal robot's "
+                  "base frame; tracker: the frame of the tracker readings the model was fitted on (mapped with the "
+                  "model's stored registration; a model fitted without mx,my,mz has none, exit 2)")
+      ->capture_default_str();
   cmd->add_flag("--strict", a->strict,
-                "if any target is refused: write nothing, name the refused rows and exit with status 1");
+                "if any target is refused (not only all of them, the default): write nothing, name the refused rows "
+                "and exit with status 1");
   cmd->add_option("--out", a->out, "output CSV (written atomically)")->required();
   cmd->callback([a] { run_compensate(*a); });
 }

@@ -355,6 +355,27 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
   return out;
 }
 
+TargetFrame parse_target_frame(const std::string& word, const std::string& option) {
+  if (word == "robot") return TargetFrame::robot;
+  if (word == "tracker") return TargetFrame::tracker;
+  throw ArgumentError(option + ": '" + word + "'; expected robot (targets in the robot base frame, the default) or tracker "
+                      "(targets in the frame of the tracker readings the model was fitted on)");
+}
+
+void bring_targets_to_robot_frame(CompensationTargets& targets, const CompensationModel& model, TargetFrame frame,
+                                  const std::string& option, const std::string& targets_name, const std::string& model_name) {
+  if (frame == TargetFrame::robot) return;
+  if (!targets.joints_deg.empty())
+    throw ArgumentError(option + " tracker: " + targets_name + " holds joint targets (q1..q6), which have no frame; " +
+                        option + " is for pose targets x,y,z,rx,ry,rz");
+  // A part measured with the tracker: the registration fit stored maps it into the frame the model's
+  // robots live in (the frame the training readings were fitted in).
+  if (!model.registration())
+    throw ArgumentError(option + " tracker: " + model_name + " holds no tracker registration (it was fitted without "
+                        "tracker positions mx,my,mz); give the targets in the robot base frame");
+  if (targets.poses.rows() > 0) targets.poses = poses_in_robot_frame(*model.registration(), targets.poses);
+}
+
 void check_seed_joints(const CompensationTargets& targets, const robot::MdhModel& nominal, const CsvTable* table) {
   const robot::JointVector lo = nominal.q_min_deg(), hi = nominal.q_max_deg();
   auto limits = [&](int k) {

@@ -6,6 +6,7 @@
 
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/pose.hpp"
 #include "robot/rigid_fit.hpp"
 
 namespace errfield::compensation {
@@ -91,6 +92,22 @@ Registration registration_from_json(const nlohmann::json& j, const std::string& 
 std::optional<Registration> find_registration(const nlohmann::json& document, const std::string& source) {
   if (!document.is_object() || !document.contains("registration") || document["registration"].is_null()) return std::nullopt;
   return registration_from_json(document["registration"], source);
+}
+
+Eigen::MatrixXd poses_in_robot_frame(const Registration& r, const Eigen::MatrixXd& tracker_poses) {
+  if (tracker_poses.cols() != 6)
+    throw InputError("poses_in_robot_frame: expected 6 columns x,y,z,rx,ry,rz, got " + std::to_string(tracker_poses.cols()));
+  Eigen::MatrixXd out(tracker_poses.rows(), 6);
+  for (Eigen::Index i = 0; i < tracker_poses.rows(); ++i) {
+    const auto t = tracker_poses.row(i);
+    if (!t.allFinite()) {
+      out.row(i) = t;
+      continue;
+    }
+    const robot::PoseXyzRpy p = robot::to_xyz_rpy(r.robot_from_tracker * robot::to_isometry({t[0], t[1], t[2], t[3], t[4], t[5]}));
+    out.row(i) << p.x_mm, p.y_mm, p.z_mm, p.rx_deg, p.ry_deg, p.rz_deg;
+  }
+  return out;
 }
 
 }  // namespace errfield::compensation

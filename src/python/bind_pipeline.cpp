@@ -171,7 +171,8 @@ py::dict predict_py(const PyModel& m, const py::object& joints, const py::object
 }
 
 py::dict compensate_py(const PyModel& m, const py::object& targets, const py::object& robot, double tolerance,
-                       const py::object& seed, double max_correction, const py::object& tool) {
+                       const py::object& seed, double max_correction, const py::object& tool, const std::string& frame) {
+  const TargetFrame target_frame = parse_target_frame(frame, "frame");
   const CompensationModel model = with_tool_arg(m.loaded.model, tool, m.loaded.model.aimed_model().tool());
   const bool kinematic =
       model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging;
@@ -193,6 +194,7 @@ py::dict compensate_py(const PyModel& m, const py::object& targets, const py::ob
   } else {
     t.joints_deg = joint_vectors_arg(targets, "targets");
   }
+  bring_targets_to_robot_frame(t, model, target_frame, "frame", "targets", "the model");
   check_seed_joints(t, nominal);  // --seed: within the joint limits
   if (!(std::isfinite(max_correction) && max_correction >= 0.0))
     throw ArgumentError("max_correction: " + format_number(max_correction) +
@@ -350,8 +352,9 @@ void bind_pipeline(py::module_& m) {
         "rows are NaN). tool: the CLI's --tool, 3 or 6 numbers (flange frame, mm, deg).");
   m.def("compensate", &compensate_py, py::arg("model"), py::arg("targets"), py::kw_only(),
         py::arg("robot") = py::none(), py::arg("tolerance") = 0.25, py::arg("seed") = py::none(),
-        py::arg("max_correction") = 0.0, py::arg("tool") = py::none(),
-        "`errfield compensate` (tool: the CLI's --tool): joints to send. targets: (N, 6) nominal joints (deg) or a dict with q1..q6 or\n"
+        py::arg("max_correction") = 0.0, py::arg("tool") = py::none(), py::arg("frame") = "robot",
+        "`errfield compensate` (tool: the CLI's --tool; frame: its --frame, robot or tracker, the frame of pose\n"
+        "targets; tracker ones are mapped with the model's registration): joints to send. targets: (N, 6) nominal joints (deg) or a dict with q1..q6 or\n"
         "x,y,z,rx,ry,rz (mm, deg), optionally with per-row seed joints sq1..sq6 (deg; a row of NaN = none) whose arm\n"
         "configuration the solution keeps. max_correction: ceiling (mm) on move_mm, 0 = the CLI's default. Returns a dict: nq1..nq6, nx,ny,nz, pred_dx..dz, pred_dl, var_mm2 (new reading:\n"
         "field + nugget), p_inside (P(|3-D error| <= tolerance mm) of a new reading; distance models: the distance\n"

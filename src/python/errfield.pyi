@@ -372,6 +372,8 @@ def compensate(
     tolerance: float = 0.25,
     seed: ArrayLike | None = None,
     max_correction: float = 0.0,
+    tool: ArrayLike | None = None,
+    frame: Literal["robot", "tracker"] = "robot",
 ) -> dict[str, Any]: ...
 def plan(
     candidates: ArrayLike | Columns,

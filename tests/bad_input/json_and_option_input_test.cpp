@@ -514,13 +514,28 @@ TEST_F(RobotFiles, PointNamesWithDelimitersAndQuotesReadBackFromEveryOutput) {
 
 // compensate exited 0 when it compensated nothing (predict, validate and cv exit 1).
 TEST_F(RobotFiles, CompensateThatCompensatesNothingSaysWhy) {
-  write("far.csv", "x,y,z,rx,ry,rz\n9000,0,500,180,0,180\n0,9000,500,180,0,180\n");
+  // Two targets out of reach, one reachable beyond the fitted grid (x 750..1250 mm).
+  write("far.csv", "x,y,z,rx,ry,rz\n9000,0,500,180,0,180\n0,9000,500,180,0,180\n1500,0,600,180,0,180\n");
+  // A failed job, as predict's: exit 1, the refusals counted by reason and the first rows named
+  // (what the status column would have said), nothing written (an old output kept).
+  write("far_out.csv", "previous\n");
   auto r = run({"compensate", "--model", path("m.json"), "--targets", path("far.csv"), "--out", path("far_out.csv")});
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_THAT(r.err, AllOf(HasSubstr("warning: none of the 2 targets"), HasSubstr("statuses only")));
-  r = run({"compensate", "--strict", "--model", path("m.json"), "--targets", path("far.csv"), "--out", path("strict.csv")});
   EXPECT_EQ(r.exit_code, 1) << r.err;
-  EXPECT_FALSE(fs::exists(path("strict.csv")));
+  EXPECT_THAT(r.err, AllOf(HasSubstr("none of the 3 targets"), HasSubstr("unreachable 2"), HasSubstr("outside-region 1"),
+                           HasSubstr("far.csv:2: unreachable"), HasSubstr("far.csv:4: outside-region"),
+                           HasSubstr("not written")));
+  EXPECT_EQ(read("far_out.csv"), "previous\n");
+  // --strict: the same, and so for one refusal among compensated targets.
+  r = run({"compensate", "--strict", "--model", path("m.json"), "--targets", path("far.csv"), "--out", path("nothing_strict.csv")});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_FALSE(fs::exists(path("nothing_strict.csv")));
+  write("some.csv", "x,y,z,rx,ry,rz\n1000,0,600,180,0,0\n1100,100,700,180,0,0\n9000,0,500,180,0,180\n");
+  r = run({"compensate", "--model", path("m.json"), "--targets", path("some.csv"), "--out", path("some_out.csv")});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  r = run({"compensate", "--strict", "--model", path("m.json"), "--targets", path("some.csv"), "--out", path("some_strict.csv")});
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("--strict: 1 of"), HasSubstr("unreachable")));
+  EXPECT_FALSE(fs::exists(path("some_strict.csv")));
 }
 
 // "tool point moved by at most 10.463 mm" was the ceiling; the largest move was 3.61 mm. Both said.

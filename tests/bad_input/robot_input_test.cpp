@@ -419,8 +419,13 @@ TEST(RobotBadInput, MeasurementsInMetresWarnNamingFileAndColumnsAndStillRun) {
             0);
   dir.write("t.csv", "x,y,z,rx,ry,rz\n1.0,-0.1,0.5,180,0,0\n1.1,0,0.6,180,0,0\n");
   auto r = run_errfield({"compensate", "--model", "f.json", "--targets", "t.csv", "--out", "j.csv"}, dir.path());
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_THAT(r.err, AllOf(HasSubstr("errfield compensate: warning: t.csv columns x,y,z"), HasSubstr("metres")));
+  // The warning does not stop the run: the targets go to IK (near the base, none is compensated,
+  // so the job fails with exit 1 and their statuses, not with exit 2 at the warning).
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr("errfield compensate: warning: t.csv columns x,y,z"), HasSubstr("metres"),
+                           HasSubstr("none of the 2 targets"), HasSubstr("t.csv:2: "), HasSubstr("t.csv:3: ")));
+  EXPECT_LT(r.err.find("warning: t.csv columns x,y,z"), r.err.find("none of the 2 targets"));
+  EXPECT_FALSE(std::filesystem::exists(dir.path() / "j.csv"));
   dir.write("t.csv", "x,y,z,rx,ry,rz\n1000,-100,500,180,0,0\n1100,0,600,180,0,0\n");
   r = run_errfield({"compensate", "--model", "f.json", "--targets", "t.csv", "--out", "j.csv"}, dir.path());
   EXPECT_EQ(r.exit_code, 0) << r.err;

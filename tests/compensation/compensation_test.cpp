@@ -3,12 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 #include <random>
 
 #include "errfield/error.hpp"
 #include "errfield/compensation/error_fields.hpp"
 #include "errfield/compensation/kriging_fields.hpp"
 #include "errfield/compensation/prediction.hpp"
+#include "errfield/compensation/registration.hpp"
 #include "errfield/compensation/tool_location.hpp"
 #include "errfield/variogram_model.hpp"
 #include "errfield/robot/kinematics.hpp"
@@ -397,6 +399,31 @@ TEST(ToolPoints, WorkingToolRoundTripsThroughJsonAndIsChecked) {
     EXPECT_NE(std::string(e.what()).find("working_tool"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("2000"), std::string::npos) << e.what();
   }
+}
+
+// compensate --frame tracker: a pose in the tracker frame, mapped with the registration, by hand.
+// Registration: a quarter turn about z and (100, -50, 10) mm; the pose (10, 20, 30) mm, tool down
+// (rx 180). In the robot frame: position Rz(90)(10, 20, 30) + t = (80, -40, 40); orientation
+// Rz(90) Rx(180), i.e. rx 180, ry 0, rz 90.
+TEST(PosesInRobotFrame, AQuarterTurnAndAShiftByHand) {
+  Registration r;
+  r.robot_from_tracker = Eigen::Translation3d(100.0, -50.0, 10.0) * Eigen::AngleAxisd(std::numbers::pi / 2.0, Eigen::Vector3d::UnitZ());
+  Eigen::MatrixXd tracker(2, 6);
+  tracker << 10.0, 20.0, 30.0, 180.0, 0.0, 0.0,  //
+      std::nan(""), 0.0, 0.0, 0.0, 0.0, 0.0;
+  const Eigen::MatrixXd robot = poses_in_robot_frame(r, tracker);
+  ASSERT_EQ(robot.rows(), 2);
+  const double expected[6] = {80.0, -40.0, 40.0, 180.0, 0.0, 90.0};
+  for (int k = 0; k < 6; ++k) {
+    if (k == 3) {
+      // rx = +-180 are one angle.
+      EXPECT_NEAR(std::abs(robot(0, k)), expected[k], 1e-9);
+      continue;
+    }
+    EXPECT_NEAR(robot(0, k), expected[k], 1e-9) << k;
+  }
+  EXPECT_FALSE(robot.row(1).allFinite());  // a row with a NaN stays non-finite
+  EXPECT_THROW(poses_in_robot_frame(r, Eigen::MatrixXd::Zero(1, 3)), InputError);
 }
 
 }  // namespace

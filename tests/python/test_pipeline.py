@@ -203,6 +203,38 @@ def test_compensate_seeds_and_ceiling_match_cli(sim, fitted, tmp_path):
         errfield.compensate(fitted, poses, robot=str(sim / "robot.json"), max_correction=-1.0)
 
 
+def test_compensate_tracker_frame_matches_cli(sim, fitted, tmp_path):
+    # frame="tracker" (the CLI's --frame tracker): the held-out readings mx,my,mz as targets, tool down
+    # in the robot frame turned into the tracker frame; the same columns as the CLI's, and the same
+    # joints as robot-frame targets mapped here with the model file's registration.
+    data = read_measurements(sim / "hold.csv")
+    reg = np.array(json.loads((sim / "vk.json").read_text())["registration"]["robot_from_tracker"])
+    rot, shift = reg[:, :3], reg[:, 3]
+    down = np.diag([1.0, -1.0, -1.0])  # rx 180, ry 0, rz 0
+    r_t = rot.T @ down  # R = Rz Ry Rx: ry = asin(-r31), rx = atan2(r32, r33), rz = atan2(r21, r11)
+    angles = np.degrees([math.atan2(r_t[2, 1], r_t[2, 2]), math.asin(-r_t[2, 0]), math.atan2(r_t[1, 0], r_t[0, 0])])
+    n = len(data["mx"])
+    tracker = {"x": data["mx"], "y": data["my"], "z": data["mz"]}
+    tracker.update({k: np.full(n, a) for k, a in zip(("rx", "ry", "rz"), angles)})
+    write_csv(tmp_path / "tracker.csv", tracker)
+    run_cli("compensate", "--model", sim / "vk.json", "--targets", tmp_path / "tracker.csv", "--frame", "tracker",
+            "--out", tmp_path / "ct.csv")
+    out = errfield.compensate(fitted, tracker, frame="tracker")
+    check_columns(out, tmp_path / "ct.csv")
+    ok = out["status"] == "ok"
+    assert ok.sum() > 20
+    p = np.column_stack([data["mx"], data["my"], data["mz"]]) @ rot.T + shift
+    robot = {"x": p[:, 0], "y": p[:, 1], "z": p[:, 2], "rx": np.full(n, 180.0), "ry": np.zeros(n), "rz": np.zeros(n)}
+    by_robot = errfield.compensate(fitted, robot)
+    assert (by_robot["status"] == out["status"]).all()
+    for name in [f"cq{k}" for k in range(1, 7)] + ["nx", "ny", "nz"]:
+        assert np.allclose(out[name][ok], by_robot[name][ok], rtol=0, atol=1e-9), name
+    with pytest.raises(errfield.ArgumentError, match="frame"):
+        errfield.compensate(fitted, tracker, frame="world")
+    with pytest.raises(errfield.ArgumentError, match="no frame"):
+        errfield.compensate(fitted, np.column_stack([data[f"q{k}"] for k in range(1, 7)]), frame="tracker")
+
+
 def test_validate_matches_cli(sim, fitted, tmp_path):
     run_cli("validate", "--model", sim / "vk.json", "--robot", sim / "robot.json", "--data", sim / "hold.csv",
             "--out", tmp_path / "v.csv", "--summary-out", tmp_path / "s.json")

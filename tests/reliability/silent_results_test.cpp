@@ -287,8 +287,15 @@ TEST_F(SilentResults, CommandsRunOnTheirOwnOutputsReplaceColumnsNeverDuplicate) 
   EXPECT_EQ(header_of("ik2.csv"), header_of("ik.csv"));
 
   ASSERT_EQ(run("fit --robot " + path("robot.json") + " --data " + path("g.csv") + " --method distance-idw --out " + path("m.json")).exit_code, 0);
-  write("t.csv", "q1,q2,q3,q4,q5,q6\n0,-20,30,0,40,0\n10,-10,20,0,30,0\n");
-  ASSERT_EQ(run("compensate --model " + path("m.json") + " --targets " + path("t.csv") + " --out " + path("c.csv")).exit_code, 0);
+  // Two targets outside the cube (refused) and the joints of its centre node (compensated: a job that
+  // compensates nothing writes no file to run on).
+  const CsvTable g = CsvTable::read(path("g.csv"));
+  std::string centre;
+  for (int k = 1; k <= 6; ++k) centre += (k > 1 ? "," : "") + std::string(g.cell(14, g.column_index("q" + std::to_string(k))));
+  write("t.csv", "q1,q2,q3,q4,q5,q6\n0,-20,30,0,40,0\n10,-10,20,0,30,0\n" + centre + "\n");
+  r = run("compensate --model " + path("m.json") + " --targets " + path("t.csv") + " --out " + path("c.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(CsvTable::read(path("c.csv")).cell(2, CsvTable::read(path("c.csv")).column_index("status")), "ok");
   r = run("compensate --model " + path("m.json") + " --targets " + path("c.csv") + " --out " + path("c2.csv"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NO_THROW(unique("c2.csv")) << header_of("c2.csv");

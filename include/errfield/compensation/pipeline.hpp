@@ -163,6 +163,19 @@ struct CompensationTargets {
   std::optional<robot::ArmConfiguration> config;
 };
 
+/// The frame pose targets are given in (`compensate --frame`, Python `frame=`): the robot base frame
+/// of the model's nominal robot (the frame its registration maps tracker readings into, and the one
+/// compensate_columns takes), or the tracker frame (a part or fixture measured with the tracker).
+enum class TargetFrame { robot, tracker };
+/// "robot" or "tracker"; anything else is an ArgumentError naming `option` and the value.
+TargetFrame parse_target_frame(const std::string& word, const std::string& option);
+/// Brings `targets` into the robot base frame: nothing for TargetFrame::robot; for tracker, every
+/// pose is mapped with the model's registration (poses_in_robot_frame, registration.hpp). Throws
+/// ArgumentError naming `option` for joint targets (they have no frame; `targets_name` says whose) and
+/// for a model without a registration (fitted without tracker positions; `model_name` says which).
+void bring_targets_to_robot_frame(CompensationTargets& targets, const CompensationModel& model, TargetFrame frame,
+                                  const std::string& option, const std::string& targets_name, const std::string& model_name);
+
 /// Seeds must be joints the robot can take: --seed (`targets.seed_deg`) and every per-row seed
 /// within `nominal`'s joint limits (a NaN row is "no seed"). Throws ArgumentError naming --seed, or
 /// InputError naming `table`'s file, line (without a table: "seed row N", 1-based), column sq<k>

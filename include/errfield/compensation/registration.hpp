@@ -43,4 +43,11 @@ Registration registration_from_json(const nlohmann::json& j, const std::string& 
 /// The "registration" member of a model or robot JSON object, if it has one.
 std::optional<Registration> find_registration(const nlohmann::json& document, const std::string& source);
 
+/// Poses given in the tracker frame (a part or fixture measured with the tracker) in the robot frame
+/// the registration maps into (the frame `compensate` takes targets in): each row x,y,z (mm),
+/// rx,ry,rz (deg, robot/pose.hpp's convention) of the N x 6 `tracker_poses` is mapped as a whole,
+/// robot_from_tracker · pose, so the orientation turns with the frame. Rows with a non-finite entry
+/// come back non-finite. Throws InputError unless `tracker_poses` has 6 columns.
+Eigen::MatrixXd poses_in_robot_frame(const Registration& r, const Eigen::MatrixXd& tracker_poses);
+
 }  // namespace errfield::compensation
