@@ -152,10 +152,22 @@ def main():
             robot = os.path.join(w, "kr16_td.json")
             run([E, "simulate", "--robot", "kr16", "--seed", seed, "--sample", "scattered:40", "--measure", "positions",
                  "--systematic", "realistic", "--robot-out", robot, "--out", train])
-            test = os.path.join(w, "tilted.csv")
+            # The tilted poses' joints from another draw, measured on the SAME simulated robot: the seed
+            # draws the robot, and `--joints` draws no poses.
+            drawn = os.path.join(w, "tilted_draw.csv")
             run([E, "simulate", "--robot", "kr16", "--seed", str(int(seed) + 1000), "--sample", "scattered:200",
                  "--orientation-spread", str(a.spread), "--measure", "positions", "--systematic", "realistic",
-                 "--out", test])
+                 "--out", drawn])
+            joints = os.path.join(w, "tilted_joints.csv")
+            with open(drawn) as f:
+                rows = [r for r in csv.DictReader(l for l in f if not l.startswith("#")) if r["kind"] == "target"]
+            with open(joints, "w") as f:
+                f.write("q1,q2,q3,q4,q5,q6\n")
+                for r in rows:
+                    f.write(",".join(r[f"q{k}"] for k in range(1, 7)) + "\n")
+            test = os.path.join(w, "tilted.csv")
+            run([E, "simulate", "--robot", "kr16", "--seed", seed, "--joints", joints, "--measure", "positions",
+                 "--systematic", "realistic", "--out", test])
             scored = {}
             for name, extra in fits:
                 model = os.path.join(w, f"td_{name}.json")
