@@ -159,9 +159,11 @@ PyModel fit_py(const py::object& data, const py::object& robot, const std::strin
   return m;
 }
 
-py::dict predict_py(const PyModel& m, const py::object& joints, const py::object& tool) {
+py::dict predict_py(const PyModel& m, const py::object& joints, const py::object& tool, bool joints_are_degrees) {
   const std::vector<JointVector> q = joint_vectors_arg(joints, "joints");
   const CompensationModel model = with_tool_arg(m.loaded.model, tool, m.loaded.model.command_model().tool());
+  // As the CLI: joints that look like radians against the model's training joints are refused.
+  if (!joints_are_degrees) check_joints_not_radians(q, model, "joints", "joints_are_degrees=True");
   std::optional<StepColumns> step;
   {
     py::gil_scoped_release release;
@@ -171,7 +173,8 @@ py::dict predict_py(const PyModel& m, const py::object& joints, const py::object
 }
 
 py::dict compensate_py(const PyModel& m, const py::object& targets, const py::object& robot, double tolerance,
-                       const py::object& seed, double max_correction, const py::object& tool, const std::string& frame) {
+                       const py::object& seed, double max_correction, const py::object& tool, const std::string& frame,
+                       bool joints_are_degrees) {
   const TargetFrame target_frame = parse_target_frame(frame, "frame");
   const CompensationModel model = with_tool_arg(m.loaded.model, tool, m.loaded.model.aimed_model().tool());
   const bool kinematic =
@@ -199,6 +202,10 @@ py::dict compensate_py(const PyModel& m, const py::object& targets, const py::ob
   if (!(std::isfinite(max_correction) && max_correction >= 0.0))
     throw ArgumentError("max_correction: " + format_number(max_correction) +
                         "; expected a ceiling > 0 (mm), or 0 for the default");
+  if (!(std::isfinite(tolerance) && tolerance > 0.0))
+    throw ArgumentError("tolerance: " + format_number(tolerance) + "; expected a finite tolerance > 0 (mm)");
+  // As the CLI: joint targets that look like radians against the model's training joints are refused.
+  if (!joints_are_degrees) check_joints_not_radians(t.joints_deg, model, "targets", "joints_are_degrees=True");
   std::optional<StepColumns> step;
   {
     py::gil_scoped_release release;
@@ -345,16 +352,21 @@ void bind_pipeline(py::module_& m) {
         "expected_rms_mm, readings, left_out, orientations, lever_mm, orientation_sigma_mrad, max_lever_mm.\n"
         "InputError for fewer than min_orientations distinct orientations or readings that are not one rigid point.");
   m.def("predict", &predict_py, py::arg("model"), py::arg("joints"), py::kw_only(), py::arg("tool") = py::none(),
+        py::arg("joints_are_degrees") = false,
         "`errfield predict`: where the tool goes at joints ((N, 6) deg or a dict with q1..q6). Returns a dict:\n"
         "px,py,pz (robot frame, mm), tx,ty,tz (tracker frame; models with a registration), where the model has a\n"
         "variance var_mm2 (a new reading: field + nugget, mm²), var_field_mm2 (field only) and r95_mm (95 % radius\n"
         "of a new reading, vector fields), status (ok | outside-region | not-credible | orientation-unknown; refused\n"
-        "rows are NaN). tool: the CLI's --tool, 3 or 6 numbers (flange frame, mm, deg).");
+        "rows are NaN). tool: the CLI's --tool, 3 or 6 numbers (flange frame, mm, deg). Joints that look like\n"
+        "radians (all within +-2 pi, spread far less than the model's training joints) are an InputError;\n"
+        "joints_are_degrees=True skips that check (the CLI's --joints-are-degrees).");
   m.def("compensate", &compensate_py, py::arg("model"), py::arg("targets"), py::kw_only(),
         py::arg("robot") = py::none(), py::arg("tolerance") = 0.25, py::arg("seed") = py::none(),
         py::arg("max_correction") = 0.0, py::arg("tool") = py::none(), py::arg("frame") = "robot",
+        py::arg("joints_are_degrees") = false,
         "`errfield compensate` (tool: the CLI's --tool; frame: its --frame, robot or tracker, the frame of pose\n"
-        "targets; tracker ones are mapped with the model's registration): joints to send. targets: (N, 6) nominal joints (deg) or a dict with q1..q6 or\n"
+        "targets; tracker ones are mapped with the model's registration; joints_are_degrees: the CLI's\n"
+        "--joints-are-degrees, joint targets that look like radians are refused without it): joints to send. targets: (N, 6) nominal joints (deg) or a dict with q1..q6 or\n"
         "x,y,z,rx,ry,rz (mm, deg), optionally with per-row seed joints sq1..sq6 (deg; a row of NaN = none) whose arm\n"
         "configuration the solution keeps. max_correction: ceiling (mm) on move_mm, 0 = the CLI's default. Returns a dict: nq1..nq6, nx,ny,nz, pred_dx..dz, pred_dl, var_mm2 (new reading:\n"
         "field + nugget), p_inside (P(|3-D error| <= tolerance mm) of a new reading; distance models: the distance\n"

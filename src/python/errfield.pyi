@@ -355,7 +355,13 @@ def fit(
     variance_calibration: Literal["auto", "loo", "none"] = "auto",
     joint_functions: int = 8,
 ) -> CompensationModel: ...
-def predict(model: CompensationModel, joints: ArrayLike | Columns) -> dict[str, Any]: ...
+def predict(
+    model: CompensationModel,
+    joints: ArrayLike | Columns,
+    *,
+    tool: ArrayLike | None = None,
+    joints_are_degrees: bool = False,
+) -> dict[str, Any]: ...
 def locate_tool(
     model: CompensationModel,
     data: Columns,
@@ -374,6 +380,7 @@ def compensate(
     max_correction: float = 0.0,
     tool: ArrayLike | None = None,
     frame: Literal["robot", "tracker"] = "robot",
+    joints_are_degrees: bool = False,
 ) -> dict[str, Any]: ...
 def plan(
     candidates: ArrayLike | Columns,

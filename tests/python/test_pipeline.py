@@ -350,3 +350,28 @@ def test_locate_tool_and_tool_match_cli(sim, fitted, tmp_path):
         errfield.locate_tool(fitted, read_measurements(sim / "grid.csv"))
     with pytest.raises(errfield.ArgumentError, match="tool"):
         errfield.predict(fitted, read_measurements(sim / "hold.csv"), tool=[3000.0, 0.0, 0.0])
+
+
+def test_joints_in_radians_are_refused_as_by_the_cli(tmp_path):
+    """Issue 35: the CLI refuses joints that look like radians against the model's training joints;
+    the module took them (every row ok). A SIMULATED UR5e, as the CLI's test."""
+    box = "-90,90,-120,-40,40,120,-120,-40,40,120,-90,90"
+    run_cli("simulate", "--robot", "ur5e", "--seed", "41", "--sample", "scattered:40", "--joint-box", box,
+            "--measure", "positions", "--robot-out", tmp_path / "r.json", "--out", tmp_path / "train.csv")
+    run_cli("fit", "--robot", tmp_path / "r.json", "--data", tmp_path / "train.csv", "--method", "kinematic",
+            "--out", tmp_path / "k.json")
+    run_cli("simulate", "--robot", "ur5e", "--seed", "42", "--sample", "scattered:12", "--joint-box", box,
+            "--measure", "positions", "--out", tmp_path / "held.csv")
+    held = read_measurements(tmp_path / "held.csv")
+    q_deg = np.column_stack([held[f"q{j}"] for j in range(1, 7)])
+    q_rad = np.radians(q_deg)
+    model = errfield.CompensationModel.load(tmp_path / "k.json")
+    with pytest.raises(errfield.InputError, match="radians.*joints_are_degrees=True"):
+        errfield.predict(model, q_rad)
+    with pytest.raises(errfield.InputError, match="radians.*joints_are_degrees=True"):
+        errfield.compensate(model, q_rad)
+    # degrees go through; the override takes the radians as degrees, as the CLI's flag does
+    assert (errfield.predict(model, q_deg)["status"] == "ok").all()
+    assert len(errfield.compensate(model, q_deg)["status"]) == len(q_deg)
+    assert len(errfield.predict(model, q_rad, joints_are_degrees=True)["status"]) == len(q_rad)
+    assert len(errfield.compensate(model, q_rad, joints_are_degrees=True)["status"]) == len(q_rad)
