@@ -102,7 +102,10 @@ struct OutputTable {
       }
       for (std::size_t c = 0; c < columns.size(); ++c) {
         if (c) out += ',';
-        out += csv_cell(columns[c][r]);
+        const std::string& cell = columns[c][r];
+        // A number's text (digits, sign, point, exponent) never needs quotes: no copy through csv_cell.
+        if (cell.find_first_not_of("0123456789.-+eE") == std::string::npos) out += cell;
+        else out += csv_cell(cell);
       }
       out += '\n';
     }
