@@ -8,9 +8,12 @@
 //   sparse : ordinary kriging, N = 100,000, sph range 45 mm (~30 samples per support ball);
 //            means at 100,000 targets; with variances at 1,000 targets
 //   simulation: conditional simulation (conditional_simulation.hpp), local back end (k = 20),
-//            sequential unconditional draws (60 neighbours, 10 draws per random path): issue 22's
+//            sequential unconditional draws (60 neighbours, 100 draws per random path): issue 22's
 //            case is 10,000 targets x 100 draws from 2,000 samples (target: under 30 s);
 //            {N, targets, draws, threads}
+//   simulation on a grid (issue 36, R gstat's krige(nsim = 100, nmax = 24) on the same job:
+//            benchmarks/peers/gstat_simulation_timing.R): 300 samples in a 100 x 100 square,
+//            100 x 100 grid nodes, k = 24, 100 draws; {draws per path, threads}
 // Arguments: {N, targets, threads, variance 0/1}. Peak RSS of the process is reported as max_rss_MiB.
 
 #include <sys/resource.h>
@@ -165,6 +168,45 @@ void BM_ConditionalSimulationLocal(benchmark::State& state) {
   state.counters["draws"] = static_cast<double>(so.draws);
   state.counters["max_rss_MiB"] = max_rss_mib();
 }
+void BM_ConditionalSimulationGrid2d(benchmark::State& state) {
+  using P2 = Eigen::Vector2d;
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 100.0);
+  std::normal_distribution<double> e(0.0, 0.2);
+  std::vector<P2> samples;
+  std::vector<double> values;
+  for (int i = 0; i < 300; ++i) {
+    const P2 p(u(rng), u(rng));
+    samples.push_back(p);
+    values.push_back(std::sin(p.x() / 15.0) + std::cos(p.y() / 20.0) + e(rng));
+  }
+  std::vector<P2> nodes;
+  for (int j = 0; j < 100; ++j)
+    for (int i = 0; i < 100; ++i) nodes.emplace_back(i + 0.5, j + 0.5);
+  errfield::KrigingOptions opt;
+  opt.backend = errfield::KrigingBackend::Local;
+  opt.neighbors = 24;
+  opt.threads = static_cast<int>(state.range(1));
+  errfield::SimulationOptions so;
+  so.draws = 100;
+  so.method = errfield::UnconditionalMethod::Sequential;
+  so.draws_per_path = static_cast<std::size_t>(state.range(0));
+  const auto model = errfield::VariogramModel::parse("sph(sill=1,range=30)+nug(0.05)");
+  for (auto _ : state) {
+    const auto r = errfield::simulate_conditional<P2, double>(samples, values, nodes, model, opt, so);
+    if (!r.usable()) state.SkipWithError(r.message.c_str());
+    benchmark::DoNotOptimize(r.draws.data());
+  }
+  state.counters["max_rss_MiB"] = max_rss_mib();
+}
+BENCHMARK(BM_ConditionalSimulationGrid2d)
+    ->ArgNames({"per_path", "threads"})
+    ->Args({100, 2})
+    ->Args({10, 2})
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond)
+    ->UseRealTime();
+
 BENCHMARK(BM_ConditionalSimulationLocal)
     ->ArgNames({"N", "targets", "draws", "threads"})
     ->Args({2000, 10000, 100, 2})

@@ -57,7 +57,7 @@ void run(benchmark::State& state, double extent,
 
 void BM_Variogram3d(benchmark::State& state) { run<3>(state, 2000.0); }
 void BM_Variogram6d(benchmark::State& state) { run<6>(state, 180.0); }
-// Directional: one angle test per pair, and no SIMD kernel (compare with BM_Variogram3d).
+// Directional: one angle test per pair inside the same pair loops (compare with BM_Variogram3d).
 void BM_Variogram3dAlpha(benchmark::State& state) {
   run<3>(state, 2000.0, errfield::VariogramDirection::gstat(45.0, 22.5));
 }
@@ -141,6 +141,49 @@ void BM_VariogramCutoff3d(benchmark::State& state) {
   state.counters["binned_pairs"] = binned;
 }
 
+// Directional variograms on the fast path (issue 36): N = 78,000 2-D locations uniform in a
+// 260 x 300 window (simulated; a smooth field plus noise), 10 bins up to a cutoff of 20 (gstat's
+// convention), 2 threads. `directions`: 0 = omnidirectional, 1 = alpha 0 with gstat's default
+// tolerance for one direction (90: every pair), 2 = alpha 0 with tolerance 22.5, 4 = alpha
+// 0, 45, 90, 135 with tolerance 22.5 (four variograms, as `errfield variogram --alpha 0,45,90,135`).
+// The R gstat call on the same job: benchmarks/peers/gstat_variogram_directional_timing.R.
+//
+//   build/benchmarks/bm_variogram --benchmark_filter=BM_Variogram2dDirections
+void BM_Variogram2dDirections(benchmark::State& state) {
+  const std::size_t n = 78000;
+  const long directions = state.range(0);
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<double> ux(0.0, 260.0), uy(0.0, 300.0);
+  std::normal_distribution<double> noise(0.0, 5.0);
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(n), 2), z(static_cast<Eigen::Index>(n), 1);
+  for (Eigen::Index i = 0; i < x.rows(); ++i) {
+    x(i, 0) = ux(rng);
+    x(i, 1) = uy(rng);
+    z(i, 0) = 100.0 * std::sin(x(i, 0) / 25.0) + 80.0 * std::cos(x(i, 1) / 40.0) + noise(rng);
+  }
+  const auto bins = errfield::LagBins::uniform(0.0, 20.0, 2.0);
+  std::vector<errfield::VariogramDirection> cones;
+  if (directions == 0) cones.emplace_back();
+  if (directions == 1) cones.push_back(errfield::VariogramDirection::gstat(0.0, 90.0));
+  if (directions == 2) cones.push_back(errfield::VariogramDirection::gstat(0.0, 22.5));
+  if (directions == 4)
+    for (double alpha : {0.0, 45.0, 90.0, 135.0}) cones.push_back(errfield::VariogramDirection::gstat(alpha, 22.5));
+  errfield::EmpiricalVariogramOptions options;
+  options.threads = 2;
+  options.convention = errfield::BinConvention::Gstat;
+  double binned = 0.0;
+  for (auto _ : state) {
+    binned = 0.0;
+    for (const auto& d : cones) {
+      options.direction = d;
+      auto v = errfield::empirical_variogram(x, z, bins, options);
+      for (const auto& b : v.bins) binned += static_cast<double>(b.pairs);
+      benchmark::DoNotOptimize(v.bins.data());
+    }
+  }
+  state.counters["binned_pairs"] = binned;
+}
+
 void cutoff_cases(benchmark::internal::Benchmark* b) {
   for (long n : {20000L, 80000L})
     for (long ratio : {5L, 10L, 20L, 30L, 50L, 100L})
@@ -157,6 +200,8 @@ void cutoff_cases(benchmark::internal::Benchmark* b) {
 }  // namespace
 
 BENCHMARK(BM_VariogramCutoff3d)->Apply(cutoff_cases);
+BENCHMARK(BM_Variogram2dDirections)->Arg(0)->Arg(1)->Arg(2)->Arg(4)->ArgName("directions")
+    ->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_VariogramKernel3d)->Arg(0)->Arg(1)->Arg(2)->ArgName("isa")->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Variogram3d)->Apply(sizes);
 BENCHMARK(BM_Variogram6d)->Apply(sizes);

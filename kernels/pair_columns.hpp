@@ -1,7 +1,8 @@
 #pragma once
 /// Sorted-column enumeration of the empirical variogram's pairs for its most common case:
 /// Euclidean lags in 1 to 3 dimensions, one value component, equally spaced bins, every pair (no
-/// subsampling, no direction cone). It visits each unordered pair that can lie within the cutoff
+/// subsampling), in every direction or in a symmetric direction cone (pair_direction.hpp, tested
+/// on each pair within the cutoff with the all-pairs loop's arithmetic). It visits each unordered pair that can lie within the cutoff
 /// once and adds it to per-bin sums, in an order of its own: the lags, and so every pair's bin and
 /// every bin's pair count, are those of the all-pairs loop (pair_binning.hpp) bit for bit, the sums
 /// differ from it only by the rounding of a different summation order. Use it through
@@ -36,6 +37,7 @@
 
 #include "pair_binning.hpp"
 #include "pair_binning_simd.hpp"
+#include "pair_direction.hpp"
 
 namespace errfield::kernels {
 
@@ -60,6 +62,9 @@ struct SortedColumns {
   double origin[2] = {0.0, 0.0};  ///< lower edge of column 0 on each gridded axis
   double side[2] = {1.0, 1.0};    ///< column width, >= cutoff / reach
   double cutoff = 0.0;            ///< the largest bin edge
+  /// Null: every direction. Otherwise a symmetric cone (cone_is_symmetric) over `coordinates`:
+  /// only the pairs it keeps are binned.
+  const DirectionCone* cone = nullptr;
 };
 
 /// Doubles of the per-bin sum copies a call needs (the caller's workspace, one per thread).
@@ -217,13 +222,14 @@ void bin_column_pairs_baseline(const SortedColumns& g, const BinLayout& bins, st
     const double vp = g.values[p];
     for (std::size_t r = 0; r < m; ++r)
       for (std::size_t q = runs[r].lo; q < runs[r].hi; ++q) {
-        double d = xp[0] - g.coordinates[q];
-        double h2 = d * d;
+        double d[3] = {xp[0] - g.coordinates[q], 0.0, 0.0};
+        double h2 = d[0] * d[0];
         for (int a = 1; a < D; ++a) {
-          d = xp[a] - g.coordinates[static_cast<std::size_t>(a) * n + q];
-          h2 += d * d;
+          d[a] = xp[a] - g.coordinates[static_cast<std::size_t>(a) * n + q];
+          h2 += d[a] * d[a];
         }
         if (!(h2 <= pre)) continue;
+        if (g.cone != nullptr && !cone_keeps_pair(*g.cone, d[0], d[1], d[2])) continue;
         add_column_pair<S>(slots, B, bins, stream++, h2, vp - g.values[q]);
       }
   }
@@ -266,6 +272,47 @@ ERRFIELD_KERNELS_NO_FP_CONTRACT __attribute__((target("avx512f"))) inline void d
   }
 }
 
+/// cone_keeps_pair for 8 separations (d0, d1, d2) at once, with its arithmetic lane by lane: the
+/// lanes of `lanes` the cone keeps. D: the axes (d2 unused below 3).
+template <int D>
+ERRFIELD_KERNELS_NO_FP_CONTRACT __attribute__((target("avx512f"))) inline __mmask8 cone_mask_avx512(
+    const DirectionCone& c, __m512d d0, __m512d d1, __m512d d2, __mmask8 lanes) noexcept {
+  ERRFIELD_KERNELS_NO_FP_CONTRACT_BODY
+  if (c.gstat) {
+    const __m512d norm2 = _mm512_add_pd(_mm512_mul_pd(d0, d0), _mm512_mul_pd(d1, d1));
+    if (c.check_hor && c.cos_tol_hor > 0.0) {
+      const __m512d dot = _mm512_add_pd(_mm512_mul_pd(d0, _mm512_set1_pd(c.hor_x)),
+                                        _mm512_mul_pd(d1, _mm512_set1_pd(c.hor_y)));
+      const __m512d k = _mm512_set1_pd(c.cos_tol_hor * c.cos_tol_hor);
+      lanes = _mm512_mask_cmp_pd_mask(lanes, _mm512_mul_pd(dot, dot), _mm512_mul_pd(k, norm2), _CMP_GE_OQ);
+    }
+    if constexpr (D > 2) {
+      if (c.check_ver && c.cos_tol_ver > 0.0) {
+        const __m512d v = _mm512_add_pd(_mm512_mul_pd(_mm512_mask_sqrt_pd(norm2, 0xFF, norm2), _mm512_set1_pd(c.ver_xy)),
+                                        _mm512_mul_pd(d2, _mm512_set1_pd(c.ver_z)));
+        const __m512d k = _mm512_set1_pd(c.cos_tol_ver * c.cos_tol_ver);
+        const __m512d all2 = _mm512_add_pd(norm2, _mm512_mul_pd(d2, d2));
+        lanes = _mm512_mask_cmp_pd_mask(lanes, _mm512_mul_pd(v, v), _mm512_mul_pd(k, all2), _CMP_GE_OQ);
+      }
+    }
+    return lanes;
+  }
+  if (!(c.cos_tol > 0.0)) return lanes;
+  // 0 + x is x (up to the sign of a zero, which squares away): the scalar sums from 0.
+  __m512d dot = _mm512_mul_pd(d0, _mm512_set1_pd(c.axis[0]));
+  __m512d norm2 = _mm512_mul_pd(d0, d0);
+  if constexpr (D > 1) {
+    dot = _mm512_add_pd(dot, _mm512_mul_pd(d1, _mm512_set1_pd(c.axis[1])));
+    norm2 = _mm512_add_pd(norm2, _mm512_mul_pd(d1, d1));
+  }
+  if constexpr (D > 2) {
+    dot = _mm512_add_pd(dot, _mm512_mul_pd(d2, _mm512_set1_pd(c.axis[2])));
+    norm2 = _mm512_add_pd(norm2, _mm512_mul_pd(d2, d2));
+  }
+  const __m512d k = _mm512_set1_pd(c.cos_tol * c.cos_tol);
+  return _mm512_mask_cmp_pd_mask(lanes, _mm512_mul_pd(dot, dot), _mm512_mul_pd(k, norm2), _CMP_GE_OQ);
+}
+
 /// AVX-512 kernel: the baseline's pairs, stream and sums, 8 candidates per step.
 template <PairStatistic S, bool Gstat, int D>
 ERRFIELD_KERNELS_NO_FP_CONTRACT __attribute__((target("avx512f"))) void bin_column_pairs_avx512(
@@ -286,6 +333,7 @@ ERRFIELD_KERNELS_NO_FP_CONTRACT __attribute__((target("avx512f"))) void bin_colu
   const double* x0 = g.coordinates;
   const double* x1 = g.coordinates + (D > 1 ? n : 0);
   const double* x2 = g.coordinates + (D > 2 ? 2 * n : 0);
+  const DirectionCone* cone = g.cone;
   std::size_t column = p_begin < p_end ? column_of_position(g, p_begin) : 0;
   for (std::size_t p = p_begin; p < p_end; ++p) {
     while (g.column_start[column + 1] <= p) ++column;
@@ -299,19 +347,21 @@ ERRFIELD_KERNELS_NO_FP_CONTRACT __attribute__((target("avx512f"))) void bin_colu
       const std::size_t hi = runs[r].hi;
       for (std::size_t q = runs[r].lo; q < hi; q += 8) {
         const __mmask8 lanes = hi - q >= 8 ? __mmask8{0xFF} : static_cast<__mmask8>((1u << (hi - q)) - 1u);
-        __m512d d = _mm512_sub_pd(vx0, _mm512_maskz_loadu_pd(lanes, x0 + q));
-        __m512d h2 = _mm512_mul_pd(d, d);
+        const __m512d d0 = _mm512_sub_pd(vx0, _mm512_maskz_loadu_pd(lanes, x0 + q));
+        __m512d d1 = _mm512_setzero_pd(), d2 = _mm512_setzero_pd();
+        __m512d h2 = _mm512_mul_pd(d0, d0);
         if constexpr (D > 1) {
-          d = _mm512_sub_pd(vx1, _mm512_maskz_loadu_pd(lanes, x1 + q));
-          h2 = _mm512_add_pd(h2, _mm512_mul_pd(d, d));
+          d1 = _mm512_sub_pd(vx1, _mm512_maskz_loadu_pd(lanes, x1 + q));
+          h2 = _mm512_add_pd(h2, _mm512_mul_pd(d1, d1));
         }
         if constexpr (D > 2) {
-          d = _mm512_sub_pd(vx2, _mm512_maskz_loadu_pd(lanes, x2 + q));
-          h2 = _mm512_add_pd(h2, _mm512_mul_pd(d, d));
+          d2 = _mm512_sub_pd(vx2, _mm512_maskz_loadu_pd(lanes, x2 + q));
+          h2 = _mm512_add_pd(h2, _mm512_mul_pd(d2, d2));
         }
         // No branch on `keep`: about half the steps keep nothing, unpredictably; storing 0 lanes
         // costs less than the mispredictions.
-        const __mmask8 keep = _mm512_mask_cmp_pd_mask(lanes, h2, vpre, _CMP_LE_OQ);
+        __mmask8 keep = _mm512_mask_cmp_pd_mask(lanes, h2, vpre, _CMP_LE_OQ);
+        if (cone != nullptr) keep = cone_mask_avx512<D>(*cone, d0, d1, d2, keep);
         const __m512d dz = _mm512_sub_pd(vv, _mm512_maskz_loadu_pd(keep, g.values + q));
         // Register-form compress then a plain store (the memory form is slow on some CPUs).
         _mm512_storeu_pd(h2s + buffered, _mm512_maskz_compress_pd(keep, h2));

@@ -2,8 +2,10 @@
 /// Direction filter of the empirical variogram's pair loop: whether the separation
 /// s = x_i - x_j of a pair lies within an angular tolerance of a direction (either sign, as gstat's
 /// symmetric variograms). Used by bin_pair_rows, bin_pair_rows_euclidean and
-/// store_pair_differences (pair_binning.hpp), which mark a rejected pair's lag NaN so that it falls
-/// in no bin. The angle is taken in the location coordinates, whatever the metric.
+/// store_pair_differences (pair_binning.hpp) and the cell list (pair_cells.hpp), which mark a
+/// rejected pair's lag NaN so that it falls in no bin, and by the sorted columns (pair_columns.hpp),
+/// which test each pair in range with cone_keeps_pair (the same rule and arithmetic). The angle is
+/// taken in the location coordinates, whatever the metric.
 ///
 /// Two kinds (errfield::VariogramDirection builds them and documents the conventions):
 ///  - gstat (2-D/3-D): horizontal test on axes 0, 1 with the direction (sin alpha, cos alpha)
@@ -58,6 +60,51 @@ inline bool direction_accepts(const DirectionCone& c, const double* s) noexcept 
   }
   if (norm2 == 0.0) return true;
   return std::fabs(dot) >= c.cos_tol * std::sqrt(norm2);
+}
+
+/// Whether the cone can reject any pair: false for a tolerance of 90 degrees or more (on every
+/// test it has), whose cone is the whole space, so that the caller can take the omnidirectional
+/// path with the same pairs.
+inline bool cone_selects(const DirectionCone& c) noexcept {
+  if (c.gstat)
+    return (c.check_hor && c.cos_tol_hor > 0.0) || (c.check_ver && c.cos_tol_ver > 0.0 && c.dimension > 2);
+  return c.cos_tol > 0.0;
+}
+
+/// Whether the cone keeps a pair and its reverse alike (mask_directions gives s and -s the same
+/// answer): true but for gstat's dip test with a nonzero dip, which looks at (|s_xy|, s_z) and
+/// so at the sign of s_z, i.e. at which point of the pair is i.
+inline bool cone_is_symmetric(const DirectionCone& c) noexcept {
+  return !(c.gstat && c.check_ver && c.cos_tol_ver > 0.0 && c.dimension > 2 && c.ver_z != 0.0);
+}
+
+/// mask_directions' rule for one pair, with the same arithmetic (so the same answer, bit for bit):
+/// d0, d1, d2 are the separation's first three coordinates (unused ones 0), `dimension` <= 3.
+/// For a symmetric cone (cone_is_symmetric) the sign of the separation does not matter.
+inline bool cone_keeps_pair(const DirectionCone& c, double d0, double d1, double d2) noexcept {
+  if (c.gstat) {
+    const double dot = d0 * c.hor_x + d1 * c.hor_y;
+    const double norm2 = d0 * d0 + d1 * d1;
+    if (c.check_hor && c.cos_tol_hor > 0.0) {
+      const double k = c.cos_tol_hor * c.cos_tol_hor;
+      if (!(dot * dot >= k * norm2)) return false;
+    }
+    if (c.check_ver && c.cos_tol_ver > 0.0 && c.dimension > 2) {
+      const double k = c.cos_tol_ver * c.cos_tol_ver;
+      const double v = std::sqrt(norm2) * c.ver_xy + d2 * c.ver_z;
+      if (!(v * v >= k * (norm2 + d2 * d2))) return false;
+    }
+    return true;
+  }
+  if (!(c.cos_tol > 0.0)) return true;
+  const double d[3] = {d0, d1, d2};
+  double dot = 0.0, norm2 = 0.0;
+  for (int a = 0; a < c.dimension; ++a) {
+    dot += d[a] * c.axis[a];
+    norm2 += d[a] * d[a];
+  }
+  const double k = c.cos_tol * c.cos_tol;
+  return dot * dot >= k * norm2;
 }
 
 /// h[t] = NaN for the pairs (i, j0 + t), t < m <= 256, outside the cone (at most 64 axes). The

@@ -2,7 +2,8 @@
 // over all pairs written here. The ordered cell list (kernels/pair_cells.hpp: directions, vector
 // values, Dowd, subsampling, weighted metrics, more than 3 axes) visits the same pairs in the same
 // order: bit for bit. The sorted columns (kernels/pair_columns.hpp: Euclidean, 1-3 axes, one
-// component, Matheron or Cressie-Hawkins, every pair) visit each pair in range once in another
+// component, Matheron or Cressie-Hawkins, every pair or a direction cone that does not depend on
+// the pair's orientation) visit each pair in range once in another
 // order: pair counts exactly, sums to the rounding of a different summation order (see
 // order_tolerance). Small simulated data: uniform random locations, part of them on a lattice so
 // that lags equal the cutoff and the bin edges, and points land on cell boundaries; duplicates
@@ -10,6 +11,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
+#include <numbers>
 #include <tuple>
 #include <random>
 #include <string>
@@ -85,8 +88,10 @@ struct BruteForce {
   std::vector<double> lag_mean, gamma;
 };
 
+// `keep` (optional): whether the pair with separation s = x_i - x_j (x.cols() entries) counts.
 BruteForce brute_force(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const std::vector<double>& e,
-                       bool gstat, const std::vector<double>& weights = {}) {
+                       bool gstat, const std::vector<double>& weights = {},
+                       const std::function<bool(const double*)>& keep = {}) {
   const std::size_t bins = e.size() - 1;
   BruteForce r{std::vector<std::uint64_t>(bins, 0), std::vector<double>(bins, 0.0),
                std::vector<double>(bins, 0.0)};
@@ -98,6 +103,11 @@ BruteForce brute_force(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const
         s += weights.empty() ? d * d : weights[static_cast<std::size_t>(a)] * d * d;
       }
       const double h = std::sqrt(s);
+      if (keep) {
+        double sep[64];
+        for (Eigen::Index a = 0; a < x.cols(); ++a) sep[a] = x(i, a) - x(j, a);
+        if (!keep(sep)) continue;
+      }
       for (std::size_t k = 0; k < bins; ++k) {
         const bool in = gstat ? (k == 0 ? h >= e[0] && h <= e[1] : h > e[k] && h <= e[k + 1])
                               : h >= e[k] && h < e[k + 1];
@@ -162,10 +172,44 @@ void expect_equal_to_rounding(const EmpiricalVariogram& a, const EmpiricalVariog
 }
 
 // Whether empirical_variogram takes the sorted columns for these inputs (when a cell list is
-// forced): the fast path's conditions, documented in empirical_variogram.hpp.
+// forced): the fast path's conditions, documented in empirical_variogram.hpp. Every direction
+// but gstat's dip test with a nonzero dip (which depends on the pair's orientation).
 bool takes_columns(int dimension, int components, const EmpiricalVariogramOptions& o) {
-  return dimension <= 3 && components == 1 && o.direction.is_all() && o.pair_fraction == 1.0 &&
+  const VariogramDirection& d = o.direction;
+  const bool oriented = d.kind() == VariogramDirection::Kind::Gstat && d.tol_ver_deg() < 90.0 &&
+                        d.beta_deg() != 0.0 && dimension == 3;
+  return dimension <= 3 && components == 1 && !oriented && o.pair_fraction == 1.0 &&
          o.estimator != VariogramEstimator::Dowd;
+}
+
+// The direction rule of docs/geostatistics.md ("Directional variograms") restated for one pair
+// s = x_i - x_j as the library decides it in floating point: squared cosines against the squared
+// cosine of the tolerance, no test at 90 degrees or more. On a lattice many pairs lie exactly on
+// a tolerance boundary (45 degrees); rounding then decides, and every pair loop must decide alike.
+bool in_cone(const VariogramDirection& d, const double* s, int dimension) {
+  constexpr double kRad = std::numbers::pi / 180.0;
+  if (d.kind() == VariogramDirection::Kind::Gstat) {
+    const double norm2 = s[0] * s[0] + s[1] * s[1];
+    if (d.tol_hor_deg() < 90.0) {
+      const double dot = s[0] * std::sin(d.alpha_deg() * kRad) + s[1] * std::cos(d.alpha_deg() * kRad);
+      const double c = std::cos(d.tol_hor_deg() * kRad);
+      if (!(dot * dot >= c * c * norm2)) return false;
+    }
+    if (d.tol_ver_deg() < 90.0 && dimension == 3) {
+      const double v = std::sqrt(norm2) * std::cos(d.beta_deg() * kRad) + s[2] * std::sin(d.beta_deg() * kRad);
+      const double c = std::cos(d.tol_ver_deg() * kRad);
+      if (!(v * v >= c * c * (norm2 + s[2] * s[2]))) return false;
+    }
+    return true;
+  }
+  if (d.kind() == VariogramDirection::Kind::All || d.tol_deg() >= 90.0) return true;
+  double dot = 0.0, norm2 = 0.0;
+  for (int a = 0; a < dimension; ++a) {
+    dot += s[a] * d.unit()[static_cast<std::size_t>(a)];
+    norm2 += s[a] * s[a];
+  }
+  const double c = std::cos(d.tol_deg() * kRad);
+  return dot * dot >= c * c * norm2;
 }
 
 // Bit for bit where the ordered cell list runs, to rounding where the sorted columns do.
@@ -254,6 +298,67 @@ TEST(VariogramCellList, EqualsAllPairsForDirectionsVectorValuesEstimatorsAndSubs
   }
 }
 
+// Directional variograms on the sorted columns (issue 36): on integer lattices in 2-D and 3-D,
+// where pairs lie exactly on 45-degree boundaries and on the axes, the same pairs as the all-pairs
+// loop and as the rule restated here (counts exactly, sums to rounding); gstat's dip test with a
+// nonzero dip keeps the ordered cell list (bit for bit). A tolerance of 90 degrees keeps every
+// pair, the ones at right angles included.
+TEST(VariogramCellList, DirectionsOnTheSortedColumnsKeepThePairsOnTheToleranceBoundaryAlike) {
+  struct Case {
+    int dimension;
+    VariogramDirection direction;
+  };
+  const std::vector<Case> cases = {
+      {2, VariogramDirection::gstat(0.0, 45.0)},    {2, VariogramDirection::gstat(45.0, 45.0)},
+      {2, VariogramDirection::gstat(0.0, 0.0)},    {2, VariogramDirection::gstat(90.0, 22.5)},
+      {2, VariogramDirection::gstat(135.0, 22.5)},  {2, VariogramDirection::gstat(30.0, 90.0)},
+      {2, VariogramDirection::along({1.0, 1.0}, 45.0)}, {2, VariogramDirection::axis(0, 2, 45.0)},
+      {2, VariogramDirection::along({1.0, 0.0}, 90.0)}, {3, VariogramDirection::gstat(0.0, 45.0, 0.0, 45.0)},
+      {3, VariogramDirection::gstat(90.0, 90.0, 0.0, 45.0)}, {3, VariogramDirection::axis(2, 3, 45.0)},
+      {3, VariogramDirection::along({1.0, 1.0, 1.0}, 30.0)}, {3, VariogramDirection::gstat(45.0, 45.0, 30.0, 20.0)},
+  };
+  // SIMULATED values on a 24 x 24 (2-D) or 10 x 10 x 6 (3-D) integer lattice, cutoff 5.
+  auto lattice = [](int dimension) {
+    const int nx = dimension == 2 ? 24 : 10, ny = nx, nz = dimension == 2 ? 1 : 6;
+    Eigen::MatrixXd x(nx * ny * nz, dimension);
+    Eigen::Index r = 0;
+    for (int k = 0; k < nz; ++k)
+      for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i, ++r) {
+          x(r, 0) = i;
+          x(r, 1) = j;
+          if (dimension == 3) x(r, 2) = k;
+        }
+    return x;
+  };
+  const LagBins bins = LagBins::uniform(0.0, 5.0, 1.0);
+  for (const Case& c : cases) {
+    SCOPED_TRACE("D=" + std::to_string(c.dimension) + " " + c.direction.to_string());
+    const Eigen::MatrixXd x = lattice(c.dimension);
+    const Eigen::MatrixXd z = simulated_values(static_cast<std::size_t>(x.rows()), 1, 71);
+    EmpiricalVariogramOptions o;
+    o.convention = BinConvention::Gstat;  // lags equal to the edges (1, 2, ..., 5) count
+    o.direction = c.direction;
+    const EmpiricalVariogram fast = run(x, z, bins, o, PairSearch::CellList);
+    expect_as_all_pairs(fast, run(x, z, bins, o, PairSearch::AllPairs), takes_columns(c.dimension, 1, o));
+    const BruteForce brute = brute_force(x, z, bins.edges(), true, {}, [&](const double* s) {
+      return in_cone(c.direction, s, c.dimension);
+    });
+    expect_matches_brute_force(fast, brute);
+    std::uint64_t kept = 0, omni = 0;
+    for (const auto& b : fast.bins) kept += b.pairs;
+    EmpiricalVariogramOptions every = o;
+    every.direction = VariogramDirection();
+    for (const auto& b : run(x, z, bins, every, PairSearch::AllPairs).bins) omni += b.pairs;
+    EXPECT_GT(kept, 0u);
+    const bool everything = c.direction.kind() == VariogramDirection::Kind::Gstat
+                                ? c.direction.tol_hor_deg() >= 90.0 && c.direction.tol_ver_deg() >= 90.0
+                                : c.direction.tol_deg() >= 90.0;
+    if (everything) EXPECT_EQ(kept, omni);
+    else EXPECT_LT(kept, omni);
+  }
+}
+
 TEST(VariogramCellList, WeightedMetricEqualsAllPairsAndBruteForceIncludingAZeroWeight) {
   const std::size_t n = 400;
   const Eigen::MatrixXd x = simulated_locations(n, 3, 0.05, 31);
@@ -316,35 +421,46 @@ TEST(VariogramCellList, SortedColumnsAvx512KernelEqualsPortableKernelBitForBit) 
     const LagBins bins = LagBins::uniform(0.0, 0.15, 0.01);
     detail::VariogramColumns columns;
     ASSERT_TRUE(detail::build_variogram_columns(axis_major.data(), z.data(), n, dimension, 0.15, true, 1.0, columns));
-    for (bool gstat : {false, true})
-      for (auto statistic : {kernels::PairStatistic::SquaredDifference, kernels::PairStatistic::RootAbsDifference}) {
-        SCOPED_TRACE("D=" + std::to_string(dimension) + (gstat ? " gstat" : " paper"));
-        EmpiricalVariogramOptions o;
-        o.convention = gstat ? BinConvention::Gstat : BinConvention::HalfOpen;
-        const kernels::BinLayout layout = detail::variogram_bin_layout(bins, o);
-        const std::size_t B = bins.size() + 1;
-        auto sums = [&](kernels::KernelIsa isa, std::size_t chunks) {
-          std::vector<std::uint64_t> count(B, 0);
-          std::vector<double> lag(B, 0.0), stat(B, 0.0);
-          alignas(64) static double slots[kernels::column_slot_doubles(64)];
-          for (std::size_t c = 0; c < chunks; ++c)
-            detail::run_column_chunk(isa, columns.list, layout, statistic, n * c / chunks, n * (c + 1) / chunks,
-                                     slots, kernels::PairSums{count.data(), lag.data(), stat.data()});
-          std::uint64_t total = 0;
-          for (std::size_t k = 0; k < bins.size(); ++k) total += count[k];
-          EXPECT_GT(total, 0u);
-          return std::make_tuple(count, lag, stat);
-        };
-        for (std::size_t chunks : {std::size_t{1}, std::size_t{7}}) {
-          const auto [c0, l0, s0] = sums(kernels::KernelIsa::Baseline, chunks);
-          const auto [c1, l1, s1] = sums(kernels::KernelIsa::Avx512, chunks);
-          for (std::size_t k = 0; k < B; ++k) {
-            EXPECT_EQ(c0[k], c1[k]);
-            EXPECT_TRUE(same_bits(l0[k], l1[k])) << l0[k] << " vs " << l1[k];
-            EXPECT_TRUE(same_bits(s0[k], s1[k])) << s0[k] << " vs " << s1[k];
+    // Every direction, and a direction cone on the sorted coordinates (gstat's in 2-D and 3-D, a
+    // vector's in any dimension).
+    std::vector<VariogramDirection> directions{VariogramDirection(), VariogramDirection::axis(0, dimension, 40.0)};
+    if (dimension == 2) directions.push_back(VariogramDirection::gstat(30.0, 20.0));
+    if (dimension == 3) directions.push_back(VariogramDirection::gstat(30.0, 20.0, 0.0, 30.0));
+    std::vector<kernels::DirectionCone> cones;
+    for (const VariogramDirection& d : directions)
+      cones.push_back(detail::variogram_direction_cone(d, columns.coordinates.data(), n, dimension));
+    for (std::size_t cone = 0; cone < cones.size(); ++cone) {
+      for (bool gstat : {false, true})
+        for (auto statistic : {kernels::PairStatistic::SquaredDifference, kernels::PairStatistic::RootAbsDifference}) {
+          SCOPED_TRACE("D=" + std::to_string(dimension) + (gstat ? " gstat " : " paper ") + directions[cone].to_string());
+          columns.list.cone = directions[cone].is_all() ? nullptr : &cones[cone];
+          EmpiricalVariogramOptions o;
+          o.convention = gstat ? BinConvention::Gstat : BinConvention::HalfOpen;
+          const kernels::BinLayout layout = detail::variogram_bin_layout(bins, o);
+          const std::size_t B = bins.size() + 1;
+          auto sums = [&](kernels::KernelIsa isa, std::size_t chunks) {
+            std::vector<std::uint64_t> count(B, 0);
+            std::vector<double> lag(B, 0.0), stat(B, 0.0);
+            alignas(64) static double slots[kernels::column_slot_doubles(64)];
+            for (std::size_t c = 0; c < chunks; ++c)
+              detail::run_column_chunk(isa, columns.list, layout, statistic, n * c / chunks, n * (c + 1) / chunks,
+                                       slots, kernels::PairSums{count.data(), lag.data(), stat.data()});
+            std::uint64_t total = 0;
+            for (std::size_t k = 0; k < bins.size(); ++k) total += count[k];
+            EXPECT_GT(total, 0u);
+            return std::make_tuple(count, lag, stat);
+          };
+          for (std::size_t chunks : {std::size_t{1}, std::size_t{7}}) {
+            const auto [c0, l0, s0] = sums(kernels::KernelIsa::Baseline, chunks);
+            const auto [c1, l1, s1] = sums(kernels::KernelIsa::Avx512, chunks);
+            for (std::size_t k = 0; k < B; ++k) {
+              EXPECT_EQ(c0[k], c1[k]);
+              EXPECT_TRUE(same_bits(l0[k], l1[k])) << l0[k] << " vs " << l1[k];
+              EXPECT_TRUE(same_bits(s0[k], s1[k])) << s0[k] << " vs " << s1[k];
+            }
           }
         }
-      }
+    }
   }
 }
 

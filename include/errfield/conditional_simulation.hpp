@@ -26,7 +26,7 @@
 ///    (in the model's metric: anisotropy applied). O(M k^3) for k neighbours. Exact when k covers
 ///    every earlier location; with a few tens of neighbours the screening effect makes it close
 ///    for the usual models (measured: ConditionalSimulationStudy, docs/kriging.md). Draws are grouped: one
-///    path (and one set of neighbour weights) serves `draws_per_path` draws.
+///    path (and one set of neighbour weights) serves `draws_per_path` draws (default 100).
 ///
 /// Nugget: with NuggetTreatment::MicroScale it is part of the simulated field (independent between
 /// distinct locations, the same at one location); with MeasurementError the field is the signal
@@ -66,7 +66,10 @@ struct SimulationOptions {
   /// every model tried was within 1 % of the exact draws.
   std::size_t neighbours = 60;
   /// Sequential: draws that share one random path (and its neighbour weights). 1 = a path per draw.
-  std::size_t draws_per_path = 10;
+  /// 100 (10 before issue 36), as gstat, whose draws all share one path: the path's neighbour
+  /// search and solves are most of the cost, so 100 draws cost about one path. Each draw has the
+  /// same distribution whatever this is; draws on one path share its (small) approximation error.
+  std::size_t draws_per_path = 100;
   /// Bytes the draws and the kriging of them may take (the (samples + targets) x draws x components
   /// doubles, three times over); beyond it ResourceError before any work.
   std::size_t memory_budget_bytes = std::size_t{4} << 30;
@@ -83,7 +86,7 @@ struct SimulationResult {
   std::vector<double> variance;        ///< the kriging variance, one per target
   std::vector<std::vector<V>> draws;   ///< draws[k][t]: realisation k at target t (NaN where not kriged)
   std::size_t failed_targets = 0;
-  std::string method;                  ///< "cholesky" or "sequential (60 neighbours, 10 draws per random path, ...)"
+  std::string method;                  ///< "cholesky" or "sequential (60 neighbours, 100 draws per random path, ...)"
   bool usable() const { return status == KrigingStatus::Ok || status == KrigingStatus::IllConditioned; }
 };
 

@@ -22,8 +22,8 @@
 /// (the cutoff) is short against the extent of the locations, only the pairs that can lie within
 /// it are enumerated (options.pair_search; Euclidean, joint-space and weighted Euclidean metrics;
 /// other metrics always use all pairs): in the common case - Euclidean or joint-space lags in 1 to
-/// 3 dimensions, one value component, Matheron or Cressie-Hawkins, every pair, every direction,
-/// equally spaced bins (at most 1024) - by sorted columns (kernels/pair_columns.hpp),
+/// 3 dimensions, one value component, Matheron or Cressie-Hawkins, every pair, any direction but
+/// a tilted dip test, equally spaced bins (at most 1024) - by sorted columns (pair_columns.hpp),
 /// each pair in range once in an order of its own: the same pairs in every bin (counts exactly),
 /// sums equal to the all-pairs ones up to the rounding of the summation order (a relative
 /// ~m 2^-53 for m pairs), bit-identical for any thread count; otherwise by a cell list

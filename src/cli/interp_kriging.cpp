@@ -40,13 +40,15 @@ struct KrigingCliOptions {
   std::uint64_t seed = 1;
   std::string simulation_method = "auto";
   std::size_t simulation_neighbours = 60;
+  std::size_t simulation_draws_per_path = SimulationOptions{}.draws_per_path;
   // interpolate only: block kriging
   std::vector<double> block;  // empty = point kriging
   int block_points = 4;
   std::string block_rule = "gauss";
 };
 KrigingCliOptions cli_options;
-// interpolate's --seed, --simulation-method, --simulation-neighbours: refused without --simulations.
+// interpolate's --seed, --simulation-method, --simulation-neighbours, --simulation-draws-per-path: refused
+// without --simulations.
 // Kept apart from cli_options, which cv's registration resets after interpolate's.
 std::vector<CLI::Option*> simulation_only_options;
 std::vector<CLI::Option*> block_only_options;  // --block-points: refused without --block
@@ -140,7 +142,13 @@ void add_kriging_options(CLI::App& cmd) {
                  "(default 60: with 30 the draws of a gau model were 8 % too variable, docs/kriging.md)")
       ->check(CLI::Range(std::size_t{1}, std::size_t{1000}))
       ->group(group);
-  simulation_only_options = {seed, method, neighbours};
+  auto* per_path = cmd.add_option("--simulation-draws-per-path", o.simulation_draws_per_path,
+                 "--simulations with the sequential method: draws that share one random path and its neighbour "
+                 "weights (default 100, as gstat, whose draws all share one path: 100 draws cost one path; 1 = a "
+                 "path per draw, each draw's own approximation error, 100 times the cost)")
+      ->check(CLI::Range(std::size_t{1}, std::size_t{100000}))
+      ->group(group);
+  simulation_only_options = {seed, method, neighbours, per_path};
   block_only_options = {block_points, block_rule};
 }
 
@@ -368,6 +376,7 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
       so.seed = cli_options.seed;
       so.method = simulation_method;
       so.neighbours = cli_options.simulation_neighbours;
+      so.draws_per_path = cli_options.simulation_draws_per_path;
       const Eigen::MatrixXd target_covariates =
           s.options.covariates.empty() ? Eigen::MatrixXd() : r.targets->numeric_columns(s.options.covariates);
       const auto sim = simulate_conditional<Eigen::VectorXd, V>(points, values, s.sample_covariates, targets,

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <random>
@@ -141,21 +142,29 @@ std::vector<PathStep> path_steps(const Eigen::MatrixXd& points, const std::vecto
     if (tree_size > 0) tree = std::make_unique<PointTree>(tree_points);
 #pragma omp parallel
     {
+      // One workspace per thread: no allocation per step once the sizes settle.
       std::vector<std::size_t> index(neighbours);
       std::vector<double> d2(neighbours);
       std::vector<std::pair<double, std::size_t>> candidates;  // (squared distance, path position)
+      Eigen::MatrixXd a;
+      Eigen::VectorXd b, w;
+      Eigen::LLT<Eigen::MatrixXd> llt;
 #pragma omp for schedule(dynamic, 16)
       for (std::size_t t = begin; t < end; ++t) {
         PathStep& s = steps[t];
         const double* here = points.col(path[t]).data();
         candidates.clear();
+        // A place scanned beyond the tree's k-th nearest cannot be among the k nearest (on a tie
+        // the tree's, earlier on the path, comes first): only closer ones are kept for the sort.
+        double worst = std::numeric_limits<double>::infinity();
         if (tree) {
           const std::size_t found = tree->nearest(here, std::min(neighbours, tree_size), index.data(), d2.data());
           for (std::size_t j = 0; j < found; ++j) candidates.emplace_back(d2[j], index[j]);
+          if (found == neighbours) worst = d2[found - 1];
         }
         for (std::size_t j = tree_size; j < t; ++j) {
           const double h = kernels::column_distance(points.col(path[j]).data(), here, d);
-          candidates.emplace_back(h * h, j);
+          if (h * h < worst) candidates.emplace_back(h * h, j);
         }
         const std::size_t n = std::min(neighbours, candidates.size());
         std::partial_sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(n), candidates.end());
@@ -165,8 +174,9 @@ std::vector<PathStep> path_steps(const Eigen::MatrixXd& points, const std::vecto
           s.sd = std::sqrt(zero_lag);
           continue;
         }
-        Eigen::MatrixXd a(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
-        Eigen::VectorXd b(static_cast<Eigen::Index>(n));
+        const auto ni = static_cast<Eigen::Index>(n);
+        a.resize(ni, ni);
+        b.resize(ni);
         for (std::size_t i = 0; i < n; ++i) {
           const double* pi = points.col(s.neighbour[i]).data();
           b[static_cast<Eigen::Index>(i)] = kernel(kernels::column_distance(pi, here, d), zero_lag);
@@ -174,8 +184,15 @@ std::vector<PathStep> path_steps(const Eigen::MatrixXd& points, const std::vecto
             a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = a(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(i)) =
                 kernel(kernels::column_distance(pi, points.col(s.neighbour[j]).data(), d), zero_lag);
         }
-        const Eigen::LDLT<Eigen::MatrixXd> ldlt(a);
-        const Eigen::VectorXd w = ldlt.solve(b);
+        // Cholesky (cheaper than the pivoted LDL', which it replaced); the pivoted LDL' when the matrix is
+        // only semi-definite (coincident-looking neighbours of a smooth model without nugget).
+        llt.compute(a);
+        if (llt.info() == Eigen::Success) {
+          w = llt.solve(b);
+        } else {
+          const Eigen::LDLT<Eigen::MatrixXd> ldlt(a);
+          w = ldlt.solve(b);
+        }
         s.weight.assign(w.data(), w.data() + w.size());
         s.sd = std::sqrt(std::max(zero_lag - b.dot(w), 0.0));
       }
@@ -198,14 +215,19 @@ Eigen::MatrixXd sequential_draws(const Eigen::MatrixXd& points, const kernels::C
     for (std::size_t i = path.size(); i > 1; --i)  // Fisher-Yates with the generator's own integers
       std::swap(path[i - 1], path[std::uniform_int_distribution<std::size_t>(0, i - 1)(rng)]);
     const std::vector<PathStep> steps = path_steps(points, path, kernel, zero_lag, options.neighbours);
+    // The path's draws place by place: a column per place, the draws down it, so that each
+    // neighbour's contribution is one contiguous update (the same sums, in the same order, as
+    // draw by draw).
+    Eigen::MatrixXd block(static_cast<Eigen::Index>(width), u);
+    Eigen::VectorXd mean(static_cast<Eigen::Index>(width));
     for (std::size_t t = 0; t < path.size(); ++t) {
       const PathStep& s = steps[t];
-      for (std::size_t c = first; c < first + width; ++c) {
-        double mean = 0.0;
-        for (std::size_t j = 0; j < s.neighbour.size(); ++j) mean += s.weight[j] * y(s.neighbour[j], static_cast<Eigen::Index>(c));
-        y(path[t], static_cast<Eigen::Index>(c)) = mean + s.sd * normal(rng);
-      }
+      mean.setZero();
+      for (std::size_t j = 0; j < s.neighbour.size(); ++j) mean += s.weight[j] * block.col(s.neighbour[j]);
+      auto here = block.col(path[t]);
+      for (Eigen::Index c = 0; c < here.size(); ++c) here[c] = mean[c] + s.sd * normal(rng);
     }
+    y.middleCols(static_cast<Eigen::Index>(first), static_cast<Eigen::Index>(width)) = block.transpose();
   }
   return y;
 }
@@ -252,8 +274,14 @@ Eigen::MatrixXd simulate_unconditional_embedded(const Eigen::MatrixXd& places, c
              " distinct locations)";
     y = sequential_draws(distinct.points, kernel, zero_lag_variance, columns, options);
   }
+  // Every place distinct (the usual case): y is the answer. Otherwise a gather, column by column
+  // (row by row strides across the whole matrix at every element).
+  bool identity = static_cast<Eigen::Index>(u) == places.cols();
+  for (std::size_t j = 0; j < distinct.of.size() && identity; ++j) identity = distinct.of[j] == static_cast<Eigen::Index>(j);
+  if (identity) return y;
   Eigen::MatrixXd out(places.cols(), static_cast<Eigen::Index>(columns));
-  for (Eigen::Index j = 0; j < places.cols(); ++j) out.row(j) = y.row(distinct.of[static_cast<std::size_t>(j)]);
+  for (Eigen::Index c = 0; c < out.cols(); ++c)
+    for (Eigen::Index j = 0; j < places.cols(); ++j) out(j, c) = y(distinct.of[static_cast<std::size_t>(j)], c);
   return out;
 }
 

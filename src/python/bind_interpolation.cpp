@@ -581,7 +581,7 @@ void bind_interpolation(py::module_& m) {
            "Cross-validation as `errfield cv --method kriging`: folds='loo' (closed form for dense, one local solve\n"
            "per sample for local; sparse uses folds) or k >= 2 folds shuffled by seed. Returns CrossValidation.")
       .def("simulate", &PyKriging::simulate, py::arg("targets"), py::arg("n"), py::kw_only(), py::arg("seed") = 1,
-           py::arg("method") = "auto", py::arg("neighbours") = 60, py::arg("draws_per_path") = 10,
+           py::arg("method") = "auto", py::arg("neighbours") = 60, py::arg("draws_per_path") = 100,
            py::arg("covariates") = py::none(),
            "n conditional Gaussian realisations at targets (M, D), as `errfield interpolate --simulations n --seed S`:\n"
            "shape (n, M) for scalar values, (n, M, K) for vectors; same seed, same draws for any thread count.\n"

@@ -214,7 +214,7 @@ class Kriging:
         seed: int = 1,
         method: Literal["auto", "cholesky", "sequential"] = "auto",
         neighbours: int = 60,
-        draws_per_path: int = 10,
+        draws_per_path: int = 100,
         covariates: ArrayLike | None = None,
     ) -> F64: ...
     @property

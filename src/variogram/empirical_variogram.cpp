@@ -210,7 +210,9 @@ kernels::DirectionCone variogram_direction_cone(const VariogramDirection& direct
     c.cos_tol_ver = std::cos(direction.tol_ver_deg() * kRadPerDeg);
   } else {
     c.axis = direction.unit().data();  // owned by the options, which outlive the pair loop
-    c.cos_tol = std::cos(direction.tol_deg() * kRadPerDeg);
+    // 90 degrees or more: every pair (cos 90 deg rounds to 6e-17, which would drop the pairs
+    // exactly at right angles to u).
+    c.cos_tol = direction.tol_deg() < 90.0 ? std::cos(direction.tol_deg() * kRadPerDeg) : -1.0;
   }
   return c;
 }

@@ -191,7 +191,8 @@ TEST_F(KrigingCli, NeighbourMetricMattersOnlyWithAnisotropy) {
 TEST_F(KrigingCli, SimulationsWriteTheLibrarysDraws) {
   // --simulations N writes sim1..simN after pred and var: the library's draws for the same seed,
   // and pred/var the plain kriging's.
-  for (const std::string extra : {"", " --neighbors 25 --simulation-method sequential --simulation-neighbours 12"}) {
+  const std::string sequential = " --neighbors 25 --simulation-method sequential --simulation-neighbours 12";
+  for (const std::string extra : {std::string(), sequential, sequential + " --simulation-draws-per-path 1"}) {
     const auto r = run("interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("T.csv") +
                            " --coords x,y,z --value v --model \"" + kModel + "\" --simulations 3 --seed 5" + extra +
                            " --out " + path("P.csv"));
@@ -207,6 +208,7 @@ TEST_F(KrigingCli, SimulationsWriteTheLibrarysDraws) {
       opt.neighbors = 25;
       so.method = UnconditionalMethod::Sequential;
       so.neighbours = 12;
+      if (extra != sequential) so.draws_per_path = 1;  // a path per draw: other draws than the default's
     }
     const auto sim = simulate_conditional<P3, double>(pts_, vals_, targets_, VariogramModel::parse(kModel), opt, so);
     const auto pred = Kriging<P3, double>(pts_, vals_, VariogramModel::parse(kModel), opt).predict(targets_);
@@ -228,6 +230,9 @@ TEST_F(KrigingCli, SimulationsWriteTheLibrarysDraws) {
   EXPECT_THAT(r.output(), HasSubstr("--simulation-method"));
   r = run(base + " --simulations 0");
   EXPECT_NE(r.exit_code, 0);
+  r = run(base + " --simulation-draws-per-path 5");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output(), HasSubstr("--simulation-draws-per-path"));
   EXPECT_FALSE(fs::exists(path("Q.csv")));
 }
 

@@ -9,6 +9,7 @@
 #   <out_prefix>_2d_default.csv : x,y; alpha = 0,45,90,135 with gstat's default tol.hor (22.5)
 #   <out_prefix>_2d_narrow.csv  : x,y; alpha = 30 and 200, tol.hor = 10
 #   <out_prefix>_3d_dip.csv     : x,y,z; alpha = 45, tol.hor = 30, beta = 30 and -20, tol.ver = 20
+#   <out_prefix>_3d_flat.csv    : x,y,z; alpha = 45, tol.hor = 30, beta = 0, tol.ver = 20
 suppressPackageStartupMessages({ library(gstat); library(sp) })
 args <- commandArgs(trailingOnly = TRUE)
 if (length(args) != 3) stop("usage: gstat_direction.R data.csv b1,b2,... out_prefix")
@@ -26,3 +27,4 @@ d3 <- raw; coordinates(d3) <- ~x + y + z
 out(variogram(v ~ 1, d2, boundaries = b, alpha = c(0, 45, 90, 135)), "2d_default")
 out(variogram(v ~ 1, d2, boundaries = b, alpha = c(30, 200), tol.hor = 10), "2d_narrow")
 out(variogram(v ~ 1, d3, boundaries = b, alpha = 45, tol.hor = 30, beta = c(30, -20), tol.ver = 20), "3d_dip")
+out(variogram(v ~ 1, d3, boundaries = b, alpha = 45, tol.hor = 30, beta = 0, tol.ver = 20), "3d_flat")

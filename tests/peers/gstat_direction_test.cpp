@@ -1,7 +1,9 @@
 // Peer cross-check against R gstat (tests/peers/gstat_direction.R, run at test time on data
 // generated here): directional empirical variograms, gstat's alpha/tol.hor in 2-D (its default
 // tolerance 90/length(alpha) and a narrow one) and alpha/beta/tol.ver in 3-D, with the same
-// boundaries (gstat's bin convention). Pair counts equal, mean lag and gamma to 1e-12 relative
+// boundaries (gstat's bin convention), with the automatic pair search (all pairs, for 300 points)
+// and a forced one (the sorted columns; the ordered cell list for a dip test with a nonzero dip).
+// Pair counts equal, mean lag and gamma to 1e-12 relative
 // (the sums differ only in their order). The coordinates are random reals, so no pair lies within
 // rounding of a tolerance boundary, where gstat (pi = 3.14159265359) and errfield (std::numbers::pi)
 // may round differently (docs/geostatistics.md, "Directional variograms"). Skipped when Rscript or
@@ -54,7 +56,7 @@ class GstatDirectionPeer : public ::testing::Test {
     }
     out.close();
     const std::string cmd = "Rscript " + std::string(ERRFIELD_SOURCE_DIR) + "/tests/peers/gstat_direction.R " +
-                            (dir_ / "data.csv").string() + " 10,20,40,60,80 " + (dir_ / "gstat").string() +
+                            (dir_ / "data.csv").string() + " 16,32,48,64,80 " + (dir_ / "gstat").string() +
                             " 2>" + (dir_ / "r.log").string();
     ran_ = std::system(cmd.c_str()) == 0;
   }
@@ -75,26 +77,31 @@ class GstatDirectionPeer : public ::testing::Test {
     const auto gamma = g.numeric_column("gamma");
     const auto hor = g.numeric_column("dir.hor");
     const auto ver = g.numeric_column("dir.ver");
-    std::size_t row = 0;
-    for (const VariogramDirection& d : directions) {
-      SCOPED_TRACE(file + " " + d.to_string());
-      EmpiricalVariogramOptions o;
-      o.convention = BinConvention::Gstat;
-      o.direction = d;
-      const auto ours = empirical_variogram(x, v_, LagBins::from_edges({0, 10, 20, 40, 60, 80}), o);
-      for (const auto& b : ours.bins) {
-        if (b.pairs == 0) continue;
-        ASSERT_LT(row, g.row_count());
-        SCOPED_TRACE("bin [" + format_number(b.lag_lo) + ", " + format_number(b.lag_hi) + "]");
-        EXPECT_EQ(hor[row], d.alpha_deg());
-        EXPECT_EQ(ver[row], d.beta_deg());
-        EXPECT_EQ(static_cast<double>(b.pairs), np[row]);
-        EXPECT_NEAR(b.lag_mean, dist[row], 1e-12 * dist[row]);
-        EXPECT_NEAR(b.gamma, gamma[row], 1e-12 * gamma[row]);
-        ++row;
-      }
+    // Automatic (all pairs for 300 points) and a forced pair search (the sorted columns, or for a
+    // dip test with a nonzero dip the ordered cell list): the same rows.
+    for (PairSearch search : {PairSearch::Automatic, PairSearch::CellList}) {
+      std::size_t row = 0;
+      for (const VariogramDirection& d : directions) {
+        SCOPED_TRACE(file + " " + d.to_string() + (search == PairSearch::CellList ? " forced pair search" : ""));
+        EmpiricalVariogramOptions o;
+        o.convention = BinConvention::Gstat;
+        o.direction = d;
+        o.pair_search = search;
+        const auto ours = empirical_variogram(x, v_, LagBins::uniform(0.0, 80.0, 16.0), o);
+        for (const auto& b : ours.bins) {
+          if (b.pairs == 0) continue;
+          ASSERT_LT(row, g.row_count());
+          SCOPED_TRACE("bin [" + format_number(b.lag_lo) + ", " + format_number(b.lag_hi) + "]");
+          EXPECT_EQ(hor[row], d.alpha_deg());
+          EXPECT_EQ(ver[row], d.beta_deg());
+          EXPECT_EQ(static_cast<double>(b.pairs), np[row]);
+          EXPECT_NEAR(b.lag_mean, dist[row], 1e-12 * dist[row]);
+          EXPECT_NEAR(b.gamma, gamma[row], 1e-12 * gamma[row]);
+          ++row;
+        }
     }
     EXPECT_EQ(row, g.row_count());
+    }
   }
 
   static inline fs::path dir_;
@@ -111,6 +118,10 @@ TEST_F(GstatDirectionPeer, HorizontalDirectionsWithGstatsDefaultTolerance) {
 TEST_F(GstatDirectionPeer, NarrowToleranceAndAnAlphaBeyond180) {
   compare("gstat_2d_narrow.csv", x_.leftCols(2),
           {VariogramDirection::gstat(30.0, 10.0), VariogramDirection::gstat(200.0, 10.0)});
+}
+
+TEST_F(GstatDirectionPeer, HorizontalDipIn3D) {
+  compare("gstat_3d_flat.csv", x_, {VariogramDirection::gstat(45.0, 30.0, 0.0, 20.0)});
 }
 
 TEST_F(GstatDirectionPeer, DipIn3D) {

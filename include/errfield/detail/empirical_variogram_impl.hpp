@@ -401,20 +401,30 @@ EmpiricalVariogram empirical_variogram(std::span<const L> locations, const Eigen
     cone = detail::variogram_direction_cone(options.direction,
                                             soa.empty() ? cone_coordinates.data() : soa.data(), n, dim);
   }
-  const kernels::DirectionCone* cone_ptr = options.direction.is_all() ? nullptr : &cone;
+  // A cone of 90 degrees or more keeps every pair: the omnidirectional loops, same pairs.
+  const kernels::DirectionCone* cone_ptr =
+      options.direction.is_all() || !kernels::cone_selects(cone) ? nullptr : &cone;
   const detail::VariogramJob<L, M> job{locations.data(), &metric, soa.empty() ? nullptr : soa.data(),
                                        n, dim, z.data(), K, layout, options.seed, keep_below,
                                        kernels::best_kernel_isa(), cone_ptr};
   // Sorted columns for the common case (Euclidean, 1-3 axes, one component, Matheron or
-  // Cressie-Hawkins, every pair, every direction, equally spaced bins): each pair within the last
-  // edge once, in an order of its own (same pairs and bins, sums to rounding: docs/geostatistics.md).
+  // Cressie-Hawkins, every pair, every direction or a cone that does not depend on the pair's
+  // orientation, equally spaced bins): each pair within the last edge once, in an order of its
+  // own (same pairs and bins, sums to rounding: docs/geostatistics.md).
   detail::VariogramColumns columns;
+  kernels::DirectionCone column_cone;
   if (options.pair_search != PairSearch::AllPairs && !soa.empty() && dim >= 1 && dim <= 3 && K == 1 &&
-      !subsample && cone_ptr == nullptr && options.estimator != VariogramEstimator::Dowd &&
-      layout.uniform && bins.size() <= kernels::kSimdMaxBins)
-    detail::build_variogram_columns(soa.data(), z.data(), n, dim, bins.edges().back(),
-                                    options.pair_search == PairSearch::CellList,
-                                    detail::column_max_share(job.isa), columns);
+      !subsample && (cone_ptr == nullptr || kernels::cone_is_symmetric(cone)) &&
+      options.estimator != VariogramEstimator::Dowd && layout.uniform &&
+      bins.size() <= kernels::kSimdMaxBins &&
+      detail::build_variogram_columns(soa.data(), z.data(), n, dim, bins.edges().back(),
+                                      options.pair_search == PairSearch::CellList,
+                                      detail::column_max_share(job.isa), columns) &&
+      cone_ptr != nullptr) {
+    column_cone = cone;  // the same test on the sorted copy of the coordinates
+    column_cone.coordinates = columns.coordinates.data();
+    columns.list.cone = &column_cone;
+  }
   if (columns.built()) {
     // One workspace of slot copies per thread, 32-byte aligned, allocated before the region.
     const std::size_t slot_doubles = kernels::column_slot_doubles(bins.size()) + 4;
