@@ -159,7 +159,8 @@ RidgeFit ridge_by_gcv(const Eigen::MatrixXd& design, const Eigen::VectorXd& y) {
 /// Cholesky factorization of p x p per penalty.
 RidgeFit ridge_with_prior(const Eigen::MatrixXd& design, const Eigen::VectorXd& y, const Eigen::VectorXd& prior_sd) {
   RidgeFit out = ridge_by_gcv(design, y);
-  if (!std::isfinite(out.lambda) || prior_sd.size() != design.cols()) return out;
+  // No finite sd (the prior off, or only gravity sds without gravity terms): the plain ridge is the fit.
+  if (!std::isfinite(out.lambda) || prior_sd.size() != design.cols() || !prior_sd.array().isFinite().any()) return out;
   const Eigen::MatrixXd gram = design.transpose() * design;
   const Eigen::VectorXd fy = design.transpose() * y;
   const double yy = y.squaredNorm();
