@@ -90,8 +90,53 @@ std::vector<int> default_candidates(const MdhModel& model, bool with_base) {
   return c;
 }
 
+namespace {
+
+// The start of the further flange points, checked against the measurements that name them.
+Eigen::VectorXd flange_point_start(const std::vector<PositionMeasurement>& data,
+                                   const std::vector<Eigen::Vector3d>& start_mm) {
+  for (std::size_t i = 0; i < data.size(); ++i)
+    if (data[i].flange_point < 0 || data[i].flange_point > static_cast<int>(start_mm.size()))
+      throw ArgumentError("calibration: measurement " + std::to_string(i) + " reads flange point " +
+                          std::to_string(data[i].flange_point) + " but " + std::to_string(start_mm.size()) +
+                          " further point(s) were given (0 is the tool point)");
+  Eigen::VectorXd extra(3 * static_cast<Eigen::Index>(start_mm.size()));
+  for (std::size_t k = 0; k < start_mm.size(); ++k) {
+    if (!start_mm[k].allFinite())
+      throw ArgumentError("calibration: flange point " + std::to_string(k + 1) + " starts at a non-finite position");
+    extra.segment<3>(3 * static_cast<Eigen::Index>(k)) = start_mm[k];
+  }
+  return extra;
+}
+
+// The further points' coordinates go right after the tool translation (the front without one):
+// kept before the link parameters, as the tool's are, so the last link's offsets that only shift
+// every point together are the ones removed as redundant, never a point the data locate.
+std::vector<int> with_flange_points(std::vector<int> candidates, std::size_t points) {
+  auto at = candidates.begin();
+  for (auto it = candidates.begin(); it != candidates.end(); ++it)
+    if (*it >= param::kToolTranslation && *it < param::kToolTranslation + 3) at = it + 1;
+  std::vector<int> extra;
+  for (int k = 1; k <= static_cast<int>(points); ++k)
+    for (int c = 0; c < 3; ++c) extra.push_back(flange_point_candidate(k, c));
+  candidates.insert(at, extra.begin(), extra.end());
+  return candidates;
+}
+
+}  // namespace
+
 CalibrationResult register_tracker(const MdhModel& model, const std::vector<PositionMeasurement>& data,
                                    const CalibrationOptions& options) {
+  return register_tracker(model, data, {}, options);
+}
+
+CalibrationResult register_tracker(const MdhModel& model, const std::vector<PositionMeasurement>& all,
+                                   const std::vector<Eigen::Vector3d>& flange_points_start_mm,
+                                   const CalibrationOptions& options) {
+  const Eigen::VectorXd extra = flange_point_start(all, flange_points_start_mm);
+  std::vector<PositionMeasurement> data;  // the tool point's readings: the closed-form start
+  for (const PositionMeasurement& m : all)
+    if (m.flange_point == 0) data.push_back(m);
   if (data.size() < 3)  // fewer than the closed-form start needs; the solver's guard names the count for more
     throw InputError("calibration: tracker registration from " + std::to_string(data.size()) +
                      " measured position(s); need at least 4 (9 parameters: base 6, reflector offset 3)");
@@ -107,8 +152,9 @@ CalibrationResult register_tracker(const MdhModel& model, const std::vector<Posi
   std::vector<int> candidates;
   for (int k = 0; k < 6; ++k) candidates.push_back(param::kBaseTranslation + k);
   for (int k = 0; k < 3; ++k) candidates.push_back(param::kToolTranslation + k);
-  PositionProblem problem(data);
-  CalibrationResult r = detail::solve_calibration(problem, CalibrationState{start, Eigen::VectorXd()}, candidates, options);
+  PositionProblem problem(all);
+  CalibrationResult r = detail::solve_calibration(problem, CalibrationState{start, extra},
+                                                  with_flange_points(candidates, flange_points_start_mm.size()), options);
   // Report the base relative to the closed-form start? Users want the absolute transform; it is
   // in r.model.base(). The increments listed are relative to the closed-form start.
   return r;
@@ -116,9 +162,18 @@ CalibrationResult register_tracker(const MdhModel& model, const std::vector<Posi
 
 CalibrationResult calibrate_positions(const MdhModel& model, const std::vector<PositionMeasurement>& data,
                                       const CalibrationOptions& options) {
+  return calibrate_positions(model, data, {}, options);
+}
+
+
+CalibrationResult calibrate_positions(const MdhModel& model, const std::vector<PositionMeasurement>& data,
+                                      const std::vector<Eigen::Vector3d>& flange_points_start_mm,
+                                      const CalibrationOptions& options) {
+  const Eigen::VectorXd extra = flange_point_start(data, flange_points_start_mm);
   PositionProblem problem(data);
-  return detail::solve_calibration(problem, CalibrationState{model, Eigen::VectorXd()}, options.candidates.empty() ? default_candidates(model, true) : options.candidates,
-               options);
+  const std::vector<int> candidates = options.candidates.empty() ? default_candidates(model, true) : options.candidates;
+  return detail::solve_calibration(problem, CalibrationState{model, extra},
+                                   with_flange_points(candidates, flange_points_start_mm.size()), options);
 }
 
 Eigen::MatrixXd distance_identification_jacobian(const MdhModel& model, const std::vector<DistanceMeasurement>& data,
@@ -220,6 +275,16 @@ std::string CalibrationResult::report() const {
       else s << " (not identified, nominal)";
     }
     s << "   (nominal " << b.nominal_mm.x() << ", " << b.nominal_mm.y() << ", " << b.nominal_mm.z() << ")\n";
+  }
+  for (std::size_t k = 0; k < flange_points.size(); ++k) {
+    const FlangePointEstimate& b = flange_points[k];
+    s << "flange point " << k + 1 << " (flange frame, mm):";
+    for (int c = 0; c < 3; ++c) {
+      s << "  " << "xyz"[c] << " " << b.position_mm[c];
+      if (b.identified[c]) s << " +- " << b.standard_error_mm[c];
+      else s << " (not identified, start)";
+    }
+    s << "\n";
   }
   if (!removed.empty()) {
     s << "removed candidates (" << removed.size() << "):\n";

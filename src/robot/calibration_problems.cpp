@@ -21,8 +21,10 @@ std::size_t count_distinct(std::vector<Vector> v) {
 
 std::string candidate_name(int index) {
   if (index < param::kCount) return parameter_name(index);
-  const int e = index - param::kCount;
-  return "base point " + std::to_string(e / 3) + " " + "xyz"[e % 3];
+  const int e = extra_index(index);
+  const std::string what = index >= kFlangePointCandidateBase ? "flange point " + std::to_string(e / 3 + 1)
+                                                               : "base point " + std::to_string(e / 3);
+  return what + " " + "xyz"[e % 3];
 }
 
 bool candidate_is_angle(int index) { return index < param::kCount && parameter_is_angle(index); }
@@ -46,9 +48,20 @@ std::vector<JointVector> distinct_configurations(const std::vector<JointVector>&
 // ---- positions -----------------------------------------------------------------------------------
 
 std::size_t PositionProblem::distinct() const {
-  std::vector<JointVector> q;
-  for (const auto& d : data_) q.push_back(d.q_deg);
+  // A pose read at two points gives two independent readings: the pair (joints, point) counts.
+  std::vector<Eigen::Matrix<double, 7, 1>> q;
+  for (const auto& d : data_) {
+    Eigen::Matrix<double, 7, 1> v;
+    v << d.q_deg, static_cast<double>(d.flange_point);
+    q.push_back(v);
+  }
   return count_distinct(std::move(q));
+}
+
+int PositionProblem::flange_point_count() const {
+  int k = 0;
+  for (const auto& d : data_) k = std::max(k, d.flange_point);
+  return k;
 }
 
 void PositionProblem::evaluate(const CalibrationState& s, const std::vector<int>& active, Eigen::VectorXd& r,
@@ -59,11 +72,35 @@ void PositionProblem::evaluate(const CalibrationState& s, const std::vector<int>
   if (jac) jac->resize(3 * n, static_cast<Eigen::Index>(active.size()));
   for (Eigen::Index i = 0; i < n; ++i) {
     const auto& d = data_[static_cast<std::size_t>(i)];
-    r.segment<3>(3 * i) = d.measured_mm - forward_position(m, d.q_deg);
+    if (d.flange_point == 0) {
+      r.segment<3>(3 * i) = d.measured_mm - forward_position(m, d.q_deg);
+      if (jac) {
+        const IdentificationJacobian j = identification_jacobian(m, d.q_deg);
+        for (std::size_t c = 0; c < active.size(); ++c)
+          jac->block<3, 1>(3 * i, static_cast<Eigen::Index>(c)) =
+              active[c] < param::kCount ? Eigen::Vector3d(j.col(active[c])) : Eigen::Vector3d::Zero();
+      }
+      continue;
+    }
+    // Flange point k: the model with its tool translation at the point gives the same lever for
+    // every link parameter; the tool's own parameters belong to point 0 and move nothing here.
+    const int e = 3 * (d.flange_point - 1);
+    const Eigen::Vector3d at = s.extra.segment<3>(e);
+    Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
+    tool.translation() = at;
+    const MdhModel mk = m.with_tool(tool);
+    const Eigen::Isometry3d flange = forward_kinematics(m, d.q_deg, EndFrame::flange);
+    r.segment<3>(3 * i) = d.measured_mm - flange * at;
     if (jac) {
-      const IdentificationJacobian j = identification_jacobian(m, d.q_deg);
-      for (std::size_t c = 0; c < active.size(); ++c)
-        jac->block<3, 1>(3 * i, static_cast<Eigen::Index>(c)) = j.col(active[c]);
+      const IdentificationJacobian j = identification_jacobian(mk, d.q_deg);
+      for (std::size_t c = 0; c < active.size(); ++c) {
+        const int a = active[c];
+        Eigen::Vector3d col = Eigen::Vector3d::Zero();
+        if (a < param::kToolTranslation) col = j.col(a);
+        else if (a >= kFlangePointCandidateBase && extra_index(a) / 3 == e / 3)
+          col = flange.linear().col(extra_index(a) % 3);
+        jac->block<3, 1>(3 * i, static_cast<Eigen::Index>(c)) = col;
+      }
     }
   }
 }
@@ -71,7 +108,9 @@ void PositionProblem::evaluate(const CalibrationState& s, const std::vector<int>
 Eigen::MatrixXd PositionProblem::generic_jacobian(const CalibrationState& s, const std::vector<int>& candidates,
                                                   const std::vector<JointVector>& q) const {
   std::vector<PositionMeasurement> d;
-  for (const auto& qk : q) d.push_back({qk, forward_position(s.model, qk)});
+  const int points = flange_point_count();
+  for (const auto& qk : q)
+    for (int k = 0; k <= points; ++k) d.push_back({qk, Eigen::Vector3d::Zero(), k});
   Eigen::VectorXd r;
   Eigen::MatrixXd jac;
   PositionProblem(d).evaluate(s, candidates, r, &jac);

@@ -14,16 +14,24 @@
 
 namespace errfield::robot::detail {
 
-// What is identified: the robot model and extra parameters (the fixed base points' coordinates,
-// 3 per point, mm). Candidate indices below param::kCount are model parameters, index
-// param::kCount + e is extra[e].
+// What is identified: the robot model and extra parameters, 3 per point (mm): the fixed base points'
+// coordinates (distances) or the further flange points' (positions of several points); a problem has
+// one kind or the other. Candidate indices below param::kCount are model parameters; index
+// param::kCount + e is extra[e] for a base point, kFlangePointCandidateBase + e for a flange point
+// (extra_index maps both).
 struct CalibrationState {
   MdhModel model;
   Eigen::VectorXd extra;
 };
 
-// "link2.alpha", "tool.x", ..., or "base point K x|y|z" for a fixed point's coordinate.
+// "link2.alpha", "tool.x", ..., "base point K x|y|z" for a fixed point's coordinate, or
+// "flange point K x|y|z" for a further point on the flange.
 std::string candidate_name(int index);
+
+// The position in CalibrationState::extra of a candidate index >= param::kCount.
+inline int extra_index(int index) {
+  return index >= kFlangePointCandidateBase ? index - kFlangePointCandidateBase : index - param::kCount;
+}
 
 // A candidate's value is an angle (rad in the Jacobian) rather than a length (mm).
 bool candidate_is_angle(int index);
@@ -53,8 +61,11 @@ class PositionProblem final : public CalibrationProblem {
   std::size_t distinct() const override;
   void evaluate(const CalibrationState& s, const std::vector<int>& active, Eigen::VectorXd& r,
                 Eigen::MatrixXd* jac) const override;
+  // At each configuration, a reading of every flange point the data have.
   Eigen::MatrixXd generic_jacobian(const CalibrationState& s, const std::vector<int>& candidates,
                                    const std::vector<JointVector>& q) const override;
+  // The largest PositionMeasurement::flange_point (0: the tool point only).
+  int flange_point_count() const;
 
  private:
   const std::vector<PositionMeasurement>& data_;

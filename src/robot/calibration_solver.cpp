@@ -64,7 +64,7 @@ CalibrationState apply_step(const CalibrationState& s, const std::vector<int>& a
   for (std::size_t c = 0; c < active.size(); ++c) {
     const double v = delta[static_cast<Eigen::Index>(c)];
     if (active[c] < param::kCount) full[active[c]] = v;
-    else t.extra[active[c] - param::kCount] += v;
+    else t.extra[extra_index(active[c])] += v;
   }
   t.model = apply_parameter_increment(s.model, full);
   return t;
@@ -302,16 +302,18 @@ CalibrationResult solve_calibration(const CalibrationProblem& problem, const Cal
     dof = used * dim - static_cast<double>(p);
   }
   const double sigma2 = dof > 0 ? weighted_cost(r, w, dim) / dof : 0.0;
-  out.base_points.resize(static_cast<std::size_t>(start.extra.size() / 3));
-  for (std::size_t k = 0; k < out.base_points.size(); ++k) {
-    out.base_points[k].nominal_mm = start.extra.segment<3>(3 * static_cast<Eigen::Index>(k));
-    out.base_points[k].position_mm = state.extra.segment<3>(3 * static_cast<Eigen::Index>(k));
+  // The extra points are fixed base points (distances) or further flange points (positions).
+  std::vector<BasePointEstimate>& points = dim == 3 ? out.flange_points : out.base_points;
+  points.resize(static_cast<std::size_t>(start.extra.size() / 3));
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    points[k].nominal_mm = start.extra.segment<3>(3 * static_cast<Eigen::Index>(k));
+    points[k].position_mm = state.extra.segment<3>(3 * static_cast<Eigen::Index>(k));
   }
   for (Eigen::Index c = 0; c < p; ++c) {
     const double var_scaled = cov_scaled(c, c);
-    if (active[static_cast<std::size_t>(c)] >= param::kCount) {  // a fixed base point's coordinate (mm)
-      const int e = active[static_cast<std::size_t>(c)] - param::kCount;
-      BasePointEstimate& b = out.base_points[static_cast<std::size_t>(e / 3)];
+    if (active[static_cast<std::size_t>(c)] >= param::kCount) {  // an extra point's coordinate (mm)
+      const int e = extra_index(active[static_cast<std::size_t>(c)]);
+      BasePointEstimate& b = points[static_cast<std::size_t>(e / 3)];
       b.identified[e % 3] = true;
       b.standard_error_mm[e % 3] = std::sqrt(sigma2 * var_scaled) / scale[c];
       continue;

@@ -35,6 +35,10 @@ namespace errfield::robot {
 struct PositionMeasurement {
   JointVector q_deg;
   Eigen::Vector3d measured_mm;
+  /// Which point on the flange was read: 0 is the model's tool point; k >= 1 is flange point k of
+  /// the list given to the multi-point overloads (a second or third reflector nest on the same
+  /// plate), whose flange-frame position is identified with the robot.
+  int flange_point = 0;
 };
 
 /// A measured distance from the tool point at `q_a_deg` to a base point: either the tool point at
@@ -127,6 +131,15 @@ struct BasePointEstimate {
   bool identified[3] = {false, false, false};
 };
 
+/// A further point on the flange (a second reflector nest) identified with the robot: its position in
+/// the flange frame (mm). The same fields as a fixed base point: `nominal_mm` is where the fit started.
+using FlangePointEstimate = BasePointEstimate;
+
+/// Candidate index of coordinate c (0 x, 1 y, 2 z) of flange point k >= 1 (multi-point position
+/// calibration): far above the model's parameters and any fixed base point's.
+inline constexpr int kFlangePointCandidateBase = param::kCount + (1 << 20);
+inline constexpr int flange_point_candidate(int k, int c) { return kFlangePointCandidateBase + 3 * (k - 1) + c; }
+
 struct ResidualSummary {
   double rms_mm = 0, mean_abs_mm = 0, max_abs_mm = 0;
   std::size_t count = 0;
@@ -138,6 +151,9 @@ struct CalibrationResult {
   std::vector<RemovedParameter> removed;      ///< Candidates removed, with the reason.
   /// Fixed base points (calibrate_distances with fixed points), identified with the robot.
   std::vector<BasePointEstimate> base_points;
+  /// Multi-point position calibration: flange points 1.. (index k - 1), identified with the robot
+  /// (flange frame, mm). Point 0 is the model's tool point, in `model.tool()`.
+  std::vector<FlangePointEstimate> flange_points;
   /// Condition number of the physically scaled identification Jacobian of the identified (kept)
   /// parameters at the initial model, where they were selected. Positions: at most
   /// CalibrationOptions::max_condition_number. Distances: may exceed it, the weak directions being
@@ -176,6 +192,21 @@ CalibrationResult register_tracker(const MdhModel& model, const std::vector<Posi
 CalibrationResult calibrate_positions(const MdhModel& model, const std::vector<PositionMeasurement>& data,
                                       const CalibrationOptions& options = {});
 
+/// Several points on the flange read at the same poses (reflector nests on one plate): measurements
+/// with flange_point = k >= 1 are readings of flange point k, which starts at
+/// `flange_points_start_mm[k - 1]` (flange frame, mm) and is identified with the rest. One base, one
+/// MD-H table, one tool point (point 0) and the further points: the points together see the flange's
+/// orientation, which one point cannot. Registration: base 6, tool translation 3 and 3 per further
+/// point; the closed-form start uses the readings of point 0 (at least 3). Throws ArgumentError for a
+/// measurement naming a point outside the list, InputError for too few readings of point 0.
+CalibrationResult register_tracker(const MdhModel& model, const std::vector<PositionMeasurement>& data,
+                                   const std::vector<Eigen::Vector3d>& flange_points_start_mm,
+                                   const CalibrationOptions& options = {});
+/// Identification from positions of several flange points (see the register_tracker overload): the
+/// default candidates (or options.candidates) plus every further point's coordinates.
+CalibrationResult calibrate_positions(const MdhModel& model, const std::vector<PositionMeasurement>& data,
+                                      const std::vector<Eigen::Vector3d>& flange_points_start_mm,
+                                      const CalibrationOptions& options = {});
 /// Identification from distances (pairs of robot positions): MD-H + tool; the base is
 /// unobservable from distances and never a candidate. The identified model is re-aligned
 /// (a rigid motion of its base) to the initial model's positions at the distinct measured configurations,
