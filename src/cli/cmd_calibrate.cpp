@@ -11,11 +11,13 @@
 #include "cli/command_registry.hpp"
 #include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
+#include "compensation/fit_checks.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/input_checks.hpp"
 #include "errfield/compensation/registration.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/distance_table.hpp"
+#include "errfield/robot/flange_points.hpp"
 #include "errfield/robot/input_checks.hpp"
 
 namespace errfield::cli {
@@ -26,6 +28,7 @@ struct CalibrateArgs {
   std::vector<std::string> base_points;
   double k0 = 1.5, k1 = 3.0, max_condition = 1e3, max_registration_rms = robot::kRegistrationRmsLimitMm;
   bool no_robust = false;
+  std::string tool_reflector;
 };
 
 void run_calibrate(const CalibrateArgs& a) {
@@ -47,7 +50,14 @@ void run_calibrate(const CalibrateArgs& a) {
   const auto q = read_joint_columns(table);
   // Misuse is an error with a reason (robot/input_checks.hpp); x,y,z of another robot say more
   // than its joints beyond this robot's limits, so first.
-  check_nominal_positions(table, nominal, !a.robot.empty());
+  // Readings of several points on the flange: x,y,z are each point's nominal position, which only
+  // the tool point's rows share with the robot JSON; each label's registration checks the robot.
+  const bool several_points = compensation::several_reflector_labels(table);
+  if (several_points && a.model != "position")
+    throw InputError(a.data + ": readings of several points on the flange (column 'reflector') calibrate with "
+                         "--model position",
+                     a.data, 0, "reflector");
+  if (!several_points) check_nominal_positions(table, nominal, !a.robot.empty());
   for (std::size_t i = 0; i < q.size(); ++i)
     for (int j = 0; j < kJointCount; ++j) {
       const MdhLink& l = nominal.link(j);
@@ -73,6 +83,7 @@ void run_calibrate(const CalibrateArgs& a) {
   CalibrationResult result;
   MdhModel identified = nominal;
   std::optional<compensation::Registration> registration;  // stored with the model (positions only)
+  std::vector<bool> other_point_row(q.size(), false);      // several points: rows not of the tool point
   if (a.model == "position" && !a.base_points.empty())
     throw ArgumentError("--base-point: fixed base points are for --model distance, not --model position");
   if (a.model == "position") {
@@ -87,7 +98,25 @@ void run_calibrate(const CalibrateArgs& a) {
     // Registration first (tracker <- robot base and reflector offset), then the full model in the
     // tracker frame; the output is expressed back in the registered robot frame.
     // The check fit, validate, predict and compensate run too (robot/input_checks.hpp).
+    std::optional<LabelledFlangePoints> points;
+    if (several_points) {
+      const std::size_t col = table.column_index("reflector");
+      std::vector<std::string> labels;
+      for (std::size_t i = 0; i < table.row_count(); ++i) labels.emplace_back(table.cell(i, col));
+      for (const std::string& l : std::vector<std::string>(labels)) {  // each label is one rigid point
+        std::vector<PositionMeasurement> own;
+        for (std::size_t i = 0; i < data.size(); ++i)
+          if (labels[i] == l) own.push_back(data[i]);
+        (void)check_tracker_registration(nominal, own, a.data + " (reflector '" + l + "')", {!a.robot.empty(), ""},
+                                         a.max_registration_rms, options);
+      }
+      points = assign_flange_points(nominal, data, labels, a.tool_reflector, options, a.data);
+      for (std::size_t i = 0; i < data.size(); ++i) other_point_row[i] = data[i].flange_point != 0;
+    } else if (!a.tool_reflector.empty()) {
+      throw ArgumentError("--tool-reflector: " + a.data + " has no 'reflector' column with several labels");
+    }
     const CalibrationResult reg = with_source(a.data, [&] {
+      if (points) return register_tracker(nominal, data, points->further_points_mm(), options);
       const auto checked = check_tracker_registration(nominal, data, a.data, {!a.robot.empty(), ""},
                                                       a.max_registration_rms, options);
       return checked ? *checked : register_tracker(nominal, data, options);
@@ -96,7 +125,17 @@ void run_calibrate(const CalibrateArgs& a) {
     const PoseXyzRpy t = to_xyz_rpy(reg.model.base());
     text << "tracker <- robot base: x " << t.x_mm << " y " << t.y_mm << " z " << t.z_mm << " mm, rx " << t.rx_deg
          << " ry " << t.ry_deg << " rz " << t.rz_deg << " deg\n\n";
-    result = with_source(a.data, [&] { return calibrate_positions(reg.model, data, options); });
+    std::vector<Eigen::Vector3d> further;
+    for (const FlangePointEstimate& p : reg.flange_points) further.push_back(p.position_mm);
+    result = with_source(a.data, [&] { return calibrate_positions(reg.model, data, further, options); });
+    if (points) {
+      text << "points on the flange (flange frame, mm): '" << points->labels[0] << "' is the tool point ("
+           << result.model.tool().translation().transpose() << ")";
+      for (std::size_t k = 1; k < points->labels.size(); ++k)
+        text << "; '" << points->labels[k] << "' is flange point " << k << " ("
+             << result.flange_points[k - 1].position_mm.transpose() << ")";
+      text << "\n";
+    }
     // reg.model.base() is tracker <- robot chain, the nominal base world <- robot chain.
     identified = result.model.with_base(nominal.base() * reg.model.base().inverse() * result.model.base());
     // Tracker readings map into the identified model's world frame by nominal.base · reg.base^-1: keep it (and the
@@ -105,10 +144,7 @@ void run_calibrate(const CalibrateArgs& a) {
     registration->robot_from_tracker = nominal.base() * reg.model.base().inverse();
     registration->reflector_offset_mm = Eigen::Vector3d(reg.model.tool().translation());
     registration->points = data.size();
-    double ss = 0.0;
-    for (const auto& d : data)
-      ss += (registration->robot_from_tracker * d.measured_mm - forward_position(identified, d.q_deg)).squaredNorm();
-    registration->residual_rms_mm = std::sqrt(ss / static_cast<double>(data.size()));
+    registration->residual_rms_mm = result.after.rms_mm;
   } else if (a.model == "distance") {
     std::vector<Eigen::Vector3d> fixed;
     for (const auto& b : a.base_points) {
@@ -153,11 +189,13 @@ void run_calibrate(const CalibrateArgs& a) {
       double ss = 0.0;
       const Eigen::MatrixXd m = table.numeric_columns({"mx", "my", "mz"});
       const MdhModel with_reflector = nominal.with_tool(tool);
+      std::size_t rows = 0;
       for (std::size_t i = 0; i < q.size(); ++i)
-        ss += (own.robot_from_tracker * Eigen::Vector3d(m.row(static_cast<Eigen::Index>(i)).transpose()) -
+        if (!other_point_row[i] && ++rows)
+          ss += (own.robot_from_tracker * Eigen::Vector3d(m.row(static_cast<Eigen::Index>(i)).transpose()) -
                forward_position(with_reflector, q[i]))
                   .squaredNorm();
-      own.residual_rms_mm = std::sqrt(ss / static_cast<double>(q.size()));
+      own.residual_rms_mm = std::sqrt(ss / static_cast<double>(rows));
       nominal_json["registration"] = compensation::registration_to_json(own);
     }
     outputs.add(a.robot_out, nominal_json.dump(2) + "\n");
@@ -184,6 +222,10 @@ void add_calibrate_command(CLI::App& app) {
                   "x,y,z columns, if present, must be its FK (within 5 mm)");
   cmd->add_option("--data", args->data, "measurement CSV")->required();
   cmd->add_option("--model", args->model, "distance (default) or position");
+  cmd->add_option("--tool-reflector", args->tool_reflector,
+                  "--model position with a 'reflector' column (several points on the flange, e.g. simulate "
+                  "--reflectors): the label that is the identified model's tool point; the others are located on the "
+                  "flange with it and determine its orientation. Default: the label located nearest --robot's tool");
   cmd->add_option("--base-point", args->base_points,
                   "nominal X,Y,Z (mm, robot base frame) of fixed base point bK, repeatable, one per dist_bK column, "
                   "for data without base rows (--model distance); identified with the robot");

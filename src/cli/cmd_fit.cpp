@@ -68,6 +68,7 @@ struct FitArgs {
   std::optional<double> region_margin;
   std::size_t base = 0;
   bool reflector_far_ok = false;
+  std::string tool_reflector;
   int joint_functions = compensation::FitOptions{}.joint_function_degree;
   std::string gravity_load = compensation::FitOptions{}.gravity_load ? "on" : "off";
   std::string joint_function_prior = default_prior_text();
@@ -92,6 +93,7 @@ void run_fit(const FitArgs& a) {
   FitTableOptions fo;
   fo.fit = o;
   fo.fit.reflector_far_ok = a.reflector_far_ok;
+  fo.fit.tool_reflector = a.tool_reflector;
   fo.fixed_bases = fixed;
   fo.robot_given = !a.robot.empty();
   fo.max_registration_rms_mm = a.max_registration_rms;
@@ -226,6 +228,11 @@ void add_fit_command(CLI::App& app) {
                 "kinematic methods from positions: accept a reflector found more than 50 mm from --robot's tool "
                 "point (a second nest, a tool-less robot JSON on purpose); compensate still aims the tool point "
                 "(docs/robot.md)");
+  cmd->add_option("--tool-reflector", a->tool_reflector,
+                  "data with a 'reflector' column (several points on the flange, e.g. simulate --reflectors): the "
+                  "label whose readings are the model's own point (the joint error functions and the field are "
+                  "fitted to them; the others are located and determine the flange's orientation in the "
+                  "calibration). Default: the label the data locate nearest --robot's tool point");
   cmd->add_option("--out", a->out, "model JSON (written atomically)")->required();
   cmd->callback([a] { run_fit(*a); });
 }

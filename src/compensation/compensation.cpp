@@ -217,6 +217,11 @@ CompensationModel CompensationModel::with_registration(std::optional<compensatio
   m.registration_ = std::move(r);
   return m;
 }
+CompensationModel CompensationModel::with_measured_orientation(std::optional<MeasuredOrientation> measured) const {
+  CompensationModel m = *this;
+  m.measured_orientation_ = measured;
+  return m;
+}
 CompensationModel CompensationModel::with_excluded_rows(std::vector<std::string> points) const {
   CompensationModel m = *this;
   m.excluded_rows_ = std::move(points);
@@ -379,6 +384,17 @@ const OrientationPrior& CompensationModel::orientation_prior() const {
     p.residual_rms_mm = std::sqrt(residual_ss / static_cast<double>(q.size()));
     p.data_sigma_rad = std::sqrt(residual_ss / lever_ss);
     p.sigma_rad = std::hypot(p.data_sigma_rad, kOrientationPriorFloorRad);
+    if (measured_orientation_) {
+      // Several points measured it: no guess from one point's residuals; the floor only where a
+      // rotation escapes them all (points on one line).
+      p.data_sigma_rad = measured_orientation_->sigma_rad;
+      p.sigma_rad = measured_orientation_->spans_plane ? p.data_sigma_rad
+                                                       : std::hypot(p.data_sigma_rad, kOrientationPriorFloorRad);
+      if (!(p.sigma_rad > 0.0)) {
+        p.max_lever_mm = std::numeric_limits<double>::infinity();
+        return;
+      }
+    }
     p.max_lever_mm = kMaxLeverResidualRatio * p.residual_rms_mm / (std::sqrt(2.0) * p.sigma_rad);
   });
   return s.value;
@@ -456,6 +472,10 @@ nlohmann::json CompensationModel::to_json() const {
   if (reflector_) j["reflector_mm"] = {reflector_->x(), reflector_->y(), reflector_->z()};
   if (joint_functions_) j["joint_error_functions"] = joint_functions_->to_json();
   if (working_tool_) j["working_tool"] = robot::detail::pose_json(*working_tool_);
+  if (measured_orientation_)
+    j["orientation_residual"] = {{"sigma_rad", measured_orientation_->sigma_rad},
+                                 {"readings", measured_orientation_->readings},
+                                 {"spans_plane", measured_orientation_->spans_plane}};
   if (!notes_.empty()) j["notes"] = notes_;
   if (!excluded_rows_.empty()) j["excluded_rows"] = excluded_rows_;
   return j;
@@ -564,6 +584,17 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
   };
   strings("notes", model.notes_);
   strings("excluded_rows", model.excluded_rows_);
+  if (j.contains("orientation_residual")) {
+    const nlohmann::json& o = j["orientation_residual"];
+    // 0.1 rad (5.7 deg) of residual orientation after calibration is no robot: a hand edit.
+    if (!o.is_object() || !o.contains("sigma_rad") || !o["sigma_rad"].is_number() || !o.contains("readings") ||
+        !o["readings"].is_number_unsigned() || !o.contains("spans_plane") || !o["spans_plane"].is_boolean() ||
+        !(o["sigma_rad"].get<double>() >= 0.0 && o["sigma_rad"].get<double>() < 0.1))
+      fail_model(source, "member \"orientation_residual\": expected {\"sigma_rad\": 0 <= number < 0.1, \"readings\": "
+                         "count, \"spans_plane\": bool}, got " + o.dump());
+    model.measured_orientation_ =
+        MeasuredOrientation{o["sigma_rad"].get<double>(), o["readings"].get<std::size_t>(), o["spans_plane"].get<bool>()};
+  }
   if (j.contains("nominal_registration")) {
     try {
       model.nominal_registration_ = compensation::registration_from_json(j["nominal_registration"], source);

@@ -34,5 +34,9 @@ FitResult attach_artifacts(FitResult fit, const robot::MdhModel& nominal, const 
 /// or no such column passes. Called before the check of x,y,z against the FK, which would blame the
 /// robot for the other reflectors' rows.
 void refuse_several_reflectors(const CsvTable& t);
+// Whether the table has a `reflector` column with more than one label (readings of several points).
+bool several_reflector_labels(const CsvTable& t);
+// Refuses (InputError naming column 'reflector') readings of several points for a method that models one.
+void refuse_several_points_for(const MeasurementSet& d, CompensationMethod method);
 
 }  // namespace errfield::compensation

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "errfield/error.hpp"
+#include "errfield/robot/flange_points.hpp"
 #include "errfield/robot/input_checks.hpp"
 
 namespace errfield::compensation {
@@ -107,6 +108,55 @@ KinematicFit from_positions(const MdhModel& robot, const MeasurementSet& d, cons
   return out;
 }
 
+// Readings of several points on the flange (a `reflector` column): one registration, one MD-H table,
+// the tool point (the label nearest the robot JSON's tool, or FitOptions::tool_reflector) and each
+// further label's offset, all in one fit, so the points together determine the flange's orientation.
+// The robot JSON's tool stays the point compensated; the rows of the model's own label are what the
+// joint functions and the field take.
+KinematicFit from_several_points(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
+  std::vector<PositionMeasurement> pm;
+  for (std::size_t i = 0; i < d.q_deg.size(); ++i) pm.push_back({d.q_deg[i], d.measured_mm[i], 0});
+  if (o.on_stage)
+    o.on_stage("registration and kinematic calibration on " + std::to_string(pm.size()) + " readings of " +
+               std::to_string(d.reflector_labels().size()) + " points on the flange");
+  const LabelledFlangePoints points = assign_flange_points(robot, pm, d.reflector, o.tool_reflector, o.calibration, d.source);
+  const CalibrationResult reg = register_tracker(robot, pm, points.further_points_mm(), o.calibration);
+  std::vector<Eigen::Vector3d> located;
+  for (const FlangePointEstimate& p : reg.flange_points) located.push_back(p.position_mm);
+  const CalibrationResult cal = calibrate_positions(reg.model, pm, located, o.calibration);
+  const Eigen::Isometry3d world_from_tracker = robot.base() * reg.model.base().inverse();
+  KinematicFit out{cal.model.with_base(world_from_tracker * cal.model.base()), Registration{}, {}, {}, {}, {}, {}, {}};
+  out.registration->robot_from_tracker = world_from_tracker;
+  out.registration->residual_rms_mm = cal.after.rms_mm;
+  for (std::size_t i = 0; i < pm.size(); ++i) {
+    const int k = pm[i].flange_point;
+    if (k == 0) out.own_point_rows.push_back(i);
+    out.flange_point_of_row_mm.push_back(k == 0 ? Eigen::Vector3d(cal.model.tool().translation())
+                                                : cal.flange_points[static_cast<std::size_t>(k - 1)].position_mm);
+  }
+  std::string where;
+  for (std::size_t k = 0; k < points.labels.size(); ++k) {
+    const Eigen::Vector3d p = k == 0 ? Eigen::Vector3d(cal.model.tool().translation()) : cal.flange_points[k - 1].position_mm;
+    where += (k ? "; '" : "'") + points.labels[k] + "' " + flange_point_text(p) + " (" +
+             std::to_string(points.readings[k]) + " readings" + (k == 0 ? ", the model's own point" : "") + ")";
+  }
+  out.notes.push_back("points on the flange located with the robot (flange frame, mm): " + where);
+  out.notes.push_back(summary(cal, pm.size(), "readings of " + std::to_string(points.labels.size()) +
+                                                  " points on the flange (tracker frame)",
+                              o.calibration.robust.enabled));
+  out.notes.push_back("the joint error functions and the field are fitted to the readings of '" + points.labels[0] +
+                      "' (" + std::to_string(out.own_point_rows.size()) +
+                      " rows); the other points determine the flange's orientation in the calibration");
+  if (!reg.converged) out.warnings.push_back("the tracker registration did not converge: " + reg.message);
+  if (!cal.converged) out.warnings.push_back("the kinematic calibration did not converge: " + cal.message);
+  // The robot JSON's tool is the working point (the "far from the tool" check is for one unlabelled
+  // reflector, where a far one means a wrong tool).
+  FitOptions far_ok = o;
+  far_ok.reflector_far_ok = true;
+  tool_and_reflector(out, robot, cal.model.tool().translation(), d, far_ok);
+  return out;
+}
+
 KinematicFit from_distances(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
   const bool fixed_bases = d.base_q_deg.empty();  // --base-point: points in the cell, not robot positions
   if (o.base >= d.distance_mm.size() || o.base >= d.base_nominal_mm.size() ||
@@ -152,6 +202,13 @@ KinematicFit from_distances(const MdhModel& robot, const MeasurementSet& d, cons
 KinematicFit fit_kinematic(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
   CalibrationData how = o.calibration_data;
   if (how == CalibrationData::automatic) how = d.measured_mm.empty() ? CalibrationData::distance : CalibrationData::position;
+  if (d.reflector_labels().size() > 1) {
+    if (how != CalibrationData::position || d.measured_mm.empty())
+      throw InputError(d.source + ": readings of several points on the flange (column 'reflector') calibrate from "
+                           "positions (mx,my,mz), not from distances",
+                       d.source, 0, "reflector");
+    return from_several_points(robot, d, o);
+  }
   return how == CalibrationData::position ? from_positions(robot, d, o) : from_distances(robot, d, o);
 }
 

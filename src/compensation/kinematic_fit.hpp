@@ -17,6 +17,11 @@ struct KinematicFit {
   std::vector<std::string> notes, warnings;
   /// From positions: the identified reflector and the tool point compensate aims (flange frame, mm).
   std::optional<Eigen::Vector3d> reflector_mm, tool_point_mm;
+  /// Data of several points on the flange: the rows of the model's own point (the reflector), which
+  /// the joint functions and the field take; empty: every row.
+  std::vector<std::size_t> own_point_rows;
+  /// Data of several points: each row's point on the calibrated flange (flange frame, mm).
+  std::vector<Eigen::Vector3d> flange_point_of_row_mm;
 };
 
 KinematicFit fit_kinematic(const robot::MdhModel& robot, const MeasurementSet& data, const FitOptions& options);

@@ -3,6 +3,9 @@
 #include "errfield/robot/input_checks.hpp"
 
 #include <algorithm>
+#include <map>
+
+#include <Eigen/Dense>
 #include <cmath>
 #include <optional>
 
@@ -20,6 +23,7 @@
 #include "errfield/scattered_idw.hpp"
 #include "compensation/fit_checks.hpp"
 #include "compensation/kinematic_fit.hpp"
+#include "errfield/robot/flange_points.hpp"
 #include "robot/rigid_fit.hpp"
 
 namespace errfield::compensation {
@@ -40,8 +44,33 @@ void refuse_several_reflectors(const CsvTable& t) {
                        t.source(), t.line_of_row(r), "reflector");
 }
 
+std::vector<std::string> MeasurementSet::reflector_labels() const {
+  std::vector<std::string> out;
+  for (const std::string& r : reflector)
+    if (std::find(out.begin(), out.end(), r) == out.end()) out.push_back(r);
+  return out;
+}
+
+void refuse_several_points_for(const MeasurementSet& d, CompensationMethod method) {
+  if (d.reflector_labels().size() <= 1 || method == CompensationMethod::kinematic ||
+      method == CompensationMethod::kinematic_kriging)
+    return;
+  throw InputError(d.source + ": readings of " + std::to_string(d.reflector_labels().size()) +
+                       " points on the flange (column 'reflector'): --method " + std::string(method_name(method)) +
+                       " models one point; kinematic and kinematic+kriging take several (or keep one reflector's rows)",
+                   d.source, 0, "reflector");
+}
+
+bool several_reflector_labels(const CsvTable& t) {
+  if (!t.has_column("reflector")) return false;
+  const std::size_t col = t.column_index("reflector");
+  for (std::size_t r = 1; r < t.row_count(); ++r)
+    if (t.row(r)[col] != t.row(0)[col]) return true;
+  return false;
+}
+
 MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& robot,
-                                          const std::vector<Eigen::Vector3d>& fixed_bases) {
+                                          const std::vector<Eigen::Vector3d>& fixed_bases, bool several_points) {
   MeasurementSet m;
   m.source = t.source();
   const Eigen::MatrixXd q = t.numeric_columns({"q1", "q2", "q3", "q4", "q5", "q6"});
@@ -54,9 +83,13 @@ MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& rob
     dist.push_back(t.numeric_column("dist_b" + std::to_string(k)));
   const bool has_kind = t.has_column("kind");
   const std::size_t kind_col = has_kind ? t.column_index("kind") : 0;
-  refuse_several_reflectors(t);
+  if (!several_points) refuse_several_reflectors(t);
   const bool has_point = t.has_column("point");
   const std::size_t point_col = has_point ? t.column_index("point") : 0;
+  const bool has_reflector = t.has_column("reflector");
+  const std::size_t reflector_col = has_reflector ? t.column_index("reflector") : 0;
+  // Rows of one pose read at several points must share the joints: the pose is one robot state.
+  std::map<std::string, std::size_t> first_row_of_point;
   m.distance_mm.assign(dist.size(), {});
   for (std::size_t r = 0; r < t.row_count(); ++r) {
     const JointVector qr = q.row(static_cast<Eigen::Index>(r)).transpose();
@@ -73,6 +106,18 @@ MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& rob
                            "'; expected base or target",
                        t.source(), t.line_of_row(r), "kind");
     m.id.push_back(has_point ? t.row(r)[point_col] : "row" + std::to_string(t.line_of_row(r)));
+    if (has_reflector) {
+      m.reflector.push_back(t.row(r)[reflector_col]);
+      if (has_point) {
+        const auto [it, first] = first_row_of_point.emplace(m.id.back(), r);
+        if (!first && q.row(static_cast<Eigen::Index>(it->second)) != q.row(static_cast<Eigen::Index>(r)))
+          throw InputError(t.source() + ":" + std::to_string(t.line_of_row(r)) + ": point '" + m.id.back() +
+                               "' (reflector '" + m.reflector.back() + "') has other joints than its row at line " +
+                               std::to_string(t.line_of_row(it->second)) +
+                               ": the readings of one pose at several points must share q1..q6",
+                           t.source(), t.line_of_row(r), "q1");
+      }
+    }
     m.q_deg.push_back(qr);
     m.nominal_mm.push_back(p);
     if (has_m) m.measured_mm.push_back(mxyz.row(static_cast<Eigen::Index>(r)).transpose());
@@ -289,6 +334,51 @@ void note_variance_calibration(FitResult& out, const KrigingFieldFit& fit) {
                       "are unchanged (model before " + c.model_before + "; --variance-calibration none keeps it)");
 }
 
+MeasurementSet without_rows(const MeasurementSet& d, const std::vector<std::size_t>& rows);
+
+/// The orientation residual a model fitted at one of several points leaves (MeasuredOrientation):
+/// at the other points' rows, the miss of the model's prediction there (its own point's field and
+/// functions carried to the point) beyond the variance it states without the orientation term is
+/// w x L, of expected square 2 sigma² |L|² for an isotropic w: sigma² = (Σ|miss|² − Σ var) / Σ 2|L|².
+MeasuredOrientation measured_orientation(const CompensationModel& model, const MeasurementSet& d,
+                                         const detail::KinematicFit& kin, const Registration& reg,
+                                         const std::vector<std::size_t>& rows) {
+  const Eigen::Vector3d own = kin.model.tool().translation();
+  double miss_ss = 0.0, explained = 0.0, lever_ss = 0.0;
+  MeasuredOrientation out;
+  for (std::size_t i : rows) {
+    Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
+    tool.translation() = kin.flange_point_of_row_mm[i];
+    const MdhModel at = model.command_model().with_tool(tool);
+    const ErrorPrediction e = model.predict_error_at(d.q_deg[i], at);
+    if (!e.inside_region || !std::isfinite(e.variance_mm2)) continue;
+    const Eigen::Vector3d miss =
+        reg.robot_from_tracker * d.measured_mm[i] - (forward_position(at, d.q_deg[i]) + e.position_error_mm);
+    const double stated = e.predictive_variance_mm2() - (std::isfinite(e.orientation_variance_mm2) ? e.orientation_variance_mm2 : 0.0);
+    const Eigen::Vector3d lever =
+        forward_kinematics(at, d.q_deg[i], EndFrame::flange).linear() * (kin.flange_point_of_row_mm[i] - own);
+    miss_ss += miss.squaredNorm();
+    explained += stated;
+    lever_ss += 2.0 * lever.squaredNorm();
+    ++out.readings;
+  }
+  out.sigma_rad = lever_ss > 0.0 ? std::sqrt(std::max(0.0, miss_ss - explained) / lever_ss) : 0.0;
+  // The points span a plane when the second singular value of their spread is not negligible.
+  std::vector<Eigen::Vector3d> points = {own};
+  for (std::size_t i : rows) {
+    bool seen = false;
+    for (const Eigen::Vector3d& p : points) seen = seen || (p - kin.flange_point_of_row_mm[i]).norm() < 1e-9;
+    if (!seen) points.push_back(kin.flange_point_of_row_mm[i]);
+  }
+  Eigen::MatrixXd spread(3, static_cast<Eigen::Index>(points.size()));
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : points) mean += p / static_cast<double>(points.size());
+  for (std::size_t k = 0; k < points.size(); ++k) spread.col(static_cast<Eigen::Index>(k)) = points[k] - mean;
+  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(spread).singularValues();
+  out.spans_plane = points.size() >= 3 && sv.size() >= 2 && sv[1] > 0.05 * sv[0];
+  return out;
+}
+
 FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o, bool model_estimated) {
   using detail::fit_kinematic;
   using detail::KinematicFit;
@@ -435,23 +525,32 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
                         .with_tool_point(kin.tool_point_mm, kin.reflector_mm),
                     kin.registration, std::nullopt, kin.notes, kin.warnings};
       if (method == CompensationMethod::kinematic) return out;
-      if (d.measured_mm.empty())
-        throw InputError(d.source + ": kinematic+kriging needs measured positions (mx,my,mz) for the residuals",
-                         d.source, 0, "mx");
-      std::vector<Eigen::Vector3d> identified(d.q_deg.size());
-      for (std::size_t i = 0; i < identified.size(); ++i) identified[i] = forward_position(kin.model, d.q_deg[i]);
+      // Readings of several points on the flange: the functions and the field take the model's own point.
+      std::vector<std::size_t> other_points;
+      for (std::size_t i = 0, next = 0; !kin.own_point_rows.empty() && i < d.q_deg.size(); ++i) {
+        if (next < kin.own_point_rows.size() && kin.own_point_rows[next] == i) ++next;
+        else other_points.push_back(i);
+      }
+      const MeasurementSet own_point = other_points.empty() ? MeasurementSet{} : without_rows(d, other_points);
+      const MeasurementSet& dd = other_points.empty() ? d : own_point;
+      const FieldSamples own_samples{dd.nominal_mm, dd.q_deg};
+      if (dd.measured_mm.empty())
+        throw InputError(dd.source + ": kinematic+kriging needs measured positions (mx,my,mz) for the residuals",
+                         dd.source, 0, "mx");
+      std::vector<Eigen::Vector3d> identified(dd.q_deg.size());
+      for (std::size_t i = 0; i < identified.size(); ++i) identified[i] = forward_position(kin.model, dd.q_deg[i]);
       // Position calibration found the registration with the model; distance calibration has none.
-      const Registration reg = kin.registration ? *kin.registration : fit_registration(d.measured_mm, identified);
+      const Registration reg = kin.registration ? *kin.registration : fit_registration(dd.measured_mm, identified);
       if (!kin.registration) out.registration = reg;
       std::vector<Eigen::Vector3d> residual(identified.size());
       for (std::size_t i = 0; i < residual.size(); ++i)
-        residual[i] = reg.robot_from_tracker * d.measured_mm[i] - identified[i];
+        residual[i] = reg.robot_from_tracker * dd.measured_mm[i] - identified[i];
       std::optional<JointErrorFunctionFit> jf;
       double inflation = 1.0;
       const std::vector<Eigen::Vector3d> calibration_residual = residual;
       const JointFunctionPrior& prior = o.joint_function_prior;
       if (o.joint_function_degree > 0) {
-        jf = fit_joint_error_functions(kin.model, d.q_deg, residual, o.joint_function_degree, o.gravity_load, prior);
+        jf = fit_joint_error_functions(kin.model, dd.q_deg, residual, o.joint_function_degree, o.gravity_load, prior);
         if (!jf->undetermined_gravity_terms.empty()) {
           std::string which;
           for (const std::string& t : jf->undetermined_gravity_terms) which += (which.empty() ? "" : ", ") + t;
@@ -482,8 +581,8 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(residual.size()), 3);
       for (std::size_t i = 0; i < residual.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = residual[i].transpose();
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
-      ko.model = chosen_model(o, samples, flat, ko, model_reason);
-      KrigingFieldFit fit = fit_vector_kriging_field(samples, residual, ko);
+      ko.model = chosen_model(o, own_samples, flat, ko, model_reason);
+      KrigingFieldFit fit = fit_vector_kriging_field(own_samples, residual, ko);
       std::optional<JointErrorFunctions> functions;
       if (jf) {
         // The functions again, by generalized least squares under the field's covariance (the
@@ -492,7 +591,7 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
         const VariogramModel field_model = fit.model;
         fit = KrigingFieldFit{};  // the first field's N x N factorization is not needed any more
         const JointErrorFunctionFit ordinary = *jf;
-        const bool refitted = refit_by_generalized_least_squares(*jf, d.q_deg, calibration_residual, field_model, prior);
+        const bool refitted = refit_by_generalized_least_squares(*jf, dd.q_deg, calibration_residual, field_model, prior);
         // A GLS fit that leaves the field far more than the ordinary one moved the functions into
         // what the correlated field absorbs at these poses: the two then cancel at the measured point
         // and nowhere else (real data: 0.89 mm left where the ordinary fit left 0.17 mm, issue 34).
@@ -506,11 +605,11 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
                               "these poses), so they keep the ordinary fit");
           *jf = ordinary;
           residual = jf->remaining_mm;
-          fit = fit_vector_kriging_field(samples, residual, ko);
-          set_coefficient_covariance(*jf, d.q_deg, fit.model);
+          fit = fit_vector_kriging_field(own_samples, residual, ko);
+          set_coefficient_covariance(*jf, dd.q_deg, fit.model);
         } else if (refitted) {
           residual = jf->remaining_mm;
-          fit = fit_vector_kriging_field(samples, residual, ko);
+          fit = fit_vector_kriging_field(own_samples, residual, ko);
           out.notes.push_back("joint error functions refitted by generalized least squares under the field's "
                               "covariance (" + format_number(std::round(jf->effective_parameters * 10) / 10) +
                               " effective parameters): they leave an RMS of " +
@@ -519,8 +618,8 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
                               format_number(std::round(ordinary_rms * 1e4) / 1e4) +
                               " mm, chasing clusters of correlated residuals)");
         } else {  // jf is as the ordinary fit left it
-          fit = fit_vector_kriging_field(samples, residual, ko);
-          set_coefficient_covariance(*jf, d.q_deg, fit.model);
+          fit = fit_vector_kriging_field(own_samples, residual, ko);
+          set_coefficient_covariance(*jf, dd.q_deg, fit.model);
           if (jf->ridge_inverse.size() > 0)
             out.notes.push_back("joint error functions: the field's covariance at the poses is not positive definite "
                                 "(repeated poses without a nugget), so they keep the ordinary fit");
@@ -530,6 +629,17 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       out.model = CompensationModel(method, kin.model, fit.field)
                       .with_tool_point(kin.tool_point_mm, kin.reflector_mm)
                       .with_joint_error_functions(std::move(functions));
+      if (!other_points.empty()) {
+        const MeasuredOrientation m = measured_orientation(out.model, d, kin, reg, other_points);
+        out.model = out.model.with_measured_orientation(m);
+        out.notes.push_back("orientation residual of the flange measured at the other points' " +
+                            std::to_string(m.readings) + " readings: " +
+                            format_number(std::round(m.sigma_rad * 1e7) / 1e4) + " mrad per axis (1 sd)" +
+                            (m.spans_plane ? std::string()
+                                           : " plus the 0.1 mrad floor (the points lie on a line: a rotation about it "
+                                             "escapes them)") +
+                            "; the variance at any other point on the flange counts it");
+      }
       out.cross_validation = kriging_report(fit, o.space, o);
       out.notes.push_back("residuals after calibration kriged with " + fit.model.to_string());
       out.notes.push_back("variogram per component: " + describe_field_model(fit.model, o.space));
@@ -638,6 +748,7 @@ MeasurementSet without_rows(const MeasurementSet& d, const std::vector<std::size
   out.id.clear();
   out.q_deg.clear();
   out.nominal_mm.clear();
+  out.reflector.clear();
   out.measured_mm.clear();
   for (auto& col : out.distance_mm) col.clear();
   std::size_t next = 0;
@@ -649,6 +760,7 @@ MeasurementSet without_rows(const MeasurementSet& d, const std::vector<std::size
     out.id.push_back(d.id[i]);
     out.q_deg.push_back(d.q_deg[i]);
     out.nominal_mm.push_back(d.nominal_mm[i]);
+    if (!d.reflector.empty()) out.reflector.push_back(d.reflector[i]);
     if (!d.measured_mm.empty()) out.measured_mm.push_back(d.measured_mm[i]);
     for (std::size_t k = 0; k < d.distance_mm.size(); ++k) out.distance_mm[k].push_back(d.distance_mm[k][i]);
   }
@@ -664,6 +776,31 @@ std::string point_list(const MeasurementSet& d, const std::vector<std::size_t>& 
   return s;
 }
 
+/// Readings of several points on the flange: the model's own label resolved first (so the stored
+/// artifacts — data joints, the nominal robot's registration — are that point's), no gross-outlier
+/// screen (the screen judges rows by the field, which holds one point's rows).
+FitResult fit_several_points(const MdhModel& robot, const MeasurementSet& d, const FitOptions& options) {
+  refuse_several_points_for(d, options.method);
+  if (d.measured_mm.empty())
+    throw InputError(d.source + ": readings of several points on the flange (column 'reflector') need the measured "
+                         "positions mx,my,mz",
+                     d.source, 0, "mx");
+  FitOptions o = options;
+  if (o.tool_reflector.empty()) {
+    std::vector<PositionMeasurement> pm;
+    for (std::size_t i = 0; i < d.q_deg.size(); ++i) pm.push_back({d.q_deg[i], d.measured_mm.at(i), 0});
+    o.tool_reflector = assign_flange_points(robot, pm, d.reflector, "", o.calibration, d.source).labels.front();
+  }
+  FitResult out = fit_checked(robot, d, o);
+  std::vector<std::size_t> others;
+  for (std::size_t i = 0; i < d.reflector.size(); ++i)
+    if (d.reflector[i] != o.tool_reflector) others.push_back(i);
+  if (o.outlier_limit > 0)
+    out.notes.push_back("gross-outlier screen: none for readings of several points on the flange (the field that "
+                        "judges rows holds one point's)");
+  return attach_artifacts(std::move(out), robot, without_rows(d, others));
+}
+
 }  // namespace
 
 FitResult fit_compensation_model(const robot::MdhModel& robot, const MeasurementSet& d, const FitOptions& options) {
@@ -677,6 +814,7 @@ FitResult fit_compensation_model(const robot::MdhModel& robot, const Measurement
     out.notes.insert(out.notes.begin(), "method auto: " + std::string(method_name(c.method)) + " (" + c.reason + ")");
     return out;
   }
+  if (d.reflector_labels().size() > 1) return fit_several_points(robot, d, options);
   const FitOptions& o = options;
   FitResult out = fit_checked(robot, d, o);
   const bool screened = o.outlier_limit > 0 && !d.measured_mm.empty() && out.registration &&

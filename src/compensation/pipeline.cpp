@@ -101,11 +101,13 @@ void check_table_fits_robot(const CsvTable& table, const robot::MdhModel& robot,
 
 TableFit fit_table(const robot::MdhModel& robot, const CsvTable& table, const FitTableOptions& options) {
   // Misuse is an error with a reason (robot/input_checks.hpp), before any fitting.
-  refuse_several_reflectors(table);
   robot::check_distance_columns(table, &robot, options.fixed_bases);
   const robot::RobotOrigin origin{options.robot_given, ""};
-  robot::check_nominal_positions(table, robot, origin.given);
-  const MeasurementSet data = MeasurementSet::from_table(table, robot, options.fixed_bases);
+  // Readings of several points on the flange: x,y,z are each point's nominal position, which only
+  // the tool point's rows share with the robot JSON; each label's registration checks the robot.
+  const bool several_points = several_reflector_labels(table);
+  if (!several_points) robot::check_nominal_positions(table, robot, origin.given);
+  const MeasurementSet data = MeasurementSet::from_table(table, robot, options.fixed_bases, true);
   if (options.on_measurements_read) options.on_measurements_read();
   FitOptions o = options.fit;
   // --method auto: the method the data support best (after the input checks, before the
@@ -117,6 +119,7 @@ TableFit fit_table(const robot::MdhModel& robot, const CsvTable& table, const Fi
     o.method = c.method;
     chosen = "method auto: " + std::string(method_name(c.method)) + " (" + c.reason + ")";
   }
+  refuse_several_points_for(data, o.method);
   // The tracker readings must be this robot's positions (the check of calibrate, validate, predict
   // and compensate), where the method uses them: a distance method ignores mx,my,mz.
   const bool uses_readings =
@@ -124,9 +127,17 @@ TableFit fit_table(const robot::MdhModel& robot, const CsvTable& table, const Fi
       o.method == CompensationMethod::kinematic_kriging ||
       (o.method == CompensationMethod::kinematic && o.calibration_data != CalibrationData::distance);
   if (uses_readings && !data.measured_mm.empty()) {
-    std::vector<robot::PositionMeasurement> readings;
-    for (std::size_t i = 0; i < data.q_deg.size(); ++i) readings.push_back({data.q_deg[i], data.measured_mm[i]});
-    (void)robot::check_tracker_registration(robot, readings, table.source(), origin, options.max_registration_rms_mm);
+    // Each point on the flange on its own (one label's readings are one rigid point's).
+    const std::vector<std::string> labels = several_points ? data.reflector_labels() : std::vector<std::string>{""};
+    for (const std::string& label : labels) {
+      std::vector<robot::PositionMeasurement> readings;
+      for (std::size_t i = 0; i < data.q_deg.size(); ++i)
+        if (!several_points || data.reflector[i] == label) readings.push_back({data.q_deg[i], data.measured_mm[i]});
+      (void)robot::check_tracker_registration(robot, readings,
+                                              several_points ? table.source() + " (reflector '" + label + "')"
+                                                             : table.source(),
+                                              origin, options.max_registration_rms_mm);
+    }
   }
   const bool from_distances = o.method == CompensationMethod::vector_kriging && data.distance_mm.size() >= 3;
   if (from_distances)

@@ -1,4 +1,5 @@
 #include "errfield/robot/calibration.hpp"
+#include "errfield/robot/flange_points.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -306,6 +307,59 @@ std::string CalibrationResult::report() const {
     << " mm; " << rejected << " rejected by IGG3\n";
   s << "status: " << message << " (" << iterations << " LM iterations, " << rounds << " weighting rounds)\n";
   return s.str();
+}
+
+}  // namespace errfield::robot
+
+// ---- several labelled points on the flange (flange_points.hpp) -------------------------------------
+
+namespace errfield::robot {
+
+LabelledFlangePoints assign_flange_points(const MdhModel& model, std::vector<PositionMeasurement>& data,
+                                          const std::vector<std::string>& row_labels, const std::string& tool_label,
+                                          const CalibrationOptions& options, const std::string& source) {
+  if (row_labels.size() != data.size())
+    throw ArgumentError("assign_flange_points: " + std::to_string(row_labels.size()) + " labels for " +
+                        std::to_string(data.size()) + " readings");
+  std::vector<std::string> labels;
+  for (const std::string& l : row_labels)
+    if (std::find(labels.begin(), labels.end(), l) == labels.end()) labels.push_back(l);
+  std::vector<Eigen::Vector3d> located;
+  std::vector<std::size_t> counts;
+  for (const std::string& l : labels) {
+    std::vector<PositionMeasurement> own;
+    for (std::size_t i = 0; i < data.size(); ++i)
+      if (row_labels[i] == l) own.push_back({data[i].q_deg, data[i].measured_mm, 0});
+    if (own.size() < 4)
+      throw InputError(source + ": reflector '" + l + "' has " + std::to_string(own.size()) +
+                           " reading(s); each point on the flange needs at least 4 to be located (9 registration "
+                           "parameters are shared, 3 are its own)",
+                       source, 0, "reflector");
+    located.push_back(register_tracker(model, own, options).model.tool().translation());
+    counts.push_back(own.size());
+  }
+  std::size_t tool = 0;
+  if (!tool_label.empty()) {
+    const auto it = std::find(labels.begin(), labels.end(), tool_label);
+    if (it == labels.end()) {
+      std::string present;
+      for (const std::string& l : labels) present += (present.empty() ? "'" : ", '") + l + "'";
+      throw InputError(source + ": no reading of reflector '" + tool_label + "' (the tool point asked for); the data have " +
+                           present,
+                       source, 0, "reflector");
+    }
+    tool = static_cast<std::size_t>(it - labels.begin());
+  } else {
+    const Eigen::Vector3d t = model.tool().translation();
+    for (std::size_t k = 1; k < labels.size(); ++k)
+      if ((located[k] - t).norm() < (located[tool] - t).norm()) tool = k;
+  }
+  std::rotate(labels.begin(), labels.begin() + static_cast<std::ptrdiff_t>(tool), labels.begin() + static_cast<std::ptrdiff_t>(tool) + 1);
+  std::rotate(located.begin(), located.begin() + static_cast<std::ptrdiff_t>(tool), located.begin() + static_cast<std::ptrdiff_t>(tool) + 1);
+  std::rotate(counts.begin(), counts.begin() + static_cast<std::ptrdiff_t>(tool), counts.begin() + static_cast<std::ptrdiff_t>(tool) + 1);
+  for (std::size_t i = 0; i < data.size(); ++i)
+    data[i].flange_point = static_cast<int>(std::find(labels.begin(), labels.end(), row_labels[i]) - labels.begin());
+  return {labels, located, counts};
 }
 
 }  // namespace errfield::robot

@@ -1,6 +1,8 @@
 // `errfield validate` and `errfield predict` against computations written here: a quaternion (Horn
 // 1987) registration, ordinary kriging solved directly, and the summary statistics (numpy's
 // percentile). SIMULATED data from `errfield simulate`.
+#include <set>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -521,6 +523,81 @@ TEST_F(ValidateCli, CompensateSolvesPoseTargetsOnTheBranchOfTheData) {
 // --tool moves the point predicted by the FK lever alone (the field is the same at every point of the
 // flange; checked against FK here), widens the variance by the orientation term and is checked;
 // locate-tool finds a second reflector from readings of it and refuses readings at one orientation.
+// Readings of three nests on one plate (SIMULATED KR 16, realistic effects the kinematic model cannot
+// express, tool orientations within 30 deg): a model fitted on r1 and r3 together (one calibration
+// that locates r3 and so sees the flange's orientation), moved to r2 located from 40 readings,
+// scores r2's held-out readings within 1.25x of a model fitted at r2 itself (issue 34), where a model
+// of r1 alone moved the same way misses by far more, and its 95 % radius holds: of 200 held-out
+// readings, 95 % +- 2.5 binomial sd (1.5 % each) is 0.91-0.99.
+TEST_F(ValidateCli, TwoReflectorsFitOneModelThatTransfersToALocatedThirdPoint) {
+  ASSERT_EQ(run("simulate --robot kr16 --seed 3 --sample scattered:440 --orientation-spread 30 --measure positions "
+                "--systematic realistic --reflectors \"0,0,100;150,0,100;0,150,100\" --robot-out kr16.json "
+                "--out refl.csv").exit_code, 0);
+  for (const auto& [name, p] : std::vector<std::pair<std::string, Eigen::Vector3d>>{{"r1", {0, 0, 100}}, {"r2", {150, 0, 100}}}) {
+    nlohmann::json robot = json("kr16.json");
+    robot["tool"] = {{"x_mm", p.x()}, {"y_mm", p.y()}, {"z_mm", p.z()}, {"rx_deg", 0.0}, {"ry_deg", 0.0}, {"rz_deg", 0.0}};
+    write("kr16_" + name + ".json", robot.dump());
+  }
+  const CsvTable all = CsvTable::read(path("refl.csv"));
+  const std::size_t point = all.column_index("point"), reflector = all.column_index("reflector"), kind = all.column_index("kind");
+  std::vector<std::string> poses;  // in file order: the first 240 train, the rest are held out
+  for (std::size_t i = 0; i < all.row_count(); ++i)
+    if (all.cell(i, kind) == "target" && (poses.empty() || poses.back() != all.cell(i, point))) poses.emplace_back(all.cell(i, point));
+  ASSERT_EQ(poses.size(), 440u);
+  const std::set<std::string> train(poses.begin(), poses.begin() + 240);
+  auto subset = [&](const std::string& out, std::set<std::string> labels, bool training, std::size_t limit = 0) {
+    std::size_t taken = 0;
+    rewrite("refl.csv", out, [](const CsvTable&, std::size_t, std::vector<std::string>&) {},
+            [](const std::string&) { return true; },
+            [&](std::size_t i) {
+              const bool keep = all.cell(i, kind) == "target" && labels.count(std::string(all.cell(i, reflector))) &&
+                                train.count(std::string(all.cell(i, point))) == (training ? 1u : 0u) &&
+                                (limit == 0 || taken < limit);
+              taken += keep ? 1 : 0;
+              return keep;
+            });
+  };
+  subset("train_r13.csv", {"r1", "r3"}, true);
+  subset("train_r1.csv", {"r1"}, true);
+  subset("train_r2.csv", {"r2"}, true);
+  subset("locate_r2.csv", {"r2"}, true, 40);
+  subset("test_r2.csv", {"r2"}, false);
+  const CliResult both = run("fit --robot kr16_r1.json --data train_r13.csv --out m13.json");
+  ASSERT_EQ(both.exit_code, 0) << both.output();
+  EXPECT_NE(both.out.find("points on the flange located with the robot"), std::string::npos) << both.out;
+  EXPECT_NE(both.out.find("orientation residual of the flange measured"), std::string::npos) << both.out;
+  ASSERT_EQ(run("fit --robot kr16_r1.json --data train_r1.csv --out m1.json").exit_code, 0);
+  ASSERT_EQ(run("fit --robot kr16_r2.json --data train_r2.csv --out m2.json").exit_code, 0);
+  auto score = [&](const std::string& model, const std::string& located) {
+    const CliResult l = run("locate-tool --model " + model + " --data locate_r2.csv --out " + located);
+    EXPECT_EQ(l.exit_code, 0) << l.output();
+    const CliResult v = run("validate --model " + located + " --data test_r2.csv --summary-out s.json");
+    EXPECT_EQ(v.exit_code, 0) << v.output();
+    const nlohmann::json s = json("s.json");
+    return std::make_pair(s["position"]["after"]["rms_mm"].get<double>(), s["uncertainty"]["coverage95"].get<double>());
+  };
+  const auto [rms13, coverage13] = score("m13.json", "m13_r2.json");
+  const auto [rms1, coverage1] = score("m1.json", "m1_r2.json");
+  ASSERT_EQ(run("validate --model m2.json --data test_r2.csv --summary-out s2.json").exit_code, 0);
+  const double own = json("s2.json")["position"]["after"]["rms_mm"].get<double>();
+  EXPECT_LT(rms13, 1.25 * own) << rms13 << " mm vs " << own << " mm fitted at r2";
+  EXPECT_LT(rms13, 0.6 * rms1) << "r1 and r3 " << rms13 << " mm, r1 alone " << rms1 << " mm";
+  EXPECT_GE(coverage13, 0.91);
+  EXPECT_LE(coverage13, 0.99);
+  // A method that models one point refuses several, naming the column; so does distance calibration.
+  const CliResult one_point = run("fit --robot kr16_r1.json --data train_r13.csv --method vector-kriging --out mv.json");
+  EXPECT_EQ(one_point.exit_code, 2) << one_point.output();
+  EXPECT_NE(one_point.output().find("reflector"), std::string::npos) << one_point.output();
+  const CliResult unknown = run("fit --robot kr16_r1.json --data train_r13.csv --tool-reflector r9 --out mx.json");
+  EXPECT_EQ(unknown.exit_code, 2) << unknown.output();
+  EXPECT_NE(unknown.output().find("'r9'"), std::string::npos) << unknown.output();
+  EXPECT_FALSE(std::filesystem::exists(path("mv.json")) || std::filesystem::exists(path("mx.json")));
+  // calibrate locates every label with the robot: r3 within 2 mm of where it was mounted
+  const CliResult cal = run("calibrate --robot kr16_r1.json --data train_r13.csv --model position --out cal.json");
+  ASSERT_EQ(cal.exit_code, 0) << cal.output();
+  EXPECT_NE(cal.out.find("'r3' is flange point 1"), std::string::npos) << cal.out;
+}
+
 TEST_F(ValidateCli, ToolOptionAndLocateToolWorkAtAnotherPointOfTheFlange) {
   ASSERT_EQ(run("simulate --seed 1 --sample grid --step 125 --robot-out robot.json --out train.csv").exit_code, 0);
   ASSERT_EQ(run("fit --robot robot.json --data train.csv --method vector-kriging --space task --model "

@@ -115,6 +115,17 @@ struct OrientationPrior {
   bool known() const { return std::isfinite(sigma_rad); }
 };
 
+/// The flange's orientation residual as measured by a model fitted to several points on the flange
+/// (FitOptions::tool_reflector): the other points' training readings against the model's prediction
+/// at each (its own point's field and functions carried to them) leave what the orientation
+/// residual w moves them by, w x L, plus their noise. Per-axis sd of w (rad), from how many readings,
+/// and whether the points span a plane (then no rotation escapes them: no floor is added).
+struct MeasuredOrientation {
+  double sigma_rad = 0.0;
+  std::size_t readings = 0;
+  bool spans_plane = false;
+};
+
 /// The floor of OrientationPrior::sigma_rad (rad): orientation errors of the flange that leave no
 /// position error at the reflector at all (a rotation about the axis through it, the mounting of a
 /// tool) are not seen in the residuals; 0.1 mrad is a tool flange's typical angular tolerance
@@ -226,6 +237,11 @@ class CompensationModel {
   /// What fit used and why, one sentence each (the notes fit prints), written as "notes".
   const std::vector<std::string>& notes() const noexcept { return notes_; }
   CompensationModel with_excluded_rows(std::vector<std::string> points) const;
+  /// Models fitted to several points on the flange: the orientation residual they measured, which
+  /// orientation_prior() then uses instead of reading it off the residuals at one point
+  /// ("orientation_residual" in the model file).
+  CompensationModel with_measured_orientation(std::optional<MeasuredOrientation> m) const;
+  const std::optional<MeasuredOrientation>& measured_orientation() const noexcept { return measured_orientation_; }
   CompensationModel with_notes(std::vector<std::string> notes) const;
   CompensationModel with_registration(std::optional<compensation::Registration> r) const;
   CompensationModel with_nominal_registration(std::optional<compensation::Registration> r) const;
@@ -320,6 +336,7 @@ class CompensationModel {
   std::optional<Eigen::Vector3d> tool_point_, reflector_;
   std::optional<JointErrorFunctions> joint_functions_;
   std::optional<Eigen::Isometry3d> working_tool_;
+  std::optional<MeasuredOrientation> measured_orientation_;
   /// orientation_prior(), computed on first use; a copy (every with_*) starts afresh, since what it
   /// is computed from may change.
   struct LazyOrientationPrior {

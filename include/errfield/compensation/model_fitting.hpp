@@ -35,14 +35,23 @@ struct MeasurementSet {
   std::vector<robot::JointVector> base_q_deg;  ///< joints of base rows (robot-position bases); empty for fixed bases
   /// distance[k][i]: measured distance from base point k to target i (mm); empty if none.
   std::vector<std::vector<double>> distance_mm;
+  /// Which point on the flange each target row reads (column `reflector`, any label; the pair
+  /// (point, reflector) names a row); empty without the column.
+  std::vector<std::string> reflector;
+
+  /// The distinct `reflector` labels in the order they first appear (empty without the column).
+  std::vector<std::string> reflector_labels() const;
 
   /// Reads the columns of `errfield simulate`: point, kind (base|target; absent = all targets),
   /// q1..q6 (deg), x,y,z (nominal, mm; absent = FK of `robot`), mx,my,mz (tracker, mm; optional),
   /// dist_b0, dist_b1, ... (mm; optional). A base row's nominal position is its base point; without
   /// base rows, `fixed_bases` give the base points of dist_b0.. (fixed points, robot frame).
   /// Throws InputError naming file, line and column.
+  /// A `reflector` column with several labels (readings of several points on the flange) is refused
+  /// unless `several_points` (fit's kinematic methods take them); rows of one pose (`point`) must
+  /// then share their joints.
   static MeasurementSet from_table(const CsvTable& table, const robot::MdhModel& robot,
-                                   const std::vector<Eigen::Vector3d>& fixed_bases = {});
+                                   const std::vector<Eigen::Vector3d>& fixed_bases = {}, bool several_points = false);
 
   /// Distance errors to base k: dist_bk − |P − B_k| (mm). Throws InputError if absent.
   std::vector<double> distance_errors(std::size_t k) const;
@@ -146,6 +155,10 @@ struct FitOptions {
   /// the robot's tool point (the robot JSON's tool, the point compensated) are two points. Further
   /// apart than kReflectorFarMm is refused as a wrong tool (InputError) unless this is set.
   bool reflector_far_ok = false;
+  /// Data of several points on the flange (a `reflector` column): the label whose readings are the
+  /// model's own point (the field's samples; the robot JSON's tool stays the point compensated).
+  /// Empty: the label the data locate nearest the robot JSON's tool point.
+  std::string tool_reflector;
   /// Called before each long stage (variogram, factorization, leave-one-out, calibration) with what
   /// it is about to do, for progress output; empty = silent.
   std::function<void(const std::string& stage)> on_stage;
