@@ -597,8 +597,9 @@ void add_simulate_command(CLI::App& app) {
                   "X1,Y1,Z1;X2,Y2,Z2;... (flange frame, mm; at least two): every pose is read at each of these "
                   "points on the flange (nests on one plate), one row each with column 'reflector' = r1, r2, ... "
                   "beside 'point'; the rows of a pose share the joints, the move and the robot's errors. "
-                  "x,y,z are the nominal FK of each point. Only with --measure positions. Fit one reflector at a "
-                  "time (its rows, a robot JSON whose tool is that point; docs/robot.md)");
+                  "x,y,z are the nominal FK of each point. Only with --measure positions. fit (kinematic methods) "
+                  "and calibrate take the labels together (--tool-reflector picks the model's own point); other "
+                  "methods one reflector's rows (docs/robot.md, 'Several points on the flange')");
   cmd->add_option("--outliers", args->outliers,
                   "FRACTION:MM: that fraction of the target rows gets a gross tracker error of MM (at most 10,000) in a random "
                   "direction (mx,my,mz and the distances); --truth-columns marks them in column 'outlier'");

@@ -584,7 +584,16 @@ TEST_F(ValidateCli, TwoReflectorsFitOneModelThatTransfersToALocatedThirdPoint) {
   EXPECT_LT(rms13, 0.6 * rms1) << "r1 and r3 " << rms13 << " mm, r1 alone " << rms1 << " mm";
   EXPECT_GE(coverage13, 0.91);
   EXPECT_LE(coverage13, 0.99);
-  // A method that models one point refuses several, naming the column; so does distance calibration.
+  // The measured orientation residual is stored, and a hand-edited one beyond any robot is refused.
+  nlohmann::json edited = json("m13.json");
+  ASSERT_TRUE(edited.contains("orientation_residual")) << edited.dump().substr(0, 200);
+  EXPECT_EQ(edited["orientation_residual"]["spans_plane"], false) << "r1 and r3 are two points: one line";
+  edited["orientation_residual"]["sigma_rad"] = 5.0;
+  write("m13_edited.json", edited.dump());
+  const CliResult hand = run("validate --model m13_edited.json --data test_r2.csv --tool 150,0,100");
+  EXPECT_EQ(hand.exit_code, 2) << hand.output();
+  EXPECT_NE(hand.output().find("orientation_residual"), std::string::npos) << hand.output();
+  // A method that models one point refuses several, naming the column.
   const CliResult one_point = run("fit --robot kr16_r1.json --data train_r13.csv --method vector-kriging --out mv.json");
   EXPECT_EQ(one_point.exit_code, 2) << one_point.output();
   EXPECT_NE(one_point.output().find("reflector"), std::string::npos) << one_point.output();

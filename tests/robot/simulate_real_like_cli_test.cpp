@@ -136,7 +136,7 @@ TEST_F(SimulateRealLike, Kr16DefaultCubeAndJointBox) {
 // --reflectors: every pose read at several points on one flange (issue 34 item 6). Checked against
 // FK of the written joints (x,y,z), the plate's rigidity (the true points keep their distances: one
 // move, one robot), and the point-to-point difference of the error a kinematic model of one point
-// cannot see; fit refuses the mixed file and reads one reflector's rows.
+// cannot see; a one-point method refuses the mixed file, and fit reads one reflector's rows.
 TEST_F(SimulateRealLike, ReflectorsReadEveryPoseAtEachPointOfTheFlange) {
   const std::vector<Eigen::Vector3d> r = {{0, 0, 100}, {150, 0, 100}, {0, 150, 60}};
   auto res = run("simulate --robot kr16 --seed 4 --sample scattered:12 --measure positions --systematic realistic "
@@ -169,9 +169,11 @@ TEST_F(SimulateRealLike, ReflectorsReadEveryPoseAtEachPointOfTheFlange) {
   // is tens of micrometres at least.
   EXPECT_GT(largest_difference, 0.02);
 
-  // fit does not take several reflectors yet (issue 34 item 1): refused, exit 2.
-  res = run("fit --robot " + path("n.json") + " --data " + path("d.csv") + " --method kinematic --out " + path("m.json"));
+  // A method that models one point refuses the mixed file (exit 2, naming the column); the kinematic
+  // methods take it (ValidateCli.TwoReflectorsFitOneModelThatTransfersToALocatedThirdPoint).
+  res = run("fit --robot " + path("n.json") + " --data " + path("d.csv") + " --method vector-kriging --out " + path("m.json"));
   EXPECT_EQ(res.exit_code, 2) << res.err;
+  EXPECT_NE(res.err.find("'reflector'"), std::string::npos) << res.err;
   // One reflector's rows (r2), with a robot whose tool is r2: readable.
   std::string kept;
   {
