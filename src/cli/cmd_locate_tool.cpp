@@ -33,10 +33,7 @@ void run_locate_tool(const LocateToolArgs& a) {
   const ToolLocation t = with_source(a.data, [&] { return locate_tool(model, readings, a.options); });
   Eigen::Isometry3d tool = model.command_model().tool();
   tool.translation() = t.tool_mm;
-  CompensationModel located = model.with_working_tool(tool);
-  // Calibrated models also aim it when read by a version that knows no working tool.
-  const bool calibrated = model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging;
-  if (calibrated) located = located.with_tool_point(t.tool_mm, model.reflector_mm() ? model.reflector_mm() : model.measured_point_mm());
+  CompensationModel located = with_located_tool(model, t);
   std::vector<std::string> notes = located.notes();
   notes.push_back("locate-tool: working tool located from " + std::to_string(t.readings) + " readings of " + a.data +
                   " at (" + rounded(t.tool_mm.x()) + ", " + rounded(t.tool_mm.y()) + ", " + rounded(t.tool_mm.z()) +
@@ -59,7 +56,8 @@ void run_locate_tool(const LocateToolArgs& a) {
             << (t.field_used ? "; the flange position corrected by the model's field and joint functions"
                              : "; the model's calibrated kinematics alone (no field)");
   if (prior.known())
-    std::cout << "; orientation prior " << rounded(prior.sigma_rad * 1e3, 1e3) << " mrad, rows refused beyond "
+    std::cout << "; orientation " << (located.measured_orientation() ? "residual measured at its readings " : "prior ")
+              << rounded(prior.sigma_rad * 1e3, 1e3) << " mrad, rows refused beyond "
               << rounded(prior.max_lever_mm, 1) << " mm" << (t.lever_mm > prior.max_lever_mm ? " (this point: every row)" : "");
   std::cout << "\n  model with this working tool written to " << a.out
             << " (predict, validate and compensate use it; --tool overrides it)\n";

@@ -388,7 +388,7 @@ const OrientationPrior& CompensationModel::orientation_prior() const {
       // Several points measured it: no guess from one point's residuals; the floor only where a
       // rotation escapes them all (points on one line).
       p.data_sigma_rad = measured_orientation_->sigma_rad;
-      p.sigma_rad = measured_orientation_->spans_plane ? p.data_sigma_rad
+      p.sigma_rad = !measured_orientation_->add_floor ? p.data_sigma_rad
                                                        : std::hypot(p.data_sigma_rad, kOrientationPriorFloorRad);
       if (!(p.sigma_rad > 0.0)) {
         p.max_lever_mm = std::numeric_limits<double>::infinity();
@@ -475,7 +475,7 @@ nlohmann::json CompensationModel::to_json() const {
   if (measured_orientation_)
     j["orientation_residual"] = {{"sigma_rad", measured_orientation_->sigma_rad},
                                  {"readings", measured_orientation_->readings},
-                                 {"spans_plane", measured_orientation_->spans_plane}};
+                                 {"add_floor", measured_orientation_->add_floor}};
   if (!notes_.empty()) j["notes"] = notes_;
   if (!excluded_rows_.empty()) j["excluded_rows"] = excluded_rows_;
   return j;
@@ -588,12 +588,12 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
     const nlohmann::json& o = j["orientation_residual"];
     // 0.1 rad (5.7 deg) of residual orientation after calibration is no robot: a hand edit.
     if (!o.is_object() || !o.contains("sigma_rad") || !o["sigma_rad"].is_number() || !o.contains("readings") ||
-        !o["readings"].is_number_unsigned() || !o.contains("spans_plane") || !o["spans_plane"].is_boolean() ||
+        !o["readings"].is_number_unsigned() || !o.contains("add_floor") || !o["add_floor"].is_boolean() ||
         !(o["sigma_rad"].get<double>() >= 0.0 && o["sigma_rad"].get<double>() < 0.1))
       fail_model(source, "member \"orientation_residual\": expected {\"sigma_rad\": 0 <= number < 0.1, \"readings\": "
-                         "count, \"spans_plane\": bool}, got " + o.dump());
+                         "count, \"add_floor\": bool}, got " + o.dump());
     model.measured_orientation_ =
-        MeasuredOrientation{o["sigma_rad"].get<double>(), o["readings"].get<std::size_t>(), o["spans_plane"].get<bool>()};
+        MeasuredOrientation{o["sigma_rad"].get<double>(), o["readings"].get<std::size_t>(), o["add_floor"].get<bool>()};
   }
   if (j.contains("nominal_registration")) {
     try {

@@ -375,7 +375,7 @@ MeasuredOrientation measured_orientation(const CompensationModel& model, const M
   for (const Eigen::Vector3d& p : points) mean += p / static_cast<double>(points.size());
   for (std::size_t k = 0; k < points.size(); ++k) spread.col(static_cast<Eigen::Index>(k)) = points[k] - mean;
   const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(spread).singularValues();
-  out.spans_plane = points.size() >= 3 && sv.size() >= 2 && sv[1] > 0.05 * sv[0];
+  out.add_floor = !(points.size() >= 3 && sv.size() >= 2 && sv[1] > 0.05 * sv[0]);
   return out;
 }
 
@@ -635,7 +635,7 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
         out.notes.push_back("orientation residual of the flange measured at the other points' " +
                             std::to_string(m.readings) + " readings: " +
                             format_number(std::round(m.sigma_rad * 1e7) / 1e4) + " mrad per axis (1 sd)" +
-                            (m.spans_plane ? std::string()
+                            (!m.add_floor ? std::string()
                                            : " plus the 0.1 mrad floor (the points lie on a line: a rotation about it "
                                              "escapes them)") +
                             "; the variance at any other point on the flange counts it");

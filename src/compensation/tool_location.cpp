@@ -124,14 +124,26 @@ ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d
   Eigen::Isometry3d tool = robot.tool();
   tool.translation() = out.tool_mm;
   const CompensationModel at_tool = model.with_working_tool(tool);
-  double var_sum = 0.0;
+  double var_sum = 0.0, stated_sum = 0.0, lever_ss = 0.0;
   std::size_t var_count = 0;
   for (std::size_t i : used) {
-    const double v = at_tool.predict_error(d.q_deg[i]).predictive_variance_mm2();
+    const ErrorPrediction e = at_tool.predict_error(d.q_deg[i]);
+    const double v = e.predictive_variance_mm2();
     if (std::isfinite(v)) {
       var_sum += v;
+      stated_sum += v - (std::isfinite(e.orientation_variance_mm2) ? e.orientation_variance_mm2 : 0.0);
       ++var_count;
     }
+    const Eigen::Vector3d lever =
+        forward_kinematics(robot, d.q_deg[i], EndFrame::flange).linear() * (out.tool_mm - model.measured_point_mm());
+    lever_ss += 2.0 * lever.squaredNorm();
+  }
+  // The orientation residual at this lever, as fit measures it at other points (MeasuredOrientation):
+  // what the readings leave beyond the stated variance (their sum of squares taken per degree of
+  // freedom: 3n numbers, 3 spent on the point), over E|w x L|^2 = 2 sigma^2 |L|^2.
+  if (out.field_used && var_count == used.size() && a.size() > 1 && out.lever_mm > kReflectorAtToolMm && lever_ss > 0.0) {
+    const double unbiased_ss = ss * (3.0 * n) / (3.0 * n - 3.0);
+    out.orientation = MeasuredOrientation{std::sqrt(std::max(0.0, unbiased_ss - stated_sum) / lever_ss), used.size(), false};
   }
   if (var_count == used.size() && var_count > 0) {
     out.expected_rms_mm = std::sqrt(var_sum / static_cast<double>(var_count));
@@ -149,6 +161,24 @@ ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d
                          " explains (readings of two points mixed, a moved nest, or another robot's)",
                      src);
   return out;
+}
+
+CompensationModel with_located_tool(const CompensationModel& model, const ToolLocation& t) {
+  Eigen::Isometry3d tool = model.command_model().tool();
+  tool.translation() = t.tool_mm;
+  CompensationModel located = model.with_working_tool(tool);
+  // Calibrated models also aim it when read by a version that knows no working tool.
+  const bool calibrated =
+      model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging;
+  if (calibrated) located = located.with_tool_point(t.tool_mm, model.reflector_mm() ? model.reflector_mm() : model.measured_point_mm());
+  // The readings at the point measured the orientation residual at its lever: it replaces the guess
+  // (and a smaller one measured at other points, which may not hold at this lever).
+  auto effective = [](const MeasuredOrientation& m) {
+    return m.add_floor ? std::hypot(m.sigma_rad, kOrientationPriorFloorRad) : m.sigma_rad;
+  };
+  if (t.orientation && (!model.measured_orientation() || effective(*t.orientation) > effective(*model.measured_orientation())))
+    located = located.with_measured_orientation(t.orientation);
+  return located;
 }
 
 }  // namespace errfield::compensation

@@ -257,11 +257,7 @@ py::tuple locate_tool_py(const PyModel& m, const py::object& data, std::size_t m
     py::gil_scoped_release release;
     t = locate_tool(model, MeasurementSet::from_table(table, model.nominal_model()), o);
   }
-  Eigen::Isometry3d tool = model.command_model().tool();
-  tool.translation() = t->tool_mm;
-  CompensationModel located = model.with_working_tool(tool);
-  if (model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging)
-    located = located.with_tool_point(t->tool_mm, model.reflector_mm() ? model.reflector_mm() : model.measured_point_mm());
+  CompensationModel located = with_located_tool(model, *t);
   py::dict r;
   r["tool_mm"] = to_numpy(std::vector<double>{t->tool_mm.x(), t->tool_mm.y(), t->tool_mm.z()});
   r["sd_mm"] = to_numpy(std::vector<double>{t->sd_mm.x(), t->sd_mm.y(), t->sd_mm.z()});

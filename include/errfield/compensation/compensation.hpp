@@ -118,12 +118,14 @@ struct OrientationPrior {
 /// The flange's orientation residual as measured by a model fitted to several points on the flange
 /// (FitOptions::tool_reflector): the other points' training readings against the model's prediction
 /// at each (its own point's field and functions carried to them) leave what the orientation
-/// residual w moves them by, w x L, plus their noise. Per-axis sd of w (rad), from how many readings,
-/// and whether the points span a plane (then no rotation escapes them: no floor is added).
+/// residual w moves them by, w x L, plus their noise; so do the readings locate-tool located a point
+/// from. Per-axis sd of w (rad), from how many readings, and whether the floor
+/// kOrientationPriorFloorRad is added (the points measured lie on one line: a rotation about it
+/// escapes them).
 struct MeasuredOrientation {
   double sigma_rad = 0.0;
   std::size_t readings = 0;
-  bool spans_plane = false;
+  bool add_floor = true;
 };
 
 /// The floor of OrientationPrior::sigma_rad (rad): orientation errors of the flange that leave no

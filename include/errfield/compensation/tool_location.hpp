@@ -18,6 +18,7 @@
 /// Frames and units: flange frame and robot frame, mm. Thread-safe (pure).
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -59,7 +60,17 @@ struct ToolLocation {
   double lever_mm = 0.0;         ///< distance of the point from the reflector the model was measured with
   bool field_used = false;       ///< the model's field (and functions) corrected the flange position
   std::vector<Eigen::Vector3d> residual_mm;  ///< per reading used (robot frame)
+  /// The flange's orientation residual the readings show at the point's lever (MeasuredOrientation):
+  /// their residual beyond the variance the model states there without its orientation term, read as
+  /// w x L (3n numbers, 3 of them spent on the point). Empty for a point at the reflector (no lever)
+  /// or a model without field.
+  std::optional<MeasuredOrientation> orientation;
 };
+
+/// The model with the located point as its working tool (also its aimed tool point, for calibrated
+/// models) and, where measured, the orientation residual the readings showed, so the variance at the
+/// point counts what the one-point model could only guess.
+CompensationModel with_located_tool(const CompensationModel& model, const ToolLocation& location);
 
 /// Locates the point the readings measured. `readings` needs tracker positions (measured_mm) and the
 /// model a registration. Throws InputError naming readings.source for: no tracker positions, a model
