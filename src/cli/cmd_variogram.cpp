@@ -156,10 +156,10 @@ void run_cloud_or_map(const VariogramArgs& a, const Eigen::MatrixXd& x, const Ei
     // gstat's cutoff: given, or the last edge of --bins, or a third of the bounding-box diagonal.
     o.cutoff = !std::isnan(a.cutoff) ? a.cutoff : a.bins.empty() ? LagBins::gstat_default(x).edges().back()
                                                                  : parse_bins_option(a.bins).edges().back();
-    o.max_pairs = a.max_pairs;
     std::vector<std::string> left, right, dist, gamma, alpha, beta;
     for (const DirectionalRun& run : runs) {
       o.direction = run.direction;
+      o.max_pairs = a.max_pairs - left.size();  // one budget for all directions together
       VariogramCloud c;
       naming_options([&] { c = variogram_cloud(x, z, o); },
                                               {{"variogram cloud: cutoff", "--cutoff"},
