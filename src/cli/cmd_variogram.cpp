@@ -161,10 +161,15 @@ void run_cloud_or_map(const VariogramArgs& a, const Eigen::MatrixXd& x, const Ei
       o.direction = run.direction;
       o.max_pairs = a.max_pairs - left.size();  // one budget for all directions together
       VariogramCloud c;
-      naming_options([&] { c = variogram_cloud(x, z, o); },
-                                              {{"variogram cloud: cutoff", "--cutoff"},
-                                               {"variogram direction: alpha/beta", "--alpha/--beta"},
-                                               {"variogram direction: tol_ver", "--tol-ver"}});
+      try {
+        naming_options([&] { c = variogram_cloud(x, z, o); }, {{"variogram cloud: cutoff", "--cutoff"},
+                                                                {"variogram direction: alpha/beta", "--alpha/--beta"},
+                                                                {"variogram direction: tol_ver", "--tol-ver"}});
+      } catch (const ResourceError& e) {
+        if (runs.size() == 1) throw;
+        throw ResourceError(std::string(e.what()) + " (the budget left after the earlier directions, which have " +
+                            std::to_string(left.size()) + " of --max-pairs " + std::to_string(a.max_pairs) + ")");
+      }
       for (std::size_t k = 0; k < c.size(); ++k) {
         left.push_back(std::to_string(c.left[k] + 1));
         right.push_back(std::to_string(c.right[k] + 1));
