@@ -1,4 +1,5 @@
 #include "errfield/empirical_variogram.hpp"
+#include "errfield/variogram_cloud.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -523,6 +524,92 @@ static_assert(Location<Vec3> && Location<Vec6> && Location<Eigen::VectorXd> && L
 static_assert(Metric<EuclideanMetric, Vec3> && Metric<WeightedEuclideanMetric, Vec6>);
 static_assert(Value<double> && Value<Vec3>);
 static_assert(!Location<int> && !Metric<int, Vec3>);
+
+// The cloud against a brute-force pair list (3-D, a vector value): every pair within the cutoff,
+// including one exactly at it, in gstat's order (left > right); the budget refuses one pair more
+// than it allows and accepts exactly as many.
+TEST(VariogramCloud, ListsEveryPairWithinTheCutoffInGstatsOrderAndKeepsItsBudget) {
+  std::mt19937_64 rng(36);
+  std::uniform_int_distribution<int> u(0, 20);
+  std::normal_distribution<double> g(0.0, 1.0);
+  Eigen::MatrixXd x(60, 3), z(60, 2);
+  for (Eigen::Index i = 0; i < x.rows(); ++i) {
+    for (int a = 0; a < 3; ++a) x(i, a) = u(rng);  // integers: distances exactly at the cutoff occur
+    z(i, 0) = g(rng);
+    z(i, 1) = g(rng);
+  }
+  VariogramCloudOptions o;
+  o.cutoff = 9.0;
+  const VariogramCloud c = variogram_cloud(x, z, o);
+  std::size_t k = 0, at_cutoff = 0;
+  for (Eigen::Index i = 1; i < x.rows(); ++i)
+    for (Eigen::Index j = 0; j < i; ++j) {
+      const double h = (x.row(i) - x.row(j)).norm();
+      if (h > 9.0) continue;
+      at_cutoff += h == 9.0;
+      ASSERT_LT(k, c.size());
+      EXPECT_EQ(c.left[k], i);
+      EXPECT_EQ(c.right[k], j);
+      EXPECT_EQ(c.dist[k], h);
+      EXPECT_DOUBLE_EQ(c.gamma[k], 0.5 * (z.row(i) - z.row(j)).squaredNorm());
+      ++k;
+    }
+  EXPECT_EQ(k, c.size());
+  EXPECT_GT(at_cutoff, 0u);
+  o.max_pairs = c.size();
+  EXPECT_EQ(variogram_cloud(x, z, o).size(), c.size());
+  o.max_pairs = c.size() - 1;
+  EXPECT_THROW(variogram_cloud(x, z, o), ResourceError);
+  o.cutoff = 0.0;
+  EXPECT_THROW(variogram_cloud(x, z, o), ArgumentError);
+}
+
+// The map with different cell widths in x and y (gstat has one width; the rule is its rule per
+// axis) against the nearest cell centre, on continuous coordinates where no lag is half-way
+// between two centres: each pair twice (+s and -s), so the map is symmetric through the origin.
+TEST(VariogramMap, CountsEachLagVectorInItsNearestCellTwiceAndIsSymmetric) {
+  std::mt19937_64 rng(3636);
+  std::uniform_real_distribution<double> u(0.0, 100.0);
+  std::normal_distribution<double> g(0.0, 1.0);
+  Eigen::MatrixXd x(80, 2), z(80, 1);
+  for (Eigen::Index i = 0; i < x.rows(); ++i) {
+    x(i, 0) = u(rng);
+    x(i, 1) = 0.5 * u(rng);
+    z(i, 0) = g(rng);
+  }
+  VariogramMapOptions o;
+  o.cutoff = 40.0;
+  o.width_x = 10.0;
+  o.width_y = 5.0;
+  const VariogramMap m = variogram_map(x, z, o);
+  ASSERT_EQ(m.columns, 9);
+  ASSERT_EQ(m.rows, 17);
+  std::vector<std::uint64_t> n(m.pairs.size(), 0);
+  std::vector<double> sum(m.pairs.size(), 0.0);
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    for (Eigen::Index j = 0; j < x.rows(); ++j) {  // both orders: +s and -s
+      if (i == j) continue;
+      const double sx = x(i, 0) - x(j, 0), sy = x(i, 1) - x(j, 1);
+      for (int r = 0; r < m.rows; ++r)
+        for (int c = 0; c < m.columns; ++c)
+          if (std::fabs(sx - m.lag_x[static_cast<std::size_t>(c)]) < 5.0 && std::fabs(sy - m.lag_y[static_cast<std::size_t>(r)]) < 2.5) {
+            const auto k = static_cast<std::size_t>(r * m.columns + c);
+            ++n[k];
+            sum[k] += 0.5 * (z(i, 0) - z(j, 0)) * (z(i, 0) - z(j, 0));
+          }
+    }
+  for (std::size_t k = 0; k < n.size(); ++k) {
+    EXPECT_EQ(m.pairs[k], n[k]) << "cell " << k;
+    if (n[k] == 0) {
+      EXPECT_TRUE(std::isnan(m.gamma[k]));
+    } else {
+      EXPECT_NEAR(m.gamma[k], sum[k] / static_cast<double>(n[k]), 1e-12 * sum[k]);
+    }
+    EXPECT_EQ(m.pairs[k], m.pairs[m.pairs.size() - 1 - k]);  // symmetric through the origin
+  }
+  const Eigen::MatrixXd x3(2, 3);
+  EXPECT_THROW(variogram_map(x3, Eigen::MatrixXd::Zero(2, 1), o), ArgumentError);
+}
 
 }  // namespace
 }  // namespace errfield

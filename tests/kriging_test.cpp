@@ -3,6 +3,7 @@
 // against each other. All data are simulated (random locations, smooth field + noise).
 
 #include "errfield/kriging.hpp"
+#include "errfield/indicator_kriging.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -900,6 +901,65 @@ struct NotEmbeddable {
   double operator()(const P3& a, const P3& b) const { return (a - b).lpNorm<1>(); }
 };
 static_assert(!EmbeddableMetric<NotEmbeddable>);
+
+// Indicator kriging of one threshold is the kriging of the 0/1 indicators I(z < T) (strict: a
+// sample equal to T is 0); the order correction equals the correction written another way here
+// (u_k the maximum of the clipped p_j over j <= k, d_k the minimum over j >= k), leaves monotone rows
+// in [0, 1] alone and NaN rows untouched.
+TEST(IndicatorKriging, KrigesTheStrictIndicatorsAndCorrectsOrderAsGslib) {
+  std::mt19937_64 rng(3606);
+  std::uniform_real_distribution<double> u(0.0, 10.0);
+  std::vector<Eigen::VectorXd> pts, targets;
+  std::vector<double> z;
+  for (int i = 0; i < 40; ++i) {
+    pts.push_back(Eigen::Vector2d(u(rng), u(rng)));
+    z.push_back(std::round(u(rng)));  // integers: samples equal to a threshold
+  }
+  for (int i = 0; i < 25; ++i) targets.push_back(Eigen::Vector2d(u(rng), u(rng)));
+  const std::vector<double> thresholds{3.0, 5.0, 7.0};
+  const std::vector<VariogramModel> models{VariogramModel::parse("sph(sill=0.15,range=4)+nug(0.05)"),
+                                           VariogramModel::parse("exp(sill=0.2,range=1)+nug(0.02)"),
+                                           VariogramModel::parse("gau(sill=0.1,range=3)+nug(0.08)")};
+  KrigingOptions o;
+  IndicatorKrigingOptions keep;
+  keep.correct_order = false;
+  const auto raw = indicator_kriging<Eigen::VectorXd>(pts, z, targets, thresholds, models, o, keep);
+  const auto ik = indicator_kriging<Eigen::VectorXd>(pts, z, targets, thresholds, models, o);
+  ASSERT_TRUE(ik.usable()) << ik.message;
+  for (std::size_t k = 0; k < thresholds.size(); ++k) {
+    std::vector<double> ind;
+    for (double v : z) ind.push_back(v < thresholds[k] ? 1.0 : 0.0);
+    const Kriging<Eigen::VectorXd, double> plain(pts, ind, models[k], o);
+    const auto p = plain.predict(targets);
+    for (std::size_t t = 0; t < targets.size(); ++t) {
+      EXPECT_EQ(raw.raw(static_cast<Eigen::Index>(t), static_cast<Eigen::Index>(k)), p.mean[t]);
+      EXPECT_EQ(ik.variance(static_cast<Eigen::Index>(t), static_cast<Eigen::Index>(k)), p.variance[t]);
+    }
+  }
+  EXPECT_EQ(raw.probability, raw.raw);
+  std::size_t changed = 0;
+  for (Eigen::Index t = 0; t < ik.raw.rows(); ++t) {
+    const Eigen::RowVector3d q = ik.raw.row(t).cwiseMax(0.0).cwiseMin(1.0);
+    bool row_changed = false;
+    for (int k = 0; k < 3; ++k) {
+      const double expected = 0.5 * (q.head(k + 1).maxCoeff() + q.tail(3 - k).minCoeff());
+      EXPECT_NEAR(ik.probability(t, k), expected, 1e-15);
+      row_changed |= ik.probability(t, k) != ik.raw(t, k);
+    }
+    changed += row_changed;
+  }
+  EXPECT_EQ(ik.correction.rows_changed, changed);
+  EXPECT_GT(changed, 0u);
+  Eigen::MatrixXd cdf(2, 3);
+  cdf << 0.1, 0.4, 0.9, std::nan(""), 2.0, -1.0;
+  const Eigen::MatrixXd before = cdf;
+  const auto c = correct_order_relations(cdf);
+  EXPECT_EQ(c.rows_changed, 0u);
+  EXPECT_EQ(cdf.row(0), before.row(0));
+  EXPECT_TRUE(std::isnan(cdf(1, 0)) && cdf(1, 1) == 2.0);
+  const std::vector<double> unsorted{5.0, 3.0};
+  EXPECT_THROW(indicator_kriging<Eigen::VectorXd>(pts, z, targets, unsorted, models, o), ArgumentError);
+}
 
 }  // namespace
 }  // namespace errfield

@@ -10,6 +10,8 @@
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
+#include "cli/interpolation_methods.hpp"
+#include "cli/variogram_svg.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/coregionalization_fit.hpp"
 #include "errfield/empirical_variogram.hpp"
@@ -37,6 +39,7 @@ struct FitVariogramArgs {
   bool lmc_method_given = false;
   bool nugget_given = false;
   std::string fix;  // --fix: parameters held at the template's values
+  std::string plot;  // --plot FILE.svg (wls): the variogram and the fitted curve
 };
 
 /// --model as a nested template with starting values, in the model text interpolate reads
@@ -512,6 +515,10 @@ void run_lmc_fit(const FitVariogramArgs& a) {
 }
 
 void run_fit_variogram(const FitVariogramArgs& a) {
+  if (!a.plot.empty() && (a.lmc || a.method != "wls"))
+    throw ArgumentError("--plot draws the empirical variogram a --method wls fit was fitted to; " +
+                        std::string(a.lmc ? "with --lmc" : "with --method " + a.method) +
+                        " plot the samples' variogram with 'errfield variogram --plot' instead");
   if (a.lmc) return run_lmc_fit(a);
   if (a.lmc_method_given) throw ArgumentError("--lmc-method applies to --lmc");
   if (a.method == "ml" || a.method == "reml") return run_likelihood_fit(a);
@@ -627,6 +634,14 @@ void run_fit_variogram(const FitVariogramArgs& a) {
   std::cout << "weighted SSE (" << weighting_name(o.weighting) << ") = " << format_number(r.weighted_sse)
             << ", " << r.bins_used << " bins, status " << status << " (" << r.message << ")\n";
 
+  AtomicFileSet files;  // --out and --plot: both or neither
+  if (!a.plot.empty()) {
+    VariogramPlot plot;
+    for (std::size_t k = 0; k < h.size(); ++k) plot.bins.push_back({h[k], g[k], n[k]});
+    if (r.status != FitStatus::Failed) plot.model = r.model;
+    plot.title = "fit-variogram (" + std::string(weighting_name(o.weighting)) + ") of " + a.input;
+    files.add(a.plot, variogram_svg_text(plot));
+  }
   if (!a.out.empty()) {
     nlohmann::json j = r.model;
     j["fit"] = {{"weights", std::string(weighting_name(o.weighting))},
@@ -639,8 +654,11 @@ void run_fit_variogram(const FitVariogramArgs& a) {
                 {"status", status},
                 {"message", r.message},
                 {"input", a.input}};
+    files.add(a.out, j.dump(2) + "\n");
+  }
+  if (files.size() > 0) {
     require_standard_output();  // the fit went to standard output: all or nothing
-    write_file_atomically(a.out, j.dump(2) + "\n");
+    files.commit();
   }
   if (r.status == FitStatus::Failed) throw Error("fit-variogram: the optimizer failed: " + r.message);
 }
@@ -732,6 +750,10 @@ void add_fit_variogram_command(CLI::App& app) {
                   "--lmc: goulard-voltz (default: iterated WLS, each B_k projected onto the PSD matrices) or gstat "
                   "(gstat's fit.lmc: separate fits, then negative eigenvalues set to 0)")
       ->each([args](const std::string&) { args->lmc_method_given = true; });
+  cmd->add_option("--plot", args->plot,
+                  "--method wls: also write an SVG picture (FILE.svg, for a browser) of the empirical variogram, one "
+                  "point per non-empty bin sized by and labelled with its pair count, and the fitted model's curve; "
+                  "written atomically, together with --out");
   cmd->add_option("--out", args->out, "output JSON (written atomically)");
   cmd->footer(
       "Example:\n"

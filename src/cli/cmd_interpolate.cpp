@@ -90,8 +90,8 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
   r.sample_labels = row_labels_of(samples, "sample");
   r.target_labels = row_labels_of(targets, "target");
 
-  const auto pred_names = prediction_columns(r.value_columns);
-  for (const auto& name : pred_names)
+  const auto default_pred_names = prediction_columns(r.value_columns);
+  for (const auto& name : default_pred_names)
     if (targets.has_column(name))
       throw InputError(a.targets + ": already has a column '" + name +
                            "', which the output would repeat; rename it",
@@ -99,6 +99,11 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
 
   const InterpolationResult result = method.interpolate(r);
   const auto m = static_cast<Eigen::Index>(targets.row_count());
+  const std::vector<std::string> pred_names = result.prediction_names.empty() ? default_pred_names : result.prediction_names;
+  for (const auto& name : result.prediction_names)
+    if (targets.has_column(name))
+      throw InputError(a.targets + ": already has a column '" + name + "', which the output would repeat; rename it",
+                       a.targets, 1, name);
   if (result.pred.rows() != m || result.pred.cols() != static_cast<Eigen::Index>(pred_names.size()))
     throw Error("interpolate: method " + method.name + " returned " + std::to_string(result.pred.rows()) + " x " +
                 std::to_string(result.pred.cols()) + " predictions; expected " + std::to_string(m) + " x " +

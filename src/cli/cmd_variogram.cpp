@@ -9,11 +9,15 @@
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
+#include "cli/interpolation_methods.hpp"
+#include "cli/variogram_svg.hpp"
 #include "cli/value_cells.hpp"
+#include "errfield/atomic_file.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/heterotopic_variogram.hpp"
 #include "errfield/error.hpp"
 #include "errfield/trend_residuals.hpp"
+#include "errfield/variogram_cloud.hpp"
 #include "errfield/variogram_direction.hpp"
 
 namespace errfield::cli {
@@ -31,6 +35,11 @@ struct VariogramArgs {
   double tol_hor = std::nan(""), tol_ver = std::nan(""), tol_axis = 45.0;
   bool per_coordinate = false;
   std::string covariates;  // --covariates: residuals of the OLS trend 1 + these columns
+  bool cloud = false;        // --cloud: every pair, not bins
+  std::string map;           // --map DX,DY: variogram map cell widths
+  double cutoff = std::nan("");  // --cutoff of --cloud / --map
+  std::uint64_t max_pairs = VariogramCloudOptions{}.max_pairs;
+  std::string plot;          // --plot FILE.svg
 };
 
 std::vector<double> parse_angles(const std::string& text, const char* option) {
@@ -118,6 +127,110 @@ LagBins parse_bins_option(const std::string& spec) {
 
 std::string cell(double v) { return std::isnan(v) ? std::string() : format_number(v); }
 
+// --cloud: one row per pair within the cutoff (gstat's variogram(..., cloud = TRUE)); --map DX,DY:
+// the variogram map (gstat's map = TRUE). Options that shape bins are refused by name.
+void run_cloud_or_map(const VariogramArgs& a, const Eigen::MatrixXd& x, const Eigen::MatrixXd& z,
+                      const std::vector<DirectionalRun>& runs, const std::vector<std::string>& coord_names) {
+  const std::string what = a.cloud ? "--cloud" : "--map";
+  if (a.cloud && !a.map.empty()) throw ArgumentError("--cloud and --map are two outputs; run them separately");
+  const auto refuse = [&](bool given, const std::string& option, const std::string& why) {
+    if (given) throw ArgumentError(option + " does not apply to " + what + ": " + why);
+  };
+  refuse(a.cross, "--cross", "the cloud and the map are of the (summed) direct semivariance");
+  refuse(a.per_component, "--per-component", "the cloud and the map write one gamma per pair or cell");
+  refuse(a.estimator != "matheron", "--estimator " + a.estimator, "they show 0.5 (z_i - z_j)^2 itself, before any estimator");
+  refuse(a.subsample != 1.0, "--subsample", "every pair is shown; use --cutoff to see fewer");
+  refuse(a.per_coordinate, "--per-coordinate", "use --alpha/--beta (one direction) with --cloud");
+  refuse(!a.convention.empty(), "--convention", "there are no bins");
+  refuse(!a.plot.empty(), "--plot", "the plot is of the binned variogram");
+  if (a.cloud) refuse(!a.bins.empty() && !std::isnan(a.cutoff), "--bins", "--cutoff already sets the cloud's cutoff");
+  if (!a.cloud) {
+    refuse(!a.bins.empty(), "--bins", "give --cutoff C and the cell widths --map DX,DY");
+    refuse(!a.alpha.empty() || !a.beta.empty(), "--alpha/--beta", "the map shows every direction");
+    if (std::isnan(a.cutoff)) throw ArgumentError("--map needs --cutoff C: the map covers lag vectors from -C to C in x and y");
+  }
+  OutputTable out;
+  std::string summary;
+  if (a.cloud) {
+    VariogramCloudOptions o;
+    // gstat's cutoff: given, or the last edge of --bins, or a third of the bounding-box diagonal.
+    o.cutoff = !std::isnan(a.cutoff) ? a.cutoff : a.bins.empty() ? LagBins::gstat_default(x).edges().back()
+                                                                 : parse_bins_option(a.bins).edges().back();
+    std::vector<std::string> left, right, dist, gamma, alpha, beta;
+    for (const DirectionalRun& run : runs) {
+      o.direction = run.direction;
+      o.max_pairs = a.max_pairs - left.size();  // one budget for all directions together
+      VariogramCloud c;
+      try {
+        naming_options([&] { c = variogram_cloud(x, z, o); }, {{"variogram cloud: cutoff", "--cutoff"},
+                                                                {"variogram direction: alpha/beta", "--alpha/--beta"},
+                                                                {"variogram direction: tol_ver", "--tol-ver"}});
+      } catch (const ResourceError& e) {
+        if (runs.size() == 1) throw;
+        throw ResourceError(std::string(e.what()) + " (the budget left after the earlier directions, which have " +
+                            std::to_string(left.size()) + " of --max-pairs " + std::to_string(a.max_pairs) + ")");
+      }
+      for (std::size_t k = 0; k < c.size(); ++k) {
+        left.push_back(std::to_string(c.left[k] + 1));
+        right.push_back(std::to_string(c.right[k] + 1));
+        dist.push_back(format_number(c.dist[k]));
+        gamma.push_back(format_number(c.gamma[k]));
+        alpha.push_back(run.alpha);
+        beta.push_back(run.beta);
+      }
+    }
+    out.add_column("left", left);
+    out.add_column("right", right);
+    out.add_column("dist", dist);
+    out.add_column("gamma", gamma);
+    if (!a.alpha.empty()) out.add_column("direction", alpha);
+    if (!a.beta.empty()) out.add_column("dip", beta);
+    summary = std::to_string(dist.size()) + " pairs within the cutoff " + format_number(o.cutoff);
+  } else {
+    if (coord_names.size() != 2)
+      throw ArgumentError("--map: " + std::to_string(coord_names.size()) +
+                          " --coords columns; a variogram map is of 2-D lag vectors (give 2 coordinates)");
+    const auto widths = split_list(a.map, "--map");
+    VariogramMapOptions o;
+    o.cutoff = a.cutoff;
+    std::vector<double> w;
+    for (const auto& item : widths) {
+      double v = 0.0;
+      const auto res = std::from_chars(item.data(), item.data() + item.size(), v);
+      if (item.empty() || res.ec != std::errc() || res.ptr != item.data() + item.size() || !(v > 0.0) || !std::isfinite(v))
+        throw ArgumentError("--map: '" + item + "' in '" + a.map + "' is not a cell width > 0; expected DX,DY (e.g. 50,50)");
+      w.push_back(v);
+    }
+    if (w.size() != 2) throw ArgumentError("--map: '" + a.map + "' has " + std::to_string(w.size()) + " widths; expected DX,DY");
+    o.width_x = w[0];
+    o.width_y = w[1];
+    VariogramMap m;
+    naming_options([&] { m = variogram_map(x, z, o); },
+                                          {{"variogram map: cutoff", "--cutoff"}, {"variogram map: cell width", "--map"}});
+    std::vector<std::string> dx, dy, np, gamma;
+    for (int r = 0; r < m.rows; ++r)
+      for (int c = 0; c < m.columns; ++c) {
+        const auto k = static_cast<std::size_t>(r) * static_cast<std::size_t>(m.columns) + static_cast<std::size_t>(c);
+        dx.push_back(format_number(m.lag_x[static_cast<std::size_t>(c)]));
+        dy.push_back(format_number(m.lag_y[static_cast<std::size_t>(r)]));
+        np.push_back(std::to_string(m.pairs[k]));
+        gamma.push_back(cell(m.gamma[k]));
+      }
+    out.add_column("dx", dx);
+    out.add_column("dy", dy);
+    out.add_column("np", np);
+    out.add_column("gamma", gamma);
+    summary = std::to_string(m.columns) + " x " + std::to_string(m.rows) + " cells of " + format_number(o.width_x) +
+              " x " + format_number(o.width_y) + " over lags -" + format_number(o.cutoff) + " .. " + format_number(o.cutoff);
+  }
+  if (a.out.empty()) {
+    std::cout << out.to_csv();
+  } else {
+    out.write(a.out);
+    std::cerr << "variogram " << what << ": " << x.rows() << " points, " << summary << ", written to " << a.out << "\n";
+  }
+}
+
 void run_variogram(const VariogramArgs& a) {
   const auto coord_names = split_column_list(a.coords, "--coords");
   const auto value_names = split_column_list(a.value, "--value");
@@ -161,6 +274,15 @@ void run_variogram(const VariogramArgs& a) {
     const auto covariate_names = split_column_list(a.covariates, "--covariates");
     z = with_source(a.input, [&] { return ols_trend_residuals(z, table.numeric_columns(covariate_names), covariate_names); });
   }
+  if (a.cloud || !a.map.empty()) {
+    if (heterotopic)
+      throw InputError(a.input + ": empty --value cells; --cloud and --map need every value column measured at every row",
+                       a.input);
+    run_cloud_or_map(a, x, z, runs, coord_names);
+    return;
+  }
+  if (!std::isnan(a.cutoff))
+    throw ArgumentError("--cutoff applies to --cloud and --map; for binned variograms give --bins lo:max:width");
   const LagBins bins = a.bins.empty() ? LagBins::gstat_default(x) : parse_bins_option(a.bins);
   if (a.bins.empty())
     std::cerr << "variogram: no --bins: gstat's default, 15 bins of " << format_number(bins.lag_hi(0))
@@ -173,6 +295,10 @@ void run_variogram(const VariogramArgs& a) {
   std::vector<std::vector<std::string>> component_pairs(value_names.size()), component_lag(value_names.size());
   std::vector<std::vector<std::string>> cross_pairs(cross.size()), cross_lag(cross.size());
   std::uint64_t total = 0;
+  if (!a.plot.empty() && runs.size() > 1)
+    throw ArgumentError("--plot draws one variogram; " + std::to_string(runs.size()) +
+                        " directions were asked (--alpha/--beta/--per-coordinate): plot one direction at a time");
+  VariogramPlot plot;
   for (const DirectionalRun& run : runs) {
     options.direction = run.direction;
     EmpiricalVariogram v;
@@ -214,6 +340,7 @@ void run_variogram(const VariogramArgs& a) {
         }
       }
       total += bin.pairs;
+      if (bin.pairs > 0) plot.bins.push_back({bin.lag_mean, bin.gamma, bin.pairs});
     }
   }
 
@@ -248,12 +375,27 @@ void run_variogram(const VariogramArgs& a) {
   if (!a.alpha.empty()) out.add_column("direction", alpha);
   if (!a.beta.empty()) out.add_column("dip", beta);
   if (a.per_coordinate) out.add_column("coordinate", coordinate);
+  std::string svg;
+  if (!a.plot.empty()) {
+    plot.title = "empirical variogram of " + a.value + (runs.front().alpha.empty() ? "" : ", direction " + runs.front().alpha) +
+                 (runs.front().beta.empty() ? "" : ", dip " + runs.front().beta) + " (" + std::to_string(table.row_count()) + " points)";
+    const std::string lag_unit = unit_of_column(table, coord_names.front());
+    const std::string value_unit = value_names.size() == 1 ? unit_of_column(table, value_names.front()) : std::string();
+    plot.lag_label = "lag" + (lag_unit.empty() ? std::string() : " [" + lag_unit + "]");
+    plot.gamma_label = "semivariance" + (value_unit.empty() ? std::string() : " [" + value_unit + "^2]");
+    svg = variogram_svg_text(plot);
+  }
   if (a.out.empty()) {
+    if (!svg.empty()) write_file_atomically(a.plot, svg);
     std::cout << out.to_csv();
   } else {
-    out.write(a.out);
+    AtomicFileSet files;  // the CSV and the picture: both or neither
+    files.add(a.out, out.to_csv());
+    if (!svg.empty()) files.add(a.plot, svg);
+    files.commit();
     std::cerr << "variogram: " << table.row_count() << " points, " << total << " pairs in "
               << bins.size() << " bins";
+    if (!svg.empty()) std::cerr << " (picture " << a.plot << ")";
     if (runs.size() > 1) std::cerr << " x " << runs.size() << " directions";
     std::cerr << " written to " << a.out << "\n";
   }
@@ -269,7 +411,9 @@ void add_variogram_command(CLI::App& app) {
       "gamma. Several --value columns form a vector value: gamma is then half the mean squared norm\n"
       "of the difference (the sum of the per-column variograms, which --per-component adds as\n"
       "gamma_<column>); --cross also adds the cross-variograms gamma_<A>_<B> (the input of\n"
-      "fit-variogram --lmc). See docs/geostatistics.md.");
+      "fit-variogram --lmc). --cloud writes every pair (left,right,dist,gamma) instead of bins and\n"
+      "--map DX,DY --cutoff C the variogram map of 2-D data (dx,dy,np,gamma), both as R gstat's;\n"
+      "--plot FILE.svg also draws the binned variogram. See docs/geostatistics.md.");
   cmd->add_option("--input", args->input, "CSV with the coordinate and value columns")->required();
   cmd->add_option("--coords", args->coords,
                   "coordinate columns, any number, e.g. x,y,z (task space, mm) or q1,q2,q3,q4,q5,q6 "
@@ -323,6 +467,25 @@ void add_variogram_command(CLI::App& app) {
                   "residual variogram: the variogram of z minus its ordinary least-squares trend 1 + these columns "
                   "(COL[,COL...] of --input), as R gstat's variogram(z ~ COL); for kriging with external drift "
                   "(interpolate --method kriging --covariates)");
+  cmd->add_flag("--cloud", args->cloud,
+                "the variogram cloud instead of bins: one row per pair (i, j) within --cutoff, columns left,right "
+                "(1-based data rows, left > right, gstat's order), dist and gamma = 0.5 (z_left - z_right)^2 (summed "
+                "over --value columns); as R gstat's variogram(..., cloud = TRUE). Takes --alpha/--beta (a direction "
+                "column per block) and refuses more than --max-pairs pairs (exit 3)");
+  cmd->add_option("--max-pairs", args->max_pairs,
+                  "--cloud: budget of pairs written (default 1000000, some 40 MB of CSV); more is refused with exit 3 "
+                  "before anything is written")
+      ->check(kUnsignedInteger);
+  cmd->add_option("--map", args->map,
+                  "the variogram map of 2-D data (R gstat's variogram(..., map = TRUE)): cells DX wide in x and DY in y, "
+                  "centred on -C, -C+DX, ... up to C (--cutoff C), each pair counted at its lag vector and at its "
+                  "opposite (the map is symmetric through 0). Columns dx,dy (cell centre), np (lag vectors in the "
+                  "cell), gamma (empty when np is 0); rows from the largest dy down, dx increasing, as gstat");
+  cmd->add_option("--cutoff", args->cutoff,
+                  "--cloud: pairs at a distance <= C (default: the last --bins edge, else gstat's a third of the "
+                  "bounding-box diagonal); --map: the half-width C of the map (required)");
+  cmd->add_option("--plot", args->plot,
+                  "also write an SVG picture of the binned variogram (points labelled by pair count), written atomically");
   cmd->add_option("--out", args->out, "output CSV (written atomically); default: standard output");
   cmd->footer(
       "Example:\n"
@@ -334,7 +497,9 @@ void add_variogram_command(CLI::App& app) {
       "--alpha 0,45,90,135 --tol-hor 22.5\n"
       "  errfield variogram --input errors.csv --coords q1,q2,q3,q4,q5,q6 --value dx,dy,dz "
       "--bins 0:100:10 --per-coordinate\n"
-      "  errfield variogram --input errors.csv --coords x,y,z --value dx,dy,dz --cross --out cross.csv");
+      "  errfield variogram --input errors.csv --coords x,y,z --value dx,dy,dz --cross --out cross.csv\n"
+      "  errfield variogram --input errors.csv --coords x,y --value dL --cloud --cutoff 300 --out cloud.csv\n"
+      "  errfield variogram --input errors.csv --coords x,y --value dL --map 50,50 --cutoff 500 --out map.csv");
   cmd->callback([args] { run_variogram(*args); });
 }
 

@@ -3,6 +3,7 @@
 // given as text or fitted automatically (--model auto).
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <numeric>
 #include <iostream>
@@ -15,6 +16,7 @@
 #include "errfield/cross_validation.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
+#include "errfield/indicator_kriging.hpp"
 #include "errfield/value_rows.hpp"
 #include "errfield/interpolation_options.hpp"
 #include "errfield/kriging.hpp"
@@ -45,6 +47,9 @@ struct KrigingCliOptions {
   std::vector<double> block;  // empty = point kriging
   int block_points = 4;
   std::string block_rule = "gauss";
+  // interpolate only: indicator kriging
+  std::string indicator;                    // --indicator T1,T2,...
+  std::string order_correction = "gslib";   // --order-correction gslib|none
 };
 KrigingCliOptions cli_options;
 // interpolate's --seed, --simulation-method, --simulation-neighbours, --simulation-draws-per-path: refused
@@ -52,6 +57,7 @@ KrigingCliOptions cli_options;
 // Kept apart from cli_options, which cv's registration resets after interpolate's.
 std::vector<CLI::Option*> simulation_only_options;
 std::vector<CLI::Option*> block_only_options;  // --block-points: refused without --block
+std::vector<CLI::Option*> indicator_only_options;  // --order-correction: refused without --indicator
 
 void add_kriging_options(CLI::App& cmd) {
   auto& o = cli_options;
@@ -148,6 +154,21 @@ void add_kriging_options(CLI::App& cmd) {
                  "path per draw, each draw's own approximation error, 100 times the cost)")
       ->check(CLI::Range(std::size_t{1}, std::size_t{100000}))
       ->group(group);
+  cmd.add_option("--indicator", o.indicator,
+                 "Indicator kriging: thresholds T1,T2,... (increasing) of the one --value column. For each, the samples "
+                 "become I(z < T) (1 below, 0 at or above: gstat's krige(I(z < T) ~ 1)), kriged with that threshold's "
+                 "--model: one model for all, one per threshold separated by ';' (\"sph(sill=0.12,range=700)+nug(0.03);"
+                 "exp(sill=0.2,range=300)\"), or auto (fitted to each threshold's indicators). Writes p_lt_<T>, the "
+                 "probability P(z < T) (1 - it: of reaching T), and var_lt_<T>, the indicator kriging variance, instead "
+                 "of pred and var")
+      ->group(group);
+  auto* order = cmd.add_option("--order-correction", o.order_correction,
+                               "--indicator: gslib (default: clip to [0,1], then the average of an upward and a downward "
+                               "pass makes the probabilities non-decreasing in T, GSLIB's correction) | none (each "
+                               "threshold as kriged, as gstat's krige of one indicator)")
+                    ->check(CLI::IsMember({"gslib", "none"}))
+                    ->group(group);
+  indicator_only_options = {order};
   simulation_only_options = {seed, method, neighbours, per_path};
   block_only_options = {block_points, block_rule};
 }
@@ -320,7 +341,113 @@ KrigingOptions cokriging_options(const CsvTable& samples, const SharedInterpolat
   return options;
 }
 
+// --indicator T1,T2,...: indicator kriging (errfield/indicator_kriging.hpp), one model per threshold.
+InterpolationResult interpolate_indicator(const InterpolationRequest& r) {
+  const auto& o = cli_options;
+  InterpolationResult result;
+  const auto refuse = [&](bool given, const std::string& option, const std::string& why) {
+    if (given) throw ArgumentError(option + " does not combine with --indicator: " + why);
+  };
+  refuse(r.value_columns.size() != 1, "--value with " + std::to_string(r.value_columns.size()) + " columns",
+         "indicator kriging takes one value column (its thresholds are of that column)");
+  refuse(model_file_is_lmc(o.model), "an LMC --model", "give one variogram model per threshold, separated by ';'");
+  refuse(!o.covariates.empty(), "--covariates", "indicator kriging with external drift is not implemented");
+  refuse(!o.measurement_variance.empty(), "--measurement-variance", "the indicators are 0 or 1, without measurement error");
+  refuse(!o.block.empty(), "--block", "block indicator kriging is not implemented; predict at points");
+  refuse(o.simulations > 0, "--simulations", "indicator simulation is not implemented");
+  for (const CLI::Option* opt : simulation_only_options) refuse(opt->count() > 0, opt->get_name(), "it belongs to --simulations");
+  for (const CLI::Option* opt : block_only_options) refuse(opt->count() > 0, opt->get_name(), "it belongs to --block");
+  if (o.model.empty())
+    throw ArgumentError("--indicator needs --model: one variogram model for every threshold, one per threshold separated by "
+                        "';', or auto");
+  std::vector<std::string> threshold_texts;
+  std::vector<double> thresholds;
+  for (auto item : split_list(o.indicator, "--indicator")) {
+    item.erase(0, item.find_first_not_of(" \t"));
+    item.erase(item.find_last_not_of(" \t") + 1);
+    double v = 0.0;
+    const auto res = std::from_chars(item.data(), item.data() + item.size(), v);
+    if (item.empty() || res.ec != std::errc() || res.ptr != item.data() + item.size() || !std::isfinite(v))
+      throw ArgumentError("--indicator: '" + item + "' in '" + o.indicator + "' is not a finite number; expected "
+                          "increasing thresholds T1,T2,... in the unit of --value, e.g. 200,400,800");
+    threshold_texts.push_back(item);
+    thresholds.push_back(v);
+  }
+  naming_options([&] { check_indicator_thresholds(thresholds); }, {{"indicator kriging: thresholds", "--indicator: thresholds"},
+                                                                   {"indicator kriging: threshold", "--indicator: threshold"}});
+  std::vector<std::string> model_texts;
+  for (std::size_t start = 0;;) {
+    const auto end = o.model.find(';', start);
+    model_texts.push_back(o.model.substr(start, end == std::string::npos ? std::string::npos : end - start));
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  if (model_texts.size() != 1 && model_texts.size() != thresholds.size())
+    throw ArgumentError("--model: " + std::to_string(model_texts.size()) + " models (';'-separated) for " +
+                        std::to_string(thresholds.size()) + " --indicator thresholds; give one model for all, or one per threshold");
+  KrigingOptions options = kriging_options_from_cli(r.shared);
+  options.sample_labels = row_labels_of(*r.samples, "sample");
+  const Eigen::VectorXd z = r.sample_values.col(0);
+  std::vector<VariogramModel> models;
+  for (std::size_t k = 0; k < thresholds.size(); ++k) {
+    const std::string& text = model_texts[model_texts.size() == 1 ? 0 : k];
+    if (text == "auto") {
+      const std::vector<double> ind = indicators_below(std::span<const double>(z.data(), static_cast<std::size_t>(z.size())), thresholds[k]);
+      const Eigen::MatrixXd indicator = Eigen::Map<const Eigen::VectorXd>(ind.data(), static_cast<Eigen::Index>(ind.size()));
+      if (indicator.minCoeff() == indicator.maxCoeff())
+        throw InputError(r.samples->source() + ": --indicator " + threshold_texts[k] + ": every sample is " +
+                             (indicator(0, 0) == 1.0 ? "below" : "at or above") +
+                             " it, so --model auto has no variogram to fit; drop the threshold or give its model",
+                         r.samples->source());
+      std::vector<std::string> fit_notes;
+      models.push_back(with_source(r.samples->source(), [&] {
+        return options.backend == KrigingBackend::Sparse ? auto_model(r.sample_coords, indicator, true, fit_notes)
+                                                         : likelihood_auto_model(r.sample_coords, indicator, options, fit_notes);
+      }));
+      for (const auto& n : fit_notes) result.notes.push_back("threshold " + threshold_texts[k] + ": " + n);
+    } else if (model_texts.size() == 1 && k > 0) {
+      models.push_back(models.front());
+    } else {
+      models.push_back(load_variogram_model(text));
+    }
+  }
+  const auto points = rows_as_points(r.sample_coords);
+  const auto targets = rows_as_points(r.target_coords);
+  IndicatorKrigingOptions io;
+  io.correct_order = o.order_correction == "gslib";
+  const IndicatorKrigingResult ik = indicator_kriging<Eigen::VectorXd>(
+      std::span<const Eigen::VectorXd>(points), std::span<const double>(z.data(), static_cast<std::size_t>(z.size())),
+      std::span<const Eigen::VectorXd>(targets), std::span<const double>(thresholds),
+      std::span<const VariogramModel>(models), options, io);
+  if (!ik.usable())
+    throw Error(r.samples->source() + ": indicator kriging failed: " + std::string(status_word(ik.status)) + ": " + ik.message);
+  if (!ik.message.empty()) result.notes.push_back(ik.message);
+  result.pred = ik.probability;
+  for (std::size_t k = 0; k < thresholds.size(); ++k) {
+    result.prediction_names.push_back("p_lt_" + threshold_texts[k]);
+    const Eigen::VectorXd v = ik.variance.col(static_cast<Eigen::Index>(k));
+    result.extra_columns.emplace_back("var_lt_" + threshold_texts[k], std::vector<double>(v.data(), v.data() + v.size()));
+    const auto below = (z.array() < thresholds[k]).count();
+    result.notes.push_back("indicator kriging: I(" + r.value_columns[0] + " < " + threshold_texts[k] + ") with " +
+                           models[k].to_string() + " (" + std::to_string(below) + " of " + std::to_string(z.size()) +
+                           " samples below)");
+  }
+  if (ik.failed_targets)
+    result.notes.push_back(std::to_string(ik.failed_targets) + " of " + std::to_string(targets.size()) +
+                           " targets could not be kriged for some threshold; their cells are empty");
+  if (io.correct_order)
+    result.notes.push_back("order relations: " + std::to_string(ik.correction.rows_changed) + " of " +
+                           std::to_string(targets.size()) + " targets corrected (clipped to [0,1] and made non-decreasing, "
+                           "GSLIB's average of upward and downward passes), largest change " +
+                           format_number(ik.correction.max_change) + (ik.correction.max_change > 0.1 ? " - large: check "
+                           "that the models of neighbouring thresholds agree" : ""));
+  return result;
+}
+
 InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
+  if (!cli_options.indicator.empty()) return interpolate_indicator(r);
+  for (const CLI::Option* o : indicator_only_options)
+    if (o->count()) throw ArgumentError(o->get_name() + " applies to --indicator T1,T2,... (indicator kriging); add it or drop " + o->get_name());
   InterpolationResult result;
   if (model_file_is_lmc(cli_options.model)) {
     const KrigingOptions options = cokriging_options(*r.samples, r.shared, true);

@@ -57,6 +57,9 @@ struct InterpolationRequest {
 /// Output of an interpolation method.
 struct InterpolationResult {
   Eigen::MatrixXd pred;  ///< M x C; a NaN row means "no prediction" (written as empty cells)
+  /// Names of pred's columns when the method chooses them (indicator kriging: p_lt_<T>, one per
+  /// threshold, pred then M x thresholds); empty: pred, or pred_<col> per --value column.
+  std::vector<std::string> prediction_names;
   /// Further columns after the predictions, e.g. {"var", ...}; NaN is written as an empty cell.
   std::vector<std::pair<std::string, std::vector<double>>> extra_columns;
   /// Lines printed to stderr after the run ("12 targets had no neighbour within --radius").

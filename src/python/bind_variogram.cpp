@@ -17,6 +17,7 @@
 #include "errfield/kriging_likelihood.hpp"
 #include "errfield/trend_residuals.hpp"
 #include "errfield/variogram_fit.hpp"
+#include "errfield/variogram_cloud.hpp"
 #include "errfield/variogram_model.hpp"
 #include "python/arrays.hpp"
 #include "python/bindings.hpp"
@@ -103,6 +104,56 @@ PyVariogram run_variogram(const py::object& coords, const py::object& values, co
   out.convention = std::string(convention_name(v.convention));
   out.pair_fraction = v.pair_fraction;
   return out;
+}
+
+/// errfield.variogram_cloud: every pair within the cutoff, as `errfield variogram --cloud`.
+py::dict run_variogram_cloud(const py::object& coords, const py::object& values, double cutoff, std::uint64_t max_pairs) {
+  const MatrixArg x = matrix_arg(coords, "coords", ArraySpec{1, 2, -1, 2});
+  const MatrixArg z = matrix_arg(values, "values", ArraySpec{1, 2, -1, 1});
+  VariogramCloudOptions o;
+  o.cutoff = cutoff;
+  o.max_pairs = max_pairs;
+  VariogramCloud c;
+  {
+    py::gil_scoped_release release;
+    c = variogram_cloud(x.data, z.data, o);
+  }
+  std::vector<std::uint64_t> left(c.left.begin(), c.left.end()), right(c.right.begin(), c.right.end());
+  py::dict d;
+  d["left"] = to_numpy(left);
+  d["right"] = to_numpy(right);
+  d["dist"] = to_numpy(c.dist);
+  d["gamma"] = to_numpy(c.gamma);
+  return d;
+}
+
+/// errfield.variogram_map: gstat's variogram map, as `errfield variogram --map`.
+py::dict run_variogram_map(const py::object& coords, const py::object& values, double cutoff,
+                           const std::pair<double, double>& width) {
+  const MatrixArg x = matrix_arg(coords, "coords", ArraySpec{2, 2, 2, 2});
+  const MatrixArg z = matrix_arg(values, "values", ArraySpec{1, 2, -1, 1});
+  VariogramMapOptions o;
+  o.cutoff = cutoff;
+  o.width_x = width.first;
+  o.width_y = width.second;
+  VariogramMap m;
+  {
+    py::gil_scoped_release release;
+    m = variogram_map(x.data, z.data, o);
+  }
+  Eigen::MatrixXd gamma(m.rows, m.columns), pairs(m.rows, m.columns);
+  for (int r = 0; r < m.rows; ++r)
+    for (int c = 0; c < m.columns; ++c) {
+      const auto k = static_cast<std::size_t>(r) * static_cast<std::size_t>(m.columns) + static_cast<std::size_t>(c);
+      gamma(r, c) = m.gamma[k];
+      pairs(r, c) = static_cast<double>(m.pairs[k]);
+    }
+  py::dict d;
+  d["dx"] = to_numpy(m.lag_x);
+  d["dy"] = to_numpy(m.lag_y);
+  d["gamma"] = to_numpy(gamma);
+  d["pairs"] = to_numpy(pairs);
+  return d;
 }
 
 /// errfield.cross_variogram: direct and cross variograms as a dict of NumPy arrays, gamma (bins, P, P).
@@ -418,6 +469,20 @@ void bind_variogram(py::module_& m) {
         "Returns an EmpiricalVariogram with NumPy arrays lag_lo, lag_hi, lag_mean, gamma (value unit^2), pairs.\n"
         "Releases the GIL; runs OpenMP on `threads` threads (0 = default), result independent of it.");
 
+  m.def("variogram_cloud", &run_variogram_cloud, py::arg("coords"), py::arg("values"), py::kw_only(), py::arg("cutoff"),
+        py::arg("max_pairs") = VariogramCloudOptions{}.max_pairs,
+        "Variogram cloud, as `errfield variogram --cloud` and gstat's variogram(..., cloud = TRUE): every pair (i, j),\n"
+        "i > j, at a distance <= cutoff, ordered by i then j.\n\n"
+        "coords: (N, D); values: (N,) or (N, K) (gamma summed over components).\n"
+        "Returns a dict of NumPy arrays: left, right (0-based rows; gstat's are these + 1), dist, gamma = 0.5 (z_i - z_j)^2.\n"
+        "More than max_pairs pairs raises errfield.ResourceError before anything is stored.");
+  m.def("variogram_map", &run_variogram_map, py::arg("coords"), py::arg("values"), py::kw_only(), py::arg("cutoff"),
+        py::arg("width"),
+        "Variogram map of 2-D data, as `errfield variogram --map` and gstat's variogram(..., map = TRUE):\n"
+        "cells of width=(DX, DY) centred on -cutoff + k*width, each pair counted at +s and -s.\n\n"
+        "coords: (N, 2); values: (N,) or (N, K).\n"
+        "Returns a dict: dx (columns,) and dy (rows,, decreasing) cell centres, gamma and pairs (rows, columns)\n"
+        "(gamma NaN where pairs is 0); row 0 is the largest dy, as gstat orders its cells.");
   m.def("cross_variogram", &run_cross_variogram, py::arg("coords"), py::arg("values"), py::arg("bins"), py::kw_only(),
         py::arg("convention") = "paper", py::arg("pair_fraction") = 1.0, py::arg("seed") = 0, py::arg("threads") = 0,
         "Direct and cross empirical variograms (Matheron) of P >= 2 value components, as\n"

@@ -45,6 +45,33 @@ def variogram(
     covariates: ArrayLike | None = None,
 ) -> EmpiricalVariogram: ...
 
+def variogram_cloud(
+    coords: ArrayLike,
+    values: ArrayLike,
+    *,
+    cutoff: float,
+    max_pairs: int = 1000000,
+) -> dict[str, Any]: ...
+def variogram_map(
+    coords: ArrayLike,
+    values: ArrayLike,
+    *,
+    cutoff: float,
+    width: tuple[float, float],
+) -> dict[str, Any]: ...
+def indicator_kriging(
+    coords: ArrayLike,
+    values: ArrayLike,
+    targets: ArrayLike,
+    thresholds: Sequence[float],
+    models: VariogramModel | str | Sequence[VariogramModel | str],
+    *,
+    kind: str = "ordinary",
+    backend: str | None = None,
+    neighbors: int | None = None,
+    radius: float | None = None,
+    order_correction: bool = True,
+) -> dict[str, Any]: ...
 def cross_variogram(
     coords: ArrayLike,
     values: ArrayLike,

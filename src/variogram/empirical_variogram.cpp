@@ -1,5 +1,6 @@
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/heterotopic_variogram.hpp"
+#include "errfield/variogram_cloud.hpp"
 
 #include "errfield/thread_count.hpp"
 
@@ -719,5 +720,131 @@ ERRFIELD_VARIOGRAM_INSTANTIATE_METRICS(Eigen::Vector2d)
 ERRFIELD_VARIOGRAM_INSTANTIATE_METRICS(Eigen::Vector3d)
 ERRFIELD_VARIOGRAM_INSTANTIATE_METRICS(detail::Location6d)
 ERRFIELD_VARIOGRAM_INSTANTIATE_METRICS(Eigen::VectorXd)
+
+// ---- variogram cloud and map (variogram_cloud.hpp) ----
+
+namespace {
+
+void check_cloud_inputs(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const char* what) {
+  detail::check_variogram_values(z, static_cast<std::size_t>(x.rows()));
+  if (x.cols() < 1) throw ArgumentError(std::string(what) + ": locations have 0 coordinates; expected at least 1");
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    for (Eigen::Index c = 0; c < x.cols(); ++c)
+      if (!std::isfinite(x(i, c))) detail::throw_bad_coordinate(static_cast<std::size_t>(i), static_cast<int>(c), x(i, c));
+}
+
+double half_squared_difference(const Eigen::MatrixXd& z, Eigen::Index i, Eigen::Index j) {
+  double s = 0.0;
+  for (Eigen::Index c = 0; c < z.cols(); ++c) {
+    const double d = z(i, c) - z(j, c);
+    s += d * d;
+  }
+  return 0.5 * s;
+}
+
+}  // namespace
+
+VariogramCloud variogram_cloud(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const VariogramCloudOptions& o) {
+  if (!(o.cutoff > 0.0) || !std::isfinite(o.cutoff))
+    throw ArgumentError("variogram cloud: cutoff = " + format_number(o.cutoff) + "; expected a finite value > 0");
+  check_cloud_inputs(x, z, "variogram cloud");
+  if (x.rows() > static_cast<Eigen::Index>(std::numeric_limits<std::uint32_t>::max()))
+    throw ResourceError("variogram cloud: " + std::to_string(x.rows()) + " locations; at most 2^32 - 1");
+  const int d = static_cast<int>(x.cols());
+  o.direction.check_dimension(d);
+  const kernels::DirectionCone cone = detail::variogram_direction_cone(o.direction, nullptr, 0, d);
+  const bool directional = !o.direction.is_all() && kernels::cone_selects(cone);
+  std::vector<double> s(static_cast<std::size_t>(d));
+  // Visits the pairs (i > j) within the cutoff and the cone, in gstat's order; stops when f says so.
+  const auto for_each_pair = [&](auto&& f) {
+    for (Eigen::Index i = 1; i < x.rows(); ++i)
+      for (Eigen::Index j = 0; j < i; ++j) {
+        double h2 = 0.0;
+        for (int a = 0; a < d; ++a) {
+          s[static_cast<std::size_t>(a)] = x(i, a) - x(j, a);
+          h2 += s[static_cast<std::size_t>(a)] * s[static_cast<std::size_t>(a)];
+        }
+        // Decided on the distance reported (not on h2 against cutoff^2, which rounds differently).
+        const double h = std::sqrt(h2);
+        if (!(h <= o.cutoff)) continue;
+        if (directional && !kernels::direction_accepts(cone, s.data())) continue;
+        if (!f(i, j, h)) return;
+      }
+  };
+  // Count first, so that a cloud over the budget is refused before anything is stored.
+  std::uint64_t count = 0;
+  for_each_pair([&](Eigen::Index, Eigen::Index, double) { return ++count <= o.max_pairs; });
+  if (count > o.max_pairs)
+    throw ResourceError("variogram cloud: more than " + std::to_string(o.max_pairs) + " pairs within the cutoff " +
+                        format_number(o.cutoff) + " (" + std::to_string(x.rows()) +
+                        " locations); raise the budget (variogram --max-pairs) or give a shorter cutoff");
+  VariogramCloud cloud;
+  cloud.left.reserve(count);
+  cloud.right.reserve(count);
+  cloud.dist.reserve(count);
+  cloud.gamma.reserve(count);
+  for_each_pair([&](Eigen::Index i, Eigen::Index j, double h) {
+    cloud.left.push_back(static_cast<std::uint32_t>(i));
+    cloud.right.push_back(static_cast<std::uint32_t>(j));
+    cloud.dist.push_back(h);
+    cloud.gamma.push_back(half_squared_difference(z, i, j));
+    return true;
+  });
+  return cloud;
+}
+
+VariogramMap variogram_map(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const VariogramMapOptions& o) {
+  if (!(o.cutoff > 0.0) || !std::isfinite(o.cutoff))
+    throw ArgumentError("variogram map: cutoff = " + format_number(o.cutoff) + "; expected a finite value > 0");
+  for (const double w : {o.width_x, o.width_y})
+    if (!(w > 0.0) || !std::isfinite(w) || w > 2.0 * o.cutoff)
+      throw ArgumentError("variogram map: cell width " + format_number(w) + "; expected a finite value in (0, 2 x cutoff = " +
+                          format_number(2.0 * o.cutoff) + "]");
+  if (x.cols() != 2)
+    throw ArgumentError("variogram map: locations have " + std::to_string(x.cols()) +
+                        " coordinates; a variogram map is of 2-D lag vectors (give 2 coordinates)");
+  check_cloud_inputs(x, z, "variogram map");
+  // R's length(seq(-cutoff, cutoff, by = width)), which sizes gstat's grid.
+  const auto cells = [&](double w) { return static_cast<std::int64_t>(std::floor(2.0 * o.cutoff / w + 1e-10)) + 1; };
+  const std::int64_t nx = cells(o.width_x), ny = cells(o.width_y);
+  constexpr std::int64_t kMaxCells = 4'000'000;
+  if (nx * ny > kMaxCells)
+    throw ResourceError("variogram map: " + std::to_string(nx) + " x " + std::to_string(ny) + " cells; at most " +
+                        std::to_string(kMaxCells) + " (wider cells or a shorter cutoff)");
+  VariogramMap m;
+  m.columns = static_cast<int>(nx);
+  m.rows = static_cast<int>(ny);
+  // gstat's grid: cell centres from -cutoff in steps of the width; left edge half a cell before
+  // the first centre, top edge half a cell above the last.
+  const double x_left = -o.cutoff - 0.5 * o.width_x;
+  const double y_top = -o.cutoff + (static_cast<double>(ny) - 0.5) * o.width_y;
+  for (std::int64_t c = 0; c < nx; ++c) m.lag_x.push_back(-o.cutoff + static_cast<double>(c) * o.width_x);
+  for (std::int64_t r = 0; r < ny; ++r) m.lag_y.push_back(-o.cutoff + static_cast<double>(ny - 1 - r) * o.width_y);
+  m.pairs.assign(static_cast<std::size_t>(nx * ny), 0);
+  std::vector<double> sum(static_cast<std::size_t>(nx * ny), 0.0);
+  const double x_right = x_left + static_cast<double>(nx) * o.width_x;
+  const double y_bottom = y_top - static_cast<double>(ny) * o.width_y;
+  const auto add = [&](double sx, double sy, double g) {
+    if (sx < x_left || sx > x_right || sy > y_top || sy < y_bottom) return;
+    auto c = static_cast<std::int64_t>(std::floor((sx - x_left) / o.width_x));
+    auto r = static_cast<std::int64_t>(std::floor((y_top - sy) / o.width_y));
+    c = std::min(c, nx - 1);  // on the right edge
+    r = std::min(r, ny - 1);  // on the bottom edge
+    const auto k = static_cast<std::size_t>(r * nx + c);
+    ++m.pairs[k];
+    sum[k] += g;
+  };
+  for (Eigen::Index i = 1; i < x.rows(); ++i)
+    for (Eigen::Index j = 0; j < i; ++j) {
+      const double sx = x(i, 0) - x(j, 0), sy = x(i, 1) - x(j, 1);
+      const double g = half_squared_difference(z, i, j);
+      add(sx, sy, g);
+      add(-sx, -sy, g);
+    }
+  m.gamma.resize(sum.size());
+  for (std::size_t k = 0; k < sum.size(); ++k)
+    m.gamma[k] = m.pairs[k] ? sum[k] / static_cast<double>(m.pairs[k]) : std::numeric_limits<double>::quiet_NaN();
+  return m;
+}
 
 }  // namespace errfield

@@ -19,6 +19,7 @@
 #include "errfield/conditional_simulation.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/kriging.hpp"
+#include "errfield/indicator_kriging.hpp"
 #include "support/cli_harness.hpp"
 
 namespace errfield {
@@ -295,6 +296,40 @@ TEST_F(KrigingCli, ModelAutoKeepsTheLikelihoodFamiliesBeyond3000Samples) {
   const double nugget = std::stod(out.substr(at + 10));
   EXPECT_GT(nugget, 0.5 * 4e-4);
   EXPECT_LT(nugget, 2.0 * 4e-4);
+}
+
+// interpolate --indicator writes p_lt_<T> (order-corrected) and var_lt_<T> as the library's
+// indicator_kriging with one model per threshold (here with the local back end), and refuses
+// misuse with exit 2 naming the option.
+TEST_F(KrigingCli, IndicatorWritesTheLibrarysProbabilitiesAndRefusesMisuse) {
+  const std::string models = "sph(sill=0.15,range=500)+nug(0.02);exp(sill=0.2,range=200)+nug(0.05);sph(sill=0.1,range=300)";
+  const std::string base = "interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("T.csv") +
+                           " --coords x,y,z --value v --neighbors 30";
+  auto r = run(base + " --indicator -0.5,0,0.5 --model \"" + models + "\" --out " + path("P.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output();
+  const CsvTable out = CsvTable::read(path("P.csv"));
+  EXPECT_EQ(out.header(), (std::vector<std::string>{"id", "x", "y", "z", "p_lt_-0.5", "p_lt_0", "p_lt_0.5", "var_lt_-0.5",
+                                                    "var_lt_0", "var_lt_0.5"}));
+  std::vector<VariogramModel> m;
+  for (const char* t : {"sph(sill=0.15,range=500)+nug(0.02)", "exp(sill=0.2,range=200)+nug(0.05)", "sph(sill=0.1,range=300)"})
+    m.push_back(VariogramModel::parse(t));
+  KrigingOptions opt;
+  opt.backend = KrigingBackend::Local;
+  opt.neighbors = 30;
+  const std::vector<double> thresholds{-0.5, 0.0, 0.5};
+  const auto ik = indicator_kriging<P3>(pts_, vals_, targets_, thresholds, m, opt);
+  EXPECT_EQ(out.numeric_columns({"p_lt_-0.5", "p_lt_0", "p_lt_0.5"}), ik.probability);
+  EXPECT_EQ(out.numeric_columns({"var_lt_-0.5", "var_lt_0", "var_lt_0.5"}), ik.variance);
+  EXPECT_THAT(r.err, HasSubstr("order relations"));
+  r = run(base + " --model \"" + kModel + "\" --order-correction none --out " + path("Q.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("--indicator"));
+  r = run(base + " --indicator 0.5,0 --model \"" + kModel + "\" --out " + path("Q.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("--indicator"));
+  r = run(base + " --indicator -0.5,0,0.5 --model \"" + kModel + ";" + kModel + "\" --out " + path("Q.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("2 models"));
 }
 
 }  // namespace

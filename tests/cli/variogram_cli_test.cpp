@@ -376,5 +376,79 @@ TEST_F(VariogramCli, FitVariogramByTheVecchiaLikelihoodWritesTheLibrarysFit) {
   EXPECT_EQ(nlohmann::json::parse(read("e.json"))["fit"]["likelihood"], "exact");
 }
 
+// --cloud over its pair budget exits 3 before writing and names the option that raises it; at the
+// budget it writes every pair. --map and --cloud refuse what does not apply with exit 2.
+TEST_F(VariogramCli, CloudKeepsItsPairBudgetAndMapRefusesWhatDoesNotApply) {
+  Eigen::MatrixXd x, z;
+  write("in.csv", simulated_csv(40, 7, &x, &z));
+  std::size_t pairs = 0;  // within the cutoff 300 in x, y
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    for (Eigen::Index j = 0; j < i; ++j) pairs += (x.row(i).head(2) - x.row(j).head(2)).norm() <= 300.0;
+  ASSERT_GT(pairs, 10u);
+  const std::string base = "variogram --input " + path("in.csv") + " --coords x,y --value dL --cloud --cutoff 300 --out " +
+                           path("cloud.csv");
+  auto r = run(base + " --max-pairs " + std::to_string(pairs - 1));
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_NE(r.err.find("--max-pairs"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("cloud.csv")));
+  r = run(base + " --max-pairs " + std::to_string(pairs));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CsvTable t = CsvTable::read(path("cloud.csv"));
+  EXPECT_EQ(t.header(), (std::vector<std::string>{"left", "right", "dist", "gamma"}));
+  EXPECT_EQ(t.row_count(), pairs);
+  r = run("variogram --input " + path("in.csv") + " --coords x,y --value dL --map 50,50");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--cutoff"), std::string::npos) << r.err;
+  r = run("variogram --input " + path("in.csv") + " --coords x,y,z --value dL --map 50,50 --cutoff 300");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("2 coordinates"), std::string::npos) << r.err;
+  r = run(base + " --estimator cressie");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--estimator"), std::string::npos) << r.err;
+}
+
+// variogram --plot and fit-variogram --plot write well-formed SVG (parsed by Python's XML parser):
+// one point per non-empty bin, each labelled with its pair count, and the model's curve in the fit's
+// picture only; a picture that cannot be written leaves --out unwritten too (both or neither).
+TEST_F(VariogramCli, PlotsAreWellFormedSvgWithAPointPerBinAndTheFittedCurve) {
+  Eigen::MatrixXd x, z;
+  write("in.csv", simulated_csv(120, 3, &x, &z));
+  auto r = run("variogram --input " + path("in.csv") + " --coords x,y,z --value dL --bins 0:1000:100 --out " +
+               path("v.csv") + " --plot " + path("v.svg"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::size_t bins = 0;
+  std::string counts;
+  const CsvTable v = CsvTable::read(path("v.csv"));
+  for (std::size_t i = 0; i < v.row_count(); ++i)
+    if (v.cell(i, v.column_index("pairs")) != std::string_view("0")) {
+      ++bins;
+      counts += std::string(v.cell(i, v.column_index("pairs"))) + ",";
+    }
+  r = run("fit-variogram --input " + path("v.csv") + " --model sph --plot " + path("f.svg") + " --out " + path("f.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  write("check.py",
+        "import sys, xml.etree.ElementTree as E\n"
+        "ns = '{http://www.w3.org/2000/svg}'\n"
+        "for f in sys.argv[1:]:\n"
+        "    root = E.parse(f).getroot()\n"
+        "    circles = [c for c in root.iter(ns + 'circle') if c.get('class') == 'bin']\n"
+        "    labels = ''.join(t.text + ',' for t in root.iter(ns + 'text') if t.get('class') == 'pairs')\n"
+        "    model = [p for p in root.iter(ns + 'path') if p.get('id') == 'model']\n"
+        "    print(len(circles), labels, len(model), len(model[0].get('d').split('L')) if model else 0)\n");
+  const std::string cmd = "/usr/bin/python3 " + path("check.py") + " " + path("v.svg") + " " + path("f.svg") + " > " +
+                          path("check.out") + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << CsvTable::read(path("v.csv")).row_count();
+  std::ifstream in(path("check.out"));
+  std::string line_v, line_f;
+  std::getline(in, line_v);
+  std::getline(in, line_f);
+  EXPECT_EQ(line_v, std::to_string(bins) + " " + counts + " 0 0");
+  EXPECT_EQ(line_f, std::to_string(bins) + " " + counts + " 1 301");
+  fs::create_directories(path("dir.svg"));
+  r = run("fit-variogram --input " + path("v.csv") + " --model sph --plot " + path("dir.svg") + " --out " + path("g.json"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_FALSE(fs::exists(path("g.json")));
+}
+
 }  // namespace
 }  // namespace errfield

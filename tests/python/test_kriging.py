@@ -261,3 +261,20 @@ def test_block_prediction_matches_cli(tmp_path):
     assert np.all(var < k.predict(t)[1])
     with pytest.raises(errfield.ArgumentError):
         k.predict(t, block=[40.0])
+
+
+def test_indicator_kriging_is_kriging_of_the_strict_indicators_then_gslib_order_correction():
+    rng = np.random.default_rng(3606)
+    x = rng.uniform(0.0, 10.0, size=(40, 2))
+    z = np.round(rng.uniform(0.0, 10.0, size=40))  # integers: some equal to a threshold
+    t = rng.uniform(0.0, 10.0, size=(20, 2))
+    models = ["sph(sill=0.15,range=4)+nug(0.05)", "exp(sill=0.2,range=1)+nug(0.02)", "sph(sill=0.1,range=3)+nug(0.08)"]
+    r = errfield.indicator_kriging(x, z, t, [3.0, 5.0, 7.0], models)
+    for k, (threshold, model) in enumerate(zip([3.0, 5.0, 7.0], models)):
+        mean, var = errfield.Kriging(x, (z < threshold).astype(float), model).predict(t)
+        np.testing.assert_array_equal(r["raw"][:, k], mean)
+        np.testing.assert_array_equal(r["variance"][:, k], var)
+    q = np.clip(r["raw"], 0.0, 1.0)
+    up = np.maximum.accumulate(q, axis=1)
+    down = np.minimum.accumulate(q[:, ::-1], axis=1)[:, ::-1]
+    np.testing.assert_allclose(r["probability"], 0.5 * (up + down), atol=1e-15)

@@ -116,3 +116,27 @@ def test_thread_limit_is_the_clis(tmp_path):
     with pytest.raises(errfield.ArgumentError, match="threads is -1"):
         errfield.variogram(x, z, [0.0, 100.0, 200.0], threads=-1)
     assert errfield.variogram(x, z, [0.0, 100.0, 200.0], threads=1024).pairs.sum() > 0
+
+
+def test_cloud_and_map_match_a_brute_force():
+    rng = np.random.default_rng(36)
+    x = rng.uniform(0.0, 100.0, size=(50, 2))
+    z = rng.standard_normal(50)
+    c = errfield.variogram_cloud(x, z, cutoff=30.0)
+    pairs = [(i, j) for i in range(50) for j in range(i) if np.linalg.norm(x[i] - x[j]) <= 30.0]
+    assert list(zip(c["left"].tolist(), c["right"].tolist())) == pairs
+    np.testing.assert_allclose(c["gamma"], [0.5 * (z[i] - z[j]) ** 2 for i, j in pairs], rtol=1e-14)
+    with pytest.raises(errfield.ResourceError):
+        errfield.variogram_cloud(x, z, cutoff=30.0, max_pairs=len(pairs) - 1)
+    m = errfield.variogram_map(x, z, cutoff=40.0, width=(10.0, 20.0))
+    assert m["gamma"].shape == (len(m["dy"]), len(m["dx"])) == (5, 9)
+    n = np.zeros_like(m["pairs"])
+    for i in range(50):
+        for j in range(50):
+            if i != j:
+                s = x[i] - x[j]
+                col = np.nonzero(np.abs(s[0] - m["dx"]) < 5.0)[0]
+                row = np.nonzero(np.abs(s[1] - m["dy"]) < 10.0)[0]
+                if len(col) and len(row):
+                    n[row[0], col[0]] += 1
+    np.testing.assert_array_equal(m["pairs"], n)

@@ -1,0 +1,160 @@
+#pragma once
+// `variogram --plot` and `fit-variogram --plot`: an SVG picture of an empirical variogram - one
+// point per non-empty bin, its area proportional to the bin's pair count and the count written
+// beside it (as gstat's plot(v, plot.numbers = TRUE)) - with, for fit-variogram, the fitted model
+// as a curve. Hand-written SVG 1.1 text (no plotting dependency), which any browser shows.
+// Axes start at 0 and have "nice" ticks (1, 2 or 5 times a power of ten); units are taken from the
+// column headers when they carry one ("x [mm]").
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "errfield/csv_table.hpp"
+#include "errfield/variogram_model.hpp"
+
+namespace errfield::cli {
+
+struct VariogramPlotBin {
+  double lag = 0.0, gamma = 0.0;
+  std::uint64_t pairs = 0;
+};
+
+struct VariogramPlot {
+  std::vector<VariogramPlotBin> bins;  ///< non-empty bins
+  std::optional<VariogramModel> model; ///< drawn as a curve (its isotropic part) when given
+  std::string title;                   ///< e.g. "dL" or the model text
+  std::string lag_label = "lag";       ///< x axis, with its unit if known: "lag [mm]"
+  std::string gamma_label = "semivariance";
+};
+
+namespace variogram_svg {
+
+/// Text safe inside SVG elements and attributes.
+inline std::string escaped(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+/// A tick step of 1, 2 or 5 times a power of ten giving about `target` intervals over [0, top].
+inline double nice_step(double top, int target) {
+  const double raw = top / target;
+  const double p = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double m : {1.0, 2.0, 5.0, 10.0})
+    if (m * p >= raw) return m * p;
+  return 10.0 * p;
+}
+
+/// Coordinates in the picture, rounded to 0.01 px (short text, no visible difference).
+inline std::string px(double v) {
+  std::ostringstream s;
+  s << std::round(v * 100.0) / 100.0;
+  return s.str();
+}
+
+/// A tick value with at most 10 significant digits (k * 0.2 prints 0.6, not 0.6000000000000001).
+inline std::string tick_label(double v) {
+  std::ostringstream s;
+  s.precision(10);
+  s << v;
+  return s.str();
+}
+
+}  // namespace variogram_svg
+
+/// The SVG document. Throws nothing; an empty `bins` gives empty axes.
+inline std::string variogram_svg_text(const VariogramPlot& p) {
+  using namespace variogram_svg;
+  constexpr double kWidth = 720, kHeight = 480, kLeft = 80, kRight = 30, kTop = 50, kBottom = 60;
+  const double plot_w = kWidth - kLeft - kRight, plot_h = kHeight - kTop - kBottom;
+  double max_lag = 0.0, max_gamma = 0.0;
+  std::uint64_t max_pairs = 1;
+  for (const auto& b : p.bins) {
+    max_lag = std::max(max_lag, b.lag);
+    max_gamma = std::max(max_gamma, b.gamma);
+    max_pairs = std::max(max_pairs, b.pairs);
+  }
+  if (!(max_lag > 0.0)) max_lag = 1.0;
+  const double x_step = nice_step(max_lag * 1.05, 6);
+  const double x_top = std::ceil(max_lag * 1.05 / x_step) * x_step;
+  // The model curve on 300 lags from just above 0 (where a nugget jumps) to the axis' end.
+  std::vector<std::pair<double, double>> curve;
+  if (p.model) {
+    const VariogramModel iso = p.model->isotropic_part();
+    for (int k = 0; k <= 300; ++k) {
+      const double h = k == 0 ? 1e-9 * x_top : x_top * k / 300.0;
+      const double g = iso.gamma(h);
+      if (std::isfinite(g)) {
+        curve.emplace_back(h, g);
+        max_gamma = std::max(max_gamma, g);
+      }
+    }
+  }
+  if (!(max_gamma > 0.0)) max_gamma = 1.0;
+  const double y_step = nice_step(max_gamma * 1.1, 5);
+  const double y_top = std::ceil(max_gamma * 1.1 / y_step) * y_step;
+  const int x_ticks = static_cast<int>(std::lround(x_top / x_step));
+  const int y_ticks = static_cast<int>(std::lround(y_top / y_step));
+  const auto X = [&](double h) { return kLeft + plot_w * h / x_top; };
+  const auto Y = [&](double g) { return kTop + plot_h * (1.0 - g / y_top); };
+
+  std::ostringstream s;
+  s << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+    << "<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"" << kWidth << "\" height=\"" << kHeight
+    << "\" viewBox=\"0 0 " << kWidth << " " << kHeight << "\" font-family=\"sans-serif\" font-size=\"12\">\n"
+    << "<title>" << escaped(p.title.empty() ? std::string("empirical variogram") : p.title) << "</title>\n"
+    << "<rect x=\"0\" y=\"0\" width=\"" << kWidth << "\" height=\"" << kHeight << "\" fill=\"white\"/>\n";
+  s << "<text x=\"" << px(kLeft) << "\" y=\"28\" font-size=\"15\">" << escaped(p.title) << "</text>\n";
+  // Grid lines and ticks.
+  s << "<g id=\"axes\" stroke=\"#000\" fill=\"none\">\n";
+  s << "<path d=\"M" << px(kLeft) << "," << px(kTop) << " V" << px(kTop + plot_h) << " H" << px(kLeft + plot_w)
+    << "\"/>\n";
+  for (int k = 0; k <= x_ticks; ++k) s << "<path d=\"M" << px(X(k * x_step)) << "," << px(kTop + plot_h) << " v5\"/>\n";
+  for (int k = 0; k <= y_ticks; ++k) s << "<path d=\"M" << px(kLeft) << "," << px(Y(k * y_step)) << " h-5\"/>\n";
+  s << "</g>\n<g id=\"tick-labels\" fill=\"#000\">\n";
+  for (int k = 0; k <= x_ticks; ++k)
+    s << "<text x=\"" << px(X(k * x_step)) << "\" y=\"" << px(kTop + plot_h + 20) << "\" text-anchor=\"middle\">"
+      << tick_label(k * x_step) << "</text>\n";
+  for (int k = 0; k <= y_ticks; ++k)
+    s << "<text x=\"" << px(kLeft - 8) << "\" y=\"" << px(Y(k * y_step) + 4) << "\" text-anchor=\"end\">"
+      << tick_label(k * y_step) << "</text>\n";
+  s << "<text x=\"" << px(kLeft + plot_w / 2) << "\" y=\"" << px(kHeight - 15) << "\" text-anchor=\"middle\">"
+    << escaped(p.lag_label) << "</text>\n";
+  s << "<text transform=\"translate(20," << px(kTop + plot_h / 2) << ") rotate(-90)\" text-anchor=\"middle\">"
+    << escaped(p.gamma_label) << "</text>\n</g>\n";
+  if (!curve.empty()) {
+    s << "<path id=\"model\" fill=\"none\" stroke=\"#c0392b\" stroke-width=\"2\" d=\"";
+    for (std::size_t k = 0; k < curve.size(); ++k)
+      s << (k ? " L" : "M") << px(X(curve[k].first)) << "," << px(Y(std::min(curve[k].second, y_top)));
+    s << "\"><title>" << escaped(p.model->to_string()) << "</title></path>\n";
+    s << "<text x=\"" << px(kLeft + plot_w) << "\" y=\"28\" text-anchor=\"end\" fill=\"#c0392b\">"
+      << escaped(p.model->to_string()) << "</text>\n";
+  }
+  // One point per bin: area proportional to its pairs, the count beside it.
+  s << "<g id=\"bins\" fill=\"#1f4e79\">\n";
+  for (const auto& b : p.bins) {
+    const double r = 2.0 + 5.0 * std::sqrt(static_cast<double>(b.pairs) / static_cast<double>(max_pairs));
+    s << "<circle class=\"bin\" cx=\"" << px(X(b.lag)) << "\" cy=\"" << px(Y(b.gamma)) << "\" r=\"" << px(r)
+      << "\"><title>lag " << format_number(b.lag) << ", gamma " << format_number(b.gamma) << ", " << b.pairs
+      << " pairs</title></circle>\n"
+      << "<text class=\"pairs\" x=\"" << px(X(b.lag) + r + 2) << "\" y=\"" << px(Y(b.gamma) - r - 2)
+      << "\" font-size=\"10\">" << b.pairs << "</text>\n";
+  }
+  s << "</g>\n</svg>\n";
+  return s.str();
+}
+
+}  // namespace errfield::cli
