@@ -1,5 +1,9 @@
 // Node grids and raster files (raster_file.hpp). Compiled on its own (not in a unity batch): only
 // this file sees GDAL's headers, and it compiles without them, refusing rasters by name.
+//
+// GDAL is loaded with dlopen the first time a raster is read or written, not linked: libgdal pulls
+// in ~100 shared libraries, whose loading made every `errfield` process 0.15-0.2 s slower to start
+// (measured: `errfield --help` 0.03 s -> 0.2 s), rasters or not; the CLI tests start it hundreds of times.
 
 #include "cli/raster_file.hpp"
 
@@ -9,6 +13,7 @@
 #include <cmath>
 #include <mutex>
 
+#include <dlfcn.h>
 #include <unistd.h>
 
 #include "errfield/csv_table.hpp"
@@ -19,6 +24,7 @@
 #include <cpl_error.h>
 #include <cpl_vsi.h>
 #include <gdal.h>
+#include <gdal_frmts.h>
 #endif
 
 namespace errfield::cli {
@@ -125,19 +131,76 @@ double CovariateRaster::at(double x, double y, const std::string& label) const {
 
 namespace {
 
-// GDAL keeps its errors per thread; its drivers are registered once per process.
-void start_gdal() {
-  static std::once_flag once;
-  std::call_once(once, [] {
+// The GDAL functions errfield calls, looked up in the library loaded at run time.
+#define ERRFIELD_GDAL_FUNCTIONS(X)                                                                          \
+  X(CPLSetConfigOption) X(CPLErrorReset) X(CPLGetLastErrorMsg) X(CPLPushErrorHandler) X(CPLQuietErrorHandler) \
+  X(GDALAllRegister) X(GDALClose) X(GDALOpen) X(GDALGetDriverByName) X(GDALCreate) X(GDALCreateCopy)          \
+  X(GDALSetGeoTransform) X(GDALGetGeoTransform) X(GDALGetRasterBand) X(GDALGetRasterCount)                   \
+  X(GDALGetRasterXSize) X(GDALGetRasterYSize) X(GDALSetDescription) X(GDALSetRasterNoDataValue)              \
+  X(GDALGetRasterNoDataValue) X(GDALRasterIO) X(VSIGetMemFileBuffer) X(VSIUnlink) X(GDALRegister_GTiff)      \
+  X(GDALRegister_AAIGrid) X(GDALRegister_MEM)
+
+struct GdalApi {
+#define ERRFIELD_GDAL_POINTER(name) decltype(&::name) name = nullptr;
+  ERRFIELD_GDAL_FUNCTIONS(ERRFIELD_GDAL_POINTER)
+#undef ERRFIELD_GDAL_POINTER
+};
+
+// Loads GDAL once per process (the library found by CMake, ERRFIELD_GDAL_LIBRARY, else its
+// soname), registers its drivers; throws Error when it cannot be loaded. GDAL keeps its errors per
+// thread: each use starts with a reset.
+const GdalApi& gdal() {
+  static const GdalApi api = [] {
+    void* handle = nullptr;
+    std::string tried;
+    for (const char* name : {ERRFIELD_GDAL_LIBRARY, "libgdal.so", "libgdal.so.32"}) {
+      handle = ::dlopen(name, RTLD_NOW | RTLD_LOCAL);
+      if (handle) break;
+      const char* why = ::dlerror();
+      tried += std::string(tried.empty() ? "" : "; ") + (why ? why : name);
+    }
+    if (!handle) throw Error("rasters: cannot load GDAL (" + tried + "); install Debian's libgdal-dev (scripts/setup.sh)");
+    GdalApi a;
+#define ERRFIELD_GDAL_LOOKUP(name)                                                              \
+  a.name = reinterpret_cast<decltype(&::name)>(::dlsym(handle, #name));                          \
+  if (!a.name) throw Error(std::string("rasters: the GDAL library has no function ") + #name);
+    ERRFIELD_GDAL_FUNCTIONS(ERRFIELD_GDAL_LOOKUP)
+#undef ERRFIELD_GDAL_LOOKUP
+    // Errors come back as messages in errfield's own words, not printed by GDAL on stderr.
+    a.CPLPushErrorHandler(a.CPLQuietErrorHandler);
     // No .aux.xml side files: the files errfield writes are the whole output.
-    CPLSetConfigOption("GDAL_PAM_ENABLED", "NO");
-    GDALAllRegister();
-  });
-  CPLErrorReset();
+    a.CPLSetConfigOption("GDAL_PAM_ENABLED", "NO");
+    // GDAL reads an ESRI ASCII grid of decimals as Float32 unless told: a covariate would lose digits.
+    a.CPLSetConfigOption("AAIGRID_DATATYPE", "Float64");
+    // The three drivers errfield writes with; all others only when a covariate raster needs one
+    // (open_raster): registering every driver took ~0.1 s a process.
+    a.GDALRegister_MEM();
+    a.GDALRegister_GTiff();
+    a.GDALRegister_AAIGrid();
+    return a;
+  }();
+  return api;
+}
+
+const GdalApi& start_gdal() {
+  const GdalApi& g = gdal();
+  g.CPLErrorReset();
+  return g;
+}
+
+// Opens a raster for reading: GeoTIFF and ESRI ASCII grids with the drivers registered, any other
+// format after registering all of GDAL's drivers.
+GDALDatasetH open_raster(const std::string& path) {
+  const GdalApi& g = start_gdal();
+  if (GDALDatasetH h = g.GDALOpen(path.c_str(), GA_ReadOnly)) return h;
+  static std::once_flag all;
+  std::call_once(all, [&] { g.GDALAllRegister(); });
+  g.CPLErrorReset();
+  return g.GDALOpen(path.c_str(), GA_ReadOnly);
 }
 
 std::string gdal_message() {
-  const char* m = CPLGetLastErrorMsg();
+  const char* m = gdal().CPLGetLastErrorMsg();
   return m && *m ? std::string(" (GDAL: ") + m + ")" : std::string();
 }
 
@@ -146,12 +209,12 @@ struct Dataset {
   GDALDatasetH h = nullptr;
   explicit Dataset(GDALDatasetH handle) : h(handle) {}
   ~Dataset() {
-    if (h) GDALClose(h);
+    if (h) gdal().GDALClose(h);
   }
   Dataset(const Dataset&) = delete;
   Dataset& operator=(const Dataset&) = delete;
   void close() {
-    if (h) GDALClose(h);
+    if (h) gdal().GDALClose(h);
     h = nullptr;
   }
 };
@@ -164,10 +227,10 @@ std::string vsimem_name(const char* ext) {
 // Takes the bytes of a /vsimem file and removes it.
 std::string take_memory_file(const std::string& name) {
   vsi_l_offset length = 0;
-  GByte* data = VSIGetMemFileBuffer(name.c_str(), &length, FALSE);
+  GByte* data = gdal().VSIGetMemFileBuffer(name.c_str(), &length, FALSE);
   if (!data) throw Error("raster: GDAL wrote no " + name + gdal_message());
   std::string bytes(reinterpret_cast<const char*>(data), static_cast<std::size_t>(length));
-  VSIUnlink(name.c_str());
+  gdal().VSIUnlink(name.c_str());
   return bytes;
 }
 
@@ -187,36 +250,36 @@ std::string encode_raster(RasterFormat format, const NodeGrid& grid, const std::
       throw ArgumentError("an ESRI ASCII grid has square cells (one cellsize); --grid has dx " + format_number(grid.dx) +
                           " and dy " + format_number(grid.dy) + ": give equal steps or write a GeoTIFF (.tif)");
   }
-  start_gdal();
+  (void)start_gdal();
   const int nx = static_cast<int>(grid.nx), ny = static_cast<int>(grid.ny);
   // Pixel-is-area: each node is the centre of its cell.
   double geo[6] = {grid.x_min - grid.dx / 2.0, grid.dx, 0.0, grid.y(0) + grid.dy / 2.0, 0.0, -grid.dy};
   const bool tiff = format == RasterFormat::GeoTiff;
   const std::string name = vsimem_name(tiff ? ".tif" : ".asc");
-  GDALDriverH mem = GDALGetDriverByName("MEM");
-  GDALDriverH out = GDALGetDriverByName(tiff ? "GTiff" : "AAIGrid");
+  GDALDriverH mem = gdal().GDALGetDriverByName("MEM");
+  GDALDriverH out = gdal().GDALGetDriverByName(tiff ? "GTiff" : "AAIGrid");
   if (!mem || !out) throw Error(std::string("raster: GDAL has no ") + (tiff ? "GTiff" : "AAIGrid") + " driver" + gdal_message());
-  Dataset src(GDALCreate(mem, "", nx, ny, static_cast<int>(bands.size()), GDT_Float64, nullptr));
+  Dataset src(gdal().GDALCreate(mem, "", nx, ny, static_cast<int>(bands.size()), GDT_Float64, nullptr));
   if (!src.h) throw ResourceError("raster: cannot hold " + std::to_string(grid.size()) + " nodes in memory" + gdal_message());
-  GDALSetGeoTransform(src.h, geo);
+  gdal().GDALSetGeoTransform(src.h, geo);
   std::vector<double> row_values(grid.nx);
   for (std::size_t b = 0; b < bands.size(); ++b) {
-    GDALRasterBandH band = GDALGetRasterBand(src.h, static_cast<int>(b) + 1);
-    GDALSetDescription(band, names[b].c_str());
-    GDALSetRasterNoDataValue(band, nodata);
+    GDALRasterBandH band = gdal().GDALGetRasterBand(src.h, static_cast<int>(b) + 1);
+    gdal().GDALSetDescription(band, names[b].c_str());
+    gdal().GDALSetRasterNoDataValue(band, nodata);
     for (std::size_t r = 0; r < grid.ny; ++r) {
       for (std::size_t c = 0; c < grid.nx; ++c) {
         const double v = bands[b][r * grid.nx + c];
         row_values[c] = std::isnan(v) ? nodata : v;
       }
-      if (GDALRasterIO(band, GF_Write, 0, static_cast<int>(r), nx, 1, row_values.data(), nx, 1, GDT_Float64, 0, 0) != CE_None)
+      if (gdal().GDALRasterIO(band, GF_Write, 0, static_cast<int>(r), nx, 1, row_values.data(), nx, 1, GDT_Float64, 0, 0) != CE_None)
         throw Error("raster: writing row " + std::to_string(r) + " failed" + gdal_message());
     }
   }
   // 17 significant digits: every double reads back exactly, as the CSV's shortest round-trip text.
   const char* tiff_options[] = {"COMPRESS=DEFLATE", "PREDICTOR=3", "INTERLEAVE=BAND", nullptr};
   const char* ascii_options[] = {"SIGNIFICANT_DIGITS=17", nullptr};
-  Dataset copy(GDALCreateCopy(out, name.c_str(), src.h, FALSE, const_cast<char**>(tiff ? tiff_options : ascii_options),
+  Dataset copy(gdal().GDALCreateCopy(out, name.c_str(), src.h, FALSE, const_cast<char**>(tiff ? tiff_options : ascii_options),
                               nullptr, nullptr));
   if (!copy.h) throw Error("raster: GDAL could not write the " + std::string(tiff ? "GeoTIFF" : "ESRI ASCII grid") + gdal_message());
   copy.close();  // flushes into the memory file
@@ -224,28 +287,27 @@ std::string encode_raster(RasterFormat format, const NodeGrid& grid, const std::
 }
 
 CovariateRaster read_covariate_raster(const std::string& path) {
-  start_gdal();
-  Dataset ds(GDALOpen(path.c_str(), GA_ReadOnly));
+  Dataset ds(open_raster(path));
   if (!ds.h) throw InputError(path + ": cannot be read as a raster" + gdal_message(), path);
   CovariateRaster r;
   r.path = path;
-  r.cols = static_cast<std::size_t>(GDALGetRasterXSize(ds.h));
-  r.rows = static_cast<std::size_t>(GDALGetRasterYSize(ds.h));
-  if (GDALGetRasterCount(ds.h) < 1 || r.cols == 0 || r.rows == 0) throw InputError(path + ": the raster has no band", path);
+  r.cols = static_cast<std::size_t>(gdal().GDALGetRasterXSize(ds.h));
+  r.rows = static_cast<std::size_t>(gdal().GDALGetRasterYSize(ds.h));
+  if (gdal().GDALGetRasterCount(ds.h) < 1 || r.cols == 0 || r.rows == 0) throw InputError(path + ": the raster has no band", path);
   if (r.cols * r.rows > 100'000'000)
     throw ResourceError(path + ": " + std::to_string(r.cols) + " x " + std::to_string(r.rows) +
                         " pixels; errfield reads covariate rasters of up to 100 million pixels: crop or resample it "
                         "(gdal_translate -projwin / -tr)");
-  if (GDALGetGeoTransform(ds.h, r.geo) != CE_None)
+  if (gdal().GDALGetGeoTransform(ds.h, r.geo) != CE_None)
     throw InputError(path + ": the raster has no georeferencing (geotransform); errfield cannot place the points on it", path);
   if (r.geo[2] != 0.0 || r.geo[4] != 0.0 || r.geo[1] == 0.0 || r.geo[5] == 0.0)
     throw InputError(path + ": the raster's geotransform is rotated or degenerate; warp it to north-up first (gdalwarp)", path);
-  GDALRasterBandH band = GDALGetRasterBand(ds.h, 1);
+  GDALRasterBandH band = gdal().GDALGetRasterBand(ds.h, 1);
   int has_nodata = 0;
-  const double nodata = GDALGetRasterNoDataValue(band, &has_nodata);
+  const double nodata = gdal().GDALGetRasterNoDataValue(band, &has_nodata);
   if (has_nodata) r.nodata = nodata;
   r.values.resize(r.cols * r.rows);
-  if (GDALRasterIO(band, GF_Read, 0, 0, static_cast<int>(r.cols), static_cast<int>(r.rows), r.values.data(),
+  if (gdal().GDALRasterIO(band, GF_Read, 0, 0, static_cast<int>(r.cols), static_cast<int>(r.rows), r.values.data(),
                    static_cast<int>(r.cols), static_cast<int>(r.rows), GDT_Float64, 0, 0) != CE_None)
     throw InputError(path + ": reading the raster's first band failed" + gdal_message(), path);
   return r;
