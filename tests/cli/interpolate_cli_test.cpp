@@ -229,12 +229,13 @@ class InterpolateGridCli : public testing::CliTest {
     }
     write(name, a.str());
   }
-  // Every band of each raster file, read by GDAL: {file: {"geo": [...], "bands": [{"name", "nodata", "values"}]}}.
+  // Every band of each raster file, read by GDAL (as raw Float64, row by row from the top; numpy,
+  // whose import doubled the reader's start, is not needed): {file: {"geo": [...], "bands": [{"name", "nodata", "values"}]}}.
   nlohmann::json read_rasters(const std::vector<std::string>& files) const {
     std::string list;
     for (const auto& f : files) list += (list.empty() ? "'" : ", '") + path(f) + "'";
     write("dump.py",
-          "import json\nfrom osgeo import gdal\ngdal.UseExceptions()\n"
+          "import json, struct\nfrom osgeo import gdal\ngdal.UseExceptions()\n"
           "gdal.SetConfigOption('AAIGRID_DATATYPE', 'Float64')\nout = {}\n"
           "for f in [" + list + "]:\n"
           "    d = gdal.Open(f)\n"
@@ -242,7 +243,8 @@ class InterpolateGridCli : public testing::CliTest {
           "    for b in range(1, d.RasterCount + 1):\n"
           "        band = d.GetRasterBand(b)\n"
           "        bands.append({'name': band.GetDescription(), 'nodata': band.GetNoDataValue(),\n"
-          "                      'values': [float(v) for v in band.ReadAsArray().ravel()]})\n"
+          "                      'values': list(struct.unpack('<%dd' % (d.RasterXSize * d.RasterYSize),\n"
+          "                          band.ReadRaster(buf_type=gdal.GDT_Float64)))})\n"
           "    out[f.split('/')[-1]] = {'geo': list(d.GetGeoTransform()), 'bands': bands}\n"
           "print(json.dumps(out))\n");
     FILE* p = ::popen(("/usr/bin/python3 " + path("dump.py") + " 2>&1").c_str(), "r");
@@ -350,6 +352,15 @@ TEST_F(InterpolateGridCli, NodesWithoutPredictionAreNodataAndBadGridsAreRefused)
 
   const std::string kriging = "interpolate --method kriging --model \"exp(sill=0.5,range=15)\" --samples " + path("S.csv") +
                               " --coords x,y --value v";
+  // XMAX is a node when it is a whole number of steps away, despite rounding: 0.3 / 0.1 = 2.9999999999999996.
+  r = run(kriging + " --grid 0:1:0.1,0:0.3:0.1 --out " + path("N.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output();
+  EXPECT_THAT(r.out, HasSubstr("the 11 x 4 nodes of --grid"));
+  const CsvTable nodes = CsvTable::read(path("N.csv"));
+  ASSERT_EQ(nodes.row_count(), 44u);
+  EXPECT_EQ(nodes.row(10)[0], "1");  // x = 0 + 10 * 0.1, computed per node, not summed
+  EXPECT_EQ(nodes.numeric_column("y")[0], 3 * 0.1);
+
   r = run(kriging + " --targets " + path("T.csv") + " --grid 0:40:10,5:37:10 --out " + path("P.csv"));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("--targets and --grid both give the targets"));
