@@ -223,8 +223,6 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
                 std::to_string(result.pred.cols()) + " predictions; expected " + std::to_string(m) + " x " +
                 std::to_string(pred_names.size()));
 
-  OutputTable out;
-  out.add_all_columns(targets);
   std::size_t missing = 0;
   for (Eigen::Index i = 0; i < m; ++i) missing += std::isnan(result.pred(i, 0)) ? 1 : 0;
   // Nothing predicted is a failed job, as in predict, validate and cv (a file of empty cells exited 0).
@@ -238,6 +236,13 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
     throw Error("interpolate: none of the " + std::to_string(m) + " targets of " + targets_name +
                 " got a prediction with --method " + method.name + why + "; " + a.out + " not written");
   }
+  if (raster) {  // the bands straight from the numbers: no text cells for millions of nodes
+    for (const auto& note : result.notes) std::cerr << "errfield interpolate: " << note << "\n";
+    write_raster(*raster, *grid, a, pred_names, result, m, missing, samples.row_count(), method.name);
+    return;
+  }
+  OutputTable out;
+  out.add_all_columns(targets);
   for (std::size_t c = 0; c < pred_names.size(); ++c) {
     std::vector<std::string> cells(static_cast<std::size_t>(m));
     for (Eigen::Index i = 0; i < m; ++i) cells[static_cast<std::size_t>(i)] = cell(result.pred(i, static_cast<Eigen::Index>(c)));
@@ -251,10 +256,6 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
   for (const auto& note : result.notes) std::cerr << "errfield interpolate: " << note << "\n";
   const std::string where = grid ? "the " + std::to_string(grid->nx) + " x " + std::to_string(grid->ny) + " nodes of --grid"
                                  : std::to_string(m) + " targets";
-  if (raster) {
-    write_raster(*raster, *grid, a, pred_names, result, m, missing, samples.row_count(), method.name);
-    return;
-  }
   std::cout << "interpolate: " << where << " from " << samples.row_count() << " samples with --method "
             << method.name << "; " << (static_cast<std::size_t>(m) - missing) << " predicted";
   if (missing) std::cout << ", " << missing << " without prediction (empty cells)";
