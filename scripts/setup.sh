@@ -12,6 +12,9 @@ PACKAGES=(
   liburdfdom-dev libkdl-parser-dev
   # independent peers for cross-checks: R gstat, Orocos KDL, scipy
   r-cran-gstat liborocos-kdl-dev python3-numpy python3-scipy python3-sklearn
+  # rasters: interpolate --grid ... --out F.tif / F.asc and raster covariates (GDAL); gdal-bin for the
+  # tests, which read the rasters back with gdalinfo / gdal_translate
+  libgdal-dev gdal-bin
   # Python module (docs/python.md): pybind11 bindings, their pytest suite and example plots
   python3-dev pybind11-dev python3-pybind11 python3-pytest python3-matplotlib
   # report rendering check, fuzzing and sanitizers

@@ -1,20 +1,27 @@
 // `errfield interpolate`: predicts a value at every row of a targets CSV from a samples CSV, with
 // one of the registered methods (interpolation_methods.hpp), and writes the targets' columns plus
-// the predictions.
+// the predictions. With --grid the targets are the nodes of a regular 2-D grid, and the results
+// may be written as a raster (GeoTIFF, ESRI ASCII grid; raster_file.hpp) instead of a CSV.
 
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
 #include "cli/interpolation_methods.hpp"
+#include "cli/raster_file.hpp"
 #include "cli/value_cells.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
 
 namespace errfield::cli {
 namespace {
+
+// 4 million nodes (2,000 x 2,000): the targets table and every output band stay within a few
+// hundred MB; --max-grid-nodes lifts it.
+constexpr std::size_t kDefaultMaxGridNodes = 4'000'000;
 
 struct InterpolateArgs {
   std::string method;
@@ -23,6 +30,10 @@ struct InterpolateArgs {
   std::string coords;
   std::string value;
   std::string out;
+  std::string grid;           // --grid XMIN:XMAX:DX,YMIN:YMAX:DY, instead of --targets
+  std::size_t max_grid_nodes = kDefaultMaxGridNodes;
+  std::string raster_format;  // "" = by --out's extension
+  double nodata = -9999.0;
   double power = 0.0;
   std::size_t neighbors = 0;
   double radius = 0.0;
@@ -66,6 +77,87 @@ std::vector<std::string> prediction_columns(const std::vector<std::string>& valu
 
 std::string cell(double v) { return std::isnan(v) ? std::string() : format_number(v); }
 
+// The nodes of --grid as a targets table with the --coords columns, in raster order (row 0 the
+// largest y): every method reads it as it reads a targets file.
+CsvTable grid_targets(const NodeGrid& grid, const std::vector<std::string>& coords) {
+  std::string text;
+  text.reserve(grid.size() * 24 + 64);
+  append_csv_line(text, coords);
+  for (std::size_t r = 0; r < grid.ny; ++r) {
+    const std::string y = format_number(grid.y(r));
+    for (std::size_t c = 0; c < grid.nx; ++c) {
+      text += format_number(grid.x(c));
+      text += ',';
+      text += y;
+      text += '\n';
+    }
+  }
+  return CsvTable::parse(text, "--grid");
+}
+
+// Where the results go: a CSV (the default) or a raster, by --raster-format or --out's extension.
+std::optional<RasterFormat> output_raster_format(const InterpolateArgs& a) {
+  if (a.raster_format == "csv") return std::nullopt;
+  if (!a.raster_format.empty()) return raster_format_from_name(a.raster_format);
+  return raster_format_of_path(a.out);
+}
+
+// An ESRI ASCII grid holds one band: the first column goes to --out, each further one to a file
+// beside it named after the column (out.asc, out_var.asc).
+std::string sibling_path(const std::string& out, const std::string& column) {
+  const auto dot = out.rfind('.');
+  const auto slash = out.rfind('/');
+  const bool has_ext = dot != std::string::npos && (slash == std::string::npos || dot > slash);
+  return has_ext ? out.substr(0, dot) + "_" + column + out.substr(dot) : out + "_" + column;
+}
+
+// The results as a raster: one band per output column (predictions, then var, ...), descriptions
+// set to the column names, empty cells as --nodata. A GeoTIFF holds every band; an ESRI ASCII grid
+// one, so each further column goes to a file beside --out. All files are replaced together.
+void write_raster(RasterFormat format, const NodeGrid& grid, const InterpolateArgs& a,
+                  const std::vector<std::string>& pred_names, const InterpolationResult& result, Eigen::Index m,
+                  std::size_t missing, std::size_t sample_count, const std::string& method) {
+  std::vector<std::string> names = pred_names;
+  std::vector<std::vector<double>> bands;
+  for (std::size_t c = 0; c < pred_names.size(); ++c) {
+    const Eigen::VectorXd column = result.pred.col(static_cast<Eigen::Index>(c));
+    bands.emplace_back(column.data(), column.data() + m);
+  }
+  for (const auto& [name, values] : result.extra_columns) {
+    names.push_back(name);
+    bands.push_back(values);
+  }
+  for (std::size_t b = 0; b < bands.size(); ++b)
+    for (std::size_t i = 0; i < bands[b].size(); ++i) {
+      const double v = bands[b][i];
+      if (v == a.nodata)
+        throw Error("interpolate: " + names[b] + " at grid node " + std::to_string(i) + " is " + format_number(v) +
+                    ", the --nodata value, which would read as 'no prediction'; give another --nodata; " + a.out + " not written");
+      if (!std::isnan(v) && !std::isfinite(v)) OutputTable::check_finite_cell(names[b], i, format_number(v));
+    }
+  AtomicFileSet files;
+  std::vector<std::string> written;
+  if (format == RasterFormat::GeoTiff) {
+    files.add(a.out, encode_raster(format, grid, names, bands, a.nodata));
+    written.push_back(a.out);
+  } else {
+    for (std::size_t b = 0; b < bands.size(); ++b) {
+      const std::string path = b == 0 ? a.out : sibling_path(a.out, names[b]);
+      files.add(path, encode_raster(format, grid, {names[b]}, {bands[b]}, a.nodata));
+      written.push_back(path);
+    }
+  }
+  std::string text = "interpolate: the " + std::to_string(grid.nx) + " x " + std::to_string(grid.ny) +
+                     " nodes of --grid from " + std::to_string(sample_count) + " samples with --method " + method + "; " +
+                     std::to_string(static_cast<std::size_t>(m) - missing) + " predicted";
+  if (missing) text += ", " + std::to_string(missing) + " without prediction (nodata " + format_number(a.nodata) + ")";
+  text += "; wrote " + std::string(format == RasterFormat::GeoTiff ? "GeoTIFF " : "ESRI ASCII grid ");
+  for (std::size_t k = 0; k < written.size(); ++k)
+    text += (k ? ", " : "") + written[k] + " (" + names[format == RasterFormat::GeoTiff ? 0 : k] +
+            (format == RasterFormat::GeoTiff && names.size() > 1 ? " and " + std::to_string(names.size() - 1) + " more bands" : "") + ")";
+  commit_after_standard_output(files, text + "\n");
+}
+
 void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, const MethodOptionOwnership& owners) {
   const InterpolationMethod& method = find_method(a.method, false);
   owners.check(method.name, method.accepts, h.all());
@@ -76,8 +168,34 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
   r.shared = read_shared(a, h);
   with_value_type(r.value_columns.size(), []<class V>() {});  // reject unsupported counts early
 
+  if (a.targets.empty() == a.grid.empty())
+    throw ArgumentError(a.grid.empty() ? "interpolate needs --targets FILE or --grid XMIN:XMAX:DX,YMIN:YMAX:DY"
+                                       : "--targets and --grid both give the targets; give one of them");
+  const std::optional<RasterFormat> raster = output_raster_format(a);
+  std::optional<NodeGrid> grid;
+  if (!a.grid.empty()) {
+    grid = parse_node_grid(a.grid, "--grid");
+    if (r.coord_columns.size() != 2)
+      throw ArgumentError("--grid is a 2-D grid; --coords names " + std::to_string(r.coord_columns.size()) +
+                          " columns, expected 2 (x,y)");
+    if (grid->size() > a.max_grid_nodes)
+      throw ResourceError("--grid " + a.grid + " has " + std::to_string(grid->nx) + " x " + std::to_string(grid->ny) +
+                          " = " + std::to_string(grid->size()) + " nodes, more than --max-grid-nodes " +
+                          std::to_string(a.max_grid_nodes) + "; give a coarser step or a larger --max-grid-nodes");
+  }
+  if (raster && !grid)
+    throw ArgumentError("--out " + a.out + " is a raster (" + (*raster == RasterFormat::GeoTiff ? "GeoTIFF" : "ESRI ASCII grid") +
+                        "); a raster needs targets on a grid: give --grid instead of --targets, or a .csv --out");
+  if (raster && !rasters_available()) (void)encode_raster(*raster, *grid, {}, {}, a.nodata);  // names the missing GDAL
+  if (raster && *raster == RasterFormat::EsriAscii && grid->dx != grid->dy)
+    throw ArgumentError("--out " + a.out + ": an ESRI ASCII grid has square cells (one cellsize); --grid has dx " +
+                        format_number(grid->dx) + " and dy " + format_number(grid->dy) +
+                        ": give equal steps or write a GeoTIFF (.tif)");
+  if (!std::isfinite(a.nodata)) throw ArgumentError("--nodata is " + format_number(a.nodata) + "; expected a finite number");
+
   const CsvTable samples = CsvTable::read(a.samples);
-  const CsvTable targets = CsvTable::read(a.targets);
+  const CsvTable targets = grid ? grid_targets(*grid, r.coord_columns) : CsvTable::read(a.targets);
+  const std::string targets_name = grid ? "--grid " + a.grid : a.targets;
   if (samples.row_count() == 0) throw InputError(a.samples + ": no data rows; expected samples", a.samples);
   if (targets.row_count() == 0) throw InputError(a.targets + ": no data rows; expected targets", a.targets);
   r.samples = &samples;
@@ -89,6 +207,7 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
   r.target_coords = targets.numeric_columns(r.coord_columns);
   r.sample_labels = row_labels_of(samples, "sample");
   r.target_labels = row_labels_of(targets, "target");
+  if (grid) r.target_labels = RowLabels{{}, {}, "grid node"};  // "grid node 12", in raster order
 
   const auto default_pred_names = prediction_columns(r.value_columns);
   for (const auto& name : default_pred_names)
@@ -109,8 +228,6 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
                 std::to_string(result.pred.cols()) + " predictions; expected " + std::to_string(m) + " x " +
                 std::to_string(pred_names.size()));
 
-  OutputTable out;
-  out.add_all_columns(targets);
   std::size_t missing = 0;
   for (Eigen::Index i = 0; i < m; ++i) missing += std::isnan(result.pred(i, 0)) ? 1 : 0;
   // Nothing predicted is a failed job, as in predict, validate and cv (a file of empty cells exited 0).
@@ -121,9 +238,16 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
       why += "; no target has a sample within --radius " + format_number(*r.shared.radius) +
              " (in the scaled coordinates, where an anisotropy applies): a larger --radius or fewer targets far "
              "from the samples";
-    throw Error("interpolate: none of the " + std::to_string(m) + " targets of " + a.targets +
+    throw Error("interpolate: none of the " + std::to_string(m) + " targets of " + targets_name +
                 " got a prediction with --method " + method.name + why + "; " + a.out + " not written");
   }
+  if (raster) {  // the bands straight from the numbers: no text cells for millions of nodes
+    for (const auto& note : result.notes) std::cerr << "errfield interpolate: " << note << "\n";
+    write_raster(*raster, *grid, a, pred_names, result, m, missing, samples.row_count(), method.name);
+    return;
+  }
+  OutputTable out;
+  out.add_all_columns(targets);
   for (std::size_t c = 0; c < pred_names.size(); ++c) {
     std::vector<std::string> cells(static_cast<std::size_t>(m));
     for (Eigen::Index i = 0; i < m; ++i) cells[static_cast<std::size_t>(i)] = cell(result.pred(i, static_cast<Eigen::Index>(c)));
@@ -135,7 +259,9 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
     out.add_column(name, std::move(cells));
   }
   for (const auto& note : result.notes) std::cerr << "errfield interpolate: " << note << "\n";
-  std::cout << "interpolate: " << m << " targets from " << samples.row_count() << " samples with --method "
+  const std::string where = grid ? "the " + std::to_string(grid->nx) + " x " + std::to_string(grid->ny) + " nodes of --grid"
+                                 : std::to_string(m) + " targets";
+  std::cout << "interpolate: " << where << " from " << samples.row_count() << " samples with --method "
             << method.name << "; " << (static_cast<std::size_t>(m) - missing) << " predicted";
   if (missing) std::cout << ", " << missing << " without prediction (empty cells)";
   std::cout << "; wrote " << a.out << "\n";
@@ -157,7 +283,9 @@ void add_interpolate_command(CLI::App& app) {
       }() +
       "\nThe output has every column of the targets file plus 'pred' (for --value dx,dy,dz: pred_dx,pred_dy,pred_dz);\n"
       "a target without a prediction gets empty cells; if no target gets one, nothing is written and the exit\n"
-      "status is 1, with the reason. The output is written atomically.\n\n"
+      "status is 1, with the reason. The output is written atomically.\n"
+      "With --grid the targets are grid nodes (row by row from the largest y, x increasing); with --out F.tif or\n"
+      "F.asc the columns pred, var, ... become raster bands (pixel centres at the nodes; docs/data-formats.md).\n\n"
       "Example (errors.csv, scattered.csv, targets.csv: SIMULATED, from scripts/make_example_error_field.py):\n"
       "  # the paper's method: distance errors measured on a 125 mm grid, interpolated to targets\n"
       "  errfield interpolate --method idw-grid --samples errors.csv --targets targets.csv \\\n"
@@ -166,10 +294,21 @@ void add_interpolate_command(CLI::App& app) {
       "      --coords x,y,z --value dx,dy,dz --neighbors 8 --power 2 --out predicted.csv\n");
   cmd->add_option("--method", args->method, "Interpolation method: " + method_names(false))->required();
   cmd->add_option("--samples", args->samples, "CSV with the measured samples (coordinates and values)")->required();
-  cmd->add_option("--targets", args->targets, "CSV with the points to predict at (the coordinate columns)")->required();
+  cmd->add_option("--targets", args->targets, "CSV with the points to predict at (the coordinate columns); or --grid");
+  cmd->add_option("--grid", args->grid,
+                  "Targets on a regular 2-D grid instead of --targets: XMIN:XMAX:DX,YMIN:YMAX:DY, the nodes x = XMIN + "
+                  "i*DX while x <= XMAX (XMAX is a node when it is a whole number of steps from XMIN), the same in y; "
+                  "--coords names the two columns. A raster --out puts a pixel centred on each node");
+  cmd->add_option("--max-grid-nodes", args->max_grid_nodes, "--grid: refuse more nodes than this (exit 3; default 4000000)")
+      ->check(kUnsignedInteger);
+  cmd->add_option("--raster-format", args->raster_format,
+                  "How --out is written: gtiff (GeoTIFF, every column a band) | aaigrid (ESRI ASCII grid, one file per "
+                  "column: --out, then OUT_<column>.asc) | csv; default by --out's extension (.tif/.tiff, .asc, else CSV)")
+      ->check(CLI::IsMember({"gtiff", "aaigrid", "csv"}));
+  cmd->add_option("--nodata", args->nodata, "Raster --out: the value of a node without prediction (default -9999)");
   cmd->add_option("--coords", args->coords, "Coordinate columns, comma-separated (x,y,z; any number for scattered methods)")->required();
   cmd->add_option("--value", args->value, "Value column, or 2-3 comma-separated columns of a vector value")->required();
-  cmd->add_option("--out", args->out, "Output CSV")->required();
+  cmd->add_option("--out", args->out, "Output CSV, or with --grid a raster: FILE.tif (GeoTIFF) or FILE.asc (ESRI ASCII grid)")->required();
   handles->power = cmd->add_option("--power", args->power, "Power p of the inverse-distance weights 1/d^p (default: 1 for idw-grid as in the paper, 2 for idw as in gstat)");
   handles->neighbors = cmd->add_option("--neighbors", args->neighbors, "Use the K nearest samples (scattered methods; default: all)")
                           ->check(kUnsignedInteger);

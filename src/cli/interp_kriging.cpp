@@ -8,10 +8,12 @@
 #include <numeric>
 #include <iostream>
 #include <limits>
+#include <memory>
 
 #include "cli/cli_support.hpp"
 #include "cli/interp_cokriging.hpp"
 #include "cli/interpolation_methods.hpp"
+#include "cli/raster_file.hpp"
 #include "errfield/conditional_simulation.hpp"
 #include "errfield/cross_validation.hpp"
 #include "errfield/empirical_variogram.hpp"
@@ -109,7 +111,10 @@ void add_kriging_options(CLI::App& cmd) {
   cmd.add_option("--covariates", o.covariates,
                  "External drift: columns COL[,COL...] present in the samples and the targets files, each one more "
                  "drift term. With --kind ordinary this is kriging with external drift (gstat's krige(z ~ COL)); with "
-                 "universal1/2 the polynomial drift plus the covariates. Not with --kind simple")
+                 "universal1/2 the polynomial drift plus the covariates. Not with --kind simple. NAME=FILE.tif (or "
+                 ".asc, any raster GDAL reads) reads covariate NAME from the first band of that raster at each "
+                 "sample and target (2-D --coords; the value of the pixel containing the point; a point outside the "
+                 "raster or on a nodata pixel is refused)")
       ->delimiter(',')
       ->group(group);
   if (cmd.get_name() != "interpolate") return;  // cv has its own --seed (the folds')
@@ -256,11 +261,64 @@ KrigingOptions kriging_options_from_cli(const SharedInterpolationOptions& shared
   return kriging_options_from_text(text, cli_option_names());
 }
 
+// Where each --covariates entry comes from: a column of the samples and targets files (COL), or
+// a raster looked up at each point (NAME=FILE).
+struct CovariateSources {
+  std::vector<std::string> names;                          // the covariates' names, in order
+  std::vector<std::shared_ptr<const CovariateRaster>> rasters;  // null: a CSV column
+};
+
+CovariateSources covariate_sources(const std::vector<std::string>& entries) {
+  CovariateSources s;
+  for (const auto& e : entries) {
+    const auto eq = e.find('=');
+    if (eq == std::string::npos) {
+      s.names.push_back(e);
+      s.rasters.push_back(nullptr);
+      continue;
+    }
+    const std::string name = e.substr(0, eq), file = e.substr(eq + 1);
+    if (name.empty() || file.empty())
+      throw ArgumentError("--covariates: '" + e + "'; expected COL (a column) or NAME=FILE (a raster)");
+    if (std::find(s.names.begin(), s.names.end(), name) != s.names.end())
+      throw ArgumentError("--covariates: '" + name + "' is given twice");
+    s.names.push_back(name);
+    s.rasters.push_back(std::make_shared<const CovariateRaster>(read_covariate_raster(file)));
+  }
+  return s;
+}
+
+// N x k covariates of the rows of `table` at `coords` (N x D): the CSV columns as numbers, the
+// rasters' pixel values at the points (2-D only).
+Eigen::MatrixXd covariate_values(const CovariateSources& s, const CsvTable& table, const Eigen::MatrixXd& coords,
+                                 const RowLabels& labels) {
+  Eigen::MatrixXd out(coords.rows(), static_cast<Eigen::Index>(s.names.size()));
+  for (std::size_t k = 0; k < s.names.size(); ++k) {
+    const auto col = static_cast<Eigen::Index>(k);
+    if (!s.rasters[k]) {
+      out.col(col) = table.numeric_columns({s.names[k]}).col(0);
+      continue;
+    }
+    if (coords.cols() != 2)
+      throw ArgumentError("--covariates " + s.names[k] + "=" + s.rasters[k]->path + ": a raster covariate needs 2-D --coords (x,y); got " +
+                          std::to_string(coords.cols()) + " columns");
+    for (Eigen::Index i = 0; i < coords.rows(); ++i)
+      out(i, col) = s.rasters[k]->at(coords(i, 0), coords(i, 1), labels(static_cast<std::size_t>(i)));
+  }
+  return out;
+}
+
 struct Setup {
   VariogramModel model;
   KrigingOptions options;
   Eigen::VectorXd measurement_variance;
   Eigen::MatrixXd sample_covariates;  // N x k (k = options.covariates.size())
+  CovariateSources covariate_sources;
+
+  Eigen::MatrixXd target_covariates(const InterpolationRequest& r) const {
+    return options.covariates.empty() ? Eigen::MatrixXd()
+                                      : covariate_values(covariate_sources, *r.targets, r.target_coords, r.target_labels);
+  }
 };
 
 Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const Eigen::MatrixXd& values,
@@ -270,10 +328,12 @@ Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const E
   s.options = kriging_options_from_cli(shared);
   auto& opt = s.options;
   opt.sample_labels = row_labels_of(samples, "sample");
-  opt.covariates = o.covariates;
-  if (!opt.covariates.empty()) {
+  if (!o.covariates.empty()) {
+    opt.covariates = o.covariates;
     opt.validate();  // names the kind when it is simple, before any file is read for them
-    s.sample_covariates = samples.numeric_columns(opt.covariates);
+    s.covariate_sources = covariate_sources(o.covariates);
+    opt.covariates = s.covariate_sources.names;
+    s.sample_covariates = covariate_values(s.covariate_sources, samples, coords, opt.sample_labels);
   }
 
   if (o.model.empty()) throw ArgumentError("--method kriging needs --model, e.g. --model \"sph(sill=0.3,range=400)+nug(0.002)\" or --model auto");
@@ -504,8 +564,7 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
       so.method = simulation_method;
       so.neighbours = cli_options.simulation_neighbours;
       so.draws_per_path = cli_options.simulation_draws_per_path;
-      const Eigen::MatrixXd target_covariates =
-          s.options.covariates.empty() ? Eigen::MatrixXd() : r.targets->numeric_columns(s.options.covariates);
+      const Eigen::MatrixXd target_covariates = s.target_covariates(r);
       const auto sim = simulate_conditional<Eigen::VectorXd, V>(points, values, s.sample_covariates, targets,
                                                                 target_covariates, s.model, s.options, so, {}, meas);
       pred.status = sim.status;
@@ -527,8 +586,7 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
       BlockDiscretization block{cli_options.block, cli_options.block_points};
       block.rule = cli_options.block_rule == "regular" ? BlockDiscretization::Rule::Regular
                                                        : BlockDiscretization::Rule::GaussLegendre;
-      const Eigen::MatrixXd target_covariates =
-          s.options.covariates.empty() ? Eigen::MatrixXd() : r.targets->numeric_columns(s.options.covariates);
+      const Eigen::MatrixXd target_covariates = s.target_covariates(r);
       pred = kriging.predict_blocks(targets, block, target_covariates, r.target_labels);
       result.notes.push_back("block kriging: blocks of " + format_number(cli_options.block[0]) +
                              [&] {
@@ -541,7 +599,7 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
     } else {
       pred = s.options.covariates.empty()
                  ? kriging.predict(targets)
-                 : kriging.predict(targets, r.targets->numeric_columns(s.options.covariates), r.target_labels);
+                 : kriging.predict(targets, s.target_covariates(r), r.target_labels);
     }
     result.pred = values_as_rows(pred.mean);
     if (pred.failed_targets) {

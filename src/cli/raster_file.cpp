@@ -1,0 +1,336 @@
+// Node grids and raster files (raster_file.hpp). Compiled on its own (not in a unity batch): only
+// this file sees GDAL's headers, and it compiles without them, refusing rasters by name.
+//
+// GDAL is loaded with dlopen the first time a raster is read or written, not linked: libgdal pulls
+// in ~100 shared libraries, whose loading made every `errfield` process 0.15-0.2 s slower to start
+// (measured: `errfield --help` 0.03 s -> 0.2 s), rasters or not; the CLI tests start it hundreds of times.
+
+#include "cli/raster_file.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <cmath>
+#include <mutex>
+
+#include <dlfcn.h>
+#include <unistd.h>
+
+#include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
+
+#ifdef ERRFIELD_HAVE_GDAL
+#include <cpl_conv.h>
+#include <cpl_error.h>
+#include <cpl_vsi.h>
+#include <gdal.h>
+#include <gdal_frmts.h>
+#endif
+
+namespace errfield::cli {
+namespace {
+
+double grid_number(std::string_view part, std::string_view option, std::string_view what) {
+  const std::string text(part);
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(text, &used);
+    if (used == text.size() && std::isfinite(v)) return v;
+  } catch (const std::exception&) {
+  }
+  throw ArgumentError(std::string(option) + ": " + std::string(what) + " is '" + text + "'; expected a finite number");
+}
+
+// One axis "MIN:MAX:STEP": the node count n with MIN + (n-1)*STEP <= MAX (+ 1e-9 STEP).
+void parse_axis(std::string_view text, std::string_view option, char axis, double& min, double& step, std::size_t& n) {
+  const std::string name(1, axis);
+  std::vector<std::string_view> parts;
+  for (std::size_t start = 0;;) {
+    const auto colon = text.find(':', start);
+    parts.push_back(text.substr(start, colon == std::string_view::npos ? std::string_view::npos : colon - start));
+    if (colon == std::string_view::npos) break;
+    start = colon + 1;
+  }
+  if (parts.size() != 3)
+    throw ArgumentError(std::string(option) + ": the " + name + " axis is '" + std::string(text) + "'; expected " +
+                        static_cast<char>(std::toupper(axis)) + "MIN:" + static_cast<char>(std::toupper(axis)) +
+                        "MAX:D" + static_cast<char>(std::toupper(axis)));
+  auto trim = [](std::string_view s) {
+    while (!s.empty() && s.front() == ' ') s.remove_prefix(1);
+    while (!s.empty() && s.back() == ' ') s.remove_suffix(1);
+    return s;
+  };
+  min = grid_number(trim(parts[0]), option, name + "min");
+  const double max = grid_number(trim(parts[1]), option, name + "max");
+  step = grid_number(trim(parts[2]), option, "d" + name);
+  if (!(step > 0.0)) throw ArgumentError(std::string(option) + ": d" + name + " is " + format_number(step) + "; expected > 0");
+  if (max < min)
+    throw ArgumentError(std::string(option) + ": " + name + "max " + format_number(max) + " is below " + name + "min " +
+                        format_number(min));
+  const double spans = (max - min) / step;
+  if (!(spans < 1099511627776.0))  // 2^40: beyond any budget, and still exact as an integer
+    throw ArgumentError(std::string(option) + ": " + format_number(spans) + " steps of d" + name +
+                        " along " + name + "; expected a coarser step");
+  n = static_cast<std::size_t>(std::floor(spans + 1e-9)) + 1;
+}
+
+}  // namespace
+
+NodeGrid parse_node_grid(std::string_view text, std::string_view option) {
+  const auto comma = text.find(',');
+  if (comma == std::string_view::npos || text.find(',', comma + 1) != std::string_view::npos)
+    throw ArgumentError(std::string(option) + " is '" + std::string(text) +
+                        "'; expected XMIN:XMAX:DX,YMIN:YMAX:DY (a 2-D grid)");
+  NodeGrid g;
+  parse_axis(text.substr(0, comma), option, 'x', g.x_min, g.dx, g.nx);
+  parse_axis(text.substr(comma + 1), option, 'y', g.y_min, g.dy, g.ny);
+  return g;
+}
+
+std::optional<RasterFormat> raster_format_of_path(const std::string& path) {
+  const auto dot = path.rfind('.');
+  const auto slash = path.rfind('/');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return std::nullopt;
+  std::string ext = path.substr(dot + 1);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == "tif" || ext == "tiff") return RasterFormat::GeoTiff;
+  if (ext == "asc") return RasterFormat::EsriAscii;
+  return std::nullopt;
+}
+
+RasterFormat raster_format_from_name(const std::string& name) {
+  if (name == "gtiff") return RasterFormat::GeoTiff;
+  if (name == "aaigrid") return RasterFormat::EsriAscii;
+  throw ArgumentError("--raster-format is '" + name + "'; expected gtiff (GeoTIFF) or aaigrid (ESRI ASCII grid)");
+}
+
+double CovariateRaster::at(double x, double y, const std::string& label) const {
+  const double fx = (x - geo[0]) / geo[1];
+  const double fy = (y - geo[3]) / geo[5];
+  constexpr double kEdge = 1e-9;  // of a pixel: a point on the outer edge is still inside
+  const double nx = static_cast<double>(cols), ny = static_cast<double>(rows);
+  if (!(fx >= -kEdge && fx <= nx + kEdge && fy >= -kEdge && fy <= ny + kEdge)) {
+    const double x1 = geo[0] + nx * geo[1], y1 = geo[3] + ny * geo[5];
+    throw InputError(label + ": the point (" + format_number(x) + ", " + format_number(y) + ") is outside the raster " +
+                         path + " (x " + format_number(std::min(geo[0], x1)) + " to " + format_number(std::max(geo[0], x1)) +
+                         ", y " + format_number(std::min(geo[3], y1)) + " to " + format_number(std::max(geo[3], y1)) +
+                         "); errfield does not extrapolate a covariate",
+                     path);
+  }
+  const auto col = static_cast<std::size_t>(std::clamp(std::floor(fx), 0.0, nx - 1.0));
+  const auto row = static_cast<std::size_t>(std::clamp(std::floor(fy), 0.0, ny - 1.0));
+  const double v = values[row * cols + col];
+  if (std::isnan(v) || (nodata && v == *nodata))
+    throw InputError(label + ": the point (" + format_number(x) + ", " + format_number(y) + ") falls on a nodata pixel (column " +
+                         std::to_string(col) + ", row " + std::to_string(row) + ", 0-based) of the raster " + path,
+                     path);
+  return v;
+}
+
+#ifdef ERRFIELD_HAVE_GDAL
+
+namespace {
+
+// The GDAL functions errfield calls, looked up in the library loaded at run time.
+#define ERRFIELD_GDAL_FUNCTIONS(X)                                                                          \
+  X(CPLSetConfigOption) X(CPLErrorReset) X(CPLGetLastErrorMsg) X(CPLPushErrorHandler) X(CPLQuietErrorHandler) \
+  X(GDALAllRegister) X(GDALClose) X(GDALOpen) X(GDALGetDriverByName) X(GDALCreate) X(GDALCreateCopy)          \
+  X(GDALSetGeoTransform) X(GDALGetGeoTransform) X(GDALGetRasterBand) X(GDALGetRasterCount)                   \
+  X(GDALGetRasterXSize) X(GDALGetRasterYSize) X(GDALSetDescription) X(GDALSetRasterNoDataValue)              \
+  X(GDALGetRasterNoDataValue) X(GDALRasterIO) X(VSIGetMemFileBuffer) X(VSIUnlink) X(GDALRegister_GTiff)      \
+  X(GDALRegister_AAIGrid) X(GDALRegister_MEM)
+
+struct GdalApi {
+#define ERRFIELD_GDAL_POINTER(name) decltype(&::name) name = nullptr;
+  ERRFIELD_GDAL_FUNCTIONS(ERRFIELD_GDAL_POINTER)
+#undef ERRFIELD_GDAL_POINTER
+};
+
+// Loads GDAL once per process (the library found by CMake, ERRFIELD_GDAL_LIBRARY, else its
+// soname), registers its drivers; throws Error when it cannot be loaded. GDAL keeps its errors per
+// thread: each use starts with a reset.
+const GdalApi& gdal() {
+  static const GdalApi api = [] {
+    void* handle = nullptr;
+    std::string tried;
+    for (const char* name : {ERRFIELD_GDAL_LIBRARY, "libgdal.so", "libgdal.so.32"}) {
+      handle = ::dlopen(name, RTLD_NOW | RTLD_LOCAL);
+      if (handle) break;
+      const char* why = ::dlerror();
+      tried += std::string(tried.empty() ? "" : "; ") + (why ? why : name);
+    }
+    if (!handle) throw Error("rasters: cannot load GDAL (" + tried + "); install Debian's libgdal-dev (scripts/setup.sh)");
+    GdalApi a;
+#define ERRFIELD_GDAL_LOOKUP(name)                                                              \
+  a.name = reinterpret_cast<decltype(&::name)>(::dlsym(handle, #name));                          \
+  if (!a.name) throw Error(std::string("rasters: the GDAL library has no function ") + #name);
+    ERRFIELD_GDAL_FUNCTIONS(ERRFIELD_GDAL_LOOKUP)
+#undef ERRFIELD_GDAL_LOOKUP
+    // Errors come back as messages in errfield's own words, not printed by GDAL on stderr.
+    a.CPLPushErrorHandler(a.CPLQuietErrorHandler);
+    // No .aux.xml side files: the files errfield writes are the whole output.
+    a.CPLSetConfigOption("GDAL_PAM_ENABLED", "NO");
+    // GDAL reads an ESRI ASCII grid of decimals as Float32 unless told: a covariate would lose digits.
+    a.CPLSetConfigOption("AAIGRID_DATATYPE", "Float64");
+    // The three drivers errfield writes with; all others only when a covariate raster needs one
+    // (open_raster): registering every driver took ~0.1 s a process.
+    a.GDALRegister_MEM();
+    a.GDALRegister_GTiff();
+    a.GDALRegister_AAIGrid();
+    return a;
+  }();
+  return api;
+}
+
+const GdalApi& start_gdal() {
+  const GdalApi& g = gdal();
+  g.CPLErrorReset();
+  return g;
+}
+
+// Opens a raster for reading: GeoTIFF and ESRI ASCII grids with the drivers registered, any other
+// format after registering all of GDAL's drivers.
+GDALDatasetH open_raster(const std::string& path) {
+  const GdalApi& g = start_gdal();
+  if (GDALDatasetH h = g.GDALOpen(path.c_str(), GA_ReadOnly)) return h;
+  static std::once_flag all;
+  std::call_once(all, [&] { g.GDALAllRegister(); });
+  g.CPLErrorReset();
+  return g.GDALOpen(path.c_str(), GA_ReadOnly);
+}
+
+std::string gdal_message() {
+  const char* m = gdal().CPLGetLastErrorMsg();
+  return m && *m ? std::string(" (GDAL: ") + m + ")" : std::string();
+}
+
+// A dataset that is closed however the scope is left.
+struct Dataset {
+  GDALDatasetH h = nullptr;
+  explicit Dataset(GDALDatasetH handle) : h(handle) {}
+  ~Dataset() {
+    if (h) gdal().GDALClose(h);
+  }
+  Dataset(const Dataset&) = delete;
+  Dataset& operator=(const Dataset&) = delete;
+  void close() {
+    if (h) gdal().GDALClose(h);
+    h = nullptr;
+  }
+};
+
+std::string vsimem_name(const char* ext) {
+  static std::atomic<unsigned> counter{0};
+  return "/vsimem/errfield_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + ext;
+}
+
+// Takes the bytes of a /vsimem file and removes it.
+std::string take_memory_file(const std::string& name) {
+  vsi_l_offset length = 0;
+  GByte* data = gdal().VSIGetMemFileBuffer(name.c_str(), &length, FALSE);
+  if (!data) throw Error("raster: GDAL wrote no " + name + gdal_message());
+  std::string bytes(reinterpret_cast<const char*>(data), static_cast<std::size_t>(length));
+  gdal().VSIUnlink(name.c_str());
+  return bytes;
+}
+
+}  // namespace
+
+bool rasters_available() { return true; }
+
+std::string encode_raster(RasterFormat format, const NodeGrid& grid, const std::vector<std::string>& names,
+                          const std::vector<std::vector<double>>& bands, double nodata) {
+  if (bands.empty() || bands.size() != names.size()) throw Error("encode_raster: band names and bands differ in number");
+  for (const auto& b : bands)
+    if (b.size() != grid.size()) throw Error("encode_raster: a band has " + std::to_string(b.size()) + " values for " +
+                                             std::to_string(grid.size()) + " nodes");
+  if (format == RasterFormat::EsriAscii) {
+    if (bands.size() != 1) throw Error("encode_raster: an ESRI ASCII grid holds one band");
+    if (grid.dx != grid.dy)
+      throw ArgumentError("an ESRI ASCII grid has square cells (one cellsize); --grid has dx " + format_number(grid.dx) +
+                          " and dy " + format_number(grid.dy) + ": give equal steps or write a GeoTIFF (.tif)");
+  }
+  (void)start_gdal();
+  const int nx = static_cast<int>(grid.nx), ny = static_cast<int>(grid.ny);
+  // Pixel-is-area: each node is the centre of its cell.
+  double geo[6] = {grid.x_min - grid.dx / 2.0, grid.dx, 0.0, grid.y(0) + grid.dy / 2.0, 0.0, -grid.dy};
+  const bool tiff = format == RasterFormat::GeoTiff;
+  const std::string name = vsimem_name(tiff ? ".tif" : ".asc");
+  GDALDriverH mem = gdal().GDALGetDriverByName("MEM");
+  GDALDriverH out = gdal().GDALGetDriverByName(tiff ? "GTiff" : "AAIGrid");
+  if (!mem || !out) throw Error(std::string("raster: GDAL has no ") + (tiff ? "GTiff" : "AAIGrid") + " driver" + gdal_message());
+  Dataset src(gdal().GDALCreate(mem, "", nx, ny, static_cast<int>(bands.size()), GDT_Float64, nullptr));
+  if (!src.h) throw ResourceError("raster: cannot hold " + std::to_string(grid.size()) + " nodes in memory" + gdal_message());
+  gdal().GDALSetGeoTransform(src.h, geo);
+  std::vector<double> row_values(grid.nx);
+  for (std::size_t b = 0; b < bands.size(); ++b) {
+    GDALRasterBandH band = gdal().GDALGetRasterBand(src.h, static_cast<int>(b) + 1);
+    gdal().GDALSetDescription(band, names[b].c_str());
+    gdal().GDALSetRasterNoDataValue(band, nodata);
+    for (std::size_t r = 0; r < grid.ny; ++r) {
+      for (std::size_t c = 0; c < grid.nx; ++c) {
+        const double v = bands[b][r * grid.nx + c];
+        row_values[c] = std::isnan(v) ? nodata : v;
+      }
+      if (gdal().GDALRasterIO(band, GF_Write, 0, static_cast<int>(r), nx, 1, row_values.data(), nx, 1, GDT_Float64, 0, 0) != CE_None)
+        throw Error("raster: writing row " + std::to_string(r) + " failed" + gdal_message());
+    }
+  }
+  // 17 significant digits: every double reads back exactly, as the CSV's shortest round-trip text.
+  const char* tiff_options[] = {"COMPRESS=DEFLATE", "PREDICTOR=3", "INTERLEAVE=BAND", nullptr};
+  const char* ascii_options[] = {"SIGNIFICANT_DIGITS=17", nullptr};
+  Dataset copy(gdal().GDALCreateCopy(out, name.c_str(), src.h, FALSE, const_cast<char**>(tiff ? tiff_options : ascii_options),
+                              nullptr, nullptr));
+  if (!copy.h) throw Error("raster: GDAL could not write the " + std::string(tiff ? "GeoTIFF" : "ESRI ASCII grid") + gdal_message());
+  copy.close();  // flushes into the memory file
+  return take_memory_file(name);
+}
+
+CovariateRaster read_covariate_raster(const std::string& path) {
+  Dataset ds(open_raster(path));
+  if (!ds.h) throw InputError(path + ": cannot be read as a raster" + gdal_message(), path);
+  CovariateRaster r;
+  r.path = path;
+  r.cols = static_cast<std::size_t>(gdal().GDALGetRasterXSize(ds.h));
+  r.rows = static_cast<std::size_t>(gdal().GDALGetRasterYSize(ds.h));
+  if (gdal().GDALGetRasterCount(ds.h) < 1 || r.cols == 0 || r.rows == 0) throw InputError(path + ": the raster has no band", path);
+  if (r.cols * r.rows > 100'000'000)
+    throw ResourceError(path + ": " + std::to_string(r.cols) + " x " + std::to_string(r.rows) +
+                        " pixels; errfield reads covariate rasters of up to 100 million pixels: crop or resample it "
+                        "(gdal_translate -projwin / -tr)");
+  if (gdal().GDALGetGeoTransform(ds.h, r.geo) != CE_None)
+    throw InputError(path + ": the raster has no georeferencing (geotransform); errfield cannot place the points on it", path);
+  if (r.geo[2] != 0.0 || r.geo[4] != 0.0 || r.geo[1] == 0.0 || r.geo[5] == 0.0)
+    throw InputError(path + ": the raster's geotransform is rotated or degenerate; warp it to north-up first (gdalwarp)", path);
+  GDALRasterBandH band = gdal().GDALGetRasterBand(ds.h, 1);
+  int has_nodata = 0;
+  const double nodata = gdal().GDALGetRasterNoDataValue(band, &has_nodata);
+  if (has_nodata) r.nodata = nodata;
+  r.values.resize(r.cols * r.rows);
+  if (gdal().GDALRasterIO(band, GF_Read, 0, 0, static_cast<int>(r.cols), static_cast<int>(r.rows), r.values.data(),
+                   static_cast<int>(r.cols), static_cast<int>(r.rows), GDT_Float64, 0, 0) != CE_None)
+    throw InputError(path + ": reading the raster's first band failed" + gdal_message(), path);
+  return r;
+}
+
+#else  // built without GDAL
+
+namespace {
+[[noreturn]] void no_gdal(const std::string& what) {
+  throw ArgumentError(what + ": this errfield was built without GDAL (Debian's libgdal-dev), which reads and writes "
+                      "GeoTIFF and ESRI ASCII grids; install it and build again (scripts/setup.sh), or use CSV");
+}
+}  // namespace
+
+bool rasters_available() { return false; }
+
+std::string encode_raster(RasterFormat, const NodeGrid&, const std::vector<std::string>&,
+                          const std::vector<std::vector<double>>&, double) {
+  no_gdal("writing a raster");
+}
+
+CovariateRaster read_covariate_raster(const std::string& path) { no_gdal(path); }
+
+#endif
+
+}  // namespace errfield::cli
