@@ -101,6 +101,11 @@ std::string refusal_tally(const std::vector<std::string>& status) {
   }
   std::string text;
   for (const auto& [word, count] : counts) text += (text.empty() ? "" : ", ") + word + " " + std::to_string(count);
+  // The one refusal the user can lift with more data: say which data.
+  if (std::any_of(counts.begin(), counts.end(), [](const auto& c) { return c.first == "orientation-unknown"; }))
+    text += "; orientation-unknown: the working tool is further from the measured reflector than the flange "
+            "orientation the model knows supports - locate it with 'errfield locate-tool' from readings at it, or "
+            "fit readings of several points on the flange (docs/robot.md, 'Tool points and orientation')";
   return text;
 }
 

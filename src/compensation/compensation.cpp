@@ -383,7 +383,8 @@ const OrientationPrior& CompensationModel::orientation_prior() const {
     p.samples = q.size();
     p.residual_rms_mm = std::sqrt(residual_ss / static_cast<double>(q.size()));
     p.data_sigma_rad = std::sqrt(residual_ss / lever_ss);
-    p.sigma_rad = std::hypot(p.data_sigma_rad, kOrientationPriorFloorRad);
+    p.sigma_rad = std::sqrt(p.data_sigma_rad * p.data_sigma_rad + kOrientationPriorFloorRad * kOrientationPriorFloorRad +
+                            kUnlocatedOrientationRad * kUnlocatedOrientationRad);
     if (measured_orientation_) {
       // Several points measured it: no guess from one point's residuals; the floor only where a
       // rotation escapes them all (points on one line).

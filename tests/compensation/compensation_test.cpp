@@ -245,7 +245,10 @@ TEST(ToolPoints, OrientationPriorFindsTheFlangeRotationOfEqualWristAngleErrors) 
   EXPECT_EQ(p.samples, q.size());
   // 900 residual numbers and 900 rotation numbers: a few % sampling error; 15 % is 3-4 of it.
   EXPECT_NEAR(p.data_sigma_rad * p.data_sigma_rad / per_axis, 1.0, 0.15);
-  EXPECT_NEAR(p.sigma_rad, std::hypot(p.data_sigma_rad, kOrientationPriorFloorRad), 1e-15);
+  EXPECT_NEAR(p.sigma_rad * p.sigma_rad,
+              p.data_sigma_rad * p.data_sigma_rad + kOrientationPriorFloorRad * kOrientationPriorFloorRad +
+                  kUnlocatedOrientationRad * kUnlocatedOrientationRad,
+              1e-18);
   EXPECT_NEAR(p.max_lever_mm, kMaxLeverResidualRatio * p.residual_rms_mm / (std::sqrt(2.0) * p.sigma_rad), 1e-9);
 }
 

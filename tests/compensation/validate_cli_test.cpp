@@ -590,6 +590,12 @@ TEST_F(ValidateCli, TwoReflectorsFitOneModelThatTransfersToALocatedThirdPoint) {
   EXPECT_GE(coverage1, 0.91) << rms1;
   EXPECT_LE(coverage1, 0.99) << rms1;
   EXPECT_TRUE(json("m1_r2.json").contains("orientation_residual"));
+  // Not located, the one-point model does not know the flange's constant orientation error there
+  // (0.5 mm at 150 mm on this robot): it refuses, naming the orientation and what would lift it.
+  const CliResult unlocated = run("validate --model m1.json --data test_r2.csv --tool 150,0,100 --summary-out s1.json");
+  EXPECT_EQ(unlocated.exit_code, 1) << unlocated.output();
+  EXPECT_NE(unlocated.output().find("orientation-unknown"), std::string::npos) << unlocated.output();
+  EXPECT_NE(unlocated.output().find("locate-tool"), std::string::npos) << unlocated.output();
   // The measured orientation residual is stored, and a hand-edited one beyond any robot is refused.
   nlohmann::json edited = json("m13.json");
   ASSERT_TRUE(edited.contains("orientation_residual")) << edited.dump().substr(0, 200);

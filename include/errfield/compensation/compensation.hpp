@@ -133,6 +133,14 @@ struct MeasuredOrientation {
 /// tool) are not seen in the residuals; 0.1 mrad is a tool flange's typical angular tolerance
 /// (docs/robot.md, "Tool points and orientation").
 inline constexpr double kOrientationPriorFloorRad = 1e-4;
+/// Per-axis sd (rad) of the flange's constant orientation error a one-point model cannot identify
+/// (rotations about axes through its reflector, which the calibration leaves at nominal), added to
+/// OrientationPrior::sigma_rad unless the orientation was measured (several points, or locate-tool's
+/// readings at the point, which absorb the constant part). 2 mrad: a reflector-1 model's kinematic
+/// part missed real readings 150 mm away by 0.39 mm (issue 34: 1.8 mrad per axis as w x L), and the
+/// constant part on SIMULATED KR 16 data was 0.37 and 0.51 mm at 150 mm (1.7 and 2.4 mrad;
+/// docs/robot.md, "Tool points and orientation").
+inline constexpr double kUnlocatedOrientationRad = 2e-3;
 /// OrientationPrior::max_lever_mm: the lever at which the orientation term's RMS is this many times
 /// the RMS of the residual the model corrects at the reflector (docs/robot.md).
 inline constexpr double kMaxLeverResidualRatio = 2.0;
