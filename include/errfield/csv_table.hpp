@@ -36,6 +36,10 @@ class CsvTable {
   /// Parses text already in memory; `source` names it in error messages.
   static CsvTable parse(std::string_view text, std::string source);
 
+  /// The data rows `keep` (in that order) with the header, source and line numbers kept, so messages
+  /// about a subset still name the file's lines. Throws std::out_of_range beyond the table.
+  CsvTable rows(const std::vector<std::size_t>& keep) const;
+
   const std::string& source() const noexcept { return source_; }
   const std::vector<std::string>& header() const noexcept { return header_; }
   std::size_t row_count() const noexcept { return lines_.size(); }

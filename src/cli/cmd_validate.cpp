@@ -1,5 +1,6 @@
 // `errfield validate`: scores a model on measurements it was not fitted on (prediction mode), or
 // the validation run on the robot after compensation (--targets).
+#include <algorithm>
 #include <fstream>
 #include <iostream>
 
@@ -10,6 +11,7 @@
 #include "cli/interpolation_methods.hpp"
 #include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
+#include "compensation/fit_checks.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/compensation/pipeline.hpp"
 #include "errfield/compensation/prediction.hpp"
@@ -21,7 +23,7 @@ namespace errfield::cli {
 namespace {
 
 struct ValidateArgs {
-  std::string model, data, robot, out, summary_out, report, tool;
+  std::string model, data, robot, out, summary_out, report, tool, reflector;
   std::vector<std::string> base_points;
   bool targets = false;
   double max_registration_rms = robot::kRegistrationRmsLimitMm;
@@ -37,19 +39,69 @@ bool marked_simulated(const std::string& path) {
   return false;
 }
 
+/// The rows of one reflector label of a file with several (`--reflector`, default the model's own
+/// point), and the model moved to that label's point when the model located it (fit on several
+/// points); the file itself when it has one label or none (`--reflector` must then match it).
+CsvTable one_reflector(const CsvTable& file, const std::string& asked, const std::string& tool_option,
+                       compensation::CompensationModel& model) {
+  using compensation::CompensationModel;
+  if (!file.has_column("reflector")) {
+    if (!asked.empty())
+      throw InputError(file.source() + ": --reflector " + asked + " but the file has no 'reflector' column", file.source(),
+                       0, "reflector");
+    return file;
+  }
+  // One label: the readings of one point, scored at the model's point (or --tool); the check that
+  // they are of that point follows.
+  if (asked.empty() && !compensation::several_reflector_labels(file)) return file;
+  const std::vector<CompensationModel::LabelledPoint>& points = model.flange_points();
+  const std::string label = !asked.empty() ? asked : !points.empty() ? points.front().label : std::string(file.cell(0, file.column_index("reflector")));
+  std::vector<std::size_t> keep;
+  const std::size_t col = file.column_index("reflector");
+  for (std::size_t i = 0; i < file.row_count(); ++i)
+    if (file.cell(i, col) == label) keep.push_back(i);
+  if (keep.empty())
+    throw InputError(file.source() + ": no rows of reflector '" + label + "'" +
+                         (asked.empty() ? " (the model's own point; give --reflector LABEL)" : std::string()),
+                     file.source(), 0, "reflector");
+  if (keep.size() == file.row_count() && points.empty()) return file;  // one label, a one-point model
+  if (points.empty())
+    throw InputError(file.source() + ": readings of several points on the flange; the model was fitted at one point, "
+                         "so only its own readings can be scored (keep them, or give --reflector LABEL with --tool at "
+                         "that point)",
+                     file.source(), 0, "reflector");
+  const auto at = std::find_if(points.begin(), points.end(), [&](const auto& p) { return p.label == label; });
+  if (at == points.end()) {
+    std::string known;
+    for (const auto& p : points) known += (known.empty() ? "'" : ", '") + p.label + "'";
+    throw InputError(file.source() + ": reflector '" + label + "' is not a point the model located (it knows " + known +
+                         "); locate it with 'errfield locate-tool' from readings of it, then validate that model",
+                     file.source(), 0, "reflector");
+  }
+  if (at != points.begin()) {
+    if (!tool_option.empty())
+      throw ArgumentError("--tool and --reflector " + label + ": the model located '" + label + "'; give one of them");
+    Eigen::Isometry3d point = model.command_model().tool();
+    point.translation() = at->position_mm;
+    model = model.with_working_tool(point);
+  }
+  return file.rows(keep);
+}
+
 void run_validate(const ValidateArgs& a) {
   using namespace robot;
   using namespace compensation;
   const compensation::LoadedModel loaded = compensation::load_model(a.model);
   const auto tool = parse_tool_option(a.tool, loaded.model.command_model().tool());
-  const CompensationModel model =
-      tool ? loaded.model.with_working_tool(loaded.model.tool_in_model_frame(*tool)) : loaded.model;
+  CompensationModel model = tool ? loaded.model.with_working_tool(loaded.model.tool_in_model_frame(*tool)) : loaded.model;
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.base_points) {
     const auto v = parse_numbers(b, 3, "--base-point");
     fixed.emplace_back(v[0], v[1], v[2]);
   }
-  const CsvTable table = CsvTable::read(a.data);
+  const CsvTable file = CsvTable::read(a.data);
+  // Readings of several points on the flange: one label's rows, scored at its located point.
+  const CsvTable table = one_reflector(file, a.reflector, a.tool, model);
   compensation::ValidationReport r;
   if (a.targets) {
     r = with_source(a.data, [&] { return compensation::validate_targets(table, model.registration(), fixed); });
@@ -131,6 +183,10 @@ void add_validate_command(CLI::App& app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   add_tool_option(cmd, a->tool, "the point the held-out readings measured");
+  cmd->add_option("--reflector", a->reflector,
+                  "data with a 'reflector' column (several points on the flange): score this label's rows, at the "
+                  "point the model located for it (fit on several points stores each label's point); default: the "
+                  "model's own point");
   cmd->add_flag("--targets", a->targets, "validation-run mode: error = measured - intended target");
   cmd->add_option("--out", a->out, "per-point CSV: point,status,before_mm,after_mm, the error components and, for "
                   "kriging models, var_mm2, var_field_mm2, r95_mm, nees");

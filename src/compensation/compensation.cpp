@@ -222,6 +222,11 @@ CompensationModel CompensationModel::with_measured_orientation(std::optional<Mea
   m.measured_orientation_ = measured;
   return m;
 }
+CompensationModel CompensationModel::with_flange_points(std::vector<LabelledPoint> points) const {
+  CompensationModel m = *this;
+  m.flange_points_ = std::move(points);
+  return m;
+}
 CompensationModel CompensationModel::with_excluded_rows(std::vector<std::string> points) const {
   CompensationModel m = *this;
   m.excluded_rows_ = std::move(points);
@@ -473,6 +478,12 @@ nlohmann::json CompensationModel::to_json() const {
   if (reflector_) j["reflector_mm"] = {reflector_->x(), reflector_->y(), reflector_->z()};
   if (joint_functions_) j["joint_error_functions"] = joint_functions_->to_json();
   if (working_tool_) j["working_tool"] = robot::detail::pose_json(*working_tool_);
+  if (!flange_points_.empty()) {
+    nlohmann::json points = nlohmann::json::array();
+    for (const LabelledPoint& p : flange_points_)
+      points.push_back({{"label", p.label}, {"mm", {p.position_mm.x(), p.position_mm.y(), p.position_mm.z()}}});
+    j["flange_points"] = points;
+  }
   if (measured_orientation_)
     j["orientation_residual"] = {{"sigma_rad", measured_orientation_->sigma_rad},
                                  {"readings", measured_orientation_->readings},
@@ -585,6 +596,23 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
   };
   strings("notes", model.notes_);
   strings("excluded_rows", model.excluded_rows_);
+  if (j.contains("flange_points")) {
+    const nlohmann::json& f = j["flange_points"];
+    if (!f.is_array()) fail_model(source, "member \"flange_points\": expected an array of {\"label\", \"mm\": [x, y, z]}");
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      const nlohmann::json& e = f[k];
+      const bool ok = e.is_object() && e.contains("label") && e["label"].is_string() && e.contains("mm") &&
+                      e["mm"].is_array() && e["mm"].size() == 3 &&
+                      std::all_of(e["mm"].begin(), e["mm"].end(), [](const nlohmann::json& v) {
+                        return v.is_number() && std::isfinite(v.get<double>()) && std::abs(v.get<double>()) <= kMaxToolPointMm;
+                      });
+      if (!ok)
+        fail_model(source, "member \"flange_points\"[" + std::to_string(k) + "]: expected {\"label\": text, \"mm\": [x, y, z] "
+                           "within " + format_number(kMaxToolPointMm) + " mm}, got " + e.dump());
+      model.flange_points_.push_back({e["label"].get<std::string>(),
+                                      Eigen::Vector3d(e["mm"][0].get<double>(), e["mm"][1].get<double>(), e["mm"][2].get<double>())});
+    }
+  }
   if (j.contains("orientation_residual")) {
     const nlohmann::json& o = j["orientation_residual"];
     // 0.1 rad (5.7 deg) of residual orientation after calibration is no robot: a hand edit.

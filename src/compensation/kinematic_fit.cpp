@@ -125,7 +125,7 @@ KinematicFit from_several_points(const MdhModel& robot, const MeasurementSet& d,
   for (const FlangePointEstimate& p : reg.flange_points) located.push_back(p.position_mm);
   const CalibrationResult cal = calibrate_positions(reg.model, pm, located, o.calibration);
   const Eigen::Isometry3d world_from_tracker = robot.base() * reg.model.base().inverse();
-  KinematicFit out{cal.model.with_base(world_from_tracker * cal.model.base()), Registration{}, {}, {}, {}, {}, {}, {}};
+  KinematicFit out{cal.model.with_base(world_from_tracker * cal.model.base()), Registration{}, {}, {}, {}, {}, {}, {}, {}};
   out.registration->robot_from_tracker = world_from_tracker;
   out.registration->residual_rms_mm = cal.after.rms_mm;
   for (std::size_t i = 0; i < pm.size(); ++i) {
@@ -137,6 +137,7 @@ KinematicFit from_several_points(const MdhModel& robot, const MeasurementSet& d,
   std::string where;
   for (std::size_t k = 0; k < points.labels.size(); ++k) {
     const Eigen::Vector3d p = k == 0 ? Eigen::Vector3d(cal.model.tool().translation()) : cal.flange_points[k - 1].position_mm;
+    out.located_points.emplace_back(points.labels[k], p);
     where += (k ? "; '" : "'") + points.labels[k] + "' " + flange_point_text(p) + " (" +
              std::to_string(points.readings[k]) + " readings" + (k == 0 ? ", the model's own point" : "") + ")";
   }

@@ -22,6 +22,8 @@ struct KinematicFit {
   std::vector<std::size_t> own_point_rows;
   /// Data of several points: each row's point on the calibrated flange (flange frame, mm).
   std::vector<Eigen::Vector3d> flange_point_of_row_mm;
+  /// Data of several points: each label's located position (flange frame, mm), the own point first.
+  std::vector<std::pair<std::string, Eigen::Vector3d>> located_points;
 };
 
 KinematicFit fit_kinematic(const robot::MdhModel& robot, const MeasurementSet& data, const FitOptions& options);

@@ -521,8 +521,11 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
     case CompensationMethod::kinematic:
     case CompensationMethod::kinematic_kriging: {
       const KinematicFit kin = fit_kinematic(robot, d, o);
+      std::vector<CompensationModel::LabelledPoint> located;
+      for (const auto& [label, p] : kin.located_points) located.push_back({label, p});
       FitResult out{CompensationModel(CompensationMethod::kinematic, kin.model, nullptr)
-                        .with_tool_point(kin.tool_point_mm, kin.reflector_mm),
+                        .with_tool_point(kin.tool_point_mm, kin.reflector_mm)
+                        .with_flange_points(located),
                     kin.registration, std::nullopt, kin.notes, kin.warnings};
       if (method == CompensationMethod::kinematic) return out;
       // Readings of several points on the flange: the functions and the field take the model's own point.
@@ -628,7 +631,8 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       }
       out.model = CompensationModel(method, kin.model, fit.field)
                       .with_tool_point(kin.tool_point_mm, kin.reflector_mm)
-                      .with_joint_error_functions(std::move(functions));
+                      .with_joint_error_functions(std::move(functions))
+                      .with_flange_points(located);
       if (!other_points.empty()) {
         const MeasuredOrientation m = measured_orientation(out.model, d, kin, reg, other_points);
         out.model = out.model.with_measured_orientation(m);

@@ -229,6 +229,21 @@ std::size_t CsvTable::append_row(std::string_view line, char delimiter, std::siz
   return cell_ends_.size() - before;
 }
 
+CsvTable CsvTable::rows(const std::vector<std::size_t>& keep) const {
+  CsvTable out;
+  out.source_ = source_;
+  out.header_ = header_;
+  out.keys_ = keys_;
+  for (std::size_t r : keep) {
+    for (std::size_t c = 0; c < header_.size(); ++c) {
+      out.cells_ += cell(r, c);
+      out.cell_ends_.push_back(out.cells_.size());
+    }
+    out.lines_.push_back(lines_.at(r));
+  }
+  return out;
+}
+
 std::string_view CsvTable::cell(std::size_t row, std::size_t column) const {
   if (row >= lines_.size() || column >= header_.size())
     throw std::out_of_range("CsvTable::cell(" + std::to_string(row) + ", " + std::to_string(column) +

@@ -562,6 +562,7 @@ TEST_F(ValidateCli, TwoReflectorsFitOneModelThatTransfersToALocatedThirdPoint) {
   subset("train_r2.csv", {"r2"}, true);
   subset("locate_r2.csv", {"r2"}, true, 40);
   subset("test_r2.csv", {"r2"}, false);
+  subset("test_all.csv", {"r1", "r2", "r3"}, false);
   const CliResult both = run("fit --robot kr16_r1.json --data train_r13.csv --out m13.json");
   ASSERT_EQ(both.exit_code, 0) << both.output();
   EXPECT_NE(both.out.find("points on the flange located with the robot"), std::string::npos) << both.out;
@@ -596,6 +597,21 @@ TEST_F(ValidateCli, TwoReflectorsFitOneModelThatTransfersToALocatedThirdPoint) {
   EXPECT_EQ(unlocated.exit_code, 1) << unlocated.output();
   EXPECT_NE(unlocated.output().find("orientation-unknown"), std::string::npos) << unlocated.output();
   EXPECT_NE(unlocated.output().find("locate-tool"), std::string::npos) << unlocated.output();
+  // validate takes the file of all three labels: the model's own by default, r3 at the point fit
+  // located for it (scored as well as r1 there: both were fitted), r2 refused until located.
+  const CliResult own_rows = run("validate --model m13.json --data test_all.csv --summary-out s_own.json");
+  ASSERT_EQ(own_rows.exit_code, 0) << own_rows.output();
+  const CliResult r3_rows = run("validate --model m13.json --data test_all.csv --reflector r3 --summary-out s_r3.json");
+  ASSERT_EQ(r3_rows.exit_code, 0) << r3_rows.output();
+  const double at_r1 = json("s_own.json")["position"]["after"]["rms_mm"].get<double>();
+  const double at_r3 = json("s_r3.json")["position"]["after"]["rms_mm"].get<double>();
+  EXPECT_EQ(json("s_own.json")["points"].get<int>(), 200);
+  EXPECT_EQ(json("s_r3.json")["points"].get<int>(), 200);
+  EXPECT_LT(at_r3, 1.25 * at_r1) << "r3 " << at_r3 << " mm, r1 " << at_r1 << " mm";
+  const CliResult r2_rows = run("validate --model m13.json --data test_all.csv --reflector r2 --summary-out s_r2.json");
+  EXPECT_EQ(r2_rows.exit_code, 2) << r2_rows.output();
+  EXPECT_NE(r2_rows.output().find("locate-tool"), std::string::npos) << r2_rows.output();
+  EXPECT_FALSE(std::filesystem::exists(path("s_r2.json")));
   // The measured orientation residual is stored, and a hand-edited one beyond any robot is refused.
   nlohmann::json edited = json("m13.json");
   ASSERT_TRUE(edited.contains("orientation_residual")) << edited.dump().substr(0, 200);

@@ -251,6 +251,15 @@ class CompensationModel {
   /// orientation_prior() then uses instead of reading it off the residuals at one point
   /// ("orientation_residual" in the model file).
   CompensationModel with_measured_orientation(std::optional<MeasuredOrientation> m) const;
+  /// Models fitted to several points on the flange: each label's located position (calibrated flange
+  /// frame, mm), the model's own first ("flange_points" in the model file); validate scores a label's
+  /// readings at its point.
+  struct LabelledPoint {
+    std::string label;
+    Eigen::Vector3d position_mm;
+  };
+  CompensationModel with_flange_points(std::vector<LabelledPoint> points) const;
+  const std::vector<LabelledPoint>& flange_points() const noexcept { return flange_points_; }
   const std::optional<MeasuredOrientation>& measured_orientation() const noexcept { return measured_orientation_; }
   CompensationModel with_notes(std::vector<std::string> notes) const;
   CompensationModel with_registration(std::optional<compensation::Registration> r) const;
@@ -347,6 +356,7 @@ class CompensationModel {
   std::optional<JointErrorFunctions> joint_functions_;
   std::optional<Eigen::Isometry3d> working_tool_;
   std::optional<MeasuredOrientation> measured_orientation_;
+  std::vector<LabelledPoint> flange_points_;
   /// orientation_prior(), computed on first use; a copy (every with_*) starts afresh, since what it
   /// is computed from may change.
   struct LazyOrientationPrior {
