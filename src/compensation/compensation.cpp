@@ -225,6 +225,7 @@ CompensationModel CompensationModel::with_measured_orientation(std::optional<Mea
 CompensationModel CompensationModel::with_flange_points(std::vector<LabelledPoint> points) const {
   CompensationModel m = *this;
   m.flange_points_ = std::move(points);
+  m.set_function_rows_at_samples();
   return m;
 }
 CompensationModel CompensationModel::with_excluded_rows(std::vector<std::string> points) const {
@@ -269,6 +270,7 @@ CompensationModel CompensationModel::with_joint_error_functions(std::optional<Jo
 
 void CompensationModel::set_function_rows_at_samples() {
   function_rows_at_samples_.reset();
+  set_point_function_rows();
   if (!joint_functions_ || joint_functions_->coefficient_covariance_mrad2.size() == 0 || !field_) return;
   const std::vector<JointVector> q = field_->sample_joints();
   if (q.empty()) return;
@@ -334,22 +336,34 @@ namespace {
 /// scalar times one joint's position column at the reflector (joint_error_functions.cpp), so it
 /// becomes the same scalar times that joint's column at the point. A column that vanishes at the
 /// reflector (the joint's axis through it) was not fitted and contributes nothing.
+/// The functions' design (3 x P, mm per mrad) carried from the reflector to the point `at`.
+Eigen::MatrixXd design_at_point(const JointErrorFunctions& f, const MdhModel& reflector, const MdhModel& at,
+                                const JointVector& q_deg) {
+  const Eigen::Index count = f.parameter_count();
+  Eigen::MatrixXd d = f.design_rows(reflector, q_deg);
+  const Eigen::Matrix<double, 3, kJointCount> ja = geometric_jacobian(reflector, q_deg, EndFrame::tool).topRows<3>();
+  const Eigen::Matrix<double, 3, kJointCount> jb = geometric_jacobian(at, q_deg, EndFrame::tool).topRows<3>();
+  const Eigen::Index polynomial = kJointCount * static_cast<Eigen::Index>(f.degree);
+  for (Eigen::Index c = 0; c < count; ++c) {
+    const int j = c < polynomial ? static_cast<int>(c / f.degree) : f.gravity_terms[static_cast<std::size_t>(c - polynomial)].joint;
+    const double n2 = ja.col(j).squaredNorm();
+    d.col(c) = n2 > 0.0 ? Eigen::Vector3d(jb.col(j) * (ja.col(j).dot(d.col(c)) / n2)) : Eigen::Vector3d::Zero();
+  }
+  return d;
+}
+
 JointFunctionPrediction functions_at_point(const JointErrorFunctions& f, const MdhModel& reflector, const MdhModel& at,
                                            const JointVector& q_deg, const Eigen::MatrixXd* taken_back) {
   JointFunctionPrediction out;
   const Eigen::Index count = f.parameter_count();
   if (count == 0) return out;
-  Eigen::MatrixXd d = f.design_rows(reflector, q_deg);
-  const Eigen::Matrix<double, 3, kJointCount> ja = geometric_jacobian(reflector, q_deg, EndFrame::tool).topRows<3>();
-  const Eigen::Matrix<double, 3, kJointCount> jb = geometric_jacobian(at, q_deg, EndFrame::tool).topRows<3>();
+  Eigen::MatrixXd d = design_at_point(f, reflector, at, q_deg);
   const Eigen::Index polynomial = kJointCount * static_cast<Eigen::Index>(f.degree);
   Eigen::VectorXd beta(count);
   for (Eigen::Index c = 0; c < count; ++c) {
     const int j = c < polynomial ? static_cast<int>(c / f.degree) : f.gravity_terms[static_cast<std::size_t>(c - polynomial)].joint;
     beta[c] = c < polynomial ? f.coefficients_mrad(j, c % f.degree)
                              : f.gravity_terms[static_cast<std::size_t>(c - polynomial)].coefficient_mrad;
-    const double n2 = ja.col(j).squaredNorm();
-    d.col(c) = n2 > 0.0 ? Eigen::Vector3d(jb.col(j) * (ja.col(j).dot(d.col(c)) / n2)) : Eigen::Vector3d::Zero();
   }
   out.position_error_mm = d * beta;
   if (f.coefficient_covariance_mrad2.size() > 0) {
@@ -410,8 +424,193 @@ ErrorPrediction CompensationModel::predict_error(const JointVector& q_deg) const
   return predict_error_at(q_deg, scored_model());
 }
 
+namespace {
+
+/// [v]x: the matrix of the cross product v x .
+Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+}  // namespace
+
+Eigen::Vector3d CompensationModel::joint_function_error_at(const JointVector& q_deg, const MdhModel& at) const {
+  if (!joint_functions_) return Eigen::Vector3d::Zero();
+  if (at.tool().isApprox(command_model_.tool(), 1e-12)) return joint_functions_->predict(command_model_, q_deg).position_error_mm;
+  return functions_at_point(*joint_functions_, command_model_, at, q_deg, nullptr).position_error_mm;
+}
+
+void CompensationModel::set_point_function_rows() {
+  point_function_rows_.assign(flange_points_.size(), nullptr);
+  if (!joint_functions_ || joint_functions_->coefficient_covariance_mrad2.size() == 0) return;
+  const Eigen::Index p = joint_functions_->parameter_count();
+  for (std::size_t k = 0; k < flange_points_.size(); ++k) {
+    if (!flange_points_[k].field) continue;
+    const std::vector<JointVector> q = flange_points_[k].field->sample_joints();
+    if (q.empty()) continue;
+    Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
+    tool.translation() = flange_points_[k].position_mm;
+    const MdhModel at = command_model_.with_tool(tool);
+    auto rows = std::make_shared<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+        static_cast<Eigen::Index>(q.size()), 3 * p);
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      const Eigen::MatrixXd block = design_at_point(*joint_functions_, command_model_, at, q[i]);
+      rows->row(static_cast<Eigen::Index>(i)) = Eigen::Map<const Eigen::RowVectorXd>(block.data(), 3 * p);
+    }
+    point_function_rows_[k] = std::move(rows);
+  }
+}
+
+ErrorPrediction CompensationModel::predict_at_labelled_point(const JointVector& q_deg, const MdhModel& point,
+                                                             std::size_t k) const {
+  const ErrorField& field = *flange_points_[k].field;
+  const auto& rows = point_function_rows_.size() == flange_points_.size() ? point_function_rows_[k] : nullptr;
+  std::vector<double> w;
+  const Eigen::Vector3d at = forward_position(nominal_model(), q_deg);
+  ErrorPrediction p = rows ? field.predict_with_weights(at, q_deg, w) : field.predict(at, q_deg);
+  if (p.inside_region && credible_) p.credible = credible_->contains(p);
+  if (p.inside_region && joint_functions_) {
+    // As at the own point: the point's field takes back part of the functions' error near its samples.
+    std::optional<Eigen::MatrixXd> taken_back;
+    if (rows && static_cast<Eigen::Index>(w.size()) == rows->rows()) {
+      const Eigen::RowVectorXd sum = Eigen::Map<const Eigen::RowVectorXd>(w.data(), static_cast<Eigen::Index>(w.size())) * *rows;
+      taken_back = Eigen::Map<const Eigen::MatrixXd>(sum.data(), 3, sum.size() / 3);
+    }
+    const JointFunctionPrediction f =
+        functions_at_point(*joint_functions_, command_model_, point, q_deg, taken_back ? &*taken_back : nullptr);
+    p.position_error_mm += f.position_error_mm;
+    if (std::isfinite(p.variance_mm2)) p.variance_mm2 += f.axis_variance_mm2.sum();
+    if (p.axis_variance_mm2.allFinite()) p.axis_variance_mm2 += f.axis_variance_mm2;
+  }
+  return p;
+}
+
+ErrorPrediction CompensationModel::predict_by_rigid_motion(const JointVector& q_deg, const MdhModel& point) const {
+  // The points with a field (flange frame) and their fields: the own point first.
+  using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  struct Known {
+    Eigen::Vector3d point_mm;
+    const ErrorField* field;
+    const Rows* function_rows;  // the functions' design at the field's samples, or null
+  };
+  std::vector<Known> known = {{measured_point_mm(), field_.get(), function_rows_at_samples_.get()}};
+  for (std::size_t k = 0; k < flange_points_.size(); ++k)
+    if (flange_points_[k].field)
+      known.push_back({flange_points_[k].position_mm, flange_points_[k].field.get(),
+                       k < point_function_rows_.size() ? point_function_rows_[k].get() : nullptr});
+  const Eigen::Index k = static_cast<Eigen::Index>(known.size());
+  // The residual at a point p of the flange moved by a small rigid motion (t, w) is t + w x p =
+  // [I, -[p]x] (t, w), with p in the robot frame (the flange's rotation at q applied): the fields'
+  // predictions at the known points give (t, w) by least squares, which then gives the point's.
+  const Eigen::Matrix3d rotation = forward_kinematics(command_model_, q_deg, EndFrame::flange).linear();
+  Eigen::MatrixXd a(3 * k, 6);
+  for (Eigen::Index j = 0; j < k; ++j) {
+    a.block<3, 3>(3 * j, 0).setIdentity();
+    a.block<3, 3>(3 * j, 3) = -cross_matrix(rotation * known[static_cast<std::size_t>(j)].point_mm);
+  }
+  Eigen::Matrix<double, 3, 6> at_point;
+  at_point << Eigen::Matrix3d::Identity(), -cross_matrix(rotation * point.tool().translation());
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeFullV);
+  const Eigen::VectorXd& s = svd.singularValues();
+  // Points on one line leave the rotation about it unobservable (one singular value ~0).
+  const double cutoff = 1e-9 * s[0];
+  Eigen::MatrixXd pseudo_inverse = Eigen::MatrixXd::Zero(6, 3 * k);
+  std::vector<Eigen::Matrix<double, 6, 1>> unobservable;  // scaled to a unit rotation
+  for (Eigen::Index c = 0; c < 6; ++c) {
+    if (c < s.size() && s[c] > cutoff) {
+      pseudo_inverse += svd.matrixV().col(c) * svd.matrixU().col(c).transpose() / s[c];
+    } else {
+      const Eigen::Matrix<double, 6, 1> v = svd.matrixV().col(c);
+      if (v.tail<3>().norm() > 1e-12) unobservable.push_back(v / v.tail<3>().norm());
+    }
+  }
+  // Of the motions that fit, the one that does not turn about the unobservable axis (the prior's
+  // mean, isotropic in the rotation): the least-norm solution would mix translation into it.
+  for (const Eigen::Matrix<double, 6, 1>& v : unobservable) {
+    Eigen::Matrix<double, 6, 6> keep = Eigen::Matrix<double, 6, 6>::Identity();
+    keep.rightCols<3>() -= v * v.tail<3>().transpose();
+    pseudo_inverse = keep * pseudo_inverse;
+  }
+  const Eigen::MatrixXd combination = at_point * pseudo_inverse;  // 3 x 3k
+  const Eigen::Vector3d at = forward_position(nominal_model(), q_deg);
+  ErrorPrediction p;
+  p.variance_mm2 = 0.0;
+  p.noise_variance_mm2 = 0.0;
+  Eigen::Vector3d field_sd = Eigen::Vector3d::Zero();
+  bool with_variance = true;
+  // What the fields take back of the joint functions' error near their samples, combined as their
+  // predictions are (each field's weights times the functions' design at its samples).
+  const Eigen::Index parameters = joint_functions_ ? joint_functions_->parameter_count() : 0;
+  std::optional<Eigen::MatrixXd> taken_back;
+  if (joint_functions_ && joint_functions_->coefficient_covariance_mrad2.size() > 0)
+    taken_back = Eigen::MatrixXd::Zero(3, parameters);
+  std::vector<double> weights;
+  for (Eigen::Index j = 0; j < k; ++j) {
+    const Known& known_point = known[static_cast<std::size_t>(j)];
+    const ErrorPrediction e = known_point.function_rows ? known_point.field->predict_with_weights(at, q_deg, weights)
+                                                        : known_point.field->predict(at, q_deg);
+    if (!e.inside_region) return e;
+    const Eigen::Matrix3d c = combination.middleCols<3>(3 * j);
+    if (taken_back && known_point.function_rows &&
+        static_cast<Eigen::Index>(weights.size()) == known_point.function_rows->rows()) {
+      const Eigen::RowVectorXd sum =
+          Eigen::Map<const Eigen::RowVectorXd>(weights.data(), static_cast<Eigen::Index>(weights.size())) *
+          *known_point.function_rows;
+      *taken_back += c * Eigen::Map<const Eigen::MatrixXd>(sum.data(), 3, parameters);
+    } else {
+      taken_back.reset();
+    }
+    p.position_error_mm += c * e.position_error_mm;
+    // Each field's own variance per axis (its nugget, when it is measurement noise, taken out: a new
+    // reading at the point has the noise of one reading, not a combination of several).
+    const double noise = std::isfinite(e.noise_variance_mm2) ? e.noise_variance_mm2 : 0.0;
+    const Eigen::Vector3d own = (e.axis_variance_mm2.array() - noise / 3.0).max(0.0).matrix();
+    with_variance = with_variance && e.axis_variance_mm2.allFinite();
+    // The fields' errors are alike at nearby points: the sum of their standard deviations bounds
+    // the combination's.
+    field_sd += (c.cwiseAbs2() * own).cwiseSqrt();
+    p.noise_variance_mm2 += noise / static_cast<double>(k);
+  }
+  if (credible_) p.credible = credible_->contains(p);
+  if (!with_variance) {
+    p.variance_mm2 = p.noise_variance_mm2 = std::numeric_limits<double>::quiet_NaN();
+  } else {
+    Eigen::Vector3d field_variance = field_sd.cwiseAbs2();
+    // The rotation about the points' line, which none of them sees: the orientation prior.
+    const OrientationPrior& prior = orientation_prior();
+    for (const Eigen::Matrix<double, 6, 1>& v : unobservable) {
+      const Eigen::Vector3d moved = at_point * v;  // mm per rad about the line
+      const double s2 = prior.known() ? prior.sigma_rad * prior.sigma_rad : 0.0;
+      field_variance += s2 * moved.cwiseAbs2();
+      p.orientation_variance_mm2 += s2 * moved.squaredNorm();
+      // The one-point lever limit is for a rotation about any axis (2 sigma² L²); about one axis it
+      // is sigma² |moved|².
+      if (prior.known()) p.orientation_supported = p.orientation_supported && moved.norm() <= std::sqrt(2.0) * prior.max_lever_mm;
+    }
+    p.variance_mm2 = field_variance.sum();
+    p.axis_variance_mm2 = field_variance + Eigen::Vector3d::Constant(p.noise_variance_mm2 / 3.0);
+  }
+  if (joint_functions_) {
+    const JointFunctionPrediction f =
+        functions_at_point(*joint_functions_, command_model_, point, q_deg, taken_back ? &*taken_back : nullptr);
+    p.position_error_mm += f.position_error_mm;
+    if (std::isfinite(p.variance_mm2)) p.variance_mm2 += f.axis_variance_mm2.sum();
+    if (p.axis_variance_mm2.allFinite()) p.axis_variance_mm2 += f.axis_variance_mm2;
+  }
+  return p;
+}
+
 ErrorPrediction CompensationModel::predict_error_at(const JointVector& q_deg, const MdhModel& point) const {
   if (!field_) return {};
+  const Eigen::Vector3d x = point.tool().translation();
+  const bool several = std::any_of(flange_points_.begin(), flange_points_.end(), [](const LabelledPoint& lp) { return lp.field != nullptr; });
+  if (several && (x - measured_point_mm()).norm() > kSameFlangePointMm) {
+    for (std::size_t k = 0; k < flange_points_.size(); ++k)
+      if (flange_points_[k].field && (flange_points_[k].position_mm - x).norm() <= kSameFlangePointMm)
+        return predict_at_labelled_point(q_deg, point, k);
+    return predict_by_rigid_motion(q_deg, point);
+  }
   std::vector<double> w;  // the field's weights, when the functions' variance needs them
   const Eigen::Vector3d at = forward_position(nominal_model(), q_deg);
   ErrorPrediction p = function_rows_at_samples_ ? field_->predict_with_weights(at, q_deg, w) : field_->predict(at, q_deg);
@@ -481,7 +680,11 @@ nlohmann::json CompensationModel::to_json() const {
   if (!flange_points_.empty()) {
     nlohmann::json points = nlohmann::json::array();
     for (const LabelledPoint& p : flange_points_)
-      points.push_back({{"label", p.label}, {"mm", {p.position_mm.x(), p.position_mm.y(), p.position_mm.z()}}});
+    {
+      nlohmann::json e = {{"label", p.label}, {"mm", {p.position_mm.x(), p.position_mm.y(), p.position_mm.z()}}};
+      if (p.field) e["field"] = p.field->to_json();
+      points.push_back(std::move(e));
+    }
     j["flange_points"] = points;
   }
   if (measured_orientation_)
@@ -609,8 +812,18 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
       if (!ok)
         fail_model(source, "member \"flange_points\"[" + std::to_string(k) + "]: expected {\"label\": text, \"mm\": [x, y, z] "
                            "within " + format_number(kMaxToolPointMm) + " mm}, got " + e.dump());
+      std::shared_ptr<const ErrorField> point_field;
+      if (e.contains("field")) {
+        // A further point's field is of the own field's kind (kinematic+kriging models only).
+        const std::string where = "member \"flange_points\"[" + std::to_string(k) + "].field";
+        if (!model.field_ || !e["field"].is_object() || !e["field"].contains("kind") || !e["field"]["kind"].is_string() ||
+            e["field"]["kind"].get<std::string>() != kind)
+          fail_model(source, where + ": expected a field of the model's own kind (\"" + std::string(kind) + "\")");
+        point_field = error_field_from_json(e["field"], source);
+      }
       model.flange_points_.push_back({e["label"].get<std::string>(),
-                                      Eigen::Vector3d(e["mm"][0].get<double>(), e["mm"][1].get<double>(), e["mm"][2].get<double>())});
+                                      Eigen::Vector3d(e["mm"][0].get<double>(), e["mm"][1].get<double>(), e["mm"][2].get<double>()),
+                                      std::move(point_field)});
     }
   }
   if (j.contains("orientation_residual")) {

@@ -379,6 +379,37 @@ MeasuredOrientation measured_orientation(const CompensationModel& model, const M
   return out;
 }
 
+/// The model's flange points, each further one (not the own point) with a field kriged on its own
+/// readings (`rows` of `d`): what the calibration, the registration and the joint error functions
+/// at that point leave, with `options` (the own field's variogram). A point with fewer than
+/// kMinimumPointFieldReadings readings keeps none.
+std::vector<CompensationModel::LabelledPoint> fields_of_further_points(const CompensationModel& model,
+                                                                       const MeasurementSet& d,
+                                                                       const detail::KinematicFit& kin,
+                                                                       const Registration& reg,
+                                                                       const std::vector<std::size_t>& rows,
+                                                                       const KrigingFieldOptions& options) {
+  constexpr std::size_t kMinimumPointFieldReadings = 20;
+  std::vector<CompensationModel::LabelledPoint> points = model.flange_points();
+  for (CompensationModel::LabelledPoint& point : points) {
+    FieldSamples samples;
+    std::vector<Eigen::Vector3d> residual;
+    for (std::size_t i : rows) {
+      if (d.reflector[i] != point.label) continue;
+      Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
+      tool.translation() = kin.flange_point_of_row_mm[i];
+      const MdhModel at = model.command_model().with_tool(tool);
+      residual.push_back(reg.robot_from_tracker * d.measured_mm[i] - forward_position(at, d.q_deg[i]) -
+                         model.joint_function_error_at(d.q_deg[i], at));
+      samples.position_mm.push_back(d.nominal_mm[i]);
+      samples.joints_deg.push_back(d.q_deg[i]);
+    }
+    if (residual.size() < kMinimumPointFieldReadings) continue;
+    point.field = fit_vector_kriging_field(samples, std::move(residual), options).field;
+  }
+  return points;
+}
+
 FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o, bool model_estimated) {
   using detail::fit_kinematic;
   using detail::KinematicFit;
@@ -522,7 +553,7 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
     case CompensationMethod::kinematic_kriging: {
       const KinematicFit kin = fit_kinematic(robot, d, o);
       std::vector<CompensationModel::LabelledPoint> located;
-      for (const auto& [label, p] : kin.located_points) located.push_back({label, p});
+      for (const auto& [label, p] : kin.located_points) located.push_back({label, p, nullptr});
       FitResult out{CompensationModel(CompensationMethod::kinematic, kin.model, nullptr)
                         .with_tool_point(kin.tool_point_mm, kin.reflector_mm)
                         .with_flange_points(located),
@@ -643,6 +674,22 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
                                            : " plus the 0.1 mrad floor (the points lie on a line: a rotation about it "
                                              "escapes them)") +
                             "; the variance at any other point on the flange counts it");
+        // Then each further point's own field, so that every measured point is predicted from its
+        // own readings and any other from the flange's rigid motion they imply (predict_error_at).
+        KrigingFieldOptions point_options = ko;
+        point_options.model = fit.model;
+        point_options.on_stage = nullptr;
+        const std::vector<CompensationModel::LabelledPoint> fielded =
+            fields_of_further_points(out.model, d, kin, reg, other_points, point_options);
+        std::string labels;
+        for (const CompensationModel::LabelledPoint& lp : fielded)
+          if (lp.field) labels += (labels.empty() ? "'" : ", '") + lp.label + "'";
+        if (!labels.empty()) {
+          out.model = out.model.with_flange_points(fielded);
+          out.notes.push_back("the residuals at " + labels + " kriged on their own readings with the same variogram; "
+                              "a point between the measured ones is predicted from the flange's rigid motion "
+                              "their fields imply");
+        }
       }
       out.cross_validation = kriging_report(fit, o.space, o);
       out.notes.push_back("residuals after calibration kriged with " + fit.model.to_string());

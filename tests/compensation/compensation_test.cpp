@@ -294,6 +294,83 @@ TEST(ToolPoints, LeverAddsTheRotationCovarianceAndIsRefusedBeyondTheSupportedLev
   EXPECT_EQ(status_name(PredictionStatus::orientation_unknown), "orientation-unknown");
 }
 
+/// Fields (joint space, exact at their samples: no nugget) of the displacement a small rigid motion
+/// (t_i, w_i) of the flange gives at `point` (flange frame) at each sample joint q_i.
+std::shared_ptr<const ErrorField> rigid_motion_field(const MdhModel& robot, const std::vector<JointVector>& q,
+                                                     const std::vector<Eigen::Vector3d>& t,
+                                                     const std::vector<Eigen::Vector3d>& w, const Eigen::Vector3d& point) {
+  FieldSamples samples;
+  std::vector<Eigen::Vector3d> values;
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    samples.joints_deg.push_back(q[i]);
+    samples.position_mm.push_back(forward_position(robot, q[i]));
+    const Eigen::Matrix3d r = forward_kinematics(robot, q[i], EndFrame::flange).linear();
+    values.push_back(t[i] + w[i].cross(r * point));
+  }
+  KrigingFieldOptions o;
+  o.space = FieldSpace::joint;
+  o.model = VariogramModel::parse("exp(sill=0.01,range=60)");
+  o.region_margin_deg = 90.0;
+  return make_vector_kriging_field(samples, values, o);
+}
+
+// Several points with fields of their own: elsewhere the prediction is the flange's rigid motion
+// their fields imply. At a sample joint the fields hold exactly t + w x (R p_j) for the motion drawn
+// there, so with three points off one line a fourth point's prediction is that motion's value at it
+// (the closed form below); with two points, the motion less its rotation about their line (which
+// they cannot see), and the variance adds the prior's sigma² |u x (x - x1)|² for it.
+TEST(ToolPoints, FieldsAtSeveralPointsPredictAnotherFromTheFlangesRigidMotion) {
+  const Eigen::Vector3d p1(0, 0, 100), p2(150, 0, 100), p3(0, 150, 100), p4(60, 90, 40);
+  const MdhModel nominal = MdhModel::er20_c10();
+  Eigen::Isometry3d own = Eigen::Isometry3d::Identity();
+  own.translation() = p1;
+  const MdhModel robot = nominal.with_tool(own);
+  const std::vector<JointVector> q = joints_in_box(30, 17);
+  std::mt19937_64 rng(23);
+  std::normal_distribution<double> z;
+  std::vector<Eigen::Vector3d> t, w;
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    t.emplace_back(0.05 * z(rng), 0.05 * z(rng), 0.05 * z(rng));
+    w.emplace_back(1e-3 * z(rng), 1e-3 * z(rng), 1e-3 * z(rng));
+  }
+  const CompensationModel one(CompensationMethod::kinematic_kriging, robot, rigid_motion_field(robot, q, t, w, p1));
+  const CompensationModel three = one.with_nominal_model(robot).with_flange_points(
+      {{"a", p1, nullptr}, {"b", p2, rigid_motion_field(robot, q, t, w, p2)}, {"c", p3, rigid_motion_field(robot, q, t, w, p3)}});
+  const CompensationModel two = one.with_nominal_model(robot).with_flange_points(
+      {{"a", p1, nullptr}, {"b", p2, rigid_motion_field(robot, q, t, w, p2)}});
+  auto at = [&](const Eigen::Vector3d& p) {
+    Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
+    tool.translation() = p;
+    return robot.with_tool(tool);
+  };
+  const OrientationPrior& prior = two.orientation_prior();
+  ASSERT_TRUE(prior.known());
+  for (std::size_t i : {3u, 11u, 29u}) {
+    const Eigen::Matrix3d r = forward_kinematics(robot, q[i], EndFrame::flange).linear();
+    const Eigen::Vector3d x4 = r * p4, x1 = r * p1, u = (r * (p2 - p1)).normalized();
+    const ErrorPrediction e3 = three.predict_error_at(q[i], at(p4));
+    ASSERT_TRUE(e3.inside_region);
+    EXPECT_LT((e3.position_error_mm - (t[i] + w[i].cross(x4))).norm(), 1e-6) << i;
+    EXPECT_EQ(e3.orientation_variance_mm2, 0.0);
+    // at a labelled point (within kSameFlangePointMm), that point's own field
+    const ErrorPrediction at_b = three.predict_error_at(q[i], at(p2 + Eigen::Vector3d(0.3, 0, 0)));
+    EXPECT_LT((at_b.position_error_mm - (t[i] + w[i].cross(r * p2))).norm(), 1e-6) << i;
+    const ErrorPrediction e2 = two.predict_error_at(q[i], at(p4));
+    const Eigen::Vector3d about_line = w[i].dot(u) * u.cross(x4 - x1);
+    EXPECT_LT((e2.position_error_mm - (t[i] + w[i].cross(x4) - about_line)).norm(), 1e-6) << i;
+    const Eigen::Vector3d moved = u.cross(x4 - x1);
+    const double s2 = prior.sigma_rad * prior.sigma_rad;
+    EXPECT_NEAR(e2.orientation_variance_mm2, s2 * moved.squaredNorm(), 1e-9 * s2 * moved.squaredNorm());
+    // the fields are exact here (no nugget): the variance is the unobservable rotation's alone
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(e2.axis_variance_mm2[k], s2 * moved[k] * moved[k], 1e-9) << i << " " << k;
+  }
+  // Away from the samples the fields' variances combine: never below the largest share of one.
+  const JointVector between = (q[3] + q[4]) / 2;
+  const ErrorPrediction e = three.predict_error_at(between, at(p4));
+  ASSERT_TRUE(e.inside_region && std::isfinite(e.variance_mm2));
+  EXPECT_GT(e.variance_mm2, 0.0);
+}
+
 // Readings the model itself predicts at a point are located back to that point exactly: the field's
 // translation and the joint functions' displacement and rotation of the flange enter locate_tool as
 // they enter the prediction (a second, independent path: the functions through the Jacobian at the point).

@@ -144,6 +144,10 @@ inline constexpr double kUnlocatedOrientationRad = 2e-3;
 /// OrientationPrior::max_lever_mm: the lever at which the orientation term's RMS is this many times
 /// the RMS of the residual the model corrects at the reflector (docs/robot.md).
 inline constexpr double kMaxLeverResidualRatio = 2.0;
+/// A point on the flange closer than this (mm) to a labelled point with a field of its own takes
+/// that field (LabelledPoint::field): a located tool's position scatters by ~0.05 mm around the
+/// point it is, and the rigid combination would trade the point's own field for its neighbours'.
+inline constexpr double kSameFlangePointMm = 1.0;
 /// `--tool`: a tool point further than this from the flange origin (mm) is refused as a typo (metres
 /// for mm, a wrong column): no robot tool is 2 m long.
 inline constexpr double kMaxToolPointMm = 2000.0;
@@ -257,6 +261,12 @@ class CompensationModel {
   struct LabelledPoint {
     std::string label;
     Eigen::Vector3d position_mm;
+    /// The kriged residual of this point's own readings (after the calibration and the joint error
+    /// functions at the point), with the own point's variogram; null for the own point (field())
+    /// and in files written before session 20. With two or more points holding a field, a point
+    /// between them is predicted from the flange's rigid motion their fields imply
+    /// (predict_error_at).
+    std::shared_ptr<const ErrorField> field;
   };
   CompensationModel with_flange_points(std::vector<LabelledPoint> points) const;
   const std::vector<LabelledPoint>& flange_points() const noexcept { return flange_points_; }
@@ -310,7 +320,15 @@ class CompensationModel {
   /// Same, for the point `at` (a command model whose tool is that point, e.g. aimed_model()): the joint
   /// error functions act through its Jacobian and the orientation term uses its lever from
   /// measured_point_mm(). predict_error(q) is predict_error_at(q, scored_model()).
+  /// With fields at several points on the flange (LabelledPoint::field): at a point within
+  /// kSameFlangePointMm of one of them, that point's field; elsewhere the flange's small rigid motion
+  /// (a translation and a rotation) fitted by least squares to the fields' predictions at their points,
+  /// carried to the point, with the fields' variances combined as if fully correlated (an upper
+  /// bound) and, where the points lie on one line, the prior on the rotation about it.
   ErrorPrediction predict_error_at(const robot::JointVector& q_deg, const robot::MdhModel& at) const;
+  /// The joint error functions' position error at the point `at` (a command model whose tool is that
+  /// point), zero without functions: what fit takes from a further point's readings before kriging them.
+  Eigen::Vector3d joint_function_error_at(const robot::JointVector& q_deg, const robot::MdhModel& at) const;
 
   /// The robot's whole predicted error of the tool point at nominal joints `q_deg` (CompensatedTarget::
   /// total_error_mm: calibration + field), with `nominal_model` giving the nominal tool point; NaN
@@ -377,6 +395,17 @@ class CompensationModel {
   /// what the field's prediction takes back from their error near its samples (predict_error);
   /// empty without.
   std::shared_ptr<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> function_rows_at_samples_;
+  /// The same for each flange point's own field (LabelledPoint::field), the design carried to that
+  /// point; null where the point has no field. Parallel to flange_points_.
+  std::vector<std::shared_ptr<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>>
+      point_function_rows_;
+  /// predict_error_at away from every point with a field, when several points hold one.
+  ErrorPrediction predict_by_rigid_motion(const robot::JointVector& q_deg, const robot::MdhModel& at) const;
+  /// predict_error_at at a further point with a field of its own.
+  ErrorPrediction predict_at_labelled_point(const robot::JointVector& q_deg, const robot::MdhModel& at,
+                                            std::size_t point) const;
+  /// point_function_rows_ from flange_points_ and joint_functions_.
+  void set_point_function_rows();
   std::vector<std::string> excluded_rows_, notes_;
   void set_function_rows_at_samples();
 };
