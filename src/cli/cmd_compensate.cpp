@@ -38,12 +38,21 @@ struct CompensateArgs {
 void check_frame_column(const CsvTable& t, const std::string& frame) {
   if (!t.has_column("frame")) return;
   const std::size_t c = t.column_index("frame");
-  for (std::size_t i = 0; i < t.row_count(); ++i)
-    if (!t.cell(i, c).empty() && t.cell(i, c) != frame)
+  for (std::size_t i = 0; i < t.row_count(); ++i) {
+    const std::string_view cell = t.cell(i, c);
+    // A column of the user's own under that name (a video frame, a fixture) would be overwritten by
+    // the frame compensate writes there: named, not taken for a frame.
+    if (!cell.empty() && cell != "robot" && cell != "tracker")
+      throw InputError(t.source() + ":" + std::to_string(t.line_of_row(i)) + ": column frame holds '" + std::string(cell) +
+                           "', which is not a frame (robot or tracker); compensate writes the targets' frame in column "
+                           "frame, so rename that column of the targets (or leave its cells empty)",
+                       t.source(), t.line_of_row(i), "frame");
+    if (!cell.empty() && cell != frame)
       throw InputError(t.source() + ":" + std::to_string(t.line_of_row(i)) + ": column frame is '" + std::string(t.cell(i, c)) +
                            "' but --frame is " + frame + "; give --frame " + std::string(t.cell(i, c)) +
                            " for targets in that frame",
                        t.source(), t.line_of_row(i), "frame");
+  }
 }
 
 // One line of the summary: in which frame the targets were read and the robot-frame columns are.

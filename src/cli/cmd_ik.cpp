@@ -8,6 +8,7 @@
 #include "cli/command_registry.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/error.hpp"
+#include "errfield/robot/arm_configuration.hpp"
 #include "errfield/robot/inverse_kinematics.hpp"
 
 namespace errfield::cli {
@@ -67,7 +68,7 @@ void run_ik(const IkArgs& a) {
   if (has_seed) seeds = read_joint_columns(table);
 
   std::vector<std::vector<double>> q(robot::kJointCount, std::vector<double>(n));
-  std::vector<std::string> status(n);
+  std::vector<std::string> status(n), config(n), config_source(n);
   std::vector<double> res_mm(n), res_deg(n);
   std::size_t failures = 0;
   robot::JointVector previous;
@@ -78,13 +79,24 @@ void run_ik(const IkArgs& a) {
     target.linear() = rotations[i];
     target.translation() = xyz.row(static_cast<Eigen::Index>(i)).transpose();
     robot::IkResult r;
+    // Where the solution's arm configuration came from (column config_source): the row's seed,
+    // the previous row's solution, or the multistart's first converged posture, which need not be
+    // the configuration the pose was taught on (issue 35: never silent).
     if (has_seed) {
       r = robot::inverse_kinematics(model, target, seeds[i], options);
+      config_source[i] = "seed";
     } else {
       // Without seeds, the previous row's solution keeps neighbouring targets on one branch.
-      if (have_previous) r = robot::inverse_kinematics(model, target, previous, options);
-      if (!have_previous || !r.ok()) r = robot::inverse_kinematics_multistart(model, target, options);
+      if (have_previous) {
+        r = robot::inverse_kinematics(model, target, previous, options);
+        config_source[i] = "previous-row";
+      }
+      if (!have_previous || !r.ok()) {
+        r = robot::inverse_kinematics_multistart(model, target, options);
+        config_source[i] = "multistart";
+      }
     }
+    if (r.ok()) config[i] = robot::arm_configuration(model, r.q_deg).to_string();
     if (r.ok()) {
       previous = r.q_deg;
       have_previous = true;
@@ -103,7 +115,7 @@ void run_ik(const IkArgs& a) {
   const auto qnames = joint_column_names();
   // So are the columns ik computes (ik run on its own output): dropped here and written anew, in
   // the same order as the first time.
-  const std::vector<std::string> computed{"status", "residual_mm", "residual_deg"};
+  const std::vector<std::string> computed{"status", "residual_mm", "residual_deg", "config", "config_source"};
   for (std::size_t c = 0; c < table.header().size(); ++c) {
     bool is_seed = false;
     for (const auto& qn : qnames) is_seed = is_seed || (has_seed && table.column_index(qn) == c);
@@ -116,9 +128,19 @@ void run_ik(const IkArgs& a) {
   out.add_column("status", status);
   out.add_numeric_column("residual_mm", res_mm);
   out.add_numeric_column("residual_deg", res_deg);
+  out.add_column("config", config);
+  out.add_column("config_source", config_source);
   out.write(a.out);
   std::cerr << "ik: " << n - failures << " of " << n << " targets solved";
   if (failures) std::cerr << "; " << failures << " not (see the status and residual columns)";
+  std::cerr << "; arm configuration from (column config_source):";
+  bool first = true;
+  for (const char* source : {"seed", "previous-row", "multistart"}) {
+    const auto count = std::count(config_source.begin(), config_source.end(), source);
+    if (count == 0) continue;
+    std::cerr << (first ? " " : ", ") << source << " " << count;
+    first = false;
+  }
   std::cerr << "; written to " << a.out << "\n";
 }
 
@@ -131,7 +153,9 @@ void add_ik_command(CLI::App& app) {
       "fixed-axis XYZ: R = Rz(rz) Ry(ry) Rx(rx)); optional seed columns q1..q6 (deg). Without seeds\n"
       "each row starts from the previous row's solution (first row: a few standard postures).\n"
       "Output: the input columns (seeds replaced) plus q1..q6 (deg), status (converged, joint_limits,\n"
-      "unreachable, max_iterations), residual_mm and residual_deg.\n"
+      "unreachable, max_iterations), residual_mm, residual_deg, config (the solution's arm configuration,\n"
+      "s+e+w- style) and config_source (seed, previous-row or multistart: where that configuration came\n"
+      "from; give seeds q1..q6 of the taught joints to hold a taught configuration).\n"
       "Example: errfield fk --input targets.csv --robot robot.json --out poses.csv   # poses: x,y,z,rx,ry,rz\n"
       "         errfield ik --input poses.csv --robot robot.json --out joints.csv\n"
       "Example: errfield ik --input targets.csv --robot robot.json --position-only --out joints.csv   # x,y,z only");

@@ -933,6 +933,18 @@ TEST_F(WrongCommand, TrackerFrameTargetsAreMappedWithTheModelsRegistration) {
                          path("ct2.csv"));
   ASSERT_EQ(again.exit_code, 0) << again.err;
   EXPECT_EQ(column("ct2.csv", "cq1"), column("ct.csv", "cq1"));
+  // A column of the user's own named frame (here a video frame number) is not taken for a frame
+  // and not silently overwritten: refused, naming the cell and what to rename (issue 35).
+  std::string numbered;
+  {
+    std::istringstream lines(read("robot.csv"));
+    std::string line;
+    for (int k = 0; std::getline(lines, line); ++k) numbered += line + "," + (k == 0 ? "frame" : std::to_string(100 + k)) + "\n";
+  }
+  write("numbered.csv", numbered);
+  expect_refused(run("compensate --model " + path("k.json") + " --targets " + path("numbered.csv") + " --out " + path("x.csv")),
+                 2, {"numbered.csv:2", "column frame holds '101'", "rename that column"});
+  EXPECT_FALSE(std::filesystem::exists(path("x.csv")));
 }
 
 }  // namespace wrong_command_cli_test

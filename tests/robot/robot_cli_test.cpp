@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "errfield/csv_table.hpp"
+#include "errfield/robot/arm_configuration.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "support/cli_harness.hpp"
 
@@ -74,7 +75,21 @@ TEST_F(RobotCli, FkThenIkRoundTripsWithUserRobotJson) {
     const Eigen::Isometry3d want = forward_kinematics(m, qs[i], EndFrame::tool);
     EXPECT_LT((t.translation() - want.translation()).norm(), 1e-6);
     EXPECT_LT((t.linear() - want.linear()).cwiseAbs().maxCoeff(), 1e-9);
+    // Where the solution's configuration came from (issue 35): without seeds the first row from the
+    // multistart, then the previous row's solution unless that failed; config is the solution's own.
+    EXPECT_EQ(ik.cell(i, ik.column_index("config")), arm_configuration(m, q[i]).to_string()) << "row " << i;
+    const std::string_view source = ik.cell(i, ik.column_index("config_source"));
+    EXPECT_TRUE(i == 0 ? source == "multistart" : source == "previous-row" || source == "multistart") << i << " " << source;
   }
+  EXPECT_NE(r.err.find("arm configuration from (column config_source): previous-row"), std::string::npos) << r.err;
+  // With seeds every row says so; ik run on its own output replaces its computed columns.
+  r = run("ik --input " + path("ik.csv") + " --robot " + path("robot.json") + " --out " + path("ik2.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CsvTable again = CsvTable::read(path("ik2.csv"));
+  EXPECT_EQ(again.header().size(), ik.header().size());
+  for (std::size_t i = 0; i < again.row_count(); ++i)
+    EXPECT_EQ(again.cell(i, again.column_index("config_source")), "seed") << "row " << i;
+  EXPECT_NE(r.err.find("arm configuration from (column config_source): seed 20"), std::string::npos) << r.err;
 }
 
 // Issue 19: fk wrote only a rotation matrix while every pose input takes rx,ry,rz. Its rx,ry,rz
