@@ -106,6 +106,10 @@ std::string refusal_tally(const std::vector<std::string>& status) {
     text += "; orientation-unknown: the working tool is further from the measured reflector than the flange "
             "orientation the model knows supports - locate it with 'errfield locate-tool' from readings at it, or "
             "fit readings of several points on the flange (docs/robot.md, 'Tool points and orientation')";
+  if (std::any_of(counts.begin(), counts.end(), [](const auto& c) { return c.first == "calibration-extrapolated"; }))
+    text += "; calibration-extrapolated: the pose lies beyond what the calibration's poses determine (another tool "
+            "orientation or arm posture than they cover) - measure poses like it and fit again (errfield plan "
+            "--candidates picks them; docs/robot.md, 'Calibration leverage')";
   return text;
 }
 

@@ -222,6 +222,11 @@ CompensationModel CompensationModel::with_measured_orientation(std::optional<Mea
   m.measured_orientation_ = measured;
   return m;
 }
+CompensationModel CompensationModel::with_calibration_leverage(std::optional<CalibrationLeverage> leverage) const {
+  CompensationModel m = *this;
+  m.calibration_leverage_ = std::move(leverage);
+  return m;
+}
 CompensationModel CompensationModel::with_flange_points(std::vector<LabelledPoint> points) const {
   CompensationModel m = *this;
   m.flange_points_ = std::move(points);
@@ -602,6 +607,17 @@ ErrorPrediction CompensationModel::predict_by_rigid_motion(const JointVector& q_
 }
 
 ErrorPrediction CompensationModel::predict_error_at(const JointVector& q_deg, const MdhModel& point) const {
+  ErrorPrediction p = predict_field_at(q_deg, point);
+  // Judged at the measured point: how far the pose is from what the calibration's data determine
+  // (a lever to another point is the orientation prior's).
+  if (calibration_leverage_) {
+    p.calibration_leverage_ratio = calibration_leverage_->ratio(command_model_, q_deg);
+    p.calibration_supported = p.calibration_leverage_ratio <= kMaxCalibrationLeverageRatio;
+  }
+  return p;
+}
+
+ErrorPrediction CompensationModel::predict_field_at(const JointVector& q_deg, const MdhModel& point) const {
   if (!field_) return {};
   const Eigen::Vector3d x = point.tool().translation();
   const bool several = std::any_of(flange_points_.begin(), flange_points_.end(), [](const LabelledPoint& lp) { return lp.field != nullptr; });
@@ -687,6 +703,7 @@ nlohmann::json CompensationModel::to_json() const {
     }
     j["flange_points"] = points;
   }
+  if (calibration_leverage_) j["calibration_leverage"] = calibration_leverage_->to_json();
   if (measured_orientation_)
     j["orientation_residual"] = {{"sigma_rad", measured_orientation_->sigma_rad},
                                  {"readings", measured_orientation_->readings},
@@ -825,6 +842,11 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
                                       Eigen::Vector3d(e["mm"][0].get<double>(), e["mm"][1].get<double>(), e["mm"][2].get<double>()),
                                       std::move(point_field)});
     }
+  }
+  if (j.contains("calibration_leverage")) {
+    if (method != CompensationMethod::kinematic && method != CompensationMethod::kinematic_kriging)
+      fail_model(source, "member \"calibration_leverage\": only calibrated models (kinematic, kinematic+kriging) have one");
+    model.calibration_leverage_ = CalibrationLeverage::from_json(j["calibration_leverage"], source);
   }
   if (j.contains("orientation_residual")) {
     const nlohmann::json& o = j["orientation_residual"];

@@ -41,6 +41,12 @@ std::string summary(const CalibrationResult& cal, std::size_t count, const std::
          (robust ? "igg3 (" + std::to_string(cal.rejected) + " rejected)" : std::string("none")) + "; " + cal.message;
 }
 
+/// The calibration's residual variance per component (mm²), at least (1 um)²: a fit of exact data
+/// leaves rounding, and no tracker reads better.
+double calibration_noise_variance(const CalibrationResult& cal) {
+  return std::max(cal.after.rms_mm * cal.after.rms_mm / 3.0, 1e-6);
+}
+
 std::string flange_point_text(const Eigen::Vector3d& v) {
   return "(" + short_number(v.x()) + ", " + short_number(v.y()) + ", " + short_number(v.z()) + ")";
 }
@@ -105,6 +111,10 @@ KinematicFit from_positions(const MdhModel& robot, const MeasurementSet& d, cons
   if (!reg.converged) out.warnings.push_back("the tracker registration did not converge: " + reg.message);
   if (!cal.converged) out.warnings.push_back("the kinematic calibration did not converge: " + cal.message);
   tool_and_reflector(out, robot, cal.model.tool().translation(), d, o);
+  std::vector<JointVector> q;
+  for (const PositionMeasurement& m : pm) q.push_back(m.q_deg);
+  out.leverage = CalibrationLeverage::of(out.model, q, calibration_noise_variance(cal), {},
+                                         cal.weights.size() == q.size() ? cal.weights : std::vector<double>{});
   return out;
 }
 
@@ -125,7 +135,7 @@ KinematicFit from_several_points(const MdhModel& robot, const MeasurementSet& d,
   for (const FlangePointEstimate& p : reg.flange_points) located.push_back(p.position_mm);
   const CalibrationResult cal = calibrate_positions(reg.model, pm, located, o.calibration);
   const Eigen::Isometry3d world_from_tracker = robot.base() * reg.model.base().inverse();
-  KinematicFit out{cal.model.with_base(world_from_tracker * cal.model.base()), Registration{}, {}, {}, {}, {}, {}, {}, {}};
+  KinematicFit out{cal.model.with_base(world_from_tracker * cal.model.base()), Registration{}, {}, {}, {}, {}, {}, {}, {}, {}};
   out.registration->robot_from_tracker = world_from_tracker;
   out.registration->residual_rms_mm = cal.after.rms_mm;
   for (std::size_t i = 0; i < pm.size(); ++i) {
@@ -155,6 +165,10 @@ KinematicFit from_several_points(const MdhModel& robot, const MeasurementSet& d,
   FitOptions far_ok = o;
   far_ok.reflector_far_ok = true;
   tool_and_reflector(out, robot, cal.model.tool().translation(), d, far_ok);
+  std::vector<JointVector> q;
+  for (const PositionMeasurement& m : pm) q.push_back(m.q_deg);
+  out.leverage = CalibrationLeverage::of(out.model, q, calibration_noise_variance(cal), out.flange_point_of_row_mm,
+                                         cal.weights.size() == q.size() ? cal.weights : std::vector<double>{});
   return out;
 }
 

@@ -24,6 +24,8 @@ struct KinematicFit {
   std::vector<Eigen::Vector3d> flange_point_of_row_mm;
   /// Data of several points: each label's located position (flange frame, mm), the own point first.
   std::vector<std::pair<std::string, Eigen::Vector3d>> located_points;
+  /// From positions: the leverage of the calibration (calibration_leverage.hpp).
+  std::optional<CalibrationLeverage> leverage;
 };
 
 KinematicFit fit_kinematic(const robot::MdhModel& robot, const MeasurementSet& data, const FitOptions& options);

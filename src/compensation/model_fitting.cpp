@@ -556,7 +556,8 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       for (const auto& [label, p] : kin.located_points) located.push_back({label, p, nullptr});
       FitResult out{CompensationModel(CompensationMethod::kinematic, kin.model, nullptr)
                         .with_tool_point(kin.tool_point_mm, kin.reflector_mm)
-                        .with_flange_points(located),
+                        .with_flange_points(located)
+                        .with_calibration_leverage(kin.leverage),
                     kin.registration, std::nullopt, kin.notes, kin.warnings};
       if (method == CompensationMethod::kinematic) return out;
       // Readings of several points on the flange: the functions and the field take the model's own point.
@@ -663,7 +664,8 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       out.model = CompensationModel(method, kin.model, fit.field)
                       .with_tool_point(kin.tool_point_mm, kin.reflector_mm)
                       .with_joint_error_functions(std::move(functions))
-                      .with_flange_points(located);
+                      .with_flange_points(located)
+                      .with_calibration_leverage(kin.leverage);
       if (!other_points.empty()) {
         const MeasuredOrientation m = measured_orientation(out.model, d, kin, reg, other_points);
         out.model = out.model.with_measured_orientation(m);

@@ -332,6 +332,7 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
     status[i] = !c.prediction.inside_region ? "outside-region"
                 : !c.prediction.credible ? "not-credible"
                 : !c.prediction.orientation_supported ? std::string(status_name(PredictionStatus::orientation_unknown))
+                : !c.prediction.calibration_supported ? std::string(status_name(PredictionStatus::calibration_extrapolated))
                 : c.ik_status != IkStatus::converged ? std::string("ik-") + to_string(c.ik_status)
                 : robot::joint_outside_limits(c.q_command_deg, model.command_model()) ? std::string(status_name(PredictionStatus::outside_limits))
                 // A move far beyond what the model ever predicted on its own data is a wrong robot,

@@ -22,6 +22,7 @@ std::string_view status_name(PredictionStatus s) {
     case PredictionStatus::not_credible: return "not-credible";
     case PredictionStatus::outside_limits: return "outside-limits";
     case PredictionStatus::orientation_unknown: return "orientation-unknown";
+    case PredictionStatus::calibration_extrapolated: return "calibration-extrapolated";
   }
   return "unknown";
 }
@@ -43,6 +44,10 @@ PointPrediction predict_position(const CompensationModel& model, const JointVect
   }
   if (!out.error.orientation_supported) {
     out.status = PredictionStatus::orientation_unknown;
+    return out;
+  }
+  if (!out.error.calibration_supported) {
+    out.status = PredictionStatus::calibration_extrapolated;
     return out;
   }
   out.position_mm = forward_position(model.scored_model(), q_deg) + out.error.position_error_mm;

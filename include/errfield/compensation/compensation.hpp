@@ -30,6 +30,7 @@
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
 
+#include "errfield/compensation/calibration_leverage.hpp"
 #include "errfield/compensation/joint_error_functions.hpp"
 #include "errfield/compensation/registration.hpp"
 #include "errfield/robot/inverse_kinematics.hpp"
@@ -90,6 +91,12 @@ struct ErrorPrediction {
   /// The part of variance_mm2 (and of axis_variance_mm2's sum) that is the unobservable orientation
   /// residual of the flange times the lever from the reflector (OrientationPrior); 0 at the reflector.
   double orientation_variance_mm2 = 0.0;
+  /// False when the pose lies beyond what the kinematic calibration's data determine
+  /// (calibration_leverage.hpp: its leverage over kMaxCalibrationLeverageRatio times the largest
+  /// training pose's): predict, validate and compensate refuse it (status calibration-extrapolated).
+  bool calibration_supported = true;
+  /// The pose's calibration leverage over the largest training pose's; NaN for models without one.
+  double calibration_leverage_ratio = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// What one reflector's data say about the orientation error of the flange, which they cannot observe:
@@ -214,6 +221,7 @@ struct CompensatedTarget {
   /// is within the lever the model's orientation supports and both IK solves converged.
   bool ok() const {
     return prediction.inside_region && prediction.credible && prediction.orientation_supported &&
+           prediction.calibration_supported &&
            ik_status == robot::IkStatus::converged;
   }
 };
@@ -272,6 +280,10 @@ class CompensationModel {
   const std::vector<LabelledPoint>& flange_points() const noexcept { return flange_points_; }
   const std::optional<MeasuredOrientation>& measured_orientation() const noexcept { return measured_orientation_; }
   CompensationModel with_notes(std::vector<std::string> notes) const;
+  /// Calibrated models fitted from positions: the calibration's leverage, which refuses poses
+  /// outside what its data determine ("calibration_leverage" in the model file; empty in older files).
+  CompensationModel with_calibration_leverage(std::optional<CalibrationLeverage> leverage) const;
+  const std::optional<CalibrationLeverage>& calibration_leverage() const noexcept { return calibration_leverage_; }
   CompensationModel with_registration(std::optional<compensation::Registration> r) const;
   CompensationModel with_nominal_registration(std::optional<compensation::Registration> r) const;
   CompensationModel with_nominal_model(robot::MdhModel nominal) const;
@@ -375,6 +387,7 @@ class CompensationModel {
   std::optional<Eigen::Isometry3d> working_tool_;
   std::optional<MeasuredOrientation> measured_orientation_;
   std::vector<LabelledPoint> flange_points_;
+  std::optional<CalibrationLeverage> calibration_leverage_;
   /// orientation_prior(), computed on first use; a copy (every with_*) starts afresh, since what it
   /// is computed from may change.
   struct LazyOrientationPrior {
@@ -399,6 +412,8 @@ class CompensationModel {
   /// point; null where the point has no field. Parallel to flange_points_.
   std::vector<std::shared_ptr<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>>
       point_function_rows_;
+  /// predict_error_at without the calibration's leverage.
+  ErrorPrediction predict_field_at(const robot::JointVector& q_deg, const robot::MdhModel& at) const;
   /// predict_error_at away from every point with a field, when several points hold one.
   ErrorPrediction predict_by_rigid_motion(const robot::JointVector& q_deg, const robot::MdhModel& at) const;
   /// predict_error_at at a further point with a field of its own.

@@ -24,9 +24,11 @@ namespace errfield::compensation {
 /// wrong joint order or a typo; the robot cannot be there, whatever the field says.
 /// orientation_unknown: the point predicted (a working tool, `--tool`) is further from the reflector the
 /// model was measured with than the model's orientation prior supports (OrientationPrior::max_lever_mm).
-enum class PredictionStatus { ok, outside_region, not_credible, outside_limits, orientation_unknown };
-/// "ok", "outside-region", "not-credible", "outside-limits", "orientation-unknown" (the status column
-/// of predict, validate, compensate).
+/// calibration_extrapolated: the pose lies beyond what the kinematic calibration's data determine
+/// (calibration_leverage.hpp), though its joints may be inside the data's box.
+enum class PredictionStatus { ok, outside_region, not_credible, outside_limits, orientation_unknown, calibration_extrapolated };
+/// "ok", "outside-region", "not-credible", "outside-limits", "orientation-unknown",
+/// "calibration-extrapolated" (the status column of predict, validate, compensate).
 std::string_view status_name(PredictionStatus s);
 
 struct PointPrediction {
