@@ -148,6 +148,7 @@ std::vector<PathStep> path_steps(const Eigen::MatrixXd& points, const std::vecto
       std::vector<std::pair<double, std::size_t>> candidates;  // (squared distance, path position)
       Eigen::MatrixXd a, factor;
       Eigen::VectorXd b, w;
+      std::vector<double> coordinates, lags, origin(static_cast<std::size_t>(d));
 #pragma omp for schedule(dynamic, 16)
       for (std::size_t t = begin; t < end; ++t) {
         PathStep& s = steps[t];
@@ -179,12 +180,32 @@ std::vector<PathStep> path_steps(const Eigen::MatrixXd& points, const std::vecto
         const auto ni = static_cast<Eigen::Index>(n);
         a.resize(ni, ni);
         b.resize(ni);
-        for (std::size_t i = 0; i < n; ++i) {  // the lower triangle: all either factorization reads
-          const double* pi = points.col(s.neighbour[i]).data();
-          b[static_cast<Eigen::Index>(i)] = kernel(kernels::column_distance(pi, here, d), zero_lag);
-          for (std::size_t j = 0; j <= i; ++j)
-            a(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) =
-                kernel(kernels::column_distance(pi, points.col(s.neighbour[j]).data(), d), zero_lag);
+        // The covariances: lags a column at a time (the lower triangle, all either factorization
+        // reads), from the neighbours' coordinates laid out coordinate by coordinate, then the
+        // kernel over the column (CovarianceKernel::at_lags). The same values, bit for bit, as
+        // kernel(column_distance(...)) pair by pair.
+        coordinates.resize(n * static_cast<std::size_t>(d));
+        for (std::size_t i = 0; i < n; ++i)
+          for (int k = 0; k < d; ++k) coordinates[static_cast<std::size_t>(k) * n + i] = points(k, s.neighbour[i]);
+        lags.resize(n);
+        auto lags_from = [&](const double* from, std::size_t first) {  // |neighbour i - from|, i >= first
+          std::fill(lags.begin() + static_cast<std::ptrdiff_t>(first), lags.end(), 0.0);
+          for (int k = 0; k < d; ++k) {
+            const double* x = coordinates.data() + static_cast<std::size_t>(k) * n;
+            const double f = from[k];
+            for (std::size_t i = first; i < n; ++i) lags[i] += (x[i] - f) * (x[i] - f);
+          }
+          // Eigen's packet square root: the correctly rounded one, two lags per instruction (std::sqrt
+          // in a loop stays scalar for errno's sake).
+          auto tail = Eigen::Map<Eigen::ArrayXd>(lags.data() + first, static_cast<Eigen::Index>(n - first));
+          tail = tail.sqrt();
+        };
+        lags_from(here, 0);
+        kernel.at_lags(lags.data(), n, zero_lag, b.data());
+        for (std::size_t j = 0; j < n; ++j) {
+          for (int k = 0; k < d; ++k) origin[static_cast<std::size_t>(k)] = coordinates[static_cast<std::size_t>(k) * n + j];
+          lags_from(origin.data(), j);
+          kernel.at_lags(lags.data() + j, n - j, zero_lag, &a(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j)));
         }
         // Cholesky (cheaper than the pivoted LDL', which it replaced), unblocked: Eigen's LLT
         // blocks systems of 32 and more, which at 60 x 60 costs 1.5x the plain column algorithm
