@@ -67,10 +67,10 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
   const Eigen::Index m = embedded.cols() / group, p = drift_terms_, comps = components_;
   const bool want_var = options_.compute_variance || leave_one_out;
   const bool want_w = (options_.keep_weights || with_weights) && !leave_one_out;
-  // Several value columns (conditional simulation krige the data and 100 draws with one system):
+  // Several value columns (conditional simulation kriges the data and 100 draws with one system):
   // each target's weights once, then applied to every column - n products per column instead of
-  // an n x n triangular solve per column (issue 36: 0.9 of the local kriging's time at 101
-  // columns). One column keeps the solve, which costs the same, so its results keep their bits.
+  // an n x n triangular solve per column (issue 36's job: the local kriging 13 % -> 6 % of the
+  // run). One column keeps the solve, which costs the same, so its results keep their bits.
   const bool apply_weights = comps > 1;
   const bool want_lambda = want_w || apply_weights;
   // The values sample by sample (C x N): a neighbour's C values are contiguous.
