@@ -9,6 +9,7 @@
 /// Points are stored column-major, one point per column (D rows), coordinates already in the
 /// Euclidean embedding of the metric (see kriging.hpp), so h is the Euclidean distance.
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <vector>
@@ -51,6 +52,29 @@ class CovarianceKernel {
   /// Covariance with the value `zero_value` used at exactly h = 0.
   double operator()(double h, double zero_value) const {
     return h > 0.0 ? at_positive_lag(h) : zero_value;
+  }
+  /// out[i] = (*this)(lags[i], zero_value) for i < n, bit for bit (the same operations in the
+  /// same order), term by term over all the lags: a spherical term is then a loop the compiler
+  /// vectorizes (a division and a select per lag, no branch), which the sequential simulation's
+  /// ~1,800 covariances per location were waiting on. `lags` and `out` do not overlap.
+  void at_lags(const double* lags, std::size_t n, double zero_value, double* out) const {
+    for (std::size_t i = 0; i < n; ++i) out[i] = 0.0;
+    for (const auto& t : terms_) {
+      if (t.kind == ModelKind::Spherical) {
+        const double sill = t.sill, range = t.range;
+        for (std::size_t i = 0; i < n; ++i) {
+          // gamma_of's expression; beyond the range r = 1 exactly, so g = sill * 1.0 = sill as there,
+          // without a branch (which would keep the division scalar: it must not run speculatively).
+          const double r = std::min(lags[i], range) / range;
+          out[i] += sill - sill * (1.5 * r - 0.5 * r * r * r);
+        }
+      } else {
+        for (std::size_t i = 0; i < n; ++i)
+          if (lags[i] > 0.0) out[i] += t.sill - gamma_of(t, lags[i]);
+      }
+    }
+    for (std::size_t i = 0; i < n; ++i)
+      if (!(lags[i] > 0.0)) out[i] = zero_value;
   }
 
  private:

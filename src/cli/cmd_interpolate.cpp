@@ -75,8 +75,6 @@ std::vector<std::string> prediction_columns(const std::vector<std::string>& valu
   return names;
 }
 
-std::string cell(double v) { return std::isnan(v) ? std::string() : format_number(v); }
-
 // The nodes of --grid as a targets table with the --coords columns, in raster order (row 0 the
 // largest y): every method reads it as it reads a targets file.
 CsvTable grid_targets(const NodeGrid& grid, const std::vector<std::string>& coords) {
@@ -216,7 +214,7 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
                            "', which the output would repeat; rename it",
                        a.targets, 1, name);
 
-  const InterpolationResult result = method.interpolate(r);
+  InterpolationResult result = method.interpolate(r);
   const auto m = static_cast<Eigen::Index>(targets.row_count());
   const std::vector<std::string> pred_names = result.prediction_names.empty() ? default_pred_names : result.prediction_names;
   for (const auto& name : result.prediction_names)
@@ -248,16 +246,12 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
   }
   OutputTable out;
   out.add_all_columns(targets);
+  // Numbers, not text: formatted straight into the file (a NaN, not predicted, is an empty cell).
   for (std::size_t c = 0; c < pred_names.size(); ++c) {
-    std::vector<std::string> cells(static_cast<std::size_t>(m));
-    for (Eigen::Index i = 0; i < m; ++i) cells[static_cast<std::size_t>(i)] = cell(result.pred(i, static_cast<Eigen::Index>(c)));
-    out.add_column(pred_names[c], std::move(cells));
+    const auto column = result.pred.col(static_cast<Eigen::Index>(c));
+    out.add_numbers(pred_names[c], std::vector<double>(column.data(), column.data() + column.size()));
   }
-  for (const auto& [name, values] : result.extra_columns) {
-    std::vector<std::string> cells(values.size());
-    for (std::size_t i = 0; i < values.size(); ++i) cells[i] = cell(values[i]);
-    out.add_column(name, std::move(cells));
-  }
+  for (auto& [name, values] : result.extra_columns) out.add_numbers(name, std::move(values));
   for (const auto& note : result.notes) std::cerr << "errfield interpolate: " << note << "\n";
   const std::string where = grid ? "the " + std::to_string(grid->nx) + " x " + std::to_string(grid->ny) + " nodes of --grid"
                                  : std::to_string(m) + " targets";

@@ -67,6 +67,14 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
   const Eigen::Index m = embedded.cols() / group, p = drift_terms_, comps = components_;
   const bool want_var = options_.compute_variance || leave_one_out;
   const bool want_w = (options_.keep_weights || with_weights) && !leave_one_out;
+  // Several value columns (conditional simulation kriges the data and 100 draws with one system):
+  // each target's weights once, then applied to every column - n products per column instead of
+  // an n x n triangular solve per column (issue 36's job: the local kriging 13 % -> 6 % of the
+  // run). One column keeps the solve, which costs the same, so its results keep their bits.
+  const bool apply_weights = comps > 1;
+  const bool want_lambda = want_w || apply_weights;
+  // The values sample by sample (C x N): a neighbour's C values are contiguous.
+  const Eigen::MatrixXd values_by_sample = apply_weights ? Eigen::MatrixXd(values_.transpose()) : Eigen::MatrixXd();
   const double c00 = block_variance(embedded, block_weights);  // the target's own variance (a block's average)
   const double zero_lag = target_variance();          // C(0) between a sample and a target point
   // Between a sample and a point of a block's discretization: the nugget (micro-scale variation or
@@ -199,10 +207,10 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
                                               block_zero_lag);
           c0[i] = sum;
         }
-        y.row(i) = values_.row(s);
+        if (!apply_weights) y.row(i) = values_.row(s);
       }
       lower.solveInPlace(c0);  // w
-      lower.solveInPlace(y);
+      if (!apply_weights) lower.solveInPlace(y);
       double var = c00 - c0.squaredNorm();
       if (p > 0) {
         auto q = ws.q.topRows(nn);
@@ -214,28 +222,38 @@ KrigingOutput KrigingEngine::predict_local(const Eigen::MatrixXd& embedded, cons
           fail(TargetOutcome::SingularDrift);
           continue;
         }
-        ws.beta.noalias() = q.transpose() * y;
-        g_llt.solveInPlace(ws.beta);
-        y.noalias() -= q * ws.beta;  // L^-1 (z - F beta)
         const auto f0 = f0_all.col(t);
-        ws.mean.noalias() = f0.transpose() * ws.beta;
-        ws.mean.noalias() += c0.transpose() * y;
+        if (!apply_weights) {
+          ws.beta.noalias() = q.transpose() * y;
+          g_llt.solveInPlace(ws.beta);
+          y.noalias() -= q * ws.beta;  // L^-1 (z - F beta)
+          ws.mean.noalias() = f0.transpose() * ws.beta;
+          ws.mean.noalias() += c0.transpose() * y;
+        }
         ws.r.noalias() = f0 - q.transpose() * c0;
         ws.s = ws.r;
         g_llt.matrixL().solveInPlace(ws.s);
         var += ws.s.squaredNorm();
-        if (want_w) {
+        if (want_lambda) {
           g_llt.solveInPlace(ws.r);  // G^-1 r
           ws.lambda.head(nn).noalias() = q * ws.r;
           ws.lambda.head(nn) += c0;
         }
       } else {
-        ws.mean.noalias() = c0.transpose() * y;
-        if (want_w) ws.lambda.head(nn) = c0;
+        if (!apply_weights) ws.mean.noalias() = c0.transpose() * y;
+        if (want_lambda) ws.lambda.head(nn) = c0;
       }
-      if (want_w) {
+      if (want_lambda) {
         auto lam = ws.lambda.head(nn);
         kb.triangularView<Eigen::Lower>().transpose().solveInPlace(lam);
+        if (apply_weights) {
+          ws.mean.setZero();
+          for (Eigen::Index i = 0; i < nn; ++i)
+            ws.mean += lam[i] * values_by_sample.col(static_cast<Eigen::Index>(ws.chosen[static_cast<std::size_t>(i)])).transpose();
+        }
+      }
+      if (want_w) {
+        const auto lam = ws.lambda.head(nn);
         auto& tw = target_weights[static_cast<std::size_t>(t)];
         tw.resize(static_cast<std::size_t>(nn));
         for (Eigen::Index i = 0; i < nn; ++i)

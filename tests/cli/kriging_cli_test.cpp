@@ -18,6 +18,7 @@
 
 #include "errfield/conditional_simulation.hpp"
 #include "errfield/csv_table.hpp"
+#include "errfield/csv_writing.hpp"
 #include "errfield/kriging.hpp"
 #include "errfield/indicator_kriging.hpp"
 #include "support/cli_harness.hpp"
@@ -235,6 +236,56 @@ TEST_F(KrigingCli, SimulationsWriteTheLibrarysDraws) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_THAT(r.output(), HasSubstr("--simulation-draws-per-path"));
   EXPECT_FALSE(fs::exists(path("Q.csv")));
+}
+
+TEST_F(KrigingCli, SimulationsCsvIsTheLibrarysNumbersAsShortestText) {
+  // A table of more than 100,000 cells is written as numbers formatted in blocks of rows, in
+  // parallel: byte for byte what format_number and csv_cell make of each cell, rows in order, for
+  // 1 and 2 threads; a target that could not be kriged (no sample within --radius) has empty
+  // cells; a text cell that needs quotes is quoted. 1,100 targets x 106 columns.
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> u(0.0, 1000.0);
+  std::vector<P3> targets;
+  std::vector<std::string> names;
+  std::ofstream t(path("TB.csv"));
+  t.precision(17);
+  t << "name,x,y,z\n";
+  for (int i = 0; i < 1100; ++i) {
+    targets.emplace_back(i % 250 == 7 ? P3(9000.0 + i, 9000.0, 9000.0) : P3(u(rng), u(rng), u(rng)));
+    names.push_back(i % 3 == 0 ? "p," + std::to_string(i) : "p" + std::to_string(i));
+    t << csv_cell(names.back()) << ',' << targets.back().x() << ',' << targets.back().y() << ',' << targets.back().z() << '\n';
+  }
+  t.close();
+  const CsvTable input = CsvTable::read(path("TB.csv"));
+  KrigingOptions opt;
+  opt.backend = KrigingBackend::Local;
+  opt.neighbors = 20;
+  opt.radius = 500.0;
+  SimulationOptions so;
+  so.draws = 100;
+  so.seed = 3;
+  const auto sim = simulate_conditional<P3, double>(pts_, vals_, targets, VariogramModel::parse(kModel), opt, so);
+  ASSERT_EQ(sim.failed_targets, 5u);
+  std::string expected = "name,x,y,z,pred,var";
+  for (int k = 1; k <= 100; ++k) expected += ",sim" + std::to_string(k);
+  expected += '\n';
+  auto number = [](double v) { return std::isnan(v) ? std::string() : format_number(v); };
+  for (std::size_t i = 0; i < targets.size(); ++i) {
+    std::vector<std::string> cells;
+    for (std::size_t c = 0; c < 4; ++c) cells.emplace_back(input.cell(i, c));  // the input's own text
+    cells.push_back(number(sim.mean[i]));
+    cells.push_back(number(sim.variance[i]));
+    for (const auto& draw : sim.draws) cells.push_back(number(draw[i]));
+    append_csv_line(expected, cells);
+  }
+  for (const char* threads : {"OMP_NUM_THREADS=1", "OMP_NUM_THREADS=2"}) {
+    const auto r = run("interpolate --method kriging --samples " + path("S.csv") + " --targets " + path("TB.csv") +
+                           " --coords x,y,z --value v --model \"" + kModel +
+                           "\" --backend local --neighbors 20 --radius 500 --simulations 100 --seed 3 --out " + path("PB.csv"),
+                       {threads});
+    ASSERT_EQ(r.exit_code, 0) << r.output();
+    EXPECT_TRUE(read("PB.csv") == expected) << threads;
+  }
 }
 
 TEST_F(KrigingCli, BlockKrigingWritesTheLibrarysBlocks) {

@@ -36,5 +36,21 @@ TEST(CovarianceKernel, BlockEqualsModelCovariance) {
   EXPECT_THROW(kernels::CovarianceKernel(VariogramModel::parse("pow(1,1.5)")), ArgumentError);
 }
 
+TEST(CovarianceKernel, AtLagsIsTheScalarKernelBitForBit) {
+  // The batch form the sequential simulation uses: the same number as operator() at every lag
+  // (zero lag, inside and beyond a spherical range, several terms of several kinds).
+  std::vector<double> lags{0.0, 1e-300, 0.5, 3.0, 29.999999999999996, 30.0, 30.000000000000004, 45.0, 1e6};
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(0.0, 80.0);
+  for (int i = 0; i < 200; ++i) lags.push_back(u(rng));
+  for (const char* text : {"sph(sill=2,range=30)+nug(0.5)", "sph(1,30)+sph(0.5,70)+nug(0.1)", "exp(1,10)+sph(0.5,20)",
+                           "mat(sill=1,range=5,nu=1.5)+gau(0.5,20)", "wen(1,25)"}) {
+    const kernels::CovarianceKernel kernel(VariogramModel::parse(text));
+    std::vector<double> out(lags.size(), -1.0);
+    kernel.at_lags(lags.data(), lags.size(), 7.0, out.data());
+    for (std::size_t i = 0; i < lags.size(); ++i) EXPECT_EQ(out[i], kernel(lags[i], 7.0)) << text << " at lag " << lags[i];
+  }
+}
+
 }  // namespace
 }  // namespace errfield
