@@ -305,8 +305,10 @@ void add_plan_command(CLI::App& app) {
       "Or choose the next poses from a pool of candidates (columns point, q1..q6 deg; all columns kept):\n"
       "without --model, maximin in joint space (the first batch); with --model (errfield fit,\n"
       "kinematic+kriging or vector-kriging) and --data (the poses measured so far), the poses that most\n"
-      "reduce the field's predicted error over the pool, and the predicted 3-D RMS now and after them;\n"
-      "--target-rms MM says how many more poses the prediction needs to reach MM.\n"
+      "reduce the field's predicted error over the pool, and the predicted 3-D RMS now and after them,\n"
+      "with its 90 % range (from the spread of the model's leave-one-out scores);\n"
+      "--target-rms MM says how many more poses the prediction needs to reach MM, and the range of counts\n"
+      "its range gives (no count while the range covers MM now).\n"
       "Example (pool.csv: SIMULATED poses already measured, README's example inputs):\n"
       "  errfield plan --robot kr16 --candidates pool.csv --count 40 --out batch1.csv\n"
       "  errfield fit --robot kr16 --data batch1.csv --out m1.json\n"
@@ -337,7 +339,7 @@ void add_plan_command(CLI::App& app) {
                   "point, and by joints), and the choice is conditioned on them");
   cmd->add_option("--target-rms", a->target_rms,
                   "--candidates with --model: the 3-D RMS wanted (mm); says whether the prediction reaches it and "
-                  "roughly how many more poses it needs");
+                  "roughly how many more poses it needs, with the range of counts the prediction's 90 % range gives");
   cmd->add_option("--local-scale", a->local_scale,
                   "--candidates with --model: on (default) weights the choice and the prediction by where the model's "
                   "leave-one-out errors exceeded its variance (docs/robot.md, 'Which poses to measure'); off: the "
