@@ -640,7 +640,17 @@ std::vector<double> local_error_scale(const Eigen::MatrixXd& samples, const Eige
                                       const VariogramModel& model, const Eigen::MatrixXd& query,
                                       std::size_t neighbours, double mean_variance_factor) {
   check_columns(query, samples);
-  const std::vector<double> z2 = leave_one_out_squared_z(samples, values, model, mean_variance_factor);
+  return local_error_scale(samples, leave_one_out_squared_z(samples, values, model, mean_variance_factor), model, query,
+                           neighbours);
+}
+
+std::vector<double> local_error_scale(const Eigen::MatrixXd& samples, const std::vector<double>& z2,
+                                      const VariogramModel& model, const Eigen::MatrixXd& query,
+                                      std::size_t neighbours) {
+  check_columns(query, samples);
+  if (!z2.empty() && z2.size() != static_cast<std::size_t>(samples.rows()))
+    throw ArgumentError("local_error_scale: " + std::to_string(z2.size()) + " z^2 for " +
+                        std::to_string(samples.rows()) + " samples");
   std::vector<double> scale(static_cast<std::size_t>(query.rows()), 1.0);
   if (z2.empty() || neighbours == 0) return scale;
   const Eigen::Index n = samples.rows();

@@ -152,6 +152,13 @@ std::vector<double> local_error_scale(const Eigen::MatrixXd& samples, const Eige
 std::vector<double> leave_one_out_squared_z(const Eigen::MatrixXd& samples, const Eigen::MatrixXd& values,
                                             const VariogramModel& model, double mean_variance_factor = 100.0);
 
+/// local_error_scale from the samples' z² computed already (leave_one_out_squared_z; empty: 1
+/// everywhere), without factoring the samples' covariance again. ArgumentError when `squared_z`
+/// is neither empty nor one per sample.
+std::vector<double> local_error_scale(const Eigen::MatrixXd& samples, const std::vector<double>& squared_z,
+                                      const VariogramModel& model, const Eigen::MatrixXd& query,
+                                      std::size_t neighbours = 10);
+
 VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candidates, const Eigen::MatrixXd& measured,
                                                    const VariogramModel& model,
                                                    const VarianceReductionOptions& options);

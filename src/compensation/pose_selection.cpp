@@ -186,8 +186,8 @@ PoseSelection select_distinct_poses(const std::vector<robot::JointVector>& candi
   if (options.local_scale && !z2.empty() && z2_mean > 0.0) {
     // Where the model's own leave-one-out errors were larger than its variance said (e.g. the
     // workspace edges of a robot whose errors grow there), weight the choice and the prediction.
-    vo.variance_scale = local_error_scale(xs, values, vm, pool);
-    if (done.rows() > 0) vo.measured_scale = local_error_scale(xs, values, vm, done);
+    vo.variance_scale = local_error_scale(xs, z2, vm, pool);
+    if (done.rows() > 0) vo.measured_scale = local_error_scale(xs, z2, vm, done);
     for (double& v : vo.variance_scale) v /= z2_mean;
     for (double& v : vo.measured_scale) v /= z2_mean;
   }
