@@ -5,10 +5,12 @@ random, maximin (space-filling) and adaptive (`errfield plan --model`) selection
 
 usage: scripts/plan_study.py ERRFIELD_BINARY WORKDIR [--robot kr16] [--seed 3] [--pool 2000]
        [--holdout 300] [--batch 40] [--batches 6] [--long-counts 320,480,687]
-       [--extra "simulate options"]
+       [--extra "simulate options"] [--target-rms MM]
 Prints one table row per (design, count); writes WORKDIR/plan_study.csv. --long-counts scores random
 and maximin also at these larger counts (the whole pool at most): how many poses each needs for
-what adaptive reaches with fewer.
+what adaptive reaches with fewer. With --target-rms, each adaptive row also records what the model
+fitted so far advises for that target (poses in total: central, and the 90 % range's ends) and the
+prediction's 90 % range: whether the advice moves between batches by more than its own range.
 """
 import argparse
 import csv
@@ -55,6 +57,7 @@ def main():
     ap.add_argument("--long-counts", default="")
     ap.add_argument("--maximin-batches", type=int, default=1,
                     help="adaptive: how many first batches are maximin (model-free) before plan --model")
+    ap.add_argument("--target-rms", default="", help="adaptive: ask plan for this target's advice at every batch")
     ap.add_argument("--plan-extra", default="", help="more options for plan --model, e.g. \"--spacing-floor 0.5\"")
     ap.add_argument("--extra", default="--joint-box -150,150,-130,-30,70,150,-90,90,-110,110,-180,180 "
                                         "--systematic realistic --orientation-spread 30 --joint-decimals 3")
@@ -131,12 +134,26 @@ def main():
             own = os.path.join(W, f"adaptive_own_{n}.json")
             run([E, "plan", "--robot", robot, "--candidates", os.path.join(W, "pool.csv"), "--count", "1",
                  "--model", model, "--data", os.path.join(W, f"adaptive_{n}.csv"), "--summary-out", own,
-                 "--local-scale", a.local_scale,
+                 "--local-scale", a.local_scale, *(["--target-rms", a.target_rms] if a.target_rms else []),
                  "--out", os.path.join(W, "own_next.csv")])
-            row["predicted_by_own_model_mm"] = json.load(open(own))["predicted_rms_mm"]["now"]
-            print(f"          predicted by its own model {row['predicted_by_own_model_mm']:.4f} mm", flush=True)
+            own_summary = json.load(open(own))
+            pr = own_summary["predicted_rms_mm"]
+            row["predicted_by_own_model_mm"] = pr["now"]
+            row["predicted_low_mm"], row["predicted_high_mm"] = pr.get("now_range", [None, None])
+            line = (f"          predicted by its own model {pr['now']:.4f} mm"
+                    + (f" (90 % range {row['predicted_low_mm']:.4f}-{row['predicted_high_mm']:.4f})"
+                       if row["predicted_low_mm"] is not None else "")
+                    + f", ratio to held-out {pr['now'] / row['heldout_rms_mm']:.3f}")
+            if a.target_rms:
+                total = lambda k: None if k is None else n + k
+                rng = own_summary.get("poses_for_target_range", [None, None])
+                row["advice_total"] = total(own_summary.get("poses_for_target"))
+                row["advice_total_low"], row["advice_total_high"] = total(rng[0]), total(rng[1])
+                line += (f"; target {a.target_rms}: {row['advice_total']} poses in total"
+                         f" (range {row['advice_total_low']} to {row['advice_total_high']})")
+            print(line, flush=True)
     with open(os.path.join(W, "plan_study.csv"), "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(out_rows[0]))
+        w = csv.DictWriter(f, fieldnames=list(dict.fromkeys(k for r in out_rows for k in r)))
         w.writeheader()
         w.writerows(out_rows)
 

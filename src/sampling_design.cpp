@@ -607,41 +607,61 @@ std::vector<std::size_t> box_extending_picks(const Eigen::MatrixXd& candidates, 
   return picks;
 }
 
+std::vector<double> leave_one_out_squared_z(const Eigen::MatrixXd& samples, const Eigen::MatrixXd& values,
+                                            const VariogramModel& model, double mean_variance_factor) {
+  check_locations(samples, "sample");
+  if (values.rows() != samples.rows() || values.cols() < 1)
+    throw ArgumentError("leave_one_out_squared_z: " + std::to_string(values.rows()) + " value rows for " +
+                        std::to_string(samples.rows()) + " samples");
+  if (!model.bounded()) throw ArgumentError("leave-one-out z^2 needs a bounded variogram model, got " + model.to_string());
+  const Eigen::Index n = samples.rows();
+  if (n < 3) return {};
+  const double nugget = model.nugget();
+  PriorCovariance k{model.isotropic_part(), model.sill() - nugget, 0.0};
+  if (!(k.field_variance > 0.0)) return {};
+  k.mean_variance = mean_variance_factor * k.field_variance;
+  const Eigen::MatrixXd xs = mapped_by_anisotropy(samples, model.anisotropy());
+  Eigen::MatrixXd kk = k.between(xs, xs);
+  kk.diagonal().array() += nugget > 0.0 ? nugget : 1e-10 * k.field_variance;
+  const Eigen::LLT<Eigen::MatrixXd> llt(kk);
+  if (llt.info() != Eigen::Success) return {};
+  const Eigen::MatrixXd inverse = llt.solve(Eigen::MatrixXd::Identity(n, n));
+  const Eigen::MatrixXd alpha = inverse * values;
+  // Leave-one-out (Dubrule): residual_i = alpha_i / inv_ii, predictive variance 1 / inv_ii.
+  std::vector<double> z2(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double d = inverse(i, i);
+    z2[static_cast<std::size_t>(i)] = (alpha.row(i) / d).squaredNorm() * d / static_cast<double>(values.cols());
+  }
+  return z2;
+}
+
 std::vector<double> local_error_scale(const Eigen::MatrixXd& samples, const Eigen::MatrixXd& values,
                                       const VariogramModel& model, const Eigen::MatrixXd& query,
                                       std::size_t neighbours, double mean_variance_factor) {
   check_columns(query, samples);
-  if (values.rows() != samples.rows() || values.cols() < 1)
-    throw ArgumentError("local_error_scale: " + std::to_string(values.rows()) + " value rows for " +
+  return local_error_scale(samples, leave_one_out_squared_z(samples, values, model, mean_variance_factor), model, query,
+                           neighbours);
+}
+
+std::vector<double> local_error_scale(const Eigen::MatrixXd& samples, const std::vector<double>& z2,
+                                      const VariogramModel& model, const Eigen::MatrixXd& query,
+                                      std::size_t neighbours) {
+  check_columns(query, samples);
+  if (!z2.empty() && z2.size() != static_cast<std::size_t>(samples.rows()))
+    throw ArgumentError("local_error_scale: " + std::to_string(z2.size()) + " z^2 for " +
                         std::to_string(samples.rows()) + " samples");
-  if (!model.bounded()) throw ArgumentError("local_error_scale needs a bounded variogram model, got " + model.to_string());
-  const Eigen::Index n = samples.rows();
   std::vector<double> scale(static_cast<std::size_t>(query.rows()), 1.0);
-  if (n < 3 || neighbours == 0) return scale;
-  const double nugget = model.nugget();
-  PriorCovariance k{model.isotropic_part(), model.sill() - nugget, 0.0};
-  if (!(k.field_variance > 0.0)) return scale;
-  k.mean_variance = mean_variance_factor * k.field_variance;
+  if (z2.empty() || neighbours == 0) return scale;
+  const Eigen::Index n = samples.rows();
   const Eigen::MatrixXd xs = mapped_by_anisotropy(samples, model.anisotropy()), xq = mapped_by_anisotropy(query, model.anisotropy());
-  Eigen::MatrixXd kk = k.between(xs, xs);
-  kk.diagonal().array() += nugget > 0.0 ? nugget : 1e-10 * k.field_variance;
-  const Eigen::LLT<Eigen::MatrixXd> llt(kk);
-  if (llt.info() != Eigen::Success) return scale;
-  const Eigen::MatrixXd inverse = llt.solve(Eigen::MatrixXd::Identity(n, n));
-  const Eigen::MatrixXd alpha = inverse * values;
-  // Leave-one-out (Dubrule): residual_i = alpha_i / inv_ii, predictive variance 1 / inv_ii.
-  Eigen::VectorXd z2(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double d = inverse(i, i);
-    z2[i] = (alpha.row(i) / d).squaredNorm() * d / static_cast<double>(values.cols());
-  }
   const std::size_t m = std::min<std::size_t>(neighbours, static_cast<std::size_t>(n));
   std::vector<std::pair<double, Eigen::Index>> d(static_cast<std::size_t>(n));
   for (Eigen::Index q = 0; q < xq.rows(); ++q) {
     for (Eigen::Index i = 0; i < n; ++i) d[static_cast<std::size_t>(i)] = {(xs.row(i) - xq.row(q)).squaredNorm(), i};
     std::partial_sort(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(m), d.end());
     double sum = 0.0;
-    for (std::size_t j = 0; j < m; ++j) sum += z2[d[j].second];
+    for (std::size_t j = 0; j < m; ++j) sum += z2[static_cast<std::size_t>(d[j].second)];
     scale[static_cast<std::size_t>(q)] = std::clamp(sum / static_cast<double>(m), 0.1, 10.0);
   }
   return scale;

@@ -532,6 +532,10 @@ TEST(LocalErrorScale, IsTheNeighbourhoodMeanOfLeaveOneOutRatiosFoundByRefitting)
     const double expected = std::clamp((ratio[d[0].second] + ratio[d[1].second] + ratio[d[2].second]) / 3.0, 0.1, 10.0);
     EXPECT_NEAR(scale[static_cast<std::size_t>(q)], expected, 1e-9 * expected) << "query " << q;
   }
+  // The per-sample ratios themselves (the stopping rule's level and its standard error come from them).
+  const std::vector<double> z2 = leave_one_out_squared_z(samples, values, model);
+  ASSERT_EQ(z2.size(), 12u);
+  for (int i = 0; i < 12; ++i) EXPECT_NEAR(z2[static_cast<std::size_t>(i)], ratio[static_cast<std::size_t>(i)], 1e-9 * ratio[static_cast<std::size_t>(i)]) << i;
 }
 
 TEST(VarianceReduction, AVarianceScaleWeightsThePicksAndThePrediction) {

@@ -143,6 +143,22 @@ std::vector<double> local_error_scale(const Eigen::MatrixXd& samples, const Eige
                                       const VariogramModel& model, const Eigen::MatrixXd& query,
                                       std::size_t neighbours = 10, double mean_variance_factor = 100.0);
 
+/// Each sample's leave-one-out squared residual over its leave-one-out predictive variance (nugget
+/// included), averaged over the K components of `values` (N x K): z² per sample, 1 on average where
+/// the model is right. What local_error_scale averages locally; their mean and spread say how well
+/// a model's variance level is known (the stopping rule's uncertainty, pose_selection.hpp). Empty
+/// for fewer than 3 samples, a model without structured variance or a covariance that does not
+/// factor. Same conventions and errors as local_error_scale. O(N³).
+std::vector<double> leave_one_out_squared_z(const Eigen::MatrixXd& samples, const Eigen::MatrixXd& values,
+                                            const VariogramModel& model, double mean_variance_factor = 100.0);
+
+/// local_error_scale from the samples' z² computed already (leave_one_out_squared_z; empty: 1
+/// everywhere), without factoring the samples' covariance again. ArgumentError when `squared_z`
+/// is neither empty nor one per sample.
+std::vector<double> local_error_scale(const Eigen::MatrixXd& samples, const std::vector<double>& squared_z,
+                                      const VariogramModel& model, const Eigen::MatrixXd& query,
+                                      std::size_t neighbours = 10);
+
 VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candidates, const Eigen::MatrixXd& measured,
                                                    const VariogramModel& model,
                                                    const VarianceReductionOptions& options);

@@ -138,29 +138,50 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
   text << "plan: " << sel.chosen.size() << " of " << open.size() << " candidate poses chosen, in measuring order ("
        << sel.design << ")\n";
   if (!sel.predicted_rms_mm.empty()) {
-    const double now = sel.predicted_rms_mm.front(), after = sel.predicted_rms_mm[std::min(a.count, sel.predicted_rms_mm.size() - 1)];
-    text << "  predicted 3-D RMS of a new reading over the pool: " << three_digits(now) << " mm with the "
-         << sel.conditioned_on << " poses measured, " << three_digits(after) << " mm after these " << a.count
-         << " (the field's own variance with its nugget"
+    const std::size_t at_end = std::min(a.count, sel.predicted_rms_mm.size() - 1);
+    const double now = sel.predicted_rms_mm.front(), after = sel.predicted_rms_mm[at_end];
+    auto range = [&](std::size_t k) {
+      return three_digits(sel.predicted_rms_low_mm[k]) + "-" + three_digits(sel.predicted_rms_high_mm[k]);
+    };
+    text << "  predicted 3-D RMS of a new reading over the pool: " << three_digits(now) << " mm (90 % range " << range(0)
+         << ") with the " << sel.conditioned_on << " poses measured, " << three_digits(after) << " mm (" << range(at_end)
+         << ") after these " << a.count << " (the field's own variance with its nugget"
          << (model->joint_error_functions() ? ", plus what the field's correction leaves of the joint error functions' estimation variance" : "")
          << "; calibration and registration uncertainty not included)\n";
-    summary["predicted_rms_mm"] = {{"now", now}, {"after", after}, {"by_pose", sel.predicted_rms_mm}};
+    if (sel.leave_one_out_scores > 0)
+      text << "  the range: the level of the prediction is the mean of the model's " << sel.leave_one_out_scores
+           << " leave-one-out scores (z^2), known to +/-" << format_number(std::round(1000.0 * sel.predicted_mse_relative_se) / 10.0)
+           << " % in the mean square (one standard error)\n";
+    summary["predicted_rms_mm"] = {{"now", now},
+                                   {"after", after},
+                                   {"by_pose", sel.predicted_rms_mm},
+                                   {"now_range", {sel.predicted_rms_low_mm.front(), sel.predicted_rms_high_mm.front()}},
+                                   {"after_range", {sel.predicted_rms_low_mm[at_end], sel.predicted_rms_high_mm[at_end]}},
+                                   {"mse_relative_se", sel.predicted_mse_relative_se},
+                                   {"leave_one_out_scores", sel.leave_one_out_scores}};
     if (o.target_rms_mm) {
       summary["target_rms_mm"] = *o.target_rms_mm;
-      if (sel.poses_for_target) {
-        summary["poses_for_target"] = *sel.poses_for_target;
-        if (*sel.poses_for_target == 0)
-          text << "  target " << format_number(*o.target_rms_mm) << " mm: reached (predicted) with the poses measured so far\n";
-        else
-          text << "  target " << format_number(*o.target_rms_mm) << " mm: about " << *sel.poses_for_target
-               << " more poses chosen this way (" << (*sel.poses_for_target <= a.count ? "within" : "beyond")
-               << " this batch)\n";
+      auto count_or_null = [](const std::optional<std::size_t>& n) { return n ? nlohmann::json(*n) : nlohmann::json(nullptr); };
+      summary["poses_for_target"] = count_or_null(sel.poses_for_target);
+      summary["poses_for_target_range"] = {count_or_null(sel.poses_for_target_low), count_or_null(sel.poses_for_target_high)};
+      const std::string target = "  target " + format_number(*o.target_rms_mm) + " mm: ";
+      const std::size_t horizon = sel.predicted_rms_mm.size() - 1;
+      if (sel.poses_for_target_high && *sel.poses_for_target_high == 0) {
+        text << target << "reached (predicted, the whole 90 % range) with the poses measured so far\n";
+      } else if (sel.poses_for_target_low && *sel.poses_for_target_low == 0) {
+        // The range covers the target now: a number of poses would be the noise of the estimate.
+        text << target << "within the prediction's 90 % range now (" << range(0)
+             << " mm): no count is given; measure the batch and validate on held-out poses to tell\n";
+      } else if (sel.poses_for_target_low) {
+        text << target << "about " << (sel.poses_for_target ? std::to_string(*sel.poses_for_target) : std::string("?"))
+             << " more poses chosen this way (90 % range " << *sel.poses_for_target_low << " to "
+             << (sel.poses_for_target_high ? std::to_string(*sel.poses_for_target_high)
+                                           : "beyond " + std::to_string(horizon) + " (not reached within this pool)")
+             << "; " << (sel.poses_for_target && *sel.poses_for_target <= a.count ? "within" : "beyond") << " this batch)\n";
       } else {
-        summary["poses_for_target"] = nullptr;
-        text << "  target " << format_number(*o.target_rms_mm) << " mm: not reached within "
-             << sel.predicted_rms_mm.size() - 1 << " more poses of this pool (predicted "
-             << three_digits(sel.predicted_rms_mm.back()) << " mm at the end): a finer model, a larger pool or "
-             << "less measurement noise is needed\n";
+        text << target << "not reached within " << horizon << " more poses of this pool, even at the low end of the "
+             << "prediction's range (predicted " << three_digits(sel.predicted_rms_mm.back()) << " mm, "
+             << range(horizon) << ", at the end): a finer model, a larger pool or less measurement noise is needed\n";
       }
     }
   }
@@ -284,8 +305,10 @@ void add_plan_command(CLI::App& app) {
       "Or choose the next poses from a pool of candidates (columns point, q1..q6 deg; all columns kept):\n"
       "without --model, maximin in joint space (the first batch); with --model (errfield fit,\n"
       "kinematic+kriging or vector-kriging) and --data (the poses measured so far), the poses that most\n"
-      "reduce the field's predicted error over the pool, and the predicted 3-D RMS now and after them;\n"
-      "--target-rms MM says how many more poses the prediction needs to reach MM.\n"
+      "reduce the field's predicted error over the pool, and the predicted 3-D RMS now and after them,\n"
+      "with its 90 % range (from the spread of the model's leave-one-out scores);\n"
+      "--target-rms MM says how many more poses the prediction needs to reach MM, and the range of counts\n"
+      "its range gives (no count while the range covers MM now).\n"
       "Example (pool.csv: SIMULATED poses already measured, README's example inputs):\n"
       "  errfield plan --robot kr16 --candidates pool.csv --count 40 --out batch1.csv\n"
       "  errfield fit --robot kr16 --data batch1.csv --out m1.json\n"
@@ -316,7 +339,7 @@ void add_plan_command(CLI::App& app) {
                   "point, and by joints), and the choice is conditioned on them");
   cmd->add_option("--target-rms", a->target_rms,
                   "--candidates with --model: the 3-D RMS wanted (mm); says whether the prediction reaches it and "
-                  "roughly how many more poses it needs");
+                  "roughly how many more poses it needs, with the range of counts the prediction's 90 % range gives");
   cmd->add_option("--local-scale", a->local_scale,
                   "--candidates with --model: on (default) weights the choice and the prediction by where the model's "
                   "leave-one-out errors exceeded its variance (docs/robot.md, 'Which poses to measure'); off: the "

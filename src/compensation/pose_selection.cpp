@@ -141,24 +141,58 @@ PoseSelection select_distinct_poses(const std::vector<robot::JointVector>& candi
   // The predicted RMS is over the whole pool: the candidates and the poses measured already (in
   // plan's use the pool rows of --data), as the poses asked for later will be spread.
   vo.measured_in_prediction = true;
-  if (options.local_scale) {
+  // The prediction's level and its uncertainty, from the field's leave-one-out scores. fit
+  // calibrates the variance so that 95 % of its leave-one-out errors fall in the 95 % region (the
+  // larger of the mean z² and the tail's factor), which suits r95, not a mean: a mean squared error
+  // needs the mean z². Where fit took the tail, the variance is scaled back by mean / factor (fit's
+  // own mean, which counts the joint error functions' leave-one-out inflation); the local scale
+  // gives the shape only (its mean over the samples is 1). Before, the local scale multiplied the
+  // calibrated variance by plan's own z² (no inflation): on SIMULATED KR 16 and UR5e draws the
+  // prediction came out 4-16 % below the held-out RMS at 120-240 poses (docs/robot.md).
+  const auto& fs = field.at("samples").at("joints_deg");
+  const auto& fv = field.at("values");
+  std::vector<robot::JointVector> sq;
+  for (const auto& q : fs) {
+    robot::JointVector v;
+    for (int k = 0; k < robot::kJointCount; ++k) v[k] = q.at(static_cast<std::size_t>(k)).get<double>();
+    sq.push_back(v);
+  }
+  Eigen::MatrixXd values(static_cast<Eigen::Index>(fv.size()), 3);
+  for (std::size_t i = 0; i < fv.size(); ++i)
+    for (int k = 0; k < 3; ++k) values(static_cast<Eigen::Index>(i), k) = fv.at(i).at(static_cast<std::size_t>(k)).get<double>();
+  const Eigen::MatrixXd xs = joint ? joint_rows(sq) : position_rows(sq, where);
+  const std::vector<double> z2 = leave_one_out_squared_z(xs, values, vm);
+  double z2_mean = 1.0, level = 1.0;
+  if (!z2.empty()) {
+    double sum = 0.0, sum2 = 0.0;
+    for (double z : z2) sum += z, sum2 += z * z;
+    const double n = static_cast<double>(z2.size());
+    z2_mean = sum / n;
+    const double sd = std::sqrt(std::max(sum2 / n - z2_mean * z2_mean, 0.0) * n / std::max(n - 1.0, 1.0));
+    // The mean z² of N scores, standard error sd / sqrt(N), relative to the mean: that of the
+    // predicted mean squared error (the RMS's is half of it).
+    if (z2_mean > 0.0) out.predicted_mse_relative_se = sd / z2_mean / std::sqrt(n);
+    out.leave_one_out_scores = z2.size();
+    level = z2_mean;
+  }
+  if (const auto c = field.find("variance_calibration"); c != field.end() && c->contains("factor") &&
+                                                           c->contains("mean_squared_z_before")) {
+    const double factor = c->at("factor").get<double>(), mean = c->at("mean_squared_z_before").get<double>();
+    if (factor > 0.0 && mean > 0.0 && std::isfinite(factor) && std::isfinite(mean)) level = mean / factor;
+  }
+  const std::vector<double> ones_pool(static_cast<std::size_t>(pool.rows()), 1.0), ones_done(static_cast<std::size_t>(done.rows()), 1.0);
+  vo.variance_scale = ones_pool;
+  if (done.rows() > 0) vo.measured_scale = ones_done;
+  if (options.local_scale && !z2.empty() && z2_mean > 0.0) {
     // Where the model's own leave-one-out errors were larger than its variance said (e.g. the
     // workspace edges of a robot whose errors grow there), weight the choice and the prediction.
-    const auto& fs = field.at("samples").at("joints_deg");
-    const auto& fv = field.at("values");
-    std::vector<robot::JointVector> sq;
-    for (const auto& q : fs) {
-      robot::JointVector v;
-      for (int k = 0; k < robot::kJointCount; ++k) v[k] = q.at(static_cast<std::size_t>(k)).get<double>();
-      sq.push_back(v);
-    }
-    Eigen::MatrixXd values(static_cast<Eigen::Index>(fv.size()), 3);
-    for (std::size_t i = 0; i < fv.size(); ++i)
-      for (int k = 0; k < 3; ++k) values(static_cast<Eigen::Index>(i), k) = fv.at(i).at(static_cast<std::size_t>(k)).get<double>();
-    const Eigen::MatrixXd xs = joint ? joint_rows(sq) : position_rows(sq, where);
-    vo.variance_scale = local_error_scale(xs, values, vm, pool);
-    if (done.rows() > 0) vo.measured_scale = local_error_scale(xs, values, vm, done);
+    vo.variance_scale = local_error_scale(xs, z2, vm, pool);
+    if (done.rows() > 0) vo.measured_scale = local_error_scale(xs, z2, vm, done);
+    for (double& v : vo.variance_scale) v /= z2_mean;
+    for (double& v : vo.measured_scale) v /= z2_mean;
   }
+  for (double& v : vo.variance_scale) v *= level;
+  for (double& v : vo.measured_scale) v *= level;
   if (options.extend_region) {
     // The model refuses a pose outside the box of its samples (widened by its margin): a pool pose
     // beyond the box of what is measured would stay refused after the next fit. Each axis' and
@@ -192,19 +226,30 @@ PoseSelection select_distinct_poses(const std::vector<robot::JointVector>& candi
   vo.lookahead = options.target_rms_mm ? options.max_lookahead : 0;
   // The look-ahead only serves "how many more poses": it ends where the prediction reaches the
   // target (an unreachable target still costs all of it: 17.6 s at 10,000 candidates, 500 measured).
+  // It goes on until the prediction's upper bound reaches the target, so the advice can say a range.
+  const double upper = 1.0 + kPredictionRangeZ * out.predicted_mse_relative_se;
+  const double lower = std::max(1.0 - kPredictionRangeZ * out.predicted_mse_relative_se, 0.0);
   if (options.target_rms_mm)
-    vo.lookahead_done = [target = *options.target_rms_mm](double mse) { return std::sqrt(3.0 * mse) <= target; };
+    vo.lookahead_done = [target = *options.target_rms_mm, upper](double mse) { return std::sqrt(3.0 * mse * upper) <= target; };
   vo.max_references = options.max_references;
   const VarianceReductionPlan plan = select_by_variance_reduction(pool, done, vm, vo);
   out.chosen = plan.chosen;
   // The field's variogram is that of one component; a reading's 3-D error sums three.
-  for (double mse : plan.predicted_mse) out.predicted_rms_mm.push_back(std::sqrt(3.0 * mse));
-  if (options.target_rms_mm)
-    for (std::size_t k = 0; k < out.predicted_rms_mm.size(); ++k)
-      if (out.predicted_rms_mm[k] <= *options.target_rms_mm) {
-        out.poses_for_target = k;
-        break;
-      }
+  for (double mse : plan.predicted_mse) {
+    out.predicted_rms_mm.push_back(std::sqrt(3.0 * mse));
+    out.predicted_rms_low_mm.push_back(std::sqrt(3.0 * mse * lower));
+    out.predicted_rms_high_mm.push_back(std::sqrt(3.0 * mse * upper));
+  }
+  if (options.target_rms_mm) {
+    auto first_reaching = [&](const std::vector<double>& rms) -> std::optional<std::size_t> {
+      for (std::size_t k = 0; k < rms.size(); ++k)
+        if (rms[k] <= *options.target_rms_mm) return k;
+      return std::nullopt;
+    };
+    out.poses_for_target = first_reaching(out.predicted_rms_mm);
+    out.poses_for_target_low = first_reaching(out.predicted_rms_low_mm);
+    out.poses_for_target_high = first_reaching(out.predicted_rms_high_mm);
+  }
   out.region_extending = vo.first_picks.size();
   out.design = (vo.first_picks.empty() ? std::string()
                                        : std::to_string(vo.first_picks.size()) +

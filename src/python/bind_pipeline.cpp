@@ -295,7 +295,12 @@ py::dict plan_py(const py::object& candidates, std::size_t count, const py::obje
   d["chosen"] = py::module_::import("numpy").attr("array")(py::cast(sel.chosen), "dtype"_a = "int64");
   d["design"] = sel.design;
   d["predicted_rms_mm"] = to_numpy(sel.predicted_rms_mm);
-  d["poses_for_target"] = sel.poses_for_target ? py::object(py::int_(*sel.poses_for_target)) : py::object(py::none());
+  auto count_or_none = [](const std::optional<std::size_t>& n) { return n ? py::object(py::int_(*n)) : py::object(py::none()); };
+  d["poses_for_target"] = count_or_none(sel.poses_for_target);
+  d["predicted_rms_low_mm"] = to_numpy(sel.predicted_rms_low_mm);
+  d["predicted_rms_high_mm"] = to_numpy(sel.predicted_rms_high_mm);
+  d["predicted_mse_relative_se"] = sel.predicted_mse_relative_se;
+  d["poses_for_target_range"] = py::make_tuple(count_or_none(sel.poses_for_target_low), count_or_none(sel.poses_for_target_high));
   d["conditioned_on"] = sel.conditioned_on;
   return d;
 }
@@ -376,7 +381,9 @@ void bind_pipeline(py::module_& m) {
         "integrated variance reduction among the candidates at least spacing_floor (0..1) of the farthest one's distance\n"
         "from everything measured or chosen (plan --spacing-floor). Returns a dict: chosen (candidate rows, in measuring order), design,\n"
         "predicted_rms_mm ([0] now, [k] after k more poses; model only), poses_for_target (target_rms given: poses\n"
-        "from now the prediction needs, None if not reached), conditioned_on. Releases the GIL.");
+        "from now the prediction needs, None if not reached), predicted_rms_low_mm / predicted_rms_high_mm (its 90 % range\n"
+        "from the spread of the model's leave-one-out scores), predicted_mse_relative_se, poses_for_target_range (low, high;\n"
+        "None: not reached), conditioned_on. Releases the GIL.");
   m.def("validate", &validate_py, py::arg("model"), py::arg("data"), py::kw_only(), py::arg("robot") = py::none(),
         py::arg("base_points") = py::none(), py::arg("targets") = false, py::arg("tool") = py::none(),
         "`errfield validate` (tool: the CLI's --tool) on held-out measurements (dict of columns). Returns a dict: points (the columns of\n"

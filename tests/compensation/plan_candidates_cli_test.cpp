@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 #include <set>
 #include <string>
 #include <vector>
@@ -167,6 +169,72 @@ TEST_F(PlanCandidates, WithAModelPredictsTheRmsAndAnswersATarget) {
   EXPECT_TRUE(nlohmann::json::parse(read("t.json"))["poses_for_target"].is_null());
 }
 
+TEST_F(PlanCandidates, TheStoppingRuleSaysItsUncertaintyAndAdvisesARange) {
+  // Issue 35: the prediction's level is the mean of the model's leave-one-out z² (fit's mean, not
+  // the 95 % tail factor its calibration may take), its 90 % range the standard error of that mean,
+  // and --target-rms advice a range of poses, withheld while the range covers the target.
+  make_pool(200);
+  take_rows("all.csv", "pool.csv", 1, 201);
+  take_rows("all.csv", "measured.csv", 1, 81);
+  // vector-kriging: the prediction is the field's alone (no joint error functions' term), so the
+  // level scales it exactly.
+  ASSERT_EQ(run("fit --robot r.json --data measured.csv --method vector-kriging --out m.json").exit_code, 0);
+  const auto r = run("plan --candidates pool.csv --count 20 --model m.json --data measured.csv --summary-out s.json --out n.csv");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("90 % range"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("80 leave-one-out scores"), std::string::npos) << r.out;
+  const auto s = nlohmann::json::parse(read("s.json"))["predicted_rms_mm"];
+  const double now = s["now"].get<double>(), se = s["mse_relative_se"].get<double>();
+  EXPECT_EQ(s["leave_one_out_scores"].get<int>(), 80);
+  ASSERT_GT(se, 0.0);
+  EXPECT_LT(se, 1.0);
+  // The ends are the mean square times 1 -/+ 1.645 standard errors.
+  EXPECT_NEAR(s["now_range"][0].get<double>(), now * std::sqrt(1.0 - 1.645 * se), 1e-12);
+  EXPECT_NEAR(s["now_range"][1].get<double>(), now * std::sqrt(1.0 + 1.645 * se), 1e-12);
+  // A calibration that took the tail (factor twice the mean z²) leaves the predicted mean square at
+  // half of what the calibrated variance says: the stopping rule predicts a mean, not a 95 % radius.
+  {
+    auto m = nlohmann::json::parse(read("m.json"));
+    auto& c = m["field"]["variance_calibration"];
+    ASSERT_TRUE(c.contains("factor")) << c.dump();
+    c["mean_squared_z_before"] = 0.5 * c["factor"].get<double>();
+    write("half.json", m.dump());
+    ASSERT_EQ(run("plan --candidates pool.csv --count 20 --model half.json --data measured.csv --summary-out h.json "
+                  "--out h.csv").exit_code, 0);
+    const double half = nlohmann::json::parse(read("h.json"))["predicted_rms_mm"]["now"].get<double>();
+    const double full = now * std::sqrt(c["factor"].get<double>() / nlohmann::json::parse(read("m.json"))["field"]
+                                              ["variance_calibration"]["mean_squared_z_before"].get<double>());
+    EXPECT_NEAR(half * half, 0.5 * full * full, 1e-9 * full * full);
+    EXPECT_EQ(read("h.csv"), read("n.csv"));  // a common factor changes no pick
+  }
+  // A target inside the range now: no count (it would be the estimate's noise), and the summary's
+  // range starts at 0.
+  const double inside = now * std::sqrt(1.0 - 0.5 * 1.645 * se);
+  auto exact = [](double v) {
+    std::ostringstream o;
+    o << std::setprecision(17) << v;
+    return o.str();
+  };
+  const auto w = run("plan --candidates pool.csv --count 20 --model m.json --data measured.csv --target-rms " +
+                     exact(inside) + " --summary-out w.json --out w.csv");
+  ASSERT_EQ(w.exit_code, 0) << w.err;
+  EXPECT_NE(w.out.find("within the prediction's 90 % range now"), std::string::npos) << w.out;
+  EXPECT_EQ(nlohmann::json::parse(read("w.json"))["poses_for_target_range"][0].get<int>(), 0);
+  // A target the prediction reaches after 15 poses (below the low end now): a count and its range
+  // around it, low <= central <= high.
+  const double after15 = s["by_pose"][15].get<double>();
+  ASSERT_LT(after15, s["now_range"][0].get<double>()) << "the draw no longer shows a fall beyond the range";
+  const auto t = run("plan --candidates pool.csv --count 20 --model m.json --data measured.csv --target-rms " +
+                     exact(after15 * (1.0 + 1e-12)) + " --summary-out t.json --out t.csv");
+  ASSERT_EQ(t.exit_code, 0) << t.err;
+  const auto ts = nlohmann::json::parse(read("t.json"));
+  EXPECT_EQ(ts["poses_for_target"].get<int>(), 15) << t.out;
+  const auto& range = ts["poses_for_target_range"];
+  EXPECT_LE(range[0].get<int>(), 15);
+  if (!range[1].is_null()) EXPECT_GE(range[1].get<int>(), 15);
+  EXPECT_NE(t.out.find("about 15 more poses chosen this way (90 % range "), std::string::npos) << t.out;
+}
+
 TEST_F(PlanCandidates, MisuseIsRefusedNamingTheOption) {
   make_pool(40);
   take_rows("all.csv", "pool.csv", 1, 41);
@@ -302,7 +370,7 @@ TEST_F(PlanCandidates, PredictedRmsHoldsOnHeldOutPoses) {
   // poses (a new reading anywhere in the pool) against the RMS `validate` measures on held-out poses
   // of the same pool. SIMULATED KR16 with the realistic systematic effects (growing at the
   // workspace edges), varying orientation and joints to 3 decimals; 160 poses fitted, 200 held out.
-  // The issue's bar: within 20 %.
+  // Issue 35's bar: within 10 % (this draw: 0.117 predicted, 0.109 held out; 1.08).
   const auto sim = run("simulate --robot kr16 --seed 8 --sample scattered:360 --joint-box "
                        "-150,150,-130,-30,70,150,-90,90,-110,110,-180,180 --systematic realistic "
                        "--orientation-spread 30 --joint-decimals 3 --measure positions --robot-out r.json --out all.csv");
@@ -317,7 +385,7 @@ TEST_F(PlanCandidates, PredictedRmsHoldsOnHeldOutPoses) {
   ASSERT_EQ(p.exit_code, 0) << p.err;
   const double achieved = nlohmann::json::parse(read("v.json"))["position"]["after"]["rms_mm"].get<double>();
   const double predicted = nlohmann::json::parse(read("p.json"))["predicted_rms_mm"]["now"].get<double>();
-  EXPECT_NEAR(predicted / achieved, 1.0, 0.2) << "predicted " << predicted << " mm, held-out " << achieved << " mm";
+  EXPECT_NEAR(predicted / achieved, 1.0, 0.1) << "predicted " << predicted << " mm, held-out " << achieved << " mm";
 }
 
 }  // namespace plan_candidates_cli_test

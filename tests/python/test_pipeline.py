@@ -301,6 +301,10 @@ def test_plan_matches_cli(tmp_path):
     s = json.loads((tmp_path / "s.json").read_text())
     assert second["predicted_rms_mm"][0] == s["predicted_rms_mm"]["now"]
     assert list(second["predicted_rms_mm"]) == s["predicted_rms_mm"]["by_pose"]
+    # The prediction's 90 % range and the advice's (issue 35): the CLI's numbers.
+    assert [second["predicted_rms_low_mm"][0], second["predicted_rms_high_mm"][0]] == s["predicted_rms_mm"]["now_range"]
+    assert second["predicted_mse_relative_se"] == s["predicted_rms_mm"]["mse_relative_se"]
+    assert list(second["poses_for_target_range"]) == s["poses_for_target_range"]
     # The spacing floor: the CLI's option, the same choice; 0 is variance reduction alone.
     run_cli("plan", "--candidates", tmp_path / "pool.csv", "--count", "12", "--model", tmp_path / "m.json",
             "--data", tmp_path / "measured.csv", "--spacing-floor", "0", "--out", tmp_path / "n3.csv")

@@ -24,6 +24,9 @@
 
 namespace errfield::compensation {
 
+/// The standard normal quantile of the prediction's 90 % range (PoseSelection::predicted_rms_low_mm).
+inline constexpr double kPredictionRangeZ = 1.645;
+
 struct PoseSelectionOptions {
   std::size_t count = 0;  ///< poses to choose
   /// With a model: keep choosing (beyond count, for the prediction only) until the predicted 3-D RMS
@@ -60,6 +63,18 @@ struct PoseSelection {
   /// With target_rms_mm: how many poses (counted from now) the prediction needs to reach it; empty
   /// when not reached within count + max_lookahead poses of this pool.
   std::optional<std::size_t> poses_for_target;
+  /// The prediction's uncertainty: the relative standard error of its mean squared error, that of
+  /// the mean of the model's `leave_one_out_scores` z² (their standard deviation / mean / sqrt(N)),
+  /// which set the prediction's level; 0 without them. The RMS's relative error is about half.
+  double predicted_mse_relative_se = 0.0;
+  std::size_t leave_one_out_scores = 0;
+  /// predicted_rms_mm at the ends of its 90 % range (mean squared error times 1 -/+ 1.645 relative
+  /// standard errors), entry by entry.
+  std::vector<double> predicted_rms_low_mm, predicted_rms_high_mm;
+  /// With target_rms_mm: poses_for_target by predicted_rms_low_mm (the fewest the prediction's
+  /// range allows) and by predicted_rms_high_mm (the most; empty when the high end does not reach
+  /// the target within count + max_lookahead poses). Advice between batches moves within this.
+  std::optional<std::size_t> poses_for_target_low, poses_for_target_high;
   std::size_t conditioned_on = 0;  ///< measured poses the model-based choice was conditioned on
   std::size_t region_extending = 0;  ///< model-based: how many of `chosen` (the first) extend the region
   /// Candidates never chosen because their joints equal (exactly, as read) an earlier candidate's
