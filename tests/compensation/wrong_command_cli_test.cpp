@@ -643,18 +643,21 @@ TEST_F(WrongCommand, JointsInRadiansAreRefusedAgainstTheTrainingJoints) {
   EXPECT_FALSE(std::filesystem::exists(path("p.csv")));
   expect_refused(run("compensate --model " + path("k.json") + " --targets " + path("rad.csv") + " --out " + path("c.csv")),
                  2, {"rad.csv", "radians", "--joints-are-degrees"});
-  // The same joints in degrees, the override, and a model file without training joints (older
-  // files) go through.
+  // The same joints in degrees go through. The override, and a model file without training joints
+  // (older files), pass the radians check; the 13 rows (12 poses and the base point), all within
+  // 2.6 "deg" of zero, then lie far beyond the poses the calibration determined: every row
+  // calibration-extrapolated (exit 1, not the radians refusal's 2).
   EXPECT_EQ(run("predict --model " + path("k.json") + " --joints " + path("deg.csv") + " --out " + path("p.csv")).exit_code, 0);
   EXPECT_EQ(run("compensate --model " + path("k.json") + " --targets " + path("deg.csv") + " --out " + path("c.csv")).exit_code, 0);
-  EXPECT_EQ(run("predict --model " + path("k.json") + " --joints " + path("rad.csv") + " --joints-are-degrees --out " +
-                path("p2.csv")).exit_code,
-            0);
+  expect_refused(run("predict --model " + path("k.json") + " --joints " + path("rad.csv") + " --joints-are-degrees --out " +
+                     path("p2.csv")),
+                 1, {"calibration-extrapolated 13"});
   nlohmann::json old = read_json("k.json");
   ASSERT_TRUE(old.contains("data_joints_deg"));
   old.erase("data_joints_deg");
   write_json("old.json", old);
-  EXPECT_EQ(run("predict --model " + path("old.json") + " --joints " + path("rad.csv") + " --out " + path("p3.csv")).exit_code, 0);
+  expect_refused(run("predict --model " + path("old.json") + " --joints " + path("rad.csv") + " --out " + path("p3.csv")), 1,
+                 {"calibration-extrapolated 13"});
 }
 
 TEST_F(WrongCommand, ValidateRefusesReadingsOfAnotherPointNamingTheDistance) {
