@@ -431,6 +431,29 @@ ErrorPrediction CompensationModel::predict_error(const JointVector& q_deg) const
 
 namespace {
 
+/// What a field's prediction takes back of the joint functions' error near its samples: its weights
+/// times the functions' design at its samples (3 x P); empty when the weights do not match the rows.
+std::optional<Eigen::MatrixXd> taken_back_by(
+    const std::vector<double>& weights,
+    const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>* rows) {
+  if (!rows || static_cast<Eigen::Index>(weights.size()) != rows->rows()) return std::nullopt;
+  const Eigen::RowVectorXd sum =
+      Eigen::Map<const Eigen::RowVectorXd>(weights.data(), static_cast<Eigen::Index>(weights.size())) * *rows;
+  return Eigen::MatrixXd(Eigen::Map<const Eigen::MatrixXd>(sum.data(), 3, sum.size() / 3));
+}
+
+/// Adds the joint functions' displacement at `point` and their estimation variance (less what the
+/// field takes back) to a field's prediction `p`.
+void add_functions_at_point(ErrorPrediction& p, const JointErrorFunctions& functions, const MdhModel& reflector,
+                            const MdhModel& point, const JointVector& q_deg,
+                            const std::optional<Eigen::MatrixXd>& taken_back) {
+  const JointFunctionPrediction f =
+      functions_at_point(functions, reflector, point, q_deg, taken_back ? &*taken_back : nullptr);
+  p.position_error_mm += f.position_error_mm;
+  if (std::isfinite(p.variance_mm2)) p.variance_mm2 += f.axis_variance_mm2.sum();
+  if (p.axis_variance_mm2.allFinite()) p.axis_variance_mm2 += f.axis_variance_mm2;
+}
+
 /// [v]x: the matrix of the cross product v x .
 Eigen::Matrix3d cross_matrix(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
@@ -477,16 +500,7 @@ ErrorPrediction CompensationModel::predict_at_labelled_point(const JointVector& 
   if (p.inside_region && credible_) p.credible = credible_->contains(p);
   if (p.inside_region && joint_functions_) {
     // As at the own point: the point's field takes back part of the functions' error near its samples.
-    std::optional<Eigen::MatrixXd> taken_back;
-    if (rows && static_cast<Eigen::Index>(w.size()) == rows->rows()) {
-      const Eigen::RowVectorXd sum = Eigen::Map<const Eigen::RowVectorXd>(w.data(), static_cast<Eigen::Index>(w.size())) * *rows;
-      taken_back = Eigen::Map<const Eigen::MatrixXd>(sum.data(), 3, sum.size() / 3);
-    }
-    const JointFunctionPrediction f =
-        functions_at_point(*joint_functions_, command_model_, point, q_deg, taken_back ? &*taken_back : nullptr);
-    p.position_error_mm += f.position_error_mm;
-    if (std::isfinite(p.variance_mm2)) p.variance_mm2 += f.axis_variance_mm2.sum();
-    if (p.axis_variance_mm2.allFinite()) p.axis_variance_mm2 += f.axis_variance_mm2;
+    add_functions_at_point(p, *joint_functions_, command_model_, point, q_deg, taken_back_by(w, rows.get()));
   }
   return p;
 }
@@ -557,15 +571,9 @@ ErrorPrediction CompensationModel::predict_by_rigid_motion(const JointVector& q_
                                                         : known_point.field->predict(at, q_deg);
     if (!e.inside_region) return e;
     const Eigen::Matrix3d c = combination.middleCols<3>(3 * j);
-    if (taken_back && known_point.function_rows &&
-        static_cast<Eigen::Index>(weights.size()) == known_point.function_rows->rows()) {
-      const Eigen::RowVectorXd sum =
-          Eigen::Map<const Eigen::RowVectorXd>(weights.data(), static_cast<Eigen::Index>(weights.size())) *
-          *known_point.function_rows;
-      *taken_back += c * Eigen::Map<const Eigen::MatrixXd>(sum.data(), 3, parameters);
-    } else {
-      taken_back.reset();
-    }
+    const std::optional<Eigen::MatrixXd> by_this = taken_back ? taken_back_by(weights, known_point.function_rows) : std::nullopt;
+    if (by_this) *taken_back += c * *by_this;
+    else taken_back.reset();
     p.position_error_mm += c * e.position_error_mm;
     // Each field's own variance per axis (its nugget, when it is measurement noise, taken out: a new
     // reading at the point has the noise of one reading, not a combination of several).
@@ -596,13 +604,7 @@ ErrorPrediction CompensationModel::predict_by_rigid_motion(const JointVector& q_
     p.variance_mm2 = field_variance.sum();
     p.axis_variance_mm2 = field_variance + Eigen::Vector3d::Constant(p.noise_variance_mm2 / 3.0);
   }
-  if (joint_functions_) {
-    const JointFunctionPrediction f =
-        functions_at_point(*joint_functions_, command_model_, point, q_deg, taken_back ? &*taken_back : nullptr);
-    p.position_error_mm += f.position_error_mm;
-    if (std::isfinite(p.variance_mm2)) p.variance_mm2 += f.axis_variance_mm2.sum();
-    if (p.axis_variance_mm2.allFinite()) p.axis_variance_mm2 += f.axis_variance_mm2;
-  }
+  if (joint_functions_) add_functions_at_point(p, *joint_functions_, command_model_, point, q_deg, taken_back);
   return p;
 }
 
@@ -637,12 +639,7 @@ ErrorPrediction CompensationModel::predict_field_at(const JointVector& q_deg, co
     // The field krigs what the functions left at its samples, so near them it takes back part of
     // the functions' error: the variance is that of (D(q) - sum_i w_i F_i) beta's error, with w the
     // field's weights and F_i the design at sample i (the universal-kriging variance's drift term).
-    std::optional<Eigen::MatrixXd> taken_back;
-    if (function_rows_at_samples_ && static_cast<Eigen::Index>(w.size()) == function_rows_at_samples_->rows()) {
-      const Eigen::RowVectorXd sum =
-          Eigen::Map<const Eigen::RowVectorXd>(w.data(), static_cast<Eigen::Index>(w.size())) * *function_rows_at_samples_;
-      taken_back = Eigen::Map<const Eigen::MatrixXd>(sum.data(), 3, sum.size() / 3);
-    }
+    const std::optional<Eigen::MatrixXd> taken_back = taken_back_by(w, function_rows_at_samples_.get());
     const bool at_reflector = point.tool().isApprox(command_model_.tool(), 1e-12);
     const JointFunctionPrediction f =
         at_reflector ? joint_functions_->predict(command_model_, q_deg, taken_back ? &*taken_back : nullptr)
