@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli/cli_support.hpp"
+#include "cli/covariate_sources.hpp"
 #include "cli/command_registry.hpp"
 #include "cli/interpolation_methods.hpp"
 #include "cli/variogram_svg.hpp"
@@ -292,8 +293,10 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   if (!covariate_names.empty()) {
     if (o.kind == KrigingKind::Simple)
       throw ArgumentError("--covariates with --kind simple0; expected --kind ordinary (external drift) or universal1/2");
-    o.covariates = t.numeric_columns(covariate_names);
-    o.covariate_names = covariate_names;
+    // COL or NAME=RASTER (the pixel at each point), as interpolate's external drift takes them.
+    const CovariateSources sources = covariate_sources(covariate_names);
+    o.covariates = covariate_values(sources, t, x, row_labels_of(t, "sample"));
+    o.covariate_names = sources.names;
   }
   // A terminal sees what a long fit is doing (a 50,000-sample Vecchia fit takes tens of seconds).
   const bool vecchia_fit = likelihood_uses_vecchia(o, static_cast<long>(t.row_count()));
@@ -696,8 +699,9 @@ void add_fit_variogram_command(CLI::App& app) {
                   "universal2, or simple0 (known mean 0, as scikit-learn's GaussianProcessRegressor)")
       ->each([args](const std::string&) { args->kind_given = true; });
   cmd->add_option("--covariates", args->covariates,
-                  "ml/reml: columns COL[,COL...] of --input added to the drift F (with --kind ordinary: the "
-                  "likelihood of kriging with external drift, interpolate --method kriging --covariates)");
+                  "ml/reml: columns COL[,COL...] of --input (or NAME=FILE.tif|.asc: the raster's pixel at each "
+                  "point, 2-D --coords) added to the drift F (with --kind ordinary: the likelihood of kriging with "
+                  "external drift, interpolate --method kriging --covariates)");
   cmd->add_option("--model", args->model,
                   "sph, exp, gau, mat (needs --nu), wen, pow or lin; or a nested template with starting values in "
                   "the model text interpolate reads, e.g. 'nug(sill=2e4)+sph(sill=3e4,range=25)+sph(sill=4e4,range=80)' "

@@ -8,6 +8,7 @@
 #include <iostream>
 
 #include "cli/cli_support.hpp"
+#include "cli/covariate_sources.hpp"
 #include "cli/command_registry.hpp"
 #include "cli/interpolation_methods.hpp"
 #include "cli/variogram_svg.hpp"
@@ -271,8 +272,10 @@ void run_variogram(const VariogramArgs& a) {
   const bool heterotopic = z.array().isNaN().any();
   if (!a.covariates.empty()) {
     // gstat's variogram(z ~ cov): the variogram of the residuals of the ordinary least-squares trend.
-    const auto covariate_names = split_column_list(a.covariates, "--covariates");
-    z = with_source(a.input, [&] { return ols_trend_residuals(z, table.numeric_columns(covariate_names), covariate_names); });
+    // COL or NAME=RASTER (the pixel at each point), as interpolate's external drift takes them.
+    const CovariateSources sources = covariate_sources(split_column_list(a.covariates, "--covariates"));
+    const Eigen::MatrixXd covariates = covariate_values(sources, table, x, row_labels_of(table, "sample"));
+    z = with_source(a.input, [&] { return ols_trend_residuals(z, covariates, sources.names); });
   }
   if (a.cloud || !a.map.empty()) {
     if (heterotopic)
@@ -465,7 +468,8 @@ void add_variogram_command(CLI::App& app) {
                   "separation along the axis is at least half the total; the cones are then disjoint)");
   cmd->add_option("--covariates", args->covariates,
                   "residual variogram: the variogram of z minus its ordinary least-squares trend 1 + these columns "
-                  "(COL[,COL...] of --input), as R gstat's variogram(z ~ COL); for kriging with external drift "
+                  "(COL[,COL...] of --input, or NAME=FILE.tif|.asc: the raster's pixel at each point, 2-D --coords), "
+                  "as R gstat's variogram(z ~ COL); for kriging with external drift "
                   "(interpolate --method kriging --covariates)");
   cmd->add_flag("--cloud", args->cloud,
                 "the variogram cloud instead of bins: one row per pair (i, j) within --cutoff, columns left,right "

@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "cli/cli_support.hpp"
+#include "cli/covariate_sources.hpp"
 #include "cli/interp_cokriging.hpp"
 #include "cli/interpolation_methods.hpp"
 #include "cli/raster_file.hpp"
@@ -259,53 +260,6 @@ KrigingOptions kriging_options_from_cli(const SharedInterpolationOptions& shared
   text.octant_max = o.octant_max;
   text.nugget = o.nugget_as;
   return kriging_options_from_text(text, cli_option_names());
-}
-
-// Where each --covariates entry comes from: a column of the samples and targets files (COL), or
-// a raster looked up at each point (NAME=FILE).
-struct CovariateSources {
-  std::vector<std::string> names;                          // the covariates' names, in order
-  std::vector<std::shared_ptr<const CovariateRaster>> rasters;  // null: a CSV column
-};
-
-CovariateSources covariate_sources(const std::vector<std::string>& entries) {
-  CovariateSources s;
-  for (const auto& e : entries) {
-    const auto eq = e.find('=');
-    if (eq == std::string::npos) {
-      s.names.push_back(e);
-      s.rasters.push_back(nullptr);
-      continue;
-    }
-    const std::string name = e.substr(0, eq), file = e.substr(eq + 1);
-    if (name.empty() || file.empty())
-      throw ArgumentError("--covariates: '" + e + "'; expected COL (a column) or NAME=FILE (a raster)");
-    if (std::find(s.names.begin(), s.names.end(), name) != s.names.end())
-      throw ArgumentError("--covariates: '" + name + "' is given twice");
-    s.names.push_back(name);
-    s.rasters.push_back(std::make_shared<const CovariateRaster>(read_covariate_raster(file)));
-  }
-  return s;
-}
-
-// N x k covariates of the rows of `table` at `coords` (N x D): the CSV columns as numbers, the
-// rasters' pixel values at the points (2-D only).
-Eigen::MatrixXd covariate_values(const CovariateSources& s, const CsvTable& table, const Eigen::MatrixXd& coords,
-                                 const RowLabels& labels) {
-  Eigen::MatrixXd out(coords.rows(), static_cast<Eigen::Index>(s.names.size()));
-  for (std::size_t k = 0; k < s.names.size(); ++k) {
-    const auto col = static_cast<Eigen::Index>(k);
-    if (!s.rasters[k]) {
-      out.col(col) = table.numeric_columns({s.names[k]}).col(0);
-      continue;
-    }
-    if (coords.cols() != 2)
-      throw ArgumentError("--covariates " + s.names[k] + "=" + s.rasters[k]->path + ": a raster covariate needs 2-D --coords (x,y); got " +
-                          std::to_string(coords.cols()) + " columns");
-    for (Eigen::Index i = 0; i < coords.rows(); ++i)
-      out(i, col) = s.rasters[k]->at(coords(i, 0), coords(i, 1), labels(static_cast<std::size_t>(i)));
-  }
-  return out;
 }
 
 struct Setup {

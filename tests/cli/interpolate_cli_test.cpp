@@ -411,5 +411,36 @@ TEST_F(InterpolateGridCli, RasterCovariateEqualsTheSameCovariateAsCsvColumns) {
   EXPECT_FALSE(fs::exists(path("bad.csv")));
 }
 
+// The residual variogram and the likelihood fit take the same raster covariate (issue 36 item 6):
+// byte for byte what the covariate as a CSV column gives (its values are the pixels', computed
+// independently by covariate_at), and a sample outside the raster is named.
+TEST_F(InterpolateGridCli, VariogramAndFitVariogramTakeARasterCovariateAsTheColumn) {
+  write_covariate_raster("cov.asc");
+  const std::string variogram = "variogram --input " + path("S.csv") + " --coords x,y --value v --bins 0:30:10 --covariates ";
+  auto r = run(variogram + "c --out " + path("vcsv.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output();
+  r = run(variogram + "c=" + path("cov.asc") + " --out " + path("vasc.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output();
+  EXPECT_EQ(read("vasc.csv"), read("vcsv.csv"));
+  const std::string fit = "fit-variogram --method reml --input " + path("S.csv") +
+                          " --coords x,y --value v --model exp --covariates ";
+  r = run(fit + "c --out " + path("fcsv.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output();
+  r = run(fit + "c=" + path("cov.asc") + " --out " + path("fasc.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.output();
+  const auto model_of = [&](const std::string& f) {
+    nlohmann::json j = nlohmann::json::parse(read(f));
+    j["fit"].erase("covariates");  // the text given: "c" and "c=<path>"
+    return j.dump();
+  };
+  EXPECT_EQ(model_of("fasc.json"), model_of("fcsv.json"));
+  write("S2.csv", read("S.csv") + "60,20,1,0\n");
+  r = run("variogram --input " + path("S2.csv") + " --coords x,y --value v --bins 0:30:10 --covariates c=" + path("cov.asc") +
+          " --out " + path("vbad.csv"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("S2.csv:27: the point (60, 20) is outside the raster"));
+  EXPECT_FALSE(fs::exists(path("vbad.csv")));
+}
+
 }  // namespace
 }  // namespace errfield
