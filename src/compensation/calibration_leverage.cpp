@@ -16,8 +16,8 @@ using namespace errfield::robot;
 
 namespace {
 
-/// The identified parameters' columns of the identification Jacobian at the model's tool point.
-Eigen::Matrix<double, 3, Eigen::Dynamic> identified_columns(const MdhModel& model, const JointVector& q_deg,
+/// The columns `parameters` of the identification Jacobian at the model's tool point.
+Eigen::Matrix<double, 3, Eigen::Dynamic> parameter_columns(const MdhModel& model, const JointVector& q_deg,
                                                             const std::vector<int>& parameters) {
   const IdentificationJacobian j = identification_jacobian(model, q_deg);
   Eigen::Matrix<double, 3, Eigen::Dynamic> out(3, static_cast<Eigen::Index>(parameters.size()));
@@ -54,7 +54,7 @@ std::optional<CalibrationLeverage> CalibrationLeverage::of(const MdhModel& model
       tool.translation() = point_of_reading_mm[i];
       at = model.with_tool(tool);
     }
-    rows[i] = identified_columns(at, q_deg[i], out.parameters);
+    rows[i] = parameter_columns(at, q_deg[i], out.parameters);
     const double w = weights.empty() ? 1.0 : weights[i];
     information.noalias() += (w / noise_variance_mm2) * rows[i].transpose() * rows[i];
   }
@@ -71,7 +71,7 @@ std::optional<CalibrationLeverage> CalibrationLeverage::of(const MdhModel& model
 }
 
 double CalibrationLeverage::at(const MdhModel& model, const JointVector& q_deg) const {
-  const Eigen::Matrix<double, 3, Eigen::Dynamic> j = identified_columns(model, q_deg, parameters);
+  const Eigen::Matrix<double, 3, Eigen::Dynamic> j = parameter_columns(model, q_deg, parameters);
   return (j * inverse_information * j.transpose()).trace();
 }
 

@@ -41,10 +41,18 @@ std::string summary(const CalibrationResult& cal, std::size_t count, const std::
          (robust ? "igg3 (" + std::to_string(cal.rejected) + " rejected)" : std::string("none")) + "; " + cal.message;
 }
 
-/// The calibration's residual variance per component (mm²), at least (1 um)²: a fit of exact data
-/// leaves rounding, and no tracker reads better.
-double calibration_noise_variance(const CalibrationResult& cal) {
-  return std::max(cal.after.rms_mm * cal.after.rms_mm / 3.0, 1e-6);
+/// The calibration's leverage (calibration_leverage.hpp) over its readings `pm`, each at its point
+/// `point_of_reading_mm` (empty: the model's tool), with its robust weights. The noise variance is
+/// the residual's per component, at least (1 um)²: a fit of exact data leaves rounding, and no
+/// tracker reads better.
+std::optional<CalibrationLeverage> leverage_of(const MdhModel& model, const std::vector<PositionMeasurement>& pm,
+                                               const CalibrationResult& cal,
+                                               const std::vector<Eigen::Vector3d>& point_of_reading_mm) {
+  std::vector<JointVector> q;
+  for (const PositionMeasurement& m : pm) q.push_back(m.q_deg);
+  const double noise_variance = std::max(cal.after.rms_mm * cal.after.rms_mm / 3.0, 1e-6);
+  return CalibrationLeverage::of(model, q, noise_variance, point_of_reading_mm,
+                                 cal.weights.size() == q.size() ? cal.weights : std::vector<double>{});
 }
 
 std::string flange_point_text(const Eigen::Vector3d& v) {
@@ -111,10 +119,7 @@ KinematicFit from_positions(const MdhModel& robot, const MeasurementSet& d, cons
   if (!reg.converged) out.warnings.push_back("the tracker registration did not converge: " + reg.message);
   if (!cal.converged) out.warnings.push_back("the kinematic calibration did not converge: " + cal.message);
   tool_and_reflector(out, robot, cal.model.tool().translation(), d, o);
-  std::vector<JointVector> q;
-  for (const PositionMeasurement& m : pm) q.push_back(m.q_deg);
-  out.leverage = CalibrationLeverage::of(out.model, q, calibration_noise_variance(cal), {},
-                                         cal.weights.size() == q.size() ? cal.weights : std::vector<double>{});
+  out.leverage = leverage_of(out.model, pm, cal, {});
   return out;
 }
 
@@ -165,10 +170,7 @@ KinematicFit from_several_points(const MdhModel& robot, const MeasurementSet& d,
   FitOptions far_ok = o;
   far_ok.reflector_far_ok = true;
   tool_and_reflector(out, robot, cal.model.tool().translation(), d, far_ok);
-  std::vector<JointVector> q;
-  for (const PositionMeasurement& m : pm) q.push_back(m.q_deg);
-  out.leverage = CalibrationLeverage::of(out.model, q, calibration_noise_variance(cal), out.flange_point_of_row_mm,
-                                         cal.weights.size() == q.size() ? cal.weights : std::vector<double>{});
+  out.leverage = leverage_of(out.model, pm, cal, out.flange_point_of_row_mm);
   return out;
 }
 
