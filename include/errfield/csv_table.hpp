@@ -40,6 +40,12 @@ class CsvTable {
   /// about a subset still name the file's lines. Throws std::out_of_range beyond the table.
   CsvTable rows(const std::vector<std::size_t>& keep) const;
 
+  /// A table computed from this one's rows (e.g. one reading expanded into several): row r holds
+  /// `cells[r]` under `header` and keeps the line number of row `from[r]` of this table, so that a
+  /// message about it names the line the user wrote. Throws ArgumentError for a row whose cell count
+  /// is not the header's, or a header with a duplicate name.
+  CsvTable derived(std::vector<std::string> header, const std::vector<std::size_t>& from,
+                   const std::vector<std::vector<std::string>>& cells) const;
   const std::string& source() const noexcept { return source_; }
   const std::vector<std::string>& header() const noexcept { return header_; }
   std::size_t row_count() const noexcept { return lines_.size(); }

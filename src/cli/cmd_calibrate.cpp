@@ -14,6 +14,7 @@
 #include "compensation/fit_checks.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/input_checks.hpp"
+#include "errfield/compensation/probe_readings.hpp"
 #include "errfield/compensation/registration.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/distance_table.hpp"
@@ -46,7 +47,8 @@ void run_calibrate(const CalibrateArgs& a) {
   options.max_condition_number = a.max_condition;
   naming_options([&] { options.validate(); }, {{"CalibrationOptions::max_condition_number", "--max-condition"},
                                                {"CalibrationOptions::robust: need 0 < k0 < k1", "need 0 < --k0 < --k1"}});
-  const CsvTable table = CsvTable::read(a.data);
+  // A 6-DoF probe's rows become three points on the flange (probe_readings.hpp).
+  const CsvTable table = compensation::expand_probe_readings(CsvTable::read(a.data));
   const auto q = read_joint_columns(table);
   // Misuse is an error with a reason (robot/input_checks.hpp); x,y,z of another robot say more
   // than its joints beyond this robot's limits, so first.

@@ -12,6 +12,7 @@
 #include "cli/robot_cli.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/error.hpp"
+#include "errfield/compensation/probe_readings.hpp"
 #include "errfield/compensation/model_fitting.hpp"
 #include "errfield/compensation/pipeline.hpp"
 #include "errfield/robot/input_checks.hpp"
@@ -89,7 +90,8 @@ void run_fit(const FitArgs& a) {
     const auto v = parse_numbers(b, 3, "--base-point");
     fixed.emplace_back(v[0], v[1], v[2]);
   }
-  const CsvTable table = CsvTable::read(a.data);
+  // A 6-DoF probe's rows become three points on the flange (probe_readings.hpp).
+  const CsvTable table = compensation::expand_probe_readings(CsvTable::read(a.data));
   FitTableOptions fo;
   fo.fit = o;
   fo.fit.reflector_far_ok = a.reflector_far_ok;

@@ -18,6 +18,7 @@
 #include "errfield/error.hpp"
 #include "errfield/robot/builtin_robots.hpp"
 #include "errfield/robot/cube_budget.hpp"
+#include "errfield/robot/pose.hpp"
 #include "errfield/robot/simulated_data.hpp"
 #include "errfield/robot/simulator.hpp"
 
@@ -26,7 +27,8 @@ namespace {
 
 struct SimulateArgs {
   std::string config, robot, joints, cube, orientation, sample = "grid", out, truth_out, config_out, robot_out,
-      joint_box, tool_offset, outliers, reflectors;
+      joint_box, tool_offset, outliers, reflectors, probe;
+  double probe_noise_mdeg = 10.0;
   double orientation_spread = 0.0;
   int joint_decimals = -1;
   std::vector<std::string> bases, fixed_bases;
@@ -236,6 +238,19 @@ void run_simulate(const SimulateArgs& a) {
       throw ArgumentError("--reflectors: only with --measure positions (distances to base points from several "
                           "reflectors are not simulated)");
   }
+  // --probe X,Y,Z,RX,RY,RZ: a 6-DoF probe on the flange (flange frame, mm and deg).
+  std::optional<Eigen::Isometry3d> probe;
+  if (!a.probe.empty()) {
+    const std::vector<double> v = parse_numbers(a.probe, 6, "--probe");
+    probe = to_isometry({v[0], v[1], v[2], v[3], v[4], v[5]});
+    if (!reflectors.empty()) throw ArgumentError("--probe and --reflectors: give one (a probe is read as one point with an orientation)");
+    if (want_distances)
+      throw ArgumentError("--probe: only with --measure positions (a probe's orientation has no distance to a base point)");
+    if (probe->translation().norm() > 2000.0)
+      throw ArgumentError("--probe: the probe point " + a.probe + " is over 2 m from the flange (mm expected)");
+  }
+  if (!(a.probe_noise_mdeg >= 0.0 && a.probe_noise_mdeg <= 1e4))
+    throw ArgumentError("--probe-noise: expected 0 to 10000 mdeg, got " + format_number(a.probe_noise_mdeg));
   const std::string systematic =
       apply_systematic_effects(config, a.systematic, a.compliance_mrad_per_knm, a.end_range_errors, a.mass_offset);
   const SimulatedRobot robot(config);
@@ -407,8 +422,28 @@ void run_simulate(const SimulateArgs& a) {
   std::vector<Eigen::Vector3d> nominal(n), truth(n), measured(n);
   std::vector<JointVector> recorded(n);
   std::vector<std::size_t> pose_of(n);
+  std::vector<Eigen::Vector3d> probe_angles(probe ? n : 0);
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const JointVector q = a.joint_decimals >= 0 ? round_joints(rows[i].q, a.joint_decimals) : rows[i].q;
+    if (probe) {
+      // The probe: its point read as a reflector's, its orientation in the tracker frame with the
+      // probe's own angular noise (per axis, a small rotation applied on the probe side).
+      recorded[i] = q;
+      pose_of[i] = i;
+      const Eigen::Isometry3d true_flange = robot.true_pose(rows[i].q, EndFrame::flange);
+      nominal[i] = forward_kinematics(config.nominal, q, EndFrame::flange) * probe->translation();
+      const double s = config.repeatability_sigma_mm;
+      truth[i] = true_flange * probe->translation() + Eigen::Vector3d(rng.normal(0, s), rng.normal(0, s), rng.normal(0, s));
+      measured[i] = robot.measure(truth[i], rng);
+      const double sd = a.probe_noise_mdeg * 1e-3 * std::acos(-1.0) / 180.0;
+      const Eigen::Vector3d noise(rng.normal(0, sd), rng.normal(0, sd), rng.normal(0, sd));
+      const Eigen::Matrix3d read = config.tracker.tracker_from_world.linear() * true_flange.linear() * probe->linear() *
+                                   Eigen::AngleAxisd(noise.norm(), noise.norm() > 0 ? Eigen::Vector3d(noise.normalized())
+                                                                                      : Eigen::Vector3d::UnitX())
+                                       .toRotationMatrix();
+      probe_angles[i] = rpy_deg_from_rotation(read);
+      continue;
+    }
     if (reflectors.empty()) {
       recorded[i] = q;
       pose_of[i] = i;
@@ -475,6 +510,7 @@ void run_simulate(const SimulateArgs& a) {
   };
   add_xyz(nominal, "x", "y", "z");
   if (want_positions) add_xyz(measured, "mx", "my", "mz");
+  if (probe) add_xyz(probe_angles, "mrx", "mry", "mrz");
   if (want_distances)
     for (std::size_t k = 0; k < base_nominal.size(); ++k) {
       std::vector<double> d(n);
@@ -522,6 +558,11 @@ void run_simulate(const SimulateArgs& a) {
     text << "; rows of one pose share point and q1..q6; x,y,z are the nominal position of the row's reflector (FK of "
             "the flange times its offset), not of the robot's tool\n";
   }
+  if (probe)
+    text << "# SIMULATED 6-DoF probe on the flange at " << a.probe << " (X,Y,Z mm, RX,RY,RZ deg, flange frame), "
+         << "orientation noise " << format_number(a.probe_noise_mdeg) << " mdeg per axis: mx,my,mz its point, "
+         << "mrx,mry,mrz its orientation in the tracker frame (deg, fixed-axis XYZ: R = Rz Ry Rx); x,y,z the probe "
+            "point's nominal position\n";
   text << "# q1..q6 commanded joints (deg); x,y,z nominal tool position (FK of q1..q6, robot base frame, mm)";
   if (want_positions) text << "; mx,my,mz measured position (tracker frame, mm)";
   if (want_distances) text << "; dist_bK measured distance to base point bK (mm)";
@@ -600,6 +641,13 @@ void add_simulate_command(CLI::App& app) {
                   "x,y,z are the nominal FK of each point. Only with --measure positions. fit (kinematic methods) "
                   "and calibrate take the labels together (--tool-reflector picks the model's own point); other "
                   "methods one reflector's rows (docs/robot.md, 'Several points on the flange')");
+  cmd->add_option("--probe", args->probe,
+                  "X,Y,Z,RX,RY,RZ (flange frame, mm and deg): a 6-DoF probe (a tracker's T-probe): each pose is read "
+                  "as the probe point (mx,my,mz) and the probe's orientation in the tracker frame (mrx,mry,mrz, deg, "
+                  "fixed-axis XYZ); fit, calibrate and validate take the orientation as three points on the flange "
+                  "(docs/data-formats.md, '6-DoF probe readings'). Only with --measure positions; not with --reflectors");
+  cmd->add_option("--probe-noise", args->probe_noise_mdeg,
+                  "the probe's orientation noise per axis (mdeg, 1 sd; default 10, a T-probe's 0.01 deg)");
   cmd->add_option("--outliers", args->outliers,
                   "FRACTION:MM: that fraction of the target rows gets a gross tracker error of MM (at most 10,000) in a random "
                   "direction (mx,my,mz and the distances); --truth-columns marks them in column 'outlier'");

@@ -15,6 +15,8 @@
 #include "errfield/atomic_file.hpp"
 #include "errfield/compensation/pipeline.hpp"
 #include "errfield/compensation/prediction.hpp"
+#include "errfield/compensation/probe_readings.hpp"
+#include "errfield/compensation/rotation_validation.hpp"
 #include "errfield/compensation/validation.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/input_checks.hpp"
@@ -23,7 +25,7 @@ namespace errfield::cli {
 namespace {
 
 struct ValidateArgs {
-  std::string model, data, robot, out, summary_out, report, tool, reflector;
+  std::string model, data, robot, out, summary_out, report, tool, reflector, orientation_out;
   std::vector<std::string> base_points;
   bool targets = false;
   double max_registration_rms = robot::kRegistrationRmsLimitMm;
@@ -88,6 +90,37 @@ CsvTable one_reflector(const CsvTable& file, const std::string& asked, const std
   return file.rows(keep);
 }
 
+/// `--orientation-out`: one row per pose with three or more points (rotation_validation.hpp).
+std::string rotation_csv(const compensation::RotationCheck& check) {
+  OutputTable t;
+  std::vector<std::string> point, status;
+  std::vector<double> readings, before, after, r95, nees;
+  std::vector<std::vector<double>> components(6);
+  for (const compensation::ValidatedRotation& v : check.poses) {
+    point.push_back(v.point);
+    status.push_back(v.status);
+    readings.push_back(static_cast<double>(v.readings));
+    before.push_back(v.before_mdeg.norm());
+    after.push_back(v.after_mdeg.norm());
+    for (int c = 0; c < 3; ++c) {
+      components[static_cast<std::size_t>(c)].push_back(v.before_mdeg[c]);
+      components[static_cast<std::size_t>(3 + c)].push_back(v.after_mdeg[c]);
+    }
+    r95.push_back(v.r95_mdeg);
+    nees.push_back(v.nees);
+  }
+  t.add_column("point", point);
+  t.add_column("status", status);
+  t.add_numbers("points_read", readings);
+  t.add_numbers("before_mdeg", before);
+  t.add_numbers("after_mdeg", after);
+  const char* names[] = {"before_wx_mdeg", "before_wy_mdeg", "before_wz_mdeg", "after_wx_mdeg", "after_wy_mdeg", "after_wz_mdeg"};
+  for (std::size_t c = 0; c < 6; ++c) t.add_numbers(names[c], components[c]);
+  t.add_numbers("r95_mdeg", r95);
+  t.add_numbers("nees", nees);
+  return t.to_csv();
+}
+
 void run_validate(const ValidateArgs& a) {
   using namespace robot;
   using namespace compensation;
@@ -99,10 +132,12 @@ void run_validate(const ValidateArgs& a) {
     const auto v = parse_numbers(b, 3, "--base-point");
     fixed.emplace_back(v[0], v[1], v[2]);
   }
-  const CsvTable file = CsvTable::read(a.data);
+  // A 6-DoF probe's rows become three points on the flange (probe_readings.hpp).
+  const CsvTable file = compensation::expand_probe_readings(CsvTable::read(a.data));
   // Readings of several points on the flange: one label's rows, scored at its located point.
   const CsvTable table = one_reflector(file, a.reflector, a.tool, model);
   compensation::ValidationReport r;
+  std::optional<compensation::RotationCheck> rotations;
   if (a.targets) {
     r = with_source(a.data, [&] { return compensation::validate_targets(table, model.registration(), fixed); });
   } else {
@@ -122,6 +157,11 @@ void run_validate(const ValidateArgs& a) {
     if (const auto w = joints_outside_limits(read_joint_columns(table), model.nominal_model(), row_labels_of(table, "row")))
       std::cerr << "errfield validate: warning: " << *w << " (status outside-limits: not scored)\n";
     r = with_source(a.data, [&] { return compensation::validate_predictions(model, data); });
+    // Three or more points per pose and a model with fields at three: the flange's orientation.
+    if (file.has_column("reflector") && model.fielded_points().size() >= 3) {
+      const MeasurementSet all_points = MeasurementSet::from_table(file, nominal_robot, fixed, true);
+      rotations = with_source(a.data, [&] { return compensation::validate_rotations(model, all_points, nominal_robot); });
+    }
     if (loaded.is_robot_json && a.robot.empty() && !table.has_column("x"))
       r.notes.push_back("no --robot and no x,y,z columns: 'before' is this robot's own FK; give the nominal robot "
                         "with --robot for an uncompensated baseline");
@@ -134,20 +174,30 @@ void run_validate(const ValidateArgs& a) {
                 " could be scored with " + loaded.description + " from " + a.model + " (" + refusal_tally(status) +
                 "); nothing written");
   }
-  const nlohmann::json summary = r.summary_json();
+  nlohmann::json summary = r.summary_json();
+  if (rotations) summary["orientation"] = rotations->summary_json();
   AtomicFileSet outputs;
   if (!a.out.empty()) {
     OutputTable points;
     add_step_columns(points, compensation::validation_point_columns(r));
     outputs.add(a.out, points.to_csv());
   }
+  if (!a.orientation_out.empty()) {
+    if (!rotations)
+      throw InputError(a.data + ": --orientation-out: no orientation to score: it needs readings of three or more "
+                       "points per pose (a 'reflector' column, or a probe's mrx,mry,mrz) and a model fitted on them "
+                       "with a field at each point",
+                       a.data);
+    outputs.add(a.orientation_out, rotation_csv(*rotations));
+  }
   if (!a.summary_out.empty()) outputs.add(a.summary_out, summary.dump(2) + "\n");
   if (!a.report.empty())
     outputs.add(a.report, compensation::validation_report_html(r, "errfield validate: " + loaded.description + " on " + a.data,
                                                                 marked_simulated(a.data)));
   std::cout << "validate: " << loaded.description << " from " << a.model << " on " << a.data << "\n" << r.summary_text();
+  if (rotations) std::cout << rotations->summary_text();
   print_working_tool(std::cout, model);
-  for (const auto& f : {a.out, a.summary_out, a.report})
+  for (const auto& f : {a.out, a.summary_out, a.report, a.orientation_out})
     if (!f.empty()) std::cout << "  written " << f << "\n";
   require_standard_output();  // before the commit: a run that fails leaves the previous files
   outputs.commit();
@@ -193,6 +243,10 @@ void add_validate_command(CLI::App& app) {
   cmd->add_option("--summary-out", a->summary_out, "summary JSON (points, refused, position/distance before/after, "
                   "the registrations used, uncertainty: coverage95, mean_nees)");
   cmd->add_option("--report", a->report, "HTML report with histograms and per-point errors before/after");
+  cmd->add_option("--orientation-out", a->orientation_out,
+                  "per-pose CSV of the flange's orientation error, for data with three or more points per pose (a "
+                  "'reflector' column, or a probe's mrx,mry,mrz) and a model fitted on them: point,status,points_read,"
+                  "before_mdeg,after_mdeg, the components before_w*/after_w* (robot frame, mdeg), r95_mdeg, nees");
   cmd->callback([a] { run_validate(*a); });
 }
 

@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
+
 #include "compensation/fit_checks.hpp"
 #include "errfield/compensation/model_fitting.hpp"
 #include "errfield/compensation/error_ball.hpp"
 #include "errfield/error.hpp"
 #include "errfield/json_file.hpp"
 #include "errfield/compensation/error_fields.hpp"
+#include "errfield/compensation/prediction.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/input_checks.hpp"
 #include "errfield/robot/kinematics.hpp"
@@ -225,6 +228,11 @@ CompensationModel CompensationModel::with_measured_orientation(std::optional<Mea
 CompensationModel CompensationModel::with_calibration_leverage(std::optional<CalibrationLeverage> leverage) const {
   CompensationModel m = *this;
   m.calibration_leverage_ = std::move(leverage);
+  return m;
+}
+CompensationModel CompensationModel::with_rotation_calibration(std::optional<RotationCalibration> c) const {
+  CompensationModel m = *this;
+  m.rotation_calibration_ = c;
   return m;
 }
 CompensationModel CompensationModel::with_flange_points(std::vector<LabelledPoint> points) const {
@@ -608,6 +616,44 @@ ErrorPrediction CompensationModel::predict_by_rigid_motion(const JointVector& q_
   return p;
 }
 
+std::vector<CompensationModel::FieldedPoint> CompensationModel::fielded_points() const {
+  std::vector<FieldedPoint> out;
+  if (!field_) return out;
+  out.push_back({measured_point_mm(), field_.get()});
+  for (const LabelledPoint& p : flange_points_)
+    if (p.field) out.push_back({p.position_mm, p.field.get()});
+  return out;
+}
+
+std::optional<RotationPrediction> CompensationModel::predict_rotation(const JointVector& q_deg) const {
+  const std::vector<FieldedPoint> points = fielded_points();
+  std::vector<Eigen::Vector3d> at;  // robot frame
+  std::vector<MdhModel> models;
+  for (const FieldedPoint& p : points) {
+    Eigen::Isometry3d tool = command_model_.tool();
+    tool.translation() = p.position_mm;
+    models.push_back(command_model_.with_tool(tool));
+    at.push_back(forward_position(models.back(), q_deg));
+  }
+  const std::optional<FlangeRotationOperator> rotation = FlangeRotationOperator::of(at);
+  if (!rotation) return std::nullopt;
+  std::vector<Eigen::Vector3d> error, variance;
+  RotationPrediction out;
+  for (const MdhModel& m : models) {
+    const ErrorPrediction e = predict_error_at(q_deg, m);
+    if (const PredictionStatus s = prediction_status(e); s != PredictionStatus::ok && out.status == "ok")
+      out.status = std::string(status_name(s));
+    error.push_back(e.position_error_mm);
+    variance.push_back(e.axis_variance_mm2);
+  }
+  out.rotation_rad = rotation->rotation_rad(error);
+  out.covariance_rad2 = rotation->covariance_rad2(variance);
+  if (rotation_calibration_)
+    out.covariance_rad2 = rotation_calibration_->covariance_at(
+        forward_kinematics(command_model_, q_deg, EndFrame::flange).linear(), out.covariance_rad2);
+  return out;
+}
+
 ErrorPrediction CompensationModel::predict_error_at(const JointVector& q_deg, const MdhModel& point) const {
   ErrorPrediction p = predict_field_at(q_deg, point);
   // Judged at the measured point: how far the pose is from what the calibration's data determine
@@ -696,6 +742,7 @@ nlohmann::json CompensationModel::to_json() const {
     {
       nlohmann::json e = {{"label", p.label}, {"mm", {p.position_mm.x(), p.position_mm.y(), p.position_mm.z()}}};
       if (p.field) e["field"] = p.field->to_json();
+      if (p.nominal_mm) e["nominal_mm"] = {p.nominal_mm->x(), p.nominal_mm->y(), p.nominal_mm->z()};
       points.push_back(std::move(e));
     }
     j["flange_points"] = points;
@@ -705,6 +752,15 @@ nlohmann::json CompensationModel::to_json() const {
     j["orientation_residual"] = {{"sigma_rad", measured_orientation_->sigma_rad},
                                  {"readings", measured_orientation_->readings},
                                  {"add_floor", measured_orientation_->add_floor}};
+  if (rotation_calibration_) {
+    nlohmann::json c = nlohmann::json::array();
+    for (int r = 0; r < 3; ++r)
+      c.push_back({rotation_calibration_->flange_covariance_rad2(r, 0), rotation_calibration_->flange_covariance_rad2(r, 1),
+                   rotation_calibration_->flange_covariance_rad2(r, 2)});
+    j["rotation_calibration"] = {{"flange_covariance_rad2", c},
+                                 {"mean_independent_trace_rad2", rotation_calibration_->mean_independent_trace_rad2},
+                                 {"poses", rotation_calibration_->poses}};
+  }
   if (!notes_.empty()) j["notes"] = notes_;
   if (!excluded_rows_.empty()) j["excluded_rows"] = excluded_rows_;
   return j;
@@ -835,9 +891,19 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
           fail_model(source, where + ": expected a field of the model's own kind (\"" + std::string(kind) + "\")");
         point_field = error_field_from_json(e["field"], source);
       }
+      std::optional<Eigen::Vector3d> nominal_point;
+      if (e.contains("nominal_mm")) {
+        const nlohmann::json& n = e["nominal_mm"];
+        if (!n.is_array() || n.size() != 3 || !std::all_of(n.begin(), n.end(), [](const nlohmann::json& v) {
+              return v.is_number() && std::isfinite(v.get<double>()) && std::abs(v.get<double>()) <= kMaxToolPointMm;
+            }))
+          fail_model(source, "member \"flange_points\"[" + std::to_string(k) + "].nominal_mm: expected [x, y, z] within " +
+                                 format_number(kMaxToolPointMm) + " mm, got " + n.dump());
+        nominal_point = Eigen::Vector3d(n[0].get<double>(), n[1].get<double>(), n[2].get<double>());
+      }
       model.flange_points_.push_back({e["label"].get<std::string>(),
                                       Eigen::Vector3d(e["mm"][0].get<double>(), e["mm"][1].get<double>(), e["mm"][2].get<double>()),
-                                      std::move(point_field)});
+                                      std::move(point_field), nominal_point});
     }
   }
   if (j.contains("calibration_leverage")) {
@@ -855,6 +921,37 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
                          "count, \"add_floor\": bool}, got " + o.dump());
     model.measured_orientation_ =
         MeasuredOrientation{o["sigma_rad"].get<double>(), o["readings"].get<std::size_t>(), o["add_floor"].get<bool>()};
+  }
+  if (j.contains("rotation_calibration")) {
+    const nlohmann::json& c = j["rotation_calibration"];
+    const std::string expected = "member \"rotation_calibration\": expected {\"flange_covariance_rad2\": a symmetric "
+                                 "positive definite 3 x 3 matrix below 0.01 rad² (5.7 deg sd), "
+                                 "\"mean_independent_trace_rad2\": a positive number, \"poses\": count}, got ";
+    RotationCalibration r;
+    bool valid = c.is_object() && c.contains("flange_covariance_rad2") && c["flange_covariance_rad2"].is_array() &&
+                 c["flange_covariance_rad2"].size() == 3 && c.contains("mean_independent_trace_rad2") &&
+                 c["mean_independent_trace_rad2"].is_number() && c.contains("poses") && c["poses"].is_number_unsigned();
+    for (int row = 0; valid && row < 3; ++row) {
+      const nlohmann::json& line = c["flange_covariance_rad2"][static_cast<std::size_t>(row)];
+      valid = line.is_array() && line.size() == 3;
+      for (int col = 0; valid && col < 3; ++col) {
+        valid = line[static_cast<std::size_t>(col)].is_number();
+        if (valid) r.flange_covariance_rad2(row, col) = line[static_cast<std::size_t>(col)].get<double>();
+      }
+    }
+    if (valid) {
+      r.mean_independent_trace_rad2 = c["mean_independent_trace_rad2"].get<double>();
+      r.poses = c["poses"].get<std::size_t>();
+      const Eigen::Matrix3d& m = r.flange_covariance_rad2;
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m, Eigen::EigenvaluesOnly);
+      valid = m.allFinite() && (m - m.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * m.cwiseAbs().maxCoeff() &&
+              eig.eigenvalues().minCoeff() > 0.0 && eig.eigenvalues().maxCoeff() < 0.01 &&
+              std::isfinite(r.mean_independent_trace_rad2) && r.mean_independent_trace_rad2 > 0.0;
+    }
+    if (!valid) fail_model(source, expected + c.dump());
+    if (model.fielded_points().size() < 3)
+      fail_model(source, "member \"rotation_calibration\": the model has fields at fewer than three points on the flange");
+    model.rotation_calibration_ = r;
   }
   if (j.contains("nominal_registration")) {
     try {

@@ -2,6 +2,7 @@
 
 #include "errfield/robot/input_checks.hpp"
 
+#include <array>
 #include <algorithm>
 #include <map>
 
@@ -410,6 +411,82 @@ std::vector<CompensationModel::LabelledPoint> fields_of_further_points(const Com
   return points;
 }
 
+/// predict_rotation's covariance (RotationCalibration): at every training pose that each field holds
+/// as a sample of its own, the rotation their leave-one-out residuals imply, in the flange frame.
+/// Empty when fewer than 30 poses qualify (repeated poses merge into
+/// one location and have no per-row leave-one-out) or the points do not determine a rotation.
+std::optional<RotationCalibration> rotation_calibration_of(const CompensationModel& model) {
+  const std::vector<CompensationModel::FieldedPoint> points = model.fielded_points();
+  if (points.size() < 3) return std::nullopt;
+  using Key = std::array<double, kJointCount>;
+  auto key_of = [](const JointVector& q) {
+    Key k;
+    for (int j = 0; j < kJointCount; ++j) k[static_cast<std::size_t>(j)] = q[j];
+    return k;
+  };
+  // Each field's leave-one-out residual by pose.
+  std::vector<std::map<Key, SampleHoldOut>> held_out(points.size());
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    const std::vector<SampleHoldOut> loo = leave_one_out_by_sample(*points[p].field);
+    const std::vector<JointVector> joints = points[p].field->sample_joints();
+    if (loo.size() != joints.size()) return std::nullopt;
+    for (std::size_t i = 0; i < loo.size(); ++i) held_out[p].emplace(key_of(joints[i]), loo[i]);
+  }
+  RotationCalibration out;
+  double independent_trace = 0.0;
+  for (const auto& [key, first] : held_out[0]) {
+    JointVector q;
+    for (int j = 0; j < kJointCount; ++j) q[j] = key[static_cast<std::size_t>(j)];
+    std::vector<Eigen::Vector3d> at, residual, variance;
+    for (std::size_t p = 0; p < points.size(); ++p) {
+      const auto found = held_out[p].find(key);
+      if (found == held_out[p].end()) break;
+      Eigen::Isometry3d tool = model.command_model().tool();
+      tool.translation() = points[p].position_mm;
+      at.push_back(forward_position(model.command_model().with_tool(tool), q));
+      residual.push_back(found->second.residual_mm);
+      variance.push_back(Eigen::Vector3d::Constant(found->second.variance_mm2));
+    }
+    if (at.size() != points.size()) continue;
+    const std::optional<FlangeRotationOperator> rotation = FlangeRotationOperator::of(at);
+    if (!rotation) return std::nullopt;
+    const Eigen::Matrix3d flange = forward_kinematics(model.command_model(), q, EndFrame::flange).linear();
+    const Eigen::Vector3d w = flange.transpose() * rotation->rotation_rad(residual);
+    out.flange_covariance_rad2 += w * w.transpose();
+    independent_trace += rotation->covariance_rad2(variance).trace();
+    ++out.poses;
+  }
+  // Fewer poses than this leave a 3 x 3 covariance too uncertain to claim a 95 % region from.
+  constexpr std::size_t kMinimumPoses = 30;
+  if (out.poses < kMinimumPoses) return std::nullopt;
+  out.flange_covariance_rad2 /= static_cast<double>(out.poses);
+  out.mean_independent_trace_rad2 = independent_trace / static_cast<double>(out.poses);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(out.flange_covariance_rad2, Eigen::EigenvaluesOnly);
+  if (!(eig.eigenvalues().minCoeff() > 0.0) || !(out.mean_independent_trace_rad2 > 0.0)) return std::nullopt;
+  return out;
+}
+
+/// Each labelled point's position on the nominal robot's flange (LabelledPoint::nominal_mm): the
+/// mean of its training readings mapped by the nominal registration into the nominal FK's flange
+/// frame.
+FitResult with_nominal_flange_points(FitResult fit, const MdhModel& nominal, const MeasurementSet& d) {
+  const std::optional<Registration>& frame = fit.model.nominal_registration();
+  if (!frame || fit.model.flange_points().empty() || d.reflector.empty()) return fit;
+  std::vector<CompensationModel::LabelledPoint> points = fit.model.flange_points();
+  for (CompensationModel::LabelledPoint& p : points) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < d.reflector.size(); ++i) {
+      if (d.reflector[i] != p.label) continue;
+      sum += forward_kinematics(nominal, d.q_deg[i], EndFrame::flange).inverse() * (frame->robot_from_tracker * d.measured_mm[i]);
+      ++n;
+    }
+    if (n > 0) p.nominal_mm = sum / static_cast<double>(n);
+  }
+  fit.model = fit.model.with_flange_points(std::move(points));
+  return fit;
+}
+
 FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o, bool model_estimated) {
   using detail::fit_kinematic;
   using detail::KinematicFit;
@@ -691,6 +768,15 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
           out.notes.push_back("the residuals at " + labels + " kriged on their own readings with the same variogram; "
                               "a point between the measured ones is predicted from the flange's rigid motion "
                               "their fields imply");
+          if (const std::optional<RotationCalibration> c = rotation_calibration_of(out.model)) {
+            out.model = out.model.with_rotation_calibration(c);
+            out.notes.push_back("the flange's orientation error is predicted from the fields at " +
+                                std::to_string(out.model.fielded_points().size()) +
+                                " points; its covariance is that of the rotation their leave-one-out residuals "
+                                "imply at " + std::to_string(c->poses) + " training poses (" +
+                                format_number(std::round(std::sqrt(c->flange_covariance_rad2.trace() / 3.0) * 1e7) / 1e4) +
+                                " mrad per axis, 1 sd), larger where the fields' own variance is");
+          }
         }
       }
       out.cross_validation = kriging_report(fit, o.space, o);
@@ -851,7 +937,8 @@ FitResult fit_several_points(const MdhModel& robot, const MeasurementSet& d, con
   if (o.outlier_limit > 0)
     out.notes.push_back("gross-outlier screen: none for readings of several points on the flange (the field that "
                         "judges rows holds one point's)");
-  return attach_artifacts(std::move(out), robot, without_rows(d, others));
+  out = attach_artifacts(std::move(out), robot, without_rows(d, others));
+  return with_nominal_flange_points(std::move(out), robot, d);
 }
 
 }  // namespace

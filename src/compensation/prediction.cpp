@@ -27,6 +27,14 @@ std::string_view status_name(PredictionStatus s) {
   return "unknown";
 }
 
+PredictionStatus prediction_status(const ErrorPrediction& e) {
+  if (!e.inside_region) return PredictionStatus::outside_region;
+  if (!e.credible) return PredictionStatus::not_credible;
+  if (!e.orientation_supported) return PredictionStatus::orientation_unknown;
+  if (!e.calibration_supported) return PredictionStatus::calibration_extrapolated;
+  return PredictionStatus::ok;
+}
+
 PointPrediction predict_position(const CompensationModel& model, const JointVector& q_deg) {
   PointPrediction out;
   if (robot::joint_outside_limits(q_deg, model.nominal_model())) {
@@ -34,22 +42,8 @@ PointPrediction predict_position(const CompensationModel& model, const JointVect
     return out;
   }
   out.error = model.predict_error(q_deg);
-  if (!out.error.inside_region) {
-    out.status = PredictionStatus::outside_region;
-    return out;
-  }
-  if (!out.error.credible) {
-    out.status = PredictionStatus::not_credible;
-    return out;
-  }
-  if (!out.error.orientation_supported) {
-    out.status = PredictionStatus::orientation_unknown;
-    return out;
-  }
-  if (!out.error.calibration_supported) {
-    out.status = PredictionStatus::calibration_extrapolated;
-    return out;
-  }
+  out.status = prediction_status(out.error);
+  if (out.status != PredictionStatus::ok) return out;
   out.position_mm = forward_position(model.scored_model(), q_deg) + out.error.position_error_mm;
   if (model.registration()) out.tracker_mm = model.registration()->robot_from_tracker.inverse() * out.position_mm;
   return out;

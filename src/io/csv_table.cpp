@@ -244,6 +244,31 @@ CsvTable CsvTable::rows(const std::vector<std::size_t>& keep) const {
   return out;
 }
 
+CsvTable CsvTable::derived(std::vector<std::string> header, const std::vector<std::size_t>& from,
+                           const std::vector<std::vector<std::string>>& cells) const {
+  if (from.size() != cells.size()) throw ArgumentError("CsvTable::derived: one source row per row of cells");
+  CsvTable out;
+  out.source_ = source_;
+  out.header_ = std::move(header);
+  for (const std::string& name : out.header_) {
+    std::string key = strip_unit(name);
+    if (std::find(out.keys_.begin(), out.keys_.end(), key) != out.keys_.end())
+      throw ArgumentError("CsvTable::derived: column '" + key + "' twice");
+    out.keys_.push_back(std::move(key));
+  }
+  for (std::size_t r = 0; r < cells.size(); ++r) {
+    if (cells[r].size() != out.header_.size())
+      throw ArgumentError("CsvTable::derived: row " + std::to_string(r) + " has " + std::to_string(cells[r].size()) +
+                          " cells for " + std::to_string(out.header_.size()) + " columns");
+    for (const std::string& c : cells[r]) {
+      out.cells_ += c;
+      out.cell_ends_.push_back(out.cells_.size());
+    }
+    out.lines_.push_back(lines_.at(from[r]));
+  }
+  return out;
+}
+
 std::string_view CsvTable::cell(std::size_t row, std::size_t column) const {
   if (row >= lines_.size() || column >= header_.size())
     throw std::out_of_range("CsvTable::cell(" + std::to_string(row) + ", " + std::to_string(column) +

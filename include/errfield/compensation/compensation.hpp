@@ -31,6 +31,7 @@
 #include <nlohmann/json.hpp>
 
 #include "errfield/compensation/calibration_leverage.hpp"
+#include "errfield/compensation/flange_rotation.hpp"
 #include "errfield/compensation/joint_error_functions.hpp"
 #include "errfield/compensation/registration.hpp"
 #include "errfield/robot/inverse_kinematics.hpp"
@@ -275,11 +276,33 @@ class CompensationModel {
     /// between them is predicted from the flange's rigid motion their fields imply
     /// (predict_error_at).
     std::shared_ptr<const ErrorField> field;
+    /// The point on the nominal robot's flange (mm): where the nominal registration
+    /// (nominal_registration()) puts its training readings, on average, in the nominal FK's flange
+    /// frame. validate's "before" orientation takes the points there, so the uncompensated robot is
+    /// scored with its own best mounting of them, as its positions are in its own registration.
+    /// Empty in files written before session 21.
+    std::optional<Eigen::Vector3d> nominal_mm;
   };
   CompensationModel with_flange_points(std::vector<LabelledPoint> points) const;
   const std::vector<LabelledPoint>& flange_points() const noexcept { return flange_points_; }
   const std::optional<MeasuredOrientation>& measured_orientation() const noexcept { return measured_orientation_; }
   CompensationModel with_notes(std::vector<std::string> notes) const;
+  /// Models with fields at three or more points on the flange that do not lie on one line (the own
+  /// point and LabelledPoint::field): the flange's orientation error they imply at joints `q_deg`
+  /// (flange_rotation.hpp), each point predicted as predict_error_at predicts it; empty for other
+  /// models. Its covariance is the points' predictive variances combined as independent, times
+  /// rotation_calibration()'s scale (1 without one).
+  std::optional<RotationPrediction> predict_rotation(const robot::JointVector& q_deg) const;
+  /// The points predict_rotation combines (flange frame, mm: the own point first) and their fields.
+  struct FieldedPoint {
+    Eigen::Vector3d position_mm;
+    const ErrorField* field;
+  };
+  std::vector<FieldedPoint> fielded_points() const;
+  /// How the independent combination of predict_rotation was scaled to the fields' leave-one-out
+  /// ("rotation_calibration" in the model file; fit sets it).
+  CompensationModel with_rotation_calibration(std::optional<RotationCalibration> c) const;
+  const std::optional<RotationCalibration>& rotation_calibration() const noexcept { return rotation_calibration_; }
   /// Calibrated models fitted from positions: the calibration's leverage, which refuses poses
   /// outside what its data determine ("calibration_leverage" in the model file; empty in older files).
   CompensationModel with_calibration_leverage(std::optional<CalibrationLeverage> leverage) const;
@@ -388,6 +411,7 @@ class CompensationModel {
   std::optional<MeasuredOrientation> measured_orientation_;
   std::vector<LabelledPoint> flange_points_;
   std::optional<CalibrationLeverage> calibration_leverage_;
+  std::optional<RotationCalibration> rotation_calibration_;
   /// orientation_prior(), computed on first use; a copy (every with_*) starts afresh, since what it
   /// is computed from may change.
   struct LazyOrientationPrior {

@@ -31,6 +31,10 @@ enum class PredictionStatus { ok, outside_region, not_credible, outside_limits, 
 /// "calibration-extrapolated" (the status column of predict, validate, compensate).
 std::string_view status_name(PredictionStatus s);
 
+/// What a field's prediction says of itself, in this order: outside-region, not-credible,
+/// orientation-unknown, calibration-extrapolated, else ok (the joint limits are the caller's).
+PredictionStatus prediction_status(const ErrorPrediction& e);
+
 struct PointPrediction {
   PredictionStatus status = PredictionStatus::ok;
   /// Predicted actual tool position, robot frame (mm); NaN unless ok.
