@@ -797,7 +797,9 @@ void add_fit_variogram_command(CLI::App& app) {
                 "fit a linear model of coregionalization to the direct and cross variograms of the --value columns "
                 "(>= 2): --input is the CSV of 'errfield variogram --cross' (or the samples, with --coords); --model "
                 "is the template, e.g. nug(0)+sph(1,400) (kinds and ranges kept, sills ignored) or nug+sph (ranges "
-                "fitted first to the mean direct variogram); --weights nj, nj_h2 (default) or unweighted; --out "
+                "fitted first to the mean direct variogram); --weights nj, nj_h2 (default) or unweighted. Heterotopic "
+                "data (empty --value cells; the variogram CSV's pairs_<A> columns): each variogram fitted over its own "
+                "bins as gstat's fit.lmc (--lmc-method gstat), ranges from the template; --out "
                 "writes the LMC JSON that interpolate and cv --method kriging --model lmc.json read (cokriging)");
   cmd->add_option("--lmc-method", args->lmc_method,
                   "--lmc: goulard-voltz (default: iterated WLS, each B_k projected onto the PSD matrices) or gstat "
