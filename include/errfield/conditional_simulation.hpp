@@ -217,11 +217,12 @@ SimulationResult<V> simulate_conditional(std::span<const L> samples, std::span<c
   result.method = std::move(out.method);
   for (Eigen::Index r = 0; r < out.kriging.mean.rows(); ++r) result.mean.push_back(row_value(out.kriging.mean, r));
   result.variance.assign(out.kriging.variance.data(), out.kriging.variance.data() + out.kriging.variance.size());
-  for (const Eigen::MatrixXd& d : out.draws) {
+  for (Eigen::MatrixXd& d : out.draws) {
     std::vector<V> draw;
     draw.reserve(static_cast<std::size_t>(d.rows()));
     for (Eigen::Index r = 0; r < d.rows(); ++r) draw.push_back(row_value(d, r));
     result.draws.push_back(std::move(draw));
+    d = Eigen::MatrixXd();  // the next draw reuses its memory rather than fresh pages
   }
   return result;
 }

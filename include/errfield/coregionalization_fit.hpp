@@ -37,6 +37,7 @@
 
 #include "errfield/coregionalization_model.hpp"
 #include "errfield/empirical_variogram.hpp"
+#include "errfield/heterotopic_variogram.hpp"
 #include "errfield/variogram_model.hpp"
 
 namespace errfield {
@@ -72,8 +73,18 @@ struct CrossVariogramTable {
   std::vector<double> lag;             ///< mean lag h_j of each bin (lag unit)
   std::vector<std::uint64_t> pairs;    ///< N_j (bins with 0 pairs are skipped)
   std::vector<Eigen::MatrixXd> gamma;  ///< value unit^2
+  /// Heterotopic data (heterotopic_variogram.hpp): every direct and cross variogram has pairs of
+  /// its own, so bin j has a mean lag and a pair count per entry (P x P, symmetric: (i, i) the
+  /// direct variogram of i, (i, l) the cross-variogram). Empty for homotopic data, whose
+  /// variograms share `lag` and `pairs`; when set, `lag` and `pairs` are not used and an entry
+  /// with 0 pairs in a bin (its gamma NaN) is skipped there.
+  std::vector<Eigen::MatrixXd> entry_lag, entry_pairs;
+  bool heterotopic() const noexcept { return !entry_lag.empty(); }
   /// From an EmpiricalVariogram computed with cross_variograms (throws ArgumentError otherwise).
   static CrossVariogramTable from(const EmpiricalVariogram& v);
+  /// From heterotopic variograms computed with cross_variograms (throws ArgumentError otherwise):
+  /// each entry with its own lags and pairs.
+  static CrossVariogramTable from(const HeterotopicVariogram& v);
 };
 
 struct CoregionalizationFitResult {
@@ -89,7 +100,11 @@ struct CoregionalizationFitResult {
 };
 
 /// Fits the B_k of `structures` (kinds, ranges and nu used; sills ignored; bounded kinds only) to
-/// `table`. `component_names` (empty or P names) go into the model. Throws ArgumentError for an
+/// `table`. A heterotopic table (each variogram over its own pairs and lags) is fitted by the
+/// Gstat method, each variogram with its own bins and weights, as gstat's fit.lmc fits the
+/// variograms of a gstat object with one data set per variable; Goulard-Voltz is refused there
+/// (ArgumentError): its block update is the exact constrained minimizer only when every entry of a
+/// bin has the same weight. `component_names` (empty or P names) go into the model. Throws ArgumentError for an
 /// empty structure list, an unbounded kind (pow, lin), a missing range, mismatched sizes, fewer
 /// than 2 components, fewer usable bins than structures, or invalid options; InputError for a
 /// non-finite or asymmetric gamma matrix or a negative lag, or a component with no spatial variation (its direct variogram 0 in every bin).
@@ -101,7 +116,8 @@ CoregionalizationFitResult fit_coregionalization(const CrossVariogramTable& tabl
 /// The structures with their ranges fitted (sills ignored) to the mean of the direct variograms,
 /// (1/P) sum_i gamma_ii, by fit_variogram with the same weighting; a nug structure makes the
 /// nugget free, otherwise there is none. Throws like fit_coregionalization, and
-/// ArgumentError when the fit fails. `component_names` (optional) name the components in messages.
+/// ArgumentError when the fit fails, or for a heterotopic table (the direct variograms have lags
+/// of their own: give the ranges). `component_names` (optional) name the components in messages.
 std::vector<ModelComponent> fit_coregionalization_ranges(const CrossVariogramTable& table,
                                                          const std::vector<ModelComponent>& structures,
                                                          LmcWeighting weighting = LmcWeighting::NjOverH2,

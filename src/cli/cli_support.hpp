@@ -115,7 +115,9 @@ struct OutputTable {
   /// Written straight into one buffer, rows in blocks formatted in parallel (OpenMP; the same
   /// bytes for any thread count).
   std::string to_csv() const;
-  /// Writes atomically; names on stderr the input columns that computed ones replaced.
+  /// The same bytes as to_csv(), written to `stream` a batch of rows at a time (bounded memory).
+  void write_csv(std::ostream& stream) const;
+  /// Writes atomically (through write_csv); names on stderr the input columns that computed ones replaced.
   void write(const std::string& path) const;
 };
 

@@ -9,6 +9,7 @@
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
 #include "cli/interpolation_methods.hpp"
+#include "cli/value_cells.hpp"
 #include "errfield/cross_validation.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
@@ -94,7 +95,12 @@ void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& ow
                         "; expected at most one fold per sample");
   r.samples = &samples;
   r.sample_coords = samples.numeric_columns(r.coord_columns);
-  r.sample_values = samples.numeric_columns(r.value_columns);
+  // Heterotopic cokriging (kriging with an LMC --model): an empty cell is that component not
+  // measured at the sample; every other method keeps refusing empty cells.
+  r.sample_values = method.takes_missing_values && method.takes_missing_values()
+                        ? numeric_columns_with_gaps(samples, r.value_columns)
+                        : samples.numeric_columns(r.value_columns);
+  const bool heterotopic = r.sample_values.array().isNaN().any();
   r.sample_labels = row_labels_of(samples, "sample");
 
   const std::size_t c = r.value_columns.size();
@@ -122,7 +128,9 @@ void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& ow
   const CrossValidationSummary s = summarize_residuals(residuals, result.variance);
   // No prediction at all is a failed job (k-fold said "predicted 0 of 12" and exited 0), whatever
   // made every fold fail; the notes say why.
-  if (s.predicted == 0) {
+  const bool nothing_predicted =
+      heterotopic ? !(r.sample_values.array().isFinite() && result.pred.array().isFinite()).any() : s.predicted == 0;
+  if (nothing_predicted) {
     std::string why;
     for (const auto& note : result.notes) why += "; " + note;
     throw Error("cv: none of the " + std::to_string(n) + " samples of " + a.samples + " could be predicted by --method " +
@@ -187,8 +195,32 @@ void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& ow
       std::cout << "  mean z^2         " << with_unit(*s.mean_squared_z, "") << "   (~1 when the variance is right)\n";
     }
   }
-  if (s.predicted < s.samples)
+  if (heterotopic) {
+    // The lines above are over the samples where every component is measured (and predicted);
+    // each component's own figures are over the samples that measure it.
+    std::cout << "  per component    (heterotopic: the lines above are over the samples measuring every component, "
+                 "these each over the samples that measure it)\n";
+    for (std::size_t k = 0; k < c; ++k) {
+      const auto col = residuals.col(static_cast<Eigen::Index>(k));
+      std::size_t measured = 0, predicted = 0;
+      double sum = 0.0, sum_sq = 0.0;
+      for (Eigen::Index i = 0; i < col.size(); ++i) {
+        if (std::isnan(r.sample_values(i, static_cast<Eigen::Index>(k)))) continue;
+        ++measured;
+        if (!std::isfinite(col(i))) continue;
+        ++predicted;
+        sum += col(i);
+        sum_sq += col(i) * col(i);
+      }
+      std::cout << "    " << r.value_columns[k] << ": predicted " << predicted << " of " << measured;
+      if (predicted > 0)
+        std::cout << ", mean error " << with_unit(sum / static_cast<double>(predicted), unit) << ", RMS error "
+                  << with_unit(std::sqrt(sum_sq / static_cast<double>(predicted)), unit);
+      std::cout << "\n";
+    }
+  } else if (s.predicted < s.samples) {
     std::cout << "  " << (s.samples - s.predicted) << " samples had no prediction (e.g. no neighbour within --radius)\n";
+  }
   for (const auto& note : result.notes) std::cerr << "errfield cv: " << note << "\n";
   if (!a.out.empty()) std::cout << "wrote " << a.out << "\n";
 }

@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <iostream>
+#include <limits>
 
 #include <nlohmann/json.hpp>
 
@@ -12,11 +13,13 @@
 #include "cli/covariate_sources.hpp"
 #include "cli/command_registry.hpp"
 #include "cli/interpolation_methods.hpp"
+#include "cli/value_cells.hpp"
 #include "cli/variogram_svg.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/coregionalization_fit.hpp"
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
+#include "errfield/heterotopic_variogram.hpp"
 #include "errfield/kriging_likelihood.hpp"
 #include "errfield/variogram_fit.hpp"
 
@@ -410,7 +413,9 @@ void run_lmc_fit(const FitVariogramArgs& a) {
   if (!a.coords.empty()) {
     // The samples: gstat's default bins and boundaries, as 'errfield variogram --cross' without --bins.
     Eigen::MatrixXd x = t.numeric_columns(split_column_list(a.coords, "--coords"));
-    const Eigen::MatrixXd z = t.numeric_columns(names);
+    // An empty cell: that component not measured there (heterotopic samples, as interpolate and
+    // variogram read them); each direct and cross variogram is then over its own pairs.
+    const Eigen::MatrixXd z = numeric_columns_with_gaps(t, names);
     if (!tmpl.anisotropy.isotropic()) {
       // An anisotropic template: the variograms of the mapped coordinates A x, where the LMC is isotropic.
       const int d = static_cast<int>(x.cols());
@@ -427,8 +432,14 @@ void run_lmc_fit(const FitVariogramArgs& a) {
     EmpiricalVariogramOptions vo;
     vo.convention = BinConvention::Gstat;
     vo.cross_variograms = true;
-    const EmpiricalVariogram v = with_source(a.input, [&] { return empirical_variogram(x, z, LagBins::gstat_default(x), vo); });
-    table = CrossVariogramTable::from(v);
+    if (z.array().isNaN().any()) {
+      const HeterotopicVariogram h =
+          with_source(a.input, [&] { return heterotopic_variogram(x, z, LagBins::gstat_default(x), vo); });
+      table = CrossVariogramTable::from(h);
+    } else {
+      const EmpiricalVariogram v = with_source(a.input, [&] { return empirical_variogram(x, z, LagBins::gstat_default(x), vo); });
+      table = CrossVariogramTable::from(v);
+    }
   } else {
     if (!tmpl.anisotropy.isotropic())
       throw ArgumentError("--model: an anisotropic template (@" + tmpl.anisotropy.to_string() +
@@ -446,10 +457,23 @@ void run_lmc_fit(const FitVariogramArgs& a) {
                            a.input, 0, name);
         col[i][j] = col[j][i] = t.column_index(name);
       }
-    if (t.has_column("pairs_" + names[0]))
-      throw InputError(a.input + ": column 'pairs_" + names[0] + "': the variograms of heterotopic data (each over its "
-                           "own pairs and lags); --lmc fits one lag and pair count per bin and does not fit these yet",
-                       a.input, 0, "pairs_" + names[0]);
+    // Heterotopic variograms ('variogram --cross' of samples with empty cells): each direct and
+    // cross variogram with its own pairs_<A>[_<B>] and lag_mean_<A>[_<B>] (empty cells where it
+    // has no pair in a bin).
+    const bool heterotopic = t.has_column("pairs_" + names[0]);
+    std::vector<std::vector<std::size_t>> entry_pairs_col(P, std::vector<std::size_t>(P)), entry_lag_col = entry_pairs_col;
+    if (heterotopic)
+      for (std::size_t i = 0; i < P; ++i)
+        for (std::size_t j = i; j < P; ++j) {
+          const std::string suffix = i == j ? names[i] : names[i] + "_" + names[j];
+          for (const std::string& name : {"pairs_" + suffix, "lag_mean_" + suffix})
+            if (!t.has_column(name))
+              throw InputError(a.input + ": column 'pairs_" + names[0] + "' (heterotopic variograms) but no column '" + name +
+                                   "'; --lmc reads the CSV of 'errfield variogram --value " + a.value + " --cross'",
+                               a.input, 0, name);
+          entry_pairs_col[i][j] = entry_pairs_col[j][i] = t.column_index("pairs_" + suffix);
+          entry_lag_col[i][j] = entry_lag_col[j][i] = t.column_index("lag_mean_" + suffix);
+        }
     for (const char* label : {"direction", "dip", "coordinate"})
       if (t.has_column(label))
         throw InputError(a.input + ": column '" + label + "': a directional variogram; --lmc fits one isotropic LMC",
@@ -461,14 +485,39 @@ void run_lmc_fit(const FitVariogramArgs& a) {
                              "': " + format_number(np) + " is not a pair count (an integer >= 0)",
                          t.source(), t.line_of_row(r), t.header()[c_pairs]);
       if (np == 0.0) continue;  // empty bin: empty cells
-      Eigen::MatrixXd g(static_cast<Eigen::Index>(P), static_cast<Eigen::Index>(P));
-      for (std::size_t i = 0; i < P; ++i)
-        for (std::size_t j = 0; j < P; ++j) g(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = parse_cell(t, r, col[i][j]);
+      const auto p = static_cast<Eigen::Index>(P);
+      Eigen::MatrixXd g(p, p);
+      if (heterotopic) {
+        // An entry without pairs in this bin has empty cells: NaN gamma and lag, 0 pairs.
+        auto cell_or_nan = [&](std::size_t c) {
+          return t.cell(r, c).empty() ? std::numeric_limits<double>::quiet_NaN() : parse_cell(t, r, c);
+        };
+        Eigen::MatrixXd lag(p, p), pairs(p, p);
+        for (std::size_t i = 0; i < P; ++i)
+          for (std::size_t j = 0; j < P; ++j) {
+            const auto ii = static_cast<Eigen::Index>(i), jj = static_cast<Eigen::Index>(j);
+            const double n = t.cell(r, entry_pairs_col[i][j]).empty() ? 0.0 : parse_cell(t, r, entry_pairs_col[i][j]);
+            pairs(ii, jj) = n;
+            lag(ii, jj) = n > 0.0 ? cell_or_nan(entry_lag_col[i][j]) : std::numeric_limits<double>::quiet_NaN();
+            g(ii, jj) = n > 0.0 ? cell_or_nan(col[i][j]) : std::numeric_limits<double>::quiet_NaN();
+          }
+        table.entry_lag.push_back(std::move(lag));
+        table.entry_pairs.push_back(std::move(pairs));
+      } else {
+        for (std::size_t i = 0; i < P; ++i)
+          for (std::size_t j = 0; j < P; ++j) g(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = parse_cell(t, r, col[i][j]);
+      }
       table.lag.push_back(parse_cell(t, r, c_lag));
       table.pairs.push_back(static_cast<std::uint64_t>(np));
       table.gamma.push_back(std::move(g));
     }
     if (table.lag.empty()) throw InputError(a.input + ": no bin with pairs > 0; nothing to fit", a.input);
+  }
+  if (table.heterotopic() && !a.lmc_method_given && o.method != LmcFitMethod::Gstat) {
+    // gstat's fit.lmc is the fit of heterotopic variograms (each with its own bins and weights).
+    o.method = LmcFitMethod::Gstat;
+    std::cout << "heterotopic variograms (empty --value cells: each over its own pairs and lags): fitted as gstat's "
+                 "fit.lmc (--lmc-method gstat)\n";
   }
   if (!ranges_given) {
     structures = with_source(a.input, [&] { return fit_coregionalization_ranges(table, structures, o.weighting, names); });
@@ -748,7 +797,9 @@ void add_fit_variogram_command(CLI::App& app) {
                 "fit a linear model of coregionalization to the direct and cross variograms of the --value columns "
                 "(>= 2): --input is the CSV of 'errfield variogram --cross' (or the samples, with --coords); --model "
                 "is the template, e.g. nug(0)+sph(1,400) (kinds and ranges kept, sills ignored) or nug+sph (ranges "
-                "fitted first to the mean direct variogram); --weights nj, nj_h2 (default) or unweighted; --out "
+                "fitted first to the mean direct variogram); --weights nj, nj_h2 (default) or unweighted. Heterotopic "
+                "data (empty --value cells; the variogram CSV's pairs_<A> columns): each variogram fitted over its own "
+                "bins as gstat's fit.lmc (--lmc-method gstat), ranges from the template; --out "
                 "writes the LMC JSON that interpolate and cv --method kriging --model lmc.json read (cokriging)");
   cmd->add_option("--lmc-method", args->lmc_method,
                   "--lmc: goulard-voltz (default: iterated WLS, each B_k projected onto the PSD matrices) or gstat "

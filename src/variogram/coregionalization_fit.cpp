@@ -70,6 +70,33 @@ CrossVariogramTable CrossVariogramTable::from(const EmpiricalVariogram& v) {
   return t;
 }
 
+CrossVariogramTable CrossVariogramTable::from(const HeterotopicVariogram& h) {
+  const EmpiricalVariogram& v = h.variogram;
+  const int P = v.components();
+  if (P >= 2 && (v.cross_gamma.cols() != P * (P - 1) / 2 || h.cross_pairs.cols() != P * (P - 1) / 2))
+    throw ArgumentError("cross-variogram table: the heterotopic variogram has no cross-variograms; compute it with "
+                        "EmpiricalVariogramOptions::cross_variograms");
+  CrossVariogramTable t;
+  const auto bins = static_cast<Eigen::Index>(v.bins.size());
+  for (Eigen::Index b = 0; b < bins; ++b) {
+    t.lag.push_back(v.bins[static_cast<std::size_t>(b)].lag_mean);
+    t.pairs.push_back(v.bins[static_cast<std::size_t>(b)].pairs);
+    Eigen::MatrixXd g(P, P), lag(P, P), pairs(P, P);
+    for (int i = 0; i < P; ++i)
+      for (int l = i; l < P; ++l) {
+        const bool direct = i == l;
+        const int c = direct ? i : EmpiricalVariogram::cross_column(i, l, P);
+        g(i, l) = g(l, i) = direct ? v.component_gamma(b, c) : v.cross_gamma(b, c);
+        lag(i, l) = lag(l, i) = direct ? h.component_lag(b, c) : h.cross_lag(b, c);
+        pairs(i, l) = pairs(l, i) = direct ? h.component_pairs(b, c) : h.cross_pairs(b, c);
+      }
+    t.gamma.push_back(std::move(g));
+    t.entry_lag.push_back(std::move(lag));
+    t.entry_pairs.push_back(std::move(pairs));
+  }
+  return t;
+}
+
 namespace {
 
 /// The usable bins of a table: lag, weight and gamma matrix.
@@ -225,6 +252,142 @@ std::vector<Eigen::MatrixXd> separate_fits(const LmcBins& b, const Eigen::Matrix
   return sills;
 }
 
+double bin_weight(LmcWeighting weighting, double n, double lag) {
+  return weighting == LmcWeighting::Nj ? n : weighting == LmcWeighting::NjOverH2 ? n / (lag * lag) : 1.0;
+}
+
+/// One direct or cross variogram of a heterotopic table: its usable bins (pairs > 0; lag > 0 for
+/// nj_h2, as for homotopic tables), their lags, weights and gammas.
+struct EntryBins {
+  std::vector<double> lag, weight, gamma;
+};
+
+/// Every entry (i <= l) of a heterotopic table, validated: entries[i * P + l].
+std::vector<EntryBins> heterotopic_entries(const CrossVariogramTable& t, LmcWeighting weighting, int& components) {
+  if (t.entry_lag.size() != t.gamma.size() || t.entry_pairs.size() != t.gamma.size())
+    throw ArgumentError("cross-variogram table: " + std::to_string(t.entry_lag.size()) + " lag matrices, " +
+                        std::to_string(t.entry_pairs.size()) + " pair-count matrices and " +
+                        std::to_string(t.gamma.size()) + " gamma matrices; expected one of each per bin");
+  const int P = t.gamma.empty() ? 0 : static_cast<int>(t.gamma.front().rows());
+  components = P;
+  if (P < 2)
+    throw ArgumentError("LMC fit: " + std::to_string(P) + " component(s); an LMC fit needs at least 2 (with 1, use fit_variogram)");
+  std::vector<EntryBins> entries(static_cast<std::size_t>(P * P));
+  for (std::size_t j = 0; j < t.gamma.size(); ++j) {
+    const Eigen::MatrixXd &g = t.gamma[j], &h = t.entry_lag[j], &n = t.entry_pairs[j];
+    for (const Eigen::MatrixXd* m : {&g, &h, &n})
+      if (m->rows() != P || m->cols() != P)
+        throw ArgumentError("cross-variogram table: bin " + std::to_string(j) + " has a " + std::to_string(m->rows()) + " x " +
+                            std::to_string(m->cols()) + " matrix; expected " + std::to_string(P) + " x " + std::to_string(P));
+    for (int i = 0; i < P; ++i)
+      for (int l = i; l < P; ++l) {
+        const double pairs = n(i, l);
+        if (!(pairs >= 0.0) || pairs != std::floor(pairs) || n(l, i) != pairs)
+          throw InputError("cross-variogram table: bin " + std::to_string(j) + ", entry (" + std::to_string(i) + ", " +
+                           std::to_string(l) + "): pair count " + std::to_string(pairs) + "; expected a symmetric integer >= 0");
+        if (pairs == 0.0) continue;
+        if (!std::isfinite(h(i, l)) || h(i, l) < 0.0)
+          throw InputError("cross-variogram table: bin " + std::to_string(j) + ", entry (" + std::to_string(i) + ", " +
+                           std::to_string(l) + ") has lag " + std::to_string(h(i, l)) + "; expected a finite lag >= 0");
+        if (!std::isfinite(g(i, l)) || g(l, i) != g(i, l))
+          throw InputError("cross-variogram table: bin " + std::to_string(j) + ", entry (" + std::to_string(i) + ", " +
+                           std::to_string(l) + ") has a non-finite or asymmetric gamma");
+        if (weighting == LmcWeighting::NjOverH2 && h(i, l) == 0.0) continue;
+        EntryBins& e = entries[static_cast<std::size_t>(i * P + l)];
+        e.lag.push_back(h(i, l));
+        e.weight.push_back(bin_weight(weighting, pairs, h(i, l)));
+        e.gamma.push_back(g(i, l));
+      }
+  }
+  return entries;
+}
+
+Eigen::MatrixXd entry_design(const EntryBins& e, const std::vector<ModelComponent>& structures) {
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(e.lag.size()), static_cast<Eigen::Index>(structures.size()));
+  for (std::size_t k = 0; k < structures.size(); ++k) {
+    ModelComponent unit = structures[k];
+    unit.sill = 1.0;
+    for (std::size_t j = 0; j < e.lag.size(); ++j)
+      x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k)) = unit.gamma(e.lag[j]);
+  }
+  return x;
+}
+
+std::string entry_name(int i, int l, const std::vector<std::string>& names) {
+  auto name = [&](int c) {
+    const auto k = static_cast<std::size_t>(c);
+    return k < names.size() ? "'" + names[k] + "'" : "component " + std::to_string(c + 1);
+  };
+  return i == l ? "the direct variogram of " + name(i) : "the cross-variogram of " + name(i) + " and " + name(l);
+}
+
+/// Q(B) of a heterotopic table: each entry over its own bins and weights (off-diagonal entries
+/// twice, as the Frobenius norm of the homotopic Q counts them).
+double heterotopic_residual(const std::vector<EntryBins>& entries, int P, const std::vector<ModelComponent>& structures,
+                            const std::vector<Eigen::MatrixXd>& sills) {
+  double q = 0.0;
+  for (int i = 0; i < P; ++i)
+    for (int l = i; l < P; ++l) {
+      const EntryBins& e = entries[static_cast<std::size_t>(i * P + l)];
+      const Eigen::MatrixXd x = entry_design(e, structures);
+      for (std::size_t j = 0; j < e.lag.size(); ++j) {
+        double r = e.gamma[j];
+        for (std::size_t k = 0; k < sills.size(); ++k) r -= x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k)) * sills[k](i, l);
+        q += (i == l ? 1.0 : 2.0) * e.weight[j] * r * r;
+      }
+    }
+  return q;
+}
+
+/// gstat's fit.lmc on a heterotopic table: each direct and cross variogram fitted alone over its
+/// own bins (separate_fits' rules), then each B_k projected onto the PSD cone.
+CoregionalizationFitResult fit_heterotopic(const CrossVariogramTable& table, const std::vector<ModelComponent>& structures,
+                                           const CoregionalizationFitOptions& options,
+                                           std::vector<std::string> component_names) {
+  if (options.method != LmcFitMethod::Gstat)
+    throw ArgumentError("LMC fit: heterotopic variograms (each over its own pairs and lags) are fitted by the gstat "
+                        "method (gstat's fit.lmc: each variogram alone, then the PSD projection); Goulard-Voltz's "
+                        "update is exact only when every variogram of a bin has the same weight");
+  int P = 0;
+  const std::vector<EntryBins> entries = heterotopic_entries(table, options.weighting, P);
+  const std::size_t K = structures.size();
+  std::vector<Eigen::MatrixXd> sills(K, Eigen::MatrixXd::Zero(P, P));
+  std::size_t bins_used = 0;
+  for (int i = 0; i < P; ++i)
+    for (int l = i; l < P; ++l) {
+      const EntryBins& e = entries[static_cast<std::size_t>(i * P + l)];
+      if (e.lag.size() < K)
+        throw ArgumentError("LMC fit: " + entry_name(i, l, component_names) + " has " + std::to_string(e.lag.size()) +
+                            " usable bin(s) for " + std::to_string(K) + " structures; expected at least as many bins " +
+                            "as structures" + (i == l ? "" : " (a cross-variogram's pairs are those where both are measured at both ends)"));
+      if (i == l && std::all_of(e.gamma.begin(), e.gamma.end(), [](double g) { return g == 0.0; }))
+        throw InputError("LMC fit: no spatial variation in " + entry_name(i, l, component_names) +
+                         ": it is 0 in all its bins (constant values); an LMC of it predicts nothing: drop it or check the data");
+      bins_used = std::max(bins_used, e.lag.size());
+      const Eigen::MatrixXd x = entry_design(e, structures);
+      const Eigen::VectorXd sw = Eigen::Map<const Eigen::VectorXd>(e.weight.data(), static_cast<Eigen::Index>(e.weight.size())).cwiseSqrt();
+      const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(e.gamma.data(), static_cast<Eigen::Index>(e.gamma.size()));
+      std::vector<bool> free(K, true);
+      Eigen::VectorXd coef = weighted_linear_fit(x, y, sw, free);
+      while (i == l && (coef.array() < 0.0).any()) {
+        for (std::size_t k = 0; k < K; ++k) free[k] = free[k] && coef(static_cast<Eigen::Index>(k)) > 0.0;
+        coef = weighted_linear_fit(x, y, sw, free);
+      }
+      for (std::size_t k = 0; k < K; ++k) sills[k](i, l) = sills[k](l, i) = coef(static_cast<Eigen::Index>(k));
+    }
+  CoregionalizationFitResult result;
+  result.bins_used = bins_used;
+  result.smallest_eigenvalue_before_projection.assign(K, 0.0);
+  for (std::size_t k = 0; k < K; ++k) sills[k] = psd_projection(sills[k], result.smallest_eigenvalue_before_projection[k]);
+  result.weighted_residual = heterotopic_residual(entries, P, structures, sills);
+  result.message = "gstat fit.lmc of heterotopic variograms: each over its own bins, then eigenvalues clipped at 0";
+  std::vector<CoregionalizationStructure> out;
+  for (std::size_t k = 0; k < K; ++k)
+    out.push_back({.kind = structures[k].kind, .range = structures[k].range, .nu = structures[k].nu, .sills = sills[k]});
+  result.model = CoregionalizationModel(std::move(out), {}, std::move(component_names));
+  return result;
+}
+
 }  // namespace
 
 CoregionalizationFitResult fit_coregionalization(const CrossVariogramTable& table,
@@ -233,6 +396,7 @@ CoregionalizationFitResult fit_coregionalization(const CrossVariogramTable& tabl
                                                  std::vector<std::string> component_names) {
   options.validate();
   check_structures(structures);
+  if (table.heterotopic()) return fit_heterotopic(table, structures, options, std::move(component_names));
   const LmcBins b = usable_bins(table, options.weighting);
   check_spatial_variation(b, component_names);
   const std::size_t K = structures.size();
@@ -313,6 +477,9 @@ std::vector<ModelComponent> fit_coregionalization_ranges(const CrossVariogramTab
                                                          LmcWeighting weighting,
                                                          const std::vector<std::string>& component_names) {
   check_structures(structures);
+  if (table.heterotopic())
+    throw ArgumentError("LMC fit: heterotopic variograms (each over its own pairs and lags): give the structures' "
+                        "ranges (e.g. nug(0)+sph(1,40)), as gstat's fit.lmc takes them from the model");
   const LmcBins b = usable_bins(table, weighting);
   check_spatial_variation(b, component_names);
   std::vector<ModelComponent> ranged;
@@ -387,13 +554,17 @@ CoregionalizationTemplate parse_coregionalization_template(std::string_view text
 
 double coregionalization_weighted_residual(const CrossVariogramTable& table, const CoregionalizationModel& model,
                                            LmcWeighting weighting) {
-  const LmcBins b = usable_bins(table, weighting);
   std::vector<ModelComponent> structures;
   std::vector<Eigen::MatrixXd> sills;
   for (const CoregionalizationStructure& s : model.structures()) {
     structures.push_back({.kind = s.kind, .sill = 1.0, .range = s.range, .nu = s.nu});
     sills.push_back(s.sills);
   }
+  if (table.heterotopic()) {
+    int P = 0;
+    return heterotopic_residual(heterotopic_entries(table, weighting, P), P, structures, sills);
+  }
+  const LmcBins b = usable_bins(table, weighting);
   return lmc_residual(b, unit_design(b, structures), sills);
 }
 

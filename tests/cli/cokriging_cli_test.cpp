@@ -186,9 +186,29 @@ TEST_F(CokrigingCli, EmptyValueCellsAreNotMeasuredForCokrigingAndRefusedElsewher
     EXPECT_DOUBLE_EQ(got(static_cast<Eigen::Index>(t), 0), pred.mean[t][1]);
     EXPECT_DOUBLE_EQ(got(static_cast<Eigen::Index>(t), 1), pred.covariance[t](2, 2));
   }
-  const auto cv = run("cv --method kriging --samples " + path("H.csv") + tail);
-  EXPECT_EQ(cv.exit_code, 2);
-  EXPECT_THAT(cv.output(), HasSubstr("H.csv:3: column 'dy' is empty; expected a number"));
+  // Leave-one-out of heterotopic cokriging: the library's (every measured component of a sample
+  // left out together; tested against refitting without the sample in cokriging_test), a component
+  // not measured at a sample has empty prediction and residual cells there.
+  const auto cv = run("cv --method kriging --samples " + path("H.csv") + tail + " --out " + path("CV.csv"));
+  ASSERT_EQ(cv.exit_code, 0) << cv.output();
+  EXPECT_THAT(cv.output(), HasSubstr("dy: predicted 40 of 40"));
+  const auto loo = Cokriging<P3, Eigen::Vector3d>(pts_, gappy, model()).leave_one_out();
+  const CsvTable written = CsvTable::read(path("CV.csv"));
+  for (std::size_t i = 0; i < pts_.size(); ++i)
+    for (int c = 0; c < 3; ++c) {
+      const std::string name = std::string("dxdydz").substr(static_cast<std::size_t>(2 * c), 2);
+      const std::string_view pred = written.cell(i, written.column_index("pred_" + name));
+      const std::string_view residual = written.cell(i, written.column_index("residual_" + name));
+      if (std::isnan(gappy[i][c])) {
+        EXPECT_TRUE(pred.empty() && residual.empty()) << "sample " << i << ", " << name;
+        continue;
+      }
+      EXPECT_DOUBLE_EQ(written.numeric_cell(i, written.column_index("pred_" + name)), loo.prediction[i][c]) << i;
+      EXPECT_NEAR(written.numeric_cell(i, written.column_index("residual_" + name)), loo.residual[i][c], 1e-12) << i;
+    }
+  const auto cv_shared = run("cv --method kriging --samples " + path("H.csv") + " --coords x,y,z --value dx,dy,dz --model sph(1,500)");
+  EXPECT_EQ(cv_shared.exit_code, 2);
+  EXPECT_THAT(cv_shared.output(), HasSubstr("H.csv:3: column 'dy' is empty; expected a number"));
   const auto shared = run("interpolate --method kriging --samples " + path("H.csv") + " --targets " + path("T.csv") +
                           " --coords x,y,z --value dx,dy,dz --model sph(1,500) --out " + path("Q.csv"));
   EXPECT_EQ(shared.exit_code, 2);
