@@ -141,11 +141,36 @@ CompensatedTarget CompensationModel::compensate_joints(const MdhModel& nominal_m
     out.move_mm = 0.0;
     return out;
   }
+  // Three or more points on the flange (or a probe) determine its orientation: the rotation the
+  // fields predict is corrected as the position is, R_cmd = exp(-[w]x) R_n, through the calibrated
+  // model's whole pose.
+  if (calibrated && field_ && fielded_points().size() >= 3) {
+    out.rotation = predict_rotation(q_nominal_deg);
+    if (out.rotation && out.rotation->status != "ok") {
+      out.prediction.inside_region = out.rotation->status != "outside-region" && out.prediction.inside_region;
+      out.prediction.credible = out.rotation->status != "not-credible" && out.prediction.credible;
+      out.prediction.orientation_supported =
+          out.rotation->status != "orientation-unknown" && out.prediction.orientation_supported;
+      out.prediction.calibration_supported =
+          out.rotation->status != "calibration-extrapolated" && out.prediction.calibration_supported;
+    }
+  }
+  const bool with_orientation = out.rotation && out.rotation->status == "ok";
   pose.translation() = out.command_position_mm;
-  // A calibrated model is used through compensated_joints (its orientation parameters are weakly
-  // determined by position/distance data, so full-pose IK of it would follow them).
-  const IkResult cmd = calibrated ? compensated_joints(nominal_model, aimed, pose, q_nominal_deg)
-                                  : inverse_kinematics(aimed, pose, q_nominal_deg, ik);
+  if (with_orientation) {
+    const Eigen::Vector3d& w = out.rotation->rotation_rad;
+    const Eigen::AngleAxisd calibration(forward_kinematics(aimed, q_nominal_deg, ik.frame).linear() * pose.linear().transpose());
+    out.total_rotation_error_rad = calibration.angle() * calibration.axis() + w;
+    pose.linear() = Eigen::AngleAxisd(-w.norm(), w.norm() > 0 ? Eigen::Vector3d(w.normalized()) : Eigen::Vector3d::UnitX())
+                        .toRotationMatrix() *
+                    pose.linear();
+  }
+  // A calibrated model is otherwise used through compensated_joints (its orientation parameters are
+  // weakly determined by one point's positions or by distances, so full-pose IK of it would follow
+  // them).
+  const IkResult cmd = with_orientation ? compensated_pose_joints(nominal_model, aimed, pose, q_nominal_deg)
+                       : calibrated     ? compensated_joints(nominal_model, aimed, pose, q_nominal_deg)
+                                        : inverse_kinematics(aimed, pose, q_nominal_deg, ik);
   out.ik_status = cmd.status;
   out.ik_residual_mm = cmd.position_residual_mm;
   if (cmd.ok()) {

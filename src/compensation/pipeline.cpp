@@ -12,6 +12,7 @@
 #include "errfield/compensation/error_ball.hpp"
 #include "errfield/compensation/prediction.hpp"
 #include "errfield/compensation/registration.hpp"
+#include "errfield/compensation/rotation_validation.hpp"
 #include "errfield/compensation/target_ik.hpp"
 #include "errfield/error.hpp"
 #include "compensation/fit_checks.hpp"
@@ -294,6 +295,10 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
     if ((ik_ok[i] || ik_status[i] == "config-change") && qn[i].allFinite())
       nconfig[i] = arm_configuration(nominal, qn[i]).to_string();
   std::vector<std::vector<double>> cols(31, std::vector<double>(n, kNaN));  // see `names` below
+  // Models that predict the flange's orientation: its predicted rotation, 95 % radius and the whole
+  // orientation error (mdeg, robot frame).
+  const bool orientation = model.fielded_points().size() >= 3 && model.rotation_calibration().has_value();
+  std::vector<std::vector<double>> rotation_cols(orientation ? 7 : 0, std::vector<double>(n, kNaN));
   std::vector<std::string> status(n);
   StepColumns out;
   out.max_correction_mm = ceiling;
@@ -322,6 +327,11 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
     for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(26 + k)][i] = c.total_error_mm[k];
     cols[29][i] = c.total_error_mm.norm();
     cols[30][i] = c.move_mm;
+    if (orientation && c.rotation) {
+      for (int k = 0; k < 3; ++k) rotation_cols[static_cast<std::size_t>(k)][i] = kMdegPerRad * c.rotation->rotation_rad[k];
+      rotation_cols[3][i] = kMdegPerRad * c.rotation->radius95_rad();
+      for (int k = 0; k < 3; ++k) rotation_cols[static_cast<std::size_t>(4 + k)][i] = kMdegPerRad * c.total_rotation_error_rad[k];
+    }
     if (c.prediction.inside_region && !(c.prediction.position_error_mm.allFinite() && c.command_position_mm.allFinite())) {
       // The field gave no number here (e.g. an overflow): never an IK failure's name, never ok.
       status[i] = "no-prediction";
@@ -355,6 +365,10 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
                          "cq5", "cq6", "var_field_mm2", "r95_mm", "total_dx", "total_dy", "total_dz", "total_mm",
                          "move_mm"};
   for (std::size_t c = 0; c < 31; ++c) out.columns.push_back(numbers(names[c], std::move(cols[c])));
+  const char* rotation_names[] = {"pred_wx_mdeg", "pred_wy_mdeg", "pred_wz_mdeg", "r95_w_mdeg",
+                                  "total_wx_mdeg", "total_wy_mdeg", "total_wz_mdeg"};
+  for (std::size_t c = 0; c < rotation_cols.size(); ++c)
+    out.columns.push_back(numbers(rotation_names[c], std::move(rotation_cols[c])));
   out.columns.push_back(words("nconfig", std::move(nconfig)));
   out.columns.push_back(words("config", std::move(config)));
   for (const std::string& w : source) {

@@ -39,6 +39,34 @@ IkResult compensated_joints(const MdhModel& nominal, const MdhModel& identified,
   return r;
 }
 
+IkResult compensated_pose_joints(const MdhModel& nominal, const MdhModel& identified, const Eigen::Isometry3d& target,
+                                 const JointVector& seed_deg, int iterations) {
+  Eigen::Isometry3d command = target;
+  IkResult r = inverse_kinematics(nominal, command, seed_deg);
+  auto gaps = [&](const JointVector& q) {
+    const Eigen::Isometry3d reached = forward_kinematics(identified, q);
+    const Eigen::AngleAxisd turn(reached.linear() * target.linear().transpose());
+    return std::make_pair(Eigen::Vector3d(reached.translation() - target.translation()), Eigen::Vector3d(turn.angle() * turn.axis()));
+  };
+  for (int it = 0; it < iterations && r.ok(); ++it) {
+    const auto [position_gap, rotation_gap] = gaps(r.q_deg);
+    if (position_gap.norm() < 1e-7 && rotation_gap.norm() < 1e-10) break;
+    command.translation() -= position_gap;
+    command.linear() = Eigen::AngleAxisd(-rotation_gap.norm(), rotation_gap.norm() > 0 ? Eigen::Vector3d(rotation_gap.normalized())
+                                                                                       : Eigen::Vector3d::UnitX())
+                           .toRotationMatrix() *
+                       command.linear();
+    r = inverse_kinematics(nominal, command, r.q_deg);
+  }
+  if (r.ok()) {
+    const auto [position_gap, rotation_gap] = gaps(r.q_deg);
+    r.position_residual_mm = position_gap.norm();
+    r.orientation_residual_rad = rotation_gap.norm();
+    if (r.position_residual_mm > 1e-4 || r.orientation_residual_rad > 1e-7) r.status = IkStatus::max_iterations;
+  }
+  return r;
+}
+
 double igg3_weight(double u, double k0, double k1) {
   if (u <= k0) return 1.0;
   if (u > k1) return 0.0;

@@ -218,6 +218,12 @@ struct CompensatedTarget {
   /// nominal model's FK: |FK(q_command) − FK(q_nominal)| (mm). What the robot will actually do
   /// differently; NaN when the command IK failed.
   double move_mm = std::numeric_limits<double>::quiet_NaN();
+  /// Models that predict the flange's orientation (predict_rotation: three or more points on the
+  /// flange, a 6-DoF probe): the field's predicted rotation at the nominal joints, and the whole
+  /// orientation error (robot frame, rad: the calibrated tool frame against the nominal one, plus the
+  /// field's). The joints then correct the orientation too (the whole pose: compensated_pose_joints).
+  std::optional<RotationPrediction> rotation;
+  Eigen::Vector3d total_rotation_error_rad = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   /// True when the target is inside the modelled region, the prediction is credible, the tool point
   /// is within the lever the model's orientation supports and both IK solves converged.
   bool ok() const {

@@ -245,6 +245,14 @@ Eigen::MatrixXd distance_identification_jacobian(const MdhModel& model, const st
 IkResult compensated_joints(const MdhModel& nominal, const MdhModel& identified, const Eigen::Isometry3d& target,
                             const JointVector& seed_deg, int iterations = 6);
 
+/// compensated_joints for the whole pose: the identified model's tool frame is brought to `target`'s
+/// position and orientation (each gap, in position and as a small rotation, taken off the nominal
+/// command and solved again). For models whose flange orientation the data determine (three or more
+/// points on the flange, a 6-DoF probe); `orientation_residual_rad` of the result holds the angle
+/// left (rad), and a gap over 1e-4 mm or 1e-7 rad is max_iterations.
+IkResult compensated_pose_joints(const MdhModel& nominal, const MdhModel& identified, const Eigen::Isometry3d& target,
+                                 const JointVector& seed_deg, int iterations = 8);
+
 /// IGG3 weight of a standardized residual u >= 0.
 double igg3_weight(double u, double k0, double k1);
 
