@@ -315,6 +315,17 @@ CalibrationResult solve_calibration(const CalibrationProblem& problem, const Cal
   LmSolution sol = solve_lm(problem, start, sel.kept, Eigen::VectorXd::Zero(p), mu, out.reach_mm,
                             std::vector<double>(n, 1.0), o);
   std::vector<int> active = sel.kept;
+  // The refinements below refit with the first fit's IGG3 weights held (settled there): weights
+  // re-estimated along with a lighter penalty kept flipping near k0/k1 without settling.
+  CalibrationOptions held_weights = o;
+  held_weights.robust.enabled = false;
+  auto take = [&](LmSolution& better) {
+    better.rounds = sol.rounds;
+    better.weight_change = sol.weight_change;
+    better.weights_settled = sol.weights_settled;
+    out.iterations += sol.iterations;
+    sol = std::move(better);
+  };
   if (!sel.weak.empty()) {
     // Weak parameters are judged at the initial model, and removing one fixes it at nominal: where
     // it is really off, the kept ones absorb its share and the fit to the data suffers (a KR 16-class
@@ -326,7 +337,8 @@ CalibrationResult solve_calibration(const CalibrationProblem& problem, const Cal
     std::vector<int> all = sel.kept;
     all.insert(all.end(), sel.weak.begin(), sel.weak.end());
     const auto q = static_cast<Eigen::Index>(all.size()) - p;
-    LmSolution wide = solve_lm(problem, start, all, Eigen::VectorXd::Zero(p + q), mu, out.reach_mm, sol.w, o);
+    LmSolution wide =
+        solve_lm(problem, start, all, Eigen::VectorXd::Zero(p + q), mu, out.reach_mm, sol.w, held_weights);
     const double reduced_ss = weighted_cost(sol.r, sol.w, dim), wide_ss = weighted_cost(wide.r, sol.w, dim);
     double equations = 0;
     for (double wi : sol.w) equations += wi > 0 ? dim : 0.0;
@@ -334,11 +346,10 @@ CalibrationResult solve_calibration(const CalibrationProblem& problem, const Cal
     const double f =
         dof > 0 && wide_ss > 0 ? (reduced_ss - wide_ss) / static_cast<double>(q) / (wide_ss / dof) : 0.0;
     if (f > kReentryF) {
-      out.iterations += sol.iterations;
       std::erase_if(out.removed, [&](const RemovedParameter& m) {
         return std::find(all.begin(), all.end(), m.index) != all.end();
       });
-      sol = std::move(wide);
+      take(wide);
       active = all;
       out.condition_number = condition_number(sol.jac * physical_units(active, out.reach_mm).asDiagonal());
     } else {
@@ -352,7 +363,7 @@ CalibrationResult solve_calibration(const CalibrationProblem& problem, const Cal
   // of the residual sum of squares per effective parameter gained.
   for (int k = 0; mu > 0 && k < kMaxRelaxations; ++k) {
     const double lighter = mu / kRelaxation;
-    LmSolution trial = solve_lm(problem, sol.state, active, sol.offset, lighter, out.reach_mm, sol.w, o);
+    LmSolution trial = solve_lm(problem, sol.state, active, sol.offset, lighter, out.reach_mm, sol.w, held_weights);
     const double held_ss = weighted_cost(sol.r, sol.w, dim), free_ss = weighted_cost(trial.r, sol.w, dim);
     // Both counted at the lighter fit's Jacobian, so that the difference is the weight's alone.
     const double held_p = effective_parameters(trial, sol.w, dim, mu);
@@ -361,9 +372,11 @@ CalibrationResult solve_calibration(const CalibrationProblem& problem, const Cal
     for (double wi : sol.w) equations += wi > 0 ? dim : 0.0;
     const double gained = free_p - held_p, dof = equations - free_p;
     const double f = gained > 0 && dof > 0 && free_ss > 0 ? (held_ss - free_ss) / gained / (free_ss / dof) : 0.0;
-    out.iterations += f > kReentryF ? sol.iterations : trial.iterations;
-    if (!(f > kReentryF)) break;
-    sol = std::move(trial);
+    if (!(f > kReentryF)) {
+      out.iterations += trial.iterations;  // counted: the work was done, its answer not taken
+      break;
+    }
+    take(trial);
     mu = lighter;
   }
   out.regularization = mu;
