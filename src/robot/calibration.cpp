@@ -326,7 +326,8 @@ std::string CalibrationResult::report() const {
   if (regularization > 0) {
     s.precision(6);
     s << "regularized toward nominal (distances): Tikhonov weight " << regularization
-      << " mm^2 per physical mm^2 (0.1 x (largest singular value / max condition)^2)\n";
+      << " mm^2 per physical mm^2 (0.1 x (largest singular value / max condition)^2, divided by 10 for each "
+         "step an F test on the residuals asked for)\n";
   }
   s.precision(4);
   s << "residuals before: rms " << before.rms_mm << " mm, mean " << before.mean_abs_mm << " mm, max "

@@ -137,6 +137,7 @@ ParameterSelection select_parameters_regularized(const Eigen::MatrixXd& jac, con
         << max_condition << " of the strongest)";
     const int index = s.kept[static_cast<std::size_t>(worst)];
     s.removed.push_back({index, candidate_name(index), why.str()});
+    s.weak.push_back(index);
     s.kept.erase(s.kept.begin() + worst);
     where.erase(where.begin() + worst);
   }

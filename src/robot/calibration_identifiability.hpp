@@ -34,6 +34,9 @@ struct ParameterSelection {
   double condition_number = 1.0;  ///< of the physically scaled columns of `kept`
   /// Tikhonov weight toward the initial values (mm² per physical mm²); 0: none.
   double regularization = 0.0;
+  /// select_parameters_regularized: the candidates removed as weakly identifiable (also in
+  /// `removed`), in removal order.
+  std::vector<int> weak;
 };
 
 /// `jac` has one column per candidate, in the Jacobian's own units (mm/rad, mm/mm). In candidate

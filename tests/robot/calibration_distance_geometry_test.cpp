@@ -28,19 +28,19 @@ namespace calibration_distance_geometry_test {
 
 // A true arm: every MD-H parameter of the nominal one off by an assembly-sized amount (0.1 deg,
 // 1 mm, 1-sigma), Hayati beta where consecutive axes are parallel, and the tool point off by 0.5 mm.
-MdhModel true_arm(const MdhModel& nominal, std::uint64_t seed) {
+MdhModel true_arm(const MdhModel& nominal, std::uint64_t seed, double scale = 1.0) {
   SimulationRng rng(seed);
   auto links = nominal.links();
   for (std::size_t i = 0; i < links.size(); ++i) {
-    links[i].alpha_deg += rng.normal(0, 0.1);
-    links[i].a_mm += rng.normal(0, 1.0);
-    links[i].theta0_deg += rng.normal(0, 0.1);
-    links[i].d_mm += rng.normal(0, 1.0);
+    links[i].alpha_deg += rng.normal(0, 0.1 * scale);
+    links[i].a_mm += rng.normal(0, 1.0 * scale);
+    links[i].theta0_deg += rng.normal(0, 0.1 * scale);
+    links[i].d_mm += rng.normal(0, 1.0 * scale);
     if (i > 0 && std::abs(std::remainder(nominal.links()[i].alpha_deg, 180.0)) < 1e-9)
-      links[i].beta_deg += rng.normal(0, 0.05);
+      links[i].beta_deg += rng.normal(0, 0.05 * scale);
   }
   Eigen::Isometry3d tool = nominal.tool();
-  tool.translation() += Eigen::Vector3d(rng.normal(0, 0.5), rng.normal(0, 0.5), rng.normal(0, 0.5));
+  tool.translation() += Eigen::Vector3d(rng.normal(0, 0.5 * scale), rng.normal(0, 0.5 * scale), rng.normal(0, 0.5 * scale));
   return MdhModel("truth", links, nominal.base(), tool);
 }
 
@@ -102,10 +102,40 @@ Experiment joint_box_experiment(const MdhModel& nominal, const JointBox& box, st
 }
 
 // Poses as a tracker campaign takes them: positions uniform in the robot's built-in cube, the tool
-// within `spread_deg` of tool-down (tilt and turn), solved by IK on the cube seed's branch. The
-// truth is errfield's simulator (SIMULATED) with the MD-H deviations of true_arm's size drawn
-// here, plus what a kinematic model cannot express: the paper set-up's joint compliance under
-// gravity and cyclic transmission error; repeatability and tracker noise on every reading.
+// within `spread_deg` of tool-down (tilt and turn), solved by IK of `nominal` on the cube seed's
+// branch.
+std::vector<JointVector> cube_poses(const BuiltinRobot& robot, const MdhModel& nominal, double spread_deg,
+                                    std::size_t n, SimulationRng& rng) {
+  MeasurementCube cube;
+  cube.min_corner_mm = robot.cube_min_mm;
+  cube.size_mm = robot.cube_size_mm;
+  cube.orientation = to_isometry({0, 0, 0, robot.cube_rpy_deg.x(), robot.cube_rpy_deg.y(), robot.cube_rpy_deg.z()}).linear();
+  const IkResult centre = cube_seed(nominal, cube);
+  EXPECT_TRUE(centre.ok()) << robot.name << ": the cube's centre is not reachable";
+  constexpr double kRad = 3.14159265358979323846 / 180.0;
+  std::vector<JointVector> q;
+  for (std::size_t tries = 0; q.size() < n && centre.ok(); ++tries) {
+    if (tries > 50 * n + 1000) {  // a cube mostly out of reach is a mistake in the geometry, not data
+      ADD_FAILURE() << robot.name << ": only " << q.size() << " of " << tries << " cube poses reachable";
+      break;
+    }
+    const double azimuth = rng.uniform(0, 2 * 3.14159265358979323846);
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = cube.orientation *
+                    Eigen::AngleAxisd(rng.uniform(0, spread_deg) * kRad,
+                                      Eigen::Vector3d(std::cos(azimuth), std::sin(azimuth), 0)) *
+                    Eigen::AngleAxisd(rng.uniform(-spread_deg, spread_deg) * kRad, Eigen::Vector3d::UnitZ());
+    pose.translation() = cube.min_corner_mm + cube.size_mm * Eigen::Vector3d(rng.uniform01(), rng.uniform01(), rng.uniform01());
+    const IkResult r = inverse_kinematics(nominal, pose, centre.q_deg);
+    if (r.ok() && (r.q_deg - centre.q_deg).cwiseAbs().maxCoeff() < 120.0) q.push_back(r.q_deg);
+  }
+  return q;
+}
+
+// Poses in the robot's cube (cube_poses). The truth is errfield's simulator (SIMULATED) with the
+// MD-H deviations of true_arm's size drawn here, plus what a kinematic model cannot express: the
+// paper set-up's joint compliance under gravity and cyclic transmission error; repeatability and
+// tracker noise on every reading.
 Experiment cube_experiment(const BuiltinRobot& robot, const Eigen::Isometry3d& tool, double spread_deg,
                            std::size_t poses, std::size_t bases, std::uint64_t seed) {
   SimulatorConfig config = SimulatorConfig::paper_default();
@@ -119,36 +149,44 @@ Experiment cube_experiment(const BuiltinRobot& robot, const Eigen::Isometry3d& t
   config.geometry.tool = {rng.normal(0, 0.5), rng.normal(0, 0.5), rng.normal(0, 0.5), 0, 0, 0};
   const auto sim = std::make_shared<SimulatedRobot>(config);
   Experiment e{config.nominal, [sim](const JointVector& q) { return sim->true_position(q); }, {}, {}};
-  MeasurementCube cube;
-  cube.min_corner_mm = robot.cube_min_mm;
-  cube.size_mm = robot.cube_size_mm;
-  cube.orientation = to_isometry({0, 0, 0, robot.cube_rpy_deg.x(), robot.cube_rpy_deg.y(), robot.cube_rpy_deg.z()}).linear();
-  const IkResult centre = cube_seed(config.nominal, cube);
-  EXPECT_TRUE(centre.ok());
-  constexpr double kRad = 3.14159265358979323846 / 180.0;
-  auto draw = [&](std::size_t n) {
-    std::vector<JointVector> q;
-    while (q.size() < n) {
-      const double azimuth = rng.uniform(0, 2 * 3.14159265358979323846);
-      Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-      pose.linear() = cube.orientation *
-                      Eigen::AngleAxisd(rng.uniform(0, spread_deg) * kRad,
-                                        Eigen::Vector3d(std::cos(azimuth), std::sin(azimuth), 0)) *
-                      Eigen::AngleAxisd(rng.uniform(-spread_deg, spread_deg) * kRad, Eigen::Vector3d::UnitZ());
-      pose.translation() = cube.min_corner_mm + cube.size_mm * Eigen::Vector3d(rng.uniform01(), rng.uniform01(), rng.uniform01());
-      const IkResult r = inverse_kinematics(config.nominal, pose, centre.q_deg);
-      if (r.ok() && (r.q_deg - centre.q_deg).cwiseAbs().maxCoeff() < 120.0) q.push_back(r.q_deg);
-    }
-    return q;
-  };
   std::vector<Eigen::Vector3d> base_reading;
-  const std::vector<JointVector> b = draw(bases);
+  const std::vector<JointVector> b = cube_poses(robot, config.nominal, spread_deg, bases, rng);
   for (const auto& qb : b) base_reading.push_back(sim->measure(sim->move(qb, rng), rng));
-  for (const auto& q : draw(poses)) {
+  for (const auto& q : cube_poses(robot, config.nominal, spread_deg, poses, rng)) {
     const Eigen::Vector3d reading = sim->measure(sim->move(q, rng), rng);
     for (std::size_t k = 0; k < b.size(); ++k) e.data.push_back({q, b[k], (reading - base_reading[k]).norm()});
   }
-  e.heldout = draw(200);
+  e.heldout = cube_poses(robot, config.nominal, spread_deg, 200, rng);
+  return e;
+}
+
+// The same campaign on a purely geometric truth (true_arm), as a simulator written outside errfield
+// would make it: nothing but MD-H and tool deviations, Gaussian noise of `noise_mm` on each distance.
+Experiment geometric_cube_experiment(const BuiltinRobot& robot, const Eigen::Isometry3d& tool, double spread_deg,
+                                     std::size_t poses, std::size_t bases, double noise_mm, std::uint64_t seed,
+                                     double deviation_scale = 1.0) {
+  const MdhModel nominal = robot.model.with_tool(tool);
+  const MdhModel arm = true_arm(nominal, seed, deviation_scale);
+  Experiment e{nominal, [arm](const JointVector& q) { return forward_position(arm, q); }, {}, {}};
+  SimulationRng rng(seed * 7919 + 31);
+  const std::vector<JointVector> b = cube_poses(robot, nominal, spread_deg, bases, rng);
+  for (const auto& q : cube_poses(robot, nominal, spread_deg, poses, rng))
+    for (const auto& qb : b) e.data.push_back({q, qb, (e.truth(q) - e.truth(qb)).norm() + rng.normal(0, noise_mm)});
+  e.heldout = cube_poses(robot, nominal, spread_deg, 200, rng);
+  return e;
+}
+
+// The joints as a controller log records them: rounded to multiples of `step_deg` (0.01, 0.001).
+// The arm went where the exact joints put it; calibration sees only the rounded ones.
+Experiment with_joints_rounded(Experiment e, double step_deg) {
+  auto round = [step_deg](JointVector q) {
+    for (int j = 0; j < kJointCount; ++j) q[j] = std::round(q[j] / step_deg) * step_deg;
+    return q;
+  };
+  for (auto& d : e.data) {
+    d.q_a_deg = round(d.q_a_deg);
+    d.q_b_deg = round(d.q_b_deg);
+  }
   return e;
 }
 
@@ -241,6 +279,39 @@ JointBox kr16_box() {
   return b;
 }
 
+// A KR 16-class arm that is none of the built-ins, as an outside simulator's arm would be: the
+// KR 16's structure (shoulder offset, upper arm, forearm with elbow offset, spherical wrist) with
+// every length changed by tens of percent, a lateral offset at the elbow (link3.d, which the
+// built-ins lack), a base-frame offset (link1.a) and a narrower wrist range. Seeded so a study
+// can draw several; seed 0 is the one the CI test uses. Its cube is where the KR 16's is, scaled
+// with the arm's reach, at tool-down.
+BuiltinRobot generated_kr16_class(std::uint64_t seed) {
+  SimulationRng rng(seed + 4001);
+  auto scaled = [&](double v, double lo, double hi) { return v * rng.uniform(lo, hi); };
+  const double base_height = scaled(675, 0.8, 0.9);  // 540-608
+  const double shoulder = scaled(260, 1.2, 1.35);     // 312-351
+  const double upper_arm = scaled(680, 0.8, 0.9);     // 544-612
+  const double elbow = scaled(35, 1.8, 2.6);          // 63-91
+  const double forearm = scaled(670, 1.15, 1.25);     // 770-838
+  const double flange = scaled(158, 0.7, 0.8);        // 111-126
+  const double lateral = scaled(40, 0.8, 1.2);        // 32-48
+  const double base_offset = scaled(25, 0.8, 1.2);    // 20-30
+  const std::array<MdhLink, kJointCount> links{{
+      {0.0, base_offset, 0.0, base_height, 0.0, -170.0, 170.0},
+      {-90.0, shoulder, 0.0, 0.0, 0.0, -150.0, 30.0},
+      {0.0, upper_arm, -90.0, lateral, 0.0, -120.0, 150.0},
+      {-90.0, elbow, 0.0, forearm, 0.0, -350.0, 350.0},
+      {90.0, 0.0, 0.0, 0.0, 0.0, -120.0, 120.0},
+      {-90.0, 0.0, 0.0, flange, 0.0, -350.0, 350.0},
+  }};
+  const BuiltinRobot& kr = *find_builtin_robot("kr16");
+  const double reach = shoulder + upper_arm + std::hypot(elbow, forearm);
+  const double s = reach / (260.0 + 680.0 + std::hypot(35.0, 670.0));
+  return {"kr16-class-" + std::to_string(seed), "generated KR 16-class arm", "calibration_distance_geometry_test",
+          MdhModel("KR16-class", links), Eigen::Vector3d(kr.cube_min_mm.x() * s, kr.cube_min_mm.y() * s, kr.cube_min_mm.z()),
+          kr.cube_size_mm * s, kr.cube_rpy_deg};
+}
+
 JointBox er20_box() {
   JointBox b;
   b.lo << -60, -140, -60, -90, -100, -90;
@@ -315,6 +386,26 @@ TEST(CalibrationDistanceGeometry, OtherArmsAndOrientationsMatchLeastSquares) {
     }
 }
 
+// Issue 35 item 7: a KR 16-class arm none of the built-ins is (generated_kr16_class(0): other link
+// lengths, an elbow offset, a lateral offset at the elbow), at one orientation from one base pose,
+// on errfield's simulator and on a purely geometric truth off by three times true_arm's deviations
+// (0.3 deg / 3 mm, 0.03 mm noise). There a weak parameter removed at nominal (link4.alpha, 47 %
+// determined; at 0.01 mm noise on seed 5 link4.a then moved by -79 mm) and the fixed Tikhonov
+// weight held real deviations back: errfield was 3.5x the reference over seeds 1-10 (18x on the
+// worst seed) before the F tests of solve_calibration (docs/robot.md).
+TEST(CalibrationDistanceGeometry, GeneratedKr16ClassMatchesLeastSquares) {
+  const BuiltinRobot arm = generated_kr16_class(0);
+  const Scores sim = compare([&](std::uint64_t seed) { return cube_experiment(arm, kTool, 0.0, 120, 1, seed); }, 1, 10);
+  ASSERT_LT(sim.reference, 0.5 * sim.nominal);
+  EXPECT_LE(sim.errfield, 1.10 * sim.reference);
+  EXPECT_LE(sim.worst_ratio, 1.2);
+  const Scores off = compare(
+      [&](std::uint64_t seed) { return geometric_cube_experiment(arm, kTool, 0.0, 120, 1, 0.03, seed, 3.0); }, 1, 10);
+  ASSERT_LT(off.reference, 0.1 * off.nominal);
+  EXPECT_LE(off.errfield, 1.10 * off.reference);
+  EXPECT_LE(off.worst_ratio, 2.0);  // measured 1.55 (seed 6), against 18x before
+}
+
 // ---- the study ----------------------------------------------------------------------------------
 
 // The figures in docs/robot.md ("Distances: regularized toward nominal"): every arm, one or 30 deg
@@ -338,6 +429,71 @@ TEST(CalibrationDistanceGeometryStudy, ErrfieldAgainstTheReference) {
   const Scores e = compare([](std::uint64_t seed) { return joint_box_experiment(MdhModel::er20_c10().with_tool(kTool), er20_box(), 120, 1, 0.03, seed); },
                            1, 10, "er20-c10, joint box, geometric truth");
   EXPECT_LE(e.errfield, 1.10 * e.reference);
+}
+
+// Issue 35 item 7: a KR 16-class arm none of the tests use (generated_kr16_class), and what a
+// simulator written outside errfield may do differently: a purely geometric truth, distance noise
+// from 0.01 to 0.1 mm, joints recorded to 0.01 or 0.001 deg, 60 poses, 1 to 5 base poses, one
+// orientation or 30 deg of spread, deviations 3 and 5 times true_arm's; and two more generated
+// arms. 10 seeds each; the figures are in docs/robot.md ("Distances: regularized toward nominal").
+// Within 10 % of the reference asserted at true_arm's deviations; the larger ones are what is left.
+// Run: build/tests/robot_tests --gtest_filter='CalibrationDistanceGeometryStudy.GeneratedKr16Class'
+TEST(CalibrationDistanceGeometryStudy, GeneratedKr16Class) {
+  struct Variant {
+    std::string label;
+    std::function<Experiment(const BuiltinRobot&, std::uint64_t)> make;
+    bool asserted = true;
+  };
+  auto sim = [](double spread, std::size_t poses, std::size_t bases, double round_deg) {
+    return [=](const BuiltinRobot& arm, std::uint64_t seed) {
+      Experiment e = cube_experiment(arm, kTool, spread, poses, bases, seed);
+      return round_deg > 0 ? with_joints_rounded(std::move(e), round_deg) : e;
+    };
+  };
+  auto geo = [](double spread, std::size_t poses, std::size_t bases, double noise, double round_deg,
+                double deviation = 1.0) {
+    return [=](const BuiltinRobot& arm, std::uint64_t seed) {
+      Experiment e = geometric_cube_experiment(arm, kTool, spread, poses, bases, noise, seed, deviation);
+      return round_deg > 0 ? with_joints_rounded(std::move(e), round_deg) : e;
+    };
+  };
+  const std::vector<Variant> variants{
+      {"simulator, 0 deg, 120 poses, 1 base", sim(0, 120, 1, 0)},
+      {"simulator, 0 deg, 120 poses, 3 bases", sim(0, 120, 3, 0)},
+      {"simulator, 0 deg, 120 poses, 5 bases", sim(0, 120, 5, 0)},
+      {"simulator, 30 deg, 120 poses, 1 base", sim(30, 120, 1, 0)},
+      {"simulator, 0 deg, 60 poses, 1 base", sim(0, 60, 1, 0)},
+      {"simulator, 0 deg, 120 poses, 1 base, joints to 0.01 deg", sim(0, 120, 1, 0.01)},
+      {"simulator, 0 deg, 120 poses, 1 base, joints to 0.001 deg", sim(0, 120, 1, 0.001)},
+      {"simulator, 0 deg, 60 poses, 1 base, joints to 0.01 deg", sim(0, 60, 1, 0.01)},
+      {"geometric, 0 deg, 120 poses, 1 base, 0.01 mm", geo(0, 120, 1, 0.01, 0)},
+      {"geometric, 0 deg, 120 poses, 1 base, 0.03 mm", geo(0, 120, 1, 0.03, 0)},
+      {"geometric, 0 deg, 120 poses, 1 base, 0.1 mm", geo(0, 120, 1, 0.1, 0)},
+      {"geometric, 0 deg, 60 poses, 1 base, 0.03 mm", geo(0, 60, 1, 0.03, 0)},
+      {"geometric, 0 deg, 120 poses, 3 bases, 0.03 mm", geo(0, 120, 3, 0.03, 0)},
+      {"geometric, 30 deg, 120 poses, 1 base, 0.03 mm", geo(30, 120, 1, 0.03, 0)},
+      {"geometric, 0 deg, 120 poses, 1 base, 0.03 mm, joints to 0.01 deg", geo(0, 120, 1, 0.03, 0.01)},
+      {"geometric, 0 deg, 60 poses, 1 base, 0.03 mm, joints to 0.01 deg", geo(0, 60, 1, 0.03, 0.01)},
+      {"geometric, 0 deg, 120 poses, 1 base, 0.03 mm, joints to 0.001 deg", geo(0, 120, 1, 0.03, 0.001)},
+      {"geometric joint box, 120 poses, 1 base, 0.03 mm",
+       [](const BuiltinRobot& arm, std::uint64_t seed) {
+         return joint_box_experiment(arm.model.with_tool(kTool), kr16_box(), 120, 1, 0.03, seed);
+       }},
+      {"geometric x3, 0 deg, 120 poses, 1 base, 0.01 mm", geo(0, 120, 1, 0.01, 0, 3), false},
+      {"geometric x3, 0 deg, 120 poses, 1 base, 0.03 mm", geo(0, 120, 1, 0.03, 0, 3), false},
+      {"geometric x3, 0 deg, 60 poses, 1 base, 0.03 mm", geo(0, 60, 1, 0.03, 0, 3), false},
+      {"geometric x3, 0 deg, 120 poses, 1 base, 0.03 mm, joints to 0.01 deg", geo(0, 120, 1, 0.03, 0.01, 3), false},
+      {"geometric x5, 0 deg, 120 poses, 1 base, 0.01 mm", geo(0, 120, 1, 0.01, 0, 5), false},
+      {"geometric x5, 0 deg, 60 poses, 1 base, 0.03 mm, joints to 0.01 deg", geo(0, 60, 1, 0.03, 0.01, 5), false},
+  };
+  for (std::uint64_t arm_seed : {0, 1, 2})
+    for (const Variant& v : variants) {
+      if (arm_seed > 0 && v.label.find("1 base") == std::string::npos) continue;
+      const BuiltinRobot arm = generated_kr16_class(arm_seed);
+      const std::string label = arm.name + ", " + v.label;
+      const Scores s = compare([&](std::uint64_t seed) { return v.make(arm, seed); }, 1, 10, label.c_str());
+      if (v.asserted) EXPECT_LE(s.errfield, 1.10 * s.reference) << label;
+    }
 }
 
 }  // namespace calibration_distance_geometry_test

@@ -89,7 +89,10 @@ struct CalibrationOptions {
   /// which less than half is determined under that weight are removed as weakly identifiable.
   /// Removing parameters one by one made the rest absorb what they carried (a KR 16 at one
   /// orientation: tens of mm, held-out 3-D error 1.14x an independent least-squares calibration;
-  /// docs/robot.md "Distances: regularized toward nominal").
+  /// docs/robot.md "Distances: regularized toward nominal"). Both are judged at the initial model,
+  /// so the data get the last word: the weakly identifiable parameters are put back, and the weight
+  /// divided by 10 (up to 3 times), when an F test on the residual sum of squares says the data ask
+  /// for it (F > 10; an arm off by 0.3 deg / 3 mm from nominal).
   double max_condition_number = 1e3;
   /// LM iterations per round. Along a weakly determined direction whose cost is not quadratic LM
   /// converges linearly: a few hundred cheap iterations.
@@ -161,8 +164,8 @@ struct CalibrationResult {
   double condition_number = 0.0;
   /// Distances: the Tikhonov weight mu (mm² per physical mm², i.e. per mm of length or per
   /// rad × reach of angle) of the penalty mu · Σ increment² toward the initial model,
-  /// 0.1 · (largest singular value of the physically scaled Jacobian / max_condition_number)².
-  /// 0 for positions.
+  /// 0.1 · (largest singular value of the physically scaled Jacobian / max_condition_number)²,
+  /// divided by 10 for each relaxation the data asked for (max_condition_number). 0 for positions.
   double regularization = 0.0;
   /// The length (mm) that scales angular parameters for identifiability: Σ(|a| + |d|) + |tool|.
   double reach_mm = 0.0;
