@@ -41,54 +41,6 @@ bool marked_simulated(const std::string& path) {
   return false;
 }
 
-/// The rows of one reflector label of a file with several (`--reflector`, default the model's own
-/// point), and the model moved to that label's point when the model located it (fit on several
-/// points); the file itself when it has one label or none (`--reflector` must then match it).
-CsvTable one_reflector(const CsvTable& file, const std::string& asked, const std::string& tool_option,
-                       compensation::CompensationModel& model) {
-  using compensation::CompensationModel;
-  if (!file.has_column("reflector")) {
-    if (!asked.empty())
-      throw InputError(file.source() + ": --reflector " + asked + " but the file has no 'reflector' column", file.source(),
-                       0, "reflector");
-    return file;
-  }
-  // One label: the readings of one point, scored at the model's point (or --tool); the check that
-  // they are of that point follows.
-  if (asked.empty() && !compensation::several_reflector_labels(file)) return file;
-  const std::vector<CompensationModel::LabelledPoint>& points = model.flange_points();
-  const std::string label = !asked.empty() ? asked : !points.empty() ? points.front().label : std::string(file.cell(0, file.column_index("reflector")));
-  std::vector<std::size_t> keep;
-  const std::size_t col = file.column_index("reflector");
-  for (std::size_t i = 0; i < file.row_count(); ++i)
-    if (file.cell(i, col) == label) keep.push_back(i);
-  if (keep.empty())
-    throw InputError(file.source() + ": no rows of reflector '" + label + "'" +
-                         (asked.empty() ? " (the model's own point; give --reflector LABEL)" : std::string()),
-                     file.source(), 0, "reflector");
-  if (keep.size() == file.row_count() && points.empty()) return file;  // one label, a one-point model
-  if (points.empty())
-    throw InputError(file.source() + ": readings of several points on the flange; the model was fitted at one point, "
-                         "so only its own readings can be scored (keep them, or give --reflector LABEL with --tool at "
-                         "that point)",
-                     file.source(), 0, "reflector");
-  const auto at = std::find_if(points.begin(), points.end(), [&](const auto& p) { return p.label == label; });
-  if (at == points.end()) {
-    std::string known;
-    for (const auto& p : points) known += (known.empty() ? "'" : ", '") + p.label + "'";
-    throw InputError(file.source() + ": reflector '" + label + "' is not a point the model located (it knows " + known +
-                         "); locate it with 'errfield locate-tool' from readings of it, then validate that model",
-                     file.source(), 0, "reflector");
-  }
-  if (at != points.begin()) {
-    if (!tool_option.empty())
-      throw ArgumentError("--tool and --reflector " + label + ": the model located '" + label + "'; give one of them");
-    Eigen::Isometry3d point = model.command_model().tool();
-    point.translation() = at->position_mm;
-    model = model.with_working_tool(point);
-  }
-  return file.rows(keep);
-}
 
 /// `--orientation-out`: one row per pose with three or more points (rotation_validation.hpp).
 std::string rotation_csv(const compensation::RotationCheck& check) {
@@ -135,7 +87,7 @@ void run_validate(const ValidateArgs& a) {
   // A 6-DoF probe's rows become three points on the flange (probe_readings.hpp).
   const CsvTable file = compensation::expand_probe_readings(CsvTable::read(a.data));
   // Readings of several points on the flange: one label's rows, scored at its located point.
-  const CsvTable table = one_reflector(file, a.reflector, a.tool, model);
+  const CsvTable table = compensation::rows_of_one_reflector(file, a.reflector, !a.tool.empty(), model, "--");
   compensation::ValidationReport r;
   std::optional<compensation::RotationCheck> rotations;
   if (a.targets) {

@@ -381,6 +381,55 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
   return out;
 }
 
+/// The rows of one reflector label of a file with several (`--reflector`, default the model's own
+/// point), and the model moved to that label's point when the model located it (fit on several
+/// points); the file itself when it has one label or none (`--reflector` must then match it).
+CsvTable rows_of_one_reflector(const CsvTable& file, const std::string& asked, bool tool_given, CompensationModel& model,
+                               const std::string& option_prefix) {
+  const std::string reflector_option = option_prefix + "reflector", tool_option = option_prefix + "tool";
+  if (!file.has_column("reflector")) {
+    if (!asked.empty())
+      throw InputError(file.source() + ": " + reflector_option + " " + asked + " but the file has no 'reflector' column", file.source(),
+                       0, "reflector");
+    return file;
+  }
+  // One label: the readings of one point, scored at the model's point (or --tool); the check that
+  // they are of that point follows.
+  if (asked.empty() && !several_reflector_labels(file)) return file;
+  const std::vector<CompensationModel::LabelledPoint>& points = model.flange_points();
+  const std::string label = !asked.empty() ? asked : !points.empty() ? points.front().label : std::string(file.cell(0, file.column_index("reflector")));
+  std::vector<std::size_t> keep;
+  const std::size_t col = file.column_index("reflector");
+  for (std::size_t i = 0; i < file.row_count(); ++i)
+    if (file.cell(i, col) == label) keep.push_back(i);
+  if (keep.empty())
+    throw InputError(file.source() + ": no rows of reflector '" + label + "'" +
+                         (asked.empty() ? " (the model's own point; give " + reflector_option + " LABEL)" : std::string()),
+                     file.source(), 0, "reflector");
+  if (keep.size() == file.row_count() && points.empty()) return file;  // one label, a one-point model
+  if (points.empty())
+    throw InputError(file.source() + ": readings of several points on the flange; the model was fitted at one point, "
+                         "so only its own readings can be scored (keep them, or give " + reflector_option + " LABEL with " + tool_option +
+                         " at that point)",
+                     file.source(), 0, "reflector");
+  const auto at = std::find_if(points.begin(), points.end(), [&](const auto& p) { return p.label == label; });
+  if (at == points.end()) {
+    std::string known;
+    for (const auto& p : points) known += (known.empty() ? "'" : ", '") + p.label + "'";
+    throw InputError(file.source() + ": reflector '" + label + "' is not a point the model located (it knows " + known +
+                         "); locate it with 'errfield locate-tool' from readings of it, then validate that model",
+                     file.source(), 0, "reflector");
+  }
+  if (at != points.begin()) {
+    if (tool_given)
+      throw ArgumentError(tool_option + " and " + reflector_option + " " + label + ": the model located '" + label + "'; give one of them");
+    Eigen::Isometry3d point = model.command_model().tool();
+    point.translation() = at->position_mm;
+    model = model.with_working_tool(point);
+  }
+  return file.rows(keep);
+}
+
 TargetFrame parse_target_frame(const std::string& word, const std::string& option) {
   if (word == "robot") return TargetFrame::robot;
   if (word == "tracker") return TargetFrame::tracker;

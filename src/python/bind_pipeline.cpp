@@ -18,6 +18,8 @@
 #include "errfield/compensation/pipeline.hpp"
 #include "errfield/compensation/pose_selection.hpp"
 #include "errfield/compensation/prediction.hpp"
+#include "errfield/compensation/probe_readings.hpp"
+#include "errfield/compensation/rotation_validation.hpp"
 #include "errfield/compensation/tool_location.hpp"
 #include "errfield/robot/pose.hpp"
 #include "errfield/csv_table.hpp"
@@ -136,7 +138,8 @@ PyModel fit_py(const py::object& data, const py::object& robot, const std::strin
                double max_condition, double max_registration_rms, double outlier_limit, bool reflector_far_ok,
                const std::string& variance_calibration, int joint_functions, bool gravity_load) {
   const MdhModel nominal = robot_arg(robot);
-  const CsvTable table = table_arg(data, "data");
+  // A 6-DoF probe's rows become three points on the flange, as in the CLI.
+  const CsvTable table = expand_probe_readings(table_arg(data, "data"));
   FitTableOptions fo;
   fo.fit = fit_options_from_text({method, space, power, model.value_or(""), kind, base, region_margin,
                                   calibration.value_or(""), robust.value_or(""), max_condition, outlier_limit, variance_calibration});
@@ -215,19 +218,25 @@ py::dict compensate_py(const PyModel& m, const py::object& targets, const py::ob
 }
 
 py::dict validate_py(const PyModel& m, const py::object& data, const py::object& robot, const py::object& base_points,
-                     bool targets, const py::object& tool) {
-  const CompensationModel model = with_tool_arg(m.loaded.model, tool, m.loaded.model.command_model().tool());
-  const CsvTable table = table_arg(data, "data");
+                     bool targets, const py::object& tool, const std::string& reflector) {
+  CompensationModel model = with_tool_arg(m.loaded.model, tool, m.loaded.model.command_model().tool());
+  // As the CLI: a probe's rows are three points, and a file of several points is scored at one label
+  // (the model's own by default) with the flange's orientation from all of them.
+  const CsvTable file = expand_probe_readings(table_arg(data, "data"));
+  const CsvTable table = targets ? file : rows_of_one_reflector(file, reflector, !tool.is_none(), model, "");
   const auto fixed = base_points_arg(base_points);
   const MdhModel nominal_robot = robot.is_none() ? model.nominal_model() : robot_arg(robot);
   const MdhModel nominal = nominal_at_working_tool(model, nominal_robot);
   ValidationReport r;
+  std::optional<RotationCheck> rotations;
   {
     py::gil_scoped_release release;
     if (targets) {
       r = validate_targets(table, model.registration(), fixed);
     } else {
       r = validate_predictions(model, MeasurementSet::from_table(table, nominal, fixed));
+      if (file.has_column("reflector") && model.fielded_points().size() >= 3)
+        rotations = validate_rotations(model, MeasurementSet::from_table(file, nominal_robot, fixed, true), nominal_robot);
     }
   }
   if (!targets && m.loaded.is_robot_json && robot.is_none() && !table.has_column("x"))
@@ -235,10 +244,12 @@ py::dict validate_py(const PyModel& m, const py::object& data, const py::object&
                       "for an uncompensated baseline");
   py::dict d;
   d["points"] = columns_dict(validation_point_columns(r));
-  const std::string summary = r.summary_json().dump(2) + "\n";
+  nlohmann::json summary_object = r.summary_json();
+  if (rotations) summary_object["orientation"] = rotations->summary_json();
+  const std::string summary = summary_object.dump(2) + "\n";
   d["summary_json"] = summary;
   d["summary"] = py::module_::import("json").attr("loads")(summary);
-  d["text"] = r.summary_text();
+  d["text"] = r.summary_text() + (rotations ? rotations->summary_text() : std::string());
   return d;
 }
 
@@ -386,10 +397,14 @@ void bind_pipeline(py::module_& m) {
         "None: not reached), conditioned_on. Releases the GIL.");
   m.def("validate", &validate_py, py::arg("model"), py::arg("data"), py::kw_only(), py::arg("robot") = py::none(),
         py::arg("base_points") = py::none(), py::arg("targets") = false, py::arg("tool") = py::none(),
-        "`errfield validate` (tool: the CLI's --tool) on held-out measurements (dict of columns). Returns a dict: points (the columns of\n"
+        py::arg("reflector") = "",
+        "`errfield validate` (tool: the CLI's --tool, reflector: its --reflector) on held-out measurements (dict of columns;\n"
+        "a probe's mrx,mry,mrz or mqw..mqz rows are read as three points on the flange). Returns a dict: points (the columns of\n"
         "--out: point, status, before_mm, after_mm, before_dx.., after_dx.., before_dl_bK, after_dl_bK; mm; kriging\n"
         "models: var_mm2, var_field_mm2, r95_mm, nees),\n"
-        "summary (dict) and summary_json (the text of --summary-out), text (the printed summary).");
+        "summary (dict; with three or more points per pose and a model fitted on them, summary['orientation']: the flange's\n"
+        "orientation error before/after in mdeg, coverage95, mean_nees) and summary_json (the text of --summary-out), text\n"
+        "(the printed summary).");
 }
 
 }  // namespace errfield::python

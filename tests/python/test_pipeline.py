@@ -383,3 +383,30 @@ def test_joints_in_radians_are_refused_as_by_the_cli(tmp_path):
     assert len(errfield.compensate(model, q_deg)["status"]) == len(q_deg)
     assert len(errfield.predict(model, q_rad, joints_are_degrees=True)["status"]) == len(q_rad)
     assert len(errfield.compensate(model, q_rad, joints_are_degrees=True)["status"]) == len(q_rad)
+
+
+def test_probe_readings_fit_and_validate_as_the_cli(tmp_path):
+    # A SIMULATED 6-DoF probe: its rows are three points on the flange in the module as in the CLI,
+    # and validate reports the flange's orientation (the same summary, byte for byte).
+    run_cli("simulate", "--robot", "kr16", "--seed", "2", "--sample", "scattered:160", "--orientation-spread", "30",
+            "--measure", "positions", "--systematic", "realistic", "--probe", "0,0,100,180,0,0",
+            "--robot-out", tmp_path / "kr16.json", "--out", tmp_path / "probe.csv")
+    robot = json.loads((tmp_path / "kr16.json").read_text())
+    robot["tool"] = {"x_mm": 0, "y_mm": 0, "z_mm": 100, "rx_deg": 0, "ry_deg": 0, "rz_deg": 0}
+    (tmp_path / "tool.json").write_text(json.dumps(robot))
+    lines = [line for line in (tmp_path / "probe.csv").read_text().splitlines() if not line.startswith("#")]
+    (tmp_path / "train.csv").write_text("\n".join(lines[:101]) + "\n")  # the header, b0 and 99 poses
+    (tmp_path / "test.csv").write_text("\n".join(lines[:1] + lines[101:]) + "\n")
+    train, test = read_measurements(tmp_path / "train.csv"), read_measurements(tmp_path / "test.csv")
+    run_cli("fit", "--robot", tmp_path / "tool.json", "--data", tmp_path / "train.csv", "--out", tmp_path / "cli.json")
+    model = errfield.fit(train, robot=str(tmp_path / "tool.json"))
+    assert model.to_json().encode() == (tmp_path / "cli.json").read_bytes()
+    run_cli("validate", "--model", tmp_path / "cli.json", "--data", tmp_path / "test.csv",
+            "--summary-out", tmp_path / "s.json")
+    # The loaded model (an in-memory one differs in the last digits, test_fit_writes_the_cli_model_file).
+    r = errfield.validate(errfield.CompensationModel.load(tmp_path / "cli.json"), test)
+    assert r["summary_json"].encode() == (tmp_path / "s.json").read_bytes()
+    o = r["summary"]["orientation"]
+    assert o["poses"] == len(test["point"])
+    assert o["after"]["rms_mdeg"] < 0.5 * o["before"]["rms_mdeg"]
+    assert "flange orientation error" in r["text"]

@@ -196,6 +196,15 @@ void check_joints_not_radians(std::span<const robot::JointVector> q_deg, const C
 inline constexpr int kRadiansSuspectJoints = 3;
 inline constexpr double kRadiansSuspectTrainingSpreadDeg = 10.0;
 
+/// `validate` on a file of several points on the flange (a `reflector` column): the rows of one
+/// label (`asked`, default the model's own point), with `model` moved to that label's located point
+/// (a working tool) when it is a further point the model located; the file itself when it has one
+/// label or none. InputError naming the file for a label without rows, a label the model did not
+/// locate, or several labels for a one-point model; ArgumentError when `tool_given` and the label is
+/// a further point. `option_prefix` ("--" on the command line, "" in Python) names the options.
+CsvTable rows_of_one_reflector(const CsvTable& file, const std::string& asked, bool tool_given, CompensationModel& model,
+                               const std::string& option_prefix);
+
 /// `validate` on readings of another point than the model's tool point (another reflector, another
 /// tool): the free reflector offset the registration check fits hides it, and validate scored 150 mm
 /// "after" errors with exit 0. Registers `measured_mm` at `q_deg` onto the model's command model with
