@@ -4,6 +4,8 @@
 // nominal FK's orientation against the reading's, in the nominal registration) rather than from
 // the three points the angles become. SIMULATED data from `errfield simulate --probe`.
 #include <cmath>
+#include <filesystem>
+#include <functional>
 #include <set>
 #include <string>
 #include <vector>
@@ -118,6 +120,23 @@ TEST_F(ProbeOrientationCli, FitOnProbeReadingsPredictsTheFlangesOrientationWithi
               spread);
   EXPECT_GT(spread, 20.0);  // the comparison means something
   EXPECT_LT(worst, 0.05 * spread);
+
+  // A hand-edited rotation calibration or nominal point is refused naming the member; nothing scored.
+  for (const auto& [edit, member] : std::vector<std::pair<std::function<void(nlohmann::json&)>, std::string>>{
+           {[](nlohmann::json& j) { j["rotation_calibration"]["flange_covariance_rad2"][0][1] = 1e-3; }, "rotation_calibration"},
+           {[](nlohmann::json& j) { j["rotation_calibration"]["flange_covariance_rad2"][2][2] = -1e-8; }, "rotation_calibration"},
+           {[](nlohmann::json& j) { j["rotation_calibration"]["mean_independent_trace_rad2"] = 0.0; }, "rotation_calibration"},
+           {[](nlohmann::json& j) { j["rotation_calibration"]["poses"] = -3; }, "rotation_calibration"},
+           {[](nlohmann::json& j) { j["flange_points"][1]["nominal_mm"] = {1.0, 2.0}; }, "flange_points\"[1].nominal_mm"},
+           {[](nlohmann::json& j) { j["flange_points"].erase(2); }, "fewer than three points"}}) {
+    nlohmann::json edited = json("m.json");
+    edit(edited);
+    write("edited.json", edited.dump());
+    const CliResult e = run("validate --model edited.json --data test.csv --summary-out edited_s.json");
+    EXPECT_EQ(e.exit_code, 2) << member << "\n" << e.output();
+    EXPECT_NE(e.err.find(member), std::string::npos) << e.err;
+    EXPECT_FALSE(std::filesystem::exists(path("edited_s.json")));
+  }
 
   // Compensation of the orientation, closed through the simulated robot: 60 held-out poses as joint
   // targets, the robot sent the compensated joints and, for the baseline, the nominal ones, the probe
