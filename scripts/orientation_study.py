@@ -11,8 +11,9 @@ import argparse
 import csv
 import json
 import os
-import subprocess
 import sys
+
+from flange_points_study import run  # a command, its output kept for the error
 
 N_POSES, N_TRAIN = 440, 240
 CASES = {
@@ -20,13 +21,6 @@ CASES = {
     "probe 3 mdeg": ["--probe", "0,0,100,180,0,0", "--probe-noise", "3"],
     "three nests": ["--reflectors", "0,0,100;150,0,100;0,150,100"],
 }
-
-
-def run(cmd):
-    r = subprocess.run(cmd, capture_output=True, text=True)
-    if r.returncode != 0:
-        raise RuntimeError(" ".join(cmd) + "\n" + r.stdout + r.stderr)
-    return r
 
 
 def split(source, workdir):

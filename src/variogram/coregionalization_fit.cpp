@@ -178,14 +178,13 @@ void check_structures(const std::vector<ModelComponent>& structures) {
   }
 }
 
-/// Design matrix X(j, k) = g_k(h_j) with unit sills.
-Eigen::MatrixXd unit_design(const LmcBins& b, const std::vector<ModelComponent>& structures) {
-  Eigen::MatrixXd x(static_cast<Eigen::Index>(b.lag.size()), static_cast<Eigen::Index>(structures.size()));
+/// Design matrix X(j, k) = g_k(h_j) with unit sills, at the lags h.
+Eigen::MatrixXd unit_design(const std::vector<double>& lag, const std::vector<ModelComponent>& structures) {
+  Eigen::MatrixXd x(static_cast<Eigen::Index>(lag.size()), static_cast<Eigen::Index>(structures.size()));
   for (std::size_t k = 0; k < structures.size(); ++k) {
     ModelComponent unit = structures[k];
     unit.sill = 1.0;
-    for (std::size_t j = 0; j < b.lag.size(); ++j)
-      x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k)) = unit.gamma(b.lag[j]);
+    for (std::size_t j = 0; j < lag.size(); ++j) x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k)) = unit.gamma(lag[j]);
   }
   return x;
 }
@@ -302,17 +301,6 @@ std::vector<EntryBins> heterotopic_entries(const CrossVariogramTable& t, LmcWeig
   return entries;
 }
 
-Eigen::MatrixXd entry_design(const EntryBins& e, const std::vector<ModelComponent>& structures) {
-  Eigen::MatrixXd x(static_cast<Eigen::Index>(e.lag.size()), static_cast<Eigen::Index>(structures.size()));
-  for (std::size_t k = 0; k < structures.size(); ++k) {
-    ModelComponent unit = structures[k];
-    unit.sill = 1.0;
-    for (std::size_t j = 0; j < e.lag.size(); ++j)
-      x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k)) = unit.gamma(e.lag[j]);
-  }
-  return x;
-}
-
 std::string entry_name(int i, int l, const std::vector<std::string>& names) {
   auto name = [&](int c) {
     const auto k = static_cast<std::size_t>(c);
@@ -329,7 +317,7 @@ double heterotopic_residual(const std::vector<EntryBins>& entries, int P, const 
   for (int i = 0; i < P; ++i)
     for (int l = i; l < P; ++l) {
       const EntryBins& e = entries[static_cast<std::size_t>(i * P + l)];
-      const Eigen::MatrixXd x = entry_design(e, structures);
+      const Eigen::MatrixXd x = unit_design(e.lag, structures);
       for (std::size_t j = 0; j < e.lag.size(); ++j) {
         double r = e.gamma[j];
         for (std::size_t k = 0; k < sills.size(); ++k) r -= x(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(k)) * sills[k](i, l);
@@ -364,7 +352,7 @@ CoregionalizationFitResult fit_heterotopic(const CrossVariogramTable& table, con
         throw InputError("LMC fit: no spatial variation in " + entry_name(i, l, component_names) +
                          ": it is 0 in all its bins (constant values); an LMC of it predicts nothing: drop it or check the data");
       bins_used = std::max(bins_used, e.lag.size());
-      const Eigen::MatrixXd x = entry_design(e, structures);
+      const Eigen::MatrixXd x = unit_design(e.lag, structures);
       const Eigen::VectorXd sw = Eigen::Map<const Eigen::VectorXd>(e.weight.data(), static_cast<Eigen::Index>(e.weight.size())).cwiseSqrt();
       const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(e.gamma.data(), static_cast<Eigen::Index>(e.gamma.size()));
       std::vector<bool> free(K, true);
@@ -403,7 +391,7 @@ CoregionalizationFitResult fit_coregionalization(const CrossVariogramTable& tabl
   if (b.lag.size() < K)
     throw ArgumentError("LMC fit: " + std::to_string(b.lag.size()) + " usable bin(s) for " + std::to_string(K) +
                         " structures; expected at least as many bins as structures");
-  const Eigen::MatrixXd x = unit_design(b, structures);
+  const Eigen::MatrixXd x = unit_design(b.lag, structures);
   CoregionalizationFitResult result;
   result.bins_used = b.lag.size();
   result.smallest_eigenvalue_before_projection.assign(K, 0.0);
@@ -565,7 +553,7 @@ double coregionalization_weighted_residual(const CrossVariogramTable& table, con
     return heterotopic_residual(heterotopic_entries(table, weighting, P), P, structures, sills);
   }
   const LmcBins b = usable_bins(table, weighting);
-  return lmc_residual(b, unit_design(b, structures), sills);
+  return lmc_residual(b, unit_design(b.lag, structures), sills);
 }
 
 }  // namespace errfield
