@@ -165,6 +165,10 @@ StepColumns predict_columns(const CompensationModel& model, std::span<const robo
   const std::size_t n = q.size();
   const bool tracker = model.registration().has_value();
   std::vector<std::vector<double>> cols(9, std::vector<double>(n, kNaN));  // see `names` below
+  // Models that predict the flange's orientation: the scored tool frame's orientation (robot frame,
+  // fixed-axis XYZ, deg) and the 95 % radius of its rotation error (mdeg).
+  const bool orientation = model.fielded_points().size() >= 3 && model.rotation_calibration().has_value();
+  std::vector<std::vector<double>> rotation_cols(orientation ? 4 : 0, std::vector<double>(n, kNaN));
   std::vector<std::string> status(n);
   bool any_variance = false, any_radius = false;
   StepColumns out;
@@ -183,6 +187,16 @@ StepColumns predict_columns(const CompensationModel& model, std::span<const robo
     cols[8][i] = radius_with_probability(0.95, p.error.axis_variance_mm2);
     any_variance = any_variance || std::isfinite(p.error.variance_mm2);
     any_radius = any_radius || std::isfinite(cols[8][i]);
+    if (orientation) {
+      const std::optional<RotationPrediction> w = model.predict_rotation(q[i]);
+      if (!w || w->status != "ok") continue;
+      const Eigen::Matrix3d tool = robot::forward_kinematics(model.scored_model(), q[i]).linear();
+      const Eigen::Vector3d& v = w->rotation_rad;
+      const Eigen::Vector3d rpy = robot::rpy_deg_from_rotation(
+          Eigen::AngleAxisd(v.norm(), v.norm() > 0 ? Eigen::Vector3d(v.normalized()) : Eigen::Vector3d::UnitX()).toRotationMatrix() * tool);
+      for (int k = 0; k < 3; ++k) rotation_cols[static_cast<std::size_t>(k)][i] = rpy[k];
+      rotation_cols[3][i] = kMdegPerRad * w->radius95_rad();
+    }
   }
   const char* names[] = {"px", "py", "pz", "tx", "ty", "tz", "var_mm2", "var_field_mm2", "r95_mm"};
   for (std::size_t c = 0; c < 9; ++c) {
@@ -191,6 +205,8 @@ StepColumns predict_columns(const CompensationModel& model, std::span<const robo
     if (c == 8 && !any_radius) continue;
     out.columns.push_back(numbers(names[c], std::move(cols[c])));
   }
+  const char* rotation_names[] = {"prx", "pry", "prz", "r95_w_mdeg"};
+  for (std::size_t c = 0; c < rotation_cols.size(); ++c) out.columns.push_back(numbers(rotation_names[c], std::move(rotation_cols[c])));
   out.columns.push_back(words("status", std::move(status)));
   return out;
 }

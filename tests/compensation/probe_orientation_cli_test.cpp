@@ -198,6 +198,32 @@ TEST_F(ProbeOrientationCli, FitOnProbeReadingsPredictsTheFlangesOrientationWithi
       mounting_sum += forward_kinematics(calibrated, joints_of(train, i, "q"), EndFrame::flange).linear().transpose() * reading(train, i);
   const Eigen::JacobiSVD<Eigen::Matrix3d> m(mounting_sum, Eigen::ComputeFullU | Eigen::ComputeFullV);
   const Eigen::Matrix3d mounting_cal = m.matrixU() * m.matrixV().transpose();
+  // predict's tool orientation (prx, pry, prz: the calibrated flange turned by the predicted rotation)
+  // against the readings of the held-out poses, and its 95 % radius r95_w_mdeg.
+  const CliResult p = run("predict --model m.json --joints test.csv --out predicted.csv");
+  ASSERT_EQ(p.exit_code, 0) << p.output();
+  const CsvTable predicted = CsvTable::read(path("predicted.csv"));
+  ASSERT_TRUE(predicted.has_column("prx") && predicted.has_column("r95_w_mdeg"));
+  double predicted_ss = 0.0;
+  std::size_t predicted_ok = 0, within = 0;
+  for (std::size_t i = 0; i < predicted.row_count(); ++i) {
+    if (predicted.cell(i, predicted.column_index("status")) != "ok") continue;
+    const Eigen::Matrix3d at = rotation_from_rpy_deg(predicted.numeric_cell(i, predicted.column_index("prx")),
+                                                     predicted.numeric_cell(i, predicted.column_index("pry")),
+                                                     predicted.numeric_cell(i, predicted.column_index("prz")));
+    const double miss = log_rotation(reading(test, i) * mounting_cal.transpose() * at.transpose()).norm() * 180000.0 / M_PI;
+    predicted_ss += miss * miss;
+    within += miss <= predicted.numeric_cell(i, predicted.column_index("r95_w_mdeg"));
+    ++predicted_ok;
+  }
+  const double predicted_rms = std::sqrt(predicted_ss / static_cast<double>(predicted_ok));
+  std::printf("predict: tool orientation within %.2f mdeg RMS of the readings (validate: %.2f), %.3f within r95_w\n",
+              predicted_rms, after, static_cast<double>(within) / static_cast<double>(predicted_ok));
+  EXPECT_EQ(predicted_ok, o["after"]["count"].get<std::size_t>());
+  EXPECT_LT(std::abs(predicted_rms - after), 0.15 * after);  // only the mounting's estimate differs
+  EXPECT_GE(static_cast<double>(within) / static_cast<double>(predicted_ok), 0.905);
+  EXPECT_LE(static_cast<double>(within) / static_cast<double>(predicted_ok), 0.995);
+
   const CsvTable after_run = CsvTable::read(path("after.csv")), before_run = CsvTable::read(path("before.csv"));
   ASSERT_EQ(after_run.row_count(), sent.size() + 1);
   ASSERT_EQ(before_run.row_count(), sent.size() + 1);
