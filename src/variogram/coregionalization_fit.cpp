@@ -204,6 +204,19 @@ Eigen::VectorXd weighted_linear_fit(const Eigen::MatrixXd& x, const Eigen::Vecto
   return b;
 }
 
+/// The partial sills of one direct or cross variogram by WLS on the unit design; a direct one's
+/// (`direct`) kept non-negative as gstat's fit.variogram does (fit.sills: a negative psill is set to
+/// 0 and the rest refitted, until none is negative).
+Eigen::VectorXd sills_fit(const Eigen::MatrixXd& x, const Eigen::VectorXd& y, const Eigen::VectorXd& sw, bool direct) {
+  std::vector<bool> free(static_cast<std::size_t>(x.cols()), true);
+  Eigen::VectorXd coef = weighted_linear_fit(x, y, sw, free);
+  while (direct && (coef.array() < 0.0).any()) {
+    for (std::size_t k = 0; k < free.size(); ++k) free[k] = free[k] && coef(static_cast<Eigen::Index>(k)) > 0.0;
+    coef = weighted_linear_fit(x, y, sw, free);
+  }
+  return coef;
+}
+
 /// Nearest PSD matrix (Frobenius): eigenvalues clipped at 0; also returns the smallest eigenvalue.
 Eigen::MatrixXd psd_projection(const Eigen::MatrixXd& m, double& smallest) {
   const Eigen::MatrixXd sym = 0.5 * (m + m.transpose());
@@ -238,13 +251,7 @@ std::vector<Eigen::MatrixXd> separate_fits(const LmcBins& b, const Eigen::Matrix
   for (int i = 0; i < P; ++i) {
     for (int l = i; l < P; ++l) {
       for (std::size_t j = 0; j < b.lag.size(); ++j) y(static_cast<Eigen::Index>(j)) = b.gamma[j](i, l);
-      std::vector<bool> free(K, true);
-      Eigen::VectorXd coef = weighted_linear_fit(x, y, sw, free);
-      while (i == l && (coef.array() < 0.0).any()) {
-        // fit.variogram: fit.sills = psill > 0, negative ones set to 0, refit.
-        for (std::size_t k = 0; k < K; ++k) free[k] = free[k] && coef(static_cast<Eigen::Index>(k)) > 0.0;
-        coef = weighted_linear_fit(x, y, sw, free);
-      }
+      const Eigen::VectorXd coef = sills_fit(x, y, sw, i == l);
       for (std::size_t k = 0; k < K; ++k) sills[k](i, l) = sills[k](l, i) = coef(static_cast<Eigen::Index>(k));
     }
   }
@@ -355,12 +362,7 @@ CoregionalizationFitResult fit_heterotopic(const CrossVariogramTable& table, con
       const Eigen::MatrixXd x = unit_design(e.lag, structures);
       const Eigen::VectorXd sw = Eigen::Map<const Eigen::VectorXd>(e.weight.data(), static_cast<Eigen::Index>(e.weight.size())).cwiseSqrt();
       const Eigen::VectorXd y = Eigen::Map<const Eigen::VectorXd>(e.gamma.data(), static_cast<Eigen::Index>(e.gamma.size()));
-      std::vector<bool> free(K, true);
-      Eigen::VectorXd coef = weighted_linear_fit(x, y, sw, free);
-      while (i == l && (coef.array() < 0.0).any()) {
-        for (std::size_t k = 0; k < K; ++k) free[k] = free[k] && coef(static_cast<Eigen::Index>(k)) > 0.0;
-        coef = weighted_linear_fit(x, y, sw, free);
-      }
+      const Eigen::VectorXd coef = sills_fit(x, y, sw, i == l);
       for (std::size_t k = 0; k < K; ++k) sills[k](i, l) = sills[k](l, i) = coef(static_cast<Eigen::Index>(k));
     }
   CoregionalizationFitResult result;
