@@ -599,6 +599,40 @@ TEST(Kriging, LeaveOneOutClosedFormEqualsBruteForce) {
   }
 }
 
+TEST(Kriging, LeaveOneOutResidualsOfOtherValuesEqualBruteForce) {
+  // The leave-one-out weights applied to other values at the same samples: each column against a
+  // kriging of that column without the sample (ordinary, universal, and simple kriging, whose mean
+  // the operator leaves out: it acts on deviations). Wrong row counts are refused.
+  const Data d = make_data(40, 83);
+  const auto model = VariogramModel::parse("sph(sill=0.5,range=60)+nug(0.02)");
+  std::mt19937 rng(5);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  Eigen::MatrixXd other(static_cast<Eigen::Index>(d.points.size()), 2);
+  for (Eigen::Index i = 0; i < other.rows(); ++i)
+    other.row(i) << normal(rng), d.points[static_cast<std::size_t>(i)].x() / 50.0 + 0.1 * normal(rng);
+  for (int order : {-1, 0, 1}) {
+    auto opt = options_for(order);
+    if (order < 0) opt.simple_mean = {0.3};  // not in the operator: the reference below has mean 0
+    const Eigen::MatrixXd left = Kriging<P3, double>(d.points, d.values, model, opt).leave_one_out_residuals_of(other);
+    ASSERT_EQ(left.rows(), other.rows());
+    ASSERT_EQ(left.cols(), 2);
+    for (Eigen::Index c = 0; c < 2; ++c) {
+      Data column = d;
+      for (std::size_t i = 0; i < d.points.size(); ++i) column.values[i] = other(static_cast<Eigen::Index>(i), c);
+      for (std::size_t i = 0; i < d.points.size(); ++i) {
+        Data rest = column;
+        rest.points.erase(rest.points.begin() + static_cast<long>(i));
+        rest.values.erase(rest.values.begin() + static_cast<long>(i));
+        const auto ref = reference(rest, d.points[i], model, order, 0.0);
+        EXPECT_NEAR(left(static_cast<Eigen::Index>(i), c), column.values[i] - ref.mean, 1e-8)
+            << "order " << order << " column " << c << " sample " << i;
+      }
+    }
+  }
+  const Kriging<P3, double> k(d.points, d.values, model);
+  EXPECT_THROW((void)k.leave_one_out_residuals_of(other.topRows(10)), ArgumentError);
+}
+
 TEST(Kriging, LeaveOneOutClosedFormSpanningSeveralColumnBlocksEqualsBruteForce) {
   // diag(K^-1) is computed in blocks of 64 columns over shrinking trailing triangles: 150 samples
   // give two full blocks and a partial one. Bit-identical for 1 and 2 threads.

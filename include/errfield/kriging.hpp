@@ -309,6 +309,7 @@ KrigingOutput engine_predict_with_weights(const KrigingEngine& engine, const Eig
 KrigingOutput engine_predict_blocks(const KrigingEngine& engine, const Eigen::MatrixXd& embedded,
                                     const Eigen::MatrixXd& raw, const Eigen::VectorXd& block_weights);
 KrigingOutput engine_leave_one_out(const KrigingEngine& engine);
+Eigen::MatrixXd engine_leave_one_out_residuals_of(const KrigingEngine& engine, const Eigen::MatrixXd& values);
 KrigingOutput engine_k_fold(const KrigingEngine& engine, int folds, std::uint64_t seed);
 /// `raw` (D x M coordinates) with the covariates (M x k, k = options.covariates.size()) appended
 /// as rows D..D+k-1, as the engine takes them. Throws ArgumentError when the covariates' shape
@@ -454,6 +455,15 @@ class Kriging {
   /// solve per sample for the local back end; not offered for sparse (use k_fold).
   KrigingCrossValidation<V> leave_one_out() const {
     return convert_cv(detail::engine_leave_one_out(*engine_));
+  }
+
+  /// The residuals leave_one_out's weights give for other values at the same samples:
+  /// v_i - sum_j w_ij v_j, one row per sample in the order given, any number of columns. The
+  /// weights do not depend on the values, so this is how a quantity fitted beside the kriging (a
+  /// regression on the same samples) enters a leave-one-out of the two together. Dense back end
+  /// and no merged duplicates only (ArgumentError otherwise); one more O(N^3/3) pass.
+  Eigen::MatrixXd leave_one_out_residuals_of(const Eigen::MatrixXd& values) const {
+    return detail::engine_leave_one_out_residuals_of(*engine_, values);
   }
 
   /// k-fold cross-validation with a deterministic shuffle from `seed`; every back end.

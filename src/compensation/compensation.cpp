@@ -377,17 +377,7 @@ namespace {
 /// The functions' design (3 x P, mm per mrad) carried from the reflector to the point `at`.
 Eigen::MatrixXd design_at_point(const JointErrorFunctions& f, const MdhModel& reflector, const MdhModel& at,
                                 const JointVector& q_deg) {
-  const Eigen::Index count = f.parameter_count();
-  Eigen::MatrixXd d = f.design_rows(reflector, q_deg);
-  const Eigen::Matrix<double, 3, kJointCount> ja = geometric_jacobian(reflector, q_deg, EndFrame::tool).topRows<3>();
-  const Eigen::Matrix<double, 3, kJointCount> jb = geometric_jacobian(at, q_deg, EndFrame::tool).topRows<3>();
-  const Eigen::Index polynomial = kJointCount * static_cast<Eigen::Index>(f.degree);
-  for (Eigen::Index c = 0; c < count; ++c) {
-    const int j = c < polynomial ? static_cast<int>(c / f.degree) : f.gravity_terms[static_cast<std::size_t>(c - polynomial)].joint;
-    const double n2 = ja.col(j).squaredNorm();
-    d.col(c) = n2 > 0.0 ? Eigen::Vector3d(jb.col(j) * (ja.col(j).dot(d.col(c)) / n2)) : Eigen::Vector3d::Zero();
-  }
-  return d;
+  return f.design_rows_at_point(reflector, at, q_deg);
 }
 
 JointFunctionPrediction functions_at_point(const JointErrorFunctions& f, const MdhModel& reflector, const MdhModel& at,

@@ -377,6 +377,21 @@ Eigen::MatrixXd JointErrorFunctions::design_rows(const robot::MdhModel& model, c
   return design_rows(frames, q_deg);
 }
 
+Eigen::MatrixXd JointErrorFunctions::design_rows_at_point(const robot::MdhModel& reflector, const robot::MdhModel& at,
+                                                          const robot::JointVector& q_deg) const {
+  Eigen::MatrixXd d = design_rows(reflector, q_deg);
+  const Eigen::Matrix<double, 3, kJoints> ja =
+      robot::geometric_jacobian(reflector, q_deg, robot::EndFrame::tool).topRows<3>();
+  const Eigen::Matrix<double, 3, kJoints> jb = robot::geometric_jacobian(at, q_deg, robot::EndFrame::tool).topRows<3>();
+  const Eigen::Index polynomial = kJoints * static_cast<Eigen::Index>(degree);
+  for (Eigen::Index c = 0; c < d.cols(); ++c) {
+    const int j = c < polynomial ? static_cast<int>(c / degree) : gravity_terms[static_cast<std::size_t>(c - polynomial)].joint;
+    const double n2 = ja.col(j).squaredNorm();
+    d.col(c) = n2 > 0.0 ? Eigen::Vector3d(jb.col(j) * (ja.col(j).dot(d.col(c)) / n2)) : Eigen::Vector3d::Zero();
+  }
+  return d;
+}
+
 JointFunctionPrediction JointErrorFunctions::predict(const robot::MdhModel& model, const robot::JointVector& q_deg,
                                                     const Eigen::MatrixXd* taken_back) const {
   JointFunctionPrediction out;
@@ -627,10 +642,13 @@ JointErrorFunctionFit fit_joint_error_functions(const robot::MdhModel& model, co
   // their ratio, which the field's variance calibration has to know.
   if (std::isfinite(best_lambda) && after > 0.0) {
     double held_out = 0.0;
+    out.held_out_coefficient_change_mrad.resize(static_cast<std::size_t>(n));
     for (Eigen::Index i = 0; i < n; ++i) {
       const auto fi = design.middleRows<3>(3 * i);
       const Eigen::Matrix3d h = fi * out.ridge_inverse * fi.transpose();
-      held_out += ((Eigen::Matrix3d::Identity() - h).inverse() * out.remaining_mm[static_cast<std::size_t>(i)]).squaredNorm();
+      const Eigen::Vector3d loo = (Eigen::Matrix3d::Identity() - h).inverse() * out.remaining_mm[static_cast<std::size_t>(i)];
+      held_out += loo.squaredNorm();
+      out.held_out_coefficient_change_mrad[static_cast<std::size_t>(i)] = -(out.ridge_inverse * (fi.transpose() * loo));
     }
     out.leave_one_out_inflation = held_out / after;
   }

@@ -19,6 +19,7 @@
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/distance_error.hpp"
 #include "errfield/compensation/error_fields.hpp"
+#include "errfield/compensation/held_out_shift.hpp"
 #include "errfield/compensation/kriging_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/scattered_idw.hpp"
@@ -330,6 +331,9 @@ void note_variance_calibration(FitResult& out, const KrigingFieldFit& fit) {
   out.notes.push_back("predictive variance calibrated by leave-one-out on the " + std::to_string(c.samples) +
                       " samples: every sill and the nugget x " + format_number(c.factor) +
                       " = max(mean z^2 per component " + format_number(c.mean_squared_z_before) +
+                      (c.capped_samples == 0 ? std::string()
+                                             : " (" + std::to_string(c.capped_samples) +
+                                                   " sample(s) beyond 1 in 1000 under the tail's scale entered at that cap)") +
                       ", 95 % quantile of z^2 / chi2(0.95) " + format_number(c.tail_factor) +
                       "), so the variance is too small neither on average nor in the tail; the predicted errors "
                       "are unchanged (model before " + c.model_before + "; --variance-calibration none keeps it)");
@@ -389,7 +393,8 @@ std::vector<CompensationModel::LabelledPoint> fields_of_further_points(const Com
                                                                        const detail::KinematicFit& kin,
                                                                        const Registration& reg,
                                                                        const std::vector<std::size_t>& rows,
-                                                                       const KrigingFieldOptions& options) {
+                                                                       const KrigingFieldOptions& options,
+                                                                       const std::function<HeldOutShift(const MdhModel&)>& shift_at) {
   constexpr std::size_t kMinimumPointFieldReadings = 20;
   std::vector<CompensationModel::LabelledPoint> points = model.flange_points();
   for (CompensationModel::LabelledPoint& point : points) {
@@ -406,7 +411,13 @@ std::vector<CompensationModel::LabelledPoint> fields_of_further_points(const Com
       samples.joints_deg.push_back(d.q_deg[i]);
     }
     if (residual.size() < kMinimumPointFieldReadings) continue;
-    point.field = fit_vector_kriging_field(samples, std::move(residual), options).field;
+    KrigingFieldOptions at_point = options;
+    if (shift_at) {
+      Eigen::Isometry3d tool = model.command_model().tool();
+      tool.translation() = point.position_mm;
+      at_point.held_out_shift = shift_at(model.command_model().with_tool(tool));
+    }
+    point.field = fit_vector_kriging_field(samples, std::move(residual), at_point).field;
   }
   return points;
 }
@@ -690,6 +701,16 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
       }
       KrigingFieldOptions ko = field_options(o, model_estimated);
       ko.value_variance_inflation = inflation;
+      // The ordinary fit's leave-one-out, per sample of every field the functions are carried to
+      // (the GLS refit below keeps it, as it keeps the inflation).
+      std::function<HeldOutShift(const MdhModel&)> shift_at;
+      if (jf) {
+        auto ordinary_fit = std::make_shared<const JointErrorFunctionFit>(*jf);
+        shift_at = [ordinary_fit, poses = dd.q_deg, reflector = kin.model](const MdhModel& at) {
+          return joint_function_held_out_shift(ordinary_fit, poses, reflector, at);
+        };
+        ko.held_out_shift = shift_at(kin.model);
+      }
       Eigen::MatrixXd flat(static_cast<Eigen::Index>(residual.size()), 3);
       for (std::size_t i = 0; i < residual.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = residual[i].transpose();
       if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
@@ -759,7 +780,7 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
         point_options.model = fit.model;
         point_options.on_stage = nullptr;
         const std::vector<CompensationModel::LabelledPoint> fielded =
-            fields_of_further_points(out.model, d, kin, reg, other_points, point_options);
+            fields_of_further_points(out.model, d, kin, reg, other_points, point_options, shift_at);
         std::string labels;
         for (const CompensationModel::LabelledPoint& lp : fielded)
           if (lp.field) labels += (labels.empty() ? "'" : ", '") + lp.label + "'";

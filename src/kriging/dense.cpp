@@ -165,10 +165,7 @@ KrigingOutput KrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, cons
   return out;
 }
 
-KrigingOutput KrigingEngine::loo_dense() const {
-  // Closed form (Dubrule 1983): with A the bordered system [K F; F' 0] and P its inverse's top-left
-  // block, P = K^-1 - K^-1 F G^-1 F' K^-1, the leave-one-out residual is alpha_i / P_ii and its
-  // variance 1 / P_ii.
+Eigen::VectorXd KrigingEngine::loo_precision_diagonal() const {
   const Eigen::Index n = points_.cols();
   // diag(K^-1)_j = |L^-1 e_j|^2, and L^-1 e_j is zero above row j: each block of columns [c, c+w)
   // needs only the trailing triangle L[c:, c:], so the whole diagonal costs n^3/3 flops (not the n^3
@@ -198,6 +195,15 @@ KrigingOutput KrigingEngine::loo_dense() const {
     g_llt_.matrixL().solveInPlace(t);  // Lg^-1 F'K^-1
     pdiag -= t.colwise().squaredNorm().transpose();
   }
+  return pdiag;
+}
+
+KrigingOutput KrigingEngine::loo_dense() const {
+  // Closed form (Dubrule 1983): with A the bordered system [K F; F' 0] and P its inverse's top-left
+  // block, P = K^-1 - K^-1 F G^-1 F' K^-1, the leave-one-out residual is alpha_i / P_ii and its
+  // variance 1 / P_ii.
+  const Eigen::Index n = points_.cols();
+  const Eigen::VectorXd pdiag = loo_precision_diagonal();
   KrigingOutput out;
   out.status = report_.status;
   out.message = report_.message;
@@ -208,6 +214,28 @@ KrigingOutput KrigingEngine::loo_dense() const {
     out.variance[i] = 1.0 / pdiag[i];
   }
   out.mean = observed_ - out.residual;
+  return out;
+}
+
+Eigen::MatrixXd KrigingEngine::leave_one_out_residuals_of(const Eigen::MatrixXd& values) const {
+  const Eigen::Index n = points_.cols();
+  if (options_.backend != KrigingBackend::Dense)
+    throw ArgumentError("kriging: leave-one-out residuals of other values need the dense back end");
+  if (!report_.usable()) throw ArgumentError("kriging: leave-one-out residuals of other values: " + report_.message);
+  if (values.rows() != static_cast<Eigen::Index>(original_index_.size()) || original_index_.size() != static_cast<std::size_t>(n))
+    throw ArgumentError("kriging: leave-one-out residuals of " + std::to_string(values.rows()) + " values for " +
+                        std::to_string(n) + " samples (" + std::to_string(original_index_.size()) +
+                        " given); expected one row per sample and no merged samples");
+  // P v as alpha_ is P times the values: K^-1 (v - F beta_v), beta_v the drift's GLS coefficients.
+  Eigen::MatrixXd y(n, values.cols());
+  for (Eigen::Index i = 0; i < n; ++i) y.row(i) = values.row(static_cast<Eigen::Index>(original_index_[static_cast<std::size_t>(i)]));
+  llt_.matrixL().solveInPlace(y);
+  if (drift_terms_ > 0) y -= q_ * g_llt_.solve(q_.transpose() * y);
+  llt_.matrixU().solveInPlace(y);
+  const Eigen::VectorXd pdiag = loo_precision_diagonal();
+  Eigen::MatrixXd out(n, values.cols());
+  for (Eigen::Index i = 0; i < n; ++i)
+    out.row(static_cast<Eigen::Index>(original_index_[static_cast<std::size_t>(i)])) = y.row(i) / pdiag[i];
   return out;
 }
 

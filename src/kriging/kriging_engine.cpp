@@ -630,6 +630,9 @@ KrigingOutput engine_predict_blocks(const KrigingEngine& engine, const Eigen::Ma
   return engine.predict(embedded, raw, block_weights);
 }
 KrigingOutput engine_leave_one_out(const KrigingEngine& engine) { return engine.leave_one_out(); }
+Eigen::MatrixXd engine_leave_one_out_residuals_of(const KrigingEngine& engine, const Eigen::MatrixXd& values) {
+  return engine.leave_one_out_residuals_of(values);
+}
 KrigingOutput engine_k_fold(const KrigingEngine& engine, int folds, std::uint64_t seed) {
   return engine.k_fold(folds, seed);
 }

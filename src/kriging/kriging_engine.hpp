@@ -53,6 +53,10 @@ class KrigingEngine {
   KrigingOutput predict(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw,
                         const Eigen::VectorXd& block_weights = Eigen::VectorXd(), bool with_weights = false) const;
   KrigingOutput leave_one_out() const;
+  /// Dense back end, no merged samples: the leave-one-out residuals v_i - sum_j w_ij v_j that the
+  /// samples' leave-one-out weights give for other values (N x K, rows in the order the samples
+  /// were given); linear in v (simple kriging's mean is not added: the operator on deviations).
+  Eigen::MatrixXd leave_one_out_residuals_of(const Eigen::MatrixXd& values) const;
   KrigingOutput k_fold(int folds, std::uint64_t seed) const;
 
  private:
@@ -89,6 +93,8 @@ class KrigingEngine {
   Eigen::MatrixXd block_drift_matrix(const Eigen::MatrixXd& raw, const Eigen::VectorXd& block_weights) const;
   KrigingOutput predict_sparse(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) const;
   KrigingOutput loo_dense() const;
+  // diag of P, the top-left block of the bordered system's inverse (Dubrule's 1 / variance)
+  Eigen::VectorXd loo_precision_diagonal() const;
   KrigingOutput unusable_output() const;
   void add_simple_mean(Eigen::MatrixXd& mean) const;
   int thread_count() const;

@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 
 #include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/held_out_shift.hpp"
+#include "errfield/compensation/kriging_fields.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/builtin_robots.hpp"
 #include "errfield/robot/kinematics.hpp"
@@ -152,6 +154,112 @@ TEST(JointErrorFunctions, RecoversJointErrorsFromPositionsAlone) {
       at[j] = lo[static_cast<std::size_t>(j)] + 0.5 * (u + 1.0) * (hi[static_cast<std::size_t>(j)] - lo[static_cast<std::size_t>(j)]);
       EXPECT_NEAR(fit.functions.angle_error_mrad(at)[j], truth_mrad(j, u) - mean, 0.05) << "joint " << j + 1 << " u " << u;
     }
+  }
+}
+
+TEST(JointErrorFunctions, HeldOutCoefficientChangeIsTheRidgeRefitWithoutThePose) {
+  // beta_-i - beta from the hat matrix's 3 x 3 block against the ridge solved again without pose i
+  // at the same penalty (recovered as R^-1 - D'D), written out here.
+  const MdhModel m = robot_with_tool();
+  const std::vector<JointVector> q = random_poses(60, 11);
+  std::mt19937_64 rng(13);
+  std::normal_distribution<double> noise(0.0, 0.02);
+  std::vector<Eigen::Vector3d> r(q.size());
+  for (auto& v : r) v = Eigen::Vector3d(noise(rng), noise(rng), noise(rng)) + Eigen::Vector3d(0.03, -0.01, 0.02);
+  const JointErrorFunctionFit fit = fit_joint_error_functions(m, q, r, 3);
+  const Eigen::MatrixXd& d = fit.design;
+  const Eigen::Index n = static_cast<Eigen::Index>(q.size()), p = d.cols();
+  ASSERT_EQ(fit.held_out_coefficient_change_mrad.size(), q.size());
+  ASSERT_EQ(fit.ridge_inverse.rows(), p);
+  Eigen::VectorXd y(3 * n);
+  for (Eigen::Index i = 0; i < n; ++i) y.segment<3>(3 * i) = r[static_cast<std::size_t>(i)];
+  const Eigen::VectorXd beta = fit.ridge_inverse * (d.transpose() * y);
+  for (Eigen::Index i = 0; i < n; ++i)  // the ridge inverse is the fit's: it leaves what the fit left
+    ASSERT_LT((y.segment<3>(3 * i) - d.middleRows<3>(3 * i) * beta - fit.remaining_mm[static_cast<std::size_t>(i)]).norm(), 1e-9);
+  const Eigen::MatrixXd normal = fit.ridge_inverse.inverse();  // D'D + penalty
+  for (Eigen::Index i = 0; i < n; i += 7) {
+    const auto di = d.middleRows<3>(3 * i);
+    const Eigen::VectorXd without = (normal - di.transpose() * di).ldlt().solve(d.transpose() * y - di.transpose() * y.segment<3>(3 * i));
+    const Eigen::VectorXd change = fit.held_out_coefficient_change_mrad[static_cast<std::size_t>(i)];
+    EXPECT_LT((change - (without - beta)).norm(), 1e-6 * std::max(1.0, (without - beta).norm())) << "pose " << i;
+  }
+}
+
+TEST(JointErrorFunctions, HeldOutShiftMakesTheLeaveOneOutOfFunctionsAndFieldTogether) {
+  // The field's leave-one-out residual plus the shift, against leaving the pose out of both by
+  // brute force: the ridge solved again without it (same penalty, R^-1 - D'D), then the field kriged
+  // on the other poses' residuals and predicted at it. At the functions' own point and at a point
+  // 150 mm away whose readings a field of its own krigs (the functions carried there).
+  const MdhModel m = robot_with_tool();
+  Eigen::Isometry3d moved = m.tool();
+  moved.translation() += Eigen::Vector3d(150.0, 0.0, 0.0);
+  const MdhModel other_point = m.with_tool(moved);
+  const std::vector<JointVector> q = random_poses(50, 17);
+  std::mt19937_64 rng(19);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  // A smooth error over the joints plus noise, at each of the two points.
+  auto smooth = [](const JointVector& v, double phase) {
+    return Eigen::Vector3d(0.05 * std::sin(v[0] / 60.0 + phase), 0.04 * std::cos(v[1] / 40.0), 0.03 * std::sin(v[2] / 50.0 - phase));
+  };
+  // ... and joint angle errors the functions can hold, so that the ridge fits something.
+  Eigen::MatrixXd coefficients(6, 2);
+  coefficients << 0.3, -0.2, 0.1, 0.4, -0.3, 0.1, 0.2, 0.2, -0.1, 0.3, 0.2, -0.2;
+  const JointErrorFunctions truth = functions_over_the_box(coefficients);
+  std::vector<Eigen::Vector3d> y(q.size()), y_other(q.size());
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    y[i] = truth.position_error_mm(m, q[i]) + smooth(q[i], 0.0) + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+    y_other[i] = truth.position_error_mm(other_point, q[i]) + smooth(q[i], 0.5) + Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
+  }
+  const auto fit = std::make_shared<const JointErrorFunctionFit>(fit_joint_error_functions(m, q, y, 2));
+  const Eigen::Index n = static_cast<Eigen::Index>(q.size()), p = fit->design.cols();
+  ASSERT_GT(p, 0);
+  ASSERT_EQ(fit->ridge_inverse.rows(), p) << "GCV fitted no function";
+  Eigen::VectorXd stacked(3 * n);
+  for (Eigen::Index i = 0; i < n; ++i) stacked.segment<3>(3 * i) = y[static_cast<std::size_t>(i)];
+  const Eigen::VectorXd beta = fit->ridge_inverse * (fit->design.transpose() * stacked);
+  const Eigen::MatrixXd normal = fit->ridge_inverse.inverse();
+  KrigingFieldOptions options;
+  options.space = FieldSpace::joint;
+  options.model = VariogramModel::parse("exp(sill=0.002,range=120)+nug(0.0001)");
+  options.region_margin_deg = 360.0;  // every left-out pose inside the others' region
+  for (const MdhModel* at : {&m, &other_point}) {
+    const bool own = at == &m;
+    const std::vector<Eigen::Vector3d>& readings = own ? y : y_other;
+    auto design_at = [&](const JointVector& v) { return own ? fit->functions.design_rows(m, v) : fit->functions.design_rows_at_point(m, *at, v); };
+    FieldSamples samples;
+    std::vector<Eigen::Vector3d> left_by_functions;
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      samples.position_mm.push_back(forward_position(*at, q[i]));
+      samples.joints_deg.push_back(q[i]);
+      left_by_functions.push_back(readings[i] - design_at(q[i]) * beta);
+    }
+    const auto field = make_vector_kriging_field(samples, left_by_functions, options);
+    const std::vector<SampleHoldOut> held_out = leave_one_out_by_sample(*field);
+    const std::vector<Eigen::Vector3d> shift = joint_function_held_out_shift(fit, q, m, *at)(*field);
+    ASSERT_EQ(held_out.size(), q.size());
+    ASSERT_EQ(shift.size(), q.size());
+    double largest_shift = 0.0;
+    for (Eigen::Index i = 0; i < n; i += 5) {
+      const auto di = fit->design.middleRows<3>(3 * i);
+      const Eigen::VectorXd without =
+          (normal - di.transpose() * di).ldlt().solve(fit->design.transpose() * stacked - di.transpose() * stacked.segment<3>(3 * i));
+      FieldSamples rest;
+      std::vector<Eigen::Vector3d> rest_values;
+      for (Eigen::Index j = 0; j < n; ++j) {
+        if (j == i) continue;
+        const auto js = static_cast<std::size_t>(j);
+        rest.position_mm.push_back(samples.position_mm[js]);
+        rest.joints_deg.push_back(q[js]);
+        rest_values.push_back(readings[js] - design_at(q[js]) * without);
+      }
+      const auto is = static_cast<std::size_t>(i);
+      const ErrorPrediction e = make_vector_kriging_field(rest, rest_values, options)->predict(samples.position_mm[is], q[is]);
+      ASSERT_TRUE(e.inside_region);
+      const Eigen::Vector3d brute_force = readings[is] - design_at(q[is]) * without - e.position_error_mm;
+      EXPECT_LT((held_out[is].residual_mm + shift[is] - brute_force).norm(), 1e-8) << (own ? "own point" : "other point") << " pose " << i;
+      largest_shift = std::max(largest_shift, shift[is].norm());
+    }
+    EXPECT_GT(largest_shift, 1e-4) << "the functions' leave-one-out moved nothing: the check above checked nothing";
   }
 }
 

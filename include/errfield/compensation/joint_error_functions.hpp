@@ -118,6 +118,13 @@ struct JointErrorFunctions {
   /// The 3 x parameter_count() block of the design at q: position error (mm) per coefficient (mrad).
   Eigen::MatrixXd design_rows(const robot::KinematicFrames& frames, const robot::JointVector& q_deg) const;
   Eigen::MatrixXd design_rows(const robot::MdhModel& model, const robot::JointVector& q_deg) const;
+  /// The design (3 x parameter_count(), mm per mrad) carried from the reflector the functions were
+  /// fitted at (`reflector`'s tool point) to the tool point of `at`: each column is a scalar times
+  /// one joint's position column at the reflector, so it becomes the same scalar times that joint's
+  /// column at the point (a gravity term's load point stays where the fit put it). A column that
+  /// vanishes at the reflector (the joint's axis through it) was not fitted and is zero.
+  Eigen::MatrixXd design_rows_at_point(const robot::MdhModel& reflector, const robot::MdhModel& at,
+                                       const robot::JointVector& q_deg) const;
   /// The largest |dq_j| of the polynomials over each joint's range (mrad), sampled: for people.
   double largest_angle_error_mrad() const;
 
@@ -159,6 +166,12 @@ struct JointErrorFunctionFit {
   /// sum |leave-one-pose-out residual|^2 / sum |in-sample residual|^2 of the regression (>= 1): how
   /// much the remaining residuals understate a new pose's (KrigingFieldOptions::value_variance_inflation).
   double leave_one_out_inflation = 1.0;
+  /// Per pose, how the coefficients move when that pose is left out of the ridge fit (mrad):
+  /// beta_-i - beta = -R D_i' (I - H_ii)^-1 r_i (R the ridge inverse, D_i the pose's design rows,
+  /// H_ii = D_i R D_i', r_i its residual); exact for the ridge at its chosen penalty. With the
+  /// field's leave-one-out weights it gives the leave-one-out of functions and field together
+  /// (KrigingFieldOptions::held_out_shift). Empty without a ridge fit.
+  std::vector<Eigen::VectorXd> held_out_coefficient_change_mrad;
   double largest_gravity_deflection_mrad = 0.0;  ///< largest |gravity terms' dq_j| over the poses
   Eigen::MatrixXd design;         ///< 3N x parameter_count() (mm per mrad), rows 3i..3i+2 for pose i
   /// (design' design + ridge)^-1, or of the whitened design after refit_by_generalized_least_squares;

@@ -59,9 +59,12 @@ FieldSpace field_space_from_name(std::string_view name);
 /// data with realistic systematic effects in docs/robot.md "Predictive uncertainty".
 struct VarianceCalibration {
   double factor = 1.0;               ///< c: every sill and the nugget were multiplied by this
-  double mean_squared_z_before = 1;  ///< mean leave-one-out z² per component of the model before
+  /// mean leave-one-out z² per component of the model before, each z² capped at tail_factor ·
+  /// χ²_K(0.999) (the calibration's `capped_samples` reached the cap)
+  double mean_squared_z_before = 1;
   double tail_factor = 1;            ///< q95(z²) / χ²_K(0.95): the scale that puts 95 % in the 95 % region
   std::size_t samples = 0;           ///< (merged) samples the mean is over
+  std::size_t capped_samples = 0;    ///< of them, those whose z² entered the mean at the cap
   std::string model_before;          ///< the variogram model before, VariogramModel::to_string
 };
 
@@ -93,6 +96,13 @@ struct KrigingFieldOptions {
   /// factor (>= 1; the regression's own leave-one-out over in-sample residual ratio); the
   /// calibration multiplies them by it.
   double value_variance_inflation = 1.0;
+  /// With calibrate_variance, vector fields: what re-estimating that regression without a sample
+  /// changes at it (mm, one per sample in the order given), from the uncalibrated field (whose
+  /// leave-one-out weights it needs, leave_one_out_residuals_of). Each sample's z² is then that of
+  /// its leave-one-out residual plus this shift: the leave-one-out of regression and field together,
+  /// per sample, in place of value_variance_inflation (which stays the fallback when the samples
+  /// were merged). Empty = not used.
+  std::function<std::vector<Eigen::Vector3d>(const ErrorField& uncalibrated)> held_out_shift;
   /// The calibration a field's model already carries (written to and read from the model JSON,
   /// member "variance_calibration"; the model string is the calibrated model).
   std::optional<VarianceCalibration> variance_calibration;
@@ -157,6 +167,12 @@ struct SampleHoldOut {
 /// when `field` is not a vector kriging field, when samples at the same location were merged
 /// (leave-one-out then leaves out a location, not a row) or when the leave-one-out failed.
 std::vector<SampleHoldOut> leave_one_out_by_sample(const ErrorField& field);
+
+/// The residuals a vector kriging field's leave-one-out weights give for other values at its
+/// samples: v_i - sum_j w_ij v_j, `values` one row per sample (any number of columns, each a
+/// quantity over the samples), in the order the samples were given. Empty when `field` is not a
+/// vector kriging field or its samples were merged.
+Eigen::MatrixXd leave_one_out_residuals_of(const ErrorField& field, const Eigen::MatrixXd& values);
 
 /// The variogram model the fields estimate when none is given: empirical variogram of the values
 /// over the samples' lags (10 bins up to 60% of the largest lag) and the best-fitting of sph/exp/gau
