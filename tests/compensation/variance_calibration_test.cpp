@@ -71,6 +71,56 @@ KrigingFieldOptions options_with(const std::string& model, bool calibrate) {
   return o;
 }
 
+/// Per sample, z² of a leave-one-out by refitting: a field on the other samples (model `given`, not
+/// calibrated) predicts the left-out one; its variance is that of a new reading.
+std::vector<double> refitted_squared_z(const FieldDraw& d, const std::string& given) {
+  std::vector<double> z2;
+  for (std::size_t i = 0; i < d.x.size(); ++i) {
+    std::vector<Eigen::Vector3d> x, v;
+    for (std::size_t j = 0; j < d.x.size(); ++j)
+      if (j != i) x.push_back(d.x[j]), v.push_back(d.reading[j]);
+    const auto field = make_vector_kriging_field(samples_of(x), v, options_with(given, false));
+    const ErrorPrediction p = field->predict(d.x[i], robot::JointVector::Zero());
+    if (!p.inside_region) return {};
+    z2.push_back((d.reading[i] - p.position_error_mm).squaredNorm() / p.axis_variance_mm2[0]);
+  }
+  return z2;
+}
+
+TEST(VarianceCalibration, OneFarOutSampleEntersTheMeanAtTheCap) {
+  // The model is right, but one reading is 1 mm off (sd 0.11 mm per axis). The mean takes each z² up to tail · χ²₃(0.999) = tail · 16.266 (R qchisq(0.999, 3)).
+  FieldDraw d = draw_field(5, 60, 0.01, 300.0, 0.0025);
+  d.reading[17] += Eigen::Vector3d(1.0, 0.0, 0.0);
+  const std::string given = "exp(sill=0.01,range=300)+nug(0.0025)";
+  std::vector<double> z2 = refitted_squared_z(d, given);
+  ASSERT_EQ(z2.size(), d.x.size());
+  std::sort(z2.begin(), z2.end());
+  const double tail = z2[static_cast<std::size_t>(std::ceil(0.95 * 60)) - 1] / 7.814727903251178;
+  const double cap = tail * 16.266236196238129;
+  double capped_mean = 0.0, plain_mean = 0.0;
+  std::size_t capped = 0;
+  for (double z : z2) {
+    capped_mean += std::min(z, cap) / 3.0 / 60.0;
+    plain_mean += z / 3.0 / 60.0;
+    capped += z > cap ? 1 : 0;
+  }
+  ASSERT_GE(capped, 1u);
+  const KrigingFieldFit fit = fit_vector_kriging_field(samples_of(d.x), d.reading, options_with(given, true));
+  ASSERT_TRUE(fit.variance_calibration.has_value());
+  const VarianceCalibration& c = *fit.variance_calibration;
+  EXPECT_EQ(c.capped_samples, capped);
+  EXPECT_NEAR(c.mean_squared_z_before, capped_mean, 1e-8 * capped_mean);
+  EXPECT_NEAR(c.factor, std::max(capped_mean, tail), 1e-8 * c.factor);
+  // The cap took something off (the neighbours that lean on the reading keep theirs: they are the
+  // tail, not one sample).
+  EXPECT_LT(c.mean_squared_z_before, plain_mean - 0.1);
+  const nlohmann::json j = fit.field->to_json();
+  EXPECT_EQ(j["variance_calibration"]["capped_samples"].get<std::size_t>(), capped);
+  const auto back = kriging_field_from_json(j, "m.json");
+  ASSERT_NE(back, nullptr);
+  EXPECT_EQ(back->to_json()["variance_calibration"], j["variance_calibration"]);
+}
+
 TEST(VarianceCalibration, FactorIsTheLargerOfMeanAndTailOfALeaveOneOutByRefitting) {
   // 40 samples; the model's variance 4x too small. Independent leave-one-out: a field on the other
   // 39 samples (same model, not calibrated) predicts the left-out one; its variance is that of a
