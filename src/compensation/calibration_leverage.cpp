@@ -48,12 +48,7 @@ std::optional<CalibrationLeverage> CalibrationLeverage::of(const MdhModel& model
   Eigen::MatrixXd information = Eigen::MatrixXd::Zero(count, count);
   for (Eigen::Index k = 0; k < count; ++k) information(k, k) = 1.0 / (prior_sd(static_cast<int>(k)) * prior_sd(static_cast<int>(k)));
   for (std::size_t i = 0; i < q_deg.size(); ++i) {
-    MdhModel at = model;
-    if (!point_of_reading_mm.empty()) {
-      Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
-      tool.translation() = point_of_reading_mm[i];
-      at = model.with_tool(tool);
-    }
+    const MdhModel at = point_of_reading_mm.empty() ? model : model.with_tool_point(point_of_reading_mm[i]);
     rows[i] = parameter_columns(at, q_deg[i], out.parameters);
     const double w = weights.empty() ? 1.0 : weights[i];
     information.noalias() += (w / noise_variance_mm2) * rows[i].transpose() * rows[i];

@@ -354,10 +354,7 @@ MdhModel CompensationModel::scored_model() const {
 
 MdhModel CompensationModel::aimed_model() const {
   if (working_tool_) return command_model_.with_tool(*working_tool_);
-  if (!tool_point_) return command_model_;
-  Eigen::Isometry3d tool = command_model_.tool();
-  tool.translation() = *tool_point_;
-  return command_model_.with_tool(tool);
+  return tool_point_ ? command_model_.with_tool_point(*tool_point_) : command_model_;
 }
 
 CompensationModel CompensationModel::with_credible_range(std::optional<CredibleRange> range) const {
@@ -500,9 +497,7 @@ void CompensationModel::set_point_function_rows() {
     if (!flange_points_[k].field) continue;
     const std::vector<JointVector> q = flange_points_[k].field->sample_joints();
     if (q.empty()) continue;
-    Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
-    tool.translation() = flange_points_[k].position_mm;
-    const MdhModel at = command_model_.with_tool(tool);
+    const MdhModel at = command_model_.with_tool_point(flange_points_[k].position_mm);
     auto rows = std::make_shared<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
         static_cast<Eigen::Index>(q.size()), 3 * p);
     for (std::size_t i = 0; i < q.size(); ++i) {
@@ -645,9 +640,7 @@ std::optional<RotationPrediction> CompensationModel::predict_rotation(const Join
   std::vector<Eigen::Vector3d> at;  // robot frame
   std::vector<MdhModel> models;
   for (const FieldedPoint& p : points) {
-    Eigen::Isometry3d tool = command_model_.tool();
-    tool.translation() = p.position_mm;
-    models.push_back(command_model_.with_tool(tool));
+    models.push_back(command_model_.with_tool_point(p.position_mm));
     at.push_back(forward_position(models.back(), q_deg));
   }
   const std::optional<FlangeRotationOperator> rotation = FlangeRotationOperator::of(at);

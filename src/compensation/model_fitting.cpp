@@ -352,9 +352,7 @@ MeasuredOrientation measured_orientation(const CompensationModel& model, const M
   double miss_ss = 0.0, explained = 0.0, lever_ss = 0.0;
   MeasuredOrientation out;
   for (std::size_t i : rows) {
-    Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
-    tool.translation() = kin.flange_point_of_row_mm[i];
-    const MdhModel at = model.command_model().with_tool(tool);
+    const MdhModel at = model.command_model().with_tool_point(kin.flange_point_of_row_mm[i]);
     const ErrorPrediction e = model.predict_error_at(d.q_deg[i], at);
     if (!e.inside_region || !std::isfinite(e.variance_mm2)) continue;
     const Eigen::Vector3d miss =
@@ -402,9 +400,7 @@ std::vector<CompensationModel::LabelledPoint> fields_of_further_points(const Com
     std::vector<Eigen::Vector3d> residual;
     for (std::size_t i : rows) {
       if (d.reflector[i] != point.label) continue;
-      Eigen::Isometry3d tool = Eigen::Isometry3d::Identity();
-      tool.translation() = kin.flange_point_of_row_mm[i];
-      const MdhModel at = model.command_model().with_tool(tool);
+      const MdhModel at = model.command_model().with_tool_point(kin.flange_point_of_row_mm[i]);
       residual.push_back(reg.robot_from_tracker * d.measured_mm[i] - forward_position(at, d.q_deg[i]) -
                          model.joint_function_error_at(d.q_deg[i], at));
       samples.position_mm.push_back(d.nominal_mm[i]);
@@ -412,11 +408,7 @@ std::vector<CompensationModel::LabelledPoint> fields_of_further_points(const Com
     }
     if (residual.size() < kMinimumPointFieldReadings) continue;
     KrigingFieldOptions at_point = options;
-    if (shift_at) {
-      Eigen::Isometry3d tool = model.command_model().tool();
-      tool.translation() = point.position_mm;
-      at_point.held_out_shift = shift_at(model.command_model().with_tool(tool));
-    }
+    if (shift_at) at_point.held_out_shift = shift_at(model.command_model().with_tool_point(point.position_mm));
     point.field = fit_vector_kriging_field(samples, std::move(residual), at_point).field;
   }
   return points;
@@ -452,9 +444,7 @@ std::optional<RotationCalibration> rotation_calibration_of(const CompensationMod
     for (std::size_t p = 0; p < points.size(); ++p) {
       const auto found = held_out[p].find(key);
       if (found == held_out[p].end()) break;
-      Eigen::Isometry3d tool = model.command_model().tool();
-      tool.translation() = points[p].position_mm;
-      at.push_back(forward_position(model.command_model().with_tool(tool), q));
+      at.push_back(forward_position(model.command_model().with_tool_point(points[p].position_mm), q));
       residual.push_back(found->second.residual_mm);
       variance.push_back(Eigen::Vector3d::Constant(found->second.variance_mm2));
     }

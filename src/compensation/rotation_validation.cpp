@@ -33,12 +33,6 @@ std::string mdeg_line(const std::string& label, const ErrorStats& s) {
          fixed(s.p95_mm, 2) + "  max " + fixed(s.max_mm, 2) + " mdeg (" + std::to_string(s.count) + " poses)\n";
 }
 
-MdhModel at_point(const MdhModel& m, const Eigen::Vector3d& flange_point_mm) {
-  Eigen::Isometry3d tool = m.tool();
-  tool.translation() = flange_point_mm;
-  return m.with_tool(tool);
-}
-
 }  // namespace
 
 nlohmann::json RotationCheck::summary_json() const {
@@ -94,12 +88,12 @@ std::optional<RotationCheck> validate_rotations(const CompensationModel& model, 
     bool with_before = before_frame.has_value();
     for (std::size_t i : rows) {
       const Eigen::Vector3d& p = located.at(data.reflector[i]);
-      calibrated.push_back(forward_position(at_point(model.command_model(), p), q));
+      calibrated.push_back(forward_position(model.command_model().with_tool_point(p), q));
       after_error.push_back(after_frame.robot_from_tracker * data.measured_mm[i] - calibrated.back());
       const std::optional<Eigen::Vector3d>& p_nominal = on_nominal.at(data.reflector[i]);
       with_before = with_before && p_nominal.has_value();
       if (!with_before) continue;
-      uncompensated.push_back(forward_position(at_point(nominal, *p_nominal), q));
+      uncompensated.push_back(forward_position(nominal.with_tool_point(*p_nominal), q));
       before_error.push_back(before_frame->robot_from_tracker * data.measured_mm[i] - uncompensated.back());
     }
     const std::optional<FlangeRotationOperator> measured = FlangeRotationOperator::of(calibrated);

@@ -164,9 +164,7 @@ ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d
 }
 
 CompensationModel with_located_tool(const CompensationModel& model, const ToolLocation& t) {
-  Eigen::Isometry3d tool = model.command_model().tool();
-  tool.translation() = t.tool_mm;
-  CompensationModel located = model.with_working_tool(tool);
+  CompensationModel located = model.with_working_tool(model.command_model().with_tool_point(t.tool_mm).tool());
   // Calibrated models also aim it when read by a version that knows no working tool.
   const bool calibrated =
       model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging;

@@ -176,6 +176,11 @@ bool MdhModel::within_limits(const JointVector& q_deg, double slack_deg) const {
 
 MdhModel MdhModel::with_base(const Eigen::Isometry3d& base) const { return MdhModel(name_, links_, base, tool_); }
 MdhModel MdhModel::with_tool(const Eigen::Isometry3d& tool) const { return MdhModel(name_, links_, base_, tool); }
+MdhModel MdhModel::with_tool_point(const Eigen::Vector3d& point_mm) const {
+  Eigen::Isometry3d tool = tool_;
+  tool.translation() = point_mm;
+  return with_tool(tool);
+}
 MdhModel MdhModel::with_links(const std::array<MdhLink, kJointCount>& links) const {
   return MdhModel(name_, links, base_, tool_);
 }

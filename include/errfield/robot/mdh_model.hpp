@@ -94,6 +94,9 @@ class MdhModel {
 
   MdhModel with_base(const Eigen::Isometry3d& base) const;
   MdhModel with_tool(const Eigen::Isometry3d& tool) const;
+  /// The same robot with its tool point at `point_mm` (flange frame, mm), the tool's rotation kept:
+  /// a point on the flange (a reflector, a probe, a located tool) as the model's end point.
+  MdhModel with_tool_point(const Eigen::Vector3d& point_mm) const;
   MdhModel with_links(const std::array<MdhLink, kJointCount>& links) const;
   MdhModel with_name(std::string name) const;
 
