@@ -26,19 +26,24 @@ def run(cmd):
     return r
 
 
-def split(source, workdir):
-    """Writes train_/test_/locate_ files per label and the label sets the study fits."""
+def read_split(source, n_train=N_TRAIN):
+    """The target rows of a simulated CSV (comments skipped), its columns, and the names of its first
+    n_train poses (the training set; the rows of one pose share `point`)."""
     with open(source) as f:
         rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
-    fields = list(rows[0].keys())
     poses = []
     for r in rows:
         if r["kind"] == "target" and (not poses or poses[-1] != r["point"]):
             poses.append(r["point"])
-    train = set(poses[:N_TRAIN])
+    return [r for r in rows if r["kind"] == "target"], list(rows[0].keys()), set(poses[:n_train])
+
+
+def split(source, workdir):
+    """Writes train_/test_/locate_ files per label and the label sets the study fits."""
+    rows, fields, train = read_split(source)
 
     def write(name, labels, training, limit=0):
-        out = [r for r in rows if r["kind"] == "target" and r["reflector"] in labels and (r["point"] in train) == training]
+        out = [r for r in rows if r["reflector"] in labels and (r["point"] in train) == training]
         with open(os.path.join(workdir, name), "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=fields, lineterminator="\n")
             w.writeheader()

@@ -13,7 +13,7 @@ import json
 import os
 import sys
 
-from flange_points_study import run  # a command, its output kept for the error
+from flange_points_study import read_split, run  # run: a command, its output kept for the error
 
 N_POSES, N_TRAIN = 440, 240
 CASES = {
@@ -24,20 +24,12 @@ CASES = {
 
 
 def split(source, workdir):
-    with open(source) as f:
-        lines = [line for line in f if not line.startswith("#")]
-    rows = list(csv.DictReader(lines))
-    fields = list(rows[0].keys())
-    poses = []
-    for r in rows:
-        if r["kind"] == "target" and (not poses or poses[-1] != r["point"]):
-            poses.append(r["point"])
-    train = set(poses[:N_TRAIN])
+    rows, fields, train = read_split(source, N_TRAIN)
     for name, training in (("train.csv", True), ("test.csv", False)):
         with open(os.path.join(workdir, name), "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=fields, lineterminator="\n")
             w.writeheader()
-            w.writerows(r for r in rows if r["kind"] == "target" and (r["point"] in train) == training)
+            w.writerows(r for r in rows if (r["point"] in train) == training)
 
 
 def main():
