@@ -260,6 +260,12 @@ CompensationModel CompensationModel::with_rotation_calibration(std::optional<Rot
   m.rotation_calibration_ = c;
   return m;
 }
+CompensationModel CompensationModel::with_flange_error_covariance(std::optional<FlangeErrorCovariance> c) const {
+  CompensationModel m = *this;
+  m.flange_error_covariance_ = std::move(c);
+  return m;
+}
+
 CompensationModel CompensationModel::with_flange_points(std::vector<LabelledPoint> points) const {
   CompensationModel m = *this;
   m.flange_points_ = std::move(points);
@@ -583,6 +589,7 @@ ErrorPrediction CompensationModel::predict_by_rigid_motion(const JointVector& q_
   if (joint_functions_ && joint_functions_->coefficient_covariance_mrad2.size() > 0)
     taken_back = Eigen::MatrixXd::Zero(3, parameters);
   std::vector<double> weights;
+  double field_variance_sum = 0.0;  // the fields' own variances, noise excluded, summed over points and axes
   for (Eigen::Index j = 0; j < k; ++j) {
     const Known& known_point = known[static_cast<std::size_t>(j)];
     const ErrorPrediction e = known_point.function_rows ? known_point.field->predict_with_weights(at, q_deg, weights)
@@ -601,6 +608,7 @@ ErrorPrediction CompensationModel::predict_by_rigid_motion(const JointVector& q_
     // The fields' errors are alike at nearby points: the sum of their standard deviations bounds
     // the combination's.
     field_sd += (c.cwiseAbs2() * own).cwiseSqrt();
+    field_variance_sum += own.sum();
     p.noise_variance_mm2 += noise / static_cast<double>(k);
   }
   if (credible_) p.credible = credible_->contains(p);
@@ -608,6 +616,10 @@ ErrorPrediction CompensationModel::predict_by_rigid_motion(const JointVector& q_
     p.variance_mm2 = p.noise_variance_mm2 = std::numeric_limits<double>::quiet_NaN();
   } else {
     Eigen::Vector3d field_variance = field_sd.cwiseAbs2();
+    // How alike the fields' errors are, from their leave-one-out (FlangeErrorCovariance), in place
+    // of that bound.
+    if (flange_error_covariance_ && flange_error_covariance_->point_count() == static_cast<std::size_t>(k))
+      field_variance = flange_error_covariance_->covariance_at(rotation, combination, field_variance_sum).diagonal().cwiseMax(0.0);
     // The rotation about the points' line, which none of them sees: the orientation prior.
     const OrientationPrior& prior = orientation_prior();
     for (const Eigen::Matrix<double, 6, 1>& v : unobservable) {
@@ -760,6 +772,18 @@ nlohmann::json CompensationModel::to_json() const {
     j["orientation_residual"] = {{"sigma_rad", measured_orientation_->sigma_rad},
                                  {"readings", measured_orientation_->readings},
                                  {"add_floor", measured_orientation_->add_floor}};
+  if (flange_error_covariance_) {
+    nlohmann::json rows = nlohmann::json::array();
+    const Eigen::MatrixXd& m = flange_error_covariance_->field_covariance_mm2;
+    for (Eigen::Index r = 0; r < m.rows(); ++r) {
+      nlohmann::json row = nlohmann::json::array();
+      for (Eigen::Index col = 0; col < m.cols(); ++col) row.push_back(m(r, col));
+      rows.push_back(std::move(row));
+    }
+    j["flange_error_covariance"] = {{"field_covariance_mm2", rows},
+                                    {"mean_field_variance_mm2", flange_error_covariance_->mean_field_variance_mm2},
+                                    {"poses", flange_error_covariance_->poses}};
+  }
   if (rotation_calibration_) {
     nlohmann::json c = nlohmann::json::array();
     for (int r = 0; r < 3; ++r)
@@ -929,6 +953,40 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
                          "count, \"add_floor\": bool}, got " + o.dump());
     model.measured_orientation_ =
         MeasuredOrientation{o["sigma_rad"].get<double>(), o["readings"].get<std::size_t>(), o["add_floor"].get<bool>()};
+  }
+  if (j.contains("flange_error_covariance")) {
+    const nlohmann::json& c = j["flange_error_covariance"];
+    const std::size_t k = model.fielded_points().size();
+    const std::string expected = "member \"flange_error_covariance\": expected {\"field_covariance_mm2\": a symmetric "
+                                 "positive semi-definite " + std::to_string(3 * k) + " x " + std::to_string(3 * k) +
+                                 " matrix (3 rows per point with a field, " + std::to_string(k) +
+                                 " here) below 1 mm², \"mean_field_variance_mm2\": a positive number, \"poses\": count}, got ";
+    FlangeErrorCovariance f;
+    const auto n = static_cast<Eigen::Index>(3 * k);
+    bool valid = k >= 2 && c.is_object() && c.contains("field_covariance_mm2") && c["field_covariance_mm2"].is_array() &&
+                 c["field_covariance_mm2"].size() == static_cast<std::size_t>(n) && c.contains("mean_field_variance_mm2") &&
+                 c["mean_field_variance_mm2"].is_number() && c.contains("poses") && c["poses"].is_number_unsigned();
+    if (valid) f.field_covariance_mm2.resize(n, n);
+    for (Eigen::Index row = 0; valid && row < n; ++row) {
+      const nlohmann::json& line = c["field_covariance_mm2"][static_cast<std::size_t>(row)];
+      valid = line.is_array() && line.size() == static_cast<std::size_t>(n);
+      for (Eigen::Index col = 0; valid && col < n; ++col) {
+        valid = line[static_cast<std::size_t>(col)].is_number();
+        if (valid) f.field_covariance_mm2(row, col) = line[static_cast<std::size_t>(col)].get<double>();
+      }
+    }
+    if (valid) {
+      f.mean_field_variance_mm2 = c["mean_field_variance_mm2"].get<double>();
+      f.poses = c["poses"].get<std::size_t>();
+      const Eigen::MatrixXd& m = f.field_covariance_mm2;
+      const double largest = m.cwiseAbs().maxCoeff();
+      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(m, Eigen::EigenvaluesOnly);
+      valid = m.allFinite() && (m - m.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * largest &&
+              eig.eigenvalues().minCoeff() >= -1e-9 * largest && largest < 1.0 &&
+              std::isfinite(f.mean_field_variance_mm2) && f.mean_field_variance_mm2 > 0.0;
+    }
+    if (!valid) fail_model(source, expected + c.dump());
+    model.flange_error_covariance_ = f;
   }
   if (j.contains("rotation_calibration")) {
     const nlohmann::json& c = j["rotation_calibration"];

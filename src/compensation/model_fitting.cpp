@@ -414,20 +414,23 @@ std::vector<CompensationModel::LabelledPoint> fields_of_further_points(const Com
   return points;
 }
 
-/// predict_rotation's covariance (RotationCalibration): at every training pose that each field holds
-/// as a sample of its own, the rotation their leave-one-out residuals imply, in the flange frame.
-/// Empty when fewer than 30 poses qualify (repeated poses merge into
-/// one location and have no per-row leave-one-out) or the points do not determine a rotation.
-std::optional<RotationCalibration> rotation_calibration_of(const CompensationModel& model) {
+/// The fields' leave-one-out at every training pose that each of them holds as a sample of its own:
+/// per pose the residuals in the flange frame (where the points' geometry is fixed), stacked in
+/// fielded_points()'s order, and each field's stated variance (per component). Empty when a field
+/// has no per-sample leave-one-out (repeated poses merge into one location).
+struct HeldOutAtPoints {
+  std::vector<Eigen::VectorXd> flange_residual_mm;  // 3K per pose
+  std::vector<Eigen::VectorXd> variance_mm2;        // K per pose
+};
+
+std::optional<HeldOutAtPoints> held_out_at_fielded_points(const CompensationModel& model) {
   const std::vector<CompensationModel::FieldedPoint> points = model.fielded_points();
-  if (points.size() < 3) return std::nullopt;
   using Key = std::array<double, kJointCount>;
   auto key_of = [](const JointVector& q) {
     Key k;
     for (int j = 0; j < kJointCount; ++j) k[static_cast<std::size_t>(j)] = q[j];
     return k;
   };
-  // Each field's leave-one-out residual by pose.
   std::vector<std::map<Key, SampleHoldOut>> held_out(points.size());
   for (std::size_t p = 0; p < points.size(); ++p) {
     const std::vector<SampleHoldOut> loo = leave_one_out_by_sample(*points[p].field);
@@ -435,25 +438,48 @@ std::optional<RotationCalibration> rotation_calibration_of(const CompensationMod
     if (loo.size() != joints.size()) return std::nullopt;
     for (std::size_t i = 0; i < loo.size(); ++i) held_out[p].emplace(key_of(joints[i]), loo[i]);
   }
-  RotationCalibration out;
-  double independent_trace = 0.0;
+  const auto k = static_cast<Eigen::Index>(points.size());
+  HeldOutAtPoints out;
   for (const auto& [key, first] : held_out[0]) {
     JointVector q;
     for (int j = 0; j < kJointCount; ++j) q[j] = key[static_cast<std::size_t>(j)];
-    std::vector<Eigen::Vector3d> at, residual, variance;
-    for (std::size_t p = 0; p < points.size(); ++p) {
-      const auto found = held_out[p].find(key);
-      if (found == held_out[p].end()) break;
-      at.push_back(forward_position(model.command_model().with_tool_point(points[p].position_mm), q));
-      residual.push_back(found->second.residual_mm);
-      variance.push_back(Eigen::Vector3d::Constant(found->second.variance_mm2));
-    }
-    if (at.size() != points.size()) continue;
-    const std::optional<FlangeRotationOperator> rotation = FlangeRotationOperator::of(at);
-    if (!rotation) return std::nullopt;
     const Eigen::Matrix3d flange = forward_kinematics(model.command_model(), q, EndFrame::flange).linear();
-    const Eigen::Vector3d w = flange.transpose() * rotation->rotation_rad(residual);
+    Eigen::VectorXd residual(3 * k), variance(k);
+    bool every = true;
+    for (Eigen::Index p = 0; p < k && every; ++p) {
+      const auto found = held_out[static_cast<std::size_t>(p)].find(key);
+      every = found != held_out[static_cast<std::size_t>(p)].end();
+      if (!every) break;
+      residual.segment<3>(3 * p) = flange.transpose() * found->second.residual_mm;
+      variance[p] = found->second.variance_mm2;
+    }
+    if (!every) continue;
+    out.flange_residual_mm.push_back(std::move(residual));
+    out.variance_mm2.push_back(std::move(variance));
+  }
+  return out;
+}
+
+/// predict_rotation's covariance (RotationCalibration): at every training pose that each field holds,
+/// the rotation the fields' leave-one-out residuals imply, in the flange frame. Empty when fewer than
+/// 30 poses qualify or the points do not determine a rotation.
+std::optional<RotationCalibration> rotation_calibration_of(const CompensationModel& model,
+                                                           const HeldOutAtPoints& held_out) {
+  const std::vector<CompensationModel::FieldedPoint> points = model.fielded_points();
+  if (points.size() < 3) return std::nullopt;
+  std::vector<Eigen::Vector3d> flange_points;
+  for (const CompensationModel::FieldedPoint& p : points) flange_points.push_back(p.position_mm);
+  // The least-squares rotation is the same in any frame the points and errors are given in.
+  const std::optional<FlangeRotationOperator> rotation = FlangeRotationOperator::of(flange_points);
+  if (!rotation) return std::nullopt;
+  RotationCalibration out;
+  double independent_trace = 0.0;
+  for (std::size_t i = 0; i < held_out.flange_residual_mm.size(); ++i) {
+    const Eigen::Vector3d w = rotation->from_errors * held_out.flange_residual_mm[i];
     out.flange_covariance_rad2 += w * w.transpose();
+    std::vector<Eigen::Vector3d> variance;
+    for (Eigen::Index p = 0; p < held_out.variance_mm2[i].size(); ++p)
+      variance.push_back(Eigen::Vector3d::Constant(held_out.variance_mm2[i][p]));
     independent_trace += rotation->covariance_rad2(variance).trace();
     ++out.poses;
   }
@@ -465,6 +491,25 @@ std::optional<RotationCalibration> rotation_calibration_of(const CompensationMod
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(out.flange_covariance_rad2, Eigen::EigenvaluesOnly);
   if (!(eig.eigenvalues().minCoeff() > 0.0) || !(out.mean_independent_trace_rad2 > 0.0)) return std::nullopt;
   return out;
+}
+
+/// The covariance of the fields' errors at their points (FlangeErrorCovariance), for the points
+/// predicted from their combination; each field's noise is its nugget when the nugget stands for
+/// measurement error (what its predictions state as noise_variance_mm2).
+std::optional<FlangeErrorCovariance> flange_error_covariance_of(const CompensationModel& model,
+                                                                const HeldOutAtPoints& held_out) {
+  const std::vector<CompensationModel::FieldedPoint> points = model.fielded_points();
+  if (points.size() < 2 || held_out.flange_residual_mm.empty()) return std::nullopt;
+  const JointVector q = points.front().field->sample_joints().front();
+  Eigen::VectorXd noise_per_axis(static_cast<Eigen::Index>(points.size()));
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    const ErrorPrediction e = points[p].field->predict(forward_position(model.nominal_model(), q), q);
+    noise_per_axis[static_cast<Eigen::Index>(p)] = std::isfinite(e.noise_variance_mm2) ? e.noise_variance_mm2 / 3.0 : 0.0;
+  }
+  std::vector<double> field_variance;
+  for (const Eigen::VectorXd& v : held_out.variance_mm2)
+    field_variance.push_back((3.0 * (v - noise_per_axis)).cwiseMax(0.0).sum());
+  return FlangeErrorCovariance::of(held_out.flange_residual_mm, field_variance, noise_per_axis);
 }
 
 /// Each labelled point's position on the nominal robot's flange (LabelledPoint::nominal_mm): the
@@ -779,7 +824,14 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
           out.notes.push_back("the residuals at " + labels + " kriged on their own readings with the same variogram; "
                               "a point between the measured ones is predicted from the flange's rigid motion "
                               "their fields imply");
-          if (const std::optional<RotationCalibration> c = rotation_calibration_of(out.model)) {
+          const std::optional<HeldOutAtPoints> held_out = held_out_at_fielded_points(out.model);
+          if (const std::optional<FlangeErrorCovariance> c = held_out ? flange_error_covariance_of(out.model, *held_out) : std::nullopt) {
+            out.model = out.model.with_flange_error_covariance(c);
+            out.notes.push_back("a point between or beyond the measured ones takes the covariance of the fields' "
+                                "leave-one-out errors at their points at " + std::to_string(c->poses) +
+                                " training poses (how alike their errors are), larger where the fields' own variance is");
+          }
+          if (const std::optional<RotationCalibration> c = held_out ? rotation_calibration_of(out.model, *held_out) : std::nullopt) {
             out.model = out.model.with_rotation_calibration(c);
             out.notes.push_back("the flange's orientation error is predicted from the fields at " +
                                 std::to_string(out.model.fielded_points().size()) +

@@ -121,14 +121,23 @@ TEST_F(ProbeOrientationCli, FitOnProbeReadingsPredictsTheFlangesOrientationWithi
   EXPECT_GT(spread, 20.0);  // the comparison means something
   EXPECT_LT(worst, 0.05 * spread);
 
-  // A hand-edited rotation calibration or nominal point is refused naming the member; nothing scored.
+  // A hand-edited rotation calibration, error covariance or nominal point is refused naming the
+  // member; nothing scored.
   for (const auto& [edit, member] : std::vector<std::pair<std::function<void(nlohmann::json&)>, std::string>>{
            {[](nlohmann::json& j) { j["rotation_calibration"]["flange_covariance_rad2"][0][1] = 1e-3; }, "rotation_calibration"},
            {[](nlohmann::json& j) { j["rotation_calibration"]["flange_covariance_rad2"][2][2] = -1e-8; }, "rotation_calibration"},
            {[](nlohmann::json& j) { j["rotation_calibration"]["mean_independent_trace_rad2"] = 0.0; }, "rotation_calibration"},
            {[](nlohmann::json& j) { j["rotation_calibration"]["poses"] = -3; }, "rotation_calibration"},
            {[](nlohmann::json& j) { j["flange_points"][1]["nominal_mm"] = {1.0, 2.0}; }, "flange_points\"[1].nominal_mm"},
-           {[](nlohmann::json& j) { j["flange_points"].erase(2); }, "fewer than three points"}}) {
+           {[](nlohmann::json& j) { j["flange_error_covariance"]["field_covariance_mm2"][0][4] = 0.5; }, "flange_error_covariance"},
+           {[](nlohmann::json& j) { j["flange_error_covariance"]["mean_field_variance_mm2"] = -1.0; }, "flange_error_covariance"},
+           // A point removed: the covariances no longer match the points with a field.
+           {[](nlohmann::json& j) { j["flange_points"].erase(2); }, "(3 rows per point with a field, 2 here)"},
+           {[](nlohmann::json& j) {
+              j["flange_points"].erase(2);
+              j.erase("flange_error_covariance");
+            },
+            "fewer than three points"}}) {
     nlohmann::json edited = json("m.json");
     edit(edited);
     write("edited.json", edited.dump());

@@ -31,6 +31,7 @@
 #include <nlohmann/json.hpp>
 
 #include "errfield/compensation/calibration_leverage.hpp"
+#include "errfield/compensation/flange_error_covariance.hpp"
 #include "errfield/compensation/flange_rotation.hpp"
 #include "errfield/compensation/joint_error_functions.hpp"
 #include "errfield/compensation/registration.hpp"
@@ -309,6 +310,11 @@ class CompensationModel {
   /// ("rotation_calibration" in the model file; fit sets it).
   CompensationModel with_rotation_calibration(std::optional<RotationCalibration> c) const;
   const std::optional<RotationCalibration>& rotation_calibration() const noexcept { return rotation_calibration_; }
+  /// How alike the fields' errors are at their points, for a point predicted from their
+  /// combination ("flange_error_covariance" in the model file; fit sets it for two or more fielded
+  /// points). Without one the combination's variance is the sum of their standard deviations.
+  CompensationModel with_flange_error_covariance(std::optional<FlangeErrorCovariance> c) const;
+  const std::optional<FlangeErrorCovariance>& flange_error_covariance() const noexcept { return flange_error_covariance_; }
   /// Calibrated models fitted from positions: the calibration's leverage, which refuses poses
   /// outside what its data determine ("calibration_leverage" in the model file; empty in older files).
   CompensationModel with_calibration_leverage(std::optional<CalibrationLeverage> leverage) const;
@@ -418,6 +424,7 @@ class CompensationModel {
   std::vector<LabelledPoint> flange_points_;
   std::optional<CalibrationLeverage> calibration_leverage_;
   std::optional<RotationCalibration> rotation_calibration_;
+  std::optional<FlangeErrorCovariance> flange_error_covariance_;
   /// orientation_prior(), computed on first use; a copy (every with_*) starts afresh, since what it
   /// is computed from may change.
   struct LazyOrientationPrior {
