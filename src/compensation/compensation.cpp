@@ -736,6 +736,36 @@ ErrorPrediction CompensationModel::predict_field_at(const JointVector& q_deg, co
   return p;
 }
 
+namespace {
+
+/// A matrix as a model file holds it: rows of numbers.
+nlohmann::json rows_of(const Eigen::MatrixXd& m) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (Eigen::Index r = 0; r < m.rows(); ++r) {
+    nlohmann::json row = nlohmann::json::array();
+    for (Eigen::Index c = 0; c < m.cols(); ++c) row.push_back(m(r, c));
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+/// The n x n matrix `rows` holds (rows of numbers), or none when it holds anything else.
+std::optional<Eigen::MatrixXd> square_matrix_of(const nlohmann::json& rows, Eigen::Index n) {
+  if (!rows.is_array() || rows.size() != static_cast<std::size_t>(n)) return std::nullopt;
+  Eigen::MatrixXd m(n, n);
+  for (Eigen::Index r = 0; r < n; ++r) {
+    const nlohmann::json& line = rows[static_cast<std::size_t>(r)];
+    if (!line.is_array() || line.size() != static_cast<std::size_t>(n)) return std::nullopt;
+    for (Eigen::Index c = 0; c < n; ++c) {
+      if (!line[static_cast<std::size_t>(c)].is_number()) return std::nullopt;
+      m(r, c) = line[static_cast<std::size_t>(c)].get<double>();
+    }
+  }
+  return m;
+}
+
+}  // namespace
+
 nlohmann::json CompensationModel::to_json() const {
   nlohmann::json j;
   j["format"] = "errfield-compensation-model";
@@ -773,23 +803,12 @@ nlohmann::json CompensationModel::to_json() const {
                                  {"readings", measured_orientation_->readings},
                                  {"add_floor", measured_orientation_->add_floor}};
   if (flange_error_covariance_) {
-    nlohmann::json rows = nlohmann::json::array();
-    const Eigen::MatrixXd& m = flange_error_covariance_->field_covariance_mm2;
-    for (Eigen::Index r = 0; r < m.rows(); ++r) {
-      nlohmann::json row = nlohmann::json::array();
-      for (Eigen::Index col = 0; col < m.cols(); ++col) row.push_back(m(r, col));
-      rows.push_back(std::move(row));
-    }
-    j["flange_error_covariance"] = {{"field_covariance_mm2", rows},
+    j["flange_error_covariance"] = {{"field_covariance_mm2", rows_of(flange_error_covariance_->field_covariance_mm2)},
                                     {"mean_field_variance_mm2", flange_error_covariance_->mean_field_variance_mm2},
                                     {"poses", flange_error_covariance_->poses}};
   }
   if (rotation_calibration_) {
-    nlohmann::json c = nlohmann::json::array();
-    for (int r = 0; r < 3; ++r)
-      c.push_back({rotation_calibration_->flange_covariance_rad2(r, 0), rotation_calibration_->flange_covariance_rad2(r, 1),
-                   rotation_calibration_->flange_covariance_rad2(r, 2)});
-    j["rotation_calibration"] = {{"flange_covariance_rad2", c},
+    j["rotation_calibration"] = {{"flange_covariance_rad2", rows_of(rotation_calibration_->flange_covariance_rad2)},
                                  {"mean_independent_trace_rad2", rotation_calibration_->mean_independent_trace_rad2},
                                  {"poses", rotation_calibration_->poses}};
   }
@@ -962,20 +981,14 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
                                  " matrix (3 rows per point with a field, " + std::to_string(k) +
                                  " here) below 1 mm², \"mean_field_variance_mm2\": a positive number, \"poses\": count}, got ";
     FlangeErrorCovariance f;
-    const auto n = static_cast<Eigen::Index>(3 * k);
-    bool valid = k >= 2 && c.is_object() && c.contains("field_covariance_mm2") && c["field_covariance_mm2"].is_array() &&
-                 c["field_covariance_mm2"].size() == static_cast<std::size_t>(n) && c.contains("mean_field_variance_mm2") &&
-                 c["mean_field_variance_mm2"].is_number() && c.contains("poses") && c["poses"].is_number_unsigned();
-    if (valid) f.field_covariance_mm2.resize(n, n);
-    for (Eigen::Index row = 0; valid && row < n; ++row) {
-      const nlohmann::json& line = c["field_covariance_mm2"][static_cast<std::size_t>(row)];
-      valid = line.is_array() && line.size() == static_cast<std::size_t>(n);
-      for (Eigen::Index col = 0; valid && col < n; ++col) {
-        valid = line[static_cast<std::size_t>(col)].is_number();
-        if (valid) f.field_covariance_mm2(row, col) = line[static_cast<std::size_t>(col)].get<double>();
-      }
-    }
+    const std::optional<Eigen::MatrixXd> matrix =
+        c.is_object() && c.contains("field_covariance_mm2")
+            ? square_matrix_of(c["field_covariance_mm2"], static_cast<Eigen::Index>(3 * k))
+            : std::nullopt;
+    bool valid = k >= 2 && matrix && c.contains("mean_field_variance_mm2") && c["mean_field_variance_mm2"].is_number() &&
+                 c.contains("poses") && c["poses"].is_number_unsigned();
     if (valid) {
+      f.field_covariance_mm2 = *matrix;
       f.mean_field_variance_mm2 = c["mean_field_variance_mm2"].get<double>();
       f.poses = c["poses"].get<std::size_t>();
       const Eigen::MatrixXd& m = f.field_covariance_mm2;
@@ -994,18 +1007,12 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
                                  "positive definite 3 x 3 matrix below 0.01 rad² (5.7 deg sd), "
                                  "\"mean_independent_trace_rad2\": a positive number, \"poses\": count}, got ";
     RotationCalibration r;
-    bool valid = c.is_object() && c.contains("flange_covariance_rad2") && c["flange_covariance_rad2"].is_array() &&
-                 c["flange_covariance_rad2"].size() == 3 && c.contains("mean_independent_trace_rad2") &&
-                 c["mean_independent_trace_rad2"].is_number() && c.contains("poses") && c["poses"].is_number_unsigned();
-    for (int row = 0; valid && row < 3; ++row) {
-      const nlohmann::json& line = c["flange_covariance_rad2"][static_cast<std::size_t>(row)];
-      valid = line.is_array() && line.size() == 3;
-      for (int col = 0; valid && col < 3; ++col) {
-        valid = line[static_cast<std::size_t>(col)].is_number();
-        if (valid) r.flange_covariance_rad2(row, col) = line[static_cast<std::size_t>(col)].get<double>();
-      }
-    }
+    const std::optional<Eigen::MatrixXd> matrix =
+        c.is_object() && c.contains("flange_covariance_rad2") ? square_matrix_of(c["flange_covariance_rad2"], 3) : std::nullopt;
+    bool valid = matrix && c.contains("mean_independent_trace_rad2") && c["mean_independent_trace_rad2"].is_number() &&
+                 c.contains("poses") && c["poses"].is_number_unsigned();
     if (valid) {
+      r.flange_covariance_rad2 = *matrix;
       r.mean_independent_trace_rad2 = c["mean_independent_trace_rad2"].get<double>();
       r.poses = c["poses"].get<std::size_t>();
       const Eigen::Matrix3d& m = r.flange_covariance_rad2;

@@ -129,16 +129,8 @@ TEST(VarianceCalibration, FactorIsTheLargerOfMeanAndTailOfALeaveOneOutByRefittin
   // χ²₃(0.95) = 7.8147).
   const FieldDraw d = draw_field(3, 40, 0.04, 300.0, 0.01);
   const std::string given = "exp(sill=0.01,range=300)+nug(0.0025)";
-  std::vector<double> z2;
-  for (std::size_t i = 0; i < d.x.size(); ++i) {
-    std::vector<Eigen::Vector3d> x, v;
-    for (std::size_t j = 0; j < d.x.size(); ++j)
-      if (j != i) x.push_back(d.x[j]), v.push_back(d.reading[j]);
-    const auto field = make_vector_kriging_field(samples_of(x), v, options_with(given, false));
-    const ErrorPrediction p = field->predict(d.x[i], robot::JointVector::Zero());
-    ASSERT_TRUE(p.inside_region);
-    z2.push_back((d.reading[i] - p.position_error_mm).squaredNorm() / p.axis_variance_mm2[0]);
-  }
+  std::vector<double> z2 = refitted_squared_z(d, given);
+  ASSERT_EQ(z2.size(), d.x.size());
   double mean = 0.0;
   for (double z : z2) mean += z / 3.0 / static_cast<double>(z2.size());
   std::sort(z2.begin(), z2.end());
