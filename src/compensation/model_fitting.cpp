@@ -978,9 +978,58 @@ std::string point_list(const MeasurementSet& d, const std::vector<std::size_t>& 
   return s;
 }
 
+/// Rows of `d` (all of them, also those a previous round excluded: `excluded`, sorted; `fit` was
+/// fitted without them) of readings of several points on the flange that are gross outliers, judged
+/// as gross_outliers judges one point's: each row by its own point's field (the own point's, or the
+/// field fitted at that label's readings) in units of the predictive σ, against the robust scale
+/// of all judged rows: a kept row by its leave-one-out, an excluded one by the model's prediction
+/// at its point. A label without a field of its own (fewer than 20 readings) is not judged.
+std::vector<std::size_t> gross_outliers_at_points(const FitResult& fit, const MeasurementSet& d,
+                                                  const std::vector<std::size_t>& excluded,
+                                                  const std::string& own_label, double limit) {
+  const CompensationModel& model = fit.model;
+  if (!fit.registration) return {};
+  struct Judged {
+    const ErrorField* field;
+    Eigen::Vector3d point_mm;  // flange frame
+  };
+  std::map<std::string, Judged> by_label;
+  if (model.field()) by_label.emplace(own_label, Judged{model.field(), model.measured_point_mm()});
+  for (const CompensationModel::LabelledPoint& p : model.flange_points())
+    if (p.field) by_label.emplace(p.label, Judged{p.field.get(), p.position_mm});
+  std::vector<std::size_t> judged_rows;
+  std::vector<double> standardized;
+  for (const auto& [label, judged] : by_label) {
+    std::vector<std::size_t> kept_rows;
+    for (std::size_t i = 0; i < d.reflector.size(); ++i)
+      if (d.reflector[i] == label && !std::binary_search(excluded.begin(), excluded.end(), i)) kept_rows.push_back(i);
+    const std::vector<SampleHoldOut> loo = leave_one_out_by_sample(*judged.field);
+    if (loo.size() != kept_rows.size()) continue;  // merged repeated poses: no per-row leave-one-out
+    for (std::size_t k = 0; k < kept_rows.size(); ++k) {
+      judged_rows.push_back(kept_rows[k]);
+      standardized.push_back(loo[k].variance_mm2 > 0 ? loo[k].residual_mm.norm() / std::sqrt(loo[k].variance_mm2) : 0.0);
+    }
+    const MdhModel at = model.command_model().with_tool_point(judged.point_mm);
+    for (std::size_t i : excluded) {
+      if (d.reflector[i] != label) continue;
+      const ErrorPrediction e = model.predict_error_at(d.q_deg[i], at);
+      const double variance = e.predictive_variance_mm2() / 3.0;  // per component
+      const Eigen::Vector3d residual = fit.registration->robot_from_tracker * d.measured_mm[i] -
+                                       forward_position(at, d.q_deg[i]) - e.position_error_mm;
+      judged_rows.push_back(i);
+      // Outside the field's region nothing is predicted there: no evidence against the row.
+      standardized.push_back(e.inside_region && variance > 0 ? residual.norm() / std::sqrt(variance) : 0.0);
+    }
+  }
+  std::vector<std::size_t> out;
+  for (std::size_t k : beyond_robust_limit(standardized, limit)) out.push_back(judged_rows[k]);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 /// Readings of several points on the flange: the model's own label resolved first (so the stored
-/// artifacts — data joints, the nominal robot's registration — are that point's), no gross-outlier
-/// screen (the screen judges rows by the field, which holds one point's rows).
+/// artifacts — data joints, the nominal robot's registration — are that point's), then one round of
+/// the gross-outlier screen over every fielded point's rows (gross_outliers_at_points).
 FitResult fit_several_points(const MdhModel& robot, const MeasurementSet& d, const FitOptions& options) {
   refuse_several_points_for(d, options.method);
   if (d.measured_mm.empty())
@@ -994,14 +1043,50 @@ FitResult fit_several_points(const MdhModel& robot, const MeasurementSet& d, con
     o.tool_reflector = assign_flange_points(robot, pm, d.reflector, "", o.calibration, d.source).labels.front();
   }
   FitResult out = fit_checked(robot, d, o);
+  // Gross outliers pull the one calibration of every point and are kriged as their point's field.
+  // One round: the rows the first fit's fields judge beyond the limit are left out, and the model
+  // fitted again.
+  MeasurementSet kept = d;
+  std::vector<std::size_t> excluded;
+  // Up to three rounds, as for one point: a reading near a gross outlier can look like one while
+  // the outlier is in its field, and comes back once it is not.
+  if (o.outlier_limit > 0 && o.method == CompensationMethod::kinematic_kriging) {
+    for (int round = 0; round < 3; ++round) {
+      const std::vector<std::size_t> rows = gross_outliers_at_points(out, d, excluded, o.tool_reflector, o.outlier_limit);
+      if (rows == excluded) break;
+      if (rows.size() * 5 > d.q_deg.size()) {
+        out.warnings.push_back(std::to_string(rows.size()) + " of " + std::to_string(d.q_deg.size()) +
+                               " rows are beyond " + format_number(o.outlier_limit) +
+                               " robust sigma: too many to be a few gross outliers, so all were kept; check the data "
+                               "(a wrong robot or tool, a moved tracker, a reflector moved in its nest)");
+        break;
+      }
+      excluded = rows;
+      kept = without_rows(d, excluded);
+      out = fit_checked(robot, kept, o);
+    }
+    if (!excluded.empty()) {
+      std::string rows;
+      for (std::size_t k = 0; k < excluded.size(); ++k)
+        rows += (k ? ", " : "") + d.id[excluded[k]] + " (" + d.reflector[excluded[k]] + ")";
+      const std::string what = std::to_string(excluded.size()) +
+                               " row(s) excluded as gross outliers (a reading beyond " + format_number(o.outlier_limit) +
+                               " robust sigma from what its neighbours in its own point's field predict, leave-one-out "
+                               "in units of the predictive sigma; --outlier-limit): " + rows;
+      out.notes.insert(out.notes.begin(), what);
+      out.warnings.push_back(what + "; look at their measurements");
+    }
+  }
   std::vector<std::size_t> others;
-  for (std::size_t i = 0; i < d.reflector.size(); ++i)
-    if (d.reflector[i] != o.tool_reflector) others.push_back(i);
-  if (o.outlier_limit > 0)
-    out.notes.push_back("gross-outlier screen: none for readings of several points on the flange (the field that "
-                        "judges rows holds one point's)");
-  out = attach_artifacts(std::move(out), robot, without_rows(d, others));
-  return with_nominal_flange_points(std::move(out), robot, d);
+  for (std::size_t i = 0; i < kept.reflector.size(); ++i)
+    if (kept.reflector[i] != o.tool_reflector) others.push_back(i);
+  out = attach_artifacts(std::move(out), robot, without_rows(kept, others));
+  if (!excluded.empty()) {
+    std::vector<std::string> names;
+    for (std::size_t row : excluded) names.push_back(d.id[row] + " (" + d.reflector[row] + ")");
+    out.model = out.model.with_excluded_rows(std::move(names));
+  }
+  return with_nominal_flange_points(std::move(out), robot, kept);
 }
 
 }  // namespace
