@@ -1027,6 +1027,38 @@ std::vector<std::size_t> gross_outliers_at_points(const FitResult& fit, const Me
   return out;
 }
 
+/// Rows a round of the gross-outlier screen judges beyond the limit, given the fit without
+/// `excluded`; none when nothing can judge them (the judge notes why in the fit).
+using OutlierJudge = std::function<std::optional<std::vector<std::size_t>>(FitResult& fit,
+                                                                           const std::vector<std::size_t>& excluded)>;
+
+/// Up to three rounds of the gross-outlier screen over `d`: each round the rows `judge` names are
+/// left out and the model fitted again (`out`, `kept`), until a round names the same rows (a row
+/// near an outlier can look like one while the outlier is in the field, and comes back once it is
+/// not). More than a fifth of the rows is no few gross outliers: all are kept and `out` warns.
+/// Returns the rows left out (sorted).
+std::vector<std::size_t> screen_gross_outliers(FitResult& out, MeasurementSet& kept, const MdhModel& robot,
+                                               const MeasurementSet& d, const FitOptions& o, const OutlierJudge& judge,
+                                               const std::string& likely_causes) {
+  std::vector<std::size_t> excluded;
+  for (int round = 0; round < 3; ++round) {
+    const std::optional<std::vector<std::size_t>> rows = judge(out, excluded);
+    if (!rows || *rows == excluded) break;
+    if (rows->size() * 5 > d.q_deg.size()) {
+      out.warnings.push_back(std::to_string(rows->size()) + " of " + std::to_string(d.q_deg.size()) +
+                             " rows are beyond " + format_number(o.outlier_limit) + " robust sigma (" +
+                             point_list(d, *rows, 10) +
+                             "): too many to be a few gross outliers, so all were kept; check the data (" +
+                             likely_causes + ")");
+      break;
+    }
+    excluded = *rows;
+    kept = without_rows(d, excluded);
+    out = fit_checked(robot, kept, o);
+  }
+  return excluded;
+}
+
 /// Readings of several points on the flange: the model's own label resolved first (so the stored
 /// artifacts — data joints, the nominal robot's registration — are that point's), then one round of
 /// the gross-outlier screen over every fielded point's rows (gross_outliers_at_points).
@@ -1051,20 +1083,12 @@ FitResult fit_several_points(const MdhModel& robot, const MeasurementSet& d, con
   // Up to three rounds, as for one point: a reading near a gross outlier can look like one while
   // the outlier is in its field, and comes back once it is not.
   if (o.outlier_limit > 0 && o.method == CompensationMethod::kinematic_kriging) {
-    for (int round = 0; round < 3; ++round) {
-      const std::vector<std::size_t> rows = gross_outliers_at_points(out, d, excluded, o.tool_reflector, o.outlier_limit);
-      if (rows == excluded) break;
-      if (rows.size() * 5 > d.q_deg.size()) {
-        out.warnings.push_back(std::to_string(rows.size()) + " of " + std::to_string(d.q_deg.size()) +
-                               " rows are beyond " + format_number(o.outlier_limit) +
-                               " robust sigma: too many to be a few gross outliers, so all were kept; check the data "
-                               "(a wrong robot or tool, a moved tracker, a reflector moved in its nest)");
-        break;
-      }
-      excluded = rows;
-      kept = without_rows(d, excluded);
-      out = fit_checked(robot, kept, o);
-    }
+    excluded = screen_gross_outliers(
+        out, kept, robot, d, o,
+        [&](FitResult& fit, const std::vector<std::size_t>& left_out) {
+          return std::optional(gross_outliers_at_points(fit, d, left_out, o.tool_reflector, o.outlier_limit));
+        },
+        "a wrong robot or tool, a moved tracker, a reflector moved in its nest");
     if (!excluded.empty()) {
       std::string rows;
       for (std::size_t k = 0; k < excluded.size(); ++k)
@@ -1110,30 +1134,20 @@ FitResult fit_compensation_model(const robot::MdhModel& robot, const Measurement
   if (!screened) return attach_artifacts(std::move(out), robot, d);
   // Gross outliers pull the calibration and, worse, are kriged as if they were the field: 3 %
   // of 5 mm tracker errors made the joint-space default 2.3x worse on clean held-out points.
-  std::vector<std::size_t> excluded;
-  MeasurementSet kept;
+  MeasurementSet kept = d;
   const bool screened_by_own_field = o.method == CompensationMethod::kinematic_kriging;
-  for (int round = 0; round < 3; ++round) {
-    std::string why_none;
-    const std::optional<FitResult> screen = screening_fit(out, robot, excluded.empty() ? d : kept, o, why_none);
-    if (!screen) {
-      out.notes.push_back(why_none);
-      break;
-    }
-    const std::vector<std::size_t> rows = gross_outliers(*screen, d, excluded, o.outlier_limit);
-    if (rows == excluded) break;
-    if (rows.size() * 5 > d.q_deg.size()) {
-      out.warnings.push_back(std::to_string(rows.size()) + " of " + std::to_string(d.q_deg.size()) +
-                             " rows are beyond " + format_number(o.outlier_limit) + " robust sigma (" +
-                             point_list(d, rows, 10) +
-                             "): too many to be a few gross outliers, so all were kept; check the data (a wrong "
-                             "robot or tool, a moved tracker)");
-      break;
-    }
-    excluded = rows;
-    kept = without_rows(d, rows);
-    out = fit_checked(robot, kept, o);
-  }
+  const std::vector<std::size_t> excluded = screen_gross_outliers(
+      out, kept, robot, d, o,
+      [&](FitResult& fit, const std::vector<std::size_t>& left_out) -> std::optional<std::vector<std::size_t>> {
+        std::string why_none;
+        const std::optional<FitResult> screen = screening_fit(fit, robot, kept, o, why_none);
+        if (!screen) {
+          fit.notes.push_back(why_none);
+          return std::nullopt;
+        }
+        return gross_outliers(*screen, d, left_out, o.outlier_limit);
+      },
+      "a wrong robot or tool, a moved tracker");
   if (excluded.empty()) return attach_artifacts(std::move(out), robot, d);
   const std::string how = "reading beyond " + format_number(o.outlier_limit) +
                           " robust sigma from what its neighbours in the field predict (leave-one-out, in units of "
