@@ -372,23 +372,14 @@ CompensationModel CompensationModel::with_credible_range(std::optional<CredibleR
 namespace {
 
 /// The joint error functions' prediction at the tool point of `at`, with their angle errors as fitted
-/// at the reflector (`reflector`'s tool): a gravity term's load point stays where the fit put it (the
-/// reflector), only the lever from each joint's axis to the point changes. Each design column is a
-/// scalar times one joint's position column at the reflector (joint_error_functions.cpp), so it
-/// becomes the same scalar times that joint's column at the point. A column that vanishes at the
-/// reflector (the joint's axis through it) was not fitted and contributes nothing.
-/// The functions' design (3 x P, mm per mrad) carried from the reflector to the point `at`.
-Eigen::MatrixXd design_at_point(const JointErrorFunctions& f, const MdhModel& reflector, const MdhModel& at,
-                                const JointVector& q_deg) {
-  return f.design_rows_at_point(reflector, at, q_deg);
-}
-
+/// at the reflector (`reflector`'s tool): their design carried to the point
+/// (JointErrorFunctions::design_rows_at_point).
 JointFunctionPrediction functions_at_point(const JointErrorFunctions& f, const MdhModel& reflector, const MdhModel& at,
                                            const JointVector& q_deg, const Eigen::MatrixXd* taken_back) {
   JointFunctionPrediction out;
   const Eigen::Index count = f.parameter_count();
   if (count == 0) return out;
-  Eigen::MatrixXd d = design_at_point(f, reflector, at, q_deg);
+  Eigen::MatrixXd d = f.design_rows_at_point(reflector, at, q_deg);
   const Eigen::Index polynomial = kJointCount * static_cast<Eigen::Index>(f.degree);
   Eigen::VectorXd beta(count);
   for (Eigen::Index c = 0; c < count; ++c) {
@@ -507,7 +498,7 @@ void CompensationModel::set_point_function_rows() {
     auto rows = std::make_shared<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
         static_cast<Eigen::Index>(q.size()), 3 * p);
     for (std::size_t i = 0; i < q.size(); ++i) {
-      const Eigen::MatrixXd block = design_at_point(*joint_functions_, command_model_, at, q[i]);
+      const Eigen::MatrixXd block = joint_functions_->design_rows_at_point(command_model_, at, q[i]);
       rows->row(static_cast<Eigen::Index>(i)) = Eigen::Map<const Eigen::RowVectorXd>(block.data(), 3 * p);
     }
     point_function_rows_[k] = std::move(rows);
