@@ -3,9 +3,9 @@
 poses, each read at three nests r1 = (0,0,100), r2 = (150,0,100), r3 = (0,150,100) mm (flange frame);
 the first 240 poses train, the other 200 are held out, 40 training readings locate a point.
 
-usage: scripts/flange_points_study.py ERRFIELD WORKDIR [--seeds 1,2,3]
+usage: scripts/flange_points_study.py ERRFIELD WORKDIR [--seeds 1,2,3] [--robot kr16]
 Prints, per seed, the held-out 3-D RMS (mm) and the 95 % radius's coverage of: each point's own
-single-point fit; the r1+r3 model at r3; the r1+r3 model with r2 located; the r1+r2 model with r3
+single-point fit; the r1 model with r2 and with r3 located; the r1+r3 model at r3; the r1+r3 model with r2 located; the r1+r2 model with r3
 located; the r1+r2+r3 model at each point.
 """
 import argparse
@@ -68,11 +68,11 @@ def score(errfield, workdir, model, data, *extra):
     return f"{s['position']['after']['rms_mm']:.4f} mm, coverage {s['uncertainty']['coverage95']:.3f}"
 
 
-def study(errfield, workdir, seed):
+def study(errfield, workdir, seed, robot_name="kr16"):
     os.makedirs(workdir, exist_ok=True)
     p = lambda name: os.path.join(workdir, name)
     nests = ";".join(",".join(str(v) for v in xyz) for xyz in POINTS.values())
-    run([errfield, "simulate", "--robot", "kr16", "--seed", str(seed), "--sample", f"scattered:{N_POSES}",
+    run([errfield, "simulate", "--robot", robot_name, "--seed", str(seed), "--sample", f"scattered:{N_POSES}",
          "--orientation-spread", "30", "--measure", "positions", "--systematic", "realistic", "--reflectors", nests,
          "--robot-out", p("kr16.json"), "--out", p("readings.csv")])
     robot = json.load(open(p("kr16.json")))
@@ -80,10 +80,14 @@ def study(errfield, workdir, seed):
         robot["tool"] = {"x_mm": x, "y_mm": y, "z_mm": z, "rx_deg": 0, "ry_deg": 0, "rz_deg": 0}
         json.dump(robot, open(p(f"kr16_{label}.json"), "w"))
     split(p("readings.csv"), workdir)
-    print(f"seed {seed} (SIMULATED)")
+    print(f"{robot_name} seed {seed} (SIMULATED)")
     for label in POINTS:
         run([errfield, "fit", "--robot", p(f"kr16_{label}.json"), "--data", p(f"train_{label}.csv"), "--out", p(f"m_{label}.json")])
         print(f"  own fit at {label}: {score(errfield, workdir, p(f'm_{label}.json'), p(f'test_{label}.csv'))}")
+    for located in ("r2", "r3"):
+        moved = p(f"m_r1_{located}.json")
+        run([errfield, "locate-tool", "--model", p("m_r1.json"), "--data", p(f"locate_{located}.csv"), "--out", moved])
+        print(f"  r1 alone, {located} located: {score(errfield, workdir, moved, p(f'test_{located}.csv'))}")
     for labels, located in (("r1r3", "r2"), ("r1r2", "r3"), ("r1r2r3", None)):
         model = p(f"m_{labels}.json")
         run([errfield, "fit", "--robot", p("kr16_r1.json"), "--data", p(f"train_{labels}.csv"), "--out", model])
@@ -102,9 +106,10 @@ def main():
     ap.add_argument("errfield")
     ap.add_argument("workdir")
     ap.add_argument("--seeds", default="1,2,3")
+    ap.add_argument("--robot", default="kr16", help="built-in robot simulate takes (kr16, ur5e, er20-c10, ...)")
     a = ap.parse_args()
     for seed in (int(s) for s in a.seeds.split(",")):
-        study(a.errfield, os.path.join(a.workdir, f"seed{seed}"), seed)
+        study(a.errfield, os.path.join(a.workdir, f"{a.robot}_seed{seed}"), seed, a.robot)
     return 0
 
 

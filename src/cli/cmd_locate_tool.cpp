@@ -55,10 +55,25 @@ void run_locate_tool(const LocateToolArgs& a) {
             << "  " << rounded(t.lever_mm, 10) << " mm from the reflector the model was measured with"
             << (t.field_used ? "; the flange position corrected by the model's field and joint functions"
                              : "; the model's calibrated kinematics alone (no field)");
-  if (prior.known())
+  if (prior.known() && !t.correction)
     std::cout << "; orientation " << (located.measured_orientation() ? "residual measured at its readings " : "prior ")
               << rounded(prior.sigma_rad * 1e3, 1e3) << " mrad, rows refused beyond "
               << rounded(prior.max_lever_mm, 1) << " mm" << (t.lever_mm > prior.max_lever_mm ? " (this point: every row)" : "");
+  if (const auto& c = t.correction) {
+    std::cout << "\n  the readings' residual at the point kriged over the joints (the flange's turn the model's points do "
+                 "not see): RMS "
+              << rounded(t.uncorrected_rms_mm) << " mm at the readings, " << rounded(t.correction_leave_one_out_rms_mm)
+              << " mm left out one at a time with the correction; standard deviation per flange axis "
+              << rounded(std::sqrt(c->sill_mm2().x())) << ", " << rounded(std::sqrt(c->sill_mm2().y())) << ", "
+              << rounded(std::sqrt(c->sill_mm2().z())) << " mm, noise " << rounded(std::sqrt(c->noise_mm2()))
+              << " mm; correlation over the joints " << c->correlation().to_string() << ", variance x " << rounded(c->variance_factor(), 100) << " (leave-one-out)";
+    if (prior.known())
+      std::cout << "; rows whose remaining uncertainty there exceeds "
+                << rounded(compensation::kMaxLeverResidualRatio * prior.residual_rms_mm) << " mm RMS are refused";
+  } else if (t.field_used && t.readings < compensation::kMinToolPointCorrectionReadings) {
+    std::cout << "\n  " << t.readings << " readings: fewer than the " << compensation::kMinToolPointCorrectionReadings
+              << " a correction at the point is kriged from (the orientation term stands for it)";
+  }
   std::cout << "\n  model with this working tool written to " << a.out
             << " (predict, validate and compensate use it; --tool overrides it)\n";
 }

@@ -69,7 +69,15 @@ void print_working_tool(std::ostream& out, const compensation::CompensationModel
   const compensation::OrientationPrior& prior = model.orientation_prior();
   out << "  working tool " << tool_option_text(model.tool_in_robot_frame(*model.working_tool())) << " (--tool, flange frame): "
       << format_number(std::round(lever * 10) / 10) << " mm from the reflector the model was measured with";
-  if (prior.known())
+  const auto& correction = model.tool_point_correction();
+  if (correction && prior.known() &&
+      (correction->point_mm() - model.working_tool()->translation()).norm() <= compensation::kSameFlangePointMm)
+    out << "; its own " << correction->readings()
+        << " readings' residual kriged over the joints (tool_point_correction): rows whose remaining uncertainty "
+           "there exceeds "
+        << format_number(std::round(compensation::kMaxLeverResidualRatio * prior.residual_rms_mm * 1e4) / 1e4)
+        << " mm RMS are refused (orientation-unknown)";
+  else if (prior.known())
     out << "; orientation prior " << format_number(std::round(prior.sigma_rad * 1e6) / 1e3)
         << " mrad per axis, refused beyond " << format_number(std::round(prior.max_lever_mm)) << " mm"
         << (lever > prior.max_lever_mm ? " (every row: orientation-unknown)" : "");

@@ -11,6 +11,7 @@
 #include "errfield/error.hpp"
 #include "errfield/json_file.hpp"
 #include "errfield/compensation/error_fields.hpp"
+#include "errfield/compensation/kriging_fields.hpp"
 #include "errfield/compensation/prediction.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/input_checks.hpp"
@@ -263,6 +264,11 @@ CompensationModel CompensationModel::with_rotation_calibration(std::optional<Rot
 CompensationModel CompensationModel::with_flange_error_covariance(std::optional<FlangeErrorCovariance> c) const {
   CompensationModel m = *this;
   m.flange_error_covariance_ = std::move(c);
+  return m;
+}
+CompensationModel CompensationModel::with_tool_point_correction(std::shared_ptr<const ToolPointCorrection> c) const {
+  CompensationModel m = *this;
+  m.tool_point_correction_ = std::move(c);
   return m;
 }
 
@@ -520,7 +526,8 @@ ErrorPrediction CompensationModel::predict_at_labelled_point(const JointVector& 
   return p;
 }
 
-ErrorPrediction CompensationModel::predict_by_rigid_motion(const JointVector& q_deg, const MdhModel& point) const {
+ErrorPrediction CompensationModel::predict_by_rigid_motion(const JointVector& q_deg, const MdhModel& point,
+                                                           bool orientation_variance) const {
   // The points with a field (flange frame) and their fields: the own point first.
   using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   struct Known {
@@ -615,7 +622,7 @@ ErrorPrediction CompensationModel::predict_by_rigid_motion(const JointVector& q_
     const OrientationPrior& prior = orientation_prior();
     for (const Eigen::Matrix<double, 6, 1>& v : unobservable) {
       const Eigen::Vector3d moved = at_point * v;  // mm per rad about the line
-      const double s2 = prior.known() ? prior.sigma_rad * prior.sigma_rad : 0.0;
+      const double s2 = prior.known() && orientation_variance ? prior.sigma_rad * prior.sigma_rad : 0.0;
       field_variance += s2 * moved.cwiseAbs2();
       p.orientation_variance_mm2 += s2 * moved.squaredNorm();
       // The one-point lever limit is for a rotation about any axis (2 sigma² L²); about one axis it
@@ -678,13 +685,37 @@ ErrorPrediction CompensationModel::predict_error_at(const JointVector& q_deg, co
 
 ErrorPrediction CompensationModel::predict_field_at(const JointVector& q_deg, const MdhModel& point) const {
   if (!field_) return {};
+  const ToolPointCorrection* correction =
+      tool_point_correction_ && (tool_point_correction_->point_mm() - point.tool().translation()).norm() <= kSameFlangePointMm
+          ? tool_point_correction_.get()
+          : nullptr;
+  ErrorPrediction p = predict_uncorrected_at(q_deg, point, correction == nullptr);
+  if (!correction || !p.inside_region) return p;
+  // What the point's own readings showed beyond the model's prediction there (the flange's turn the
+  // model's points do not see), kriged; its variance is what the orientation term guessed.
+  const ToolPointCorrectionPrediction c =
+      correction->predict(q_deg, forward_kinematics(command_model_, q_deg, EndFrame::flange).linear());
+  p.position_error_mm += c.error_mm;
+  p.orientation_variance_mm2 = c.axis_variance_mm2.sum();
+  // The lever rule with what is left unknown at this pose: the correction's kriging variance in place
+  // of the prior's 2 sigma² L² (near the readings the point is supported, far from them as before).
+  const OrientationPrior& prior = orientation_prior();
+  if (prior.known())
+    p.orientation_supported = std::sqrt(p.orientation_variance_mm2) <= kMaxLeverResidualRatio * prior.residual_rms_mm;
+  if (std::isfinite(p.variance_mm2)) p.variance_mm2 += p.orientation_variance_mm2;
+  if (p.axis_variance_mm2.allFinite()) p.axis_variance_mm2 += c.axis_variance_mm2;
+  return p;
+}
+
+ErrorPrediction CompensationModel::predict_uncorrected_at(const JointVector& q_deg, const MdhModel& point,
+                                                          bool orientation_variance) const {
   const Eigen::Vector3d x = point.tool().translation();
   const bool several = std::any_of(flange_points_.begin(), flange_points_.end(), [](const LabelledPoint& lp) { return lp.field != nullptr; });
   if (several && (x - measured_point_mm()).norm() > kSameFlangePointMm) {
     for (std::size_t k = 0; k < flange_points_.size(); ++k)
       if (flange_points_[k].field && (flange_points_[k].position_mm - x).norm() <= kSameFlangePointMm)
         return predict_at_labelled_point(q_deg, point, k);
-    return predict_by_rigid_motion(q_deg, point);
+    return predict_by_rigid_motion(q_deg, point, orientation_variance);
   }
   std::vector<double> w;  // the field's weights, when the functions' variance needs them
   const Eigen::Vector3d at = forward_position(nominal_model(), q_deg);
@@ -716,7 +747,7 @@ ErrorPrediction CompensationModel::predict_field_at(const JointVector& q_deg, co
     const OrientationPrior& prior = orientation_prior();
     if (prior.known()) {
       const Eigen::Vector3d lever = forward_kinematics(point, q_deg, EndFrame::flange).linear() * lever_flange;
-      const double s2 = prior.sigma_rad * prior.sigma_rad, l2 = lever.squaredNorm();
+      const double s2 = orientation_variance ? prior.sigma_rad * prior.sigma_rad : 0.0, l2 = lever.squaredNorm();
       p.orientation_variance_mm2 = 2.0 * s2 * l2;
       if (std::isfinite(p.variance_mm2)) p.variance_mm2 += p.orientation_variance_mm2;
       if (p.axis_variance_mm2.allFinite())
@@ -798,6 +829,7 @@ nlohmann::json CompensationModel::to_json() const {
                                     {"mean_field_variance_mm2", flange_error_covariance_->mean_field_variance_mm2},
                                     {"poses", flange_error_covariance_->poses}};
   }
+  if (tool_point_correction_) j["tool_point_correction"] = tool_point_correction_->to_json();
   if (rotation_calibration_) {
     j["rotation_calibration"] = {{"flange_covariance_rad2", rows_of(rotation_calibration_->flange_covariance_rad2)},
                                  {"mean_independent_trace_rad2", rotation_calibration_->mean_independent_trace_rad2},
@@ -1077,6 +1109,19 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
     } catch (const ArgumentError& e) {
       fail_model(source, e.what());
     }
+  }
+  if (j.contains("tool_point_correction")) {
+    auto c = std::make_shared<const ToolPointCorrection>(ToolPointCorrection::from_json(j["tool_point_correction"], source));
+    // It is the residual of the working tool's readings against this model: at another point it
+    // belongs to another model (or the file was edited).
+    if (!model.working_tool_ || (model.working_tool_->translation() - c->point_mm()).norm() > kSameFlangePointMm)
+      fail_model(source, "member \"tool_point_correction\" is for the point (" + format_number(c->point_mm().x()) + ", " +
+                             format_number(c->point_mm().y()) + ", " + format_number(c->point_mm().z()) +
+                             ") mm, but the model's working_tool is " +
+                             (model.working_tool_ ? "elsewhere" : "not set") +
+                             ": it holds the residual of the located point's readings and applies there only "
+                             "(run locate-tool again rather than editing either)");
+    model.tool_point_correction_ = std::move(c);
   }
   if (j.contains("joint_error_functions")) {
     // Evaluated through the calibrated command model's Jacobian and added to a field's prediction:

@@ -509,6 +509,12 @@ std::vector<SampleHoldOut> leave_one_out_by_sample(const ErrorField& field) {
   return {};
 }
 
+std::optional<VariogramModel> joint_space_vector_field_model(const ErrorField& field) {
+  if (const auto* f = dynamic_cast<const KrigingField<JointVector, Eigen::Vector3d, JointSpaceMetric>*>(&field))
+    return f->model();
+  return std::nullopt;
+}
+
 Eigen::MatrixXd leave_one_out_residuals_of(const ErrorField& field, const Eigen::MatrixXd& values) {
   if (const auto* f = dynamic_cast<const KrigingField<JointVector, Eigen::Vector3d, JointSpaceMetric>*>(&field))
     return f->leave_one_out_residuals_of(values);

@@ -7,6 +7,7 @@
 
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
+#include "errfield/compensation/kriging_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
 
 namespace errfield::compensation {
@@ -47,6 +48,41 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& w) {
 }
 
 std::string mm(double v) { return format_number(std::round(v * 1e4) / 1e4); }
+
+/// The readings' residual against `at_tool` (the model with the located point as working tool and no
+/// correction), kriged over the joints with the model field's correlation (ToolPointCorrection);
+/// sets the RMS before and the correction's leave-one-out RMS in `out`.
+std::shared_ptr<const ToolPointCorrection> correction_at_located_point(const CompensationModel& at_tool,
+                                                                       const MeasurementSet& d,
+                                                                       const std::vector<std::size_t>& used,
+                                                                       ToolLocation& out) {
+  const std::optional<VariogramModel> field_model =
+      at_tool.field() ? joint_space_vector_field_model(*at_tool.field()) : std::nullopt;
+  if (!field_model || used.size() < kMinToolPointCorrectionReadings) return nullptr;
+  const Registration& reg = *at_tool.registration();
+  const MdhModel scored = at_tool.scored_model();
+  std::vector<JointVector> q;
+  std::vector<Eigen::Matrix3d> rotation;
+  std::vector<Eigen::Vector3d> residual;
+  double ss = 0.0;
+  for (std::size_t i : used) {
+    const ErrorPrediction e = at_tool.predict_error(d.q_deg[i]);
+    if (!e.inside_region || !e.position_error_mm.allFinite()) continue;
+    q.push_back(d.q_deg[i]);
+    rotation.push_back(forward_kinematics(at_tool.command_model(), d.q_deg[i], EndFrame::flange).linear());
+    residual.push_back(reg.robot_from_tracker * d.measured_mm[i] -
+                       (forward_position(scored, d.q_deg[i]) + e.position_error_mm));
+    ss += residual.back().squaredNorm();
+  }
+  std::optional<ToolPointCorrection> c =
+      ToolPointCorrection::fit(scored.tool().translation(), q, rotation, residual, *field_model);
+  if (!c) return nullptr;
+  out.uncorrected_rms_mm = std::sqrt(ss / static_cast<double>(q.size()));
+  double loo = 0.0;
+  for (const Eigen::Vector3d& r : c->leave_one_out_residual_mm()) loo += r.squaredNorm();
+  out.correction_leave_one_out_rms_mm = std::sqrt(loo / static_cast<double>(q.size()));
+  return std::make_shared<const ToolPointCorrection>(std::move(*c));
+}
 
 }  // namespace
 
@@ -123,7 +159,8 @@ ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d
   // What the model's own errors explain at the located point.
   Eigen::Isometry3d tool = robot.tool();
   tool.translation() = out.tool_mm;
-  const CompensationModel at_tool = model.with_working_tool(tool);
+  // An earlier located point's correction is of its readings: not this point's.
+  const CompensationModel at_tool = model.with_working_tool(tool).with_tool_point_correction(nullptr);
   double var_sum = 0.0, stated_sum = 0.0, lever_ss = 0.0;
   std::size_t var_count = 0;
   for (std::size_t i : used) {
@@ -152,6 +189,7 @@ ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d
     out.expected_rms_mm = reg.residual_rms_mm;
     out.expected_basis = "the model's registration residual";
   }
+  if (out.field_used) out.correction = correction_at_located_point(at_tool, d, used, out);
   if (out.residual_rms_mm > options.not_rigid_factor * out.expected_rms_mm)
     throw InputError(src + ": the " + std::to_string(out.readings) + " readings are not one point rigidly attached to "
                          "the flange: located at (" + mm(out.tool_mm.x()) + ", " + mm(out.tool_mm.y()) + ", " +
@@ -164,7 +202,8 @@ ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d
 }
 
 CompensationModel with_located_tool(const CompensationModel& model, const ToolLocation& t) {
-  CompensationModel located = model.with_working_tool(model.command_model().with_tool_point(t.tool_mm).tool());
+  CompensationModel located = model.with_working_tool(model.command_model().with_tool_point(t.tool_mm).tool())
+                                  .with_tool_point_correction(t.correction);
   // Calibrated models also aim it when read by a version that knows no working tool.
   const bool calibrated =
       model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging;

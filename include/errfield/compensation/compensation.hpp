@@ -35,6 +35,7 @@
 #include "errfield/compensation/flange_rotation.hpp"
 #include "errfield/compensation/joint_error_functions.hpp"
 #include "errfield/compensation/registration.hpp"
+#include "errfield/compensation/tool_point_correction.hpp"
 #include "errfield/robot/inverse_kinematics.hpp"
 #include "errfield/robot/mdh_model.hpp"
 
@@ -315,6 +316,12 @@ class CompensationModel {
   /// points). Without one the combination's variance is the sum of their standard deviations.
   CompensationModel with_flange_error_covariance(std::optional<FlangeErrorCovariance> c) const;
   const std::optional<FlangeErrorCovariance>& flange_error_covariance() const noexcept { return flange_error_covariance_; }
+  /// The kriged residual of a located point's own readings (tool_point_correction.hpp; `locate-tool`
+  /// sets it, "tool_point_correction" in the model file): added where a point within
+  /// kSameFlangePointMm of its point is predicted, its kriging variance in place of the orientation
+  /// term there.
+  CompensationModel with_tool_point_correction(std::shared_ptr<const ToolPointCorrection> c) const;
+  const std::shared_ptr<const ToolPointCorrection>& tool_point_correction() const noexcept { return tool_point_correction_; }
   /// Calibrated models fitted from positions: the calibration's leverage, which refuses poses
   /// outside what its data determine ("calibration_leverage" in the model file; empty in older files).
   CompensationModel with_calibration_leverage(std::optional<CalibrationLeverage> leverage) const;
@@ -425,6 +432,7 @@ class CompensationModel {
   std::optional<CalibrationLeverage> calibration_leverage_;
   std::optional<RotationCalibration> rotation_calibration_;
   std::optional<FlangeErrorCovariance> flange_error_covariance_;
+  std::shared_ptr<const ToolPointCorrection> tool_point_correction_;
   /// orientation_prior(), computed on first use; a copy (every with_*) starts afresh, since what it
   /// is computed from may change.
   struct LazyOrientationPrior {
@@ -451,8 +459,13 @@ class CompensationModel {
       point_function_rows_;
   /// predict_error_at without the calibration's leverage.
   ErrorPrediction predict_field_at(const robot::JointVector& q_deg, const robot::MdhModel& at) const;
+  /// predict_field_at without the tool point correction; `orientation_variance` false leaves the
+  /// orientation term's variance out (the correction's measured variance takes its place).
+  ErrorPrediction predict_uncorrected_at(const robot::JointVector& q_deg, const robot::MdhModel& at,
+                                         bool orientation_variance) const;
   /// predict_error_at away from every point with a field, when several points hold one.
-  ErrorPrediction predict_by_rigid_motion(const robot::JointVector& q_deg, const robot::MdhModel& at) const;
+  ErrorPrediction predict_by_rigid_motion(const robot::JointVector& q_deg, const robot::MdhModel& at,
+                                          bool orientation_variance) const;
   /// predict_error_at at a further point with a field of its own.
   ErrorPrediction predict_at_labelled_point(const robot::JointVector& q_deg, const robot::MdhModel& at,
                                             std::size_t point) const;

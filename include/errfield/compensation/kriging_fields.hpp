@@ -174,6 +174,10 @@ std::vector<SampleHoldOut> leave_one_out_by_sample(const ErrorField& field);
 /// vector kriging field or its samples were merged.
 Eigen::MatrixXd leave_one_out_residuals_of(const ErrorField& field, const Eigen::MatrixXd& values);
 
+/// The variogram model of a vector kriging field over joint space (per component, the calibrated one
+/// where the field's variance was calibrated); none for any other field.
+std::optional<VariogramModel> joint_space_vector_field_model(const ErrorField& field);
+
 /// The variogram model the fields estimate when none is given: empirical variogram of the values
 /// over the samples' lags (10 bins up to 60% of the largest lag) and the best-fitting of sph/exp/gau
 /// with a free nugget. `values` is N x K (K = 1 or 3). The model is that of one component (the

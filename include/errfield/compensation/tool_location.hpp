@@ -18,6 +18,8 @@
 /// Frames and units: flange frame and robot frame, mm. Thread-safe (pure).
 
 #include <cstddef>
+#include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -26,6 +28,7 @@
 
 #include "errfield/compensation/compensation.hpp"
 #include "errfield/compensation/model_fitting.hpp"
+#include "errfield/compensation/tool_point_correction.hpp"
 
 namespace errfield::compensation {
 
@@ -65,11 +68,20 @@ struct ToolLocation {
   /// w x L (3n numbers, 3 of them spent on the point). Empty for a point at the reflector (no lever)
   /// or a model without field.
   std::optional<MeasuredOrientation> orientation;
+  /// The readings' residual against the located model's prediction at the point, kriged
+  /// (tool_point_correction.hpp): null with fewer than kMinToolPointCorrectionReadings readings or a
+  /// model whose field is not a joint-space vector kriging field.
+  std::shared_ptr<const ToolPointCorrection> correction;
+  /// RMS of |residual| at the readings against the located model without the correction, and the
+  /// correction's leave-one-out RMS there (mm); NaN without a correction.
+  double uncorrected_rms_mm = std::numeric_limits<double>::quiet_NaN();
+  double correction_leave_one_out_rms_mm = std::numeric_limits<double>::quiet_NaN();
 };
 
 /// The model with the located point as its working tool (also its aimed tool point, for calibrated
-/// models) and, where measured, the orientation residual the readings showed, so the variance at the
-/// point counts what the one-point model could only guess.
+/// models), its readings' kriged residual (ToolLocation::correction; any earlier one dropped) and,
+/// where measured, the orientation residual the readings showed, so the variance at the point counts
+/// what the one-point model could only guess.
 CompensationModel with_located_tool(const CompensationModel& model, const ToolLocation& location);
 
 /// Locates the point the readings measured. `readings` needs tracker positions (measured_mm) and the
