@@ -219,18 +219,24 @@ double ToolPointCorrection::leave_one_out_variance_factor() const {
       z.emplace_back(cv.residual[i] * cv.residual[i], std::max(0.0, cv.variance[i] - noise_mm2_));
   }
   if (z.empty()) return 1.0;
-  auto mean_z2 = [&](double f) {
-    double sum = 0.0;
-    for (const auto& [r2, v] : z) sum += r2 / (f * v + noise_mm2_);
-    return sum / static_cast<double>(z.size());
+  // The factor that maximizes the readings' leave-one-out log score, sum of
+  // -1/2 [log(f v + n) + r² / (f v + n)]: its derivative in f, sum of v (f v + n - r²) / (f v + n)²,
+  // falls from positive to negative where the stated variance fits the residuals (a reading whose
+  // kriging variance is ~0, on an axis without a field, weighs nothing, as it should).
+  auto slope = [&](double f) {
+    double d = 0.0;
+    for (const auto& [r2, v] : z) {
+      const double total = f * v + noise_mm2_;
+      d += v * (total - r2) / (total * total);
+    }
+    return d;
   };
-  // mean z²(f) falls as f grows: bisect for 1 on a log scale within the bounds.
   double lo = std::log(kMinVarianceFactor), hi = std::log(kMaxVarianceFactor);
-  if (mean_z2(std::exp(lo)) <= 1.0) return kMinVarianceFactor;
-  if (mean_z2(std::exp(hi)) >= 1.0) return kMaxVarianceFactor;
+  if (slope(std::exp(lo)) >= 0.0) return kMinVarianceFactor;
+  if (slope(std::exp(hi)) <= 0.0) return kMaxVarianceFactor;
   for (int it = 0; it < 60; ++it) {
     const double mid = 0.5 * (lo + hi);
-    (mean_z2(std::exp(mid)) > 1.0 ? lo : hi) = mid;
+    (slope(std::exp(mid)) < 0.0 ? lo : hi) = mid;
   }
   return std::exp(0.5 * (lo + hi));
 }
