@@ -281,6 +281,21 @@ py::tuple locate_tool_py(const PyModel& m, const py::object& data, std::size_t m
   const OrientationPrior& prior = located.orientation_prior();
   r["orientation_sigma_mrad"] = prior.known() ? py::object(py::float_(prior.sigma_rad * 1e3)) : py::object(py::none());
   r["max_lever_mm"] = prior.known() ? py::object(py::float_(prior.max_lever_mm)) : py::object(py::none());
+  // The readings' kriged residual at the point (tool_point_correction), as locate-tool prints it.
+  if (const auto& c = t->correction) {
+    py::dict d;
+    d["readings"] = c->readings();
+    d["sd_mm"] = to_numpy(std::vector<double>{std::sqrt(c->sill_mm2().x()), std::sqrt(c->sill_mm2().y()),
+                                              std::sqrt(c->sill_mm2().z())});
+    d["noise_mm"] = std::sqrt(c->noise_mm2());
+    d["correlation"] = c->correlation().to_string();
+    d["variance_factor"] = c->variance_factor();
+    d["uncorrected_rms_mm"] = t->uncorrected_rms_mm;
+    d["leave_one_out_rms_mm"] = t->correction_leave_one_out_rms_mm;
+    r["correction"] = d;
+  } else {
+    r["correction"] = py::none();
+  }
   const std::string what = std::string(method_name(located.method())) + " model";
   return py::make_tuple(PyModel{LoadedModel{std::move(located), false, what}, py::none()}, r);
 }

@@ -325,16 +325,25 @@ def test_plan_matches_cli(tmp_path):
         errfield.plan(pool, count=5, model=loaded, measured=measured, spacing_floor=1.0)
 
 
-@pytest.mark.skip(reason="its readings (other flange orientations) fall outside the region of the "
-                  "fixture's model, which was fitted at one orientation: locate-tool refuses them; needs a model "
-                  "fitted with --orientation-spread (the CLI's locate-tool is tested in ValidateCli)")
-def test_locate_tool_and_tool_match_cli(sim, fitted, tmp_path):
-    """Issue 34: errfield.locate_tool writes the CLI's model byte for byte and reports its figures;
-    predict(tool=...) is the CLI's --tool; readings at one orientation are refused."""
-    run_cli("simulate", "--sample", "grid", "--step", "250", "--orientation-spread", "30", "--tool-offset", "100,0,0",
-            "--out", tmp_path / "b.csv")
-    out = run_cli("locate-tool", "--model", sim / "vk.json", "--data", tmp_path / "b.csv", "--out", tmp_path / "cli.json")
-    model, report = errfield.locate_tool(fitted, read_measurements(tmp_path / "b.csv"))
+def test_locate_tool_and_tool_match_cli(sim, tmp_path):
+    """Issue 34: errfield.locate_tool writes the CLI's model byte for byte and reports its figures
+    (the readings' kriged residual at the point among them); predict at the located point is the
+    CLI's; readings at one orientation and a tool 3 m away are refused. SIMULATED KR 16 poses within 30 deg of tool-down (a model
+    fitted at one orientation refuses readings at others as outside its region)."""
+    common = ["--robot", "kr16", "--seed", "4", "--orientation-spread", "30", "--measure", "positions",
+              "--systematic", "realistic"]
+    run_cli("simulate", *common, "--sample", "scattered:120", "--robot-out", tmp_path / "kr16.json",
+            "--out", tmp_path / "a.csv")
+    run_cli("simulate", *common, "--sample", "scattered:120", "--tool-offset", "100,0,0", "--out", tmp_path / "b.csv")
+    run_cli("fit", "--robot", tmp_path / "kr16.json", "--data", tmp_path / "a.csv", "--out", tmp_path / "m.json")
+    lines = [line for line in (tmp_path / "b.csv").read_text().splitlines() if not line.startswith("#")]
+    kind = lines[0].split(",").index("kind")
+    rows = [line for line in lines[1:] if line.split(",")[kind] == "target"][:40]
+    (tmp_path / "b40.csv").write_text("\n".join([lines[0], *rows]) + "\n")
+    out = run_cli("locate-tool", "--model", tmp_path / "m.json", "--data", tmp_path / "b40.csv",
+                  "--out", tmp_path / "cli.json")
+    fitted = errfield.CompensationModel.load(tmp_path / "m.json")
+    model, report = errfield.locate_tool(fitted, read_measurements(tmp_path / "b40.csv"))
     model.save(tmp_path / "py.json")
     cli = json.loads((tmp_path / "cli.json").read_text())
     py = json.loads((tmp_path / "py.json").read_text())
@@ -343,17 +352,26 @@ def test_locate_tool_and_tool_match_cli(sim, fitted, tmp_path):
     assert py == cli
     t = cli["working_tool"]
     assert np.allclose(report["tool_mm"], [t.get("x_mm", 0), t.get("y_mm", 0), t.get("z_mm", 0)], atol=1e-12)
-    assert report["readings"] > 0 and report["orientations"] >= 3
+    assert report["readings"] == 40 and report["orientations"] >= 3
     assert "fit residual RMS" in out and report["residual_rms_mm"] >= 0
     assert all(s > 0 for s in report["sd_mm"])
-    # --tool: the same columns as the CLI's
-    tool = ",".join(repr(float(v)) for v in report["tool_mm"])
-    run_cli("predict", "--model", sim / "vk.json", "--joints", sim / "hold.csv", "--tool", tool, "--out", tmp_path / "p.csv")
-    check_columns(errfield.predict(fitted, read_measurements(sim / "hold.csv"), tool=report["tool_mm"]), tmp_path / "p.csv")
+    c = report["correction"]
+    assert c is not None and c["readings"] == 40
+    assert np.allclose(np.square(c["sd_mm"]), cli["tool_point_correction"]["sill_mm2"], rtol=1e-12, atol=0)
+    assert c["variance_factor"] == cli["tool_point_correction"]["variance_factor"]
+    assert f"{c['uncorrected_rms_mm']:.4f}".rstrip("0") in out
+    # predict at the located point (its correction included): the same columns as the CLI's
+    a = read_csv(tmp_path / "b40.csv")
+    write_csv(tmp_path / "q.csv", {f"q{k}": numbers(a[f"q{k}"]) for k in range(1, 7)})  # joints only
+    run_cli("predict", "--model", tmp_path / "cli.json", "--joints", tmp_path / "q.csv", "--out", tmp_path / "p.csv")
+    # (from the saved file, as the CLI reads it: the working tool's rotation goes through degrees in
+    # the file, which moves a prediction by 1e-13 mm)
+    reloaded = errfield.CompensationModel.load(tmp_path / "py.json")
+    check_columns(errfield.predict(reloaded, read_measurements(tmp_path / "q.csv")), tmp_path / "p.csv")
     with pytest.raises(errfield.InputError, match="distinct flange orientation"):
         errfield.locate_tool(fitted, read_measurements(sim / "grid.csv"))
     with pytest.raises(errfield.ArgumentError, match="tool"):
-        errfield.predict(fitted, read_measurements(sim / "hold.csv"), tool=[3000.0, 0.0, 0.0])
+        errfield.predict(fitted, read_measurements(tmp_path / "q.csv"), tool=[3000.0, 0.0, 0.0])
 
 
 def test_joints_in_radians_are_refused_as_by_the_cli(tmp_path):
