@@ -63,7 +63,11 @@ void run_locate_tool(const LocateToolArgs& a) {
     std::cout << "\n  the readings' residual at the point kriged over the joints (the flange's turn the model's points do "
                  "not see): RMS "
               << rounded(t.uncorrected_rms_mm) << " mm at the readings, " << rounded(t.correction_leave_one_out_rms_mm)
-              << " mm left out one at a time with the correction; standard deviation per flange axis "
+              << " mm left out one at a time with the correction"
+              << (c->excluded_readings() ? " (" + std::to_string(c->excluded_readings()) + " gross reading(s) left out: over " +
+                                               format_number(ToolPointCorrection::kOutlierLimit) + " robust sd)"
+                                         : std::string())
+              << "; standard deviation per flange axis "
               << rounded(std::sqrt(c->sill_mm2().x())) << ", " << rounded(std::sqrt(c->sill_mm2().y())) << ", "
               << rounded(std::sqrt(c->sill_mm2().z())) << " mm, noise " << rounded(std::sqrt(c->noise_mm2()))
               << " mm; correlation over the joints " << c->correlation().to_string() << ", variance x " << rounded(c->variance_factor(), 100) << " (leave-one-out)";

@@ -79,8 +79,9 @@ std::shared_ptr<const ToolPointCorrection> correction_at_located_point(const Com
   if (!c) return nullptr;
   out.uncorrected_rms_mm = std::sqrt(ss / static_cast<double>(q.size()));
   double loo = 0.0;
-  for (const Eigen::Vector3d& r : c->leave_one_out_residual_mm()) loo += r.squaredNorm();
-  out.correction_leave_one_out_rms_mm = std::sqrt(loo / static_cast<double>(q.size()));
+  const std::vector<Eigen::Vector3d> held_out = c->leave_one_out_residual_mm();  // of the readings kept
+  for (const Eigen::Vector3d& r : held_out) loo += r.squaredNorm();
+  out.correction_leave_one_out_rms_mm = std::sqrt(loo / static_cast<double>(held_out.size()));
   return std::make_shared<const ToolPointCorrection>(std::move(*c));
 }
 

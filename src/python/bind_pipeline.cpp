@@ -285,6 +285,7 @@ py::tuple locate_tool_py(const PyModel& m, const py::object& data, std::size_t m
   if (const auto& c = t->correction) {
     py::dict d;
     d["readings"] = c->readings();
+    d["excluded_readings"] = c->excluded_readings();
     d["sd_mm"] = to_numpy(std::vector<double>{std::sqrt(c->sill_mm2().x()), std::sqrt(c->sill_mm2().y()),
                                               std::sqrt(c->sill_mm2().z())});
     d["noise_mm"] = std::sqrt(c->noise_mm2());

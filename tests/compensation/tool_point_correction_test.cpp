@@ -308,5 +308,36 @@ TEST(ToolPointCorrection, JsonRoundTripsAndRefusesEdits) {
   refused([](nlohmann::json &e) { e.erase("point_mm"); }, "point_mm");
 }
 
+TEST(ToolPointCorrection, AGrossReadingIsLeftOutNotKrigedIntoASpike) {
+  const Readings clean = draw(40, 61);
+  Readings bumped = clean;
+  bumped.reading_mm[7] += Eigen::Vector3d(0.0, 0.0, 0.6);  // one reading 0.6 mm off (a bumped nest)
+  const auto a = ToolPointCorrection::fit(Eigen::Vector3d(0, 150, 100), clean.q, clean.rotation, clean.reading_mm,
+                                          field_model());
+  const auto b = ToolPointCorrection::fit(Eigen::Vector3d(0, 150, 100), bumped.q, bumped.rotation, bumped.reading_mm,
+                                          field_model());
+  ASSERT_TRUE(a && b);
+  EXPECT_EQ(a->excluded_readings(), 0u);
+  EXPECT_EQ(b->excluded_readings(), 1u);
+  EXPECT_EQ(b->readings(), 39u);
+  // Without the bumped reading the correction is the one kriged from the other 39 readings by hand.
+  std::vector<JointVector> q;
+  std::vector<Eigen::Matrix3d> rot;
+  std::vector<Eigen::Vector3d> res;
+  for (std::size_t i = 0; i < clean.q.size(); ++i)
+    if (i != 7) q.push_back(clean.q[i]), rot.push_back(clean.rotation[i]), res.push_back(clean.reading_mm[i]);
+  const auto by_hand = ToolPointCorrection::fit(Eigen::Vector3d(0, 150, 100), q, rot, res, field_model());
+  ASSERT_TRUE(by_hand);
+  const Readings held_out = draw(200, 62);
+  const auto pb = b->predict(held_out.q, held_out.rotation), ph = by_hand->predict(held_out.q, held_out.rotation);
+  double miss2 = 0.0, truth2 = 0.0;
+  for (std::size_t t = 0; t < pb.size(); ++t) {
+    EXPECT_LT((pb[t].error_mm - ph[t].error_mm).norm(), 1e-12) << t;
+    miss2 += (held_out.truth_mm[t] - pb[t].error_mm).squaredNorm();
+    truth2 += held_out.truth_mm[t].squaredNorm();
+  }
+  EXPECT_LT(std::sqrt(miss2 / 200.0), 0.3 * std::sqrt(truth2 / 200.0));
+}
+
 }  // namespace tool_point_correction_test
 }  // namespace errfield::compensation

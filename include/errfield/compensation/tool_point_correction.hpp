@@ -34,6 +34,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -66,7 +67,8 @@ class ToolPointCorrection {
   /// Kriges `residual_mm` (robot frame: reading − the model's prediction at the point, one per
   /// reading) at joints `q_deg`, whose flange rotations (robot from flange) are `flange_rotation`.
   /// `field_model` is the model's own field's variogram (per component; its structures give the
-  /// correlation). None with fewer than kMinToolPointCorrectionReadings readings, a field model
+  /// correlation). Gross readings are left out first (excluded_readings). None with fewer than
+  /// kMinToolPointCorrectionReadings readings, a field model
   /// without a bounded structure, residuals that are all zero, or non-finite input.
   static std::optional<ToolPointCorrection> fit(const Eigen::Vector3d& point_mm, const std::vector<robot::JointVector>& q_deg,
                                                 const std::vector<Eigen::Matrix3d>& flange_rotation,
@@ -82,6 +84,11 @@ class ToolPointCorrection {
   /// The leave-one-out residual of every reading (flange frame, mm): its value less the correction
   /// kriged from the other readings. What locate-tool reports the correction's gain with.
   std::vector<Eigen::Vector3d> leave_one_out_residual_mm() const;
+  /// Readings left out as gross (fit's screen: leave-one-out residual over kOutlierLimit robust sd).
+  std::size_t excluded_readings() const noexcept { return excluded_readings_; }
+  /// The screen's limit (robust sd, as fit's --outlier-limit default) and its rounds.
+  static constexpr double kOutlierLimit = 5.0;
+  static constexpr int kOutlierRounds = 3;
 
   const Eigen::Vector3d& point_mm() const noexcept { return point_mm_; }
   std::size_t readings() const noexcept { return q_deg_.size(); }
@@ -122,6 +129,15 @@ class ToolPointCorrection {
   Eigen::Vector3d sill_mm2_;
   double noise_mm2_ = 0.0;
   double variance_factor_ = 1.0;
+  std::size_t excluded_readings_ = 0;
+  /// Kriging and the variance factor for the given readings (no screen).
+  static std::optional<ToolPointCorrection> fit_once(const Eigen::Vector3d& point_mm,
+                                                     const std::vector<robot::JointVector>& q_deg,
+                                                     const std::vector<Eigen::Vector3d>& flange,
+                                                     const VariogramModel& field_model);
+  /// Per reading: its leave-one-out residual (flange frame) and that residual's variance per axis
+  /// (the kriging part times variance_factor, plus n); empty when readings were merged.
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> held_out_residuals() const;
   /// variance_factor from the readings' leave-one-out.
   double leave_one_out_variance_factor() const;
   std::shared_ptr<const Kriged> kriged_;  ///< the three simple krigings (shared: copies are cheap)
