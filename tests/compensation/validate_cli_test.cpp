@@ -613,6 +613,14 @@ TEST_F(ValidateCli, TwoReflectorsFitOneModelThatTransfersToALocatedThirdPoint) {
   EXPECT_LT(rms13, 0.95 * rms13_bare) << rms13 << " mm with the correction, " << rms13_bare << " without";
   EXPECT_LT(rms1, 0.5 * rms1_bare) << rms1 << " mm with the correction, " << rms1_bare << " without";
   EXPECT_LT(rms1, 1.25 * own) << rms1 << " mm vs " << own << " mm fitted at r2";
+  // The correction is of the located point's readings: moved by hand to another point, the model is
+  // refused, naming the member (a correction never applies where it was not measured).
+  nlohmann::json moved = json("m1_r2.json");
+  moved["tool_point_correction"]["point_mm"][0] = moved["tool_point_correction"]["point_mm"][0].get<double>() + 20.0;
+  write("m1_r2_moved.json", moved.dump());
+  const CliResult moved_run = run("validate --model m1_r2_moved.json --data test_r2.csv");
+  EXPECT_EQ(moved_run.exit_code, 2) << moved_run.output();
+  EXPECT_NE(moved_run.output().find("tool_point_correction"), std::string::npos) << moved_run.output();
   // Not located, the one-point model does not know the flange's constant orientation error there
   // (0.5 mm at 150 mm on this robot): it refuses, naming the orientation and what would lift it.
   const CliResult unlocated = run("validate --model m1.json --data test_r2.csv --tool 150,0,100 --summary-out s1.json");
