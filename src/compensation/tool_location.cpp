@@ -52,9 +52,12 @@ std::string mm(double v) { return format_number(std::round(v * 1e4) / 1e4); }
 /// The readings' residual against `at_tool` (the model with the located point as working tool and no
 /// correction), kriged over the joints with the model field's correlation (ToolPointCorrection);
 /// sets the RMS before and the correction's leave-one-out RMS in `out`.
+/// `flange_rotation` and `at_point` (at_tool's prediction there) are per reading of `used`.
 std::shared_ptr<const ToolPointCorrection> correction_at_located_point(const CompensationModel& at_tool,
                                                                        const MeasurementSet& d,
                                                                        const std::vector<std::size_t>& used,
+                                                                       const std::vector<Eigen::Matrix3d>& flange_rotation,
+                                                                       const std::vector<ErrorPrediction>& at_point,
                                                                        ToolLocation& out) {
   const std::optional<VariogramModel> field_model =
       at_tool.field() ? joint_space_vector_field_model(*at_tool.field()) : std::nullopt;
@@ -65,11 +68,12 @@ std::shared_ptr<const ToolPointCorrection> correction_at_located_point(const Com
   std::vector<Eigen::Matrix3d> rotation;
   std::vector<Eigen::Vector3d> residual;
   double ss = 0.0;
-  for (std::size_t i : used) {
-    const ErrorPrediction e = at_tool.predict_error(d.q_deg[i]);
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    const std::size_t i = used[k];
+    const ErrorPrediction& e = at_point[k];
     if (!e.inside_region || !e.position_error_mm.allFinite()) continue;
     q.push_back(d.q_deg[i]);
-    rotation.push_back(forward_kinematics(at_tool.command_model(), d.q_deg[i], EndFrame::flange).linear());
+    rotation.push_back(flange_rotation[k]);
     residual.push_back(reg.robot_from_tracker * d.measured_mm[i] -
                        (forward_position(scored, d.q_deg[i]) + e.position_error_mm));
     ss += residual.back().squaredNorm();
@@ -164,8 +168,9 @@ ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d
   const CompensationModel at_tool = model.with_working_tool(tool).with_tool_point_correction(nullptr);
   double var_sum = 0.0, stated_sum = 0.0, lever_ss = 0.0;
   std::size_t var_count = 0;
+  std::vector<ErrorPrediction> at_point;  // per reading used
   for (std::size_t i : used) {
-    const ErrorPrediction e = at_tool.predict_error(d.q_deg[i]);
+    const ErrorPrediction& e = at_point.emplace_back(at_tool.predict_error(d.q_deg[i]));
     const double v = e.predictive_variance_mm2();
     if (std::isfinite(v)) {
       var_sum += v;
@@ -190,7 +195,7 @@ ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d
     out.expected_rms_mm = reg.residual_rms_mm;
     out.expected_basis = "the model's registration residual";
   }
-  if (out.field_used) out.correction = correction_at_located_point(at_tool, d, used, out);
+  if (out.field_used) out.correction = correction_at_located_point(at_tool, d, used, rotations, at_point, out);
   if (out.residual_rms_mm > options.not_rigid_factor * out.expected_rms_mm)
     throw InputError(src + ": the " + std::to_string(out.readings) + " readings are not one point rigidly attached to "
                          "the flange: located at (" + mm(out.tool_mm.x()) + ", " + mm(out.tool_mm.y()) + ", " +

@@ -269,20 +269,25 @@ std::optional<ToolPointCorrection> ToolPointCorrection::fit(const Eigen::Vector3
   return c;
 }
 
-std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> ToolPointCorrection::held_out_residuals() const {
-  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> out(
-      residual_flange_mm_.size(), {Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(noise_mm2_)});
-  for (std::size_t i = 0; i < out.size(); ++i) out[i].first = residual_flange_mm_[i];
+std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> ToolPointCorrection::leave_one_out_by_axis() const {
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> out(residual_flange_mm_.size());
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = {residual_flange_mm_[i], Eigen::Vector3d::Zero()};
   for (int k = 0; k < 3; ++k) {
-    if (!kriged_->axis[k]) continue;
+    if (!kriged_->axis[k]) continue;  // an axis without a field: the value itself, no kriging variance
     const KrigingCrossValidation<double> cv = kriged_->axis[k]->leave_one_out();
     if (cv.residual.size() != out.size() || cv.variance.size() != out.size()) return {};
     for (std::size_t i = 0; i < out.size(); ++i) {
       out[i].first[k] = cv.residual[i];
-      // The kriging part scaled as predict scales it; the reading's noise as is.
-      out[i].second[k] = variance_factor_ * std::max(0.0, cv.variance[i] - noise_mm2_) + noise_mm2_;
+      out[i].second[k] = std::max(0.0, cv.variance[i] - noise_mm2_);
     }
   }
+  return out;
+}
+
+std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> ToolPointCorrection::held_out_residuals() const {
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> out = leave_one_out_by_axis();
+  // The kriging part scaled as predict scales it; the reading's noise as is.
+  for (auto& [residual, variance] : out) variance = (variance_factor_ * variance.array() + noise_mm2_).matrix();
   return out;
 }
 
@@ -290,13 +295,9 @@ double ToolPointCorrection::leave_one_out_variance_factor() const {
   // Residual² and the part of its variance the factor scales (the kriging variance; the reading's
   // noise stays), per reading and fielded axis.
   std::vector<std::pair<double, double>> z;
-  for (int k = 0; k < 3; ++k) {
-    if (!kriged_->axis[k]) continue;
-    const KrigingCrossValidation<double> cv = kriged_->axis[k]->leave_one_out();
-    if (cv.residual.size() != cv.variance.size()) return 1.0;
-    for (std::size_t i = 0; i < cv.residual.size(); ++i)
-      z.emplace_back(cv.residual[i] * cv.residual[i], std::max(0.0, cv.variance[i] - noise_mm2_));
-  }
+  for (const auto& [residual, variance] : leave_one_out_by_axis())
+    for (int k = 0; k < 3; ++k)
+      if (kriged_->axis[k]) z.emplace_back(residual[k] * residual[k], variance[k]);
   if (z.empty()) return 1.0;
   // The factor that maximizes the readings' leave-one-out log score, sum of
   // -1/2 [log(f v + n) + r² / (f v + n)]: its derivative in f, sum of v (f v + n - r²) / (f v + n)²,
@@ -350,13 +351,10 @@ ToolPointCorrectionPrediction ToolPointCorrection::predict(const JointVector& q_
 }
 
 std::vector<Eigen::Vector3d> ToolPointCorrection::leave_one_out_residual_mm() const {
-  std::vector<Eigen::Vector3d> out = residual_flange_mm_;
-  for (int k = 0; k < 3; ++k) {
-    if (!kriged_->axis[k]) continue;
-    const KrigingCrossValidation<double> cv = kriged_->axis[k]->leave_one_out();
-    if (cv.residual.size() != out.size()) continue;
-    for (std::size_t i = 0; i < out.size(); ++i) out[i][k] = cv.residual[i];
-  }
+  const std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> held = leave_one_out_by_axis();
+  if (held.empty()) return residual_flange_mm_;  // readings were merged: their values as they are
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& [residual, variance] : held) out.push_back(residual);
   return out;
 }
 

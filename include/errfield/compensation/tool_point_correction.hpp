@@ -135,8 +135,11 @@ class ToolPointCorrection {
                                                      const std::vector<robot::JointVector>& q_deg,
                                                      const std::vector<Eigen::Vector3d>& flange,
                                                      const VariogramModel& field_model);
-  /// Per reading: its leave-one-out residual (flange frame) and that residual's variance per axis
-  /// (the kriging part times variance_factor, plus n); empty when readings were merged.
+  /// Per reading: its leave-one-out residual (flange frame) and the kriging variance of that
+  /// prediction per axis (noise excluded, unscaled; 0 on an axis without a field); empty when
+  /// readings were merged. What the three below are computed from.
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> leave_one_out_by_axis() const;
+  /// leave_one_out_by_axis with the variance as predict states it (times variance_factor, plus n).
   std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> held_out_residuals() const;
   /// variance_factor from the readings' leave-one-out.
   double leave_one_out_variance_factor() const;
