@@ -143,7 +143,7 @@ void add_fit_command(CLI::App& app) {
       "Example: errfield fit --robot robot.json --data measured.csv --out model.json\n"
       "Example: errfield fit --robot robot.json --data grid.csv --method distance-idw --out model.json   # the paper's method");
   cmd->add_option("--robot", a->robot,
-                  "nominal robot JSON or built-in name (er20-c10, kr16, ur5e); default: built-in ER20-C10, no tool. "
+                  "nominal robot JSON or built-in name (er20-c10, kr16, ur5e, ur5, ur10); default: built-in ER20-C10, no tool. "
                   "x,y,z that are not its FK (within 5 mm) are refused with the likely cause");
   cmd->add_option("--data", a->data, "measurement CSV")->required();
   cmd->add_option("--method", a->method, "auto | distance-idw | position-idw | distance-kriging | vector-kriging | kinematic | kinematic+kriging; "
