@@ -110,8 +110,9 @@ void add_import_measurements_command(CLI::App& app) {
       "--sep, --decimal, --map (the file's column for each errfield name), units and conventions, or name a\n"
       "preset for the two real data sets of docs/realdata.md. A bad cell is refused naming file, line, column\n"
       "and value; joints that look like radians given as degrees (and metres given as mm) are refused.\n"
-      "Example: errfield import-measurements --in export.csv --out m.csv --sep ';' --decimal , --joint-units rad\n"
-      "  --map q1=A1,q2=A2,q3=A3,q4=A4,q5=A5,q6=A6,mx=X,my=Y,mz=Z");
+      "A ';' export with decimal commas, radians and its own names takes --sep ';' --decimal , --joint-units rad\n"
+      "--map q1=A1,q2=A2,q3=A3,q4=A4,q5=A5,q6=A6,mx=X,my=Y,mz=Z; the UR10 set: --preset ur10-ipa.\n"
+      "Example: errfield import-measurements --in holdout.csv --out day2.csv --series day2");
   cmd->add_option("--in", a->in, "the foreign measurement file (CSV text)")->required();
   cmd->add_option("--out", a->out, "errfield measurement CSV to write (atomically)")->required();
   cmd->add_option("--preset", a->preset,
