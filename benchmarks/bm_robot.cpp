@@ -25,7 +25,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include "errfield/compensation/model_fitting.hpp"
+#include "errfield/compensation/fitting/model_fitting.hpp"
 #include "errfield/robot/builtin_robots.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/reproduction/paper_reproduction.hpp"

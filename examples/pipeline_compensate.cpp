@@ -3,8 +3,8 @@
 #include <cstdio>
 
 #include "errfield/grid_idw.hpp"
-#include "errfield/compensation/compensation.hpp"
-#include "errfield/compensation/error_fields.hpp"
+#include "errfield/compensation/model/compensation.hpp"
+#include "errfield/compensation/model/error_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/simulator.hpp"
 

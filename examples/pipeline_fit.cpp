@@ -3,7 +3,7 @@
 // robot, read your CSV with CsvTable::read and MeasurementSet::from_table instead.
 #include <cstdio>
 
-#include "errfield/compensation/model_fitting.hpp"
+#include "errfield/compensation/fitting/model_fitting.hpp"
 #include "errfield/robot/simulator.hpp"
 
 int main() {

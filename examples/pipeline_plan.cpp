@@ -3,7 +3,7 @@
 // with its IK joints, and one base point. Run it, then measure the printed joints.
 #include <cstdio>
 
-#include "errfield/compensation/measurement_plan.hpp"
+#include "errfield/compensation/planning/measurement_plan.hpp"
 #include "errfield/robot/pose.hpp"
 #include "errfield/robot/simulator.hpp"
 

@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "errfield/robot/calibration.hpp"
-#include "errfield/compensation/model_fitting.hpp"
+#include "errfield/compensation/fitting/model_fitting.hpp"
 #include "errfield/robot/simulator.hpp"
 
 using namespace errfield::robot;

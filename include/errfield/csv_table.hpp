@@ -21,6 +21,8 @@
 
 #include <Eigen/Core>
 
+#include "errfield/number_format.hpp"  // format_number, declared where formatting lives
+
 namespace errfield {
 
 class CsvTable {
@@ -116,9 +118,6 @@ class CsvTable {
 /// dropped. Two header cells with the same key are the same column (and a duplicate).
 std::string column_key(std::string_view name);
 
-/// Shortest text that reads back to exactly `value` ("nan" and "inf" never occur in our outputs;
-/// callers write an empty cell for a missing value instead).
-std::string format_number(double value);
 
 /// Splits "a,b,c" into {"a","b","c"}, trimming spaces; empty items are an ArgumentError naming
 /// `what` (the option being parsed).

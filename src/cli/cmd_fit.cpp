@@ -12,8 +12,8 @@
 #include "cli/robot_cli.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/error.hpp"
-#include "errfield/compensation/probe_readings.hpp"
-#include "errfield/compensation/model_fitting.hpp"
+#include "errfield/compensation/tools/probe_readings.hpp"
+#include "errfield/compensation/fitting/model_fitting.hpp"
 #include "errfield/compensation/pipeline.hpp"
 #include "errfield/robot/input_checks.hpp"
 

@@ -6,7 +6,7 @@
 #include "cli/command_registry.hpp"
 #include "cli/interpolation_methods.hpp"
 #include "cli/robot_cli.hpp"
-#include "errfield/compensation/prediction.hpp"
+#include "errfield/compensation/model/prediction.hpp"
 #include "errfield/robot/input_checks.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/pose.hpp"

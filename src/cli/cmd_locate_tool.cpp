@@ -8,8 +8,8 @@
 #include "cli/command_registry.hpp"
 #include "cli/pipeline_cli.hpp"
 #include "errfield/atomic_file.hpp"
-#include "errfield/compensation/compensation.hpp"
-#include "errfield/compensation/tool_location.hpp"
+#include "errfield/compensation/model/compensation.hpp"
+#include "errfield/compensation/tools/tool_location.hpp"
 #include "errfield/error.hpp"
 #include "errfield/json_file.hpp"
 

@@ -6,7 +6,7 @@
 #include "cli/interpolation_methods.hpp"
 #include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
-#include "errfield/compensation/prediction.hpp"
+#include "errfield/compensation/model/prediction.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/input_checks.hpp"
 

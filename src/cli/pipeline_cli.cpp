@@ -6,7 +6,7 @@
 #include <utility>
 
 #include "errfield/csv_table.hpp"
-#include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/model/compensation.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/pose.hpp"
 

@@ -9,13 +9,13 @@
 #include <numbers>
 #include <optional>
 
-#include "errfield/compensation/error_ball.hpp"
-#include "errfield/compensation/prediction.hpp"
-#include "errfield/compensation/registration.hpp"
-#include "errfield/compensation/rotation_validation.hpp"
-#include "errfield/compensation/target_ik.hpp"
+#include "errfield/compensation/model/error_ball.hpp"
+#include "errfield/compensation/model/prediction.hpp"
+#include "errfield/compensation/model/registration.hpp"
+#include "errfield/compensation/validation/rotation_validation.hpp"
+#include "errfield/compensation/tools/target_ik.hpp"
 #include "errfield/error.hpp"
-#include "compensation/fit_checks.hpp"
+#include "compensation/fitting/fit_checks.hpp"
 #include "errfield/robot/arm_configuration.hpp"
 #include "errfield/robot/calibration.hpp"
 #include "errfield/robot/kinematics.hpp"

@@ -340,12 +340,6 @@ Eigen::MatrixXd CsvTable::numeric_columns(const std::vector<std::string>& names)
   return m;
 }
 
-std::string format_number(double value) {
-  char buf[64];
-  const auto res = std::to_chars(buf, buf + sizeof buf, value);
-  return std::string(buf, res.ptr);
-}
-
 std::string csv_cell(std::string_view cell) {
   const bool needs_quotes =
       cell.find_first_of(",;\"\r\n") != std::string_view::npos ||

@@ -6,10 +6,10 @@
 #include <cmath>
 
 #include "errfield/error.hpp"
-#include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/model/compensation.hpp"
 #include "errfield/robot/kinematics.hpp"
-#include "errfield/compensation/kriging_fields.hpp"
-#include "errfield/compensation/model_fitting.hpp"
+#include "errfield/compensation/model/kriging_fields.hpp"
+#include "errfield/compensation/fitting/model_fitting.hpp"
 #include "errfield/reproduction/paper_reproduction.hpp"
 #include "errfield/robot/pose.hpp"
 #include "reproduction/seed_streams.hpp"

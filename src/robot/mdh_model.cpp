@@ -92,7 +92,7 @@ MdhModel MdhModel::er20_c10() {
 
 MdhModel MdhModel::from_json(const nlohmann::json& j, const std::string& source) {
   if (!j.is_object()) fail(source, "(top level)", "expected a JSON object, got " + j.dump().substr(0, 60));
-  // "registration": the tracker registration calibrate stores beside the robot (compensation/registration.hpp).
+  // "registration": the tracker registration calibrate stores beside the robot (compensation/model/registration.hpp).
   json_check_keys(j, {"name", "units", "links", "base", "tool", "comment", "registration"}, "", source);
   std::string name = "robot";
   if (const auto it = j.find("name"); it != j.end()) {

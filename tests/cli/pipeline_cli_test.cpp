@@ -10,7 +10,7 @@
 
 #include "errfield/csv_table.hpp"
 #include "errfield/robot/kinematics.hpp"
-#include "errfield/compensation/model_fitting.hpp"
+#include "errfield/compensation/fitting/model_fitting.hpp"
 #include "errfield/robot/simulator.hpp"
 #include "support/cli_harness.hpp"
 

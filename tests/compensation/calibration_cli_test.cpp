@@ -12,7 +12,7 @@
 #include <random>
 
 #include "errfield/csv_table.hpp"
-#include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/model/compensation.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "support/cli_harness.hpp"
 

@@ -14,7 +14,7 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
-#include "errfield/compensation/model_fitting.hpp"
+#include "errfield/compensation/fitting/model_fitting.hpp"
 #include "errfield/robot/random.hpp"
 
 namespace errfield::compensation {

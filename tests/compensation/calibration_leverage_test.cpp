@@ -1,4 +1,4 @@
-#include "errfield/compensation/calibration_leverage.hpp"
+#include "errfield/compensation/model/calibration_leverage.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/model/compensation.hpp"
 
 #include <gtest/gtest.h>
 
@@ -7,11 +7,11 @@
 #include <random>
 
 #include "errfield/error.hpp"
-#include "errfield/compensation/error_fields.hpp"
-#include "errfield/compensation/kriging_fields.hpp"
-#include "errfield/compensation/prediction.hpp"
-#include "errfield/compensation/registration.hpp"
-#include "errfield/compensation/tool_location.hpp"
+#include "errfield/compensation/model/error_fields.hpp"
+#include "errfield/compensation/model/kriging_fields.hpp"
+#include "errfield/compensation/model/prediction.hpp"
+#include "errfield/compensation/model/registration.hpp"
+#include "errfield/compensation/tools/tool_location.hpp"
 #include "errfield/variogram_model.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/simulator.hpp"

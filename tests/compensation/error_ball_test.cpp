@@ -1,7 +1,7 @@
 // The 3-D error ball (error_ball.hpp) against computations written here: the chi-square(3) CDF by
 // Simpson integration of its density, a table value of its 95 % quantile, the two-equal-variances
 // case as a 1-D integral (Z1² + Z2² is exponential), and Monte Carlo for three unequal variances.
-#include "errfield/compensation/error_ball.hpp"
+#include "errfield/compensation/model/error_ball.hpp"
 
 #include <gtest/gtest.h>
 

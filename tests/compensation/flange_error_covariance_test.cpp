@@ -1,4 +1,4 @@
-// FlangeErrorCovariance (compensation/flange_error_covariance.hpp): from the fields' stacked
+// FlangeErrorCovariance (compensation/model/flange_error_covariance.hpp): from the fields' stacked
 // leave-one-out residuals, the covariance of a point predicted from their combination. Checked
 // against closed forms: for errors that are an exact rigid motion of the flange per pose, the
 // least-squares combination reproduces the motion at any point, so its covariance is
@@ -11,7 +11,7 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
-#include "errfield/compensation/flange_error_covariance.hpp"
+#include "errfield/compensation/model/flange_error_covariance.hpp"
 
 namespace errfield::compensation {
 namespace flange_error_covariance_test {

@@ -11,8 +11,8 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
-#include "errfield/compensation/flange_rotation.hpp"
-#include "errfield/compensation/probe_readings.hpp"
+#include "errfield/compensation/model/flange_rotation.hpp"
+#include "errfield/compensation/tools/probe_readings.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/pose.hpp"

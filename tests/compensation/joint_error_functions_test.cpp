@@ -1,4 +1,4 @@
-#include "errfield/compensation/joint_error_functions.hpp"
+#include "errfield/compensation/model/joint_error_functions.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,9 +8,9 @@
 #include <Eigen/Eigenvalues>
 #include <nlohmann/json.hpp>
 
-#include "errfield/compensation/compensation.hpp"
-#include "errfield/compensation/held_out_shift.hpp"
-#include "errfield/compensation/kriging_fields.hpp"
+#include "errfield/compensation/model/compensation.hpp"
+#include "errfield/compensation/fitting/held_out_shift.hpp"
+#include "errfield/compensation/model/kriging_fields.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/builtin_robots.hpp"
 #include "errfield/robot/kinematics.hpp"

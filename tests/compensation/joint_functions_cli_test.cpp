@@ -9,9 +9,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "errfield/compensation/compensation.hpp"
-#include "errfield/compensation/pose_selection.hpp"
-#include "errfield/compensation/prediction.hpp"
+#include "errfield/compensation/model/compensation.hpp"
+#include "errfield/compensation/planning/pose_selection.hpp"
+#include "errfield/compensation/model/prediction.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "support/held_out_cli.hpp"

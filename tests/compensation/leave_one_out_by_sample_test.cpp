@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "errfield/compensation/kriging_fields.hpp"
+#include "errfield/compensation/model/kriging_fields.hpp"
 #include "errfield/variogram_model.hpp"
 
 namespace errfield::compensation {

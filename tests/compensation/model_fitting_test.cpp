@@ -2,7 +2,7 @@
 // form leave-one-out of one factorization; here it is checked against the definition: refit
 // ordinary kriging without sample i, predict sample i, for every i (SIMULATED measurements).
 
-#include "errfield/compensation/model_fitting.hpp"
+#include "errfield/compensation/fitting/model_fitting.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -12,7 +12,7 @@
 
 #include "errfield/error.hpp"
 #include "errfield/kriging.hpp"
-#include "errfield/compensation/measurement_plan.hpp"
+#include "errfield/compensation/planning/measurement_plan.hpp"
 #include "errfield/robot/simulator.hpp"
 
 namespace errfield::compensation {

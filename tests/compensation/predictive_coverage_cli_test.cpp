@@ -12,7 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "errfield/compensation/kriging_fields.hpp"
+#include "errfield/compensation/model/kriging_fields.hpp"
 #include "errfield/csv_table.hpp"
 #include "support/cli_harness.hpp"
 #include "support/session_split.hpp"

@@ -13,8 +13,8 @@
 
 #include <Eigen/Dense>
 
-#include "errfield/compensation/error_ball.hpp"
-#include "errfield/compensation/kriging_fields.hpp"
+#include "errfield/compensation/model/error_ball.hpp"
+#include "errfield/compensation/model/kriging_fields.hpp"
 #include "errfield/variogram_model.hpp"
 
 namespace errfield::compensation {

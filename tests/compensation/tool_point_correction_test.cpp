@@ -1,8 +1,8 @@
-// ToolPointCorrection (compensation/tool_point_correction.hpp): the kriged residual of a located point's
+// ToolPointCorrection (compensation/model/tool_point_correction.hpp): the kriged residual of a located point's
 // readings. Checked against simple kriging written out here with a dense solve, the likelihood written out
 // here (its optimum in sill and noise), leave-one-out by refitting without each reading, and a known smooth
 // turn of the flange at new poses.
-#include "errfield/compensation/tool_point_correction.hpp"
+#include "errfield/compensation/model/tool_point_correction.hpp"
 
 #include <gtest/gtest.h>
 

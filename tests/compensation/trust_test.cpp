@@ -6,17 +6,17 @@
 
 #include <cmath>
 
-#include "errfield/compensation/target_ik.hpp"
+#include "errfield/compensation/tools/target_ik.hpp"
 #include "errfield/error.hpp"
 #include "errfield/regular_grid.hpp"
-#include "errfield/compensation/compensation.hpp"
-#include "errfield/compensation/error_fields.hpp"
+#include "errfield/compensation/model/compensation.hpp"
+#include "errfield/compensation/model/error_fields.hpp"
 #include "errfield/robot/kinematics.hpp"
-#include "errfield/compensation/kriging_fields.hpp"
-#include "errfield/compensation/model_fitting.hpp"
+#include "errfield/compensation/model/kriging_fields.hpp"
+#include "errfield/compensation/fitting/model_fitting.hpp"
 #include "errfield/robot/pose.hpp"
 #include "errfield/robot/simulator.hpp"
-#include "compensation/fit_checks.hpp"
+#include "compensation/fitting/fit_checks.hpp"
 
 namespace errfield::compensation {
 using namespace errfield::robot;

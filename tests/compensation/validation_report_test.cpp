@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "errfield/compensation/validation.hpp"
+#include "errfield/compensation/validation/validation.hpp"
 
 namespace errfield::compensation {
 namespace validation_report_test {

@@ -14,7 +14,7 @@
 
 #include "errfield/error.hpp"
 #include "errfield/json_file.hpp"
-#include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/model/compensation.hpp"
 #include "errfield/robot/simulator.hpp"
 #include "fuzz/fuzz_checks.hpp"
 

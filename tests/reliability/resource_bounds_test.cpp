@@ -11,7 +11,7 @@
 #include "errfield/empirical_variogram.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/cube_budget.hpp"
-#include "errfield/compensation/measurement_plan.hpp"
+#include "errfield/compensation/planning/measurement_plan.hpp"
 #include "errfield/robot/simulator.hpp"
 #include "support/cli_harness.hpp"
 

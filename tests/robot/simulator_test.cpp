@@ -12,7 +12,7 @@
 #include "errfield/error.hpp"
 #include "errfield/robot/distance_error.hpp"
 #include "errfield/robot/simulated_data.hpp"
-#include "errfield/compensation/model_fitting.hpp"
+#include "errfield/compensation/fitting/model_fitting.hpp"
 
 namespace errfield::robot {
 namespace simulator_test {

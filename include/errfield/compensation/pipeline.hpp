@@ -16,8 +16,8 @@
 
 #include <Eigen/Core>
 
-#include "errfield/compensation/model_fitting.hpp"
-#include "errfield/compensation/validation.hpp"
+#include "errfield/compensation/fitting/model_fitting.hpp"
+#include "errfield/compensation/validation/validation.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/robot/arm_configuration.hpp"
 #include "errfield/robot/input_checks.hpp"

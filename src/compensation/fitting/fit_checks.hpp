@@ -1,0 +1,39 @@
+#pragma once
+// Internal to fit_compensation_model: the credibility check of a fitted model (refit with a nugget
+// or refuse) and the artifacts a written model carries (registration, nominal robot, training
+// joints, credible range). See model_fitting.hpp for the rules.
+
+#include <functional>
+
+#include <Eigen/Core>
+
+#include "errfield/compensation/fitting/model_fitting.hpp"
+
+namespace errfield::compensation {
+
+/// Why a kriging fit is not credible (condition beyond the limit, leave-one-out beyond 3 × the
+/// data's largest deviation); empty when it is fine or the model has no kriging system.
+std::string fit_problem(const FitResult& fit);
+
+/// Returns `fit` if fit_problem() is empty; else refits with a nugget via `refit` when the variogram
+/// was estimated (options.model empty), or throws Error naming the figures.
+FitResult check_fitted_model(FitResult fit, const FitOptions& options,
+                                    const std::function<FitResult(const VariogramModel&)>& refit);
+
+/// Stores the nominal robot (kinematic methods), the training joints, the credible range and the
+/// registration (the training rows' tracker readings onto the model's own predictions, unless the
+/// fit already registered them) in fit.model.
+FitResult attach_artifacts(FitResult fit, const robot::MdhModel& nominal, const MeasurementSet& data);
+
+/// Refuses (InputError naming the file, line, column 'reflector' and the value) a measurement table
+/// whose rows carry more than one label in a column `reflector` (simulate --reflectors, nests on one
+/// plate): a model is fitted to one point at a time. One label (the user kept one reflector's rows)
+/// or no such column passes. Called before the check of x,y,z against the FK, which would blame the
+/// robot for the other reflectors' rows.
+void refuse_several_reflectors(const CsvTable& t);
+// Whether the table has a `reflector` column with more than one label (readings of several points).
+bool several_reflector_labels(const CsvTable& t);
+// Refuses (InputError naming column 'reflector') readings of several points for a method that models one.
+void refuse_several_points_for(const MeasurementSet& d, CompensationMethod method);
+
+}  // namespace errfield::compensation

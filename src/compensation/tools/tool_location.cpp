@@ -1,0 +1,227 @@
+#include "errfield/compensation/tools/tool_location.hpp"
+
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Geometry>
+
+#include "errfield/csv_table.hpp"
+#include "errfield/error.hpp"
+#include "errfield/compensation/model/kriging_fields.hpp"
+#include "errfield/robot/kinematics.hpp"
+
+namespace errfield::compensation {
+
+using namespace errfield::robot;
+
+void ToolLocationOptions::validate() const {
+  if (!(distinct_orientation_deg > 0.0 && distinct_orientation_deg < 180.0))
+    throw ArgumentError("ToolLocationOptions: distinct_orientation_deg must be in (0, 180), got " +
+                        format_number(distinct_orientation_deg));
+  if (min_orientations < 1) throw ArgumentError("ToolLocationOptions: min_orientations must be >= 1");
+  if (!(not_rigid_factor > 0.0 && std::isfinite(not_rigid_factor)))
+    throw ArgumentError("ToolLocationOptions: not_rigid_factor must be finite and > 0, got " + format_number(not_rigid_factor));
+}
+
+namespace {
+
+/// Greedy clusters of rotations: a rotation further than `limit_rad` from every cluster's first
+/// member starts a new one. Counts the clusters.
+std::size_t distinct_orientations(const std::vector<Eigen::Matrix3d>& r, double limit_rad) {
+  std::vector<Eigen::Matrix3d> seen;
+  for (const Eigen::Matrix3d& m : r) {
+    bool near = false;
+    for (const Eigen::Matrix3d& s : seen)
+      if (Eigen::AngleAxisd(s.transpose() * m).angle() <= limit_rad) {
+        near = true;
+        break;
+      }
+    if (!near) seen.push_back(m);
+  }
+  return seen.size();
+}
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& w) {
+  Eigen::Matrix3d s;
+  s << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
+  return s;
+}
+
+std::string mm(double v) { return format_number(std::round(v * 1e4) / 1e4); }
+
+/// The readings' residual against `at_tool` (the model with the located point as working tool and no
+/// correction), kriged over the joints with the model field's correlation (ToolPointCorrection);
+/// sets the RMS before and the correction's leave-one-out RMS in `out`.
+/// `flange_rotation` and `at_point` (at_tool's prediction there) are per reading of `used`.
+std::shared_ptr<const ToolPointCorrection> correction_at_located_point(const CompensationModel& at_tool,
+                                                                       const MeasurementSet& d,
+                                                                       const std::vector<std::size_t>& used,
+                                                                       const std::vector<Eigen::Matrix3d>& flange_rotation,
+                                                                       const std::vector<ErrorPrediction>& at_point,
+                                                                       ToolLocation& out) {
+  const std::optional<VariogramModel> field_model =
+      at_tool.field() ? joint_space_vector_field_model(*at_tool.field()) : std::nullopt;
+  if (!field_model || used.size() < kMinToolPointCorrectionReadings) return nullptr;
+  const Registration& reg = *at_tool.registration();
+  const MdhModel scored = at_tool.scored_model();
+  std::vector<JointVector> q;
+  std::vector<Eigen::Matrix3d> rotation;
+  std::vector<Eigen::Vector3d> residual;
+  double ss = 0.0;
+  for (std::size_t k = 0; k < used.size(); ++k) {
+    const std::size_t i = used[k];
+    const ErrorPrediction& e = at_point[k];
+    if (!e.inside_region || !e.position_error_mm.allFinite()) continue;
+    q.push_back(d.q_deg[i]);
+    rotation.push_back(flange_rotation[k]);
+    residual.push_back(reg.robot_from_tracker * d.measured_mm[i] -
+                       (forward_position(scored, d.q_deg[i]) + e.position_error_mm));
+    ss += residual.back().squaredNorm();
+  }
+  std::optional<ToolPointCorrection> c =
+      ToolPointCorrection::fit(scored.tool().translation(), q, rotation, residual, *field_model);
+  if (!c) return nullptr;
+  out.uncorrected_rms_mm = std::sqrt(ss / static_cast<double>(q.size()));
+  double loo = 0.0;
+  const std::vector<Eigen::Vector3d> held_out = c->leave_one_out_residual_mm();  // of the readings kept
+  for (const Eigen::Vector3d& r : held_out) loo += r.squaredNorm();
+  out.correction_leave_one_out_rms_mm = std::sqrt(loo / static_cast<double>(held_out.size()));
+  return std::make_shared<const ToolPointCorrection>(std::move(*c));
+}
+
+}  // namespace
+
+ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d, const ToolLocationOptions& options) {
+  options.validate();
+  const std::string& src = d.source;
+  if (d.measured_mm.empty())
+    throw InputError(src + ": no tracker readings (columns mx,my,mz): locate-tool needs readings of the point", src);
+  if (!model.registration())
+    throw InputError(src + ": the model holds no tracker registration (fit or calibrate it from data with mx,my,mz), "
+                           "so readings cannot be put in the robot frame", src);
+  const Registration& reg = *model.registration();
+  const MdhModel& robot = model.command_model();
+  // The flange origin as the model's point: the field's correction and the functions' displacement there.
+  const MdhModel flange_model = robot.with_tool(Eigen::Isometry3d::Identity());
+  ToolLocation out;
+  out.field_used = model.field() != nullptr;
+  std::vector<Eigen::Matrix3d> a, rotations;
+  std::vector<Eigen::Vector3d> b;
+  std::vector<std::size_t> used;
+  for (std::size_t i = 0; i < d.q_deg.size(); ++i) {
+    const JointVector& q = d.q_deg[i];
+    const Eigen::Isometry3d flange = forward_kinematics(robot, q, EndFrame::flange);
+    Eigen::Vector3d shift = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d turn = Eigen::Matrix3d::Identity();
+    if (model.field()) {
+      const ErrorPrediction e = model.predict_error_at(q, flange_model);
+      if (!e.inside_region || !e.credible || !e.position_error_mm.allFinite()) {
+        ++out.left_out;
+        continue;
+      }
+      shift = e.position_error_mm;
+      if (const auto& f = model.joint_error_functions()) {
+        const Eigen::Matrix<double, 6, 1> dq_rad = 1e-3 * f->angle_error_mrad(q, &robot);
+        turn += skew(geometric_jacobian(robot, q, EndFrame::flange).bottomRows<3>() * dq_rad);
+      }
+    }
+    a.push_back(turn * flange.linear());
+    b.push_back(reg.robot_from_tracker * d.measured_mm[i] - flange.translation() - shift);
+    rotations.push_back(flange.linear());
+    used.push_back(i);
+  }
+  out.readings = used.size();
+  out.orientations = distinct_orientations(rotations, options.distinct_orientation_deg * M_PI / 180.0);
+  if (out.orientations < options.min_orientations)
+    throw InputError(src + ": " + std::to_string(out.readings) + " reading(s)" +
+                         (out.left_out ? " (" + std::to_string(out.left_out) + " more outside the model's region)" : "") +
+                         " in " + std::to_string(out.orientations) + " distinct flange orientation(s) (closer than " +
+                         format_number(options.distinct_orientation_deg) + " deg count as one); at least " +
+                         std::to_string(options.min_orientations) +
+                         " are needed to locate the point: with fewer, the model's error at those poses cannot be told "
+                         "from the point's offset. Measure the point at more orientations of the flange",
+                     src);
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    normal += a[k].transpose() * a[k];
+    rhs += a[k].transpose() * b[k];
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> solve(normal);
+  out.tool_mm = solve.solve(rhs);
+  double ss = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    out.residual_mm.push_back(a[k] * out.tool_mm - b[k]);
+    ss += out.residual_mm.back().squaredNorm();
+  }
+  const double n = static_cast<double>(a.size());
+  out.residual_rms_mm = std::sqrt(ss / n);
+  // Residual variance per coordinate with 3 parameters fitted from 3n numbers.
+  const double s2 = a.size() > 1 ? ss / (3.0 * n - 3.0) : 0.0;
+  out.sd_mm = (s2 * solve.solve(Eigen::Matrix3d::Identity())).diagonal().cwiseSqrt();
+  out.lever_mm = (out.tool_mm - model.measured_point_mm()).norm();
+
+  // What the model's own errors explain at the located point.
+  Eigen::Isometry3d tool = robot.tool();
+  tool.translation() = out.tool_mm;
+  // An earlier located point's correction is of its readings: not this point's.
+  const CompensationModel at_tool = model.with_working_tool(tool).with_tool_point_correction(nullptr);
+  double var_sum = 0.0, stated_sum = 0.0, lever_ss = 0.0;
+  std::size_t var_count = 0;
+  std::vector<ErrorPrediction> at_point;  // per reading used
+  for (std::size_t i : used) {
+    const ErrorPrediction& e = at_point.emplace_back(at_tool.predict_error(d.q_deg[i]));
+    const double v = e.predictive_variance_mm2();
+    if (std::isfinite(v)) {
+      var_sum += v;
+      stated_sum += v - (std::isfinite(e.orientation_variance_mm2) ? e.orientation_variance_mm2 : 0.0);
+      ++var_count;
+    }
+    const Eigen::Vector3d lever =
+        forward_kinematics(robot, d.q_deg[i], EndFrame::flange).linear() * (out.tool_mm - model.measured_point_mm());
+    lever_ss += 2.0 * lever.squaredNorm();
+  }
+  // The orientation residual at this lever, as fit measures it at other points (MeasuredOrientation):
+  // what the readings leave beyond the stated variance (their sum of squares taken per degree of
+  // freedom: 3n numbers, 3 spent on the point), over E|w x L|^2 = 2 sigma^2 |L|^2.
+  if (out.field_used && var_count == used.size() && a.size() > 1 && out.lever_mm > kReflectorAtToolMm && lever_ss > 0.0) {
+    const double unbiased_ss = ss * (3.0 * n) / (3.0 * n - 3.0);
+    out.orientation = MeasuredOrientation{std::sqrt(std::max(0.0, unbiased_ss - stated_sum) / lever_ss), used.size(), false};
+  }
+  if (var_count == used.size() && var_count > 0) {
+    out.expected_rms_mm = std::sqrt(var_sum / static_cast<double>(var_count));
+    out.expected_basis = "the model's predictive variance at the point";
+  } else {
+    out.expected_rms_mm = reg.residual_rms_mm;
+    out.expected_basis = "the model's registration residual";
+  }
+  if (out.field_used) out.correction = correction_at_located_point(at_tool, d, used, rotations, at_point, out);
+  if (out.residual_rms_mm > options.not_rigid_factor * out.expected_rms_mm)
+    throw InputError(src + ": the " + std::to_string(out.readings) + " readings are not one point rigidly attached to "
+                         "the flange: located at (" + mm(out.tool_mm.x()) + ", " + mm(out.tool_mm.y()) + ", " +
+                         mm(out.tool_mm.z()) + ") mm they leave a residual RMS of " + mm(out.residual_rms_mm) +
+                         " mm, more than " + format_number(options.not_rigid_factor) + " x the " +
+                         mm(out.expected_rms_mm) + " mm that " + out.expected_basis +
+                         " explains (readings of two points mixed, a moved nest, or another robot's)",
+                     src);
+  return out;
+}
+
+CompensationModel with_located_tool(const CompensationModel& model, const ToolLocation& t) {
+  CompensationModel located = model.with_working_tool(model.command_model().with_tool_point(t.tool_mm).tool())
+                                  .with_tool_point_correction(t.correction);
+  // Calibrated models also aim it when read by a version that knows no working tool.
+  const bool calibrated =
+      model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging;
+  if (calibrated) located = located.with_tool_point(t.tool_mm, model.reflector_mm() ? model.reflector_mm() : model.measured_point_mm());
+  // The readings at the point measured the orientation residual at its lever: it replaces the guess
+  // (and a smaller one measured at other points, which may not hold at this lever).
+  auto effective = [](const MeasuredOrientation& m) {
+    return m.add_floor ? std::hypot(m.sigma_rad, kOrientationPriorFloorRad) : m.sigma_rad;
+  };
+  if (t.orientation && (!model.measured_orientation() || effective(*t.orientation) > effective(*model.measured_orientation())))
+    located = located.with_measured_orientation(t.orientation);
+  return located;
+}
+
+}  // namespace errfield::compensation
