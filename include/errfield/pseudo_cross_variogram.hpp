@@ -7,9 +7,10 @@
 ///
 /// For the pairs (i in A, j in B) whose lag h_ij = |x_i - x_j| (Euclidean) falls in bin k (N_k pairs):
 ///   gamma_AB,k = 1/(2 N_k) sum (z_A(x_i) - z_B(x_j))^2
-/// over every i of A and every j of B (N_A N_B ordered pairs; not symmetric in A and B when the
-/// means differ, since it includes half the squared difference of the means). This is R gstat's
-/// variogram(g, pseudo = TRUE) for two variables, with its special estimate at lag exactly 0 (gstat's
+/// over every i of A and every j of B (N_A N_B ordered pairs; it includes half the squared
+/// difference of the means of z_A and z_B). R gstat's variogram(g, pseudo = TRUE) is this of the
+/// residuals of each variable's own trend (for z ~ 1, z minus its mean: pass centred values; the
+/// CLI's `variogram --pseudo` does), with its special estimate at lag exactly 0 (gstat's
 /// ZERO_SPECIAL, the default for pseudo cross-variograms): pairs at distance 0 are counted in
 /// `zero_lag`, not in the first bin. Bins follow `convention` (BinConvention::Gstat for gstat's). The
 /// sums run in gstat's order (i over A, then j over B), so the result agrees with gstat's to the

@@ -286,7 +286,6 @@ void run_pseudo(const VariogramArgs& a, const CsvTable& table, const Eigen::Matr
   const auto refuse = [&](bool given, const std::string& option, const std::string& why) {
     if (given) throw ArgumentError(option + " does not apply to --pseudo: " + why);
   };
-  refuse(value_names.size() < 2, "one --value column", "give 2 or more (--value A,B), the variables never co-located");
   refuse(a.cross, "--cross", "--pseudo already writes every pair's (pseudo) cross-variogram");
   refuse(a.per_component, "--per-component", "each variogram has its own rows (column id)");
   refuse(a.estimator != "matheron", "--estimator " + a.estimator, "the pseudo cross-variogram is a mean of squared differences (Matheron)");
@@ -320,6 +319,8 @@ void run_variogram(const VariogramArgs& a) {
   check_thread_count("--threads", a.threads);
   options.threads = a.threads;
   options.max_stored_differences = a.max_stored;
+  if (a.pseudo && value_names.size() < 2)
+    throw ArgumentError("--pseudo needs at least 2 --value columns (variables measured at different rows); got '" + a.value + "'");
   if (a.cross) {
     if (value_names.size() < 2)
       throw ArgumentError("--cross needs at least 2 --value columns (their cross-variograms); got '" + a.value + "'");
@@ -579,8 +580,8 @@ void add_variogram_command(CLI::App& app) {
   cmd->add_flag("--pseudo", args->pseudo,
                 "with 2 or more --value columns measured at different rows (empty cells elsewhere; never co-located): "
                 "the direct variogram of each over its own rows and the pseudo cross-variogram of each pair, "
-                "gamma_AB(h) = 1/(2N(h)) sum (A(x_i) - B(x_j))^2 over every i measuring A and j measuring B at lag h, "
-                "as R gstat's variogram(g, pseudo = TRUE). Columns id (A, B, A.B as gstat), lag_lo,lag_hi,lag_mean,gamma,"
+                "gamma_AB(h) = 1/(2N(h)) sum (a(x_i) - b(x_j))^2 over every i measuring A and j measuring B at lag h, a and "
+                "b each column minus its mean, as R gstat's variogram(g, pseudo = TRUE). Columns id (A, B, A.B as gstat), lag_lo,lag_hi,lag_mean,gamma,"
                 "pairs; without --bins/--cutoff each variogram gets gstat's default bins of its own; pairs at lag 0 "
                 "in a row of their own. The input of fit-variogram --lmc");
   cmd->add_option("--plot", args->plot,

@@ -58,8 +58,12 @@ OutputTable pseudo_variogram_table(const Eigen::MatrixXd& x, const Eigen::Matrix
       const std::string name = names[a] + "." + names[b];
       // gstat computes the cross-variogram of A and B with B (the later variable) first: its bins by
       // default and the order of its sums.
-      const PseudoCrossVariogram p = pseudo_cross_variogram(columns[b].x, columns[b].z, columns[a].x, columns[a].z,
-                                                            bins_of(columns[b]), convention);
+      // gstat pairs the residuals of each variable's own trend (z ~ 1: z minus its mean; sem.c's
+      // make_residuals_lm), so a difference between the two means does not enter the pseudo
+      // cross-variogram.
+      const Eigen::VectorXd ra = columns[a].z.array() - columns[a].z.mean();
+      const Eigen::VectorXd rb = columns[b].z.array() - columns[b].z.mean();
+      const PseudoCrossVariogram p = pseudo_cross_variogram(columns[b].x, rb, columns[a].x, ra, bins_of(columns[b]), convention);
       if (p.zero_lag.pairs > 0) {
         add(name, p.zero_lag);
         note += "variogram --pseudo: " + std::to_string(p.zero_lag.pairs) + " pair(s) of " + name +

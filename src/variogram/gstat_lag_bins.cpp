@@ -3,8 +3,8 @@
 #include <cmath>
 #include <vector>
 
-#include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
+#include "errfield/number_format.hpp"
 
 namespace errfield {
 

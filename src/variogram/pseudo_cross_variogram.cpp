@@ -4,8 +4,8 @@
 #include <limits>
 #include <string>
 
-#include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
+#include "errfield/number_format.hpp"
 #include "pair_binning.hpp"
 
 namespace errfield {
