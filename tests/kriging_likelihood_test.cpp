@@ -111,18 +111,28 @@ TEST(KrigingLikelihood, NegativeLogLikelihoodEqualsExplicitFormula) {
       EXPECT_NEAR(negative_log_likelihood(f.x, f.z, m, o), reference_nll(f, m, reml, 0), 1e-8) << text << reml;
     }
   }
-  // Universal order 1: ML is invariant to the drift basis; REML up to a constant, so compare the
-  // difference between two models.
+  // Universal order 1: ML and REML both equal the formula with the raw drift columns [1 x y z]
+  // (the textbook REML; issue 49: the scaled columns the fit works with shifted it by a constant,
+  // 8.56 on oxford with covariates).
   LikelihoodFitOptions uk;
   uk.kind = KrigingKind::Universal;
   uk.drift_order = 1;
   const auto a = VariogramModel::parse("exp(sill=1,range=20)+nug(0.05)");
   const auto b = VariogramModel::parse("gau(sill=0.8,range=15)+nug(0.2)");
-  uk.restricted = false;
-  EXPECT_NEAR(negative_log_likelihood(f.x, f.z, a, uk), reference_nll(f, a, false, 1), 1e-8);
-  uk.restricted = true;
-  EXPECT_NEAR(negative_log_likelihood(f.x, f.z, a, uk) - negative_log_likelihood(f.x, f.z, b, uk),
-              reference_nll(f, a, true, 1) - reference_nll(f, b, true, 1), 1e-8);
+  for (bool reml : {false, true}) {
+    uk.restricted = reml;
+    EXPECT_NEAR(negative_log_likelihood(f.x, f.z, a, uk), reference_nll(f, a, reml, 1), 1e-8) << reml;
+    EXPECT_NEAR(negative_log_likelihood(f.x, f.z, b, uk), reference_nll(f, b, reml, 1), 1e-8) << reml;
+  }
+  // External drift: the covariate columns as given, whatever their scale (here the coordinates x 1000).
+  LikelihoodFitOptions ked;
+  ked.covariates = 1000.0 * f.x;
+  for (bool reml : {false, true}) {
+    ked.restricted = reml;
+    EXPECT_NEAR(negative_log_likelihood(f.x, f.z, a, ked),
+                reference_nll(f, a, reml, 1) + (reml ? 3.0 * std::log(1000.0) : 0.0), 1e-8)
+        << reml;
+  }
 }
 
 TEST(KrigingLikelihood, RemlFitIsALocalOptimumNearTheTruth) {

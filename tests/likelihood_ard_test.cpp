@@ -4,13 +4,16 @@
 // standard errors), and the automatic model choice refusing ill-conditioned candidates.
 
 #include <cmath>
+#include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
 #include "errfield/kriging_likelihood.hpp"
+#include "errfield/range_plausibility.hpp"
 #include "kriging/likelihood_profile.hpp"
 
 namespace errfield {
@@ -278,6 +281,38 @@ TEST(ModelChoice, AnImplausibleWinnerIsSetAsideWithTheReason) {
     finite = finite || (ard ? range * choice.model.anisotropy().parameters()[static_cast<std::size_t>(k)] <= 10.0 * extent[k]
                             : range <= 10.0 * extent.norm());
   EXPECT_TRUE(finite) << choice.model.to_string();
+}
+
+TEST(RangePlausibility, NamesAStripeBelowTheSpacingAndATrendBeyondTheExtent) {
+  // Issue 49's fulmar indicator: an ARD model with a range of 2.5e8 along x and 92 along y. Here:
+  // exp(range 10) with multipliers 1e6 and 0.5 over a 100 x 100 extent whose samples are >= 20 apart.
+  Eigen::RowVectorXd extent(2);
+  extent << 100.0, 100.0;
+  const VariogramModel stripe(VariogramModel::parse("exp(sill=1,range=10)+nug(0)").components(), Anisotropy::ard({1e6, 0.5}));
+  const std::vector<std::string> why = implausible_ranges(stripe, extent, 20.0);
+  ASSERT_EQ(why.size(), 2u);
+  // exp's practical range is 3 x its range parameter (covariance 5 % of the sill): 3e7 along x, 15 along y.
+  EXPECT_NE(why[0].find("along coordinate 1 (x) is 299573."), std::string::npos) << why[0];
+  EXPECT_NE(why[0].find("x the samples' extent 100: a trend over the data"), std::string::npos) << why[0];
+  EXPECT_NE(why[1].find("exp practical range 14.9786"), std::string::npos) << why[1];
+  EXPECT_NE(why[1].find("along coordinate 2 (y) below the smallest sample spacing 20"), std::string::npos) << why[1];
+  // A plausible isotropic model: nothing to say; one side only when asked.
+  EXPECT_TRUE(implausible_ranges(VariogramModel::parse("sph(sill=1,range=40)"), extent, 20.0).empty());
+  EXPECT_TRUE(implausible_ranges(stripe, extent, 0.0, std::numeric_limits<double>::infinity()).empty());
+}
+
+TEST(RangePlausibility, SmallestSpacingEqualsBruteForceAndSkipsRepeatedLocations) {
+  const Field f = simulate(200, Eigen::Vector2d(15, 40), 1.0, 0.05, 1, 7);
+  Eigen::MatrixXd x = f.x;
+  x.row(5) = x.row(17);  // a repeated location is not a spacing
+  double brute = std::numeric_limits<double>::infinity();
+  for (Eigen::Index i = 0; i < x.rows(); ++i)
+    for (Eigen::Index j = i + 1; j < x.rows(); ++j) {
+      const double d = (x.row(i) - x.row(j)).norm();
+      if (d > 0.0) brute = std::min(brute, d);
+    }
+  EXPECT_EQ(smallest_sample_spacing(x), brute);
+  EXPECT_EQ(smallest_sample_spacing(x.topRows(1)), std::numeric_limits<double>::infinity());
 }
 
 }  // namespace

@@ -232,7 +232,7 @@ void add_cv_command(CLI::App& app) {
   cmd->footer(
       "Each sample (leave-one-out) or each of K folds is predicted from the other samples; the summary\n"
       "gives the mean error (observed - predicted), mean and max |error| and the RMS error, in the unit\n"
-      "of the value column (e.g. 'dL [mm]' -> mm). k-fold folds come from a seeded shuffle: the same\n"
+      "of the value column (e.g. 'z [m]' -> m). k-fold folds come from a seeded shuffle: the same\n"
       "--seed gives the same folds everywhere. --out writes every sample column plus fold, pred,\n"
       "residual and abs_residual (vector values: pred_<col>, residual_<col>; abs_residual is the norm).\n\n"
       "Methods: " + method_names(true) + "\n\n"

@@ -11,6 +11,7 @@
 
 #include "cli/cli_support.hpp"
 #include "cli/covariate_sources.hpp"
+#include "cli/duplicate_locations.hpp"
 #include "cli/command_registry.hpp"
 #include "cli/interpolation_methods.hpp"
 #include "cli/value_cells.hpp"
@@ -21,6 +22,7 @@
 #include "errfield/error.hpp"
 #include "errfield/heterotopic_variogram.hpp"
 #include "errfield/kriging_likelihood.hpp"
+#include "errfield/range_plausibility.hpp"
 #include "errfield/variogram_fit.hpp"
 
 namespace errfield::cli {
@@ -44,6 +46,7 @@ struct FitVariogramArgs {
   bool nugget_given = false;
   std::string fix;  // --fix: parameters held at the template's values
   std::string plot;  // --plot FILE.svg (wls): the variogram and the fitted curve
+  std::string duplicates = "keep";  // --duplicates keep|average|first|refuse (ml/reml)
 };
 
 /// --model as a nested template with starting values, in the model text interpolate reads
@@ -203,7 +206,7 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   const bool restricted = a.method == "reml";
   if (a.coords.empty() || a.value.empty())
     throw ArgumentError("--method " + a.method + " fits the samples themselves: give --coords and --value "
-                        "(the columns of --input), e.g. --coords x,y,z --value dL");
+                        "(the columns of --input), e.g. --coords x,y --value z");
   if (a.weights_given) throw ArgumentError("--weights applies to --method wls only");
   if (a.range_max_given) throw ArgumentError("--range-max applies to --method wls only");
   LikelihoodFitOptions o;
@@ -290,8 +293,9 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   if (t.row_count() < static_cast<std::size_t>(kMinLikelihoodSamples))
     throw InputError(a.input + ": " + std::to_string(t.row_count()) + " data row(s); the likelihood fit needs "
                      "at least " + std::to_string(kMinLikelihoodSamples) + " samples", a.input);
-  const Eigen::MatrixXd x = t.numeric_columns(coord_names);
-  const Eigen::MatrixXd z = t.numeric_columns(value_names);
+  Eigen::MatrixXd x = t.numeric_columns(coord_names);
+  Eigen::MatrixXd z = t.numeric_columns(value_names);
+  apply_duplicates_option(a.duplicates, "fit-variogram", !a.covariates.empty(), t, x, z);
   const auto covariate_names = a.covariates.empty() ? std::vector<std::string>{} : split_column_list(a.covariates, "--covariates");
   if (!covariate_names.empty()) {
     if (o.kind == KrigingKind::Simple)
@@ -320,9 +324,21 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
   static const char* const kAxes[] = {"the major axis", "minor axis 1", "minor axis 2"};
   for (std::size_t k = 0; k < r.ranges.size(); ++k) {
     const std::string along = rotated ? std::string(r.ranges.size() == 2 && k == 1 ? "the minor axis" : kAxes[std::min<std::size_t>(k, 2)])
-                                      : coord_names[k];
-    std::cout << "  range" << (r.ranges.size() > 1 ? " along " + along : std::string()) << " = "
-              << format_number(r.ranges[k]) << " +- " << format_number(r.range_standard_errors[k]) << " (standard error)\n";
+                                      : coord_names[std::min(k, coord_names.size() - 1)];
+    // Isotropic: one range per structure of the template (not one per coordinate).
+    const bool per_structure = o.anisotropy == LikelihoodFitOptions::Anisotropy::None;
+    const std::string label = r.ranges.size() < 2 ? std::string()
+                              : per_structure     ? " of structure " + std::to_string(k + 1)
+                                                  : " along " + along;
+    std::cout << "  range" << label << " = " << format_number(r.ranges[k]);
+    // A held range has no standard error ("+- nan" said nothing); nor has a fit of held parameters (BOBYQA).
+    const std::size_t structure = std::min(k, o.hold_range.empty() ? std::size_t{0} : o.hold_range.size() - 1);
+    if (std::isfinite(r.range_standard_errors[k]))
+      std::cout << " +- " << format_number(r.range_standard_errors[k]) << " (standard error)\n";
+    else if (!o.hold_range.empty() && o.hold_range[structure])
+      std::cout << " (held at the template's value by --fix: no standard error)\n";
+    else
+      std::cout << " (no standard error: the derivative-free fit used with --fix does not estimate one)\n";
     ranges.push_back(r.ranges[k]);
     errors.push_back(std::isfinite(r.range_standard_errors[k]) ? nlohmann::json(r.range_standard_errors[k]) : nlohmann::json());
   }
@@ -369,6 +385,94 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
     write_file_atomically(a.out, j.dump(2) + "\n");
   }
   if (!r.converged) std::cerr << "errfield fit-variogram: warning: " << r.message << "\n";
+  // A free range below the samples' spacing (a nugget) or far beyond their extent (a trend) "converged"
+  // silently before (issue 49: oxford's REML range 620 x the extent).
+  const bool ranges_held = !o.hold_range.empty() && std::all_of(o.hold_range.begin(), o.hold_range.end(), [](bool h) { return h; });
+  if (!ranges_held && r.angles_deg.empty())
+    for (const std::string& w : implausible_ranges(r.model, x.colwise().maxCoeff() - x.colwise().minCoeff(), smallest_sample_spacing(x)))
+      std::cerr << "errfield fit-variogram: warning: " << w << "\n";
+}
+
+/// --lmc on a CSV with one block of rows per variogram, column `id` naming it (A, or A.B / A_B for
+/// the cross-variogram of A and B): 'errfield variogram --pseudo', or R gstat's variogram data frame
+/// written with write.csv (columns id, np, dist, gamma). Each variogram keeps its own bins, lags and
+/// pairs (a heterotopic table); rows with 0 pairs are skipped, and so are rows at lag 0 (gstat's zero
+/// estimate of a pseudo cross-variogram: a weight N_j / h_j^2 would be infinite there), counted in
+/// `skipped_zero_lag`.
+CrossVariogramTable lmc_table_from_blocks(const CsvTable& t, const std::vector<std::string>& names, const std::string& value,
+                                          std::size_t& skipped_zero_lag) {
+  const std::size_t P = names.size();
+  const std::size_t c_id = t.column_index("id");
+  const std::size_t c_lag = find_column(t, "lag_mean", "dist");
+  const std::size_t c_gamma = t.column_index("gamma");
+  const std::size_t c_pairs = find_column(t, "pairs", "np");
+  struct Row {
+    double lag, pairs, gamma;
+  };
+  std::vector<std::vector<std::vector<Row>>> rows(P, std::vector<std::vector<Row>>(P));
+  const auto where = [&](std::size_t r, std::size_t c) {
+    return t.source() + ":" + std::to_string(t.line_of_row(r)) + ": column '" + t.header()[c] + "': ";
+  };
+  for (std::size_t r = 0; r < t.row_count(); ++r) {
+    const std::string id(t.cell(r, c_id));
+    std::size_t a = P, b = P;
+    for (std::size_t i = 0; i < P; ++i)
+      for (std::size_t j = i; j < P; ++j)
+        if ((i == j && id == names[i]) ||
+            (i != j && (id == names[i] + "." + names[j] || id == names[j] + "." + names[i] || id == names[i] + "_" + names[j] ||
+                        id == names[j] + "_" + names[i]))) {
+          a = i;
+          b = j;
+        }
+    if (a == P)
+      throw InputError(where(r, c_id) + "'" + id + "' names no variogram of --value " + value +
+                           " (expected a column name, or A.B for the cross-variogram of A and B)",
+                       t.source(), t.line_of_row(r), "id");
+    const double np = parse_cell(t, r, c_pairs);
+    if (np < 0.0 || np != std::floor(np))
+      throw InputError(where(r, c_pairs) + format_number(np) + " is not a pair count (an integer >= 0)", t.source(),
+                       t.line_of_row(r), t.header()[c_pairs]);
+    if (np == 0.0) continue;  // an empty bin
+    const double lag = parse_cell(t, r, c_lag);
+    if (lag == 0.0) {
+      ++skipped_zero_lag;
+      continue;
+    }
+    rows[a][b].push_back({lag, np, parse_cell(t, r, c_gamma)});
+  }
+  std::size_t bins = 0;
+  for (std::size_t i = 0; i < P; ++i)
+    for (std::size_t j = i; j < P; ++j) {
+      if (rows[i][j].empty())
+        throw InputError(t.source() + ": no row with pairs > 0 for id '" + (i == j ? names[i] : names[i] + "." + names[j]) +
+                             "'; --lmc needs every direct and cross variogram of --value " + value,
+                         t.source(), 0, "id");
+      bins = std::max(bins, rows[i][j].size());
+    }
+  CrossVariogramTable table;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto p = static_cast<Eigen::Index>(P);
+  for (std::size_t k = 0; k < bins; ++k) {
+    Eigen::MatrixXd g = Eigen::MatrixXd::Constant(p, p, nan), lag = g, pairs = Eigen::MatrixXd::Zero(p, p);
+    double any_lag = nan, most_pairs = 0.0;
+    for (std::size_t i = 0; i < P; ++i)
+      for (std::size_t j = i; j < P; ++j) {
+        if (k >= rows[i][j].size()) continue;
+        const Row& row = rows[i][j][k];
+        const auto ii = static_cast<Eigen::Index>(i), jj = static_cast<Eigen::Index>(j);
+        g(ii, jj) = g(jj, ii) = row.gamma;
+        lag(ii, jj) = lag(jj, ii) = row.lag;
+        pairs(ii, jj) = pairs(jj, ii) = row.pairs;
+        if (std::isnan(any_lag)) any_lag = row.lag;
+        most_pairs = std::max(most_pairs, row.pairs);
+      }
+    table.lag.push_back(any_lag);
+    table.pairs.push_back(static_cast<std::uint64_t>(most_pairs));
+    table.gamma.push_back(std::move(g));
+    table.entry_lag.push_back(std::move(lag));
+    table.entry_pairs.push_back(std::move(pairs));
+  }
+  return table;
 }
 
 /// --lmc: the direct and cross variograms of --value's columns (from a CSV of 'variogram --cross',
@@ -440,6 +544,16 @@ void run_lmc_fit(const FitVariogramArgs& a) {
       const EmpiricalVariogram v = with_source(a.input, [&] { return empirical_variogram(x, z, LagBins::gstat_default(x), vo); });
       table = CrossVariogramTable::from(v);
     }
+  } else if (t.has_column("id")) {
+    if (!tmpl.anisotropy.isotropic())
+      throw ArgumentError("--model: an anisotropic template (@" + tmpl.anisotropy.to_string() +
+                          ") needs the samples (--coords); a variogram CSV's lags are already computed");
+    std::size_t zero_lag = 0;
+    table = lmc_table_from_blocks(t, names, a.value, zero_lag);
+    std::cout << "variograms by id (errfield variogram --pseudo, or gstat's variogram data frame): each with its own "
+                 "bins; a pseudo cross-variogram A.B is fitted as the cross-variogram of the LMC, as gstat's fit.lmc "
+                 "does"
+              << (zero_lag ? " (" + std::to_string(zero_lag) + " row(s) at lag 0 left out)" : std::string()) << "\n";
   } else {
     if (!tmpl.anisotropy.isotropic())
       throw ArgumentError("--model: an anisotropic template (@" + tmpl.anisotropy.to_string() +
@@ -571,6 +685,9 @@ void run_fit_variogram(const FitVariogramArgs& a) {
     throw ArgumentError("--plot draws the empirical variogram a --method wls fit was fitted to; " +
                         std::string(a.lmc ? "with --lmc" : "with --method " + a.method) +
                         " plot the samples' variogram with 'errfield variogram --plot' instead");
+  if (a.duplicates != "keep" && (a.lmc || a.method == "wls"))
+    throw ArgumentError("--duplicates applies to --method ml or reml (the samples themselves); for a variogram CSV give it "
+                        "to 'errfield variogram'");
   if (a.lmc) return run_lmc_fit(a);
   if (a.lmc_method_given) throw ArgumentError("--lmc-method applies to --lmc");
   if (a.method == "ml" || a.method == "reml") return run_likelihood_fit(a);
@@ -735,7 +852,7 @@ void add_fit_variogram_command(CLI::App& app) {
   cmd->add_option("--coords", args->coords,
                   "ml/reml (and --lmc on samples): coordinate columns of --input, e.g. x,y,z (any unit)");
   cmd->add_option("--value", args->value,
-                  "ml/reml: the value column, e.g. dL, or several (ex,ey,ez): one model shared by the components, "
+                  "ml/reml: the value column, e.g. z, or several (ex,ey,ez): one model shared by the components, "
                   "the sum of their log-likelihoods; --lmc: the components (>= 2), whose gamma_<A> and gamma_<A>_<B> "
                   "columns --input holds");
   cmd->add_option("--anisotropy", args->anisotropy,
@@ -805,6 +922,9 @@ void add_fit_variogram_command(CLI::App& app) {
                   "--lmc: goulard-voltz (default: iterated WLS, each B_k projected onto the PSD matrices) or gstat "
                   "(gstat's fit.lmc: separate fits, then negative eigenvalues set to 0)")
       ->each([args](const std::string&) { args->lmc_method_given = true; });
+  cmd->add_option("--duplicates", args->duplicates,
+                  "ml/reml: rows at exactly the same coordinates: keep (default: repeated measurements, which the nugget "
+                  "describes) | average (one sample per location, the mean value) | first (the first row's) | refuse");
   cmd->add_option("--plot", args->plot,
                   "--method wls: also write an SVG picture (FILE.svg, for a browser) of the empirical variogram, one "
                   "point per non-empty bin sized by and labelled with its pair count, and the fitted model's curve; "

@@ -6,15 +6,19 @@
 #include <charconv>
 #include <cmath>
 #include <iostream>
+#include <optional>
 
 #include "cli/cli_support.hpp"
 #include "cli/covariate_sources.hpp"
+#include "cli/duplicate_locations.hpp"
 #include "cli/command_registry.hpp"
 #include "cli/interpolation_methods.hpp"
+#include "cli/pseudo_variogram_table.hpp"
 #include "cli/variogram_svg.hpp"
 #include "cli/value_cells.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/empirical_variogram.hpp"
+#include "errfield/gstat_lag_bins.hpp"
 #include "errfield/heterotopic_variogram.hpp"
 #include "errfield/error.hpp"
 #include "errfield/trend_residuals.hpp"
@@ -38,7 +42,10 @@ struct VariogramArgs {
   std::string covariates;  // --covariates: residuals of the OLS trend 1 + these columns
   bool cloud = false;        // --cloud: every pair, not bins
   std::string map;           // --map DX,DY: variogram map cell widths
-  double cutoff = std::nan("");  // --cutoff of --cloud / --map
+  double cutoff = std::nan("");  // --cutoff: of --cloud / --map, or with --width gstat's bins
+  double width = std::nan("");   // --width: gstat's bin width (default cutoff / 15)
+  bool pseudo = false;           // --pseudo: pseudo cross-variograms of columns never co-located
+  std::string duplicates = "keep";  // --duplicates keep|average|first|refuse
   std::uint64_t max_pairs = VariogramCloudOptions{}.max_pairs;
   std::string plot;          // --plot FILE.svg
 };
@@ -143,6 +150,8 @@ void run_cloud_or_map(const VariogramArgs& a, const Eigen::MatrixXd& x, const Ei
   refuse(a.subsample != 1.0, "--subsample", "every pair is shown; use --cutoff to see fewer");
   refuse(a.per_coordinate, "--per-coordinate", "use --alpha/--beta (one direction) with --cloud");
   refuse(!a.convention.empty(), "--convention", "there are no bins");
+  refuse(!std::isnan(a.width), "--width", "there are no bins (--map takes its cell widths as --map DX,DY)");
+  refuse(a.pseudo, "--pseudo", "the cloud and the map are of one variable's pairs");
   refuse(!a.plot.empty(), "--plot", "the plot is of the binned variogram");
   if (a.cloud) refuse(!a.bins.empty() && !std::isnan(a.cutoff), "--bins", "--cutoff already sets the cloud's cutoff");
   if (!a.cloud) {
@@ -232,18 +241,86 @@ void run_cloud_or_map(const VariogramArgs& a, const Eigen::MatrixXd& x, const Ei
   }
 }
 
+/// --bins without --convention counts a lag equal to an inner edge in the bin above it ([lo, hi), the
+/// paper's tables) where gstat counts it in the bin below ((lo, hi]): on lattice data (integer
+/// coordinates) that moves many pairs (coalash's first bin: 719 pairs against gstat's 369). Says so,
+/// with the first bin that differs, when the two conventions count differently.
+void warn_lags_on_edges(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const LagBins& bins,
+                        EmpiricalVariogramOptions options, const DirectionalRun& run,
+                        const std::vector<std::uint64_t>& half_open_pairs, bool heterotopic) {
+  options.convention = BinConvention::Gstat;
+  options.direction = run.direction;
+  const EmpiricalVariogram g = heterotopic ? heterotopic_variogram(x, z, bins, options).variogram
+                                           : empirical_variogram(x, z, bins, options);
+  for (std::size_t k = 0; k < g.bins.size() && k < half_open_pairs.size(); ++k)
+    if (g.bins[k].pairs != half_open_pairs[k]) {
+      std::cerr << "variogram: warning: lags fall exactly on --bins edges: bin " << k + 1 << " [" << format_number(bins.lag_lo(k))
+                << ", " << format_number(bins.lag_hi(k)) << ") has " << half_open_pairs[k]
+                << " pairs with the half-open bins [lo, hi) used (--convention paper, the default with --bins) but "
+                << g.bins[k].pairs << " with gstat's (lo, hi] (--convention gstat, as R gstat's boundaries = and "
+                << "--cutoff/--width); give --convention to choose and silence this\n";
+      return;
+    }
+}
+
+/// The bins of --bins, or gstat's of --cutoff C [--width W] (width default C/15, cutoff default a
+/// third of the bounding-box diagonal); none given: nothing (the caller's default).
+std::optional<LagBins> bins_from_options(const VariogramArgs& a, const Eigen::MatrixXd& x) {
+  const bool gstat = !std::isnan(a.cutoff) || !std::isnan(a.width);
+  if (gstat && !a.bins.empty())
+    throw ArgumentError("--bins with --cutoff/--width: give one or the other (--cutoff C --width W is gstat's "
+                        "variogram(..., cutoff = C, width = W): bins [0,W], (W,2W], ... up to C)");
+  if (!a.bins.empty()) return parse_bins_option(a.bins);
+  if (!gstat) return std::nullopt;
+  const double cutoff = !std::isnan(a.cutoff) ? a.cutoff : LagBins::gstat_default(x).edges().back();
+  const double width = !std::isnan(a.width) ? a.width : cutoff / 15.0;
+  std::optional<LagBins> bins;
+  naming_options([&] { bins = gstat_cutoff_width_bins(cutoff, width); },
+                 {{"lag bins: cutoff", "--cutoff"}, {"lag bins: width", "--width"}});
+  return bins;
+}
+
+// --pseudo: the direct variograms and the pseudo cross-variograms, one block of rows per variogram.
+void run_pseudo(const VariogramArgs& a, const CsvTable& table, const Eigen::MatrixXd& x, const Eigen::MatrixXd& z,
+                const std::vector<std::string>& value_names, const std::optional<LagBins>& bins, BinConvention convention) {
+  const auto refuse = [&](bool given, const std::string& option, const std::string& why) {
+    if (given) throw ArgumentError(option + " does not apply to --pseudo: " + why);
+  };
+  refuse(a.cross, "--cross", "--pseudo already writes every pair's (pseudo) cross-variogram");
+  refuse(a.per_component, "--per-component", "each variogram has its own rows (column id)");
+  refuse(a.estimator != "matheron", "--estimator " + a.estimator, "the pseudo cross-variogram is a mean of squared differences (Matheron)");
+  refuse(a.subsample != 1.0, "--subsample", "every pair is used");
+  refuse(!a.alpha.empty() || !a.beta.empty() || a.per_coordinate, "--alpha/--beta/--per-coordinate",
+         "the pseudo cross-variograms are omnidirectional here");
+  refuse(!a.covariates.empty(), "--covariates", "residuals of a trend are not supported with --pseudo");
+  refuse(!a.plot.empty(), "--plot", "plot each variogram's rows separately");
+  std::string note;
+  const OutputTable out = with_source(a.input, [&] { return pseudo_variogram_table(x, z, value_names, bins, convention, note); });
+  std::cerr << note;
+  if (a.out.empty()) {
+    std::cout << out.to_csv();
+    return;
+  }
+  out.write(a.out);
+  std::cerr << "variogram --pseudo: " << table.row_count() << " rows, " << value_names.size() << " direct and "
+            << value_names.size() * (value_names.size() - 1) / 2 << " pseudo cross-variogram(s) ("
+            << (bins ? "the bins given" : "gstat's default bins of each") << "), written to " << a.out << "\n";
+}
+
 void run_variogram(const VariogramArgs& a) {
   const auto coord_names = split_column_list(a.coords, "--coords");
   const auto value_names = split_column_list(a.value, "--value");
   EmpiricalVariogramOptions options;
   options.estimator = estimator_from_name(a.estimator);
-  // Without --bins, gstat's default bins and, unless --convention says otherwise, its boundaries.
+  // Without --bins (gstat's default bins, or --cutoff/--width), gstat's boundaries unless --convention says otherwise.
   options.convention = convention_from_name(!a.convention.empty() ? a.convention : a.bins.empty() ? "gstat" : "paper");
   options.pair_fraction = a.subsample;
   options.seed = a.seed;
   check_thread_count("--threads", a.threads);
   options.threads = a.threads;
   options.max_stored_differences = a.max_stored;
+  if (a.pseudo && value_names.size() < 2)
+    throw ArgumentError("--pseudo needs at least 2 --value columns (variables measured at different rows); got '" + a.value + "'");
   if (a.cross) {
     if (value_names.size() < 2)
       throw ArgumentError("--cross needs at least 2 --value columns (their cross-variograms); got '" + a.value + "'");
@@ -263,12 +340,13 @@ void run_variogram(const VariogramArgs& a) {
                          " data row(s); the variogram needs at least 2 points",
                      a.input);
   const std::vector<DirectionalRun> runs = directions(a, coord_names);
-  const Eigen::MatrixXd x = table.numeric_columns(coord_names);
+  Eigen::MatrixXd x = table.numeric_columns(coord_names);
   // With 2 or more --value columns an empty cell is that column not measured there (heterotopic
   // data); each variogram is then over its own pairs. One column, or the trend of --covariates
   // (which needs every value), keeps refusing empty cells.
   Eigen::MatrixXd z = a.covariates.empty() && value_names.size() >= 2 ? numeric_columns_with_gaps(table, value_names)
                                                                       : table.numeric_columns(value_names);
+  apply_duplicates_option(a.duplicates, "variogram", !a.covariates.empty(), table, x, z);
   const bool heterotopic = z.array().isNaN().any();
   if (!a.covariates.empty()) {
     // gstat's variogram(z ~ cov): the variogram of the residuals of the ordinary least-squares trend.
@@ -284,10 +362,13 @@ void run_variogram(const VariogramArgs& a) {
     run_cloud_or_map(a, x, z, runs, coord_names);
     return;
   }
-  if (!std::isnan(a.cutoff))
-    throw ArgumentError("--cutoff applies to --cloud and --map; for binned variograms give --bins lo:max:width");
-  const LagBins bins = a.bins.empty() ? LagBins::gstat_default(x) : parse_bins_option(a.bins);
-  if (a.bins.empty())
+  const std::optional<LagBins> given_bins = bins_from_options(a, x);
+  if (a.pseudo) {
+    run_pseudo(a, table, x, z, value_names, given_bins, options.convention);
+    return;
+  }
+  const LagBins bins = given_bins ? *given_bins : LagBins::gstat_default(x);
+  if (!given_bins)
     std::cerr << "variogram: no --bins: gstat's default, 15 bins of " << format_number(bins.lag_hi(0))
               << " up to " << format_number(bins.edges().back()) << " (a third of the data's bounding-box diagonal)"
               << (options.convention == BinConvention::Gstat ? ", gstat's boundaries" : "") << "\n";
@@ -302,6 +383,7 @@ void run_variogram(const VariogramArgs& a) {
     throw ArgumentError("--plot draws one variogram; " + std::to_string(runs.size()) +
                         " directions were asked (--alpha/--beta/--per-coordinate): plot one direction at a time");
   VariogramPlot plot;
+  std::vector<std::uint64_t> first_run_pairs;  // the first direction's pair counts (the --bins edge check)
   for (const DirectionalRun& run : runs) {
     options.direction = run.direction;
     EmpiricalVariogram v;
@@ -344,8 +426,10 @@ void run_variogram(const VariogramArgs& a) {
       }
       total += bin.pairs;
       if (bin.pairs > 0) plot.bins.push_back({bin.lag_mean, bin.gamma, bin.pairs});
+      if (&run == &runs.front()) first_run_pairs.push_back(bin.pairs);
     }
   }
+  if (!a.bins.empty() && a.convention.empty()) warn_lags_on_edges(x, z, bins, options, runs.front(), first_run_pairs, heterotopic);
 
   OutputTable out;
   out.add_column("lag_lo", lo);
@@ -381,7 +465,7 @@ void run_variogram(const VariogramArgs& a) {
   std::string svg;
   if (!a.plot.empty()) {
     plot.title = "empirical variogram of " + a.value + (runs.front().alpha.empty() ? "" : ", direction " + runs.front().alpha) +
-                 (runs.front().beta.empty() ? "" : ", dip " + runs.front().beta) + " (" + std::to_string(table.row_count()) + " points)";
+                 (runs.front().beta.empty() ? "" : ", dip " + runs.front().beta) + " (" + std::to_string(x.rows()) + " points)";
     const std::string lag_unit = unit_of_column(table, coord_names.front());
     const std::string value_unit = value_names.size() == 1 ? unit_of_column(table, value_names.front()) : std::string();
     plot.lag_label = "lag" + (lag_unit.empty() ? std::string() : " [" + lag_unit + "]");
@@ -396,7 +480,7 @@ void run_variogram(const VariogramArgs& a) {
     files.add(a.out, out.to_csv());
     if (!svg.empty()) files.add(a.plot, svg);
     files.commit();
-    std::cerr << "variogram: " << table.row_count() << " points, " << total << " pairs in "
+    std::cerr << "variogram: " << x.rows() << " points, " << total << " pairs in "
               << bins.size() << " bins";
     if (!svg.empty()) std::cerr << " (picture " << a.plot << ")";
     if (runs.size() > 1) std::cerr << " x " << runs.size() << " directions";
@@ -419,8 +503,8 @@ void add_variogram_command(CLI::App& app) {
       "--plot FILE.svg also draws the binned variogram. See docs/geostatistics.md.");
   cmd->add_option("--input", args->input, "CSV with the coordinate and value columns")->required();
   cmd->add_option("--coords", args->coords,
-                  "coordinate columns, any number, e.g. x,y,z (task space, mm) or q1,q2,q3,q4,q5,q6 "
-                  "(joint space, deg)")
+                  "coordinate columns, any number, in one unit (the lags' unit), e.g. x,y (map coordinates, m), x,y,z "
+                  "or q1,...,q6 (joint angles, deg)")
       ->required();
   cmd->add_option("--value", args->value,
                   "value column, or several comma-separated columns for a vector value (dx,dy,dz)")
@@ -486,10 +570,27 @@ void add_variogram_command(CLI::App& app) {
                   "opposite (the map is symmetric through 0). Columns dx,dy (cell centre), np (lag vectors in the "
                   "cell), gamma (empty when np is 0); rows from the largest dy down, dx increasing, as gstat");
   cmd->add_option("--cutoff", args->cutoff,
-                  "--cloud: pairs at a distance <= C (default: the last --bins edge, else gstat's a third of the "
-                  "bounding-box diagonal); --map: the half-width C of the map (required)");
+                  "binned variogram: gstat's bins [0,W], (W,2W], ... up to C, no lag above C (R gstat's "
+                  "variogram(..., cutoff = C, width = W); W from --width, default C/15; gstat's boundaries unless "
+                  "--convention); --cloud: pairs at a distance <= C (default: the last --bins edge, else gstat's a "
+                  "third of the bounding-box diagonal); --map: the half-width C of the map (required)");
+  cmd->add_option("--width", args->width,
+                  "bin width W of gstat's bins (lag unit; with or without --cutoff, whose default is then a third of "
+                  "the bounding-box diagonal)");
+  cmd->add_flag("--pseudo", args->pseudo,
+                "with 2 or more --value columns measured at different rows (empty cells elsewhere; never co-located): "
+                "the direct variogram of each over its own rows and the pseudo cross-variogram of each pair, "
+                "gamma_AB(h) = 1/(2N(h)) sum (a(x_i) - b(x_j))^2 over every i measuring A and j measuring B at lag h, a and "
+                "b each column minus its mean, as R gstat's variogram(g, pseudo = TRUE). Columns id (A, B, A.B as gstat), lag_lo,lag_hi,lag_mean,gamma,"
+                "pairs; without --bins/--cutoff each variogram gets gstat's default bins of its own; pairs at lag 0 "
+                "in a row of their own. The input of fit-variogram --lmc");
   cmd->add_option("--plot", args->plot,
                   "also write an SVG picture of the binned variogram (points labelled by pair count), written atomically");
+  cmd->add_option("--duplicates", args->duplicates,
+                  "rows at exactly the same coordinates: keep (default: every row, as gstat's variogram; their pairs have "
+                  "lag 0, in the first bin) | average (one sample per location, the mean of each --value column over the "
+                  "rows measuring it, as gstat users average before krige) | first (the first row's values) | refuse "
+                  "(an error naming both lines)");
   cmd->add_option("--out", args->out, "output CSV (written atomically); default: standard output");
   cmd->footer(
       "Example:\n"

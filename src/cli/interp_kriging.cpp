@@ -38,6 +38,7 @@ struct KrigingCliOptions {
   std::size_t min_neighbours = 0;  // 0 = none
   std::size_t octant_max = 0;      // 0 = no limit
   std::string nugget_as = "micro";
+  std::string duplicates = "refuse";  // --duplicates refuse|average
   std::string measurement_variance;
   std::vector<std::string> covariates;  // --covariates: external-drift columns
   // interpolate only: conditional simulation
@@ -105,6 +106,11 @@ void add_kriging_options(CLI::App& cmd) {
   cmd.add_option("--nugget-as", o.nugget_as,
                  "micro (default, gstat's krige: exact at the samples) | error (the nugget is measurement error, like "
                  "gstat's Err: predictions of the error-free signal, smoothing)")
+      ->group(group);
+  cmd.add_option("--duplicates", o.duplicates,
+                 "samples at exactly the same location (a singular kriging system): refuse (default; the error names "
+                 "both lines) | average (one sample there with the mean value and the variance of the mean, as gstat "
+                 "users average duplicates before krige)")
       ->group(group);
   cmd.add_option("--measurement-variance", o.measurement_variance,
                  "Column of the samples file with each sample's measurement variance (value unit^2)")
@@ -259,6 +265,7 @@ KrigingOptions kriging_options_from_cli(const SharedInterpolationOptions& shared
   text.min_neighbours = o.min_neighbours;
   text.octant_max = o.octant_max;
   text.nugget = o.nugget_as;
+  text.duplicates = o.duplicates;
   return kriging_options_from_text(text, cli_option_names());
 }
 
@@ -325,7 +332,7 @@ void refuse_duplicate_samples(const Eigen::MatrixXd& coords, const RowLabels& la
     if (coords.row(a) != coords.row(b)) continue;
     const auto first = static_cast<std::size_t>(std::min(a, b)), later = static_cast<std::size_t>(std::max(a, b));
     throw InputError(labels(later) + ": kriging: this sample and " + labels(first) +
-                         " are duplicates (same location); remove one",
+                         " are duplicates (same location); remove one, or give --duplicates average (one sample, their mean)",
                      labels.source, labels.line(later));
   }
 }

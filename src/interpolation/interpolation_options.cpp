@@ -85,9 +85,9 @@ KrigingOptions kriging_options_from_text(const KrigingOptionText& t, const Optio
   if (t.nugget == "micro") o.nugget = NuggetTreatment::MicroScale;
   else if (t.nugget == "error") o.nugget = NuggetTreatment::MeasurementError;
   else throw ArgumentError(n.nugget + " is " + quoted(t.nugget) + "; expected micro or error");
-  if (t.duplicates == "error") o.duplicates = DuplicatePolicy::Error;
+  if (t.duplicates == "error" || t.duplicates == "refuse") o.duplicates = DuplicatePolicy::Error;
   else if (t.duplicates == "average") o.duplicates = DuplicatePolicy::Average;
-  else throw ArgumentError(n.duplicates + " is " + quoted(t.duplicates) + "; expected error or average");
+  else throw ArgumentError(n.duplicates + " is " + quoted(t.duplicates) + "; expected refuse (or error) or average");
   o.validate();
   return o;
 }

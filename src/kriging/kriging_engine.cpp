@@ -195,7 +195,8 @@ void KrigingEngine::merge_duplicates() {
     if (const auto pair = first_duplicate(*tree_, points_, tol))
       throw_duplicate(*pair, options_.sample_labels, n, "kriging",
                       (tol > 0 ? " <= duplicate_distance " + format_number(tol) : std::string(", same location")) +
-                          "); remove one, or set duplicates = Average to merge them");
+                          "); remove one, or merge them: DuplicatePolicy::Average (errfield interpolate and cv: "
+                          "--duplicates average)");
     return;
   }
   // Average: union of all pairs within tol, each group represented by its lowest index.

@@ -21,8 +21,12 @@
 namespace errfield {
 namespace {
 
-// Drift matrix (N x p) in centred, scaled coordinates, as the kriging engine builds it.
-Eigen::MatrixXd drift(const Eigen::MatrixXd& x, const LikelihoodFitOptions& o) {
+// Drift matrix (N x p) in centred, scaled coordinates, as the kriging engine builds it. Centring
+// and scaling change F by a unit-triangular map times the column scales, so log det F'K^-1F - and
+// the REML likelihood - differ from the raw columns' (1, x, y, ..., x^2, ..., the covariates as
+// given) by a constant: `log_scale_sum` gets the sum of the logs of those column scales.
+Eigen::MatrixXd drift(const Eigen::MatrixXd& x, const LikelihoodFitOptions& o, double* log_scale_sum = nullptr) {
+  if (log_scale_sum) *log_scale_sum = 0.0;
   const Eigen::Index n = x.rows(), d = x.cols();
   if (o.kind == KrigingKind::Simple) return Eigen::MatrixXd(n, 0);
   const int order = o.kind == KrigingKind::Ordinary ? 0 : o.drift_order;
@@ -32,11 +36,18 @@ Eigen::MatrixXd drift(const Eigen::MatrixXd& x, const LikelihoodFitOptions& o) {
     if (!(scale[k] > 0.0)) scale[k] = 1.0;
   const Eigen::MatrixXd u = (x.rowwise() - center).array().rowwise() / scale.array();
   std::vector<Eigen::VectorXd> cols{Eigen::VectorXd::Ones(n)};
+  double logs = 0.0;
   if (order >= 1)
-    for (Eigen::Index k = 0; k < d; ++k) cols.push_back(u.col(k));
+    for (Eigen::Index k = 0; k < d; ++k) {
+      cols.push_back(u.col(k));
+      logs += std::log(scale[k]);
+    }
   if (order >= 2)
     for (Eigen::Index k = 0; k < d; ++k)
-      for (Eigen::Index l = k; l < d; ++l) cols.push_back(u.col(k).cwiseProduct(u.col(l)));
+      for (Eigen::Index l = k; l < d; ++l) {
+        cols.push_back(u.col(k).cwiseProduct(u.col(l)));
+        logs += std::log(scale[k]) + std::log(scale[l]);
+      }
   // External drift: one more column per covariate, centred and scaled like the coordinates.
   const Eigen::MatrixXd& cov = o.covariates;
   if (cov.cols() > 0 && cov.rows() != n)
@@ -46,7 +57,9 @@ Eigen::MatrixXd drift(const Eigen::MatrixXd& x, const LikelihoodFitOptions& o) {
     const double mean = cov.col(j).mean();
     const double spread = (cov.col(j).array() - mean).abs().maxCoeff();
     cols.push_back((cov.col(j).array() - mean) / (spread > 0.0 ? spread : 1.0));
+    if (spread > 0.0) logs += std::log(spread);
   }
+  if (log_scale_sum) *log_scale_sum = logs;
   Eigen::MatrixXd f(n, static_cast<Eigen::Index>(cols.size()));
   for (std::size_t c = 0; c < cols.size(); ++c) f.col(static_cast<Eigen::Index>(c)) = cols[c];
   return f;
@@ -164,6 +177,13 @@ double nll(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z, const Eigen::Matr
   const double c = static_cast<double>(z.cols());
   const double m = restricted ? static_cast<double>(n - p) : static_cast<double>(n);
   return 0.5 * (c * (logdet + extra) + y.squaredNorm() + c * m * std::log(2.0 * std::numbers::pi));
+}
+
+// REML of the raw drift columns (the textbook value, Harville 1974, without nlme's + 0.5 log det F'F):
+// the optimizer works with the scaled F, and the printed value adds the constant back (per value
+// column). ML does not depend on the basis of F.
+double textbook_reml_offset(const LikelihoodFitOptions& o, double log_scale_sum, Eigen::Index value_columns) {
+  return o.restricted ? static_cast<double>(value_columns) * log_scale_sum : 0.0;
 }
 
 void check_input(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z) {
@@ -371,7 +391,9 @@ double negative_log_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::
     throw ArgumentError("likelihood: the model's anisotropy " + a.to_string() + " is for " +
                         std::to_string(a.dimension()) + " coordinates but the samples have " +
                         std::to_string(coordinates.cols()));
-  return nll_of_model(coordinates, z, drift(coordinates, options), model, options);
+  double log_scales = 0.0;
+  const Eigen::MatrixXd f = drift(coordinates, options, &log_scales);
+  return nll_of_model(coordinates, z, f, model, options) + textbook_reml_offset(options, log_scales, values.cols());
 }
 
 LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
@@ -406,6 +428,9 @@ LikelihoodFitResult fit_likelihood(const Eigen::MatrixXd& coordinates, const Eig
   refuse_repeated_rows(coordinates, values);
   refuse_collinear_covariates(coordinates, options);
   LikelihoodFitResult res = fit_likelihood_checked(coordinates, values, structure, options);
+  double log_scales = 0.0;
+  drift(coordinates, options, &log_scales);
+  res.negative_log_likelihood += textbook_reml_offset(options, log_scales, values.cols());
   const double n = static_cast<double>(coordinates.rows() * values.cols());
   res.aic = 2.0 * res.negative_log_likelihood + 2.0 * res.parameters;
   res.bic = 2.0 * res.negative_log_likelihood + res.parameters * std::log(n);

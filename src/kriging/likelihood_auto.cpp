@@ -15,6 +15,7 @@
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
 #include "errfield/kriging_likelihood.hpp"
+#include "errfield/range_plausibility.hpp"
 
 namespace errfield {
 namespace {
@@ -149,11 +150,28 @@ std::vector<CandidateFit> fit_candidates(const Eigen::MatrixXd& x, const Eigen::
   return out;
 }
 
+// Where the covariance of one structure (kind, range, nu) falls to 5 % of its sill, in units of
+// its range parameter: 1 for sph and the compactly supported kinds, 3 for exp, sqrt(3) for gau,
+// by bisection for mat.
+double practical_range_factor(const ModelComponent& c) {
+  ModelComponent unit = c;
+  unit.sill = 1.0;
+  unit.range = 1.0;
+  const VariogramModel m({unit});
+  double lo = 0.0, hi = 1.0;
+  while (m.covariance(hi) > 0.05 && hi < 1e6) hi *= 2.0;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (m.covariance(mid) > 0.05 ? lo : hi) = mid;
+  }
+  return hi;
+}
+
 // Why `model` is implausible for samples spanning `extent` (max - min per coordinate) with this
 // condition number, or empty. Ranges are compared along each coordinate (ARD: range x multiplier;
 // isotropic: against the diagonal). A range far beyond its coordinate's extent only says that the
 // field is flat along it, so the anisotropy ratio is taken among the ranges within that factor.
-std::string implausibility(const VariogramModel& model, const Eigen::RowVectorXd& extent, double condition,
+std::string implausibility(const VariogramModel& model, const Eigen::RowVectorXd& extent, double spacing, double condition,
                            const ModelChoiceOptions& o) {
   double range = 0.0;
   for (const auto& c : model.components())
@@ -186,6 +204,9 @@ std::string implausibility(const VariogramModel& model, const Eigen::RowVectorXd
       why.push_back("anisotropy ratio " + format_number(*hi / *lo) + " > " + format_number(o.pathological_anisotropy_ratio) +
                     " (ranges " + format_number(*hi) + " and " + format_number(*lo) + ")");
   }
+  // A range the samples cannot resolve (below their smallest spacing): what the fit calls a range is a nugget.
+  for (const std::string& r : implausible_ranges(model, extent, spacing, std::numeric_limits<double>::infinity()))
+    why.push_back(r);
   if (condition > o.near_singular_condition)
     why.push_back("near-singular kriging system (condition number " + format_number(condition) + " > " +
                   format_number(o.near_singular_condition) + ")");
@@ -196,13 +217,13 @@ std::string implausibility(const VariogramModel& model, const Eigen::RowVectorXd
 
 // Fills candidate `cand` from a fit of it on samples x.
 void record_fit(ModelChoiceCandidate& cand, const LikelihoodFitResult& r, const Eigen::MatrixXd& x,
-                const Eigen::RowVectorXd& extent, bool use_bic, const ModelChoiceOptions& o) {
+                const Eigen::RowVectorXd& extent, double spacing, bool use_bic, const ModelChoiceOptions& o) {
   cand.model = r.model;
   cand.negative_log_likelihood = r.negative_log_likelihood;
   const double criterion = use_bic ? r.bic : r.aic;
   cand.condition_number = condition_number(x, r.model);
   cand.accepted = std::isfinite(criterion) && cand.condition_number <= o.max_condition_number;
-  cand.implausible = cand.accepted ? implausibility(r.model, extent, cand.condition_number, o) : std::string();
+  cand.implausible = cand.accepted ? implausibility(r.model, extent, spacing, cand.condition_number, o) : std::string();
   cand.note = cand.accepted ? r.message
                             : "refused: condition number " + format_number(cand.condition_number) + " > " +
                                   format_number(o.max_condition_number);
@@ -241,6 +262,7 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
   const Eigen::MatrixXd& vr = subset ? vs : values;
   const Eigen::RowVectorXd extent = x.colwise().maxCoeff() - x.colwise().minCoeff();
   const Eigen::RowVectorXd extent_r = xr.colwise().maxCoeff() - xr.colwise().minCoeff();
+  const double spacing = smallest_sample_spacing(x);  // of all samples, for the subset's fits too
   const std::vector<CandidateSpec> specs = candidate_specs(o, x.cols());
   std::vector<std::size_t> every(specs.size());
   for (std::size_t i = 0; i < every.size(); ++i) every[i] = i;
@@ -279,7 +301,7 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
         continue;
       }
       ++fitted;
-      record_fit(cand, *ranked[i].fit, xr, extent_r, use_bic, o);
+      record_fit(cand, *ranked[i].fit, xr, extent_r, spacing, use_bic, o);
       if (!confirm_needed) cand.all_samples_criterion = cand.criterion;
       any_accepted = any_accepted || cand.accepted;
     }
@@ -345,7 +367,7 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
           continue;
         }
         const double ranking_criterion = cand.criterion;
-        record_fit(cand, *r[k].fit, x, extent, use_bic, o);
+        record_fit(cand, *r[k].fit, x, extent, spacing, use_bic, o);
         cand.all_samples_criterion = cand.criterion;
         cand.criterion = ranking_criterion;
         final_fit[i] = r[k].fit;
@@ -378,7 +400,7 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
       if (!r[0].fit) break;
       cond = condition_number(x, r[0].fit->model);
       if (cond <= o.max_condition_number) {
-        record_fit(choice.candidates[i], *r[0].fit, x, extent, use_bic, o);
+        record_fit(choice.candidates[i], *r[0].fit, x, extent, spacing, use_bic, o);
         choice.candidates[i].all_samples_criterion = choice.candidates[i].criterion;
         final_fit[i] = r[0].fit;
         best_any = static_cast<int>(i);
@@ -423,8 +445,57 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
     const std::string note = "every candidate fitted is implausible; kept " + spec_name(specs[w]) + ": " + winner.implausible;
     choice.reason += "; " + note;
     choice.warnings.push_back(note);
+  } else {
+    // A plausible winner may still have one ARD range far beyond its coordinate's extent: a trend there.
+    for (const std::string& r : implausible_ranges(choice.model, extent, 0.0, o.pathological_range_factor))
+      choice.warnings.push_back(spec_name(specs[w]) + ": " + r);
   }
   return choice;
+}
+
+double smallest_sample_spacing(const Eigen::MatrixXd& x) {
+  const Eigen::Index n = x.rows();
+  std::vector<Eigen::Index> order(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) order[static_cast<std::size_t>(i)] = i;
+  std::sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return x(a, 0) < x(b, 0); });
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t a = 0; a < order.size(); ++a)
+    for (std::size_t b = a + 1; b < order.size(); ++b) {
+      const double dx = x(order[b], 0) - x(order[a], 0);
+      if (dx >= best) break;  // sorted along the first coordinate: no closer pair further on
+      const double d = (x.row(order[b]) - x.row(order[a])).norm();
+      if (d > 0.0 && d < best) best = d;
+    }
+  return best;
+}
+
+std::vector<std::string> implausible_ranges(const VariogramModel& model, const Eigen::RowVectorXd& extent, double spacing,
+                                            double factor) {
+  static const char* const kAxis[] = {"x", "y", "z"};
+  const Anisotropy& an = model.anisotropy();
+  const bool ard = an.type() == Anisotropy::Type::Ard && an.dimension() == extent.size();
+  std::vector<std::string> out;
+  for (const ModelComponent& c : model.components()) {
+    if (c.kind == ModelKind::Nugget || !c.bounded() || !(c.sill > 0.0)) continue;
+    const double practical = c.range * practical_range_factor(c);
+    for (Eigen::Index k = 0; k < (ard ? extent.size() : 1); ++k) {
+      const double a = ard ? practical * an.parameters()[static_cast<std::size_t>(k)] : practical;
+      const double e = ard ? extent[k] : extent.norm();
+      const std::string along = ard ? " along coordinate " + std::to_string(k + 1) +
+                                          (k < 3 ? " (" + std::string(kAxis[k]) + ")" : std::string())
+                                    : std::string();
+      if (a < spacing)
+        out.push_back(std::string(model_kind_name(c.kind)) + " practical range " + format_number(a) + along +
+                      " below the smallest sample spacing " + format_number(spacing) +
+                      ": the samples cannot resolve it (it acts as a nugget)");
+      else if (e > 0.0 && a > factor * e)
+        out.push_back(std::string(model_kind_name(c.kind)) + " practical range " + format_number(a) + along + " is " +
+                      format_number(a / e) + " x the samples' extent " + format_number(e) +
+                      ": a trend over the data, not a range; model it (--kind universal1|universal2, or --covariates) or "
+                      "hold the range (--fix range)");
+    }
+  }
+  return out;
 }
 
 }  // namespace errfield
