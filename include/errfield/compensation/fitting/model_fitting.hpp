@@ -60,11 +60,7 @@ struct MeasurementSet {
 // Registration and fit_registration (robot ← tracker, the frame in which measured positions become
 // position errors; fit stores it in the model it writes): compensation/model/registration.hpp.
 
-/// Reflector and tool point closer than this (mm, flange frame) are one point as far as the data
-/// can tell: the tool point compensate aims is the reflector as identified, which corrects the tool's
-/// own error (a robot JSON tool a few mm off, a ball's centre). Further apart they are two points:
-/// compensate aims the robot JSON's tool on the calibrated flange, and fit warns what that costs.
-inline constexpr double kReflectorAtToolMm = 10.0;
+// kReflectorAtToolMm (reflector and tool point as one point) is the model's: compensation.hpp.
 /// Further apart than this (mm) the robot JSON's tool must be the wrong one (a second reflector nest,
 /// a tool-less robot JSON): fit refuses unless FitOptions::reflector_far_ok.
 inline constexpr double kReflectorFarMm = 50.0;

@@ -158,6 +158,11 @@ inline constexpr double kMaxLeverResidualRatio = 2.0;
 /// that field (LabelledPoint::field): a located tool's position scatters by ~0.05 mm around the
 /// point it is, and the rigid combination would trade the point's own field for its neighbours'.
 inline constexpr double kSameFlangePointMm = 1.0;
+/// Reflector and tool point closer than this (mm, flange frame) are one point as far as the data
+/// can tell: the tool point compensate aims is the reflector as identified, which corrects the tool's
+/// own error (a robot JSON tool a few mm off, a ball's centre). Further apart they are two points:
+/// compensate aims the robot JSON's tool on the calibrated flange, and fit warns what that costs.
+inline constexpr double kReflectorAtToolMm = 10.0;
 /// `--tool`: a tool point further than this from the flange origin (mm) is refused as a typo (metres
 /// for mm, a wrong column): no robot tool is 2 m long.
 inline constexpr double kMaxToolPointMm = 2000.0;
