@@ -62,7 +62,7 @@ class LocateToolMessages : public errfield::testing::CliTest {
 
 TEST_F(LocateToolMessages, OptionsAreNamedAsOnTheCommandLineAndRadiansAreCalledSo) {
   ASSERT_NO_FATAL_FAILURE(make_two_point_model());
-  for (const std::string& bad : {"--min-orientations 0", "--distinct-orientation 0", "--distinct-orientation 200",
+  for (const std::string bad : {"--min-orientations 0", "--distinct-orientation 0", "--distinct-orientation 200",
                                  "--not-rigid-factor 0", "--not-rigid-factor -1"}) {
     const auto r = run("locate-tool --model m.json --data train_r2.csv --out l.json " + bad);
     EXPECT_EQ(r.exit_code, 2) << bad << "\n" << r.output();
