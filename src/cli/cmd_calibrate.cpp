@@ -220,7 +220,7 @@ void add_calibrate_command(CLI::App& app) {
       "Prints the identified parameters and the before/after residuals; writes the identified robot JSON.\n"
       "Example: errfield calibrate --robot robot.json --data grid.csv --model distance --out calibrated.json");
   cmd->add_option("--robot", args->robot,
-                  "nominal robot JSON or built-in name (er20-c10, kr16, ur5e); default: built-in ER20-C10 (no tool). "
+                  "nominal robot JSON or built-in name (er20-c10, kr16, ur5e, ur5, ur10); default: built-in ER20-C10 (no tool). "
                   "x,y,z columns, if present, must be its FK (within 5 mm)");
   cmd->add_option("--data", args->data, "measurement CSV")->required();
   cmd->add_option("--model", args->model, "distance (default) or position");

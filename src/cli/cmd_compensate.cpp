@@ -234,7 +234,9 @@ void add_compensate_command(CLI::App& app) {
       "refused, nothing is written and the exit status is 1 (as predict's): the error counts the refusals by\n"
       "status and names the first rows; with --strict, so it is if any target is refused.\n"
       "Example: errfield compensate --model model.json --targets targets.csv --out joints.csv");
-  cmd->add_option("--robot", a->robot, "nominal robot JSON or built-in name (er20-c10, kr16, ur5e; default: the model's command model)");
+  cmd->add_option("--robot", a->robot,
+                  "nominal robot JSON or built-in name (er20-c10, kr16, ur5e, ur5, ur10; default: the model's command "
+                  "model)");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();
   cmd->add_option("--targets", a->targets, "targets CSV")->required();
   cmd->add_option("--tolerance", a->tolerance, "tolerance for p_inside: radius of the 3-D error (mm; distance models: |distance error|)")->capture_default_str();

@@ -110,6 +110,7 @@ struct FitArgs {
   int joint_functions = compensation::FitOptions{}.joint_function_degree;
   std::string gravity_load = compensation::FitOptions{}.gravity_load ? "on" : "off";
   std::string joint_function_prior = default_prior_text();
+  double gls_guard = compensation::FitOptions{}.gls_guard_ratio;
   std::size_t max_fit_readings = kDefaultMaxFitReadings;
 };
 
@@ -123,6 +124,7 @@ void run_fit(const FitArgs& a) {
   o.joint_function_degree = a.joint_functions;
   o.gravity_load = a.gravity_load == "on";
   o.joint_function_prior = parse_joint_function_prior(a.joint_function_prior);
+  o.gls_guard_ratio = a.gls_guard;
   std::vector<Eigen::Vector3d> fixed;
   for (const auto& b : a.base_points) {
     const auto v = parse_numbers(b, 3, "--base-point");
@@ -180,7 +182,7 @@ void add_fit_command(CLI::App& app) {
       "Example: errfield fit --robot robot.json --data measured.csv --out model.json\n"
       "Example: errfield fit --robot robot.json --data grid.csv --method distance-idw --out model.json   # the paper's method");
   cmd->add_option("--robot", a->robot,
-                  "nominal robot JSON or built-in name (er20-c10, kr16, ur5e); default: built-in ER20-C10, no tool. "
+                  "nominal robot JSON or built-in name (er20-c10, kr16, ur5e, ur5, ur10); default: built-in ER20-C10, no tool. "
                   "x,y,z that are not its FK (within 5 mm) are refused with the likely cause");
   cmd->add_option("--data", a->data, "measurement CSV")->required();
   cmd->add_option("--method", a->method, "auto | distance-idw | position-idw | distance-kriging | vector-kriging | kinematic | kinematic+kriging; "
@@ -273,6 +275,13 @@ void add_fit_command(CLI::App& app) {
                   "off: fitted freely, combinations of angle errors that barely move the measured point (they turn the "
                   "flange about it) grow to tens of mrad and move every other point on the flange; docs/robot.md "
                   "('Tool points and orientation') says which data decided the default")
+      ->capture_default_str();
+  cmd->add_option("--gls-guard", a->gls_guard,
+                  "kinematic+kriging with --joint-functions: RATIO; the functions are refitted by generalized least "
+                  "squares under the field's covariance, and a positive RATIO drops that refit when it leaves the "
+                  "field more than RATIO x the ordinary fit's RMS; 0 (default) always keeps it; docs/realdata.md says "
+                  "which data decided the default")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_flag("--reflector-far-ok", a->reflector_far_ok,
                 "kinematic methods from positions: accept a reflector found more than 50 mm from --robot's tool "

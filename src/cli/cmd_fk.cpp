@@ -85,7 +85,7 @@ void add_fk_command(CLI::App& app) {
       "Example: errfield fk --input joints.csv --robot robot.json --frame tool --out poses.csv");
   cmd->add_option("--input", args->input, "CSV with columns q1..q6 (deg)")->required();
   cmd->add_option("--robot", args->robot,
-                  "robot description JSON (docs/robot.md), built-in name (er20-c10, kr16, ur5e; errfield robots) or "
+                  "robot description JSON (docs/robot.md), built-in name (er20-c10, kr16, ur5e, ur5, ur10; errfield robots) or "
                   "compensation model JSON (its command model); default: built-in nominal ER20-C10, no tool");
   cmd->add_option("--frame", args->frame, "flange or tool (default tool)");
   cmd->add_option("--out", args->out, "output CSV (written atomically)")->required();

@@ -161,7 +161,7 @@ void add_ik_command(CLI::App& app) {
       "Example: errfield ik --input targets.csv --robot robot.json --position-only --out joints.csv   # x,y,z only");
   cmd->add_option("--input", args->input, "CSV with x,y,z and r11..r33 or rx,ry,rz")->required();
   cmd->add_option("--robot", args->robot,
-                  "robot description JSON (docs/robot.md) or built-in name (er20-c10, kr16, ur5e; errfield robots); "
+                  "robot description JSON (docs/robot.md) or built-in name (er20-c10, kr16, ur5e, ur5, ur10; errfield robots); "
                   "default: built-in nominal ER20-C10, no tool");
   cmd->add_option("--frame", args->frame, "flange or tool (default tool)");
   cmd->add_flag("--position-only", args->position_only, "match the position only (orientation free)");

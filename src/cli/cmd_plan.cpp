@@ -314,7 +314,8 @@ void add_plan_command(CLI::App& app) {
       "  errfield fit --robot kr16 --data batch1.csv --out m1.json\n"
       "  errfield plan --candidates pool.csv --count 40 --model m1.json --data batch1.csv \\\n"
       "    --target-rms 0.09 --out batch2.csv");
-  cmd->add_option("--robot", a->robot, "robot JSON or built-in name (er20-c10, kr16, ur5e; default: built-in ER20-C10, no tool)");
+  cmd->add_option("--robot", a->robot,
+                  "robot JSON or built-in name (er20-c10, kr16, ur5e, ur5, ur10; default: built-in ER20-C10, no tool)");
   cmd->add_option("--cube", a->cube, "X0,Y0,Z0,SIZE: lower corner and side (mm); a grid plan");
   cmd->add_option("--step", a->step, "grid step (mm, divides SIZE) or auto")->capture_default_str();
   cmd->add_option("--orientation", a->orientation, "RX,RY,RZ tool orientation (deg, fixed axes XYZ)")->capture_default_str();

@@ -17,6 +17,7 @@ struct PredictArgs {
   std::string model, joints, out, tool;
   double max_registration_rms = robot::kRegistrationRmsLimitMm;
   bool joints_are_degrees = false;  // skip the radians check (check_joints_not_radians)
+  bool extrapolate = false;
 };
 
 void run_predict(const PredictArgs& a) {
@@ -36,7 +37,7 @@ void run_predict(const PredictArgs& a) {
                                        a.max_registration_rms);
   if (const auto w = robot::joints_outside_limits(q, model.nominal_model(), row_labels_of(table, "row")))
     std::cerr << "errfield predict: warning: " << *w << " (status outside-limits: nothing predicted there)\n";
-  const compensation::StepColumns step = compensation::predict_columns(model, q);
+  const compensation::StepColumns step = compensation::predict_columns(model, q, a.extrapolate);
   const std::size_t refused = step.refused;
   bool any_variance = false, any_radius = false;
   for (const auto& c : step.columns) {
@@ -86,6 +87,7 @@ void add_predict_command(CLI::App& app) {
                 "skip the check that refuses joints that look like radians (all within +-2 pi and spread far less "
                 "than the model's training joints, exit 2); give it when such small angles are meant");
   add_tool_option(cmd, a->tool, "the point predicted");
+  add_extrapolate_option(cmd, a->extrapolate);
   cmd->add_option("--out", a->out, "output CSV (written atomically)")->required();
   cmd->callback([a] { run_predict(*a); });
 }

@@ -54,9 +54,9 @@ void add_robots_command(CLI::App& app) {
   auto args = std::make_shared<RobotsArgs>();
   auto* cmd = app.add_subcommand(
       "robots",
-      "The built-in nominal robots (er20-c10, kr16, ur5e; from published datasheets, docs/robot.md), usable\n"
-      "by name wherever --robot is accepted. Without options: lists them with their sources and joint\n"
-      "limits. --show NAME prints (or --out writes) one as a robot JSON.\n"
+      "The built-in nominal robots (er20-c10, kr16, ur5e, ur5, ur10; from published datasheets,\n"
+      "docs/robot.md), usable by name wherever --robot is accepted. Without options: lists them with their\n"
+      "sources and joint limits. --show NAME prints (or --out writes) one as a robot JSON.\n"
       "Example: errfield robots --show ur5e --out ur5e.json");
   cmd->add_option("--show", args->show, "a built-in robot's name: print its robot JSON");
   cmd->add_option("--out", args->out, "with --show: write the robot JSON to this file (atomically)");

@@ -609,7 +609,7 @@ void add_simulate_command(CLI::App& app) {
       "           --truth-columns --robot-out kr16.json --out extremes.csv");
   cmd->add_option("--config", args->config, "simulation JSON (docs/robot.md); default: the paper's set-up");
   cmd->add_option("--robot", args->robot,
-                  "nominal robot: a built-in name (er20-c10, kr16, ur5e; errfield robots) or a robot JSON; overrides "
+                  "nominal robot: a built-in name (er20-c10, kr16, ur5e, ur5, ur10; errfield robots) or a robot JSON; overrides "
                   "the config's robot. A built-in name also sets the default --cube to one that robot reaches");
   cmd->add_option("--seed", args->seed, "random seed (overrides the config's)")->check(kUnsignedInteger);
   cmd->add_option("--joints", args->joints, "CSV with commanded joints q1..q6 (deg) instead of cube points");

@@ -27,7 +27,7 @@ namespace {
 struct ValidateArgs {
   std::string model, data, robot, out, summary_out, report, tool, reflector, orientation_out;
   std::vector<std::string> base_points;
-  bool targets = false;
+  bool targets = false, extrapolate = false;
   double max_registration_rms = robot::kRegistrationRmsLimitMm;
   double max_tool_point_shift = compensation::kToolPointShiftLimitMm;
 };
@@ -108,7 +108,7 @@ void run_validate(const ValidateArgs& a) {
       check_readings_of_tool_point(model, data.q_deg, data.measured_mm, a.data, a.max_tool_point_shift);
     if (const auto w = joints_outside_limits(read_joint_columns(table), model.nominal_model(), row_labels_of(table, "row")))
       std::cerr << "errfield validate: warning: " << *w << " (status outside-limits: not scored)\n";
-    r = with_source(a.data, [&] { return compensation::validate_predictions(model, data); });
+    r = with_source(a.data, [&] { return compensation::validate_predictions(model, data, a.extrapolate); });
     // Three or more points per pose and a model with fields at three: the flange's orientation.
     if (file.has_column("reflector") && model.fielded_points().size() >= 3) {
       const MeasurementSet all_points = MeasurementSet::from_table(file, nominal_robot, fixed, true);
@@ -190,6 +190,7 @@ void add_validate_command(CLI::App& app) {
                   "point the model located for it (fit on several points stores each label's point); default: the "
                   "model's own point");
   cmd->add_flag("--targets", a->targets, "validation-run mode: error = measured - intended target");
+  add_extrapolate_option(cmd, a->extrapolate);
   cmd->add_option("--out", a->out, "per-point CSV: point,status,before_mm,after_mm, the error components and, for "
                   "kriging models, var_mm2, var_field_mm2, r95_mm, nees");
   cmd->add_option("--summary-out", a->summary_out, "summary JSON (points, refused, position/distance before/after, "

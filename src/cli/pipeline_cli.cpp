@@ -114,6 +114,11 @@ std::string refusal_tally(const std::vector<std::string>& status) {
     text += "; orientation-unknown: the working tool is further from the measured reflector than the flange "
             "orientation the model knows supports - locate it with 'errfield locate-tool' from readings at it, or "
             "fit readings of several points on the flange (docs/robot.md, 'Tool points and orientation')";
+  if (std::any_of(counts.begin(), counts.end(),
+                  [](const auto& c) { return c.first == "outside-region" || c.first == "calibration-extrapolated"; }))
+    text += "; predict and validate answer such poses with --extrapolate (status extrapolated: outside the field's "
+            "region the calibration and joint error functions alone, no variance claimed); compensate never "
+            "does";
   if (std::any_of(counts.begin(), counts.end(), [](const auto& c) { return c.first == "calibration-extrapolated"; }))
     text += "; calibration-extrapolated: the pose lies beyond what the calibration's poses determine (another tool "
             "orientation or arm posture than they cover) - measure poses like it and fit again (errfield plan "
@@ -126,6 +131,14 @@ const std::vector<std::string>& status_words(const compensation::StepColumns& st
   for (const auto& c : step.columns)
     if (c.name == "status") return c.words;
   return none;
+}
+
+void add_extrapolate_option(CLI::App* cmd, bool& extrapolate) {
+  cmd->add_flag("--extrapolate", extrapolate,
+                "answer rows the model refuses as outside-region or calibration-extrapolated (status extrapolated): "
+                "outside the field's region with the calibrated kinematics and joint error functions alone, beyond the "
+                "calibration's poses with the whole model; no variance or 95 % radius is claimed for them (e.g. a model "
+                "of one series used on another after 'errfield register'); compensate never extrapolates");
 }
 
 }  // namespace errfield::cli

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
 #include <Eigen/Geometry>
 
 #include "cli/cli_support.hpp"
@@ -38,5 +39,8 @@ std::string refusal_tally(const std::vector<std::string>& status);
 
 /// The words of a step's "status" column (empty if it has none).
 const std::vector<std::string>& status_words(const compensation::StepColumns& step);
+
+/// `--extrapolate` of predict and validate (prediction.hpp, predict_position's extrapolate).
+void add_extrapolate_option(CLI::App* cmd, bool& extrapolate);
 
 }  // namespace errfield::cli

@@ -3,6 +3,8 @@
 
 #include "errfield/compensation/pipeline.hpp"
 
+#include "errfield/number_format.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -161,7 +163,7 @@ TableFit fit_table(const robot::MdhModel& robot, const CsvTable& table, const Fi
   return fit;
 }
 
-StepColumns predict_columns(const CompensationModel& model, std::span<const robot::JointVector> q) {
+StepColumns predict_columns(const CompensationModel& model, std::span<const robot::JointVector> q, bool extrapolate) {
   const std::size_t n = q.size();
   const bool tracker = model.registration().has_value();
   std::vector<std::vector<double>> cols(9, std::vector<double>(n, kNaN));  // see `names` below
@@ -173,9 +175,9 @@ StepColumns predict_columns(const CompensationModel& model, std::span<const robo
   bool any_variance = false, any_radius = false;
   StepColumns out;
   for (std::size_t i = 0; i < n; ++i) {
-    const PointPrediction p = predict_position(model, q[i]);
+    const PointPrediction p = predict_position(model, q[i], extrapolate);
     status[i] = std::string(status_name(p.status));
-    if (!p.ok()) {
+    if (!p.ok() && p.status != PredictionStatus::extrapolated) {
       ++out.refused;  // no position for a prediction the model cannot vouch for
       continue;
     }
@@ -565,7 +567,18 @@ void check_readings_of_tool_point(const CompensationModel& model, std::span<cons
   const robot::CalibrationResult reg = robot::register_tracker(command, data);
   const Eigen::Vector3d found = reg.model.tool().translation(), fitted = command.tool().translation();
   const double shift = (found - fitted).norm();
-  if (!(shift > limit_mm)) return;
+  if (!(shift > limit_mm)) {
+    // The model's point, far in the stored frame yet close in a frame fitted to the readings: the
+    // tracker (or the robot) moved since the model was fitted (issue 45: another day, another place).
+    if (reg.after.rms_mm < 0.2 * rms)
+      throw InputError(source + ": the model's registration leaves these readings " + format_significant(rms, 4) +
+                           " mm RMS from the model's point, and a registration fitted to them " +
+                           format_significant(reg.after.rms_mm, 4) +
+                           " mm: the tracker (or the robot) has moved since the model was fitted. Register the model "
+                           "to readings of today first: errfield register --model MODEL --data READINGS --out MODEL_TODAY",
+                       source);
+    return;
+  }
   auto xyz = [](const Eigen::Vector3d& v) {
     return "(" + format_number(std::round(v.x() * 10) / 10) + ", " + format_number(std::round(v.y() * 10) / 10) +
            ", " + format_number(std::round(v.z() * 10) / 10) + ")";

@@ -27,24 +27,43 @@ MdhModel kr16() {
   return MdhModel("KR16", links);
 }
 
-MdhModel ur5e() {
-  // Universal Robots, "Parameters for calculations of kinematics and dynamics" (UR support FAQ
-  // 45257, e-Series software 5.1): standard D-H, i = 1..6,
-  //   a = (0, -425, -392.2, 0, 0, 0) mm, d = (162.5, 0, 0, 133.3, 99.7, 99.6) mm,
-  //   alpha = (90, 0, 0, 90, -90, 0) deg, theta offsets 0.
-  // Standard D-H Rz(q_i) Dz(d_i) Dx(a_i) Rx(alpha_i) regrouped as modified D-H: link i takes
-  // alpha_{i-1}, a_{i-1} of the previous standard row (0 for i = 1) and its own d_i; the last
-  // row's Dx(a_6) Rx(alpha_6) is the identity here, so frame 6 is UR's tool flange frame.
-  // Joint ranges: +-360 deg on every joint (UR5e datasheet).
+namespace {
+
+// A Universal Robots arm from its published standard D-H lengths (mm): every UR arm has
+// alpha = (90, 0, 0, 90, -90, 0) deg, theta offsets 0 and a1 = a4 = a5 = a6 = 0.
+// Standard D-H Rz(q_i) Dz(d_i) Dx(a_i) Rx(alpha_i) regrouped as modified D-H: link i takes
+// alpha_{i-1}, a_{i-1} of the previous standard row (0 for i = 1) and its own d_i; the last
+// row's Dx(a_6) Rx(alpha_6) is the identity here, so frame 6 is UR's tool flange frame.
+// Joint ranges: +-360 deg on every joint (UR datasheets, CB3 and e-Series alike).
+MdhModel universal_robot(std::string name, double d1, double a2, double a3, double d4, double d5, double d6) {
   const std::array<MdhLink, kJointCount> links{{
-      {0.0, 0.0, 0.0, 162.5, 0.0, -360.0, 360.0},
+      {0.0, 0.0, 0.0, d1, 0.0, -360.0, 360.0},
       {90.0, 0.0, 0.0, 0.0, 0.0, -360.0, 360.0},
-      {0.0, -425.0, 0.0, 0.0, 0.0, -360.0, 360.0},
-      {0.0, -392.2, 0.0, 133.3, 0.0, -360.0, 360.0},
-      {90.0, 0.0, 0.0, 99.7, 0.0, -360.0, 360.0},
-      {-90.0, 0.0, 0.0, 99.6, 0.0, -360.0, 360.0},
+      {0.0, a2, 0.0, 0.0, 0.0, -360.0, 360.0},
+      {0.0, a3, 0.0, d4, 0.0, -360.0, 360.0},
+      {90.0, 0.0, 0.0, d5, 0.0, -360.0, 360.0},
+      {-90.0, 0.0, 0.0, d6, 0.0, -360.0, 360.0},
   }};
-  return MdhModel("UR5e", links);
+  return MdhModel(std::move(name), links);
+}
+
+}  // namespace
+
+// Universal Robots, "Parameters for calculations of kinematics and dynamics" (UR support FAQ
+// 45257), standard D-H, i = 1..6, alpha = (90, 0, 0, 90, -90, 0) deg:
+MdhModel ur5e() {
+  // e-Series software 5.1: a = (0, -425, -392.2, 0, 0, 0), d = (162.5, 0, 0, 133.3, 99.7, 99.6) mm.
+  return universal_robot("UR5e", 162.5, -425.0, -392.2, 133.3, 99.7, 99.6);
+}
+
+MdhModel ur5() {
+  // CB3 UR5: a = (0, -425, -392.25, 0, 0, 0), d = (89.159, 0, 0, 109.15, 94.65, 82.3) mm.
+  return universal_robot("UR5", 89.159, -425.0, -392.25, 109.15, 94.65, 82.3);
+}
+
+MdhModel ur10() {
+  // CB3 UR10: a = (0, -612, -572.3, 0, 0, 0), d = (127.3, 0, 0, 163.941, 115.7, 92.2) mm.
+  return universal_robot("UR10", 127.3, -612.0, -572.3, 163.941, 115.7, 92.2);
 }
 
 const std::vector<BuiltinRobot>& builtin_robots() {
@@ -62,6 +81,12 @@ const std::vector<BuiltinRobot>& builtin_robots() {
       {"ur5e", "Universal Robots UR5e, 5 kg, reach 850 mm",
        "Universal Robots D-H parameters (support FAQ 45257), standard D-H converted to modified D-H", ur5e(),
        Eigen::Vector3d(-550, -150, 100), 300.0, Eigen::Vector3d(180, 0, 0)},
+      {"ur5", "Universal Robots UR5 (CB3), 5 kg, reach 850 mm",
+       "Universal Robots D-H parameters (support FAQ 45257, CB3 UR5), standard D-H converted to modified D-H", ur5(),
+       Eigen::Vector3d(-550, -150, 50), 300.0, Eigen::Vector3d(180, 0, 0)},
+      {"ur10", "Universal Robots UR10 (CB3), 10 kg, reach 1300 mm",
+       "Universal Robots D-H parameters (support FAQ 45257, CB3 UR10), standard D-H converted to modified D-H", ur10(),
+       Eigen::Vector3d(-840, -230, 150), 460.0, Eigen::Vector3d(180, 0, 0)},
   };
   return robots;
 }

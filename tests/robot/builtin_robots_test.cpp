@@ -33,10 +33,17 @@ Eigen::Matrix4d trans(double x, double y, double z) {
   return m;
 }
 
-// UR5e, Universal Robots support FAQ 45257: standard D-H in metres and radians, as published.
-Eigen::Matrix4d ur5e_standard_dh(const JointVector& q_deg) {
-  const double a[6] = {0, -0.425, -0.3922, 0, 0, 0};
-  const double d[6] = {0.1625, 0, 0, 0.1333, 0.0997, 0.0996};
+// Universal Robots support FAQ 45257: standard D-H in metres and radians, as published.
+struct UrTable {
+  double a[6], d[6];
+};
+const UrTable kUr5eTable{{0, -0.425, -0.3922, 0, 0, 0}, {0.1625, 0, 0, 0.1333, 0.0997, 0.0996}};
+const UrTable kUr5Table{{0, -0.425, -0.39225, 0, 0, 0}, {0.089159, 0, 0, 0.10915, 0.09465, 0.0823}};
+const UrTable kUr10Table{{0, -0.612, -0.5723, 0, 0, 0}, {0.1273, 0, 0, 0.163941, 0.1157, 0.0922}};
+
+Eigen::Matrix4d ur_standard_dh(const UrTable& table, const JointVector& q_deg) {
+  const double* a = table.a;
+  const double* d = table.d;
   const double alpha[6] = {std::numbers::pi / 2, 0, 0, std::numbers::pi / 2, -std::numbers::pi / 2, 0};
   Eigen::Matrix4d t = Eigen::Matrix4d::Identity();
   for (int i = 0; i < 6; ++i) {
@@ -70,22 +77,30 @@ JointVector random_joints(const MdhModel& m, std::mt19937_64& rng) {
   return q;
 }
 
-TEST(BuiltinRobots, Ur5eMatchesPublishedStandardDh) {
-  const MdhModel m = ur5e();
-  std::mt19937_64 rng(3);
-  for (int k = 0; k < 200; ++k) {
-    const JointVector q = random_joints(m, rng);
-    const Eigen::Matrix4d want = ur5e_standard_dh(q);
-    const Eigen::Matrix4d got = forward_kinematics(m, q, EndFrame::flange).matrix();
-    EXPECT_LT((got.topLeftCorner<3, 3>() - want.topLeftCorner<3, 3>()).cwiseAbs().maxCoeff(), 1e-12) << q.transpose();
-    EXPECT_LT((got.topRightCorner<3, 1>() - want.topRightCorner<3, 1>()).norm(), 1e-9) << q.transpose();
+TEST(BuiltinRobots, UniversalRobotsMatchPublishedStandardDh) {
+  for (const auto& [m, table] : {std::pair{ur5e(), kUr5eTable}, std::pair{ur5(), kUr5Table}, std::pair{ur10(), kUr10Table}}) {
+    std::mt19937_64 rng(3);
+    for (int k = 0; k < 200; ++k) {
+      const JointVector q = random_joints(m, rng);
+      const Eigen::Matrix4d want = ur_standard_dh(table, q);
+      const Eigen::Matrix4d got = forward_kinematics(m, q, EndFrame::flange).matrix();
+      EXPECT_LT((got.topLeftCorner<3, 3>() - want.topLeftCorner<3, 3>()).cwiseAbs().maxCoeff(), 1e-12)
+          << m.name() << " " << q.transpose();
+      EXPECT_LT((got.topRightCorner<3, 1>() - want.topRightCorner<3, 1>()).norm(), 1e-9) << m.name() << " " << q.transpose();
+    }
   }
+  const MdhModel m = ur5e();
   // Zero pose, by hand: the arm lies along -x, the wrist offsets d4 and d6 along -y, d5 down:
   // flange at x = a2 + a3 = -817.2, y = -(d4 + d6) = -232.9, z = d1 - d5 = 62.8 mm.
   const Eigen::Vector3d p0 = forward_kinematics(m, JointVector::Zero(), EndFrame::flange).translation();
   EXPECT_NEAR(p0.x(), -817.2, 1e-9);
   EXPECT_NEAR(p0.y(), -232.9, 1e-9);
   EXPECT_NEAR(p0.z(), 62.8, 1e-9);
+  // The same for the CB3 UR5 (-817.25, -191.45, -5.491) and UR10 (-1184.3, -256.141, 11.6).
+  EXPECT_LT((forward_kinematics(ur5(), JointVector::Zero(), EndFrame::flange).translation() -
+             Eigen::Vector3d(-817.25, -191.45, -5.491)).norm(), 1e-9);
+  EXPECT_LT((forward_kinematics(ur10(), JointVector::Zero(), EndFrame::flange).translation() -
+             Eigen::Vector3d(-1184.3, -256.141, 11.6)).norm(), 1e-9);
 }
 
 TEST(BuiltinRobots, Kr16MatchesJointAxisChainFromDatasheet) {
@@ -112,8 +127,11 @@ TEST(BuiltinRobots, FoundByNameCaseInsensitively) {
   EXPECT_EQ(find_builtin_robot("KR16")->model.name(), "KR16");
   ASSERT_NE(find_builtin_robot("er20"), nullptr);
   EXPECT_EQ(find_builtin_robot("er20")->name, "er20-c10");
-  EXPECT_EQ(find_builtin_robot("ur5"), nullptr);
-  EXPECT_EQ(builtin_robot_names(), "er20-c10, kr16, ur5e");
+  ASSERT_NE(find_builtin_robot("UR10"), nullptr);
+  EXPECT_EQ(find_builtin_robot("UR10")->model.name(), "UR10");
+  EXPECT_EQ(find_builtin_robot("ur5")->model.name(), "UR5");
+  EXPECT_EQ(find_builtin_robot("ur"), nullptr);
+  EXPECT_EQ(builtin_robot_names(), "er20-c10, kr16, ur5e, ur5, ur10");
 }
 
 // A user who keeps each robot's outputs in a folder named after it ("kr16/") still means the

@@ -145,7 +145,9 @@ TableFit fit_table(const robot::MdhModel& robot, const CsvTable& table, const Fi
 /// registration), var_mm2 (variance of a new reading: field + nugget) and var_field_mm2 (field only)
 /// when some row has a variance, r95_mm (radius around the predicted point holding a new reading
 /// with 95 %, error_ball.hpp; vector fields) when some row has one, status; one row per joint vector.
-StepColumns predict_columns(const CompensationModel& model, std::span<const robot::JointVector> q_deg);
+/// `extrapolate`: rows outside the model's region are answered with status extrapolated
+/// (predict_position's extrapolate) instead of refused.
+StepColumns predict_columns(const CompensationModel& model, std::span<const robot::JointVector> q_deg, bool extrapolate = false);
 
 /// Targets of `errfield compensate`: nominal joints q1..q6 (deg), or poses x,y,z,rx,ry,rz (mm, deg)
 /// solved on the training joints' branch (or from `seed`).

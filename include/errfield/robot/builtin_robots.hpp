@@ -1,7 +1,7 @@
 #pragma once
 /// Nominal robots errfield knows by name, from published datasheets: the ER20-C10 of the paper,
-/// a KUKA KR 16 class arm and a Universal Robots UR5e. Choose one wherever a robot is accepted
-/// (`--robot kr16`); `errfield robots` lists them. Each carries where its numbers come from and a
+/// a KUKA KR 16 class arm and Universal Robots' UR5e, UR5 and UR10 (the last two CB3). Choose one
+/// wherever a robot is accepted (`--robot kr16`); `errfield robots` lists them. Each carries where its numbers come from and a
 /// workspace cube it reaches at a tool-down orientation, so `errfield simulate --robot NAME` has a
 /// sensible default region. docs/robot.md ("Built-in robots") documents the joint conventions.
 
@@ -36,12 +36,16 @@ const BuiltinRobot* find_builtin_robot(const std::string& name);
 /// directory: a folder called "kr16" holding a user's outputs is not a robot) of that name
 /// exists, in which case the user's file wins; nothing when it is not a built-in name.
 const BuiltinRobot* builtin_robot_unless_file(const std::string& name_or_path);
-/// "er20-c10, kr16, ur5e" for messages.
+/// "er20-c10, kr16, ur5e, ur5, ur10" for messages.
 std::string builtin_robot_names();
 
 /// KUKA KR 16 class arm (KR 16-2 datasheet dimensions; docs/robot.md for the joint convention).
 MdhModel kr16();
 /// Universal Robots UR5e: the published standard D-H table converted to modified D-H.
 MdhModel ur5e();
+/// Universal Robots UR5 (CB3 series): its published standard D-H table, converted as ur5e's.
+MdhModel ur5();
+/// Universal Robots UR10 (CB3 series): its published standard D-H table, converted as ur5e's.
+MdhModel ur10();
 
 }  // namespace errfield::robot

@@ -202,15 +202,12 @@ void FitOptions::validate() const {
     throw ArgumentError("fit: joint function degree " + std::to_string(joint_function_degree) +
                         "; expected 0 (none) to 20");
   joint_function_prior.validate();
+  if (!(gls_guard_ratio >= 0.0) || !std::isfinite(gls_guard_ratio))
+    throw ArgumentError("fit: GLS guard ratio " + format_number(gls_guard_ratio) + "; expected a finite value >= 0 (0 = off)");
   calibration.validate();
 }
 
 namespace {
-
-// The GLS refit of the joint functions is kept while it leaves the field at most this multiple of
-// the ordinary fit's RMS: on SIMULATED KR 16 the good refits left 1.1-1.3x (docs/robot.md, "Joint
-// error functions"); the real data of issue 34 left 5.3x and did not transfer.
-constexpr double kGlsLeftRmsLimit = 1.5;
 
 CrossValidationReport report(const CrossValidationSummary& s, std::string how) {
   CrossValidationReport c;
@@ -763,11 +760,11 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
         // A GLS fit that leaves the field far more than the ordinary one moved the functions into
         // what the correlated field absorbs at these poses: the two then cancel at the measured point
         // and nowhere else (real data: 0.89 mm left where the ordinary fit left 0.17 mm, issue 34).
-        const bool moved_far = refitted && jf->rms_after_mm > kGlsLeftRmsLimit * ordinary_rms;
+        const bool moved_far = refitted && o.gls_guard_ratio > 0.0 && jf->rms_after_mm > o.gls_guard_ratio * ordinary_rms;
         if (moved_far) {
           out.notes.push_back("joint error functions: the refit by generalized least squares would leave an RMS of " +
                               format_number(std::round(jf->rms_after_mm * 1e4) / 1e4) + " mm to the field, over " +
-                              format_number(kGlsLeftRmsLimit) + " x the " +
+                              format_number(o.gls_guard_ratio) + " x the " +
                               format_number(std::round(ordinary_rms * 1e4) / 1e4) +
                               " mm the ordinary fit left (it moved the functions into what the field absorbs at "
                               "these poses), so they keep the ordinary fit");

@@ -93,6 +93,7 @@ void summarize(ValidationReport& r, bool has_before_positions, bool has_before_d
 
 nlohmann::json ValidationReport::summary_json() const {
   nlohmann::json j = {{"mode", mode}, {"points", points.size()}, {"refused", refused}};
+  if (extrapolated > 0) j["extrapolated"] = extrapolated;
   j["position"] = position ? block_json(*position) : nlohmann::json(nullptr);
   if (position) {
     if (!before_registration.empty()) j["position"]["before_registration"] = before_registration;
@@ -130,7 +131,7 @@ std::string ValidationReport::summary_text() const {
   return s;
 }
 
-ValidationReport validate_predictions(const CompensationModel& model, const MeasurementSet& d) {
+ValidationReport validate_predictions(const CompensationModel& model, const MeasurementSet& d, bool extrapolate) {
   ValidationReport r;
   r.mode = "prediction";
   const bool positions = !d.measured_mm.empty() && model.registration().has_value();
@@ -186,8 +187,11 @@ ValidationReport validate_predictions(const CompensationModel& model, const Meas
     ValidatedPoint p;
     p.point = d.id[i];
     p.q_deg = d.q_deg[i];
-    const PointPrediction pr = predict_position(model, d.q_deg[i]);
-    if (!pr.ok()) {
+    const PointPrediction pr = predict_position(model, d.q_deg[i], extrapolate);
+    if (pr.status == PredictionStatus::extrapolated) {
+      p.status = std::string(status_name(pr.status));
+      ++r.extrapolated;
+    } else if (!pr.ok()) {
       p.status = std::string(status_name(pr.status));
       ++r.refused;
       r.points.push_back(std::move(p));
@@ -217,6 +221,11 @@ ValidationReport validate_predictions(const CompensationModel& model, const Meas
     }
     r.points.push_back(std::move(p));
   }
+  if (r.extrapolated > 0)
+    r.notes.push_back(std::to_string(r.extrapolated) + " of " + std::to_string(r.points.size()) +
+                      " points lie beyond the model's region and were answered with --extrapolate (status extrapolated: "
+                      "outside the field's region the calibration and joint error functions alone; "
+                      "no variance is claimed for them); compensate refuses them");
   summarize(r, before_registration.has_value() || !positions, true);
   UncertaintyCheck u;
   double within = 0.0, nees = 0.0;

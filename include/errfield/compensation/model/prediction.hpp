@@ -26,9 +26,12 @@ namespace errfield::compensation {
 /// model was measured with than the model's orientation prior supports (OrientationPrior::max_lever_mm).
 /// calibration_extrapolated: the pose lies beyond what the kinematic calibration's data determine
 /// (calibration_leverage.hpp), though its joints may be inside the data's box.
-enum class PredictionStatus { ok, outside_region, not_credible, outside_limits, orientation_unknown, calibration_extrapolated };
+/// extrapolated: only with predict_position's `extrapolate` (predict and validate --extrapolate, never
+/// compensate): a pose outside the field's region or beyond the calibration's leverage, answered with
+/// what holds there (PointPrediction::position_mm says how) and a variance that says so.
+enum class PredictionStatus { ok, outside_region, not_credible, outside_limits, orientation_unknown, calibration_extrapolated, extrapolated };
 /// "ok", "outside-region", "not-credible", "outside-limits", "orientation-unknown",
-/// "calibration-extrapolated" (the status column of predict, validate, compensate).
+/// "calibration-extrapolated", "extrapolated" (the status column of predict, validate, compensate).
 std::string_view status_name(PredictionStatus s);
 
 /// What a field's prediction says of itself, in this order: outside-region, not-credible,
@@ -48,7 +51,12 @@ struct PointPrediction {
 
 /// Prediction at commanded joints `q_deg`, of the model's scored point (scored_model(): the working
 /// tool where the model has one, else the reflector).
-PointPrediction predict_position(const CompensationModel& model, const robot::JointVector& q_deg);
+/// `extrapolate`: a pose the model refuses as outside-region or calibration-extrapolated is answered
+/// instead, with status extrapolated: beyond the calibration's leverage with the whole model (the
+/// field is still inside its region); outside the field's region with the parts that hold everywhere,
+/// the calibrated kinematics and the joint error functions. No variance is stated for them (NaN):
+/// nothing the model measured says how far its calibration extrapolates. Never for compensate.
+PointPrediction predict_position(const CompensationModel& model, const robot::JointVector& q_deg, bool extrapolate = false);
 
 /// A model file as validate, predict and fk read it: a compensation model (errfield fit) or a robot
 /// JSON (errfield calibrate, or any robot description: its FK is the prediction, its

@@ -72,7 +72,8 @@ struct ValidatedPoint {
   /// nq1..nq6 (targets mode, when the file has them); NaN when unknown. For the report's view of
   /// where large errors and refusals are.
   Eigen::Matrix<double, 6, 1> q_deg = Eigen::Matrix<double, 6, 1>::Constant(kNaN);
-  bool ok() const { return status == "ok"; }
+  /// Scored: ok, or extrapolated (validate --extrapolate: answered beyond the model's region).
+  bool ok() const { return status == "ok" || status == "extrapolated"; }
 };
 
 /// How well the predictive variance held on the scored points (prediction mode, vector fields).
@@ -86,6 +87,8 @@ struct ValidationReport {
   std::string mode;  ///< "prediction" or "targets"
   std::vector<ValidatedPoint> points;
   std::size_t refused = 0;
+  /// Points answered beyond the model's region (validate --extrapolate; scored, status extrapolated).
+  std::size_t extrapolated = 0;
   std::optional<BeforeAfter> position;
   std::optional<BeforeAfter> distance;  ///< pooled over the base points
   std::size_t distance_columns = 0;
@@ -104,7 +107,8 @@ struct ValidationReport {
 
 /// Prediction mode on held-out rows. Positions are scored when the data have mx,my,mz and the model
 /// has a registration (else a note says why not); distances when the data have dist_bK.
-ValidationReport validate_predictions(const CompensationModel& model, const MeasurementSet& data);
+/// `extrapolate`: rows outside the model's region are scored too (predict_position's extrapolate).
+ValidationReport validate_predictions(const CompensationModel& model, const MeasurementSet& data, bool extrapolate = false);
 
 /// Targets mode. Columns: point; target nx,ny,nz (compensate output) or x,y,z (robot frame, mm);
 /// mx,my,mz (tracker frame) and/or dist_bK; optional run (before|after; absent = after), kind
