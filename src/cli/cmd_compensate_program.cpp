@@ -13,7 +13,7 @@
 #include "cli/pipeline_cli.hpp"
 #include "cli/robot_cli.hpp"
 #include "errfield/atomic_file.hpp"
-#include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/model/compensation.hpp"
 #include "errfield/compensation/pipeline.hpp"
 #include "errfield/error.hpp"
 #include "errfield/json_file.hpp"

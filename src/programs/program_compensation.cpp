@@ -6,8 +6,9 @@
 #include <numbers>
 
 #include "errfield/compensation/pipeline.hpp"
-#include "errfield/compensation/rotation_validation.hpp"
-#include "errfield/compensation/target_ik.hpp"
+#include "errfield/error.hpp"
+#include "errfield/compensation/validation/rotation_validation.hpp"
+#include "errfield/compensation/tools/target_ik.hpp"
 #include "errfield/robot/inverse_kinematics.hpp"
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/pose.hpp"
@@ -144,9 +145,16 @@ ProgramCompensation compensate_program_targets(const compensation::CompensationM
     const std::string key = tool_key(t.tool);
     auto g = groups.find(key);
     if (g == groups.end()) {
-      CompensationModel with_tool = model.with_working_tool(model.tool_in_model_frame(t.tool));
-      robot::MdhModel nominal = compensation::nominal_at_working_tool(with_tool, nominal_robot);
-      g = groups.emplace(key, ToolGroup{std::move(with_tool), std::move(nominal), {}, {}}).first;
+      try {
+        compensation::check_tool_point(t.tool, "tool " + t.tool_name);
+        CompensationModel with_tool = model.with_working_tool(model.tool_in_model_frame(t.tool));
+        robot::MdhModel nominal = compensation::nominal_at_working_tool(with_tool, nominal_robot);
+        g = groups.emplace(key, ToolGroup{std::move(with_tool), std::move(nominal), {}, {}}).first;
+      } catch (const Error& e) {
+        row.status = kStatusRefused;
+        row.reason = e.what();
+        continue;
+      }
     }
     const robot::MdhModel& nominal = g->second.nominal;
     const Eigen::Isometry3d target = t.frame * t.pose_in_frame;

@@ -420,7 +420,8 @@ class RapidReader {
         continue;
       }
       // A robtarget assigned in a routine is a run-time value (p := Offs(...), p := CRobT(), p.trans.x := ...).
-      if (in_program && (k == 0 || (s.tokens[k - 1].text == ";" || s.tokens[k - 1].kind == Tok::ident))) {
+      if (in_program && (k == 0 || s.tokens[k - 1].text == ";" || s.tokens[k - 1].text == ")" ||
+                         s.tokens[k - 1].kind == Tok::ident)) {
         std::size_t j = k + 1;
         while (j < s.tokens.size() && (s.is(j, ".") || s.is(j, "{"))) j = s.is(j, "{") ? skip_group(s, j) : j + 2;
         if (s.is(j, ":=")) {
@@ -545,6 +546,12 @@ class RapidReader {
         return;
       }
       const Node* n = &*d->value;
+      if (!n->aggregate) {
+        p.kind = TargetKind::computed;
+        p.note = p.label + " is declared := " + short_text(d->source->text(n->first, n->end)) + " (" + where(*d) +
+                 "): computed at run time";
+        return;
+      }
       if (element) {
         const auto index = static_cast<std::size_t>(s.tokens[a.first + 2].value);
         if (!d->array || !n->aggregate || index < 1 || index > n->items.size()) {

@@ -8,12 +8,15 @@
 /// with the tool, in the target's own frame. Use it from any format's reader (program_target.hpp).
 
 #include <cstddef>
+#include <functional>
+#include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
-#include "errfield/compensation/compensation.hpp"
+#include "errfield/compensation/model/compensation.hpp"
 #include "errfield/programs/program_target.hpp"
 
 namespace errfield::programs {
