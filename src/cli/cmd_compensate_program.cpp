@@ -125,7 +125,17 @@ void run_compensate_program(const CompensateProgramArgs& a) {
   for (const ProgramReportRow& r : result.rows) {
     ++count[r.status];
     if (r.status != kStatusRefused) continue;
-    const std::string problem = r.reason.substr(0, r.reason.find("; "));
+    // The reason's first clause: up to the first "; " outside parentheses.
+    std::size_t cut = r.reason.size();
+    int depth = 0;
+    for (std::size_t c = 0; c + 1 < r.reason.size(); ++c) {
+      depth += r.reason[c] == '(' ? 1 : r.reason[c] == ')' ? -1 : 0;
+      if (depth == 0 && r.reason[c] == ';' && r.reason[c + 1] == ' ') {
+        cut = c;
+        break;
+      }
+    }
+    const std::string problem = r.reason.substr(0, cut);
     auto it = std::find_if(problems.begin(), problems.end(), [&](const auto& p) { return p.first == problem; });
     if (it == problems.end()) problems.push_back({problem, {1, r.file + ":" + std::to_string(r.line)}});
     else ++it->second.first;

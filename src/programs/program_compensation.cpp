@@ -279,6 +279,7 @@ ProgramCompensation compensate_program_targets(const compensation::CompensationM
         out.rows[i].status = kStatusRefused;
         out.rows[i].reason = joined(why, out.rows[i].reason);
         out.rows[i].d_mm.setConstant(std::numeric_limits<double>::quiet_NaN());
+        out.rows[i].q_deg.setConstant(std::numeric_limits<double>::quiet_NaN());
         out.rows[i].rotation_mdeg.setConstant(std::numeric_limits<double>::quiet_NaN());
       }
   }
