@@ -82,8 +82,9 @@ TEST_F(ToolPointResults, ToolOptionOnASeveralPointModelCarriesTheUnlocatedTurn) 
   EXPECT_THAT(by_tool.output(), ::testing::Not(HasSubstr("refused beyond inf mm")));
   if (by_tool.exit_code == 0) {
     const nlohmann::json s = json("s_tool.json");
-    if (s["points"].get<int>() > s["refused"].get<int>())
+    if (s["points"].get<int>() > s["refused"].get<int>()) {
       EXPECT_GE(s["uncertainty"]["coverage95"].get<double>(), 0.85) << by_tool.output();
+    }
   } else {
     EXPECT_EQ(by_tool.exit_code, 1) << by_tool.output();
     EXPECT_THAT(by_tool.output(), HasSubstr("orientation-unknown"));
