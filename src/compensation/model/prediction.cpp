@@ -2,11 +2,9 @@
 
 #include <filesystem>
 #include <fstream>
-#include <limits>
 
 #include <nlohmann/json.hpp>
 
-#include "errfield/compensation/model/error_fields.hpp"
 #include "errfield/error.hpp"
 #include "errfield/json_file.hpp"
 #include "errfield/robot/builtin_robots.hpp"
