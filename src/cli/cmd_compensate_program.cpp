@@ -214,7 +214,8 @@ void add_compensate_program_command(CLI::App& app) {
       "what they depend on, not rewritten), unchanged (MoveAbsJ: joint targets), refused (with the reason: tool or\n"
       "work object unknown, configuration matching no solution, outside-region, not-credible, ...). The input is\n"
       "never modified; if no target can be compensated nothing is written (exit 1).\n"
-      "Example: errfield compensate-program --model model.json --program cell.mod --out cell_comp.mod --report r.csv");
+      "Example: errfield compensate-program --model model.json --program cell.mod --out cell_comp.mod --report r.csv"
+      "  # not-run: needs a RAPID module; docs/robot.md, \"Compensating a robot program\", runs one");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();
   cmd->add_option("--program", a->program, "robot program to read (never modified)")->required();
   cmd->add_option("--out", a->out, "the compensated program (written atomically)")->required();

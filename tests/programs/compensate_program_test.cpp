@@ -5,10 +5,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <random>
 #include <regex>
 
 #include <Eigen/Dense>
+#include <nlohmann/json.hpp>
 
 #include "errfield/csv_table.hpp"
 #include "errfield/programs/abb_confdata.hpp"
@@ -103,7 +105,7 @@ TEST(AbbConfdata, AgreesWithAnIndependentComputationFromJointAngles) {
 
 TEST(ProgramText, ReplacementsChangeOnlyTheirSpans) {
   const std::string s = "a 1.5 b\r\n\xE9 -2 c";
-  const std::string out = apply_replacements(s, {{{10, 12}, "-2.25"}, {{2, 5}, "7"}});
+  const std::string out = apply_replacements(s, {{{11, 13}, "-2.25"}, {{2, 5}, "7"}});
   EXPECT_EQ(out, "a 7 b\r\n\xE9 -2.25 c");
   EXPECT_EQ(line_of_offset(s, 10), 2u);
   EXPECT_EQ(format_program_number(-0.00001, 3), "0");
@@ -153,7 +155,8 @@ class CompensateProgram : public errfield::testing::CliTest {
   static void SetUpTestSuite() {
     shared_ = fs::temp_directory_path() / ("errfield_programs_" + std::to_string(::getpid()));
     fs::create_directories(shared_);
-    for (const char* line : {"simulate --seed 1 --sample grid --step 125 --robot-out robot.json --truth-out truth.json --out train.csv",
+    for (const char* line : {"simulate --seed 1 --sample grid --step 125 --robot-out robot.json --truth-out truth.json --config-out config.json "
+                             "--out train.csv",
                              "fit --robot robot.json --data train.csv --method kinematic --out model.json"}) {
       const errfield::testing::CliResult r = errfield::testing::run_errfield_line(line, shared_);
       if (r.exit_code != 0 && setup_error_.empty()) setup_error_ = std::string(line) + ": " + r.output();
@@ -238,6 +241,7 @@ Module make_module(const MdhModel& nominal, const std::vector<JointVector>& trai
           num(uf.translation().y(), 6) + "," + num(uf.translation().z(), 6) + "],[" + num(uq.w(), 12) + "," + num(uq.x(), 12) +
           "," + num(uq.y(), 12) + "," + num(uq.z(), 12) + "]],[[-10,0,0],[1,0,0,0]]];" + crlf;
   text += decl + crlf + "  PROC main()" + crlf + "    ConfJ\\On;" + crlf + body + "  ENDPROC" + crlf + "ENDMODULE" + crlf;
+  m.text = text;
   return m;
 }
 
@@ -307,14 +311,27 @@ TEST_F(CompensateProgram, RoundTripThroughTheSimulatedRobotLandsNearerAndKeepsEv
   };
   const auto before = in_order(targets_of(m.text)), after = in_order(targets_of(out));
   ASSERT_EQ(targets_of(out).size(), 12u);  // MoveAbsJ's [[0,0,0,0,30,0],...] is no robtarget
+  // Where the SIMULATED robot lands, in the frame the model calls the robot base: the simulator's
+  // world -> tracker (config.json), then the model's registration tracker -> base. (The true base
+  // error and the tracker's pose are one rigid motion to the readings; only their product is known.)
   const MdhModel controller = nom.with_tool(m.tool), robot = tru.with_tool(tru.tool() * nom.tool().inverse() * m.tool);
+  const nlohmann::json config = nlohmann::json::parse(std::ifstream(shared("config.json")));
+  const nlohmann::json& tw = config.at("tracker").at("tracker_from_world");
+  const Eigen::Isometry3d tracker_from_world = to_isometry(
+      PoseXyzRpy{tw.at("x_mm"), tw.at("y_mm"), tw.at("z_mm"), tw.at("rx_deg"), tw.at("ry_deg"), tw.at("rz_deg")});
+  const nlohmann::json model_json = nlohmann::json::parse(std::ifstream(shared("model.json")));
+  const nlohmann::json& rt = model_json.at("registration").at("robot_from_tracker");
+  Eigen::Isometry3d robot_from_tracker = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) robot_from_tracker.matrix()(r, c) = rt.at(static_cast<std::size_t>(r)).at(static_cast<std::size_t>(c));
+  const Eigen::Isometry3d base_from_world = robot_from_tracker * tracker_from_world;
   double ss_before = 0, ss_after = 0;
   for (int i = 0; i < 12; ++i) {
     const auto u = static_cast<std::size_t>(i);
     auto reached = [&](const Eigen::Isometry3d& in_wobj) {
       const IkResult ik = inverse_kinematics(controller, m.wobj * in_wobj, m.joints[u]);
       EXPECT_TRUE(ik.ok());
-      return forward_position(robot, ik.q_deg);
+      return Eigen::Vector3d(base_from_world * forward_position(robot, ik.q_deg));
     };
     const double e0 = (reached(before[u]) - m.intended[u].translation()).norm();
     const double e1 = (reached(after[u]) - m.intended[u].translation()).norm();
