@@ -65,9 +65,10 @@ bool same_output_file(const std::filesystem::path& a, const std::filesystem::pat
 /// write_file_atomically calls, which leave a mix of new and old files when a later one fails.
 /// Before writing, commit() refuses a target that is a directory and the same file named twice
 /// (ArgumentError; see same_output_file). Signals that end the process are held back during the
-/// renames (and act right after), so a signal never leaves new and old files mixed; device and
-/// FIFO targets are written after the renames. (A rename can still fail individually, e.g. on a target that
-/// became a directory after the check; the files renamed before stay replaced.)
+/// renames (and act right after), so a signal never leaves new and old files mixed. Device and
+/// FIFO targets are written before the renames: one that fails (/dev/full) leaves every regular
+/// target untouched. (A rename can still fail individually, e.g. on a target that became a
+/// directory after the check; the files renamed before stay replaced, and a device already has its bytes.)
 class AtomicFileSet {
  public:
   /// Queues `content` for `target`; nothing is written until commit().

@@ -202,18 +202,22 @@ void Progress::finish() {
 
 namespace {
 
-bool progress_wanted() {
+// Off (ERRFIELD_PROGRESS=0), a terminal (or ERRFIELD_PROGRESS=1 standing in for one), or a log: a
+// pipe or file, which gets the "still running" lines only, and less often.
+enum class ProgressMode { off, terminal, log };
+
+ProgressMode progress_mode() {
   const char* forced = std::getenv("ERRFIELD_PROGRESS");
-  if (forced && *forced) return std::string_view(forced) != "0";
-  return ::isatty(STDERR_FILENO) != 0;
+  if (forced && *forced) return std::string_view(forced) != "0" ? ProgressMode::terminal : ProgressMode::off;
+  return ::isatty(STDERR_FILENO) != 0 ? ProgressMode::terminal : ProgressMode::log;
 }
 
-double progress_after_seconds() {
+double progress_after_seconds(double fallback) {
   const char* text = std::getenv("ERRFIELD_PROGRESS_AFTER");
-  if (!text || !*text) return StageLog::kProgressAfter;
+  if (!text || !*text) return fallback;
   char* end = nullptr;
   const double v = std::strtod(text, &end);
-  return end != text && *end == '\0' && v >= 0.0 && v <= 3600.0 ? v : StageLog::kProgressAfter;
+  return end != text && *end == '\0' && v >= 0.0 && v <= 3600.0 ? v : fallback;
 }
 
 }  // namespace
@@ -223,6 +227,7 @@ struct StageLog::State {
   std::string label;
   bool every_stage = false;  // long_job: a line at each stage's start
   double after_s = kProgressAfter;
+  double every_s = kProgressAfter;  // between two lines of one stage
   Clock::time_point start = Clock::now();
   std::mutex mutex;
   std::condition_variable wake;
@@ -247,7 +252,7 @@ struct StageLog::State {
       if (wake.wait_until(lock, next_line) == std::cv_status::timeout && !stop && Clock::now() >= next_line) {
         const auto now = Clock::now();
         print(stage + ", still running", now);
-        next_line = now + std::chrono::seconds(5);
+        next_line = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(every_s));
       }
     }
   }
@@ -263,11 +268,16 @@ struct StageLog::State {
 };
 
 StageLog::StageLog(std::string label, bool long_job) {
-  if (!progress_wanted()) return;
+  const ProgressMode mode = progress_mode();
+  if (mode == ProgressMode::off) return;
   state_ = std::make_shared<State>();
   state_->label = std::move(label);
-  state_->every_stage = long_job;
-  state_->after_s = progress_after_seconds();
+  // A log (a pipe, a file) gets only the lines of a stage that runs long: a fit of 5,000 poses ran
+  // past a minute with nothing in its log (issue 47).
+  state_->every_stage = long_job && mode == ProgressMode::terminal;
+  const double interval = mode == ProgressMode::terminal ? kProgressAfter : kLogProgressAfter;
+  state_->after_s = progress_after_seconds(interval);
+  state_->every_s = interval;
   state_->watcher = std::thread([s = state_.get()] { s->watch(); });
 }
 

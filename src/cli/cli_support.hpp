@@ -161,15 +161,18 @@ auto with_source(const std::string& file, F f) {
   }
 }
 
-/// Progress of a job in stages on stderr, when stderr is a terminal (or ERRFIELD_PROGRESS=1):
+/// Progress of a job in stages on stderr. When stderr is a terminal (or ERRFIELD_PROGRESS=1):
 /// "label: stage (12.3 s)" as the job enters each stage when `long_job` (known to be long from its
 /// size), and, whatever the size, a line for a stage once it has run kProgressAfter (5 s; the
 /// environment's ERRFIELD_PROGRESS_AFTER, in seconds, overrides it) and again every 5 s after,
 /// from a watcher thread: a 687-pose fit ran 12-24 s silently because only 1,000 rows counted as
-/// long. Copies share one log (it is kept in a std::function); the watcher ends with the last copy.
+/// long. When stderr is a pipe or a file, only the second kind, after kLogProgressAfter (30 s, or
+/// ERRFIELD_PROGRESS_AFTER) and every 30 s; ERRFIELD_PROGRESS=0 prints nothing. Copies share one
+/// log (it is kept in a std::function); the watcher ends with the last copy.
 class StageLog {
  public:
   static constexpr double kProgressAfter = 5.0;
+  static constexpr double kLogProgressAfter = 30.0;
   StageLog(std::string label, bool long_job);
   void operator()(const std::string& stage) const;
 

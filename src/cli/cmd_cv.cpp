@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <memory>
 
 #include "cli/cli_support.hpp"
@@ -138,8 +139,11 @@ void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& ow
                 "; nothing written");
   }
 
+  // Written after the summary (require_standard_output): a standard output that cannot be written
+  // (> /dev/full) replaced --out, then exited 1 (issue 47, the class of item 10).
+  std::optional<OutputTable> table;
   if (!a.out.empty()) {
-    OutputTable out;
+    OutputTable& out = table.emplace();
     out.add_all_columns(samples);
     std::vector<std::string> folds(n);
     for (std::size_t i = 0; i < n; ++i) folds[i] = std::to_string(result.fold[i]);
@@ -169,7 +173,6 @@ void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& ow
       for (std::size_t i = 0; i < n; ++i) cells[i] = cell(values[i]);
       out.add_column(name, std::move(cells));
     }
-    out.write(a.out);
   }
 
   // Units from the value columns' headers ("dL [mm]"); shown only when all columns agree.
@@ -222,7 +225,11 @@ void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& ow
     std::cout << "  " << (s.samples - s.predicted) << " samples had no prediction (e.g. no neighbour within --radius)\n";
   }
   for (const auto& note : result.notes) std::cerr << "errfield cv: " << note << "\n";
-  if (!a.out.empty()) std::cout << "wrote " << a.out << "\n";
+  if (table) {
+    std::cout << "wrote " << a.out << "\n";
+    require_standard_output();
+    table->write(a.out);
+  }
 }
 
 void add_cv_command(CLI::App& app) {

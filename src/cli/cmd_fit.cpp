@@ -12,6 +12,7 @@
 #include "cli/robot_cli.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/error.hpp"
+#include "errfield/compensation/model/kriging_fields.hpp"
 #include "errfield/compensation/tools/probe_readings.hpp"
 #include "errfield/compensation/fitting/model_fitting.hpp"
 #include "errfield/compensation/pipeline.hpp"
@@ -60,6 +61,42 @@ compensation::JointFunctionPrior parse_joint_function_prior(const std::string& t
   return p;
 }
 
+// The work of a fit with a kriging field grows faster than its readings: the default fit's CPU was
+// 4.75 s at 687 poses and 146 s at 5,000 (docs/benchmarks.md, "Model choice of the robot fit"), about
+// N^1.7. Beyond kLongFitReadings the fit says so before it starts; beyond --max-fit-readings it is
+// refused (exit 3) before any work, with the estimate (docs/robot.md, "How long a fit takes").
+constexpr std::size_t kLongFitReadings = 2000;
+constexpr std::size_t kDefaultMaxFitReadings = 20000;
+
+double estimated_fit_cpu_seconds(std::size_t readings) {
+  return 146.0 * std::pow(static_cast<double>(readings) / 5000.0, 1.7);
+}
+
+std::string cpu_time_text(double seconds) {
+  if (seconds < 120.0) return format_number(std::round(seconds)) + " s";
+  if (seconds < 7200.0) return format_number(std::round(seconds / 60.0)) + " min";
+  return format_number(std::round(seconds / 360.0) / 10.0) + " h";
+}
+
+/// The budget of a fit with a kriging field (see kLongFitReadings): the count of readings is known
+/// up front, the minutes are not, so the count is what is limited.
+void check_fit_budget(const std::string& method, const CsvTable& table, const std::string& data, std::size_t max_readings) {
+  // auto fits a field when the data have tracker positions (kinematic+kriging), else none.
+  const bool field = method.find("kriging") != std::string::npos || (method == "auto" && table.has_column("mx"));
+  const std::size_t n = table.row_count();
+  if (!field || (n <= kLongFitReadings && n <= max_readings)) return;
+  const std::string what = std::to_string(n) + " readings in " + data +
+                           (table.has_column("reflector") ? " (a probe row or pose counts once per point on the flange)" : "");
+  const std::string estimate = "roughly " + cpu_time_text(estimated_fit_cpu_seconds(n)) +
+                               " of CPU for the kriging field's model choice and fit at this size (146 s measured at 5,000 "
+                               "poses, growing as about N^1.7; docs/robot.md, \"How long a fit takes\")";
+  if (n > max_readings)
+    throw ResourceError("fit: " + what + ", more than --max-fit-readings " + std::to_string(max_readings) + ": " + estimate +
+                        ". Fit a subset of the poses (the field's accuracy levels off long before: docs/robot.md), a "
+                        "method without a field (--method kinematic), or raise --max-fit-readings");
+  std::cerr << "errfield fit: note: " << what << ": " << estimate << "; stderr says which stage runs\n";
+}
+
 struct FitArgs {
   std::string robot, data, method = "auto", space = "auto", out, model, calibration, robust, kind = "ordinary",
       variance_calibration = "auto";
@@ -74,6 +111,7 @@ struct FitArgs {
   std::string gravity_load = compensation::FitOptions{}.gravity_load ? "on" : "off";
   std::string joint_function_prior = default_prior_text();
   double gls_guard = compensation::FitOptions{}.gls_guard_ratio;
+  std::size_t max_fit_readings = kDefaultMaxFitReadings;
 };
 
 void run_fit(const FitArgs& a) {
@@ -94,6 +132,7 @@ void run_fit(const FitArgs& a) {
   }
   // A 6-DoF probe's rows become three points on the flange (probe_readings.hpp).
   const CsvTable table = compensation::expand_probe_readings(CsvTable::read(a.data));
+  check_fit_budget(a.method, table, a.data, a.max_fit_readings);
   FitTableOptions fo;
   fo.fit = o;
   fo.fit.reflector_far_ok = a.reflector_far_ok;
@@ -157,8 +196,10 @@ void add_fit_command(CLI::App& app) {
                   "(fit-variogram --out), or a family whose parameters are estimated: sph, exp, gau, mat, "
                   "mat(2.5), wen, with @iso or @ard to fix the anisotropy; default (auto): the REML fit of "
                   "sph/exp/gau/mat(1.5,2.5) + nugget, isotropic or ARD (over q1..q6 in joint space, x,y,z in task "
-                  "space), with the smallest AIC among well-conditioned ones (compared on up to 700 points, the winner refitted on "
-                  "all; beyond 3000 points by the Vecchia likelihood)");
+                  "space), with the smallest AIC among well-conditioned ones (ranked on up to " +
+                      std::to_string(compensation::kFieldChoiceSubsample) + " points, the best " +
+                      std::to_string(compensation::kFieldChoiceConfirmed) +
+                      " refitted on all; beyond 3000 points by the Vecchia likelihood)");
   cmd->add_option("--kind", a->kind,
                   "kriging methods: ordinary (default), universal1 or universal2 (linear / quadratic drift in the "
                   "field's coordinates)")
@@ -167,6 +208,13 @@ void add_fit_command(CLI::App& app) {
       ->check(kUnsignedInteger)
       ->capture_default_str();
   cmd->add_option("--base-point", a->base_points, "X,Y,Z of base point b0, b1, ... when the data have no base rows (fixed points)");
+  cmd->add_option("--max-fit-readings", a->max_fit_readings,
+                  "methods with a kriging field (auto included): refuse (exit 3, before any work) data of more readings "
+                  "than this (a probe row or pose counts once per point on the flange); the field's CPU time grows as "
+                  "about N^1.7, 146 s at 5,000 poses (docs/robot.md, 'How long a fit takes'); above " +
+                      std::to_string(kLongFitReadings) + " readings fit says its estimate before it starts")
+      ->check(kUnsignedInteger)
+      ->capture_default_str();
   cmd->add_option("--max-registration-rms", a->max_registration_rms,
                   "refuse (exit 2) when the tracker -> robot registration leaves a larger RMS (mm): a tool/reflector "
                   "offset missing from --robot, a wrong robot (docs/robot.md)")

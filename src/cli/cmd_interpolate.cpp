@@ -172,14 +172,10 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
   const std::optional<RasterFormat> raster = output_raster_format(a);
   std::optional<NodeGrid> grid;
   if (!a.grid.empty()) {
-    grid = parse_node_grid(a.grid, "--grid");
+    grid = parse_node_grid(a.grid, "--grid", a.max_grid_nodes, "--max-grid-nodes");
     if (r.coord_columns.size() != 2)
       throw ArgumentError("--grid is a 2-D grid; --coords names " + std::to_string(r.coord_columns.size()) +
                           " columns, expected 2 (x,y)");
-    if (grid->size() > a.max_grid_nodes)
-      throw ResourceError("--grid " + a.grid + " has " + std::to_string(grid->nx) + " x " + std::to_string(grid->ny) +
-                          " = " + std::to_string(grid->size()) + " nodes, more than --max-grid-nodes " +
-                          std::to_string(a.max_grid_nodes) + "; give a coarser step or a larger --max-grid-nodes");
   }
   if (raster && !grid)
     throw ArgumentError("--out " + a.out + " is a raster (" + (*raster == RasterFormat::GeoTiff ? "GeoTIFF" : "ESRI ASCII grid") +

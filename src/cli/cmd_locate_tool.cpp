@@ -1,6 +1,7 @@
 // `errfield locate-tool`: a model's working tool point located from a few readings of it (issue 34).
 #include <cmath>
 #include <iostream>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -9,6 +10,7 @@
 #include "cli/pipeline_cli.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/compensation/model/compensation.hpp"
+#include "errfield/compensation/pipeline.hpp"
 #include "errfield/compensation/tools/tool_location.hpp"
 #include "errfield/error.hpp"
 #include "errfield/json_file.hpp"
@@ -19,6 +21,7 @@ namespace {
 struct LocateToolArgs {
   std::string model, data, out;
   compensation::ToolLocationOptions options;
+  bool joints_are_degrees = false;  // skip the radians check (check_joints_not_radians)
 };
 
 std::string rounded(double v, double scale = 1e4) { return format_number(std::round(v * scale) / scale); }
@@ -26,10 +29,16 @@ std::string rounded(double v, double scale = 1e4) { return format_number(std::ro
 void run_locate_tool(const LocateToolArgs& a) {
   using namespace compensation;
   refuse_same_output({{"--model", &a.model}, {"--out", &a.out}});
+  naming_options([&] { a.options.validate(); }, {{"ToolLocationOptions: distinct_orientation_deg", "--distinct-orientation"},
+                                                 {"ToolLocationOptions: min_orientations", "--min-orientations"},
+                                                 {"ToolLocationOptions: not_rigid_factor", "--not-rigid-factor"}});
   const nlohmann::json j = read_json_file(a.model, "model file");
   const CompensationModel model = with_json_source(a.model, [&] { return CompensationModel::from_json(j, a.model); });
   const CsvTable table = CsvTable::read(a.data);
   const MeasurementSet readings = with_source(a.data, [&] { return MeasurementSet::from_table(table, model.nominal_model()); });
+  // Radians read as degrees turn the flange by a few degrees only: without this check they were
+  // refused as too few distinct orientations ("measure at more"), which sends a user the wrong way.
+  if (!a.joints_are_degrees) check_joints_not_radians(readings.q_deg, model, a.data, "--joints-are-degrees");
   const ToolLocation t = with_source(a.data, [&] { return locate_tool(model, readings, a.options); });
   Eigen::Isometry3d tool = model.command_model().tool();
   tool.translation() = t.tool_mm;
@@ -41,12 +50,14 @@ void run_locate_tool(const LocateToolArgs& a) {
   located = located.with_notes(std::move(notes));
   AtomicFileSet outputs;
   outputs.add(a.out, located.to_json().dump(1) + "\n");
-  outputs.commit();
+  // The report first, the model after it (commit_after_standard_output): a standard output that
+  // cannot be written (> /dev/full) replaced --out, then exited 1 (issue 47, the class of item 10).
+  std::ostringstream text;
   const OrientationPrior& prior = located.orientation_prior();
-  std::cout << "locate-tool: " << t.readings << " readings of " << a.data << " in " << t.orientations
+  text << "locate-tool: " << t.readings << " readings of " << a.data << " in " << t.orientations
             << " distinct flange orientations";
-  if (t.left_out) std::cout << " (" << t.left_out << " left out: outside the model's region)";
-  std::cout << "\n  tool point " << rounded(t.tool_mm.x()) << "," << rounded(t.tool_mm.y()) << "," << rounded(t.tool_mm.z())
+  if (t.left_out) text << " (" << t.left_out << " left out: outside the model's region)";
+  text << "\n  tool point " << rounded(t.tool_mm.x()) << "," << rounded(t.tool_mm.y()) << "," << rounded(t.tool_mm.z())
             << " mm (the calibrated model's flange frame; --tool " << tool_option_text(located.tool_in_robot_frame(tool))
             << " in the robot description's), standard deviation " << rounded(t.sd_mm.x()) << ", " << rounded(t.sd_mm.y()) << ", "
             << rounded(t.sd_mm.z()) << " mm per axis (least squares, readings taken as independent)\n"
@@ -56,11 +67,11 @@ void run_locate_tool(const LocateToolArgs& a) {
             << (t.field_used ? "; the flange position corrected by the model's field and joint functions"
                              : "; the model's calibrated kinematics alone (no field)");
   if (prior.known() && !t.correction)
-    std::cout << "; orientation " << (located.measured_orientation() ? "residual measured at its readings " : "prior ")
+    text << "; orientation " << (located.measured_orientation() ? "residual measured at its readings " : "prior ")
               << rounded(prior.sigma_rad * 1e3, 1e3) << " mrad, rows refused beyond "
               << rounded(prior.max_lever_mm, 1) << " mm" << (t.lever_mm > prior.max_lever_mm ? " (this point: every row)" : "");
   if (const auto& c = t.correction) {
-    std::cout << "\n  the readings' residual at the point kriged over the joints (the flange's turn the model's points do "
+    text << "\n  the readings' residual at the point kriged over the joints (the flange's turn the model's points do "
                  "not see): RMS "
               << rounded(t.uncorrected_rms_mm) << " mm at the readings, " << rounded(t.correction_leave_one_out_rms_mm)
               << " mm left out one at a time with the correction"
@@ -72,14 +83,15 @@ void run_locate_tool(const LocateToolArgs& a) {
               << rounded(std::sqrt(c->sill_mm2().z())) << " mm, noise " << rounded(std::sqrt(c->noise_mm2()))
               << " mm; correlation over the joints " << c->correlation().to_string() << ", variance x " << rounded(c->variance_factor(), 100) << " (leave-one-out)";
     if (prior.known())
-      std::cout << "; rows whose remaining uncertainty there exceeds "
+      text << "; rows whose remaining uncertainty there exceeds "
                 << rounded(compensation::kMaxLeverResidualRatio * prior.residual_rms_mm) << " mm RMS are refused";
   } else if (t.field_used && t.readings < compensation::kMinToolPointCorrectionReadings) {
-    std::cout << "\n  " << t.readings << " readings: fewer than the " << compensation::kMinToolPointCorrectionReadings
+    text << "\n  " << t.readings << " readings: fewer than the " << compensation::kMinToolPointCorrectionReadings
               << " a correction at the point is kriged from (the orientation term stands for it)";
   }
-  std::cout << "\n  model with this working tool written to " << a.out
-            << " (predict, validate and compensate use it; --tool overrides it)\n";
+  text << "\n  model with this working tool written to " << a.out
+       << " (predict, validate and compensate use it; --tool overrides it)\n";
+  commit_after_standard_output(outputs, text.str());
 }
 
 void add_locate_tool_command(CLI::App& app) {
@@ -107,6 +119,9 @@ void add_locate_tool_command(CLI::App& app) {
                   "refuse readings whose residual RMS exceeds this many times what the model's own errors explain")
       ->capture_default_str();
   cmd->add_option("--out", a->out, "model JSON with the located working tool (written atomically)")->required();
+  cmd->add_flag("--joints-are-degrees", a->joints_are_degrees,
+                "skip the check that refuses readings whose joints look like radians (all within +-2 pi and spread far "
+                "less than the model's training joints)");
   cmd->callback([a] { run_locate_tool(*a); });
 }
 

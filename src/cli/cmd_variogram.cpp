@@ -473,8 +473,13 @@ void run_variogram(const VariogramArgs& a) {
     svg = variogram_svg_text(plot);
   }
   if (a.out.empty()) {
-    if (!svg.empty()) write_file_atomically(a.plot, svg);
+    // The table first: a standard output that cannot be written (> /dev/full) leaves the picture
+    // untouched, as --out would.
     std::cout << out.to_csv();
+    if (!svg.empty()) {
+      require_standard_output();
+      write_file_atomically(a.plot, svg);
+    }
   } else {
     AtomicFileSet files;  // the CSV and the picture: both or neither
     files.add(a.out, out.to_csv());

@@ -62,6 +62,9 @@ KrigingCliOptions cli_options;
 std::vector<CLI::Option*> simulation_only_options;
 std::vector<CLI::Option*> block_only_options;  // --block-points: refused without --block
 std::vector<CLI::Option*> indicator_only_options;  // --order-correction: refused without --indicator
+// --indicator itself: given (even as '') means indicator kriging, whose empty thresholds are then
+// refused; its value alone cannot tell `--indicator ''` from no --indicator.
+CLI::Option* indicator_option = nullptr;
 
 void add_kriging_options(CLI::App& cmd) {
   auto& o = cli_options;
@@ -166,7 +169,7 @@ void add_kriging_options(CLI::App& cmd) {
                  "path per draw, each draw's own approximation error, 100 times the cost)")
       ->check(CLI::Range(std::size_t{1}, std::size_t{100000}))
       ->group(group);
-  cmd.add_option("--indicator", o.indicator,
+  indicator_option = cmd.add_option("--indicator", o.indicator,
                  "Indicator kriging: thresholds T1,T2,... (increasing) of the one --value column. For each, the samples "
                  "become I(z < T) (1 below, 0 at or above: gstat's krige(I(z < T) ~ 1)), kriged with that threshold's "
                  "--model: one model for all, one per threshold separated by ';' (\"sph(sill=0.12,range=700)+nug(0.03);"
@@ -381,6 +384,9 @@ InterpolationResult interpolate_indicator(const InterpolationRequest& r) {
   if (o.model.empty())
     throw ArgumentError("--indicator needs --model: one variogram model for every threshold, one per threshold separated by "
                         "';', or auto");
+  if (o.indicator.find_first_not_of(" \t") == std::string::npos)
+    throw ArgumentError("--indicator is '" + o.indicator + "': no thresholds; expected increasing thresholds T1,T2,... in "
+                        "the unit of --value, e.g. 200,400,800 (or drop --indicator for kriging of the values)");
   std::vector<std::string> threshold_texts;
   std::vector<double> thresholds;
   for (auto item : split_list(o.indicator, "--indicator")) {
@@ -466,7 +472,8 @@ InterpolationResult interpolate_indicator(const InterpolationRequest& r) {
 }
 
 InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
-  if (!cli_options.indicator.empty()) return interpolate_indicator(r);
+  if (!cli_options.indicator.empty() || (indicator_option != nullptr && indicator_option->count() > 0))
+    return interpolate_indicator(r);
   for (const CLI::Option* o : indicator_only_options)
     if (o->count()) throw ArgumentError(o->get_name() + " applies to --indicator T1,T2,... (indicator kriging); add it or drop " + o->get_name());
   InterpolationResult result;

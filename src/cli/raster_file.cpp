@@ -41,8 +41,10 @@ double grid_number(std::string_view part, std::string_view option, std::string_v
   throw ArgumentError(std::string(option) + ": " + std::string(what) + " is '" + text + "'; expected a finite number");
 }
 
-// One axis "MIN:MAX:STEP": the node count n with MIN + (n-1)*STEP <= MAX (+ 1e-9 STEP).
-void parse_axis(std::string_view text, std::string_view option, char axis, double& min, double& step, std::size_t& n) {
+// One axis "MIN:MAX:STEP": the node count n with MIN + (n-1)*STEP <= MAX (+ 1e-9 STEP), as a
+// double: it may be beyond any integer type (1e300 nodes, or inf when MAX - MIN overflows), which
+// the caller's node budget refuses.
+double parse_axis(std::string_view text, std::string_view option, char axis, double& min, double& step) {
   const std::string name(1, axis);
   std::vector<std::string_view> parts;
   for (std::size_t start = 0;;) {
@@ -68,22 +70,31 @@ void parse_axis(std::string_view text, std::string_view option, char axis, doubl
     throw ArgumentError(std::string(option) + ": " + name + "max " + format_number(max) + " is below " + name + "min " +
                         format_number(min));
   const double spans = (max - min) / step;
-  if (!(spans < 1099511627776.0))  // 2^40: beyond any budget, and still exact as an integer
-    throw ArgumentError(std::string(option) + ": " + format_number(spans) + " steps of d" + name +
-                        " along " + name + "; expected a coarser step");
-  n = static_cast<std::size_t>(std::floor(spans + 1e-9)) + 1;
+  return std::floor(spans + 1e-9) + 1.0;
 }
 
 }  // namespace
 
-NodeGrid parse_node_grid(std::string_view text, std::string_view option) {
+NodeGrid parse_node_grid(std::string_view text, std::string_view option, std::size_t max_nodes,
+                         std::string_view max_option) {
   const auto comma = text.find(',');
   if (comma == std::string_view::npos || text.find(',', comma + 1) != std::string_view::npos)
     throw ArgumentError(std::string(option) + " is '" + std::string(text) +
                         "'; expected XMIN:XMAX:DX,YMIN:YMAX:DY (a 2-D grid)");
   NodeGrid g;
-  parse_axis(text.substr(0, comma), option, 'x', g.x_min, g.dx, g.nx);
-  parse_axis(text.substr(comma + 1), option, 'y', g.y_min, g.dy, g.ny);
+  const double nx = parse_axis(text.substr(0, comma), option, 'x', g.x_min, g.dx);
+  const double ny = parse_axis(text.substr(comma + 1), option, 'y', g.y_min, g.dy);
+  // Counted in double: a size_t product of two huge axes wraps round (2^40 x 2^40 is 0) and
+  // would pass the budget. Every grid over it is one error, however large (1e18, 1e300, inf).
+  const double nodes = nx * ny;
+  constexpr double kExact = 9007199254740992.0;  // 2^53: the count and its size_t product stay exact
+  if (!(nodes <= static_cast<double>(max_nodes) && nodes <= kExact))
+    throw ResourceError(std::string(option) + " " + std::string(text) + " has " + format_number(nx) + " x " +
+                        format_number(ny) + " = " + format_number(nodes) + " nodes, more than " +
+                        std::string(max_option) + " " + std::to_string(max_nodes) + "; give a coarser step or a larger " +
+                        std::string(max_option));
+  g.nx = static_cast<std::size_t>(nx);
+  g.ny = static_cast<std::size_t>(ny);
   return g;
 }
 

@@ -33,8 +33,11 @@ struct NodeGrid {
 };
 
 /// Parses "XMIN:XMAX:DX,YMIN:YMAX:DY" (the text of `option`). Throws ArgumentError naming the
-/// option and the bad part (not a number, DX <= 0, XMAX < XMIN, a node count beyond 2^40).
-NodeGrid parse_node_grid(std::string_view text, std::string_view option);
+/// option and the bad part (not a number, DX <= 0, XMAX < XMIN); ResourceError (exit 3) naming
+/// `max_option` when the grid has more than `max_nodes` nodes, however many (1e300, or an
+/// overflowing XMAX - XMIN).
+NodeGrid parse_node_grid(std::string_view text, std::string_view option, std::size_t max_nodes,
+                         std::string_view max_option);
 
 enum class RasterFormat { GeoTiff, EsriAscii };
 

@@ -411,10 +411,18 @@ CsvTable rows_of_one_reflector(const CsvTable& file, const std::string& asked, b
                        0, "reflector");
     return file;
   }
-  // One label: the readings of one point, scored at the model's point (or --tool); the check that
-  // they are of that point follows.
-  if (asked.empty() && !several_reflector_labels(file)) return file;
   const std::vector<CompensationModel::LabelledPoint>& points = model.flange_points();
+  if (asked.empty() && !several_reflector_labels(file)) {
+    // One label: the readings of one point, scored at the model's point (or --tool); the check that
+    // they are of that point follows. But a label that is a further point the model located (r2 of an
+    // r1+r2 model) says which point was read: scored there, as --reflector r2 would (they were
+    // refused as not of the model's point, with no hint of the option).
+    const std::string only = file.row_count() > 0 ? std::string(file.cell(0, file.column_index("reflector"))) : std::string();
+    const bool further = !tool_given && points.size() > 1 &&
+                         std::any_of(points.begin() + 1, points.end(), [&](const auto& p) { return p.label == only; });
+    if (!further) return file;
+    return rows_of_one_reflector(file, only, tool_given, model, option_prefix);
+  }
   const std::string label = !asked.empty() ? asked : !points.empty() ? points.front().label : std::string(file.cell(0, file.column_index("reflector")));
   std::vector<std::size_t> keep;
   const std::size_t col = file.column_index("reflector");

@@ -239,6 +239,11 @@ void AtomicFileSet::commit() {
     writers.back()->stream().write(content.data(), static_cast<std::streamsize>(content.size()));
     writers.back()->finish_writing();
   }
+  // Devices and FIFOs before any rename, with signals open: a write that fails there (/dev/full,
+  // a closed pipe) must leave every regular target untouched (all or none), and opening a FIFO
+  // waits for its reader, which a user must be able to interrupt (the temporaries are then removed).
+  for (auto& w : writers)
+    if (w->writes_through()) w->commit();
   // Every signal that would end the process waits until every rename is done: one between two
   // renames would leave new and old files mixed. It is delivered (and ends the process) right after.
   const sigset_t block = cleanup_signal_set();
@@ -252,10 +257,6 @@ void AtomicFileSet::commit() {
     throw;
   }
   ::pthread_sigmask(SIG_SETMASK, &previous, nullptr);
-  // Devices and FIFOs last, with signals open: opening a FIFO waits for its reader, and a user
-  // must be able to interrupt that wait.
-  for (auto& w : writers)
-    if (w->writes_through()) w->commit();
   files_.clear();
 }
 

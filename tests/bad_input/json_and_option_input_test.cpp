@@ -576,7 +576,35 @@ TEST_F(RobotFiles, AStageThatRunsLongSaysSoWhateverTheRowCount) {
   EXPECT_THAT(r.err, AllOf(HasSubstr("fit: "), HasSubstr("still running")));
   const auto quiet = run({"fit", "--robot", path("robot.json"), "--data", path("g.csv"), "--method", "vector-kriging",
                           "--out", path("progress.json")});
-  EXPECT_THAT(quiet.err, Not(HasSubstr("still running")));  // not a terminal, not asked: nothing
+  EXPECT_THAT(quiet.err, Not(HasSubstr("still running")));  // not a terminal: nothing within 30 s
+}
+
+// Issue 47 item 14: a 5,000-pose fit ran past a minute with nothing on a pipe. A log (not a
+// terminal) gets the "still running" lines of a long stage too (after 30 s, here 0), unless
+// ERRFIELD_PROGRESS=0; and a fit with a field over --max-fit-readings is refused before any work
+// (exit 3), naming the count, the option and the time it would take.
+TEST_F(RobotFiles, ALongFitSaysSoOnAPipeAndAnOversizedOneIsRefusedUpFront) {
+  const std::vector<std::string> fit{"fit", "--robot", path("robot.json"), "--data", path("g.csv"), "--method",
+                                     "vector-kriging", "--out", path("progress.json")};
+  const auto logged = testing::run_errfield(fit, dir_, {"ERRFIELD_PROGRESS_AFTER=0"});
+  ASSERT_EQ(logged.exit_code, 0) << logged.err;
+  EXPECT_THAT(logged.err, AllOf(HasSubstr("fit: "), HasSubstr("still running")));
+  const auto off = testing::run_errfield(fit, dir_, {"ERRFIELD_PROGRESS=0", "ERRFIELD_PROGRESS_AFTER=0"});
+  ASSERT_EQ(off.exit_code, 0) << off.err;
+  EXPECT_THAT(off.err, Not(HasSubstr("still running")));
+
+  const std::size_t rows = CsvTable::read(path("g.csv")).row_count();
+  fs::remove(path("progress.json"));
+  std::vector<std::string> small = fit;
+  small.insert(small.end(), {"--max-fit-readings", std::to_string(rows - 1)});
+  const auto r = run(small);
+  EXPECT_EQ(r.exit_code, 3) << r.err;
+  EXPECT_THAT(r.err, AllOf(HasSubstr(std::to_string(rows) + " readings"), HasSubstr("--max-fit-readings " + std::to_string(rows - 1)),
+                           HasSubstr("of CPU")));
+  EXPECT_FALSE(fs::exists(path("progress.json")));
+  // A method without a field has no such budget.
+  small[6] = "kinematic";
+  EXPECT_EQ(run(small).exit_code, 0);
 }
 
 // Round three: a bad option value exited 1 (the outliers overflowed later).

@@ -379,6 +379,29 @@ TEST_F(InterpolateGridCli, NodesWithoutPredictionAreNodataAndBadGridsAreRefused)
   EXPECT_FALSE(fs::exists(path("P.csv")) || fs::exists(path("P.tif")) || fs::exists(path("P.asc")));
 }
 
+// Issue 47 item 11: a grid over --max-grid-nodes is exit 3 naming it whatever its size. 1e300
+// nodes was exit 2 (a per-axis cap) while 1e18 was exit 3; 2^32 x 2^32 nodes wrapped round to 0
+// in size_t; an XMAX - XMIN that overflows to inf is one more. And `--indicator ''` ran plain
+// kriging instead of refusing its empty thresholds.
+TEST_F(InterpolateGridCli, EveryGridOverTheBudgetIsExitThreeAndAnEmptyIndicatorIsRefused) {
+  const std::string kriging = "interpolate --method kriging --model \"exp(sill=0.5,range=15)\" --samples " + path("S.csv") +
+                              " --coords x,y --value v --out " + path("P.csv");
+  for (const std::string grid : {"0:1e9:1,0:1e9:1", "0:1e150:1,0:1e150:1", "0:4294967295:1,0:4294967295:1",
+                                 "-1e308:1e308:1,0:1:1", "0:1e300:1e-300,0:1:1"}) {
+    const auto r = run(kriging + " --grid " + grid);
+    EXPECT_EQ(r.exit_code, 3) << grid << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr("more than --max-grid-nodes 4000000")) << grid;
+  }
+  EXPECT_FALSE(fs::exists(path("P.csv")));
+
+  for (const std::string thresholds : {"", " "}) {
+    const auto r = run(kriging + " --indicator '" + thresholds + "'");
+    EXPECT_EQ(r.exit_code, 2) << r.output();
+    EXPECT_THAT(r.err, HasSubstr("--indicator is '" + thresholds + "': no thresholds"));
+  }
+  EXPECT_FALSE(fs::exists(path("P.csv")));
+}
+
 TEST_F(InterpolateGridCli, RasterCovariateEqualsTheSameCovariateAsCsvColumns) {
   write_covariate_raster("cov.asc");
   const std::string kriging = "interpolate --method kriging --model \"exp(sill=0.3,range=15)+nug(0.01)\" --coords x,y "

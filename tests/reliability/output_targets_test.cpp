@@ -167,6 +167,51 @@ TEST(OutputNames, AFifoIsWrittenThroughNotReplaced) {
   EXPECT_THAT(dir.entries(), ElementsAre("g.csv", "pipe"));
 }
 
+// Issue 47 item 10: `variogram --plot /dev/full --out v.csv` replaced v.csv, then exited 1: the
+// set wrote its device targets after renaming the regular ones. A device that cannot be written
+// now leaves every regular file of the set as it was (all or none), in the library and in each
+// command with a --plot beside its --out. (A link to /dev/full: never a target under /dev itself.)
+TEST(OutputNames, AFullDeviceInASetLeavesTheOtherFilesUntouched) {
+  ScratchDir dir;
+  fs::create_symlink("/dev/full", dir.path() / "full");
+  dir.write("a.csv", kOld);
+  AtomicFileSet set;
+  set.add(dir.path() / "a.csv", "new\n");
+  set.add(dir.path() / "full", "picture\n");
+  EXPECT_THROW(set.commit(), Error);
+  EXPECT_EQ(dir.read("a.csv"), kOld);
+  EXPECT_THAT(dir.entries(), ElementsAre("a.csv", "full")) << "no temporary left";
+
+  dir.write("g.csv", kUnitCubeGrid);
+  dir.write("v.csv", kOld);
+  auto args = variogram_to("v.csv");
+  args.insert(args.end(), {"--plot", "full"});
+  auto r = run_errfield(args, dir.path());
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(dir.read("v.csv"), kOld) << "variogram replaced --out although --plot failed";
+
+  dir.write("e.csv", "lag_lo,lag_hi,lag_mean,gamma,pairs\n0,1,0.5,0.1,30\n1,2,1.5,0.2,40\n2,3,2.5,0.3,50\n3,4,3.5,0.32,50\n");
+  dir.write("m.json", kOld);
+  r = run_errfield({"fit-variogram", "--input", "e.csv", "--model", "sph", "--out", "m.json", "--plot", "full"}, dir.path());
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(dir.read("m.json"), kOld) << "fit-variogram replaced --out although --plot failed";
+
+  // Without --out the table goes to standard output: a full one leaves the picture as it was.
+  dir.write("p.svg", kOld);
+  args = variogram_to("v.csv");
+  args.resize(args.size() - 2);
+  args.insert(args.end(), {"--plot", "p.svg"});
+  r = testing::run_errfield_to_full_stdout(args, dir.path());
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(dir.read("p.svg"), kOld) << "variogram replaced --plot although standard output failed";
+  // cv wrote --out, then its summary to standard output.
+  dir.write("o.csv", kOld);
+  r = testing::run_errfield_to_full_stdout(
+      {"cv", "--method", "idw", "--samples", "g.csv", "--coords", "x,y,z", "--value", "v", "--out", "o.csv"}, dir.path());
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(dir.read("o.csv"), kOld) << "cv replaced --out although standard output failed";
+}
+
 TEST(OutputNames, ADirectoryOrALinkToOneIsRefused) {
   ScratchDir dir;
   fs::create_directory(dir.path() / "d");

@@ -201,7 +201,8 @@ inline constexpr double kRadiansSuspectTrainingSpreadDeg = 10.0;
 /// `validate` on a file of several points on the flange (a `reflector` column): the rows of one
 /// label (`asked`, default the model's own point), with `model` moved to that label's located point
 /// (a working tool) when it is a further point the model located; the file itself when it has one
-/// label or none. InputError naming the file for a label without rows, a label the model did not
+/// label or none, except that a file whose every row carries the label of a further located point
+/// is scored at that point without `asked` (unless `tool_given`). InputError naming the file for a label without rows, a label the model did not
 /// locate, or several labels for a one-point model; ArgumentError when `tool_given` and the label is
 /// a further point. `option_prefix` ("--" on the command line, "" in Python) names the options.
 CsvTable rows_of_one_reflector(const CsvTable& file, const std::string& asked, bool tool_given, CompensationModel& model,

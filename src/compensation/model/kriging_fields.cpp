@@ -605,8 +605,8 @@ VariogramModel choose_field_model(const FieldSamples& samples, const Eigen::Matr
   // each, as the plain fit has). On 687 SIMULATED KR 16 poses this chose the same family as ranking
   // all ten on every sample, in a third of the time (docs/robot.md, "The subset the family is
   // chosen on"); ranking on 300 without the confirmation had chosen worse families.
-  mo.choice_subsample = 300;
-  mo.confirmed = 2;
+  mo.choice_subsample = kFieldChoiceSubsample;
+  mo.confirmed = kFieldChoiceConfirmed;
   mo.confirm_with_plain_starts = false;
   // Joint space: a degree of J1 moves the tool ten to a hundred times as far as a degree of J6, so
   // ARD ranges a few hundred times apart are the arm's geometry, not an artefact (the ARD fits of 687

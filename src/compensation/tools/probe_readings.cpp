@@ -13,6 +13,7 @@ namespace errfield::compensation {
 namespace {
 
 const std::vector<std::string> kAngleColumns = {"mrx", "mry", "mrz"};
+constexpr double kMaxProbeAngleDeg = 720.0;  // two turns: any unwrapped angle a tracker writes
 const std::vector<std::string> kQuaternionColumns = {"mqw", "mqx", "mqy", "mqz"};
 
 bool has_all(const CsvTable& t, const std::vector<std::string>& names) {
@@ -102,7 +103,15 @@ CsvTable expand_probe_readings(const CsvTable& table) {
     Eigen::Matrix3d rotation;
     if (angles) {
       double a[3];
-      for (int k = 0; k < 3; ++k) a[k] = table.numeric_cell(r, orientation_col[static_cast<std::size_t>(k)]);
+      for (int k = 0; k < 3; ++k) {
+        a[k] = table.numeric_cell(r, orientation_col[static_cast<std::size_t>(k)]);
+        // An angle far beyond a turn (1e300) is no tracker's output: its sine is rounding noise, a
+        // rotation that was accepted and then failed later without a line.
+        if (!(std::abs(a[k]) <= kMaxProbeAngleDeg))
+          throw InputError(line + ": column " + names[static_cast<std::size_t>(k)] + " = " + format_number(a[k]) +
+                               " deg; expected a probe angle in degrees within +-" + format_number(kMaxProbeAngleDeg),
+                           source, table.line_of_row(r), names[static_cast<std::size_t>(k)]);
+      }
       rotation = robot::rotation_from_rpy_deg(a[0], a[1], a[2]);
     } else {
       double v[4];

@@ -40,6 +40,11 @@ enum class FieldSpace { task, joint };
 /// the rounding of joints recorded to 4+ decimals or of IK (1e-7 mm).
 inline constexpr double kRegionToleranceMm = 0.01;
 inline constexpr double kRegionToleranceDeg = 1e-4;
+/// The default field's family choice (`fit --model auto`) ranks the candidates on this many samples
+/// (all of them when fewer) and refits the best kFieldChoiceConfirmed on all: `fit --help`, its log
+/// and docs/robot.md state these numbers.
+inline constexpr std::size_t kFieldChoiceSubsample = 300;
+inline constexpr std::size_t kFieldChoiceConfirmed = 2;
 std::string_view field_space_name(FieldSpace s);
 /// "task" | "joint"; throws ArgumentError.
 FieldSpace field_space_from_name(std::string_view name);
