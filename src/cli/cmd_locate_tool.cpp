@@ -57,6 +57,9 @@ void run_locate_tool(const LocateToolArgs& a) {
   text << "locate-tool: " << t.readings << " readings of " << a.data << " in " << t.orientations
             << " distinct flange orientations";
   if (t.left_out) text << " (" << t.left_out << " left out: outside the model's region)";
+  if (t.gross)
+    text << " (" << t.gross << " gross reading(s) left out of the location and the correction: over "
+         << format_number(ToolPointCorrection::kOutlierLimit) << " robust sd left out one at a time)";
   text << "\n  tool point " << rounded(t.tool_mm.x()) << "," << rounded(t.tool_mm.y()) << "," << rounded(t.tool_mm.z())
             << " mm (the calibrated model's flange frame; --tool " << tool_option_text(located.tool_in_robot_frame(tool))
             << " in the robot description's), standard deviation " << rounded(t.sd_mm.x()) << ", " << rounded(t.sd_mm.y()) << ", "

@@ -95,7 +95,7 @@ void run_validate(const ValidateArgs& a) {
   } else {
     const MdhModel nominal_robot = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
     // The readings are of the working tool's point: so is the nominal robot's 'before'.
-    const MdhModel nominal = nominal_at_working_tool(model, nominal_robot);
+    const MdhModel nominal = nominal_at_measured_point(model, nominal_robot);
     // Data of another robot, or joints in radians, scored "after" errors of a metre (exit 0).
     check_table_fits_robot(table, nominal,
                            {true, a.robot.empty() ? "the nominal robot of " + a.model : "--robot " + a.robot},

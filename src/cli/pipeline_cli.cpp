@@ -38,6 +38,12 @@ std::optional<Eigen::Isometry3d> parse_tool_option(const std::string& text, cons
   if (count != 3 && count != 6)
     throw ArgumentError(what + ": expected X,Y,Z or X,Y,Z,RX,RY,RZ (flange frame; mm, deg), got '" + text + "'");
   const std::vector<double> v = parse_numbers(text, count, what);
+  // An angle beyond a turn is a typo (radians in the wrong field, a unit slip): reduced modulo 360 it
+  // would be an orientation nobody gave.
+  for (std::size_t k = 3; k < count; ++k)
+    if (std::abs(v[k]) > 360.0)
+      throw ArgumentError(what + ": angle " + std::string(1, "xyz"[k - 3]) + " " + format_number(v[k]) +
+                          " deg is beyond a turn; expected -360..360 deg (X,Y,Z,RX,RY,RZ: mm, deg)");
   Eigen::Isometry3d tool = current_tool;
   if (count == 6) tool = robot::to_isometry({v[0], v[1], v[2], v[3], v[4], v[5]});
   tool.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
@@ -60,7 +66,15 @@ void add_tool_option(CLI::App* cmd, std::string& into, const std::string& role) 
                   format_number(compensation::kMaxToolPointMm) +
                   " mm from the flange. Away from the measured reflector the variance includes the flange's "
                   "unobservable orientation error, and rows too far from it are refused (orientation-unknown; "
-                  "docs/robot.md, \"Tool points and orientation\")");
+                  "docs/robot.md, \"Tool points and orientation\")")
+      // Given empty (a shell variable that was not set), it must not silently mean "no --tool".
+      ->check(CLI::Validator(
+          [](std::string& text) {
+            return text.find_first_not_of(" \t") == std::string::npos
+                       ? std::string("empty; expected X,Y,Z or X,Y,Z,RX,RY,RZ (flange frame; mm, deg), or leave --tool out")
+                       : std::string();
+          },
+          "X,Y,Z[,RX,RY,RZ]"));
 }
 
 void print_working_tool(std::ostream& out, const compensation::CompensationModel& model) {

@@ -78,6 +78,14 @@ FitResult check_fitted_model(FitResult fit, const FitOptions& options,
               "); nothing was written. Try --space task|joint or another --method");
 }
 
+MdhModel nominal_at_measured_point(const CompensationModel& model, const MdhModel& nominal) {
+  if (model.working_tool()) return nominal_at_working_tool(model, nominal);
+  const bool calibrated =
+      model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging;
+  if (!calibrated || (nominal.tool().translation() - model.measured_point_mm()).norm() <= kReflectorAtToolMm) return nominal;
+  return nominal.with_tool_point(model.measured_point_mm());
+}
+
 FitResult attach_artifacts(FitResult fit, const MdhModel& nominal, const MeasurementSet& d) {
   CompensationModel m = fit.model.with_data_joints(d.q_deg);
   const bool kinematic =
@@ -107,7 +115,10 @@ FitResult attach_artifacts(FitResult fit, const MdhModel& nominal, const Measure
   // "before" uses it, so a calibrated model's frame never flatters or spoils the baseline.
   if (d.measured_mm.size() >= 3 && d.measured_mm.size() == d.q_deg.size()) {
     std::vector<Eigen::Vector3d> fk(d.q_deg.size());
-    for (std::size_t i = 0; i < fk.size(); ++i) fk[i] = forward_position(nominal, d.q_deg[i]);
+    // At the reflector the readings are of (the calibration located it when the robot JSON's tool
+    // is elsewhere, e.g. 0): at the flange centre the registration would absorb a lever of 100 mm.
+    const MdhModel at_reflector = nominal_at_measured_point(m, nominal);
+    for (std::size_t i = 0; i < fk.size(); ++i) fk[i] = forward_position(at_reflector, d.q_deg[i]);
     m = m.with_nominal_registration(fit_registration(d.measured_mm, fk));
   }
   fit.model = std::move(m);

@@ -25,6 +25,14 @@ FitResult check_fitted_model(FitResult fit, const FitOptions& options,
 /// fit already registered them) in fit.model.
 FitResult attach_artifacts(FitResult fit, const robot::MdhModel& nominal, const MeasurementSet& data);
 
+/// The nominal robot `nominal` at the point a model's readings are of, for its "before" (the nominal
+/// registration attach_artifacts stores, validate's held-out rows): the working tool where the model
+/// has one (nominal_at_working_tool), else, for a calibrated model whose reflector lies further than
+/// kReflectorAtToolMm from `nominal`'s tool (a robot JSON with tool 0, the reflector found by the
+/// calibration), that reflector. At the flange centre a 0.8 mm robot read 118.9 mm "before" on real
+/// data (issue 47).
+robot::MdhModel nominal_at_measured_point(const CompensationModel& model, const robot::MdhModel& nominal);
+
 /// Refuses (InputError naming the file, line, column 'reflector' and the value) a measurement table
 /// whose rows carry more than one label in a column `reflector` (simulate --reflectors, nests on one
 /// plate): a model is fitted to one point at a time. One label (the user kept one reflector's rows)

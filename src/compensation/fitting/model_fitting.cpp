@@ -3,6 +3,7 @@
 #include "errfield/robot/input_checks.hpp"
 
 #include <array>
+#include <cctype>
 #include <algorithm>
 #include <map>
 
@@ -71,6 +72,31 @@ bool several_reflector_labels(const CsvTable& t) {
   return false;
 }
 
+namespace {
+
+/// `label` without its whitespace: what a person reads as the label.
+std::string label_spelling(std::string_view label) {
+  std::string out;
+  for (char c : label)
+    if (!std::isspace(static_cast<unsigned char>(c))) out.push_back(c);
+  return out;
+}
+
+/// Refuses row `r`'s reflector label when an earlier row spelt the same label with other spaces
+/// (`seen`: spelling -> first label and its row), naming both lines.
+void refuse_label_spelt_differently(const CsvTable& t, std::size_t r, std::size_t col,
+                                    std::map<std::string, std::pair<std::string, std::size_t>>& seen) {
+  const std::string& label = t.row(r)[col];
+  const auto [it, fresh] = seen.emplace(label_spelling(label), std::make_pair(label, r));
+  if (fresh || it->second.first == label) return;
+  throw InputError(t.source() + ":" + std::to_string(t.line_of_row(r)) + ": column 'reflector': '" + label +
+                       "' differs from '" + it->second.first + "' (line " + std::to_string(t.line_of_row(it->second.second)) +
+                       ") only by spaces: two labels are two points on the flange; spell one reflector's label one way",
+                   t.source(), t.line_of_row(r), "reflector");
+}
+
+}  // namespace
+
 MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& robot,
                                           const std::vector<Eigen::Vector3d>& fixed_bases, bool several_points) {
   MeasurementSet m;
@@ -92,6 +118,12 @@ MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& rob
   const std::size_t reflector_col = has_reflector ? t.column_index("reflector") : 0;
   // Rows of one pose read at several points must share the joints: the pose is one robot state.
   std::map<std::string, std::size_t> first_row_of_point;
+  // A (point, reflector) pair names one reading: a repeated pair is a row given twice (its joints
+  // and reading count twice, and the fields' leave-one-out per pose, which the rotation's and the
+  // points' covariance come from, cannot take it). Labels that differ only by spaces are one
+  // reflector to a person and two to the file.
+  std::map<std::pair<std::string, std::string>, std::size_t> row_of_reading;
+  std::map<std::string, std::pair<std::string, std::size_t>> label_by_spelling;
   m.distance_mm.assign(dist.size(), {});
   for (std::size_t r = 0; r < t.row_count(); ++r) {
     const JointVector qr = q.row(static_cast<Eigen::Index>(r)).transpose();
@@ -110,7 +142,16 @@ MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& rob
     m.id.push_back(has_point ? t.row(r)[point_col] : "row" + std::to_string(t.line_of_row(r)));
     if (has_reflector) {
       m.reflector.push_back(t.row(r)[reflector_col]);
+      refuse_label_spelt_differently(t, r, reflector_col, label_by_spelling);
       if (has_point) {
+        const auto [seen, fresh] = row_of_reading.emplace(std::make_pair(m.id.back(), m.reflector.back()), r);
+        if (!fresh)
+          throw InputError(t.source() + ":" + std::to_string(t.line_of_row(r)) + ": point '" + m.id.back() +
+                               "' at reflector '" + m.reflector.back() + "' is read again (first at line " +
+                               std::to_string(t.line_of_row(seen->second)) +
+                               "): each (point, reflector) pair is one reading; remove the repeated row, or give a "
+                               "repeated measurement of the pose its own point name",
+                           t.source(), t.line_of_row(r), "point");
         const auto [it, first] = first_row_of_point.emplace(m.id.back(), r);
         if (!first && q.row(static_cast<Eigen::Index>(it->second)) != q.row(static_cast<Eigen::Index>(r)))
           throw InputError(t.source() + ":" + std::to_string(t.line_of_row(r)) + ": point '" + m.id.back() +
@@ -822,6 +863,11 @@ FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const Fi
                               "a point between the measured ones is predicted from the flange's rigid motion "
                               "their fields imply");
           const std::optional<HeldOutAtPoints> held_out = held_out_at_fielded_points(out.model);
+          if (!held_out)
+            out.notes.push_back("warning: no flange_error_covariance and no rotation_calibration: a field holds no "
+                                "leave-one-out per training pose (poses repeated at one point merge into one "
+                                "location), so a point between the measured ones takes the sum of the fields' "
+                                "standard deviations and the orientation's covariance their independent combination");
           if (const std::optional<FlangeErrorCovariance> c = held_out ? flange_error_covariance_of(out.model, *held_out) : std::nullopt) {
             out.model = out.model.with_flange_error_covariance(c);
             out.notes.push_back("a point between or beyond the measured ones takes the covariance of the fields' "

@@ -358,13 +358,77 @@ Eigen::Isometry3d CompensationModel::tool_in_robot_frame(const Eigen::Isometry3d
   return t;
 }
 
+namespace {
+
+/// with_located_probe_frame: a description's tool rotation within this of the located probe frame
+/// (rad; 5 deg, far beyond a mounting's tolerance and far below a deliberate turn) is the probe's.
+constexpr double kProbeFrameAsDrawnRad = 5.0 * M_PI / 180.0;
+
+/// `model` with its tool's rotation the probe frame the model's flange points located, where they are
+/// a 6-DoF probe's (probe_readings.hpp: the own point LABEL with LABEL+x and LABEL+y kProbeLeverMm
+/// along the probe's own axes): the probe's mounting on the calibrated flange as its readings showed
+/// it. The robot description's tool rotation is the mounting as drawn; the difference (the probe's
+/// twist on the flange, with joint 6's offset that the calibration cannot tell from it) made
+/// predict's orientation miss the probe frame by 149 mdeg RMS and compensate's joints leave 151
+/// (issue 47). `model` unchanged for other models.
+MdhModel with_located_probe_frame(MdhModel model, const std::vector<CompensationModel::LabelledPoint>& points) {
+  if (points.empty()) return model;
+  const std::string& own = points.front().label;
+  const CompensationModel::LabelledPoint *x = nullptr, *y = nullptr;
+  for (const CompensationModel::LabelledPoint& p : points) {
+    if (p.label == own + "+x") x = &p;
+    if (p.label == own + "+y") y = &p;
+  }
+  if (!x || !y) return model;
+  const Eigen::Vector3d origin = points.front().position_mm;
+  const Eigen::Vector3d ex = (x->position_mm - origin).normalized();
+  Eigen::Vector3d ey = y->position_mm - origin;
+  ey = (ey - ey.dot(ex) * ex).normalized();
+  if (!ex.allFinite() || !ey.allFinite()) return model;
+  Eigen::Matrix3d located;
+  located << ex, ey, ex.cross(ey);
+  // Only where the description's tool is the probe's frame as drawn: a tool frame turned against the
+  // probe on purpose (a TCP of its own) keeps its rotation on the calibrated flange.
+  if (Eigen::AngleAxisd(model.tool().linear().transpose() * located).angle() > kProbeFrameAsDrawnRad) return model;
+  Eigen::Isometry3d tool = model.tool();
+  tool.linear() = located;
+  return model.with_tool(tool);
+}
+
+}  // namespace
+
+namespace {
+
+/// True for a working tool no data located: not the model's reflector (within kSameFlangePointMm,
+/// where the calibration maps the robot description's tool onto the located point), not the point
+/// locate-tool located (it sets the working tool, for calibrated models also the aimed tool point to
+/// the same numbers, and from kMinToolPointCorrectionReadings readings a correction there). A
+/// `--tool` elsewhere is in the robot description's frame, which the calibrated flange's frame
+/// differs from by a constant turn nothing measured, whatever the model measured of the flange's
+/// orientation at its own points: a three-nest model scored a point 150 mm away given by --tool at
+/// 0.39 mm with a 95 % radius that held none (issue 47). Even a fitted flange point's description
+/// coordinates are not its located ones (--reflector scores its readings there).
+bool unlocated_working_tool(const CompensationModel& model) {
+  if (!model.working_tool()) return false;
+  const Eigen::Vector3d x = model.working_tool()->translation();
+  if ((x - model.measured_point_mm()).norm() <= kSameFlangePointMm) return false;
+  if (model.tool_point_mm() && (x - *model.tool_point_mm()).norm() <= 1e-6 && model.reflector_mm() &&
+      (*model.tool_point_mm() - *model.reflector_mm()).norm() > 1e-9)
+    return false;
+  const auto& correction = model.tool_point_correction();
+  return !(correction && (correction->point_mm() - x).norm() <= kSameFlangePointMm);
+}
+
+}  // namespace
+
 MdhModel CompensationModel::scored_model() const {
-  return working_tool_ ? command_model_.with_tool(*working_tool_) : command_model_;
+  return working_tool_ ? command_model_.with_tool(*working_tool_) : with_located_probe_frame(command_model_, flange_points_);
 }
 
 MdhModel CompensationModel::aimed_model() const {
   if (working_tool_) return command_model_.with_tool(*working_tool_);
-  return tool_point_ ? command_model_.with_tool_point(*tool_point_) : command_model_;
+  const MdhModel aimed = with_located_probe_frame(command_model_, flange_points_);
+  return tool_point_ ? aimed.with_tool_point(*tool_point_) : aimed;
 }
 
 CompensationModel CompensationModel::with_credible_range(std::optional<CredibleRange> range) const {
@@ -436,6 +500,10 @@ const OrientationPrior& CompensationModel::orientation_prior() const {
       p.data_sigma_rad = measured_orientation_->sigma_rad;
       p.sigma_rad = !measured_orientation_->add_floor ? p.data_sigma_rad
                                                        : std::hypot(p.data_sigma_rad, kOrientationPriorFloorRad);
+      // What they measured is the flange's turn at their own located points; a working tool no data
+      // located (`--tool`, in the robot description's frame) also carries the constant turn between
+      // that frame and the calibrated one, which nothing measured (unlocated_working_tool).
+      if (unlocated_working_tool(*this)) p.sigma_rad = std::hypot(p.sigma_rad, kUnlocatedOrientationRad);
       if (!(p.sigma_rad > 0.0)) {
         p.max_lever_mm = std::numeric_limits<double>::infinity();
         return;
@@ -705,6 +773,33 @@ ErrorPrediction CompensationModel::predict_field_at(const JointVector& q_deg, co
   return p;
 }
 
+namespace {
+
+/// `p`, a several-point model's prediction at `point` (a flange point's field, or their rigid motion),
+/// with the unlocated turn of the working tool where `point` is an unlocated working tool.
+ErrorPrediction with_unlocated_orientation(const CompensationModel& model, ErrorPrediction p, const JointVector& q_deg,
+                                           const MdhModel& point, bool orientation_variance) {
+  const Eigen::Vector3d x = point.tool().translation();
+  if (!orientation_variance || !p.inside_region || !unlocated_working_tool(model) ||
+      (model.working_tool()->translation() - x).norm() > 1e-9)
+    return p;
+  const OrientationPrior& prior = model.orientation_prior();
+  if (!prior.known()) return p;
+  // The constant turn w0 between the description's flange frame and the calibrated one moves the
+  // point by w0 x L, L its lever from the reflector (where the two frames agree): isotropic
+  // kUnlocatedOrientationRad per axis, as for a one-point model (predict_uncorrected_at below).
+  const Eigen::Vector3d lever_flange = x - model.measured_point_mm();
+  const Eigen::Vector3d lever = forward_kinematics(point, q_deg, EndFrame::flange).linear() * lever_flange;
+  const double s2 = kUnlocatedOrientationRad * kUnlocatedOrientationRad, l2 = lever.squaredNorm();
+  p.orientation_variance_mm2 += 2.0 * s2 * l2;
+  if (std::isfinite(p.variance_mm2)) p.variance_mm2 += 2.0 * s2 * l2;
+  if (p.axis_variance_mm2.allFinite()) p.axis_variance_mm2 += s2 * (Eigen::Vector3d::Constant(l2) - lever.cwiseAbs2());
+  p.orientation_supported = p.orientation_supported && lever_flange.norm() <= prior.max_lever_mm;
+  return p;
+}
+
+}  // namespace
+
 ErrorPrediction CompensationModel::predict_uncorrected_at(const JointVector& q_deg, const MdhModel& point,
                                                           bool orientation_variance) const {
   const Eigen::Vector3d x = point.tool().translation();
@@ -712,8 +807,10 @@ ErrorPrediction CompensationModel::predict_uncorrected_at(const JointVector& q_d
   if (several && (x - measured_point_mm()).norm() > kSameFlangePointMm) {
     for (std::size_t k = 0; k < flange_points_.size(); ++k)
       if (flange_points_[k].field && (flange_points_[k].position_mm - x).norm() <= kSameFlangePointMm)
-        return predict_at_labelled_point(q_deg, point, k);
-    return predict_by_rigid_motion(q_deg, point, orientation_variance);
+        return with_unlocated_orientation(*this, predict_at_labelled_point(q_deg, point, k), q_deg, point,
+                                          orientation_variance);
+    return with_unlocated_orientation(*this, predict_by_rigid_motion(q_deg, point, orientation_variance), q_deg, point,
+                                      orientation_variance);
   }
   std::vector<double> w;  // the field's weights, when the functions' variance needs them
   const Eigen::Vector3d at = forward_position(nominal_model(), q_deg);
@@ -726,7 +823,7 @@ ErrorPrediction CompensationModel::predict_uncorrected_at(const JointVector& q_d
     // the functions' error: the variance is that of (D(q) - sum_i w_i F_i) beta's error, with w the
     // field's weights and F_i the design at sample i (the universal-kriging variance's drift term).
     const std::optional<Eigen::MatrixXd> taken_back = taken_back_by(w, function_rows_at_samples_.get());
-    const bool at_reflector = point.tool().isApprox(command_model_.tool(), 1e-12);
+    const bool at_reflector = (point.tool().translation() - command_model_.tool().translation()).norm() <= 1e-12;
     const JointFunctionPrediction f =
         at_reflector ? joint_functions_->predict(command_model_, q_deg, taken_back ? &*taken_back : nullptr)
                      : functions_at_point(*joint_functions_, command_model_, point, q_deg, taken_back ? &*taken_back : nullptr);
@@ -884,6 +981,69 @@ void check_stored_samples(const CompensationModel& model, const nlohmann::json& 
 
 }  // namespace
 
+namespace {
+
+/// check_flange_points: the points lie as far apart as on the nominal robot's flange to within this
+/// (mm): their nominal positions are means of many readings, so their distances agree to a few
+/// hundredths on SIMULATED data.
+constexpr double kFlangePointDistanceToleranceMm = 0.2;
+
+/// A model's flange points as fit locates them: one label each, the own point first at the measured
+/// point, no two within kSameFlangePointMm of each other (one point to the predictions), on a line
+/// only if the measured orientation says so (add_floor), and their distances as on the nominal
+/// robot's flange (LabelledPoint::nominal_mm, where stored), for a rigid plate is the same plate in
+/// both frames. A position moved by hand would otherwise be predicted with the fields of where it
+/// was (orientation "after" of 72-15,005 mdeg with moves of 0.5-50 mm, issue 47). A move at right
+/// angles to every other point is not seen in their distances.
+void check_flange_points(const CompensationModel& model, const std::string& source) {
+  const std::vector<CompensationModel::LabelledPoint>& points = model.flange_points();
+  if (points.empty()) return;
+  auto where = [](std::size_t k) { return "member \"flange_points\"[" + std::to_string(k) + "]"; };
+  auto mm3 = [](const Eigen::Vector3d& v) {
+    return "(" + format_number(v.x()) + ", " + format_number(v.y()) + ", " + format_number(v.z()) + ") mm";
+  };
+  if ((points.front().position_mm - model.measured_point_mm()).norm() > 1e-6)
+    fail_model(source, where(0) + ".mm: the model's own point " + mm3(points.front().position_mm) +
+                           " is not its command model's tool " + mm3(model.measured_point_mm()) +
+                           " (the own point comes first; the file was edited?)");
+  for (std::size_t a = 0; a < points.size(); ++a)
+    for (std::size_t b = a + 1; b < points.size(); ++b) {
+      if (points[a].label == points[b].label)
+        fail_model(source, where(b) + ".label: '" + points[b].label + "' is also " + where(a) + "'s label");
+      const double apart = (points[a].position_mm - points[b].position_mm).norm();
+      if (apart <= kSameFlangePointMm)
+        fail_model(source, where(b) + ".mm: " + mm3(points[b].position_mm) + " is " + format_number(apart) + " mm from " +
+                               where(a) + " ('" + points[a].label + "'): points closer than " +
+                               format_number(kSameFlangePointMm) + " mm are one point (the file was edited?)");
+    }
+  for (std::size_t a = 0; a < points.size(); ++a)
+    for (std::size_t b = a + 1; b < points.size(); ++b) {
+      const double apart = (points[a].position_mm - points[b].position_mm).norm();
+      if (points[a].nominal_mm && points[b].nominal_mm) {
+        const double nominal_apart = (*points[a].nominal_mm - *points[b].nominal_mm).norm();
+        if (std::abs(apart - nominal_apart) > kFlangePointDistanceToleranceMm)
+          fail_model(source, where(b) + ".mm: " + format_number(apart) + " mm from " + where(a) + " ('" + points[a].label +
+                                 "'), but " + format_number(nominal_apart) + " mm apart on the nominal flange (nominal_mm): "
+                                 "more than " + format_number(kFlangePointDistanceToleranceMm) +
+                                 " mm differs; a rigid plate is the same in both frames (the file was edited?)");
+      }
+    }
+  // On one line, the rotation about it is unobserved: a model that says otherwise (add_floor false)
+  // would predict the flange's orientation from points that cannot give it.
+  if (points.size() >= 2 && model.measured_orientation() && !model.measured_orientation()->add_floor) {
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto& p : points) mean += p.position_mm / static_cast<double>(points.size());
+    Eigen::MatrixXd spread(3, static_cast<Eigen::Index>(points.size()));
+    for (std::size_t k = 0; k < points.size(); ++k) spread.col(static_cast<Eigen::Index>(k)) = points[k].position_mm - mean;
+    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(spread).singularValues();
+    if (!(points.size() >= 3 && sv.size() >= 2 && sv[1] > 0.05 * sv[0]))
+      fail_model(source, "member \"flange_points\": the points lie on one line, but \"orientation_residual\".add_floor "
+                         "is false (which says they span a plane; the file was edited?)");
+  }
+}
+
+}  // namespace
+
 CompensationModel CompensationModel::from_json(const nlohmann::json& j, const std::string& source) {
   if (!j.is_object()) fail_model(source, "expected a JSON object (an errfield compensation model)");
   if (j.value("format", std::string()) != "errfield-compensation-model")
@@ -994,6 +1154,7 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
     model.measured_orientation_ =
         MeasuredOrientation{o["sigma_rad"].get<double>(), o["readings"].get<std::size_t>(), o["add_floor"].get<bool>()};
   }
+  check_flange_points(model, source);
   if (j.contains("flange_error_covariance")) {
     const nlohmann::json& c = j["flange_error_covariance"];
     const std::size_t k = model.fielded_points().size();
@@ -1101,6 +1262,13 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
     fail_model(source, "member \"tool_point_mm\": only calibrated models (kinematic, kinematic+kriging) aim a tool "
                        "point on their calibrated flange; method \"" + std::string(method_name(method)) + "\" has none");
   if (j.contains("working_tool")) {
+    // The model file states every member (to_json writes all six): one missing is a hand edit, and a
+    // default of 0 would turn the tool without a word (a robot JSON's tool may leave them out).
+    if (j["working_tool"].is_object())
+      for (const char* key : {"x_mm", "y_mm", "z_mm", "rx_deg", "ry_deg", "rz_deg"})
+        if (!j["working_tool"].contains(key))
+          fail_model(source, std::string("member \"working_tool\".") + key +
+                                 ": missing (a model file states all six of x_mm, y_mm, z_mm, rx_deg, ry_deg, rz_deg)");
     model.working_tool_ = robot::detail::json_pose(j["working_tool"], "working_tool", source);
     try {
       check_tool_point(*model.working_tool_, "member \"working_tool\"");

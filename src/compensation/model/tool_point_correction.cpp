@@ -371,6 +371,48 @@ nlohmann::json ToolPointCorrection::to_json() const {
           {"residual_flange_mm", std::move(r)}};
 }
 
+namespace {
+
+/// A stored correction (from_json) whose axis has sill 0 holds residuals there of mean square at most
+/// this many times its noise: a chi-square of kMinToolPointCorrectionReadings noise readings exceeds
+/// that with negligible probability, so more is a field the file says is not there.
+constexpr double kMaxZeroSillNoiseRatio = 25.0;
+/// The longest correlation range (deg) a stored correction may hold: ten turns of a joint.
+constexpr double kMaxCorrelationRangeDeg = 3600.0;
+
+/// A stored correction's variogram against the residuals it holds, as fit chooses it
+/// (most_likely_sills_and_noise): the noise at most the values' mean square, each sill at most 100
+/// times its axis's, an axis of sill 0 only where its residuals are noise-sized, and ranges a
+/// correlation over the joints can have. A hand-edited noise or range of 1e300, or residuals put on
+/// an axis the file says holds none, would otherwise state a variance nothing measured.
+template <class Fail>
+void check_against_residuals(const VariogramModel& rho, const Eigen::Vector3d& sill, double noise,
+                             const std::vector<Eigen::Vector3d>& residual, const Fail& fail) {
+  Eigen::Vector3d mean_square = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& r : residual) mean_square += r.cwiseAbs2() / static_cast<double>(residual.size());
+  const double all = mean_square.sum() / 3.0;
+  constexpr double kSlack = 1.0 + 1e-9;
+  if (noise > kSlack * all)
+    throw fail("noise_mm2 " + format_number(noise) + " exceeds the mean square " + format_number(all) +
+               " mm2 of its residual_flange_mm, the most a fit gives it (the file was edited?)");
+  for (int k = 0; k < 3; ++k) {
+    const std::string axis(1, "xyz"[k]);
+    if (sill[k] > kSlack * 100.0 * mean_square[k] + 1e-300)
+      throw fail("sill_mm2 of flange axis " + axis + " " + format_number(sill[k]) + " exceeds 100 x the mean square " +
+                 format_number(mean_square[k]) + " mm2 of its residuals, the most a fit gives it (the file was edited?)");
+    if (sill[k] == 0.0 && mean_square[k] > kMaxZeroSillNoiseRatio * noise)
+      throw fail("flange axis " + axis + " has sill_mm2 0 (no residual field: predicted 0 there) but residuals of mean "
+                 "square " + format_number(mean_square[k]) + " mm2, over " + format_number(kMaxZeroSillNoiseRatio) +
+                 " x noise_mm2 " + format_number(noise) + " (the file was edited?)");
+  }
+  for (const ModelComponent& c : rho.components())
+    if (!(c.range <= kMaxCorrelationRangeDeg))
+      throw fail("correlation range " + format_number(c.range) + " deg exceeds " + format_number(kMaxCorrelationRangeDeg) +
+                 " deg (ten turns of a joint: no correlation over the joints; the file was edited?)");
+}
+
+}  // namespace
+
 ToolPointCorrection ToolPointCorrection::from_json(const nlohmann::json& j, const std::string& source) {
   const std::string where = source + ": tool_point_correction";
   auto fail = [&](const std::string& what) { return InputError(where + ": " + what, source); };
@@ -419,6 +461,7 @@ ToolPointCorrection ToolPointCorrection::from_json(const nlohmann::json& j, cons
     joints.push_back(Eigen::Map<const JointVector>(qi.data()));
     residual.emplace_back(ri[0], ri[1], ri[2]);
   }
+  check_against_residuals(rho, Eigen::Vector3d(s[0], s[1], s[2]), noise, residual, fail);
   try {
     ToolPointCorrection c(Eigen::Vector3d(p[0], p[1], p[2]), std::move(joints), std::move(residual), std::move(rho),
                           Eigen::Vector3d(s[0], s[1], s[2]), noise);

@@ -32,6 +32,10 @@
 
 namespace errfield::compensation {
 
+/// Fewest readings the location screens for gross ones (a robust scale needs a few more than the 3
+/// unknowns).
+inline constexpr std::size_t kMinScreenedReadings = 8;
+
 struct ToolLocationOptions {
   /// Flange orientations closer than this (deg, angle of the relative rotation) count as one.
   double distinct_orientation_deg = 10.0;
@@ -59,6 +63,9 @@ struct ToolLocation {
   std::string expected_basis;    ///< "the model's predictive variance" or "the registration residual"
   std::size_t readings = 0;      ///< used
   std::size_t left_out = 0;      ///< where the field refused
+  /// Gross readings left out of the location (and the correction): leave-one-out residual over
+  /// ToolPointCorrection::kOutlierLimit robust sd, from kMinScreenedReadings readings on.
+  std::size_t gross = 0;
   std::size_t orientations = 0;  ///< distinct flange orientations among the readings used
   double lever_mm = 0.0;         ///< distance of the point from the reflector the model was measured with
   bool field_used = false;       ///< the model's field (and functions) corrected the flange position
