@@ -9,7 +9,9 @@
 
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
+#include "cli/coordinate_system.hpp"
 #include "cli/interpolation_methods.hpp"
+#include "cli/point_layer.hpp"
 #include "cli/value_cells.hpp"
 #include "errfield/cross_validation.hpp"
 #include "errfield/csv_table.hpp"
@@ -23,6 +25,7 @@ struct CvArgs {
   std::string samples;
   std::string coords;
   std::string value;
+  std::string crs;  // --crs: checked against the inputs' CRSs (a layer, covariate rasters)
   std::string folds = "loo";
   std::uint64_t seed = 1;
   std::string out;
@@ -65,7 +68,6 @@ void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& ow
   owners.check(method.name, method.accepts, {h.power, h.neighbors, h.radius});
 
   CrossValidationRequest r;
-  r.coord_columns = split_column_list(a.coords, "--coords");
   r.value_columns = split_column_list(a.value, "--value");
   r.folds = parse_folds(a.folds);
   r.seed = a.seed;
@@ -87,7 +89,15 @@ void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& ow
   }
   with_value_type(r.value_columns.size(), []<class V>() {});
 
-  const CsvTable samples = CsvTable::read(a.samples);
+  CoordinateSystem cs;
+  if (!a.crs.empty()) cs.add(parse_crs(a.crs, "--crs"), "--crs");
+  const bool gaps = method.takes_missing_values && method.takes_missing_values();
+  const PointTable points = read_point_table(a.samples, "--samples", {r.value_columns, gaps});
+  const CsvTable& samples = points.table;
+  cs.add(points.crs, "--samples " + a.samples, a.samples);
+  r.coord_columns = points.coordinate_columns(a.coords, "--coords");
+  r.coordinate_system = &cs;
+  if (const std::string w = cs.geographic_warning(); !w.empty()) std::cerr << "errfield cv: " << w << "\n";
   const std::size_t n = samples.row_count();
   if (n < 2)
     throw InputError(a.samples + ": " + std::to_string(n) + " data rows; cross-validation needs at least 2", a.samples);
@@ -98,11 +108,9 @@ void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& ow
   r.sample_coords = samples.numeric_columns(r.coord_columns);
   // Heterotopic cokriging (kriging with an LMC --model): an empty cell is that component not
   // measured at the sample; every other method keeps refusing empty cells.
-  r.sample_values = method.takes_missing_values && method.takes_missing_values()
-                        ? numeric_columns_with_gaps(samples, r.value_columns)
-                        : samples.numeric_columns(r.value_columns);
+  r.sample_values = gaps ? numeric_columns_with_gaps(samples, r.value_columns) : samples.numeric_columns(r.value_columns);
   const bool heterotopic = r.sample_values.array().isNaN().any();
-  r.sample_labels = row_labels_of(samples, "sample");
+  r.sample_labels = points.labels("sample");
 
   const std::size_t c = r.value_columns.size();
   std::vector<std::string> pred_names, res_names;
@@ -247,9 +255,15 @@ void add_cv_command(CLI::App& app) {
       "  errfield cv --method idw --samples scattered.csv --coords x,y,z --value dL --neighbors 8 --folds 10 \\\n"
       "      --seed 42 --out cv_points.csv\n");
   cmd->add_option("--method", args->method, "Method to validate: " + method_names(true))->required();
-  cmd->add_option("--samples", args->samples, "CSV with the samples (coordinates and values)")->required();
-  cmd->add_option("--coords", args->coords, "Coordinate columns, comma-separated (any number)")->required();
-  cmd->add_option("--value", args->value, "Value column, or 2-3 comma-separated columns of a vector value")->required();
+  cmd->add_option("--samples", args->samples,
+                  "Samples: a CSV (coordinates and values), or a point layer (.gpkg, .shp, .geojson: the coordinates are "
+                  "the points', the values attributes)")->required();
+  cmd->add_option("--coords", args->coords,
+                  "Coordinate columns, comma-separated (any number); default for a point layer: its points' x,y (and z)");
+  cmd->add_option("--value", args->value, "Value column (attribute of a point layer), or 2-3 comma-separated columns of a vector value")->required();
+  cmd->add_option("--crs", args->crs,
+                  "The CRS of the coordinates (EPSG:NNNN, WKT or a PROJ string), checked against the CRS of a point layer "
+                  "and of covariate rasters (errfield does not reproject)");
   cmd->add_option("--folds", args->folds, "'loo' (leave-one-out, default) or the number of folds K >= 2");
   handles->seed = cmd->add_option("--seed", args->seed, "Seed of the k-fold assignment (default 1)")->check(kUnsignedInteger);
   cmd->add_option("--out", args->out, "Optional CSV of per-sample predictions and residuals");

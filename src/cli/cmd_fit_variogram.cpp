@@ -12,6 +12,7 @@
 #include "cli/cli_support.hpp"
 #include "cli/covariate_sources.hpp"
 #include "cli/duplicate_locations.hpp"
+#include "cli/point_layer.hpp"
 #include "cli/command_registry.hpp"
 #include "cli/interpolation_methods.hpp"
 #include "cli/value_cells.hpp"
@@ -204,7 +205,7 @@ VecchiaOrdering vecchia_ordering_from(const std::string& text) {
 /// model.
 void run_likelihood_fit(const FitVariogramArgs& a) {
   const bool restricted = a.method == "reml";
-  if (a.coords.empty() || a.value.empty())
+  if ((a.coords.empty() && !is_vector_path(a.input)) || a.value.empty())
     throw ArgumentError("--method " + a.method + " fits the samples themselves: give --coords and --value "
                         "(the columns of --input), e.g. --coords x,y --value z");
   if (a.weights_given) throw ArgumentError("--weights applies to --method wls only");
@@ -260,9 +261,14 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
     throw ArgumentError("--vecchia-neighbours: " + std::to_string(a.neighbours) + "; expected 1 to " +
                         std::to_string(kMaxVecchiaNeighbours));
   o.validate();
-  const auto coord_names = split_column_list(a.coords, "--coords");
   const auto value_names = split_column_list(a.value, "--value");
-  const CsvTable t = CsvTable::read(a.input);
+  // A CSV, or a point layer (GeoPackage, shapefile, GeoJSON) whose points give the coordinates.
+  const PointTable points = read_point_table(a.input, "--input", {value_names});
+  const CsvTable& t = points.table;
+  const auto coord_names = points.coordinate_columns(a.coords, "--coords");
+  CoordinateSystem crs;  // the layer's; a covariate raster in another CRS is refused
+  crs.add(points.crs, "--input " + a.input, a.input);
+  if (const std::string w = crs.geographic_warning(); !w.empty()) std::cerr << "errfield fit-variogram: " << w << "\n";
   if (!likelihood_uses_vecchia(o, static_cast<long>(t.row_count())) &&
       t.row_count() > static_cast<std::size_t>(kMaxLikelihoodSamples))
     throw ResourceError(a.input + ": " + std::to_string(t.row_count()) + " samples; --method " + a.method +
@@ -301,8 +307,8 @@ void run_likelihood_fit(const FitVariogramArgs& a) {
     if (o.kind == KrigingKind::Simple)
       throw ArgumentError("--covariates with --kind simple0; expected --kind ordinary (external drift) or universal1/2");
     // COL or NAME=RASTER (the pixel at each point), as interpolate's external drift takes them.
-    const CovariateSources sources = covariate_sources(covariate_names);
-    o.covariates = covariate_values(sources, t, x, row_labels_of(t, "sample"));
+    const CovariateSources sources = covariate_sources(covariate_names, &crs);
+    o.covariates = covariate_values(sources, t, x, points.labels("sample"));
     o.covariate_names = sources.names;
   }
   // A terminal sees what a long fit is doing (a 50,000-sample Vecchia fit takes tens of seconds).

@@ -14,6 +14,7 @@
 #include "cli/command_registry.hpp"
 #include "cli/interpolation_methods.hpp"
 #include "cli/pseudo_variogram_table.hpp"
+#include "cli/point_layer.hpp"
 #include "cli/variogram_svg.hpp"
 #include "cli/value_cells.hpp"
 #include "errfield/atomic_file.hpp"
@@ -308,8 +309,10 @@ void run_pseudo(const VariogramArgs& a, const CsvTable& table, const Eigen::Matr
 }
 
 void run_variogram(const VariogramArgs& a) {
-  const auto coord_names = split_column_list(a.coords, "--coords");
   const auto value_names = split_column_list(a.value, "--value");
+  // A CSV, or a point layer (GeoPackage, shapefile, GeoJSON) whose points give the coordinates.
+  const PointTable points = read_point_table(a.input, "--input", {value_names, value_names.size() >= 2 && a.covariates.empty()});
+  const auto coord_names = points.coordinate_columns(a.coords, "--coords");
   EmpiricalVariogramOptions options;
   options.estimator = estimator_from_name(a.estimator);
   // Without --bins (gstat's default bins, or --cutoff/--width), gstat's boundaries unless --convention says otherwise.
@@ -334,7 +337,10 @@ void run_variogram(const VariogramArgs& a) {
                                                {"pair_fraction", "--subsample"},
                                                {"variogram options: threads", "--threads"}});
 
-  const CsvTable table = CsvTable::read(a.input);
+  const CsvTable& table = points.table;
+  CoordinateSystem crs;  // the layer's; a covariate raster in another CRS is refused
+  crs.add(points.crs, "--input " + a.input, a.input);
+  if (const std::string w = crs.geographic_warning(); !w.empty()) std::cerr << "errfield variogram: " << w << "\n";
   if (table.row_count() < 2)
     throw InputError(a.input + ": " + std::to_string(table.row_count()) +
                          " data row(s); the variogram needs at least 2 points",
@@ -351,8 +357,8 @@ void run_variogram(const VariogramArgs& a) {
   if (!a.covariates.empty()) {
     // gstat's variogram(z ~ cov): the variogram of the residuals of the ordinary least-squares trend.
     // COL or NAME=RASTER (the pixel at each point), as interpolate's external drift takes them.
-    const CovariateSources sources = covariate_sources(split_column_list(a.covariates, "--covariates"));
-    const Eigen::MatrixXd covariates = covariate_values(sources, table, x, row_labels_of(table, "sample"));
+    const CovariateSources sources = covariate_sources(split_column_list(a.covariates, "--covariates"), &crs);
+    const Eigen::MatrixXd covariates = covariate_values(sources, table, x, points.labels("sample"));
     z = with_source(a.input, [&] { return ols_trend_residuals(z, covariates, sources.names); });
   }
   if (a.cloud || !a.map.empty()) {
@@ -506,11 +512,12 @@ void add_variogram_command(CLI::App& app) {
       "fit-variogram --lmc). --cloud writes every pair (left,right,dist,gamma) instead of bins and\n"
       "--map DX,DY --cutoff C the variogram map of 2-D data (dx,dy,np,gamma), both as R gstat's;\n"
       "--plot FILE.svg also draws the binned variogram. See docs/geostatistics.md.");
-  cmd->add_option("--input", args->input, "CSV with the coordinate and value columns")->required();
+  cmd->add_option("--input", args->input,
+                  "CSV with the coordinate and value columns, or a point layer (.gpkg, .shp, .geojson: the coordinates "
+                  "are the points', the values attributes)")->required();
   cmd->add_option("--coords", args->coords,
                   "coordinate columns, any number, in one unit (the lags' unit), e.g. x,y (map coordinates, m), x,y,z "
-                  "or q1,...,q6 (joint angles, deg)")
-      ->required();
+                  "or q1,...,q6 (joint angles, deg); default for a point layer: its points' x,y (and z)");
   cmd->add_option("--value", args->value,
                   "value column, or several comma-separated columns for a vector value (dx,dy,dz)")
       ->required();

@@ -6,7 +6,7 @@
 
 namespace errfield::cli {
 
-CovariateSources covariate_sources(const std::vector<std::string>& entries) {
+CovariateSources covariate_sources(const std::vector<std::string>& entries, CoordinateSystem* coordinate_system) {
   CovariateSources s;
   for (const auto& e : entries) {
     const auto eq = e.find('=');
@@ -22,6 +22,7 @@ CovariateSources covariate_sources(const std::vector<std::string>& entries) {
       throw ArgumentError("--covariates: '" + name + "' is given twice");
     s.names.push_back(name);
     s.rasters.push_back(std::make_shared<const CovariateRaster>(read_covariate_raster(file)));
+    if (coordinate_system) coordinate_system->add(s.rasters.back()->crs, "covariate raster " + file, file);
   }
   return s;
 }

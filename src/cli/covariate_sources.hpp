@@ -10,6 +10,7 @@
 
 #include <Eigen/Core>
 
+#include "cli/coordinate_system.hpp"
 #include "cli/raster_file.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/row_labels.hpp"
@@ -21,9 +22,11 @@ struct CovariateSources {
   std::vector<std::shared_ptr<const CovariateRaster>> rasters;  ///< null: a CSV column
 };
 
-/// Parses the entries (COL or NAME=FILE) and reads every raster. Throws ArgumentError for an empty
-/// name or file and a name given twice; the raster reader's errors for a file GDAL cannot read.
-CovariateSources covariate_sources(const std::vector<std::string>& entries);
+/// Parses the entries (COL or NAME=FILE) and reads every raster; each raster's CRS is added to
+/// `coordinate_system` when given (a raster in another CRS than the samples is refused, naming both).
+/// Throws ArgumentError for an empty name or file and a name given twice; the raster reader's
+/// errors for a file GDAL cannot read.
+CovariateSources covariate_sources(const std::vector<std::string>& entries, CoordinateSystem* coordinate_system = nullptr);
 
 /// N x k covariates of the rows of `table` at `coords` (N x D): the CSV columns as numbers, the
 /// rasters' pixel values at the points (2-D only; a point outside a raster or on nodata is an

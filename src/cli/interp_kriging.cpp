@@ -286,16 +286,17 @@ struct Setup {
 };
 
 Setup make_setup(const CsvTable& samples, const Eigen::MatrixXd& coords, const Eigen::MatrixXd& values,
+                 const RowLabels& sample_labels, CoordinateSystem* coordinate_system,
                  const SharedInterpolationOptions& shared, std::vector<std::string>& notes) {
   const auto& o = cli_options;
   Setup s;
   s.options = kriging_options_from_cli(shared);
   auto& opt = s.options;
-  opt.sample_labels = row_labels_of(samples, "sample");
+  opt.sample_labels = sample_labels;
   if (!o.covariates.empty()) {
     opt.covariates = o.covariates;
     opt.validate();  // names the kind when it is simple, before any file is read for them
-    s.covariate_sources = covariate_sources(o.covariates);
+    s.covariate_sources = covariate_sources(o.covariates, coordinate_system);
     opt.covariates = s.covariate_sources.names;
     s.sample_covariates = covariate_values(s.covariate_sources, samples, coords, opt.sample_labels);
   }
@@ -481,7 +482,7 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
     const KrigingOptions options = cokriging_options(*r.samples, r.shared, true);
     return interpolate_cokriging(r, load_lmc_for_values(cli_options.model, r.value_columns), options);
   }
-  const Setup s = make_setup(*r.samples, r.sample_coords, r.sample_values, r.shared, result.notes);
+  const Setup s = make_setup(*r.samples, r.sample_coords, r.sample_values, r.sample_labels, r.coordinate_system, r.shared, result.notes);
   const auto points = rows_as_points(r.sample_coords);
   const auto targets = rows_as_points(r.target_coords);
   const std::size_t c = r.value_columns.size();
@@ -599,7 +600,7 @@ CrossValidationOutput cross_validate_kriging(const CrossValidationRequest& r) {
     const KrigingOptions options = cokriging_options(*r.samples, r.shared, false);
     return cross_validate_cokriging(r, load_lmc_for_values(cli_options.model, r.value_columns), options);
   }
-  const Setup s = make_setup(*r.samples, r.sample_coords, r.sample_values, r.shared, out.notes);
+  const Setup s = make_setup(*r.samples, r.sample_coords, r.sample_values, r.sample_labels, r.coordinate_system, r.shared, out.notes);
   if (s.measurement_variance.size() > 0 && r.folds > 0)
     out.notes.push_back("k-fold z-scores use the kriging variance without the held-out samples' measurement variance");
   const auto points = rows_as_points(r.sample_coords);

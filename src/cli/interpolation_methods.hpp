@@ -26,6 +26,7 @@
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
 
+#include "cli/coordinate_system.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/interpolation_options.hpp"
 #include "errfield/row_labels.hpp"
@@ -52,6 +53,9 @@ struct InterpolationRequest {
   RowLabels sample_labels;                 ///< "S.csv:7"
   RowLabels target_labels;                 ///< "T.csv:9"
   SharedInterpolationOptions shared;
+  /// The CRS the inputs agree on; a method that reads a further georeferenced file (a covariate
+  /// raster) adds its CRS, which is refused when it differs. Null: not checked.
+  CoordinateSystem* coordinate_system = nullptr;
 };
 
 /// Output of an interpolation method.
@@ -77,6 +81,7 @@ struct CrossValidationRequest {
   std::size_t folds = 0;          ///< 0 = leave-one-out, else k >= 2
   std::uint64_t seed = 1;         ///< fold assignment seed (k-fold)
   SharedInterpolationOptions shared;
+  CoordinateSystem* coordinate_system = nullptr;  ///< as InterpolationRequest's
 };
 
 /// Output of a cross-validation run, per sample (rows in input order).

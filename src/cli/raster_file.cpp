@@ -1,30 +1,20 @@
-// Node grids and raster files (raster_file.hpp). Compiled on its own (not in a unity batch): only
-// this file sees GDAL's headers, and it compiles without them, refusing rasters by name.
-//
-// GDAL is loaded with dlopen the first time a raster is read or written, not linked: libgdal pulls
-// in ~100 shared libraries, whose loading made every `errfield` process 0.15-0.2 s slower to start
-// (measured: `errfield --help` 0.03 s -> 0.2 s), rasters or not; the CLI tests start it hundreds of times.
+// Node grids and raster files (raster_file.hpp). Compiled on its own (not in a unity batch) with
+// GDAL's headers, loaded at run time (gdal_library.hpp); it compiles without them, refusing rasters
+// by name.
 
 #include "cli/raster_file.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cctype>
 #include <cmath>
-#include <mutex>
-
-#include <dlfcn.h>
-#include <unistd.h>
+#include <optional>
+#include <utility>
 
 #include "errfield/csv_table.hpp"
 #include "errfield/error.hpp"
 
 #ifdef ERRFIELD_HAVE_GDAL
-#include <cpl_conv.h>
-#include <cpl_error.h>
-#include <cpl_vsi.h>
-#include <gdal.h>
-#include <gdal_frmts.h>
+#include "cli/gdal_library.hpp"
 #endif
 
 namespace errfield::cli {
@@ -115,21 +105,32 @@ RasterFormat raster_format_from_name(const std::string& name) {
   throw ArgumentError("--raster-format is '" + name + "'; expected gtiff (GeoTIFF) or aaigrid (ESRI ASCII grid)");
 }
 
-double CovariateRaster::at(double x, double y, const std::string& label) const {
-  const double fx = (x - geo[0]) / geo[1];
-  const double fy = (y - geo[3]) / geo[5];
+namespace {
+
+// The pixel (column, row) of a raster that contains (x, y), or none outside it.
+std::optional<std::pair<std::size_t, std::size_t>> pixel_of(const CovariateRaster& r, double x, double y) {
+  const double fx = (x - r.geo[0]) / r.geo[1];
+  const double fy = (y - r.geo[3]) / r.geo[5];
   constexpr double kEdge = 1e-9;  // of a pixel: a point on the outer edge is still inside
-  const double nx = static_cast<double>(cols), ny = static_cast<double>(rows);
-  if (!(fx >= -kEdge && fx <= nx + kEdge && fy >= -kEdge && fy <= ny + kEdge)) {
-    const double x1 = geo[0] + nx * geo[1], y1 = geo[3] + ny * geo[5];
+  const double nx = static_cast<double>(r.cols), ny = static_cast<double>(r.rows);
+  if (!(fx >= -kEdge && fx <= nx + kEdge && fy >= -kEdge && fy <= ny + kEdge)) return std::nullopt;
+  return std::pair{static_cast<std::size_t>(std::clamp(std::floor(fx), 0.0, nx - 1.0)),
+                   static_cast<std::size_t>(std::clamp(std::floor(fy), 0.0, ny - 1.0))};
+}
+
+}  // namespace
+
+double CovariateRaster::at(double x, double y, const std::string& label) const {
+  const auto pixel = pixel_of(*this, x, y);
+  if (!pixel) {
+    const double x1 = geo[0] + static_cast<double>(cols) * geo[1], y1 = geo[3] + static_cast<double>(rows) * geo[5];
     throw InputError(label + ": the point (" + format_number(x) + ", " + format_number(y) + ") is outside the raster " +
                          path + " (x " + format_number(std::min(geo[0], x1)) + " to " + format_number(std::max(geo[0], x1)) +
                          ", y " + format_number(std::min(geo[3], y1)) + " to " + format_number(std::max(geo[3], y1)) +
                          "); errfield does not extrapolate a covariate",
                      path);
   }
-  const auto col = static_cast<std::size_t>(std::clamp(std::floor(fx), 0.0, nx - 1.0));
-  const auto row = static_cast<std::size_t>(std::clamp(std::floor(fy), 0.0, ny - 1.0));
+  const auto [col, row] = *pixel;
   const double v = values[row * cols + col];
   if (std::isnan(v) || (nodata && v == *nodata))
     throw InputError(label + ": the point (" + format_number(x) + ", " + format_number(y) + ") falls on a nodata pixel (column " +
@@ -138,119 +139,34 @@ double CovariateRaster::at(double x, double y, const std::string& label) const {
   return v;
 }
 
+bool CovariateRaster::has_data_at(double x, double y) const {
+  const auto pixel = pixel_of(*this, x, y);
+  if (!pixel) return false;
+  const double v = values[pixel->second * cols + pixel->first];
+  return !std::isnan(v) && !(nodata && v == *nodata);
+}
+
 #ifdef ERRFIELD_HAVE_GDAL
 
 namespace {
 
-// The GDAL functions errfield calls, looked up in the library loaded at run time.
-#define ERRFIELD_GDAL_FUNCTIONS(X)                                                                          \
-  X(CPLSetConfigOption) X(CPLErrorReset) X(CPLGetLastErrorMsg) X(CPLPushErrorHandler) X(CPLQuietErrorHandler) \
-  X(GDALAllRegister) X(GDALClose) X(GDALOpen) X(GDALGetDriverByName) X(GDALCreate) X(GDALCreateCopy)          \
-  X(GDALSetGeoTransform) X(GDALGetGeoTransform) X(GDALGetRasterBand) X(GDALGetRasterCount)                   \
-  X(GDALGetRasterXSize) X(GDALGetRasterYSize) X(GDALSetDescription) X(GDALSetRasterNoDataValue)              \
-  X(GDALGetRasterNoDataValue) X(GDALRasterIO) X(VSIGetMemFileBuffer) X(VSIUnlink) X(GDALRegister_GTiff)      \
-  X(GDALRegister_AAIGrid) X(GDALRegister_MEM)
-
-struct GdalApi {
-#define ERRFIELD_GDAL_POINTER(name) decltype(&::name) name = nullptr;
-  ERRFIELD_GDAL_FUNCTIONS(ERRFIELD_GDAL_POINTER)
-#undef ERRFIELD_GDAL_POINTER
-};
-
-// Loads GDAL once per process (the library found by CMake, ERRFIELD_GDAL_LIBRARY, else its
-// soname), registers its drivers; throws Error when it cannot be loaded. GDAL keeps its errors per
-// thread: each use starts with a reset.
-const GdalApi& gdal() {
-  static const GdalApi api = [] {
-    void* handle = nullptr;
-    std::string tried;
-    for (const char* name : {ERRFIELD_GDAL_LIBRARY, "libgdal.so", "libgdal.so.32"}) {
-      handle = ::dlopen(name, RTLD_NOW | RTLD_LOCAL);
-      if (handle) break;
-      const char* why = ::dlerror();
-      tried += std::string(tried.empty() ? "" : "; ") + (why ? why : name);
-    }
-    if (!handle) throw Error("rasters: cannot load GDAL (" + tried + "); install Debian's libgdal-dev (scripts/setup.sh)");
-    GdalApi a;
-#define ERRFIELD_GDAL_LOOKUP(name)                                                              \
-  a.name = reinterpret_cast<decltype(&::name)>(::dlsym(handle, #name));                          \
-  if (!a.name) throw Error(std::string("rasters: the GDAL library has no function ") + #name);
-    ERRFIELD_GDAL_FUNCTIONS(ERRFIELD_GDAL_LOOKUP)
-#undef ERRFIELD_GDAL_LOOKUP
-    // Errors come back as messages in errfield's own words, not printed by GDAL on stderr.
-    a.CPLPushErrorHandler(a.CPLQuietErrorHandler);
-    // No .aux.xml side files: the files errfield writes are the whole output.
-    a.CPLSetConfigOption("GDAL_PAM_ENABLED", "NO");
-    // GDAL reads an ESRI ASCII grid of decimals as Float32 unless told: a covariate would lose digits.
-    a.CPLSetConfigOption("AAIGRID_DATATYPE", "Float64");
-    // The three drivers errfield writes with; all others only when a covariate raster needs one
-    // (open_raster): registering every driver took ~0.1 s a process.
-    a.GDALRegister_MEM();
-    a.GDALRegister_GTiff();
-    a.GDALRegister_AAIGrid();
-    return a;
-  }();
-  return api;
-}
-
-const GdalApi& start_gdal() {
-  const GdalApi& g = gdal();
-  g.CPLErrorReset();
-  return g;
-}
+using namespace gdal_detail;
 
 // Opens a raster for reading: GeoTIFF and ESRI ASCII grids with the drivers registered, any other
 // format after registering all of GDAL's drivers.
 GDALDatasetH open_raster(const std::string& path) {
   const GdalApi& g = start_gdal();
   if (GDALDatasetH h = g.GDALOpen(path.c_str(), GA_ReadOnly)) return h;
-  static std::once_flag all;
-  std::call_once(all, [&] { g.GDALAllRegister(); });
-  g.CPLErrorReset();
+  register_all_drivers();
   return g.GDALOpen(path.c_str(), GA_ReadOnly);
-}
-
-std::string gdal_message() {
-  const char* m = gdal().CPLGetLastErrorMsg();
-  return m && *m ? std::string(" (GDAL: ") + m + ")" : std::string();
-}
-
-// A dataset that is closed however the scope is left.
-struct Dataset {
-  GDALDatasetH h = nullptr;
-  explicit Dataset(GDALDatasetH handle) : h(handle) {}
-  ~Dataset() {
-    if (h) gdal().GDALClose(h);
-  }
-  Dataset(const Dataset&) = delete;
-  Dataset& operator=(const Dataset&) = delete;
-  void close() {
-    if (h) gdal().GDALClose(h);
-    h = nullptr;
-  }
-};
-
-std::string vsimem_name(const char* ext) {
-  static std::atomic<unsigned> counter{0};
-  return "/vsimem/errfield_" + std::to_string(::getpid()) + "_" + std::to_string(counter++) + ext;
-}
-
-// Takes the bytes of a /vsimem file and removes it.
-std::string take_memory_file(const std::string& name) {
-  vsi_l_offset length = 0;
-  GByte* data = gdal().VSIGetMemFileBuffer(name.c_str(), &length, FALSE);
-  if (!data) throw Error("raster: GDAL wrote no " + name + gdal_message());
-  std::string bytes(reinterpret_cast<const char*>(data), static_cast<std::size_t>(length));
-  gdal().VSIUnlink(name.c_str());
-  return bytes;
 }
 
 }  // namespace
 
 bool rasters_available() { return true; }
 
-std::string encode_raster(RasterFormat format, const NodeGrid& grid, const std::vector<std::string>& names,
-                          const std::vector<std::vector<double>>& bands, double nodata) {
+EncodedRaster encode_raster(RasterFormat format, const NodeGrid& grid, const std::vector<std::string>& names,
+                            const std::vector<std::vector<double>>& bands, double nodata, const std::optional<Crs>& crs) {
   if (bands.empty() || bands.size() != names.size()) throw Error("encode_raster: band names and bands differ in number");
   for (const auto& b : bands)
     if (b.size() != grid.size()) throw Error("encode_raster: a band has " + std::to_string(b.size()) + " values for " +
@@ -273,6 +189,12 @@ std::string encode_raster(RasterFormat format, const NodeGrid& grid, const std::
   Dataset src(gdal().GDALCreate(mem, "", nx, ny, static_cast<int>(bands.size()), GDT_Float64, nullptr));
   if (!src.h) throw ResourceError("raster: cannot hold " + std::to_string(grid.size()) + " nodes in memory" + gdal_message());
   gdal().GDALSetGeoTransform(src.h, geo);
+  if (crs) {
+    OGRSpatialReferenceH srs = new_spatial_reference(*crs);
+    const CPLErr set = gdal().GDALSetSpatialRef(src.h, srs);
+    gdal().OSRDestroySpatialReference(srs);
+    if (set != CE_None) throw Error("raster: GDAL could not set the CRS " + crs->label + gdal_message());
+  }
   std::vector<double> row_values(grid.nx);
   for (std::size_t b = 0; b < bands.size(); ++b) {
     GDALRasterBandH band = gdal().GDALGetRasterBand(src.h, static_cast<int>(b) + 1);
@@ -294,7 +216,14 @@ std::string encode_raster(RasterFormat format, const NodeGrid& grid, const std::
                               nullptr, nullptr));
   if (!copy.h) throw Error("raster: GDAL could not write the " + std::string(tiff ? "GeoTIFF" : "ESRI ASCII grid") + gdal_message());
   copy.close();  // flushes into the memory file
-  return take_memory_file(name);
+  EncodedRaster encoded;
+  encoded.bytes = take_memory_file(name);
+  // An ESRI ASCII grid keeps its CRS in a .prj file beside it, which GDAL wrote with the grid.
+  const std::string prj = name.substr(0, name.size() - 4) + ".prj";
+  vsi_l_offset length = 0;
+  if (gdal().VSIGetMemFileBuffer(prj.c_str(), &length, FALSE)) encoded.prj = take_memory_file(prj);
+  if (crs && !tiff && encoded.prj.empty()) throw Error("raster: GDAL wrote no .prj file for the CRS " + crs->label + gdal_message());
+  return encoded;
 }
 
 CovariateRaster read_covariate_raster(const std::string& path) {
@@ -317,6 +246,7 @@ CovariateRaster read_covariate_raster(const std::string& path) {
   int has_nodata = 0;
   const double nodata = gdal().GDALGetRasterNoDataValue(band, &has_nodata);
   if (has_nodata) r.nodata = nodata;
+  r.crs = optional_crs_of(gdal().GDALGetSpatialRef(ds.h));
   r.values.resize(r.cols * r.rows);
   if (gdal().GDALRasterIO(band, GF_Read, 0, 0, static_cast<int>(r.cols), static_cast<int>(r.rows), r.values.data(),
                    static_cast<int>(r.cols), static_cast<int>(r.rows), GDT_Float64, 0, 0) != CE_None)
@@ -335,8 +265,8 @@ namespace {
 
 bool rasters_available() { return false; }
 
-std::string encode_raster(RasterFormat, const NodeGrid&, const std::vector<std::string>&,
-                          const std::vector<std::vector<double>>&, double) {
+EncodedRaster encode_raster(RasterFormat, const NodeGrid&, const std::vector<std::string>&,
+                            const std::vector<std::vector<double>>&, double, const std::optional<Crs>&) {
   no_gdal("writing a raster");
 }
 

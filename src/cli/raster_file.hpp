@@ -15,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "cli/coordinate_system.hpp"
 #include "errfield/row_labels.hpp"
 
 namespace errfield::cli {
@@ -50,13 +51,21 @@ RasterFormat raster_format_from_name(const std::string& name);
 /// True when this build can read and write rasters (it was built with GDAL).
 bool rasters_available();
 
+/// A raster file's bytes, and those of the .prj file beside it (an ESRI ASCII grid with a CRS).
+struct EncodedRaster {
+  std::string bytes;
+  std::string prj;  ///< empty: no side file
+};
+
 /// The bytes of a raster file of `grid` in `format`, one band per entry of `bands` (each
-/// grid.size() values in raster order; NaN is written as `nodata`), band descriptions `names`.
+/// grid.size() values in raster order; NaN is written as `nodata`), band descriptions `names`,
+/// in `crs` when given (a GeoTIFF holds it; an ESRI ASCII grid has it in the .prj beside it).
 /// GeoTIFF: Float64, all bands in one file. ESRI ASCII grid holds one band: `bands` must have one
 /// entry, and the cells must be square (dx == dy), else ArgumentError. Written in memory (GDAL's
 /// /vsimem), so that the caller commits it atomically with AtomicFileSet.
-std::string encode_raster(RasterFormat format, const NodeGrid& grid, const std::vector<std::string>& names,
-                          const std::vector<std::vector<double>>& bands, double nodata);
+EncodedRaster encode_raster(RasterFormat format, const NodeGrid& grid, const std::vector<std::string>& names,
+                            const std::vector<std::vector<double>>& bands, double nodata,
+                            const std::optional<Crs>& crs = std::nullopt);
 
 /// The first band of a georeferenced raster file, for looking values up at points.
 struct CovariateRaster {
@@ -65,6 +74,10 @@ struct CovariateRaster {
   double geo[6] = {0, 1, 0, 0, 0, 1};  ///< GDAL geotransform (no rotation)
   std::vector<double> values;           ///< rows x cols, row-major
   std::optional<double> nodata;
+  std::optional<Crs> crs;               ///< none when the file has no CRS
+
+  /// True when (x, y) falls on a pixel with data: inside the raster, not nodata, not NaN (a mask).
+  bool has_data_at(double x, double y) const;
 
   /// The value of the pixel that contains (x, y) (pixel-is-area; a point on the raster's outer
   /// edge belongs to the edge pixel, one on an inner edge to the pixel east / south of it, as
