@@ -53,11 +53,11 @@ Crs crs_of(OGRSpatialReferenceH srs) {
   char* wkt = nullptr;
   const char* options[] = {"FORMAT=WKT2_2019", nullptr};
   if (g.OSRExportToWktEx(srs, &wkt, options) != OGRERR_NONE || !wkt) {
-    g.CPLFree(wkt);
+    g.VSIFree(wkt);
     throw Error("GDAL could not write a CRS as WKT" + gdal_message());
   }
   c.wkt = wkt;
-  g.CPLFree(wkt);
+  g.VSIFree(wkt);
   c.geographic = g.OSRIsGeographic(srs) != 0;
   // The authority code when the definition has one, else the EPSG code GDAL recognises it as
   // (a copy is identified: identification adds the code to the definition).

@@ -22,10 +22,11 @@
 
 namespace errfield::cli::gdal_detail {
 
-// The GDAL functions errfield calls, looked up in the library loaded at run time.
+// The GDAL functions errfield calls, looked up in the library loaded at run time. Real symbols only:
+// CPLFree is a macro for VSIFree, so X(CPLFree) looked up "CPLFree" and failed (VSIFree it is).
 #define ERRFIELD_GDAL_FUNCTIONS(X)                                                                            \
   X(CPLSetConfigOption) X(CPLErrorReset) X(CPLGetLastErrorMsg) X(CPLPushErrorHandler) X(CPLQuietErrorHandler) \
-  X(CPLFree) X(GDALAllRegister) X(GDALClose) X(GDALOpen) X(GDALOpenEx) X(GDALGetDriverByName) X(GDALCreate)   \
+  X(VSIFree) X(GDALAllRegister) X(GDALClose) X(GDALOpen) X(GDALOpenEx) X(GDALGetDriverByName) X(GDALCreate)   \
   X(GDALCreateCopy) X(GDALSetGeoTransform) X(GDALGetGeoTransform) X(GDALGetRasterBand) X(GDALGetRasterCount) \
   X(GDALGetRasterXSize) X(GDALGetRasterYSize) X(GDALSetDescription) X(GDALSetRasterNoDataValue)              \
   X(GDALGetRasterNoDataValue) X(GDALRasterIO) X(GDALGetSpatialRef) X(GDALSetSpatialRef) X(VSIGetMemFileBuffer) \

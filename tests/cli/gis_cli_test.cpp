@@ -68,8 +68,9 @@ class GisCli : public testing::CliTest {
   // gdalsrsinfo's EPSG code of a raster or vector file ("EPSG:27700").
   std::string epsg_of(const std::string& file) const {
     std::string text = capture("gdalsrsinfo -o epsg " + path(file));
-    while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
-    return text;
+    // gdalsrsinfo prints a blank line before the code.
+    const auto first = text.find_first_not_of(" \n"), last = text.find_last_not_of(" \n");
+    return first == std::string::npos ? std::string() : text.substr(first, last - first + 1);
   }
   // Every raster band or point feature of the files, read by GDAL's Python bindings (numbers as
   // shortest round-trip text): rasters {"srs", "geo", "bands": [{"name", "nodata", "values"}]},
@@ -137,7 +138,7 @@ TEST_F(GisCli, PointLayersGiveTheSameResultsAsTheCsv) {
   const std::string reml = "fit-variogram --method reml --model \"exp(sill=0.4,range=12)+nug(0.01)\" --value v --out ";
   ASSERT_EQ((r = run(reml + path("f.json") + " --input " + path("S.csv") + " --coords x,y")).exit_code, 0) << r.output();
   ASSERT_EQ((r = run(reml + path("f_gpkg.json") + " --input " + path("S.gpkg"))).exit_code, 0) << r.output();
-  EXPECT_EQ(nlohmann::json::parse(read("f_gpkg.json")).at("model"), nlohmann::json::parse(read("f.json")).at("model"));
+  EXPECT_EQ(nlohmann::json::parse(read("f_gpkg.json")).at("components"), nlohmann::json::parse(read("f.json")).at("components"));
 }
 
 // A CRS given with --crs or carried by a point layer is in every raster and GeoPackage written,

@@ -395,7 +395,7 @@ TEST_F(InterpolateGridCli, EveryGridOverTheBudgetIsExitThreeAndAnEmptyIndicatorI
   EXPECT_FALSE(fs::exists(path("P.csv")));
 
   for (const std::string thresholds : {"", " "}) {
-    const auto r = run(kriging + " --indicator '" + thresholds + "'");
+    const auto r = run(kriging + " --grid 0:10:1,0:10:1 --indicator '" + thresholds + "'");
     EXPECT_EQ(r.exit_code, 2) << r.output();
     EXPECT_THAT(r.err, HasSubstr("--indicator is '" + thresholds + "': no thresholds"));
   }
