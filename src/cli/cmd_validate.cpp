@@ -96,8 +96,10 @@ void run_validate(const ValidateArgs& a) {
     const MdhModel nominal_robot = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
     // The readings are of the working tool's point: so is the nominal robot's 'before'.
     const MdhModel nominal = nominal_at_measured_point(model, nominal_robot);
-    // Data of another robot, or joints in radians, scored "after" errors of a metre (exit 0).
-    check_table_fits_robot(table, nominal,
+    // Data of another robot, or joints in radians, scored "after" errors of a metre (exit 0). A file's
+    // x,y,z columns are the controller's FK at the robot JSON's (working) tool, not at the located
+    // reflector: they are checked against that robot.
+    check_table_fits_robot(table, compensation::nominal_at_working_tool(model, nominal_robot),
                            {true, a.robot.empty() ? "the nominal robot of " + a.model : "--robot " + a.robot},
                            a.max_registration_rms);
     const MeasurementSet data = MeasurementSet::from_table(table, nominal, fixed);

@@ -439,7 +439,7 @@ TEST(ToolPoints, LocateToolRefusesTooFewOrientationsAndReadingsOfTwoPoints) {
   std::vector<JointVector> two = joints_in_box(2, 6);
   for (int i = 0; i < 6; ++i) {
     JointVector x = two[static_cast<std::size_t>(i % 2)];
-    x[0] += 0.5 * i;
+    x[0] += 0.5 * (i + 1);  // a repeated pose is refused for itself (another message)
     two.push_back(x);
   }
   try {

@@ -160,13 +160,20 @@ TEST_F(ProbeOrientationCli, FitOnProbeReadingsPredictsTheFlangesOrientationWithi
            {[](nlohmann::json& j) { j["flange_points"][1]["nominal_mm"] = {1.0, 2.0}; }, "flange_points\"[1].nominal_mm"},
            {[](nlohmann::json& j) { j["flange_error_covariance"]["field_covariance_mm2"][0][4] = 0.5; }, "flange_error_covariance"},
            {[](nlohmann::json& j) { j["flange_error_covariance"]["mean_field_variance_mm2"] = -1.0; }, "flange_error_covariance"},
-           // A point removed: the covariances no longer match the points with a field.
-           {[](nlohmann::json& j) { j["flange_points"].erase(2); }, "(3 rows per point with a field, 2 here)"},
+           // A point removed: two points are on one line, which the stored orientation residual (a
+           // plane's: add_floor false) contradicts; refused before the covariances' sizes are compared.
+           {[](nlohmann::json& j) { j["flange_points"].erase(2); }, "\"flange_points\": the points lie on one line"},
            {[](nlohmann::json& j) {
               j["flange_points"].erase(2);
               j.erase("flange_error_covariance");
             },
-            "fewer than three points"}}) {
+            "\"flange_points\": the points lie on one line"},
+           // ... and with the residual marked as a line's, the covariances no longer match the points.
+           {[](nlohmann::json& j) {
+              j["flange_points"].erase(2);
+              j["orientation_residual"]["add_floor"] = true;
+            },
+            "(3 rows per point with a field, 2 here)"}}) {
     nlohmann::json edited = json("m.json");
     edit(edited);
     write("edited.json", edited.dump());

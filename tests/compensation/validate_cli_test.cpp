@@ -607,11 +607,15 @@ TEST_F(ValidateCli, TwoReflectorsFitOneModelThatTransfersToALocatedThirdPoint) {
     write(name + "_bare.json", bare.dump());
   }
   ASSERT_EQ(run("validate --model m13_r2_bare.json --data test_r2.csv --summary-out s13b.json").exit_code, 0);
-  ASSERT_EQ(run("validate --model m1_r2_bare.json --data test_r2.csv --summary-out s1b.json").exit_code, 0);
+  // The one-point model without its correction: the orientation residual its 40 readings measured
+  // (taken at its one-sided 95 % upper bound since issue 47) supports no 150 mm lever, so its rows are
+  // refused (orientation-unknown) where before this it scored them at 0.166 mm; with the correction
+  // they are scored (rms1 above).
+  const CliResult bare1 = run("validate --model m1_r2_bare.json --data test_r2.csv --summary-out s1b.json");
+  EXPECT_EQ(bare1.exit_code, 1) << bare1.output();
+  EXPECT_NE(bare1.err.find("orientation-unknown"), std::string::npos) << bare1.err;
   const double rms13_bare = json("s13b.json")["position"]["after"]["rms_mm"].get<double>();
-  const double rms1_bare = json("s1b.json")["position"]["after"]["rms_mm"].get<double>();
   EXPECT_LT(rms13, 0.95 * rms13_bare) << rms13 << " mm with the correction, " << rms13_bare << " without";
-  EXPECT_LT(rms1, 0.5 * rms1_bare) << rms1 << " mm with the correction, " << rms1_bare << " without";
   EXPECT_LT(rms1, 1.25 * own) << rms1 << " mm vs " << own << " mm fitted at r2";
   // The correction is of the located point's readings: moved by hand to another point, the model is
   // refused, naming the member (a correction never applies where it was not measured).

@@ -130,6 +130,17 @@ MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& rob
     const Eigen::Vector3d p = has_xyz ? Eigen::Vector3d(xyz.row(static_cast<Eigen::Index>(r)).transpose())
                                       : forward_position(robot, qr);
     const std::string kind = has_kind ? t.row(r)[kind_col] : "target";
+    // A base reading given twice counts twice in the base point's distance as a target's would.
+    if (kind == "base" && has_reflector) refuse_label_spelt_differently(t, r, reflector_col, label_by_spelling);
+    if (kind == "base" && has_point && has_reflector) {
+      const std::string label(t.row(r)[reflector_col]), point(t.row(r)[point_col]);
+      const auto [seen, fresh] = row_of_reading.emplace(std::make_pair(point, label), r);
+      if (!fresh)
+        throw InputError(t.source() + ":" + std::to_string(t.line_of_row(r)) + ": base point '" + point + "' at reflector '" +
+                             label + "' is read again (first at line " + std::to_string(t.line_of_row(seen->second)) +
+                             "): each (point, reflector) pair is one reading; remove the repeated row",
+                         t.source(), t.line_of_row(r), "point");
+    }
     if (kind == "base") {
       m.base_nominal_mm.push_back(p);
       m.base_q_deg.push_back(qr);

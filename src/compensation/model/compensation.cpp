@@ -337,6 +337,13 @@ void CompensationModel::set_function_rows_at_samples() {
 CompensationModel CompensationModel::with_working_tool(std::optional<Eigen::Isometry3d> tool) const {
   CompensationModel m = *this;
   m.working_tool_ = std::move(tool);
+  m.working_tool_located_ = false;
+  return m;
+}
+
+CompensationModel CompensationModel::with_located_working_tool(const Eigen::Isometry3d& tool) const {
+  CompensationModel m = with_working_tool(tool);
+  m.working_tool_located_ = true;
   return m;
 }
 
@@ -409,9 +416,13 @@ namespace {
 /// 0.39 mm with a 95 % radius that held none (issue 47). Even a fitted flange point's description
 /// coordinates are not its located ones (--reflector scores its readings there).
 bool unlocated_working_tool(const CompensationModel& model) {
-  if (!model.working_tool()) return false;
+  if (!model.working_tool() || model.working_tool_located()) return false;
   const Eigen::Vector3d x = model.working_tool()->translation();
   if ((x - model.measured_point_mm()).norm() <= kSameFlangePointMm) return false;
+  // A flange point the fit located, at its located coordinates (`--reflector` sets the working tool
+  // there); its description's coordinates, a few tenths away, are not located.
+  for (const CompensationModel::LabelledPoint& p : model.flange_points())
+    if ((p.position_mm - x).norm() <= 1e-9) return false;
   if (model.tool_point_mm() && (x - *model.tool_point_mm()).norm() <= 1e-6 && model.reflector_mm() &&
       (*model.tool_point_mm() - *model.reflector_mm()).norm() > 1e-9)
     return false;
@@ -903,6 +914,7 @@ nlohmann::json CompensationModel::to_json() const {
   if (reflector_) j["reflector_mm"] = {reflector_->x(), reflector_->y(), reflector_->z()};
   if (joint_functions_) j["joint_error_functions"] = joint_functions_->to_json();
   if (working_tool_) j["working_tool"] = robot::detail::pose_json(*working_tool_);
+  if (working_tool_ && working_tool_located_) j["working_tool_located"] = true;
   if (!flange_points_.empty()) {
     nlohmann::json points = nlohmann::json::array();
     for (const LabelledPoint& p : flange_points_)
@@ -995,7 +1007,10 @@ constexpr double kFlangePointDistanceToleranceMm = 0.2;
 /// both frames. A position moved by hand would otherwise be predicted with the fields of where it
 /// was (orientation "after" of 72-15,005 mdeg with moves of 0.5-50 mm, issue 47). A move at right
 /// angles to every other point is not seen in their distances.
-void check_flange_points(const CompensationModel& model, const std::string& source) {
+/// `located_tool`: the model's working tool was located from readings of it (working_tool_located),
+/// whose orientation residual then replaced the points' own (locate-tool): a plane's, whatever line
+/// the flange points lie on.
+void check_flange_points(const CompensationModel& model, const std::string& source, bool located_tool) {
   const std::vector<CompensationModel::LabelledPoint>& points = model.flange_points();
   if (points.empty()) return;
   auto where = [](std::size_t k) { return "member \"flange_points\"[" + std::to_string(k) + "]"; };
@@ -1030,7 +1045,7 @@ void check_flange_points(const CompensationModel& model, const std::string& sour
     }
   // On one line, the rotation about it is unobserved: a model that says otherwise (add_floor false)
   // would predict the flange's orientation from points that cannot give it.
-  if (points.size() >= 2 && model.measured_orientation() && !model.measured_orientation()->add_floor) {
+  if (points.size() >= 2 && !located_tool && model.measured_orientation() && !model.measured_orientation()->add_floor) {
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     for (const auto& p : points) mean += p.position_mm / static_cast<double>(points.size());
     Eigen::MatrixXd spread(3, static_cast<Eigen::Index>(points.size()));
@@ -1154,7 +1169,8 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
     model.measured_orientation_ =
         MeasuredOrientation{o["sigma_rad"].get<double>(), o["readings"].get<std::size_t>(), o["add_floor"].get<bool>()};
   }
-  check_flange_points(model, source);
+  check_flange_points(model, source,
+                      j.contains("working_tool") && j.contains("working_tool_located") && j["working_tool_located"] == true);
   if (j.contains("flange_error_covariance")) {
     const nlohmann::json& c = j["flange_error_covariance"];
     const std::size_t k = model.fielded_points().size();
@@ -1270,6 +1286,11 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
           fail_model(source, std::string("member \"working_tool\".") + key +
                                  ": missing (a model file states all six of x_mm, y_mm, z_mm, rx_deg, ry_deg, rz_deg)");
     model.working_tool_ = robot::detail::json_pose(j["working_tool"], "working_tool", source);
+    if (j.contains("working_tool_located")) {
+      if (!j["working_tool_located"].is_boolean())
+        fail_model(source, "member \"working_tool_located\": expected true or false");
+      model.working_tool_located_ = j["working_tool_located"].get<bool>();
+    }
     try {
       check_tool_point(*model.working_tool_, "member \"working_tool\"");
     } catch (const ArgumentError& e) {

@@ -353,7 +353,12 @@ class CompensationModel {
   /// locate-tool` ("working_tool"). Empty: predict and validate score the reflector, compensate aims
   /// tool_point_mm(). Its lever from the reflector brings in the orientation term (OrientationPrior).
   const std::optional<Eigen::Isometry3d>& working_tool() const noexcept { return working_tool_; }
+  /// Sets the working tool as given (`--tool`, `--reflector`): not located by readings of it.
   CompensationModel with_working_tool(std::optional<Eigen::Isometry3d> tool) const;
+  /// Sets the working tool `errfield locate-tool` located from readings of it ("working_tool_located"
+  /// in the file): its lever's orientation was measured there, whatever else the model keeps.
+  CompensationModel with_located_working_tool(const Eigen::Isometry3d& tool) const;
+  bool working_tool_located() const noexcept { return working_tool_located_; }
   /// A tool given in the robot description's flange frame (`--tool`), in the calibrated model's: moved
   /// by the calibration's correction of the reflector (measured_point_mm() − the nominal robot's tool)
   /// when the two are one point (closer than kReflectorAtToolMm), since the flange it corrects carries
@@ -432,6 +437,7 @@ class CompensationModel {
   std::optional<Eigen::Vector3d> tool_point_, reflector_;
   std::optional<JointErrorFunctions> joint_functions_;
   std::optional<Eigen::Isometry3d> working_tool_;
+  bool working_tool_located_ = false;
   std::optional<MeasuredOrientation> measured_orientation_;
   std::vector<LabelledPoint> flange_points_;
   std::optional<CalibrationLeverage> calibration_leverage_;
