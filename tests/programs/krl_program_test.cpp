@@ -105,6 +105,21 @@ TEST(KrlStatusTurn, PtpTargetsAskForTurnAndOverheadAsKukaDefinesThem) {
   EXPECT_GT(seen[1], 0) << "no overhead posture drawn with the Turn";
 }
 
+TEST(KrlRewrite, WritesTheAnglesOfTheNewRotationNearestTheWrittenOnes) {
+  // A = 179.99 turned by +0.02 deg about the tool's z is A = 180.01 (not -179.99), C stays 180.0.
+  const ProgramFile src{"r.src", "DEF r( )\r\n$TOOL=$NULLFRAME\r\n$BASE=$NULLFRAME\r\nLIN {X 1000.0,Y 0.0,Z 500.0,A 179.99,B 0.0,C 180.0}\r\nEND\r\n"};
+  const auto targets = read_krl_targets(src, {}, {}, find_builtin_robot("kr16")->model);
+  ASSERT_EQ(targets.size(), 1u);
+  ASSERT_TRUE(targets[0].rewrite);
+  const Eigen::Isometry3d old = targets[0].pose_in_frame;
+  EXPECT_LT((old.linear() - abc_by_hand(179.99, 0.0, 180.0)).norm(), 1e-12);
+  Eigen::Isometry3d now = old;
+  now.translation() += Eigen::Vector3d(0.25, -0.5, 0.0);
+  now.linear() = abc_by_hand(180.01, 0.0, 180.0);
+  const std::string out = apply_replacements(src.bytes, targets[0].rewrite(now));
+  EXPECT_EQ(out, "DEF r( )\r\n$TOOL=$NULLFRAME\r\n$BASE=$NULLFRAME\r\nLIN {X 1000.25,Y -0.5,Z 500.0,A 180.01,B 0.0,C 180.0}\r\nEND\r\n");
+}
+
 // ---- the CLI on a SIMULATED KR 16 and a kinematic model fitted on its SIMULATED readings.
 
 using program_test_support::fixed;

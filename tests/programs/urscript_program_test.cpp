@@ -54,6 +54,20 @@ TEST(ProgramNumberSpelling, KeepsThePointStyleOfTheOriginal) {
   EXPECT_EQ(format_program_number_like("100", 101.0, 3), "101");
 }
 
+TEST(UrscriptRewrite, KeepsTheRotationVectorOnTheWrittenSideOfPi) {
+  // Written: pi - 0.0001 rad about +z. Turned 0.001 rad further the angle passes pi: the same
+  // rotation is (pi + 0.0009) about +z or (pi - 0.0009) about -z; the first is nearest the written.
+  const std::string text = "set_tcp(p[0, 0, 0, 0, 0, 0])\nmovel(p[.4, -.1, .3, 0.0, 0.0, 3.141493], a=1.2)\n";
+  const auto targets = read_urscript_targets({"r.script", text});
+  ASSERT_EQ(targets.size(), 1u);
+  ASSERT_TRUE(targets[0].rewrite);
+  Eigen::Isometry3d now = targets[0].pose_in_frame;
+  now.linear() = Eigen::AngleAxisd(3.141493 + 0.001, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  now.translation() += Eigen::Vector3d(0.5, 0.0, 0.0);
+  const std::string out = apply_replacements(text, targets[0].rewrite(now));
+  EXPECT_EQ(out, "set_tcp(p[0, 0, 0, 0, 0, 0])\nmovel(p[.4005, -.1, .3, 0.0, 0.0, 3.142493], a=1.2)\n");
+}
+
 // ---- the CLI on a SIMULATED UR5 and a kinematic model fitted on its SIMULATED readings.
 
 using program_test_support::fixed;
