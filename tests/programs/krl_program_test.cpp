@@ -326,5 +326,19 @@ TEST_F(CompensateKrl, AToolDeclaredNowhereIsRefusedByNameAndGivenByOption) {
   EXPECT_EQ(out.substr(0, 90), src.substr(0, 90));
 }
 
+TEST_F(CompensateKrl, TheDatAloneIsRefusedAndFormatsComeFromTheExtensionOrFormat) {
+  write("cell.dat", "DEFDAT cell\r\nDECL E6POS XP1={X 1000.0,Y 0.0,Z 500.0,A 0.0,B 0.0,C 180.0}\r\nENDDAT\r\n");
+  auto r = run("compensate-program --model " + shared("model.json") + " --program cell.dat --out o.dat");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output().find("give the .src"), std::string::npos) << r.output();
+  write("cell.txt", "DEF cell( )\n$TOOL=TOOL_DATA[7]\n$BASE=$NULLFRAME\nLIN {X 1000.0,Y 0.0,Z 500.0,A 0.0,B 0.0,C 180.0}\nEND\n");
+  r = run("compensate-program --model " + shared("model.json") + " --program cell.txt --out o.txt");
+  EXPECT_NE(r.output().find("give --format"), std::string::npos) << r.output();
+  r = run("compensate-program --model " + shared("model.json") + " --program cell.txt --out o.txt --format krl");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output().find("TOOL_DATA[7]"), std::string::npos) << "read as KRL: " << r.output();
+  EXPECT_FALSE(fs::exists(path("o.txt")));
+}
+
 }  // namespace krl_program_test
 }  // namespace errfield::programs
