@@ -283,8 +283,8 @@ void add_compensate_program_command(CLI::App& app) {
       "    BAS, FDAT_ACT and the fold line's Tool[n] Base[n], TOOL_DATA[n]/BASE_DATA[n] from an --include such as\n"
       "    $config.dat; Status/Turn pick the solution of PTP motions (Turn and Status bit 0 checked);\n"
       "  urscript (.script/.urscript): p[x,y,z,rx,ry,rz] poses (m, rotation vector in rad) of movel/movej/movep/movec,\n"
-      "    inline or in a variable, the TCP of the last set_tcp; no configuration: the solution nearest the previous\n"
-      "    target's (or the Name_q joints stored beside Name_p).\n"
+      "    inline or in a variable, the TCP of the last set_tcp (before any: refused unless --tool tcp=...); no\n"
+      "    configuration: the solution nearest the previous target's (or the Name_q joints stored beside Name_p).\n"
       "Each target goes through the same computation as 'errfield compensate' (the tool point, orientation where the\n"
       "model predicts it, the credible region, the ceiling); the rewritten pose is the nominal FK of the compensated\n"
       "joints. Report (--report CSV): one row per target occurrence,\n"
@@ -297,7 +297,9 @@ void add_compensate_program_command(CLI::App& app) {
       "  # not-run: needs a robot program; docs/robot.md, \"Compensating a robot program\", runs one per format");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();
   cmd->add_option("--program", a->program, "robot program to read (never modified)")->required();
-  cmd->add_option("--out", a->out, "the compensated program (written atomically)")->required();
+  cmd->add_option("--out", a->out,
+                  "the compensated program (written atomically; krl: and OUT's stem + .dat, the compensated .dat)")
+      ->required();
   cmd->add_option("--report", a->report, "report CSV, one row per target occurrence (written atomically)");
   cmd->add_option("--format", a->format,
                   "rapid, krl or urscript (default from the extension: .mod/.prg/.sys, .src, .script/.urscript)");
