@@ -17,6 +17,7 @@
 /// Numbers are rewritten in metres and radians, spelled with as many decimals as the literal had (at
 /// least 6: 1 um, 1 urad), in its style (".417" keeps no leading 0).
 
+#include <array>
 #include <map>
 #include <string>
 #include <vector>
