@@ -18,7 +18,9 @@
 #include "errfield/error.hpp"
 #include "errfield/json_file.hpp"
 #include "errfield/programs/program_compensation.hpp"
+#include "errfield/programs/krl_program.hpp"
 #include "errfield/programs/rapid_module.hpp"
+#include "errfield/programs/urscript_program.hpp"
 #include "errfield/robot/pose.hpp"
 
 namespace errfield::cli {
@@ -51,23 +53,42 @@ std::string program_format(const CompensateProgramArgs& a) {
                       "' names no known format (.mod/.prg/.sys: rapid, .src/.dat: krl, .script: urscript); give --format");
 }
 
-// NAME=X,Y,Z[,RX,RY,RZ] (mm, deg; errfield's fixed-axis XYZ angles, robot/pose.hpp).
-std::pair<std::string, Eigen::Isometry3d> named_frame(const std::string& text, const std::string& option) {
+// NAME=X,Y,Z[,R1,R2,R3]: the name and its 3 or 6 numbers, read as the program's format writes a
+// tool or frame (frame_of).
+std::pair<std::string, std::vector<double>> named_numbers(const std::string& text, const std::string& option) {
   const auto eq = text.find('=');
   if (eq == std::string::npos || eq == 0)
-    throw ArgumentError(option + " '" + text + "': expected NAME=X,Y,Z[,RX,RY,RZ] (mm, deg), e.g. " + option +
-                        " tGripper=0,0,211,0,90,0");
+    throw ArgumentError(option + " '" + text + "': expected NAME=X,Y,Z[,R1,R2,R3], e.g. " + option +
+                        " tGripper=0,0,211,0,90,0 (see --help for each format's units)");
   const std::string name = text.substr(0, eq), values = text.substr(eq + 1);
   const std::size_t count = split_list(values, option).size();
   if (count != 3 && count != 6) throw ArgumentError(option + " '" + text + "': expected 3 or 6 numbers after " + name + "=");
-  const std::vector<double> v = parse_numbers(values, count, option);
-  robot::PoseXyzRpy p{v[0], v[1], v[2]};
-  if (count == 6) {
-    p.rx_deg = v[3];
-    p.ry_deg = v[4];
-    p.rz_deg = v[5];
+  std::vector<double> v = parse_numbers(values, count, option);
+  v.resize(6, 0.0);
+  return {name, v};
+}
+
+// The numbers of --tool/--wobj as each format writes a frame: RAPID mm and errfield's fixed-axis
+// XYZ angles (deg, robot/pose.hpp); KRL mm and KUKA's A,B,C (deg, as TOOL_DATA in $config.dat);
+// URScript set_tcp's p[...] (m, a rotation vector in rad).
+Eigen::Isometry3d frame_of(const std::vector<double>& v, const std::string& format) {
+  if (format == "krl") {
+    Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+    t.translation() << v[0], v[1], v[2];
+    t.linear() = programs::kuka_abc_rotation(v[3], v[4], v[5]);
+    return t;
   }
-  return {name, robot::to_isometry(p)};
+  if (format == "urscript") return programs::urscript_pose({v[0], v[1], v[2], v[3], v[4], v[5]});
+  return robot::to_isometry(robot::PoseXyzRpy{v[0], v[1], v[2], v[3], v[4], v[5]});
+}
+
+// The .dat beside a .src (same stem, .dat or .DAT); empty when there is none.
+std::string dat_beside(const std::string& src) {
+  for (const char* ext : {".dat", ".DAT", ".Dat"}) {
+    const std::filesystem::path p = std::filesystem::path(src).replace_extension(ext);
+    if (std::filesystem::exists(p)) return p.string();
+  }
+  return {};
 }
 
 std::string fixed(double v, int decimals) {
@@ -84,9 +105,10 @@ void run_compensate_program(const CompensateProgramArgs& a) {
   if (!(std::isfinite(a.max_correction) && a.max_correction >= 0.0))
     throw ArgumentError("--max-correction: " + format_number(a.max_correction) + "; expected a ceiling > 0 (mm), or 0 for the default");
   const std::string format = program_format(a);
-  if (format != "rapid")
-    throw ArgumentError("--program " + a.program + ": " + format +
-                        " programs are not read yet (this version reads ABB RAPID .mod/.prg/.sys); see docs/robot.md");
+  const std::string extension = lower_text(std::filesystem::path(a.program).extension().string());
+  if (format == "krl" && extension == ".dat")
+    throw ArgumentError("--program " + a.program + ": give the .src (the motions are there; the .dat beside it is read and "
+                        "written with it)");
   const nlohmann::json j = read_json_file(a.model, "model file");
   const compensation::CompensationModel model =
       with_json_source(a.model, [&] { return compensation::CompensationModel::from_json(j, a.model); });
@@ -96,23 +118,54 @@ void run_compensate_program(const CompensateProgramArgs& a) {
     throw ArgumentError("--robot: a kinematic model's command model is the calibrated robot; give the nominal robot JSON");
   const robot::MdhModel nominal_robot = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
 
-  RapidReadOptions options;
+  std::map<std::string, Eigen::Isometry3d> tools, wobjs;
   for (const std::string& t : a.tools) {
-    auto [name, tool] = named_frame(t, "--tool");
+    auto [name, numbers] = named_numbers(t, "--tool");
+    const Eigen::Isometry3d tool = frame_of(numbers, format);
     compensation::check_tool_point(tool, "--tool " + name);
-    options.tools[name] = tool;
+    tools[name] = tool;
   }
   for (const std::string& w : a.wobjs) {
-    auto [name, frame] = named_frame(w, "--wobj");
-    options.wobjs[name] = frame;
+    auto [name, numbers] = named_numbers(w, "--wobj");
+    wobjs[name] = frame_of(numbers, format);
   }
-  const ProgramFile program{a.program, read_program_bytes(a.program, "--program")};
+  // The files a reader may rewrite: the program, and for KRL the .dat beside the .src.
+  std::vector<ProgramFile> written{{a.program, read_program_bytes(a.program, "--program")}};
+  std::vector<std::string> written_to{a.out};
   std::vector<ProgramFile> includes;
   for (const std::string& path : a.includes) includes.push_back({path, read_program_bytes(path, "--include")});
-  const std::vector<ProgramTarget> targets = read_rapid_targets(program, includes, nominal_robot, options);
+  std::vector<ProgramTarget> targets;
+  if (format == "rapid") {
+    RapidReadOptions options;
+    options.tools = tools;
+    options.wobjs = wobjs;
+    targets = read_rapid_targets(written.front(), includes, nominal_robot, options);
+  } else if (format == "krl") {
+    KrlReadOptions options;
+    options.tools = tools;
+    options.bases = wobjs;
+    ProgramFile dat;
+    if (const std::string path = dat_beside(a.program); !path.empty()) {
+      dat = {path, read_program_bytes(path, "the .dat beside --program")};
+      written.push_back(dat);
+      written_to.push_back(std::filesystem::path(a.out).replace_extension(std::filesystem::path(path).extension()).string());
+      refuse_same_output(
+          {{"--out's .dat", &written_to.back()}, {"--out", &a.out}, {"--program's .dat", &path}, {"--report", &a.report}});
+    }
+    targets = read_krl_targets(written.front(), dat, includes, nominal_robot, options);
+  } else {
+    if (!wobjs.empty()) throw ArgumentError("--wobj: URScript poses are in the robot base frame; there is no work object to give");
+    for (const auto& [name, tool] : tools)
+      if (name != "tcp") throw ArgumentError("--tool " + name + "=...: a URScript program's tool is named tcp (--tool tcp=X,Y,Z,RX,RY,RZ)");
+    if (!includes.empty()) throw ArgumentError("--include: a URScript program is read as one file");
+    UrscriptReadOptions options;
+    options.tools = tools;
+    targets = read_urscript_targets(written.front(), options);
+  }
   if (targets.empty())
-    throw InputError(a.program + ": no move instruction with a target found (MoveL, MoveJ, MoveC, MoveAbsJ, ...); " + a.out +
-                         " not written",
+    throw InputError(a.program + ": no motion with a target found (" +
+                         std::string(format == "rapid" ? "MoveL, MoveJ, MoveC, MoveAbsJ" : format == "krl" ? "PTP, LIN, CIRC, SPTP, SLIN, SPL" : "movel, movej, movep, movec") +
+                         ", ...); " + a.out + " not written",
                      a.program);
   ProgramCompensationOptions copt;
   copt.tolerance_mm = a.tolerance;
@@ -160,15 +213,33 @@ void run_compensate_program(const CompensateProgramArgs& a) {
           << problem_lines;
   if (count[kStatusComputed])
     summary << "  " << count[kStatusComputed]
-            << " target(s) are computed by the controller (Offs, RelTool, assignments): they are not rewritten; a computed "
-               "target moves with the literal it is computed from only where that literal was rewritten\n";
-  summary << "  note: if this controller runs ABB Absolute Accuracy it already corrects pose targets: a model fitted on the "
-             "nominal kinematics would correct twice; fit the model on data taken with Absolute Accuracy active, or "
-             "turn it off\n";
-  summary << "  program written to " << a.out << (a.report.empty() ? "" : "; report to " + a.report) << "\n";
+            << " target(s) are computed by the controller (relative moves, frame products, function calls, run-time "
+               "assignments): they are not rewritten; a computed target moves with the literal it is computed from only "
+               "where that literal was rewritten\n";
+  if (format == "rapid")
+    summary << "  note: if this controller runs ABB Absolute Accuracy it already corrects pose targets: a model fitted on the "
+               "nominal kinematics would correct twice; fit the model on data taken with Absolute Accuracy active, or "
+               "turn it off\n";
+  else if (format == "krl")
+    summary << "  note: if this robot is a KUKA positionally accurate robot (absolutely accurate model active) the "
+               "controller already corrects pose targets: a model fitted on the nominal kinematics would correct twice; "
+               "fit the model on data taken with it active, or turn it off\n";
+  else
+    summary << "  warning: a Universal Robots controller applies its factory kinematic calibration to every pose target: "
+               "a model fitted on the nominal D-H would correct twice; fit the model on poses commanded through that "
+               "controller (measured targets against the poses the program sent), so it learns only the error left "
+               "after the factory calibration\n";
+  summary << "  program written to " << a.out;
+  for (std::size_t f = 1; f < written_to.size(); ++f) summary << " and " << written_to[f];
+  summary << (a.report.empty() ? "" : "; report to " + a.report) << "\n";
 
   AtomicFileSet outputs;
-  outputs.add(a.out, apply_replacements(program.bytes, result.replacements));
+  for (std::size_t f = 0; f < written.size(); ++f) {
+    std::vector<Replacement> edits;
+    for (const Replacement& r : result.replacements)
+      if (r.file == f) edits.push_back(r);
+    outputs.add(written_to[f], apply_replacements(written[f].bytes, std::move(edits)));
+  }
   if (!a.report.empty()) {
     OutputTable t;
     const std::size_t n = result.rows.size();
@@ -202,33 +273,47 @@ void add_compensate_program_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "compensate-program",
       "Compensate a robot program's targets with a fitted model and write the program back: only the numbers of\n"
-      "rewritten targets change, every other byte stays (encoding, line ends, comments, spacing). Reads ABB RAPID\n"
-      "(.mod/.prg/.sys): robtargets inline in MoveL/MoveJ/MoveC and declared CONST/PERS/VAR, with the tooldata\n"
-      "and wobjdata (uframe o oframe) in force at each move (declared in the module, an --include, or given by\n"
-      "--tool/--wobj NAME=...), the confdata picking the joint solution (ConfL\\Off/ConfJ\\Off: the solution nearest\n"
-      "the previous target's). Each target goes through the same computation as 'errfield compensate' (the tool\n"
-      "point, orientation where the model predicts it, the credible region, the ceiling); the rewritten pose is the\n"
-      "nominal FK of the compensated joints. Report (--report CSV): one row per target occurrence,\n"
+      "rewritten targets change, every other byte stays (encoding, line ends, comments, spacing). Formats (from the\n"
+      "extension, or --format):\n"
+      "  rapid (.mod/.prg/.sys): robtargets inline in MoveL/MoveJ/MoveC and declared CONST/PERS/VAR, with the\n"
+      "    tooldata and wobjdata (uframe o oframe) in force, confdata picking the joint solution (ConfL\\Off/ConfJ\\Off:\n"
+      "    the solution nearest the previous target's);\n"
+      "  krl (.src, with the .dat beside it, read and written as OUT's stem + .dat): E6POS/POS/FRAME points and\n"
+      "    inline {X,Y,Z,A,B,C} aggregates of PTP/LIN/CIRC/SPTP/SLIN/SCIRC/SPL, the tool and base from $TOOL/$BASE,\n"
+      "    BAS, FDAT_ACT and the fold line's Tool[n] Base[n], TOOL_DATA[n]/BASE_DATA[n] from an --include such as\n"
+      "    $config.dat; Status/Turn pick the solution of PTP motions (Turn and Status bit 0 checked);\n"
+      "  urscript (.script/.urscript): p[x,y,z,rx,ry,rz] poses (m, rotation vector in rad) of movel/movej/movep/movec,\n"
+      "    inline or in a variable, the TCP of the last set_tcp (before any: refused unless --tool tcp=...); no\n"
+      "    configuration: the solution nearest the previous target's (or the Name_q joints stored beside Name_p).\n"
+      "Each target goes through the same computation as 'errfield compensate' (the tool point, orientation where the\n"
+      "model predicts it, the credible region, the ceiling); the rewritten pose is the nominal FK of the compensated\n"
+      "joints. Report (--report CSV): one row per target occurrence,\n"
       "file,line,target,status,reason,dx_mm,dy_mm,dz_mm,q1..q6 (deg, compensated joints),dwx_mdeg..dwz_mdeg\n"
-      "(rotation change); status ok (rewritten), computed (Offs, RelTool, run-time assignments: reported with\n"
-      "what they depend on, not rewritten), unchanged (MoveAbsJ: joint targets), refused (with the reason: tool or\n"
-      "work object unknown, configuration matching no solution, outside-region, not-credible, ...). The input is\n"
-      "never modified; if no target can be compensated nothing is written (exit 1).\n"
+      "(rotation change); status ok (rewritten), computed (Offs, RelTool, frame products, pose_trans, run-time\n"
+      "assignments: reported with what they depend on, not rewritten), unchanged (joint targets), refused (with the\n"
+      "reason: tool or work object/base unknown, configuration matching no solution, outside-region, ...). The input\n"
+      "is never modified; if no target can be compensated nothing is written (exit 1).\n"
       "Example: errfield compensate-program --model model.json --program cell.mod --out cell_comp.mod --report r.csv"
-      "  # not-run: needs a RAPID module; docs/robot.md, \"Compensating a robot program\", runs one");
+      "  # not-run: needs a robot program; docs/robot.md, \"Compensating a robot program\", runs one per format");
   cmd->add_option("--model", a->model, "model JSON from 'errfield fit'")->required();
   cmd->add_option("--program", a->program, "robot program to read (never modified)")->required();
-  cmd->add_option("--out", a->out, "the compensated program (written atomically)")->required();
+  cmd->add_option("--out", a->out,
+                  "the compensated program (written atomically; krl: and OUT's stem + .dat, the compensated .dat)")
+      ->required();
   cmd->add_option("--report", a->report, "report CSV, one row per target occurrence (written atomically)");
-  cmd->add_option("--format", a->format, "rapid (default from the extension: .mod/.prg/.sys)");
+  cmd->add_option("--format", a->format,
+                  "rapid, krl or urscript (default from the extension: .mod/.prg/.sys, .src, .script/.urscript)");
   cmd->add_option("--tool", a->tools,
-                  "NAME=X,Y,Z[,RX,RY,RZ]: tool NAME's TCP in the flange frame (mm; deg, errfield's fixed-axis XYZ "
-                  "angles), used instead of (or where there is no) declaration; repeatable");
+                  "NAME=X,Y,Z[,R1,R2,R3]: tool NAME's TCP in the flange frame, used instead of (or where there is no) "
+                  "declaration; repeatable. Numbers as the format writes a tool: rapid mm and errfield's fixed-axis XYZ "
+                  "angles (deg); krl NAME like TOOL_DATA[1], mm and KUKA's A,B,C (deg); urscript NAME tcp (the TCP "
+                  "before any set_tcp), set_tcp's m and rotation vector (rad)");
   cmd->add_option("--wobj", a->wobjs,
-                  "NAME=X,Y,Z[,RX,RY,RZ]: work object NAME's frame (user frame o object frame) in the robot base frame "
-                  "(mm, deg); repeatable");
+                  "NAME=X,Y,Z[,R1,R2,R3]: work object NAME's frame (rapid: user frame o object frame; krl: NAME like "
+                  "BASE_DATA[2]) in the robot base frame, numbers as for --tool; repeatable");
   cmd->add_option("--include", a->includes,
-                  "another module to read declarations from (tooldata, wobjdata, robtargets; never rewritten); repeatable");
+                  "another file to read declarations from (rapid: tooldata, wobjdata, robtargets; krl: $config.dat's "
+                  "TOOL_DATA/BASE_DATA, points; never rewritten); repeatable");
   cmd->add_option("--robot", a->robot, "nominal robot JSON or built-in name (default: the model's nominal robot)");
   cmd->add_option("--tolerance", a->tolerance, "tolerance for compensate's p_inside (mm)")->capture_default_str();
   cmd->add_option("--max-correction", a->max_correction,

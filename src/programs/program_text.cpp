@@ -1,6 +1,7 @@
 #include "errfield/programs/program_text.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -10,6 +11,39 @@
 #include "errfield/error.hpp"
 
 namespace errfield::programs {
+
+namespace {
+bool digit_at(std::string_view s, std::size_t i) { return i < s.size() && std::isdigit(static_cast<unsigned char>(s[i])); }
+}  // namespace
+
+bool number_starts(std::string_view s, std::size_t i) { return digit_at(s, i) || (i < s.size() && s[i] == '.' && digit_at(s, i + 1)); }
+
+std::size_t number_end(std::string_view s, std::size_t i) {
+  while (digit_at(s, i)) ++i;
+  if (i < s.size() && s[i] == '.') {
+    ++i;
+    while (digit_at(s, i)) ++i;
+  }
+  if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
+    std::size_t j = i + 1;
+    if (j < s.size() && (s[j] == '+' || s[j] == '-')) ++j;
+    if (digit_at(s, j)) {
+      while (digit_at(s, j)) ++j;
+      i = j;
+    }
+  }
+  return i;
+}
+
+std::string collapse_spaces(std::string_view raw) {
+  std::string out;
+  for (char c : raw) {
+    const bool space = std::isspace(static_cast<unsigned char>(c));
+    if (space && (out.empty() || out.back() == ' ')) continue;
+    out += space ? ' ' : c;
+  }
+  return out;
+}
 
 std::string apply_replacements(std::string_view original, std::vector<Replacement> replacements) {
   std::sort(replacements.begin(), replacements.end(),
@@ -42,6 +76,17 @@ std::string format_program_number(double value, int decimals) {
     if (!s.empty() && s.back() == '.') s.pop_back();
   }
   if (s == "-0") s = "0";
+  return s;
+}
+
+std::string format_program_number_like(std::string_view original, double value, int decimals) {
+  std::string s = format_program_number(value, decimals);
+  const bool had_point = original.find('.') != std::string_view::npos && original.find_first_of("eE") == std::string_view::npos;
+  if (had_point && s.find('.') == std::string::npos) s += ".0";
+  // ".417" and "-.191" (URScript as Polyscope writes it): no zero before the point.
+  const std::size_t o = !original.empty() && (original[0] == '-' || original[0] == '+') ? 1 : 0;
+  const std::size_t n = !s.empty() && s[0] == '-' ? 1 : 0;
+  if (o < original.size() && original[o] == '.' && s.compare(n, 2, "0.") == 0) s.erase(n, 1);
   return s;
 }
 

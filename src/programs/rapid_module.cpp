@@ -9,19 +9,15 @@
 
 #include "errfield/error.hpp"
 #include "errfield/programs/abb_confdata.hpp"
+#include "errfield/programs/program_lexer.hpp"
 #include "errfield/robot/pose.hpp"
 
 namespace errfield::programs {
 namespace {
 
-enum class Tok { ident, number, string, punct };
+using Tok = LexKind;
 
-struct Token {
-  Tok kind = Tok::punct;
-  ByteSpan span;
-  std::string text;  // identifiers and punctuation; numbers and strings keep their bytes too
-  double value = 0.0;
-};
+using Token = LexToken;
 
 bool ident_start(unsigned char c) { return std::isalpha(c) || c == '_'; }
 bool ident_char(unsigned char c) { return std::isalnum(c) || c == '_'; }
@@ -34,69 +30,12 @@ std::string lower(std::string s) {
 // RAPID's lexical elements, comments (! to the end of the line) dropped. Identifiers are compared
 // without case (RAPID is case-insensitive).
 std::vector<Token> tokenize(const ProgramFile& f) {
-  const std::string& s = f.bytes;
-  std::vector<Token> out;
-  std::size_t i = 0;
-  while (i < s.size()) {
-    const unsigned char c = static_cast<unsigned char>(s[i]);
-    if (c == '!') {
-      while (i < s.size() && s[i] != '\n') ++i;
-      continue;
-    }
-    if (std::isspace(c)) {
-      ++i;
-      continue;
-    }
-    Token t;
-    t.span.begin = i;
-    if (c == '"') {
-      ++i;
-      for (;;) {
-        if (i >= s.size())
-          throw InputError(f.path + ":" + std::to_string(line_of_offset(s, t.span.begin)) + ": unterminated string", f.path,
-                           line_of_offset(s, t.span.begin));
-        if (s[i] == '"' && i + 1 < s.size() && s[i + 1] == '"') {
-          i += 2;
-          continue;
-        }
-        if (s[i] == '\\' && i + 1 < s.size()) {
-          i += 2;
-          continue;
-        }
-        if (s[i] == '"') break;
-        ++i;
-      }
-      ++i;
-      t.kind = Tok::string;
-    } else if (ident_start(c)) {
-      while (i < s.size() && ident_char(static_cast<unsigned char>(s[i]))) ++i;
-      t.kind = Tok::ident;
-    } else if (std::isdigit(c) || (c == '.' && i + 1 < s.size() && std::isdigit(static_cast<unsigned char>(s[i + 1])))) {
-      while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i]))) ++i;
-      if (i < s.size() && s[i] == '.') {
-        ++i;
-        while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i]))) ++i;
-      }
-      if (i < s.size() && (s[i] == 'e' || s[i] == 'E')) {
-        std::size_t j = i + 1;
-        if (j < s.size() && (s[j] == '+' || s[j] == '-')) ++j;
-        if (j < s.size() && std::isdigit(static_cast<unsigned char>(s[j]))) {
-          while (j < s.size() && std::isdigit(static_cast<unsigned char>(s[j]))) ++j;
-          i = j;
-        }
-      }
-      t.kind = Tok::number;
-    } else {
-      const std::string two = s.substr(i, 2);
-      i += (two == ":=" || two == "<>" || two == "<=" || two == ">=") ? 2 : 1;
-      t.kind = Tok::punct;
-    }
-    t.span.end = i;
-    t.text = s.substr(t.span.begin, t.span.end - t.span.begin);
-    if (t.kind == Tok::number) t.value = std::strtod(t.text.c_str(), nullptr);
-    out.push_back(std::move(t));
-  }
-  return out;
+  LexicalRules rules;
+  rules.comment = '!';
+  rules.doubled_quote = true;
+  rules.backslash_escape = true;
+  rules.two_char_punct = {":=", "<>", "<=", ">="};
+  return lex_program(f, rules).tokens;
 }
 
 // An aggregate value ([a, [b, c], ...]) or a leaf: a signed number, or any other expression.
@@ -121,13 +60,7 @@ struct Source {
   // The source text of tokens [a, b), whitespace runs collapsed to one space.
   std::string text(std::size_t a, std::size_t b) const {
     if (a >= b) return {};
-    std::string raw = file->bytes.substr(tokens[a].span.begin, tokens[b - 1].span.end - tokens[a].span.begin), out;
-    for (char c : raw) {
-      const bool space = std::isspace(static_cast<unsigned char>(c));
-      if (space && (out.empty() || out.back() == ' ')) continue;
-      out += space ? ' ' : c;
-    }
-    return out;
+    return collapse_spaces(std::string_view(file->bytes).substr(tokens[a].span.begin, tokens[b - 1].span.end - tokens[a].span.begin));
   }
 };
 

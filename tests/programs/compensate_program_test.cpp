@@ -20,6 +20,7 @@
 #include "errfield/robot/kinematics.hpp"
 #include "errfield/robot/mdh_model.hpp"
 #include "errfield/robot/pose.hpp"
+#include "program_test_support.hpp"
 #include "support/cli_harness.hpp"
 
 namespace errfield::programs {
@@ -115,74 +116,24 @@ TEST(ProgramText, ReplacementsChangeOnlyTheirSpans) {
 
 // ---- the CLI on a SIMULATED robot and a kinematic model fitted on its SIMULATED readings.
 
-std::string num(double v, int decimals) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.*f", decimals, v);
-  return b;
-}
+using program_test_support::fixed;
 
 std::string pose_text(const Eigen::Isometry3d& p) {
   const Eigen::Quaterniond q(p.linear());
-  return "[" + num(p.translation().x(), 2) + "," + num(p.translation().y(), 2) + "," + num(p.translation().z(), 2) + "],[" +
-         num(q.w(), 7) + "," + num(q.x(), 7) + "," + num(q.y(), 7) + "," + num(q.z(), 7) + "]";
+  return "[" + fixed(p.translation().x(), 2) + "," + fixed(p.translation().y(), 2) + "," + fixed(p.translation().z(), 2) + "],[" +
+         fixed(q.w(), 7) + "," + fixed(q.x(), 7) + "," + fixed(q.y(), 7) + "," + fixed(q.z(), 7) + "]";
 }
 
-// The numbers of a text and the text between them: two files that differ only in numbers have
-// equal "between" parts.
-struct Numbers {
-  std::vector<std::string> between, numbers;
-  std::vector<std::size_t> lines;
-};
-Numbers split_numbers(const std::string& s) {
-  static const std::regex number(R"(-?[0-9]+(\.[0-9]*)?([eE][-+]?[0-9]+)?)");
-  Numbers n;
-  std::size_t at = 0;
-  for (auto it = std::sregex_iterator(s.begin(), s.end(), number); it != std::sregex_iterator(); ++it) {
-    const auto pos = static_cast<std::size_t>(it->position());
-    n.between.push_back(s.substr(at, pos - at));
-    n.numbers.push_back(it->str());
-    n.lines.push_back(line_of_offset(s, pos));
-    at = pos + static_cast<std::size_t>(it->length());
-  }
-  n.between.push_back(s.substr(at));
-  return n;
-}
+using program_test_support::split_numbers;
+using program_test_support::Numbers;
 
-class CompensateProgram : public errfield::testing::CliTest {
- protected:
-  // A SIMULATED ER20-C10 with the paper's errors, its nominal description, the true geometry, and a
-  // kinematic model fitted on 125 grid readings (shared by the tests: fitted once).
-  static void SetUpTestSuite() {
-    shared_ = fs::temp_directory_path() / ("errfield_programs_" + std::to_string(::getpid()));
-    fs::create_directories(shared_);
-    for (const char* line : {"simulate --seed 1 --sample grid --step 125 --robot-out robot.json --truth-out truth.json --config-out config.json "
-                             "--out train.csv",
-                             "fit --robot robot.json --data train.csv --method kinematic --out model.json"}) {
-      const errfield::testing::CliResult r = errfield::testing::run_errfield_line(line, shared_);
-      if (r.exit_code != 0 && setup_error_.empty()) setup_error_ = std::string(line) + ": " + r.output();
-    }
-  }
-  static void TearDownTestSuite() { fs::remove_all(shared_); }
-  std::string shared(const std::string& name) const { return (shared_ / name).string(); }
-  MdhModel nominal() const { return MdhModel::load(shared("robot.json")); }
-  MdhModel truth() const { return MdhModel::load(shared("truth.json")); }
-  std::vector<JointVector> training_joints() const {
-    const CsvTable t = CsvTable::read(shared("train.csv"));
-    std::vector<JointVector> q;
-    for (std::size_t i = 0; i < t.row_count(); ++i) {
-      if (t.has_column("kind") && t.cell(i, t.column_index("kind")) != "target") continue;
-      JointVector v;
-      for (int k = 0; k < 6; ++k) v[k] = t.numeric_cell(i, t.column_index("q" + std::to_string(k + 1)));
-      q.push_back(v);
-    }
-    return q;
-  }
-  void SetUp() override { ASSERT_TRUE(setup_error_.empty()) << setup_error_; }
-  static fs::path shared_;
-  static std::string setup_error_;
+// A SIMULATED ER20-C10 with the paper's errors, its nominal description, the true geometry, and a
+// kinematic model fitted on 125 grid readings (shared by the tests: fitted once).
+struct RapidSetup {
+  static constexpr const char* kDirectory = "errfield_programs_rapid";
+  static constexpr const char* kSimulate = "--seed 1 --sample grid --step 125";
 };
-fs::path CompensateProgram::shared_;
-std::string CompensateProgram::setup_error_;
+using CompensateProgram = program_test_support::FittedRobotTest<RapidSetup>;
 
 // A Latin-1, CRLF module: a rotated tool and a work object declared in it, declared and inline
 // robtargets (one declared target used twice), Offs, MoveAbsJ, 9E9 external axes, comments.
@@ -231,15 +182,15 @@ Module make_module(const MdhModel& nominal, const std::vector<JointVector>& trai
   const Eigen::Quaterniond tq(m.tool.linear()), wq(m.wobj.linear());
   std::string text = "%%%" + crlf + "  VERSION:1" + crlf + "  LANGUAGE:ENGLISH" + crlf + "%%%" + crlf + crlf +
                      "MODULE Zelle_G\xE4rtner" + crlf + "  ! Gr\xFC\xDF" "e: erzeugt von Hand, Ma\xDF" "e in mm" + crlf;
-  text += "  PERS tooldata tGreifer:=[TRUE,[[" + num(m.tool.translation().x(), 4) + "," + num(m.tool.translation().y(), 4) +
-          "," + num(m.tool.translation().z(), 4) + "],[" + num(tq.w(), 9) + "," + num(tq.x(), 9) + "," + num(tq.y(), 9) + "," +
-          num(tq.z(), 9) + "]],[1.2,[0,0,50],[1,0,0,0],0,0,0]];" + crlf;
+  text += "  PERS tooldata tGreifer:=[TRUE,[[" + fixed(m.tool.translation().x(), 4) + "," + fixed(m.tool.translation().y(), 4) +
+          "," + fixed(m.tool.translation().z(), 4) + "],[" + fixed(tq.w(), 9) + "," + fixed(tq.x(), 9) + "," + fixed(tq.y(), 9) + "," +
+          fixed(tq.z(), 9) + "]],[1.2,[0,0,50],[1,0,0,0],0,0,0]];" + crlf;
   // uframe o oframe: the user frame shifted 10 mm along its x, the object frame 10 mm back.
   const Eigen::Isometry3d uf = m.wobj * Eigen::Translation3d(10, 0, 0);
   const Eigen::Quaterniond uq(uf.linear());
-  text += "  TASK PERS wobjdata wVorrichtung:=[FALSE,TRUE,\"\",[[" + num(uf.translation().x(), 6) + "," +
-          num(uf.translation().y(), 6) + "," + num(uf.translation().z(), 6) + "],[" + num(uq.w(), 12) + "," + num(uq.x(), 12) +
-          "," + num(uq.y(), 12) + "," + num(uq.z(), 12) + "]],[[-10,0,0],[1,0,0,0]]];" + crlf;
+  text += "  TASK PERS wobjdata wVorrichtung:=[FALSE,TRUE,\"\",[[" + fixed(uf.translation().x(), 6) + "," +
+          fixed(uf.translation().y(), 6) + "," + fixed(uf.translation().z(), 6) + "],[" + fixed(uq.w(), 12) + "," + fixed(uq.x(), 12) +
+          "," + fixed(uq.y(), 12) + "," + fixed(uq.z(), 12) + "]],[[-10,0,0],[1,0,0,0]]];" + crlf;
   text += decl + crlf + "  PROC main()" + crlf + "    ConfJ\\On;" + crlf + body + "  ENDPROC" + crlf + "ENDMODULE" + crlf;
   m.text = text;
   return m;
@@ -254,18 +205,11 @@ TEST_F(CompensateProgram, RoundTripThroughTheSimulatedRobotLandsNearerAndKeepsEv
   EXPECT_EQ(read("cell.mod"), m.text) << "the input is never modified";
   const std::string out = read("out.mod");
   // Every byte outside numbers is kept; numbers change only on lines of rewritten robtargets.
-  const Numbers a = split_numbers(m.text), b = split_numbers(out);
-  ASSERT_EQ(a.between.size(), b.between.size());
-  for (std::size_t i = 0; i < a.between.size(); ++i) ASSERT_EQ(a.between[i], b.between[i]) << "piece " << i;
-  std::size_t changed = 0;
-  for (std::size_t i = 0; i < a.numbers.size(); ++i) {
-    if (a.numbers[i] == b.numbers[i]) continue;
-    ++changed;
-    const std::string line = [&] {
-      std::size_t s = 0;
-      for (std::size_t l = 1; l < a.lines[i]; ++l) s = m.text.find('\n', s) + 1;
-      return m.text.substr(s, m.text.find('\n', s) - s);
-    }();
+  const Numbers a = split_numbers(m.text);
+  const std::vector<std::size_t> changed_at = program_test_support::changed_numbers(m.text, out);
+  const std::size_t changed = changed_at.size();
+  for (std::size_t i : changed_at) {
+    const std::string line = program_test_support::line_text(m.text, a.lines[i]);
     EXPECT_TRUE(line.find("robtarget") != std::string::npos || line.find("MoveJ [") != std::string::npos) << line;
     EXPECT_NE(a.numbers[i], "9E+09");
   }
@@ -311,37 +255,14 @@ TEST_F(CompensateProgram, RoundTripThroughTheSimulatedRobotLandsNearerAndKeepsEv
   };
   const auto before = in_order(targets_of(m.text)), after = in_order(targets_of(out));
   ASSERT_EQ(targets_of(out).size(), 12u);  // MoveAbsJ's [[0,0,0,0,30,0],...] is no robtarget
-  // Where the SIMULATED robot lands, in the frame the model calls the robot base: the simulator's
-  // world -> tracker (config.json), then the model's registration tracker -> base. (The true base
-  // error and the tracker's pose are one rigid motion to the readings; only their product is known.)
   const MdhModel controller = nom.with_tool(m.tool), robot = tru.with_tool(tru.tool() * nom.tool().inverse() * m.tool);
-  const nlohmann::json config = nlohmann::json::parse(std::ifstream(shared("config.json")));
-  const nlohmann::json& tw = config.at("tracker").at("tracker_from_world");
-  const Eigen::Isometry3d tracker_from_world = to_isometry(
-      PoseXyzRpy{tw.at("x_mm"), tw.at("y_mm"), tw.at("z_mm"), tw.at("rx_deg"), tw.at("ry_deg"), tw.at("rz_deg")});
-  const nlohmann::json model_json = nlohmann::json::parse(std::ifstream(shared("model.json")));
-  const nlohmann::json& rt = model_json.at("registration").at("robot_from_tracker");
-  Eigen::Isometry3d robot_from_tracker = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 4; ++c) robot_from_tracker.matrix()(r, c) = rt.at(static_cast<std::size_t>(r)).at(static_cast<std::size_t>(c));
-  const Eigen::Isometry3d base_from_world = robot_from_tracker * tracker_from_world;
-  double ss_before = 0, ss_after = 0;
-  for (int i = 0; i < 12; ++i) {
-    const auto u = static_cast<std::size_t>(i);
-    auto reached = [&](const Eigen::Isometry3d& in_wobj) {
-      const IkResult ik = inverse_kinematics(controller, m.wobj * in_wobj, m.joints[u]);
-      EXPECT_TRUE(ik.ok());
-      return Eigen::Vector3d(base_from_world * forward_position(robot, ik.q_deg));
-    };
-    const double e0 = (reached(before[u]) - m.intended[u].translation()).norm();
-    const double e1 = (reached(after[u]) - m.intended[u].translation()).norm();
-    ss_before += e0 * e0;
-    ss_after += e1 * e1;
-    EXPECT_LT(e1, e0) << "target " << i;
+  std::vector<Eigen::Isometry3d> before_base, after_base;
+  for (std::size_t i = 0; i < 12; ++i) {
+    before_base.push_back(m.wobj * before[i]);
+    after_base.push_back(m.wobj * after[i]);
   }
-  const double rms_before = std::sqrt(ss_before / 12), rms_after = std::sqrt(ss_after / 12);
-  EXPECT_GT(rms_before, 0.3) << "the simulated robot must have errors to correct";
-  EXPECT_LT(rms_after, 0.2 * rms_before) << rms_before << " -> " << rms_after;
+  program_test_support::expect_lands_nearer(controller, robot, program_test_support::base_from_world(shared_), before_base,
+                                            after_base, m.intended, m.joints);
 }
 
 }  // namespace compensate_program_test

@@ -11,6 +11,12 @@
 
 namespace errfield::programs {
 
+/// A file's name (for the report and messages) and its bytes.
+struct ProgramFile {
+  std::string path;
+  std::string bytes;
+};
+
 /// Bytes [begin, end) of a program's text.
 struct ByteSpan {
   std::size_t begin = 0, end = 0;
@@ -22,11 +28,23 @@ struct NumberLiteral {
   double value = 0.0;
 };
 
-/// New text for the bytes of `span`.
+/// New text for the bytes of `span` of one of the files a reader rewrites: `file` 0 is the program
+/// itself, other indices are the reader's (KRL: 1 is the .dat beside the .src).
 struct Replacement {
   ByteSpan span;
   std::string text;
+  std::size_t file = 0;
 };
+
+/// True when a number literal starts at byte `i`: a digit, or a point followed by one (".5").
+bool number_starts(std::string_view s, std::size_t i);
+
+/// End of the number literal starting at `i` (number_starts): digits, a fraction, an exponent
+/// (`1.5E+3`; an `E` not followed by digits is not part of the number).
+std::size_t number_end(std::string_view s, std::size_t i);
+
+/// `raw` with every run of white space written as one space (labels and messages).
+std::string collapse_spaces(std::string_view raw);
 
 /// `original` with every replacement applied; all other bytes copied as they are. Replacements may
 /// come in any order; overlapping ones are a logic error (std::logic_error).
@@ -38,6 +56,12 @@ std::size_t line_of_offset(std::string_view text, std::size_t offset);
 /// `value` with `decimals` digits after the point, trailing zeros (and a bare point) dropped, "-0"
 /// written as "0": the spelling errfield gives rewritten program numbers.
 std::string format_program_number(double value, int decimals);
+
+/// `value` written like `original` (a number as the program spelled it): format_program_number's
+/// spelling, plus ".0" when the original had a decimal point and the new text has none (KRL and
+/// URScript writers spell whole reals "100.0"), and no 0 before the point when the original had none
+/// (".417", "-.191").
+std::string format_program_number_like(std::string_view original, double value, int decimals);
 
 /// The whole file as bytes; InputError naming `what` and the path when it cannot be read.
 std::string read_program_bytes(const std::string& path, const std::string& what);

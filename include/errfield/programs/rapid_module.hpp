@@ -23,12 +23,6 @@
 
 namespace errfield::programs {
 
-/// A file's name (for the report and messages) and its bytes.
-struct ProgramFile {
-  std::string path;
-  std::string bytes;
-};
-
 struct RapidReadOptions {
   /// Tools and work objects given by name (`--tool NAME=...`, `--wobj NAME=...`): these win over
   /// declarations (flange -> TCP, base -> work object; mm).
