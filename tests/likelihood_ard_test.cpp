@@ -12,6 +12,7 @@
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include "errfield/error.hpp"
 #include "errfield/kriging_likelihood.hpp"
 #include "errfield/range_plausibility.hpp"
 #include "kriging/likelihood_profile.hpp"
@@ -195,6 +196,35 @@ TEST(ModelChoice, TheSubsetDependsOnTheSamplesNotOnTheirOrder) {
   EXPECT_NEAR(a.model.sill(), b.model.sill(), 1e-5 * a.model.sill());
   EXPECT_NEAR(a.model.nugget(), b.model.nugget(), 1e-5 * a.model.sill());
   EXPECT_NE(a.reason.find("random subset of 40 of the 90"), std::string::npos) << a.reason;
+}
+
+TEST(ModelChoice, ConfirmationOnALargerSubsetIsOrderIndependentAndNamedInTheReason) {
+  // confirm_subsample: the confirming fits see a second, larger subset instead of every sample.
+  const Field f = simulate(90, Eigen::Vector2d(15, 40), 1.0, 0.05, 1, 31);
+  ModelChoiceOptions o;
+  o.kinds = {ModelKind::Spherical, ModelKind::Gaussian};
+  o.choice_subsample = 40;
+  const ModelChoice all = choose_likelihood_model(f.x, f.z, o);
+  // At or beyond the sample count it is every sample: the same choice, to the bit.
+  o.confirm_subsample = 90;
+  const ModelChoice same = choose_likelihood_model(f.x, f.z, o);
+  EXPECT_EQ(same.model.to_string(), all.model.to_string());
+  EXPECT_EQ(same.reason, all.reason);
+  // Below it: named in the reason, and the same subset whatever the rows' order.
+  o.confirm_subsample = 60;
+  std::vector<Eigen::Index> permutation(90);
+  for (Eigen::Index i = 0; i < 90; ++i) permutation[static_cast<std::size_t>(i)] = (37 * i + 11) % 90;
+  const ModelChoice a = choose_likelihood_model(f.x, f.z, o),
+                    b = choose_likelihood_model(f.x(permutation, Eigen::all), f.z(permutation, Eigen::all), o);
+  EXPECT_NE(a.reason.find("refitted on a subset of 60"), std::string::npos) << a.reason;
+  EXPECT_EQ(a.model.components().front().kind, b.model.components().front().kind);
+  EXPECT_NEAR(a.model.sill(), b.model.sill(), 1e-5 * a.model.sill());
+  EXPECT_NEAR(a.model.nugget(), b.model.nugget(), 1e-5 * a.model.sill());
+  // Its likelihood is another sample's: the all-sample criterion differs from the full confirmation's.
+  EXPECT_NE(a.model.to_string(), all.model.to_string());
+  // A confirming subset smaller than the ranking's is a contradiction.
+  o.confirm_subsample = 30;
+  EXPECT_THROW(choose_likelihood_model(f.x, f.z, o), ArgumentError);
 }
 
 // The plain fit_likelihood of one candidate family (default starts) and whether some range of it

@@ -255,6 +255,12 @@ struct ModelChoiceOptions {
   int ranking_local_runs = 0;
   /// How many of the best-ranked candidates are fitted again on all samples (>= 1).
   std::size_t confirmed = 3;
+  /// With more samples than this (> 0), the confirming fits see a deterministic random subset of
+  /// this size (drawn as the ranking's, with another seed; >= choice_subsample) instead of all
+  /// samples: the exact likelihood costs N^3 per evaluation, and the confirmation was nearly all of a
+  /// fit's time at 2,000 samples. The model is then estimated on the subset (the prediction still
+  /// krigs with every sample). 0 = all samples.
+  std::size_t confirm_subsample = 0;
   /// true: a confirming fit screens the subset estimate with fit's starts and runs fit.local_runs +
   /// 1 local runs (never worse than the plain fit on the exact path). false: one local run from the
   /// best screened start (nearly always the subset estimate): cheaper, without that guarantee.

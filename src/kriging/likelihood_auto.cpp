@@ -240,6 +240,8 @@ void ModelChoiceOptions::validate() const {
   if (ranking_starts < 0 || ranking_local_runs < 0)
     throw ArgumentError("model choice: ranking_starts and ranking_local_runs must be >= 0 (0 = fit's)");
   if (confirmed < 1) throw ArgumentError("model choice: confirmed must be >= 1");
+  if (confirm_subsample > 0 && choice_subsample > 0 && confirm_subsample < choice_subsample)
+    throw ArgumentError("model choice: confirm_subsample must be 0 or >= choice_subsample");
   if (!(pathological_range_factor > 1.0) || !(pathological_anisotropy_ratio > 1.0) || !(near_singular_condition > 1.0))
     throw ArgumentError("model choice: pathological_range_factor, pathological_anisotropy_ratio and "
                         "near_singular_condition must be > 1");
@@ -260,6 +262,16 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
   }
   const Eigen::MatrixXd& xr = subset ? xs : x;
   const Eigen::MatrixXd& vr = subset ? vs : values;
+  // The confirming fits' samples: all, or a larger subset (confirm_subsample).
+  const bool confirm_subset = o.confirm_subsample > 0 && n > o.confirm_subsample;
+  Eigen::MatrixXd xc, vc;
+  if (confirm_subset) {
+    const std::vector<Eigen::Index> order = order_independent_subset(x, values, o.confirm_subsample, 20261207);
+    xc = x(order, Eigen::all);
+    vc = values(order, Eigen::all);
+  }
+  const Eigen::MatrixXd& xconf = confirm_subset ? xc : x;
+  const Eigen::MatrixXd& vconf = confirm_subset ? vc : values;
   const Eigen::RowVectorXd extent = x.colwise().maxCoeff() - x.colwise().minCoeff();
   const Eigen::RowVectorXd extent_r = xr.colwise().maxCoeff() - xr.colwise().minCoeff();
   const double spacing = smallest_sample_spacing(x);  // of all samples, for the subset's fits too
@@ -339,7 +351,7 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
     // By Vecchia's likelihood the plain fit's neighbour sets differ from the warm-started fit's, so
     // more runs would not make that guarantee; one run from the best screened start (nearly always
     // the subset estimate) keeps the cost of large N near the single refit it was.
-    if (!o.confirm_with_plain_starts || likelihood_uses_vecchia(fit, static_cast<long>(n))) confirm.local_runs = 1;
+    if (!o.confirm_with_plain_starts || likelihood_uses_vecchia(fit, static_cast<long>(xconf.rows()))) confirm.local_runs = 1;
     else confirm.local_runs = fit.local_runs + 1;
     std::size_t next = 0;
     auto plausible_confirmed = [&] {
@@ -356,7 +368,7 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
         batch.push_back(i);
         initial.emplace_back(choice.candidates[i].model);
       }
-      const std::vector<CandidateFit> r = fit_candidates(x, values, specs, batch, confirm, initial);
+      const std::vector<CandidateFit> r = fit_candidates(xconf, vconf, specs, batch, confirm, initial);
       for (std::size_t k = 0; k < batch.size(); ++k) {
         const std::size_t i = batch[k];
         auto& cand = choice.candidates[i];
@@ -422,7 +434,8 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
     choice.reason += std::to_string(specs.size()) + " " + (fit.restricted ? "REML" : "ML") +
                      " fits (sph/exp/gau/mat with a nugget, isotropic and ARD) ranked on a random subset of " +
                      std::to_string(o.choice_subsample) + " of the " + std::to_string(n) + " samples, the best " +
-                     std::to_string(confirmed.size()) + " refitted on all";
+                     std::to_string(confirmed.size()) + " refitted on " +
+                     (confirm_subset ? "a subset of " + std::to_string(o.confirm_subsample) : std::string("all"));
   else if (confirm_needed)
     choice.reason += std::to_string(specs.size()) + " " + (fit.restricted ? "REML" : "ML") +
                      " fits (sph/exp/gau/mat with a nugget, isotropic and ARD), the best " +
