@@ -253,25 +253,30 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
   const bool use_bic = o.criterion == ModelChoiceOptions::Criterion::Bic;
   const std::string criterion_name = use_bic ? "BIC" : "AIC";
   const auto n = static_cast<std::size_t>(x.rows());
-  const bool subset = o.choice_subsample > 0 && n > o.choice_subsample;
-  Eigen::MatrixXd xs, vs;
-  if (subset) {
-    const std::vector<Eigen::Index> order = order_independent_subset(x, values, o.choice_subsample, 20261123);
-    xs = x(order, Eigen::all);
-    vs = values(order, Eigen::all);
-  }
-  const Eigen::MatrixXd& xr = subset ? xs : x;
-  const Eigen::MatrixXd& vr = subset ? vs : values;
+  // The rows of an order-independent random subset of `size` samples (all when there are no more).
+  struct Rows {
+    bool subset = false;
+    Eigen::MatrixXd x, values;
+  };
+  auto rows_of = [&](std::size_t size, std::uint64_t seed) {
+    Rows r;
+    r.subset = size > 0 && n > size;
+    if (r.subset) {
+      const std::vector<Eigen::Index> order = order_independent_subset(x, values, size, seed);
+      r.x = x(order, Eigen::all);
+      r.values = values(order, Eigen::all);
+    }
+    return r;
+  };
+  const Rows ranking_rows = rows_of(o.choice_subsample, 20261123);
+  const bool subset = ranking_rows.subset;
+  const Eigen::MatrixXd& xr = subset ? ranking_rows.x : x;
+  const Eigen::MatrixXd& vr = subset ? ranking_rows.values : values;
   // The confirming fits' samples: all, or a larger subset (confirm_subsample).
-  const bool confirm_subset = o.confirm_subsample > 0 && n > o.confirm_subsample;
-  Eigen::MatrixXd xc, vc;
-  if (confirm_subset) {
-    const std::vector<Eigen::Index> order = order_independent_subset(x, values, o.confirm_subsample, 20261207);
-    xc = x(order, Eigen::all);
-    vc = values(order, Eigen::all);
-  }
-  const Eigen::MatrixXd& xconf = confirm_subset ? xc : x;
-  const Eigen::MatrixXd& vconf = confirm_subset ? vc : values;
+  const Rows confirm_rows = rows_of(o.confirm_subsample, 20261207);
+  const bool confirm_subset = confirm_rows.subset;
+  const Eigen::MatrixXd& xconf = confirm_subset ? confirm_rows.x : x;
+  const Eigen::MatrixXd& vconf = confirm_subset ? confirm_rows.values : values;
   const Eigen::RowVectorXd extent = x.colwise().maxCoeff() - x.colwise().minCoeff();
   const Eigen::RowVectorXd extent_r = xr.colwise().maxCoeff() - xr.colwise().minCoeff();
   const double spacing = smallest_sample_spacing(x);  // of all samples, for the subset's fits too
