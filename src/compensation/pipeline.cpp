@@ -233,6 +233,193 @@ std::vector<robot::JointVector> seed_rows_of(const CsvTable& table) {
   return seeds;
 }
 
+namespace {
+
+/// Each target's nominal joints and what the compensation must keep: whether they were found, why
+/// not, the arm configuration the row must stay on and where that configuration came from.
+struct NominalTargets {
+  std::vector<robot::JointVector> q_deg;
+  std::vector<bool> ok;
+  std::vector<std::string> status;
+  // The arm configuration each row must keep: its seed's, or the training sample's its pose path
+  // started from, or that of the given nominal joints. A solver may land on another solution of the
+  // same pose (the wrist flipped: q4, q6 180 deg away, q5 negated) without crossing a singularity
+  // on its path; a robot sent those joints would flip its wrist between moves.
+  std::vector<std::optional<robot::ArmConfiguration>> wanted;
+  std::vector<std::string> config_source;
+
+  explicit NominalTargets(std::size_t n) : q_deg(n), ok(n, true), status(n), wanted(n), config_source(n) {}
+};
+
+NominalTargets given_joint_targets(const robot::MdhModel& nominal, const CompensationTargets& targets) {
+  const std::size_t n = targets.joints_deg.size();
+  NominalTargets out(n);
+  out.q_deg = targets.joints_deg;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (out.q_deg[i].allFinite()) out.wanted[i] = robot::arm_configuration(nominal, out.q_deg[i]);
+    out.config_source[i] = kConfigSourceGiven;
+    if (targets.config) {
+      // Given joints on another configuration than the pinned one are refused below.
+      if (out.wanted[i] && !out.wanted[i]->compatible_with(*targets.config)) out.status[i] = "config-change";
+      out.wanted[i] = targets.config;
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (out.status[i] == "config-change") out.ok[i] = false;
+  return out;
+}
+
+/// Pose targets solved on the branch of their seed, of the pinned configuration's training poses,
+/// or of the nearest training pose (`reference`: the model's training joints; older model files
+/// have none: multistart).
+NominalTargets solved_pose_targets(const robot::MdhModel& nominal, const CompensationTargets& targets,
+                                   const std::vector<robot::JointVector>& reference) {
+  using namespace robot;
+  const std::size_t n = static_cast<std::size_t>(targets.poses.rows());
+  NominalTargets out(n);
+  // --config: pose paths start from the training samples on that configuration only.
+  std::vector<JointVector> pinned_reference;
+  if (targets.config) {
+    for (const JointVector& q : reference)
+      if (arm_configuration(nominal, q).compatible_with(*targets.config)) pinned_reference.push_back(q);
+  }
+  const std::vector<JointVector>& start_from = targets.config ? pinned_reference : reference;
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto r = targets.poses.row(static_cast<Eigen::Index>(i));
+    std::optional<JointVector> seed = targets.seed_deg;
+    if (!targets.seed_rows_deg.empty() && targets.seed_rows_deg[i].allFinite()) seed = targets.seed_rows_deg[i];
+    if (targets.config && !seed && start_from.empty())
+      throw ArgumentError("--config " + targets.config->to_string() + ": none of the model's " +
+                          std::to_string(reference.size()) +
+                          " training poses is on this configuration, so pose targets have no start on it; give "
+                          "seed joints on it per row (columns sq1..sq6) or --seed");
+    const BranchIkResult ik = solve_on_branch(nominal, to_isometry({r[0], r[1], r[2], r[3], r[4], r[5]}), start_from, seed);
+    out.q_deg[i] = ik.ik.q_deg;
+    out.ok[i] = ik.ok();
+    out.status[i] = ik.branch_changed ? "branch-change" : ik.ik.ok() ? "" : to_string(ik.ik.status);
+    out.config_source[i] = targets.config ? kConfigSourcePinned : seed ? kConfigSourceSeed
+                           : ik.start_sample ? kConfigSourceNearestTraining : kConfigSourceNone;
+    if (targets.config) out.wanted[i] = targets.config;
+    else if (seed) out.wanted[i] = arm_configuration(nominal, *seed);
+    else if (ik.start_sample) out.wanted[i] = arm_configuration(nominal, start_from[*ik.start_sample]);
+    if (out.ok[i] && out.wanted[i] && !arm_configuration(nominal, out.q_deg[i]).compatible_with(*out.wanted[i])) {
+      out.ok[i] = false;
+      out.status[i] = "config-change";
+    }
+  }
+  return out;
+}
+
+/// The compensation step's columns, one value per target (NaN or empty where a row is refused).
+struct CompensationColumns {
+  std::vector<std::vector<double>> numbers;    // kCompensationColumnNames' order
+  std::vector<std::vector<double>> rotation;   // kRotationColumnNames' order; none without orientation
+  std::vector<std::string> config, status;
+
+  CompensationColumns(std::size_t n, bool orientation)
+      : numbers(31, std::vector<double>(n, kNaN)),
+        rotation(orientation ? 7 : 0, std::vector<double>(n, kNaN)),
+        config(n),
+        status(n) {}
+};
+
+constexpr const char* kCompensationColumnNames[] = {
+    "nq1", "nq2", "nq3", "nq4", "nq5", "nq6", "nx", "ny", "nz", "pred_dx", "pred_dy", "pred_dz",
+    "pred_dl", "var_mm2", "p_inside", "cmd_x", "cmd_y", "cmd_z", "cq1", "cq2", "cq3", "cq4",
+    "cq5", "cq6", "var_field_mm2", "r95_mm", "total_dx", "total_dy", "total_dz", "total_mm",
+    "move_mm"};
+constexpr const char* kRotationColumnNames[] = {"pred_wx_mdeg", "pred_wy_mdeg", "pred_wz_mdeg", "r95_w_mdeg",
+                                                "total_wx_mdeg", "total_wy_mdeg", "total_wz_mdeg"};
+
+/// The prediction and the compensation of row i, whether or not it is then sent.
+void put_compensation(CompensationColumns& out, std::size_t i, const robot::JointVector& q,
+                      const Eigen::Vector3d& nominal_mm, const CompensatedTarget& c) {
+  std::vector<std::vector<double>>& cols = out.numbers;
+  for (int k = 0; k < 6; ++k) cols[static_cast<std::size_t>(k)][i] = q[k];
+  for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(6 + k)][i] = nominal_mm[k];
+  for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(9 + k)][i] = c.prediction.position_error_mm[k];
+  cols[12][i] = c.prediction.distance_error_mm;
+  cols[13][i] = c.prediction.predictive_variance_mm2();
+  cols[14][i] = c.p_within_tolerance;
+  cols[24][i] = c.prediction.variance_mm2;
+  cols[25][i] = radius_with_probability(0.95, c.prediction.axis_variance_mm2);
+  for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(15 + k)][i] = c.command_position_mm[k];
+  for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(26 + k)][i] = c.total_error_mm[k];
+  cols[29][i] = c.total_error_mm.norm();
+  cols[30][i] = c.move_mm;
+  if (!out.rotation.empty() && c.rotation) {
+    for (int k = 0; k < 3; ++k) out.rotation[static_cast<std::size_t>(k)][i] = kMdegPerRad * c.rotation->rotation_rad[k];
+    out.rotation[3][i] = kMdegPerRad * c.rotation->radius95_rad();
+    for (int k = 0; k < 3; ++k) out.rotation[static_cast<std::size_t>(4 + k)][i] = kMdegPerRad * c.total_rotation_error_rad[k];
+  }
+}
+
+/// Why the compensated joints of a predicted target are not sent, or "ok".
+std::string compensation_status(const CompensationModel& model, const robot::MdhModel& nominal,
+                                const robot::JointVector& q, const CompensatedTarget& c, double ceiling,
+                                const std::optional<robot::ArmConfiguration>& wanted) {
+  using namespace robot;
+  return !c.prediction.inside_region ? "outside-region"
+         : !c.prediction.credible ? "not-credible"
+         : !c.prediction.orientation_supported ? std::string(status_name(PredictionStatus::orientation_unknown))
+         : !c.prediction.calibration_supported ? std::string(status_name(PredictionStatus::calibration_extrapolated))
+         : c.ik_status != IkStatus::converged ? std::string("ik-") + to_string(c.ik_status)
+         : robot::joint_outside_limits(c.q_command_deg, model.command_model()) ? std::string(status_name(PredictionStatus::outside_limits))
+         // A move far beyond what the model ever predicted on its own data is a wrong robot,
+         // tool or model, not a correction (NaN: no move known, never ok either).
+         : !(c.move_mm <= ceiling) ? "correction-too-large"
+         : wanted && !arm_configuration(nominal, c.q_command_deg).compatible_with(*wanted) ? "config-change"
+         : singular_swing(nominal, q, c.q_command_deg, c.move_mm);
+}
+
+/// Compensates every target the nominal stage found, counting the refusals in `out`.
+CompensationColumns compensate_targets(const CompensationModel& model, const robot::MdhModel& nominal,
+                                       const NominalTargets& targets, double tolerance_mm, double ceiling,
+                                       StepColumns& out) {
+  const std::size_t n = targets.q_deg.size();
+  // Models that predict the flange's orientation: its predicted rotation, 95 % radius and the whole
+  // orientation error (mdeg, robot frame).
+  const bool orientation = model.fielded_points().size() >= 3 && model.rotation_calibration().has_value();
+  CompensationColumns cols(n, orientation);
+  std::vector<std::string>& status = cols.status;
+  for (std::size_t i = 0; i < n; ++i) {
+    const robot::JointVector& q = targets.q_deg[i];
+    if (!targets.ok[i]) {
+      const std::string& why = targets.status[i];
+      status[i] = why == "branch-change" || why == "config-change" ? why : "unreachable";
+      ++out.refused;
+      continue;
+    }
+    if (robot::joint_outside_limits(q, nominal)) {
+      status[i] = std::string(status_name(PredictionStatus::outside_limits));  // a target the robot cannot take is not compensated
+      ++out.refused;
+      continue;
+    }
+    const CompensatedTarget c = model.compensate_joints(nominal, q, tolerance_mm);
+    put_compensation(cols, i, q, robot::forward_position(nominal, q), c);
+    if (c.prediction.inside_region && !(c.prediction.position_error_mm.allFinite() && c.command_position_mm.allFinite())) {
+      // The field gave no number here (e.g. an overflow): never an IK failure's name, never ok.
+      status[i] = "no-prediction";
+      ++out.no_prediction;
+      ++out.refused;
+      continue;
+    }
+    status[i] = compensation_status(model, nominal, q, c, ceiling, targets.wanted[i]);
+    out.too_large += status[i] == "correction-too-large";
+    out.singular += status[i].ends_with("singular");
+    if (status[i] != "ok") {
+      ++out.refused;
+      continue;  // compensated joints stay empty: nothing is sent for a refused target
+    }
+    for (int k = 0; k < 6; ++k) cols.numbers[static_cast<std::size_t>(18 + k)][i] = c.q_command_deg[k];
+    cols.config[i] = robot::arm_configuration(nominal, c.q_command_deg).to_string();
+    out.largest_move_mm = std::max(out.largest_move_mm, c.move_mm);
+  }
+  return cols;
+}
+
+}  // namespace
+
 StepColumns compensate_columns(const CompensationModel& model, const robot::MdhModel& nominal,
                                const CompensationTargets& targets, double tolerance_mm, double max_correction_mm) {
   using namespace robot;
@@ -247,155 +434,33 @@ StepColumns compensate_columns(const CompensationModel& model, const robot::MdhM
   if (!joints && targets.poses.cols() != 6)
     throw ArgumentError("poses: " + std::to_string(targets.poses.cols()) + " columns; expected x,y,z,rx,ry,rz");
   const std::size_t n = joints ? targets.joints_deg.size() : static_cast<std::size_t>(targets.poses.rows());
-  // The branch pose targets are solved on: the model's training joints (older model files have
-  // none: multistart).
-  const std::vector<JointVector>& reference = model.data_joints();
   if (!targets.seed_rows_deg.empty() && (joints || targets.seed_rows_deg.size() != n))
     throw ArgumentError("seed rows: " + std::to_string(targets.seed_rows_deg.size()) + " for " + std::to_string(n) +
                         (joints ? " joint targets; only pose targets take seeds" : " pose targets"));
-  std::vector<JointVector> qn(n);
-  std::vector<bool> ik_ok(n, true);
-  std::vector<std::string> ik_status(n);
-  // The arm configuration each row must keep: its seed's, or the training sample's its pose path
-  // started from, or that of the given nominal joints. A solver may land on another solution of the
-  // same pose (the wrist flipped: q4, q6 180 deg away, q5 negated) without crossing a singularity
-  // on its path; a robot sent those joints would flip its wrist between moves.
-  std::vector<std::optional<ArmConfiguration>> wanted(n);
-  std::vector<std::string> source(n);
-  if (joints) {
-    qn = targets.joints_deg;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (qn[i].allFinite()) wanted[i] = arm_configuration(nominal, qn[i]);
-      source[i] = kConfigSourceGiven;
-      if (targets.config) {
-        // Given joints on another configuration than the pinned one are refused below.
-        if (wanted[i] && !wanted[i]->compatible_with(*targets.config)) ik_status[i] = "config-change";
-        wanted[i] = targets.config;
-      }
-    }
-  } else {
-    // --config: pose paths start from the training samples on that configuration only.
-    std::vector<JointVector> pinned_reference;
-    if (targets.config) {
-      for (const JointVector& q : reference)
-        if (arm_configuration(nominal, q).compatible_with(*targets.config)) pinned_reference.push_back(q);
-    }
-    const std::vector<JointVector>& start_from = targets.config ? pinned_reference : reference;
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto r = targets.poses.row(static_cast<Eigen::Index>(i));
-      std::optional<JointVector> seed = targets.seed_deg;
-      if (!targets.seed_rows_deg.empty() && targets.seed_rows_deg[i].allFinite()) seed = targets.seed_rows_deg[i];
-      if (targets.config && !seed && start_from.empty())
-        throw ArgumentError("--config " + targets.config->to_string() + ": none of the model's " +
-                            std::to_string(reference.size()) +
-                            " training poses is on this configuration, so pose targets have no start on it; give "
-                            "seed joints on it per row (columns sq1..sq6) or --seed");
-      const BranchIkResult ik = solve_on_branch(nominal, to_isometry({r[0], r[1], r[2], r[3], r[4], r[5]}), start_from, seed);
-      qn[i] = ik.ik.q_deg;
-      ik_ok[i] = ik.ok();
-      ik_status[i] = ik.branch_changed ? "branch-change" : ik.ik.ok() ? "" : to_string(ik.ik.status);
-      source[i] = targets.config ? kConfigSourcePinned : seed ? kConfigSourceSeed
-                  : ik.start_sample ? kConfigSourceNearestTraining : kConfigSourceNone;
-      if (targets.config) wanted[i] = targets.config;
-      else if (seed) wanted[i] = arm_configuration(nominal, *seed);
-      else if (ik.start_sample) wanted[i] = arm_configuration(nominal, start_from[*ik.start_sample]);
-      if (ik_ok[i] && wanted[i] && !arm_configuration(nominal, qn[i]).compatible_with(*wanted[i])) {
-        ik_ok[i] = false;
-        ik_status[i] = "config-change";
-      }
-    }
-  }
-  if (joints)
-    for (std::size_t i = 0; i < n; ++i)
-      if (ik_status[i] == "config-change") ik_ok[i] = false;
-  std::vector<std::string> nconfig(n), config(n);
+  // The branch pose targets are solved on: the model's training joints (older model files have
+  // none: multistart).
+  NominalTargets nominal_targets =
+      joints ? given_joint_targets(nominal, targets) : solved_pose_targets(nominal, targets, model.data_joints());
+  std::vector<std::string> nconfig(n);
   for (std::size_t i = 0; i < n; ++i)
-    if ((ik_ok[i] || ik_status[i] == "config-change") && qn[i].allFinite())
-      nconfig[i] = arm_configuration(nominal, qn[i]).to_string();
-  std::vector<std::vector<double>> cols(31, std::vector<double>(n, kNaN));  // see `names` below
-  // Models that predict the flange's orientation: its predicted rotation, 95 % radius and the whole
-  // orientation error (mdeg, robot frame).
-  const bool orientation = model.fielded_points().size() >= 3 && model.rotation_calibration().has_value();
-  std::vector<std::vector<double>> rotation_cols(orientation ? 7 : 0, std::vector<double>(n, kNaN));
-  std::vector<std::string> status(n);
+    if ((nominal_targets.ok[i] || nominal_targets.status[i] == "config-change") && nominal_targets.q_deg[i].allFinite())
+      nconfig[i] = arm_configuration(nominal, nominal_targets.q_deg[i]).to_string();
   StepColumns out;
   out.max_correction_mm = ceiling;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!ik_ok[i]) {
-      status[i] = ik_status[i] == "branch-change" || ik_status[i] == "config-change" ? ik_status[i] : "unreachable";
-      ++out.refused;
-      continue;
-    }
-    if (robot::joint_outside_limits(qn[i], nominal)) {
-      status[i] = std::string(status_name(PredictionStatus::outside_limits));  // a target the robot cannot take is not compensated
-      ++out.refused;
-      continue;
-    }
-    const CompensatedTarget c = model.compensate_joints(nominal, qn[i], tolerance_mm);
-    const Eigen::Vector3d p = forward_position(nominal, qn[i]);
-    for (int k = 0; k < 6; ++k) cols[static_cast<std::size_t>(k)][i] = qn[i][k];
-    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(6 + k)][i] = p[k];
-    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(9 + k)][i] = c.prediction.position_error_mm[k];
-    cols[12][i] = c.prediction.distance_error_mm;
-    cols[13][i] = c.prediction.predictive_variance_mm2();
-    cols[14][i] = c.p_within_tolerance;
-    cols[24][i] = c.prediction.variance_mm2;
-    cols[25][i] = radius_with_probability(0.95, c.prediction.axis_variance_mm2);
-    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(15 + k)][i] = c.command_position_mm[k];
-    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(26 + k)][i] = c.total_error_mm[k];
-    cols[29][i] = c.total_error_mm.norm();
-    cols[30][i] = c.move_mm;
-    if (orientation && c.rotation) {
-      for (int k = 0; k < 3; ++k) rotation_cols[static_cast<std::size_t>(k)][i] = kMdegPerRad * c.rotation->rotation_rad[k];
-      rotation_cols[3][i] = kMdegPerRad * c.rotation->radius95_rad();
-      for (int k = 0; k < 3; ++k) rotation_cols[static_cast<std::size_t>(4 + k)][i] = kMdegPerRad * c.total_rotation_error_rad[k];
-    }
-    if (c.prediction.inside_region && !(c.prediction.position_error_mm.allFinite() && c.command_position_mm.allFinite())) {
-      // The field gave no number here (e.g. an overflow): never an IK failure's name, never ok.
-      status[i] = "no-prediction";
-      ++out.no_prediction;
-      ++out.refused;
-      continue;
-    }
-    status[i] = !c.prediction.inside_region ? "outside-region"
-                : !c.prediction.credible ? "not-credible"
-                : !c.prediction.orientation_supported ? std::string(status_name(PredictionStatus::orientation_unknown))
-                : !c.prediction.calibration_supported ? std::string(status_name(PredictionStatus::calibration_extrapolated))
-                : c.ik_status != IkStatus::converged ? std::string("ik-") + to_string(c.ik_status)
-                : robot::joint_outside_limits(c.q_command_deg, model.command_model()) ? std::string(status_name(PredictionStatus::outside_limits))
-                // A move far beyond what the model ever predicted on its own data is a wrong robot,
-                // tool or model, not a correction (NaN: no move known, never ok either).
-                : !(c.move_mm <= ceiling) ? "correction-too-large"
-                : wanted[i] && !arm_configuration(nominal, c.q_command_deg).compatible_with(*wanted[i]) ? "config-change"
-                : singular_swing(nominal, qn[i], c.q_command_deg, c.move_mm);
-    out.too_large += status[i] == "correction-too-large";
-    out.singular += status[i].ends_with("singular");
-    if (status[i] != "ok") {
-      ++out.refused;
-      continue;  // compensated joints stay empty: nothing is sent for a refused target
-    }
-    for (int k = 0; k < 6; ++k) cols[static_cast<std::size_t>(18 + k)][i] = c.q_command_deg[k];
-    config[i] = arm_configuration(nominal, c.q_command_deg).to_string();
-    out.largest_move_mm = std::max(out.largest_move_mm, c.move_mm);
-  }
-  const char* names[] = {"nq1", "nq2", "nq3", "nq4", "nq5", "nq6", "nx", "ny", "nz", "pred_dx", "pred_dy", "pred_dz",
-                         "pred_dl", "var_mm2", "p_inside", "cmd_x", "cmd_y", "cmd_z", "cq1", "cq2", "cq3", "cq4",
-                         "cq5", "cq6", "var_field_mm2", "r95_mm", "total_dx", "total_dy", "total_dz", "total_mm",
-                         "move_mm"};
-  for (std::size_t c = 0; c < 31; ++c) out.columns.push_back(numbers(names[c], std::move(cols[c])));
-  const char* rotation_names[] = {"pred_wx_mdeg", "pred_wy_mdeg", "pred_wz_mdeg", "r95_w_mdeg",
-                                  "total_wx_mdeg", "total_wy_mdeg", "total_wz_mdeg"};
-  for (std::size_t c = 0; c < rotation_cols.size(); ++c)
-    out.columns.push_back(numbers(rotation_names[c], std::move(rotation_cols[c])));
+  CompensationColumns cols = compensate_targets(model, nominal, nominal_targets, tolerance_mm, ceiling, out);
+  for (std::size_t c = 0; c < cols.numbers.size(); ++c)
+    out.columns.push_back(numbers(kCompensationColumnNames[c], std::move(cols.numbers[c])));
+  for (std::size_t c = 0; c < cols.rotation.size(); ++c)
+    out.columns.push_back(numbers(kRotationColumnNames[c], std::move(cols.rotation[c])));
   out.columns.push_back(words("nconfig", std::move(nconfig)));
-  out.columns.push_back(words("config", std::move(config)));
-  for (const std::string& w : source) {
+  out.columns.push_back(words("config", std::move(cols.config)));
+  for (const std::string& w : nominal_targets.config_source) {
     auto it = std::find_if(out.config_sources.begin(), out.config_sources.end(), [&](const auto& e) { return e.first == w; });
     if (it == out.config_sources.end()) out.config_sources.emplace_back(w, 1);
     else ++it->second;
   }
-  out.columns.push_back(words("config_source", std::move(source)));
-  out.columns.push_back(words("status", std::move(status)));
+  out.columns.push_back(words("config_source", std::move(nominal_targets.config_source)));
+  out.columns.push_back(words("status", std::move(cols.status)));
   return out;
 }
 

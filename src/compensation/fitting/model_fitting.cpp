@@ -97,6 +97,41 @@ void refuse_label_spelt_differently(const CsvTable& t, std::size_t r, std::size_
 
 }  // namespace
 
+namespace {
+
+/// Implausible measurements (distances in metres or far from the nominal ones, a tracker that
+/// never moved) are refused here, before any method turns them into corrections.
+void refuse_implausible_measurements(const CsvTable& t, const MeasurementSet& m, const MdhModel& robot) {
+  const bool has_kind = t.has_column("kind");
+  const std::size_t kind_col = has_kind ? t.column_index("kind") : 0;
+  std::vector<std::size_t> target_rows;
+  for (std::size_t r = 0; r < t.row_count(); ++r)
+    if (!has_kind || t.row(r)[kind_col] != "base") target_rows.push_back(r);
+  for (std::size_t k = 0; k < m.distance_mm.size(); ++k) {
+    const bool metres = distances_in_metres(m.distance_mm[k], robot, {}).has_value();  // warned, not refused
+    for (std::size_t i = 0; i < m.q_deg.size(); ++i) {
+      const double nominal = (m.nominal_mm[i] - m.base_nominal_mm[k]).norm();
+      if (nominal < 1.0) continue;  // the point at its base: no distance to speak of
+      if (const auto why = implausible_distance(m.distance_mm[k][i], nominal, robot, !metres)) {
+        const std::size_t line = t.line_of_row(target_rows[i]);
+        const std::string col = "dist_b" + std::to_string(k);
+        throw InputError(t.source() + ":" + std::to_string(line) + ": column '" + col + "': " + *why, t.source(), line,
+                         col);
+      }
+    }
+  }
+  if (!m.measured_mm.empty()) {
+    Eigen::MatrixXd measured(static_cast<Eigen::Index>(m.q_deg.size()), 3), nominal(measured.rows(), 3);
+    for (std::size_t i = 0; i < m.q_deg.size(); ++i) {
+      measured.row(static_cast<Eigen::Index>(i)) = m.measured_mm[i].transpose();
+      nominal.row(static_cast<Eigen::Index>(i)) = m.nominal_mm[i].transpose();
+    }
+    if (const auto why = tracker_frozen(measured, nominal)) throw InputError(t.source() + ": " + *why, t.source(), 0, "mx");
+  }
+}
+
+}  // namespace
+
 MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& robot,
                                           const std::vector<Eigen::Vector3d>& fixed_bases, bool several_points) {
   MeasurementSet m;
@@ -184,31 +219,7 @@ MeasurementSet MeasurementSet::from_table(const CsvTable& t, const MdhModel& rob
                          " base points; add rows with kind=base or give the base points (--base-point X,Y,Z)",
                      t.source());
   if (m.q_deg.empty()) throw InputError(t.source() + ": no target rows", t.source());
-  // Implausible measurements are refused here, before any method turns them into corrections.
-  std::vector<std::size_t> target_rows;
-  for (std::size_t r = 0; r < t.row_count(); ++r)
-    if (!has_kind || t.row(r)[kind_col] != "base") target_rows.push_back(r);
-  for (std::size_t k = 0; k < dist.size(); ++k) {
-    const bool metres = distances_in_metres(m.distance_mm[k], robot, {}).has_value();  // warned, not refused
-    for (std::size_t i = 0; i < m.q_deg.size(); ++i) {
-      const double nominal = (m.nominal_mm[i] - m.base_nominal_mm[k]).norm();
-      if (nominal < 1.0) continue;  // the point at its base: no distance to speak of
-      if (const auto why = implausible_distance(m.distance_mm[k][i], nominal, robot, !metres)) {
-        const std::size_t line = t.line_of_row(target_rows[i]);
-        const std::string col = "dist_b" + std::to_string(k);
-        throw InputError(t.source() + ":" + std::to_string(line) + ": column '" + col + "': " + *why, t.source(), line,
-                         col);
-      }
-    }
-  }
-  if (has_m) {
-    Eigen::MatrixXd measured(static_cast<Eigen::Index>(m.q_deg.size()), 3), nominal(measured.rows(), 3);
-    for (std::size_t i = 0; i < m.q_deg.size(); ++i) {
-      measured.row(static_cast<Eigen::Index>(i)) = m.measured_mm[i].transpose();
-      nominal.row(static_cast<Eigen::Index>(i)) = m.nominal_mm[i].transpose();
-    }
-    if (const auto why = tracker_frozen(measured, nominal)) throw InputError(t.source() + ": " + *why, t.source(), 0, "mx");
-  }
+  refuse_implausible_measurements(t, m, robot);
   return m;
 }
 
@@ -582,328 +593,417 @@ FitResult with_nominal_flange_points(FitResult fit, const MdhModel& nominal, con
   return fit;
 }
 
-FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o, bool model_estimated) {
-  using detail::fit_kinematic;
-  using detail::KinematicFit;
-  std::string model_reason;
-  const CompensationMethod method = o.method;
+/// What every method's fit reads: the nominal robot, the data and the options, and whether the
+/// variogram is the data's own estimate (field_options) rather than the user's.
+struct FitInputs {
+  const MdhModel& robot;
+  const MeasurementSet& d;
+  const FitOptions& o;
+  bool model_estimated;
+};
+
+void require_base_point(const MeasurementSet& d, const FitOptions& o) {
+  if (o.base >= d.base_nominal_mm.size())
+    throw InputError(d.source + ": base point " + std::to_string(o.base) + " requested but the data have " +
+                         std::to_string(d.base_nominal_mm.size()),
+                     d.source);
+}
+
+/// Each point's measured error after the tracker -> robot registration fitted on all points (kept
+/// in `out` with its note): the rigid part of the robot's error goes into the registration.
+std::vector<Eigen::Vector3d> registered_errors(const MeasurementSet& d, FitResult& out) {
+  if (d.measured_mm.empty())
+    throw InputError(d.source + ": the method needs measured positions (columns mx,my,mz, tracker frame)", d.source, 0,
+                     "mx");
+  const Registration reg = fit_registration(d.measured_mm, d.nominal_mm);
+  std::vector<Eigen::Vector3d> dp(d.nominal_mm.size());
+  for (std::size_t i = 0; i < dp.size(); ++i) dp[i] = reg.robot_from_tracker * d.measured_mm[i] - d.nominal_mm[i];
+  out.registration = reg;
+  out.notes.push_back("registration tracker -> robot fitted on " + std::to_string(dp.size()) +
+                      " points, residual RMS " + std::to_string(reg.residual_rms_mm) +
+                      " mm (it absorbs the rigid part of the robot's error)");
+  return dp;
+}
+
+/// The notes every kriged field ends with: its variogram, its factorization, why the model was
+/// chosen and how its variance was calibrated.
+void note_kriged_field(FitResult& out, const KrigingFieldFit& fit, FieldSpace space, const std::string& model_reason) {
+  out.notes.push_back("variogram per component: " + describe_field_model(fit.model, space));
+  note_factorization(out, fit, fit.model);
+  if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
+  note_variance_calibration(out, fit);
+}
+
+FitResult fit_distance_idw(const FitInputs& in) {
+  const auto& [robot, d, o, model_estimated] = in;
+  const CompensationMethod method = CompensationMethod::distance_idw;
+  require_base_point(d, o);
   GridIdwOptions idw;
   idw.power = o.idw_power;
+  const std::vector<double> dl = d.distance_errors(o.base);
+  std::vector<std::size_t> order;
+  // The paper's layout: the base point P0 is grid vertex 0, measured once as the base row. Its
+  // distance to itself is exactly 0, its distance error 0: it completes the grid (when the
+  // targets alone do not form one and the base row is a robot position).
+  std::vector<double> node_values = dl;
+  std::optional<RegularGrid3> found;
+  bool base_as_vertex = false;
+  try {
+    found = detect_grid(d, order);
+  } catch (const InputError& e) {
+    if (o.base >= d.base_q_deg.size()) throw_grid_needed(e, method, d.nominal_mm.size());
+    MeasurementSet with_base = d;
+    with_base.nominal_mm.push_back(d.base_nominal_mm[o.base]);
+    try {
+      found = detect_grid(with_base, order);
+    } catch (const InputError&) {
+    }
+    if (!found) throw_grid_needed(e, method, d.nominal_mm.size());  // the targets' own grid error
+    node_values.push_back(0.0);
+    base_as_vertex = true;
+  }
+  const RegularGrid3 grid = *found;
+  std::vector<double> node(order.size());
+  for (std::size_t n = 0; n < order.size(); ++n) node[n] = node_values[order[n]];
+  FitResult out{CompensationModel(method, robot, make_distance_idw_field(grid, node, d.base_nominal_mm[o.base], idw)),
+                std::nullopt, idw_cv(d.nominal_mm, dl, o.idw_power), {}, {}};
+  if (base_as_vertex)
+    out.notes.push_back("base point b" + std::to_string(o.base) +
+                        " is a grid vertex (the paper's layout): its distance error there is 0");
+  out.notes.push_back("base point b" + std::to_string(o.base) + " at (" + std::to_string(d.base_nominal_mm[o.base].x()) +
+                      ", " + std::to_string(d.base_nominal_mm[o.base].y()) + ", " +
+                      std::to_string(d.base_nominal_mm[o.base].z()) + ") mm");
+  return out;
+}
+
+FitResult fit_position_idw(const FitInputs& in) {
+  const auto& [robot, d, o, model_estimated] = in;
+  const CompensationMethod method = CompensationMethod::position_idw;
+  GridIdwOptions idw;
+  idw.power = o.idw_power;
+  FitResult out{CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {}, {}};
+  const auto dp = registered_errors(d, out);
+  std::vector<std::size_t> order;
+  const RegularGrid3 grid = [&] {
+    try {
+      return detect_grid(d, order);
+    } catch (const InputError& e) {
+      throw_grid_needed(e, method, d.nominal_mm.size());
+    }
+  }();
+  std::vector<Eigen::Vector3d> node(order.size());
+  for (std::size_t n = 0; n < order.size(); ++n) node[n] = dp[order[n]];
+  out.model = CompensationModel(method, robot, make_position_idw_field(grid, node, idw));
+  out.cross_validation = idw_cv(d.nominal_mm, dp, o.idw_power);
+  return out;
+}
+
+FitResult fit_distance_kriging(const FitInputs& in) {
+  const auto& [robot, d, o, model_estimated] = in;
+  const CompensationMethod method = CompensationMethod::distance_kriging;
+  require_base_point(d, o);
+  std::string model_reason;
   const FieldSamples samples{d.nominal_mm, d.q_deg};
-  auto need_base = [&] {
-    if (o.base >= d.base_nominal_mm.size())
-      throw InputError(d.source + ": base point " + std::to_string(o.base) + " requested but the data have " +
-                           std::to_string(d.base_nominal_mm.size()),
-                       d.source);
-  };
-  auto registered_errors = [&](FitResult& out) {
-    if (d.measured_mm.empty())
-      throw InputError(d.source + ": the method needs measured positions (columns mx,my,mz, tracker frame)", d.source, 0,
-                       "mx");
-    const Registration reg = fit_registration(d.measured_mm, d.nominal_mm);
-    std::vector<Eigen::Vector3d> dp(d.nominal_mm.size());
-    for (std::size_t i = 0; i < dp.size(); ++i) dp[i] = reg.robot_from_tracker * d.measured_mm[i] - d.nominal_mm[i];
-    out.registration = reg;
-    out.notes.push_back("registration tracker -> robot fitted on " + std::to_string(dp.size()) +
-                        " points, residual RMS " + std::to_string(reg.residual_rms_mm) +
-                        " mm (it absorbs the rigid part of the robot's error)");
-    return dp;
-  };
-  switch (method) {
+  const std::vector<double> dl = d.distance_errors(o.base);
+  KrigingFieldOptions ko = field_options(o, model_estimated);
+  const Eigen::MatrixXd flat = Eigen::Map<const Eigen::VectorXd>(dl.data(), static_cast<Eigen::Index>(dl.size()));
+  if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
+  ko.model = chosen_model(o, samples, flat, ko, model_reason);
+  const KrigingFieldFit fit = fit_distance_kriging_field(samples, dl, d.base_nominal_mm[o.base], ko);
+  FitResult out{CompensationModel(method, robot, fit.field), std::nullopt, kriging_report(fit, o.space, o), {}, {}};
+  note_factorization(out, fit, fit.model);
+  if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
+  out.notes.push_back("variogram model " + fit.model.to_string() + "; base point b" + std::to_string(o.base));
+  out.notes.push_back("variogram: " + describe_field_model(fit.model, o.space));
+  note_variance_calibration(out, fit);
+  return out;
+}
+
+/// The full error vector at every point from its distances to >= 3 fixed base points: no
+/// registration needed.
+std::vector<Eigen::Vector3d> errors_from_base_distances(const MeasurementSet& d, FitResult& out) {
+  std::vector<Eigen::Vector3d> dp;
+  std::vector<std::vector<double>> dl;
+  for (std::size_t k = 0; k < d.distance_mm.size(); ++k) dl.push_back(d.distance_errors(k));
+  double worst = 0.0;
+  for (std::size_t i = 0; i < d.q_deg.size(); ++i) {
+    std::vector<double> di;
+    for (const auto& col : dl) di.push_back(col[i]);
+    const PositionErrorRecovery rec = recover_position_error(d.base_nominal_mm, di, d.nominal_mm[i]);
+    if (!rec.ok) throw InputError(d.source + ": point " + d.id[i] + ": " + rec.message, d.source);
+    worst = std::max(worst, rec.condition_number);
+    dp.push_back(rec.position_error_mm);
+  }
+  out.notes.push_back("error vectors recovered from distances to " + std::to_string(dl.size()) +
+                      " base points (worst condition number " + std::to_string(worst) + ")");
+  return dp;
+}
+
+Eigen::MatrixXd rows_of_vectors(const std::vector<Eigen::Vector3d>& v) {
+  Eigen::MatrixXd flat(static_cast<Eigen::Index>(v.size()), 3);
+  for (std::size_t i = 0; i < v.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = v[i].transpose();
+  return flat;
+}
+
+FitResult fit_vector_kriging(const FitInputs& in) {
+  const auto& [robot, d, o, model_estimated] = in;
+  const CompensationMethod method = CompensationMethod::vector_kriging;
+  std::string model_reason;
+  const FieldSamples samples{d.nominal_mm, d.q_deg};
+  FitResult out{CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {}, {}};
+  // Robot-position bases carry the robot's own error into every distance; recovering error
+  // vectors from them as if they were exact biases every vector, so those data use positions
+  // (the CLI refuses them without positions: input_checks.hpp).
+  const std::vector<Eigen::Vector3d> dp = d.distance_mm.size() >= 3 && d.base_q_deg.empty()
+                                              ? errors_from_base_distances(d, out)
+                                              : registered_errors(d, out);
+  KrigingFieldOptions ko = field_options(o, model_estimated);
+  const Eigen::MatrixXd flat = rows_of_vectors(dp);
+  if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
+  ko.model = chosen_model(o, samples, flat, ko, model_reason);
+  const KrigingFieldFit fit = fit_vector_kriging_field(samples, dp, ko);
+  out.model = CompensationModel(method, robot, fit.field);
+  out.cross_validation = kriging_report(fit, o.space, o);
+  out.notes.push_back("variogram model " + fit.model.to_string() + " (shared by the 3 components)");
+  note_kriged_field(out, fit, o.space, model_reason);
+  return out;
+}
+
+/// The rows that are not the model's own point (data of several points on the flange); empty when
+/// every row is.
+std::vector<std::size_t> rows_of_other_points(const detail::KinematicFit& kin, std::size_t rows) {
+  std::vector<std::size_t> other_points;
+  for (std::size_t i = 0, next = 0; !kin.own_point_rows.empty() && i < rows; ++i) {
+    if (next < kin.own_point_rows.size() && kin.own_point_rows[next] == i) ++next;
+    else other_points.push_back(i);
+  }
+  return other_points;
+}
+
+/// What the calibrated model leaves at the own point's readings, in the robot frame, and the
+/// registration it is measured through.
+struct CalibrationResidual {
+  Registration registration;
+  std::vector<Eigen::Vector3d> residual_mm;
+};
+
+CalibrationResidual calibration_residual(const detail::KinematicFit& kin, const MeasurementSet& dd) {
+  if (dd.measured_mm.empty())
+    throw InputError(dd.source + ": kinematic+kriging needs measured positions (mx,my,mz) for the residuals",
+                     dd.source, 0, "mx");
+  std::vector<Eigen::Vector3d> identified(dd.q_deg.size());
+  for (std::size_t i = 0; i < identified.size(); ++i) identified[i] = forward_position(kin.model, dd.q_deg[i]);
+  // Position calibration found the registration with the model; distance calibration has none.
+  const Registration reg = kin.registration ? *kin.registration : fit_registration(dd.measured_mm, identified);
+  std::vector<Eigen::Vector3d> residual(identified.size());
+  for (std::size_t i = 0; i < residual.size(); ++i) residual[i] = reg.robot_from_tracker * dd.measured_mm[i] - identified[i];
+  return {reg, std::move(residual)};
+}
+
+/// The joint error functions by ordinary (ridge) least squares on the calibration's residual, with
+/// their notes.
+JointErrorFunctionFit ordinary_joint_functions(const detail::KinematicFit& kin, const MeasurementSet& dd,
+                                               const std::vector<Eigen::Vector3d>& residual, const FitOptions& o,
+                                               FitResult& out) {
+  JointErrorFunctionFit jf = fit_joint_error_functions(kin.model, dd.q_deg, residual, o.joint_function_degree,
+                                                       o.gravity_load, o.joint_function_prior);
+  if (!jf.undetermined_gravity_terms.empty()) {
+    std::string which;
+    for (const std::string& t : jf.undetermined_gravity_terms) which += (which.empty() ? "" : ", ") + t;
+    out.notes.push_back(std::to_string(jf.undetermined_gravity_terms.size()) + " gravity-load term(s) left out (" +
+                        which +
+                        "): over these poses their lever barely varies, so the data cannot tell them from the "
+                        "joint offsets the calibration identified");
+  }
+  const std::string gravity =
+      o.gravity_load ? " and " + std::to_string(jf.functions.gravity_terms.size()) +
+                           " gravity-load terms (largest deflection over the poses " +
+                           format_number(std::round(jf.largest_gravity_deflection_mrad * 1e3) / 1e3) + " mrad)"
+                     : std::string();
+  out.notes.push_back("joint error functions (Legendre degree " + std::to_string(o.joint_function_degree) +
+                      " per joint" + gravity + ", ridge by generalized cross-validation: " +
+                      format_number(std::round(jf.effective_parameters * 10) / 10) +
+                      " effective parameters): residual RMS " + format_number(std::round(jf.rms_before_mm * 1e4) / 1e4) +
+                      " -> " + format_number(std::round(jf.rms_after_mm * 1e4) / 1e4) +
+                      " mm, largest joint angle error " +
+                      format_number(std::round(jf.functions.largest_angle_error_mrad() * 1e3) / 1e3) +
+                      " mrad; the field's variance calibration counts their leave-one-out inflation x" +
+                      format_number(std::round(jf.leave_one_out_inflation * 1e3) / 1e3));
+  return jf;
+}
+
+/// The joint functions again, by generalized least squares under the first field's covariance (the
+/// residuals are correlated), then the field on what they leave, with the same variogram; or the
+/// ordinary fit kept, when the GLS refit is not possible or the guard refuses it. `fit` holds the
+/// first field on entry and the final field on return.
+void refit_joint_functions(JointErrorFunctionFit& jf, const MeasurementSet& dd,
+                           const std::vector<Eigen::Vector3d>& calibration_residual, const FieldSamples& own_samples,
+                           const KrigingFieldOptions& ko, const FitOptions& o, KrigingFieldFit& fit, FitResult& out) {
+  const double ordinary_rms = jf.rms_after_mm;
+  const VariogramModel field_model = fit.model;
+  fit = KrigingFieldFit{};  // the first field's N x N factorization is not needed any more
+  const JointErrorFunctionFit ordinary = jf;
+  const bool refitted =
+      refit_by_generalized_least_squares(jf, dd.q_deg, calibration_residual, field_model, o.joint_function_prior);
+  // A GLS fit that leaves the field far more than the ordinary one moved the functions into
+  // what the correlated field absorbs at these poses: the two then cancel at the measured point
+  // and nowhere else (real data: 0.89 mm left where the ordinary fit left 0.17 mm, issue 34).
+  const bool moved_far = refitted && o.gls_guard_ratio > 0.0 && jf.rms_after_mm > o.gls_guard_ratio * ordinary_rms;
+  if (moved_far) {
+    out.notes.push_back("joint error functions: the refit by generalized least squares would leave an RMS of " +
+                        format_number(std::round(jf.rms_after_mm * 1e4) / 1e4) + " mm to the field, over " +
+                        format_number(o.gls_guard_ratio) + " x the " + format_number(std::round(ordinary_rms * 1e4) / 1e4) +
+                        " mm the ordinary fit left (it moved the functions into what the field absorbs at "
+                        "these poses), so they keep the ordinary fit");
+    jf = ordinary;
+    fit = fit_vector_kriging_field(own_samples, jf.remaining_mm, ko);
+    set_coefficient_covariance(jf, dd.q_deg, fit.model);
+  } else if (refitted) {
+    fit = fit_vector_kriging_field(own_samples, jf.remaining_mm, ko);
+    out.notes.push_back("joint error functions refitted by generalized least squares under the field's "
+                        "covariance (" + format_number(std::round(jf.effective_parameters * 10) / 10) +
+                        " effective parameters): they leave an RMS of " +
+                        format_number(std::round(jf.rms_after_mm * 1e4) / 1e4) + " mm to the field (the ordinary fit left " +
+                        format_number(std::round(ordinary_rms * 1e4) / 1e4) +
+                        " mm, chasing clusters of correlated residuals)");
+  } else {  // jf is as the ordinary fit left it
+    fit = fit_vector_kriging_field(own_samples, jf.remaining_mm, ko);
+    set_coefficient_covariance(jf, dd.q_deg, fit.model);
+    if (jf.ridge_inverse.size() > 0)
+      out.notes.push_back("joint error functions: the field's covariance at the poses is not positive definite "
+                          "(repeated poses without a nugget), so they keep the ordinary fit");
+  }
+}
+
+/// Data of several points on the flange: the covariances the model states at a point between or
+/// beyond the measured ones, from the fields' leave-one-out at the training poses.
+void add_point_covariances(FitResult& out) {
+  const std::optional<HeldOutAtPoints> held_out = held_out_at_fielded_points(out.model);
+  if (!held_out)
+    out.notes.push_back("warning: no flange_error_covariance and no rotation_calibration: a field holds no "
+                        "leave-one-out per training pose (poses repeated at one point merge into one "
+                        "location), so a point between the measured ones takes the sum of the fields' "
+                        "standard deviations and the orientation's covariance their independent combination");
+  if (const std::optional<FlangeErrorCovariance> c = held_out ? flange_error_covariance_of(out.model, *held_out) : std::nullopt) {
+    out.model = out.model.with_flange_error_covariance(c);
+    out.notes.push_back("a point between or beyond the measured ones takes the covariance of the fields' "
+                        "leave-one-out errors at their points at " + std::to_string(c->poses) +
+                        " training poses (how alike their errors are), larger where the fields' own variance is");
+  }
+  if (const std::optional<RotationCalibration> c = held_out ? rotation_calibration_of(out.model, *held_out) : std::nullopt) {
+    out.model = out.model.with_rotation_calibration(c);
+    out.notes.push_back("the flange's orientation error is predicted from the fields at " +
+                        std::to_string(out.model.fielded_points().size()) +
+                        " points; its covariance is that of the rotation their leave-one-out residuals "
+                        "imply at " + std::to_string(c->poses) + " training poses (" +
+                        format_number(std::round(std::sqrt(c->flange_covariance_rad2.trace() / 3.0) * 1e7) / 1e4) +
+                        " mrad per axis, 1 sd), larger where the fields' own variance is");
+  }
+}
+
+/// Data of several points on the flange: the orientation residual the other points measure, then
+/// each further point's own field, so that every measured point is predicted from its own readings
+/// and any other from the flange's rigid motion they imply (predict_error_at).
+void add_further_points(FitResult& out, const MeasurementSet& d, const detail::KinematicFit& kin,
+                        const Registration& reg, const std::vector<std::size_t>& other_points,
+                        const KrigingFieldOptions& ko, const VariogramModel& field_model,
+                        const std::function<HeldOutShift(const MdhModel&)>& shift_at) {
+  const MeasuredOrientation m = measured_orientation(out.model, d, kin, reg, other_points);
+  out.model = out.model.with_measured_orientation(m);
+  out.notes.push_back("orientation residual of the flange measured at the other points' " + std::to_string(m.readings) +
+                      " readings: " + format_number(std::round(m.sigma_rad * 1e7) / 1e4) + " mrad per axis (1 sd)" +
+                      (!m.add_floor ? std::string()
+                                     : " plus the 0.1 mrad floor (the points lie on a line: a rotation about it "
+                                       "escapes them)") +
+                      "; the variance at any other point on the flange counts it");
+  KrigingFieldOptions point_options = ko;
+  point_options.model = field_model;
+  point_options.on_stage = nullptr;
+  const std::vector<CompensationModel::LabelledPoint> fielded =
+      fields_of_further_points(out.model, d, kin, reg, other_points, point_options, shift_at);
+  std::string labels;
+  for (const CompensationModel::LabelledPoint& lp : fielded)
+    if (lp.field) labels += (labels.empty() ? "'" : ", '") + lp.label + "'";
+  if (labels.empty()) return;
+  out.model = out.model.with_flange_points(fielded);
+  out.notes.push_back("the residuals at " + labels + " kriged on their own readings with the same variogram; "
+                      "a point between the measured ones is predicted from the flange's rigid motion "
+                      "their fields imply");
+  add_point_covariances(out);
+}
+
+/// Kinematic calibration, then (kinematic+kriging) joint error functions and a field on what the
+/// calibration leaves at the model's own point, then the further points on the flange.
+FitResult fit_kinematic_model(const FitInputs& in) {
+  const auto& [robot, d, o, model_estimated] = in;
+  const CompensationMethod method = o.method;
+  const detail::KinematicFit kin = detail::fit_kinematic(robot, d, o);
+  std::vector<CompensationModel::LabelledPoint> located;
+  for (const auto& [label, p] : kin.located_points) located.push_back({label, p, nullptr});
+  FitResult out{CompensationModel(CompensationMethod::kinematic, kin.model, nullptr)
+                    .with_tool_point(kin.tool_point_mm, kin.reflector_mm)
+                    .with_flange_points(located)
+                    .with_calibration_leverage(kin.leverage),
+                kin.registration, std::nullopt, kin.notes, kin.warnings};
+  if (method == CompensationMethod::kinematic) return out;
+  // Readings of several points on the flange: the functions and the field take the model's own point.
+  const std::vector<std::size_t> other_points = rows_of_other_points(kin, d.q_deg.size());
+  const MeasurementSet own_point = other_points.empty() ? MeasurementSet{} : without_rows(d, other_points);
+  const MeasurementSet& dd = other_points.empty() ? d : own_point;
+  const FieldSamples own_samples{dd.nominal_mm, dd.q_deg};
+  const CalibrationResidual calibration = calibration_residual(kin, dd);
+  if (!kin.registration) out.registration = calibration.registration;
+  std::vector<Eigen::Vector3d> residual = calibration.residual_mm;
+  std::optional<JointErrorFunctionFit> jf;
+  if (o.joint_function_degree > 0) {
+    jf = ordinary_joint_functions(kin, dd, residual, o, out);
+    residual = jf->remaining_mm;
+  }
+  KrigingFieldOptions ko = field_options(o, model_estimated);
+  ko.value_variance_inflation = jf ? jf->leave_one_out_inflation : 1.0;
+  // The ordinary fit's leave-one-out, per sample of every field the functions are carried to
+  // (the GLS refit keeps it, as it keeps the inflation).
+  std::function<HeldOutShift(const MdhModel&)> shift_at;
+  if (jf) {
+    auto ordinary_fit = std::make_shared<const JointErrorFunctionFit>(*jf);
+    shift_at = [ordinary_fit, poses = dd.q_deg, reflector = kin.model](const MdhModel& at) {
+      return joint_function_held_out_shift(ordinary_fit, poses, reflector, at);
+    };
+    ko.held_out_shift = shift_at(kin.model);
+  }
+  std::string model_reason;
+  if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
+  ko.model = chosen_model(o, own_samples, rows_of_vectors(residual), ko, model_reason);
+  KrigingFieldFit fit = fit_vector_kriging_field(own_samples, residual, ko);
+  std::optional<JointErrorFunctions> functions;
+  if (jf) {
+    refit_joint_functions(*jf, dd, calibration.residual_mm, own_samples, ko, o, fit, out);
+    functions = std::move(jf->functions);
+  }
+  out.model = CompensationModel(method, kin.model, fit.field)
+                  .with_tool_point(kin.tool_point_mm, kin.reflector_mm)
+                  .with_joint_error_functions(std::move(functions))
+                  .with_flange_points(located)
+                  .with_calibration_leverage(kin.leverage);
+  if (!other_points.empty())
+    add_further_points(out, d, kin, calibration.registration, other_points, ko, fit.model, shift_at);
+  out.cross_validation = kriging_report(fit, o.space, o);
+  out.notes.push_back("residuals after calibration kriged with " + fit.model.to_string());
+  note_kriged_field(out, fit, o.space, model_reason);
+  return out;
+}
+
+FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o, bool model_estimated) {
+  const FitInputs in{robot, d, o, model_estimated};
+  switch (o.method) {
     case CompensationMethod::none:
-      return {CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {"no correction"}, {}};
-    case CompensationMethod::distance_idw: {
-      need_base();
-      const std::vector<double> dl = d.distance_errors(o.base);
-      std::vector<std::size_t> order;
-      // The paper's layout: the base point P0 is grid vertex 0, measured once as the base row. Its
-      // distance to itself is exactly 0, its distance error 0: it completes the grid (when the
-      // targets alone do not form one and the base row is a robot position).
-      std::vector<double> node_values = dl;
-      std::optional<RegularGrid3> found;
-      bool base_as_vertex = false;
-      try {
-        found = detect_grid(d, order);
-      } catch (const InputError& e) {
-        if (o.base >= d.base_q_deg.size()) throw_grid_needed(e, method, d.nominal_mm.size());
-        MeasurementSet with_base = d;
-        with_base.nominal_mm.push_back(d.base_nominal_mm[o.base]);
-        try {
-          found = detect_grid(with_base, order);
-        } catch (const InputError&) {
-        }
-        if (!found) throw_grid_needed(e, method, d.nominal_mm.size());  // the targets' own grid error
-        node_values.push_back(0.0);
-        base_as_vertex = true;
-      }
-      const RegularGrid3 grid = *found;
-      std::vector<double> node(order.size());
-      for (std::size_t n = 0; n < order.size(); ++n) node[n] = node_values[order[n]];
-      FitResult out{CompensationModel(method, robot, make_distance_idw_field(grid, node, d.base_nominal_mm[o.base], idw)),
-                    std::nullopt, idw_cv(d.nominal_mm, dl, o.idw_power), {}, {}};
-      if (base_as_vertex)
-        out.notes.push_back("base point b" + std::to_string(o.base) +
-                            " is a grid vertex (the paper's layout): its distance error there is 0");
-      out.notes.push_back("base point b" + std::to_string(o.base) + " at (" + std::to_string(d.base_nominal_mm[o.base].x()) +
-                          ", " + std::to_string(d.base_nominal_mm[o.base].y()) + ", " +
-                          std::to_string(d.base_nominal_mm[o.base].z()) + ") mm");
-      return out;
-    }
-    case CompensationMethod::position_idw: {
-      FitResult out{CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {}, {}};
-      const auto dp = registered_errors(out);
-      std::vector<std::size_t> order;
-      const RegularGrid3 grid = [&] {
-        try {
-          return detect_grid(d, order);
-        } catch (const InputError& e) {
-          throw_grid_needed(e, method, d.nominal_mm.size());
-        }
-      }();
-      std::vector<Eigen::Vector3d> node(order.size());
-      for (std::size_t n = 0; n < order.size(); ++n) node[n] = dp[order[n]];
-      out.model = CompensationModel(method, robot, make_position_idw_field(grid, node, idw));
-      out.cross_validation = idw_cv(d.nominal_mm, dp, o.idw_power);
-      return out;
-    }
-    case CompensationMethod::distance_kriging: {
-      need_base();
-      const std::vector<double> dl = d.distance_errors(o.base);
-      KrigingFieldOptions ko = field_options(o, model_estimated);
-      const Eigen::MatrixXd flat = Eigen::Map<const Eigen::VectorXd>(dl.data(), static_cast<Eigen::Index>(dl.size()));
-      if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
-      ko.model = chosen_model(o, samples, flat, ko, model_reason);
-      const KrigingFieldFit fit = fit_distance_kriging_field(samples, dl, d.base_nominal_mm[o.base], ko);
-      FitResult out{CompensationModel(method, robot, fit.field), std::nullopt, kriging_report(fit, o.space, o), {}, {}};
-      note_factorization(out, fit, fit.model);
-      if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
-      out.notes.push_back("variogram model " + fit.model.to_string() + "; base point b" + std::to_string(o.base));
-      out.notes.push_back("variogram: " + describe_field_model(fit.model, o.space));
-      note_variance_calibration(out, fit);
-      return out;
-    }
-    case CompensationMethod::vector_kriging: {
-      FitResult out{CompensationModel(method, robot, nullptr), std::nullopt, std::nullopt, {}, {}};
-      std::vector<Eigen::Vector3d> dp;
-      // Robot-position bases carry the robot's own error into every distance; recovering error
-      // vectors from them as if they were exact biases every vector, so those data use positions
-      // (the CLI refuses them without positions: input_checks.hpp).
-      if (d.distance_mm.size() >= 3 && d.base_q_deg.empty()) {
-        // registration-free: the full error vector from distances to >= 3 fixed base points
-        std::vector<std::vector<double>> dl;
-        for (std::size_t k = 0; k < d.distance_mm.size(); ++k) dl.push_back(d.distance_errors(k));
-        double worst = 0.0;
-        for (std::size_t i = 0; i < d.q_deg.size(); ++i) {
-          std::vector<double> di;
-          for (const auto& col : dl) di.push_back(col[i]);
-          const PositionErrorRecovery rec = recover_position_error(d.base_nominal_mm, di, d.nominal_mm[i]);
-          if (!rec.ok) throw InputError(d.source + ": point " + d.id[i] + ": " + rec.message, d.source);
-          worst = std::max(worst, rec.condition_number);
-          dp.push_back(rec.position_error_mm);
-        }
-        out.notes.push_back("error vectors recovered from distances to " + std::to_string(dl.size()) +
-                            " base points (worst condition number " + std::to_string(worst) + ")");
-      } else {
-        dp = registered_errors(out);
-      }
-      KrigingFieldOptions ko = field_options(o, model_estimated);
-      Eigen::MatrixXd flat(static_cast<Eigen::Index>(dp.size()), 3);
-      for (std::size_t i = 0; i < dp.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = dp[i].transpose();
-      if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
-      ko.model = chosen_model(o, samples, flat, ko, model_reason);
-      const KrigingFieldFit fit = fit_vector_kriging_field(samples, dp, ko);
-      out.model = CompensationModel(method, robot, fit.field);
-      out.cross_validation = kriging_report(fit, o.space, o);
-      out.notes.push_back("variogram model " + fit.model.to_string() + " (shared by the 3 components)");
-      out.notes.push_back("variogram per component: " + describe_field_model(fit.model, o.space));
-      note_factorization(out, fit, fit.model);
-      if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
-      note_variance_calibration(out, fit);
-      return out;
-    }
+      return {CompensationModel(o.method, robot, nullptr), std::nullopt, std::nullopt, {"no correction"}, {}};
+    case CompensationMethod::distance_idw: return fit_distance_idw(in);
+    case CompensationMethod::position_idw: return fit_position_idw(in);
+    case CompensationMethod::distance_kriging: return fit_distance_kriging(in);
+    case CompensationMethod::vector_kriging: return fit_vector_kriging(in);
     case CompensationMethod::kinematic:
-    case CompensationMethod::kinematic_kriging: {
-      const KinematicFit kin = fit_kinematic(robot, d, o);
-      std::vector<CompensationModel::LabelledPoint> located;
-      for (const auto& [label, p] : kin.located_points) located.push_back({label, p, nullptr});
-      FitResult out{CompensationModel(CompensationMethod::kinematic, kin.model, nullptr)
-                        .with_tool_point(kin.tool_point_mm, kin.reflector_mm)
-                        .with_flange_points(located)
-                        .with_calibration_leverage(kin.leverage),
-                    kin.registration, std::nullopt, kin.notes, kin.warnings};
-      if (method == CompensationMethod::kinematic) return out;
-      // Readings of several points on the flange: the functions and the field take the model's own point.
-      std::vector<std::size_t> other_points;
-      for (std::size_t i = 0, next = 0; !kin.own_point_rows.empty() && i < d.q_deg.size(); ++i) {
-        if (next < kin.own_point_rows.size() && kin.own_point_rows[next] == i) ++next;
-        else other_points.push_back(i);
-      }
-      const MeasurementSet own_point = other_points.empty() ? MeasurementSet{} : without_rows(d, other_points);
-      const MeasurementSet& dd = other_points.empty() ? d : own_point;
-      const FieldSamples own_samples{dd.nominal_mm, dd.q_deg};
-      if (dd.measured_mm.empty())
-        throw InputError(dd.source + ": kinematic+kriging needs measured positions (mx,my,mz) for the residuals",
-                         dd.source, 0, "mx");
-      std::vector<Eigen::Vector3d> identified(dd.q_deg.size());
-      for (std::size_t i = 0; i < identified.size(); ++i) identified[i] = forward_position(kin.model, dd.q_deg[i]);
-      // Position calibration found the registration with the model; distance calibration has none.
-      const Registration reg = kin.registration ? *kin.registration : fit_registration(dd.measured_mm, identified);
-      if (!kin.registration) out.registration = reg;
-      std::vector<Eigen::Vector3d> residual(identified.size());
-      for (std::size_t i = 0; i < residual.size(); ++i)
-        residual[i] = reg.robot_from_tracker * dd.measured_mm[i] - identified[i];
-      std::optional<JointErrorFunctionFit> jf;
-      double inflation = 1.0;
-      const std::vector<Eigen::Vector3d> calibration_residual = residual;
-      const JointFunctionPrior& prior = o.joint_function_prior;
-      if (o.joint_function_degree > 0) {
-        jf = fit_joint_error_functions(kin.model, dd.q_deg, residual, o.joint_function_degree, o.gravity_load, prior);
-        if (!jf->undetermined_gravity_terms.empty()) {
-          std::string which;
-          for (const std::string& t : jf->undetermined_gravity_terms) which += (which.empty() ? "" : ", ") + t;
-          out.notes.push_back(std::to_string(jf->undetermined_gravity_terms.size()) +
-                              " gravity-load term(s) left out (" + which +
-                              "): over these poses their lever barely varies, so the data cannot tell them from the "
-                              "joint offsets the calibration identified");
-        }
-        residual = jf->remaining_mm;
-        const std::string gravity =
-            o.gravity_load ? " and " + std::to_string(jf->functions.gravity_terms.size()) +
-                                 " gravity-load terms (largest deflection over the poses " +
-                                 format_number(std::round(jf->largest_gravity_deflection_mrad * 1e3) / 1e3) + " mrad)"
-                           : std::string();
-        out.notes.push_back("joint error functions (Legendre degree " + std::to_string(o.joint_function_degree) +
-                            " per joint" + gravity + ", ridge by generalized cross-validation: " +
-                            format_number(std::round(jf->effective_parameters * 10) / 10) +
-                            " effective parameters): residual RMS " + format_number(std::round(jf->rms_before_mm * 1e4) / 1e4) +
-                            " -> " + format_number(std::round(jf->rms_after_mm * 1e4) / 1e4) +
-                            " mm, largest joint angle error " +
-                            format_number(std::round(jf->functions.largest_angle_error_mrad() * 1e3) / 1e3) +
-                            " mrad; the field's variance calibration counts their leave-one-out inflation x" +
-                            format_number(std::round(jf->leave_one_out_inflation * 1e3) / 1e3));
-        inflation = jf->leave_one_out_inflation;
-      }
-      KrigingFieldOptions ko = field_options(o, model_estimated);
-      ko.value_variance_inflation = inflation;
-      // The ordinary fit's leave-one-out, per sample of every field the functions are carried to
-      // (the GLS refit below keeps it, as it keeps the inflation).
-      std::function<HeldOutShift(const MdhModel&)> shift_at;
-      if (jf) {
-        auto ordinary_fit = std::make_shared<const JointErrorFunctionFit>(*jf);
-        shift_at = [ordinary_fit, poses = dd.q_deg, reflector = kin.model](const MdhModel& at) {
-          return joint_function_held_out_shift(ordinary_fit, poses, reflector, at);
-        };
-        ko.held_out_shift = shift_at(kin.model);
-      }
-      Eigen::MatrixXd flat(static_cast<Eigen::Index>(residual.size()), 3);
-      for (std::size_t i = 0; i < residual.size(); ++i) flat.row(static_cast<Eigen::Index>(i)) = residual[i].transpose();
-      if (!o.model && o.on_stage) o.on_stage("estimating the variogram");
-      ko.model = chosen_model(o, own_samples, flat, ko, model_reason);
-      KrigingFieldFit fit = fit_vector_kriging_field(own_samples, residual, ko);
-      std::optional<JointErrorFunctions> functions;
-      if (jf) {
-        // The functions again, by generalized least squares under the field's covariance (the
-        // residuals are correlated), then the field on what they leave, with the same variogram.
-        const double ordinary_rms = jf->rms_after_mm;
-        const VariogramModel field_model = fit.model;
-        fit = KrigingFieldFit{};  // the first field's N x N factorization is not needed any more
-        const JointErrorFunctionFit ordinary = *jf;
-        const bool refitted = refit_by_generalized_least_squares(*jf, dd.q_deg, calibration_residual, field_model, prior);
-        // A GLS fit that leaves the field far more than the ordinary one moved the functions into
-        // what the correlated field absorbs at these poses: the two then cancel at the measured point
-        // and nowhere else (real data: 0.89 mm left where the ordinary fit left 0.17 mm, issue 34).
-        const bool moved_far = refitted && o.gls_guard_ratio > 0.0 && jf->rms_after_mm > o.gls_guard_ratio * ordinary_rms;
-        if (moved_far) {
-          out.notes.push_back("joint error functions: the refit by generalized least squares would leave an RMS of " +
-                              format_number(std::round(jf->rms_after_mm * 1e4) / 1e4) + " mm to the field, over " +
-                              format_number(o.gls_guard_ratio) + " x the " +
-                              format_number(std::round(ordinary_rms * 1e4) / 1e4) +
-                              " mm the ordinary fit left (it moved the functions into what the field absorbs at "
-                              "these poses), so they keep the ordinary fit");
-          *jf = ordinary;
-          residual = jf->remaining_mm;
-          fit = fit_vector_kriging_field(own_samples, residual, ko);
-          set_coefficient_covariance(*jf, dd.q_deg, fit.model);
-        } else if (refitted) {
-          residual = jf->remaining_mm;
-          fit = fit_vector_kriging_field(own_samples, residual, ko);
-          out.notes.push_back("joint error functions refitted by generalized least squares under the field's "
-                              "covariance (" + format_number(std::round(jf->effective_parameters * 10) / 10) +
-                              " effective parameters): they leave an RMS of " +
-                              format_number(std::round(jf->rms_after_mm * 1e4) / 1e4) +
-                              " mm to the field (the ordinary fit left " +
-                              format_number(std::round(ordinary_rms * 1e4) / 1e4) +
-                              " mm, chasing clusters of correlated residuals)");
-        } else {  // jf is as the ordinary fit left it
-          fit = fit_vector_kriging_field(own_samples, residual, ko);
-          set_coefficient_covariance(*jf, dd.q_deg, fit.model);
-          if (jf->ridge_inverse.size() > 0)
-            out.notes.push_back("joint error functions: the field's covariance at the poses is not positive definite "
-                                "(repeated poses without a nugget), so they keep the ordinary fit");
-        }
-        functions = std::move(jf->functions);
-      }
-      out.model = CompensationModel(method, kin.model, fit.field)
-                      .with_tool_point(kin.tool_point_mm, kin.reflector_mm)
-                      .with_joint_error_functions(std::move(functions))
-                      .with_flange_points(located)
-                      .with_calibration_leverage(kin.leverage);
-      if (!other_points.empty()) {
-        const MeasuredOrientation m = measured_orientation(out.model, d, kin, reg, other_points);
-        out.model = out.model.with_measured_orientation(m);
-        out.notes.push_back("orientation residual of the flange measured at the other points' " +
-                            std::to_string(m.readings) + " readings: " +
-                            format_number(std::round(m.sigma_rad * 1e7) / 1e4) + " mrad per axis (1 sd)" +
-                            (!m.add_floor ? std::string()
-                                           : " plus the 0.1 mrad floor (the points lie on a line: a rotation about it "
-                                             "escapes them)") +
-                            "; the variance at any other point on the flange counts it");
-        // Then each further point's own field, so that every measured point is predicted from its
-        // own readings and any other from the flange's rigid motion they imply (predict_error_at).
-        KrigingFieldOptions point_options = ko;
-        point_options.model = fit.model;
-        point_options.on_stage = nullptr;
-        const std::vector<CompensationModel::LabelledPoint> fielded =
-            fields_of_further_points(out.model, d, kin, reg, other_points, point_options, shift_at);
-        std::string labels;
-        for (const CompensationModel::LabelledPoint& lp : fielded)
-          if (lp.field) labels += (labels.empty() ? "'" : ", '") + lp.label + "'";
-        if (!labels.empty()) {
-          out.model = out.model.with_flange_points(fielded);
-          out.notes.push_back("the residuals at " + labels + " kriged on their own readings with the same variogram; "
-                              "a point between the measured ones is predicted from the flange's rigid motion "
-                              "their fields imply");
-          const std::optional<HeldOutAtPoints> held_out = held_out_at_fielded_points(out.model);
-          if (!held_out)
-            out.notes.push_back("warning: no flange_error_covariance and no rotation_calibration: a field holds no "
-                                "leave-one-out per training pose (poses repeated at one point merge into one "
-                                "location), so a point between the measured ones takes the sum of the fields' "
-                                "standard deviations and the orientation's covariance their independent combination");
-          if (const std::optional<FlangeErrorCovariance> c = held_out ? flange_error_covariance_of(out.model, *held_out) : std::nullopt) {
-            out.model = out.model.with_flange_error_covariance(c);
-            out.notes.push_back("a point between or beyond the measured ones takes the covariance of the fields' "
-                                "leave-one-out errors at their points at " + std::to_string(c->poses) +
-                                " training poses (how alike their errors are), larger where the fields' own variance is");
-          }
-          if (const std::optional<RotationCalibration> c = held_out ? rotation_calibration_of(out.model, *held_out) : std::nullopt) {
-            out.model = out.model.with_rotation_calibration(c);
-            out.notes.push_back("the flange's orientation error is predicted from the fields at " +
-                                std::to_string(out.model.fielded_points().size()) +
-                                " points; its covariance is that of the rotation their leave-one-out residuals "
-                                "imply at " + std::to_string(c->poses) + " training poses (" +
-                                format_number(std::round(std::sqrt(c->flange_covariance_rad2.trace() / 3.0) * 1e7) / 1e4) +
-                                " mrad per axis, 1 sd), larger where the fields' own variance is");
-          }
-        }
-      }
-      out.cross_validation = kriging_report(fit, o.space, o);
-      out.notes.push_back("residuals after calibration kriged with " + fit.model.to_string());
-      out.notes.push_back("variogram per component: " + describe_field_model(fit.model, o.space));
-      note_factorization(out, fit, fit.model);
-      if (!model_reason.empty()) out.notes.push_back("model chosen by " + model_reason);
-      note_variance_calibration(out, fit);
-      return out;
-    }
+    case CompensationMethod::kinematic_kriging: return fit_kinematic_model(in);
   }
   throw ArgumentError("fit: unknown method");
 }

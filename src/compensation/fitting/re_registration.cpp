@@ -37,18 +37,9 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-}  // namespace
-
-ReRegistration reregister(const CompensationModel& model, const robot::MdhModel& nominal,
-                          const std::vector<JointVector>& q_deg, const std::vector<Eigen::Vector3d>& tracker_mm,
-                          const std::string& source, const ReRegistrationOptions& o) {
-  const std::size_t n = q_deg.size();
-  if (n != tracker_mm.size()) throw InputError(source + ": joints and readings differ in count", source);
-  if (n < o.min_readings)
-    throw InputError(source + ": " + std::to_string(n) + " readings with tracker positions mx,my,mz; register needs at least " +
-                         std::to_string(o.min_readings) + " (10-30 spread over the work volume determine the frame well)",
-                     source);
-  // A rigid motion needs readings that span a plane: on one line the rotation about it is free.
+/// A rigid motion needs readings that span a plane: on one line the rotation about it is free.
+void refuse_readings_on_a_line(const std::vector<Eigen::Vector3d>& tracker_mm, const std::string& source) {
+  const std::size_t n = tracker_mm.size();
   Eigen::MatrixXd centred(static_cast<Eigen::Index>(n), 3);
   const Eigen::Vector3d mean = [&] {
     Eigen::Vector3d m = Eigen::Vector3d::Zero();
@@ -61,83 +52,122 @@ ReRegistration reregister(const CompensationModel& model, const robot::MdhModel&
     throw InputError(source + ": the readings lie within " + format_significant(spread[1], 3) +
                          " mm (RMS) of one line: a rigid motion is not determined; measure poses spread over the work volume",
                      source);
-  ReRegistration out;
-  std::vector<Eigen::Vector3d> predicted(n), fk(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    bool with_field = true;
-    predicted[i] = model_prediction(model, q_deg[i], with_field);
-    if (!with_field) ++out.without_field;
-    fk[i] = robot::forward_position(nominal, q_deg[i]);
-  }
-  const auto fit_on = [&](const std::vector<std::size_t>& rows, const std::vector<Eigen::Vector3d>& to) {
+}
+
+/// The readings (tracker frame) and where the model puts each of them (robot frame).
+struct RegistrationData {
+  const std::vector<Eigen::Vector3d>& tracker_mm;
+  std::vector<Eigen::Vector3d> predicted;
+
+  Registration fit_on(const std::vector<std::size_t>& rows, const std::vector<Eigen::Vector3d>& to) const {
     std::vector<Eigen::Vector3d> a, b;
     for (const std::size_t i : rows) {
       a.push_back(tracker_mm[i]);
       b.push_back(to[i]);
     }
     return fit_registration(a, b);
-  };
-  const auto residuals = [&](const Registration& r) {
-    std::vector<double> e(n);
-    for (std::size_t i = 0; i < n; ++i) e[i] = (r.robot_from_tracker * tracker_mm[i] - predicted[i]).norm();
+  }
+  std::vector<double> residuals(const Registration& r) const {
+    std::vector<double> e(tracker_mm.size());
+    for (std::size_t i = 0; i < e.size(); ++i) e[i] = (r.robot_from_tracker * tracker_mm[i] - predicted[i]).norm();
     return e;
-  };
-  // Least median of squares over triples of readings: a least-squares fit is pulled towards a group
-  // of readings in another frame (a tracker bumped mid-series) until no single one stands out; the
-  // triple whose registration leaves the smallest median residual is not, up to half the readings.
+  }
+};
+
+/// Triple number t of the n (n - 1) (n - 2) / 6 in lexicographic order.
+std::array<std::size_t, 3> nth_triple(std::size_t t, std::size_t n) {
+  std::array<std::size_t, 3> k{};
+  std::size_t r = t;
+  for (k[0] = 0;; ++k[0]) {
+    const std::size_t c = (n - 1 - k[0]) * (n - 2 - k[0]) / 2;
+    if (r < c) break;
+    r -= c;
+  }
+  for (k[1] = k[0] + 1;; ++k[1]) {
+    const std::size_t c = n - 1 - k[1];
+    if (r < c) break;
+    r -= c;
+  }
+  k[2] = k[1] + 1 + r;
+  return k;
+}
+
+/// Least median of squares over triples of readings: a least-squares fit is pulled towards a group
+/// of readings in another frame (a tracker bumped mid-series) until no single one stands out; the
+/// triple whose registration leaves the smallest median residual is not, up to half the readings.
+/// Returns that registration and its median residual.
+std::pair<Registration, double> least_median_registration(const RegistrationData& data) {
+  const std::size_t n = data.tracker_mm.size();
   std::vector<std::size_t> all(n);
   for (std::size_t i = 0; i < n; ++i) all[i] = i;
-  Registration start = fit_on(all, predicted);
-  double best_median = median(residuals(start));
+  Registration start = data.fit_on(all, data.predicted);
+  double best_median = median(data.residuals(start));
   std::mt19937 random(1);  // deterministic: the same readings give the same model
   const std::size_t triples = std::min<std::size_t>(n * (n - 1) * (n - 2) / 6, 3000);
   for (std::size_t t = 0; t < triples; ++t) {
     std::array<std::size_t, 3> k{};
     if (triples == n * (n - 1) * (n - 2) / 6) {  // every triple, in order
-      std::size_t r = t;
-      for (k[0] = 0;; ++k[0]) {
-        const std::size_t c = (n - 1 - k[0]) * (n - 2 - k[0]) / 2;
-        if (r < c) break;
-        r -= c;
-      }
-      for (k[1] = k[0] + 1;; ++k[1]) {
-        const std::size_t c = n - 1 - k[1];
-        if (r < c) break;
-        r -= c;
-      }
-      k[2] = k[1] + 1 + r;
+      k = nth_triple(t, n);
     } else {
       std::uniform_int_distribution<std::size_t> pick(0, n - 1);
       k = {pick(random), pick(random), pick(random)};
       if (k[0] == k[1] || k[1] == k[2] || k[0] == k[2]) continue;
     }
-    const Eigen::Vector3d u = tracker_mm[k[1]] - tracker_mm[k[0]], v = tracker_mm[k[2]] - tracker_mm[k[0]];
+    const Eigen::Vector3d u = data.tracker_mm[k[1]] - data.tracker_mm[k[0]], v = data.tracker_mm[k[2]] - data.tracker_mm[k[0]];
     if (u.cross(v).norm() < 100.0) continue;  // within ~10 mm of one line: no rotation determined
-    const Registration r = fit_on({k[0], k[1], k[2]}, predicted);
-    const double m = median(residuals(r));
+    const Registration r = data.fit_on({k[0], k[1], k[2]}, data.predicted);
+    const double m = median(data.residuals(r));
     if (m < best_median) {
       best_median = m;
       start = r;
     }
   }
+  return {start, best_median};
+}
+
+}  // namespace
+
+ReRegistration reregister(const CompensationModel& model, const robot::MdhModel& nominal,
+                          const std::vector<JointVector>& q_deg, const std::vector<Eigen::Vector3d>& tracker_mm,
+                          const std::string& source, const ReRegistrationOptions& o) {
+  const std::size_t n = q_deg.size();
+  if (n != tracker_mm.size()) throw InputError(source + ": joints and readings differ in count", source);
+  if (n < o.min_readings)
+    throw InputError(source + ": " + std::to_string(n) + " readings with tracker positions mx,my,mz; register needs at least " +
+                         std::to_string(o.min_readings) + " (10-30 spread over the work volume determine the frame well)",
+                     source);
+  refuse_readings_on_a_line(tracker_mm, source);
+  ReRegistration out;
+  RegistrationData data{tracker_mm, std::vector<Eigen::Vector3d>(n)};
+  std::vector<Eigen::Vector3d> fk(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    bool with_field = true;
+    data.predicted[i] = model_prediction(model, q_deg[i], with_field);
+    if (!with_field) ++out.without_field;
+    fk[i] = robot::forward_position(nominal, q_deg[i]);
+  }
+  const auto [start, best_median] = least_median_registration(data);
   // Inliers of the best start, then least squares on them, twice (readings may come back in).
   std::vector<std::size_t> kept;
   Registration current = start;
   double sigma = std::max(o.min_sigma_mm, best_median / kChi3Median);
   for (int round = 0; round < 2; ++round) {
-    const std::vector<double> e = residuals(current);
+    const std::vector<double> e = data.residuals(current);
     kept.clear();
     for (std::size_t i = 0; i < n; ++i)
       if (e[i] <= o.outlier_sigmas * sigma) kept.push_back(i);
-    if (kept.size() < 3) kept = all;  // no consensus: judged below on every reading
-    current = fit_on(kept, predicted);
+    if (kept.size() < 3) {  // no consensus: judged below on every reading
+      kept.resize(n);
+      for (std::size_t i = 0; i < n; ++i) kept[i] = i;
+    }
+    current = data.fit_on(kept, data.predicted);
     std::vector<double> kept_residual;
-    const std::vector<double> after = residuals(current);
+    const std::vector<double> after = data.residuals(current);
     for (const std::size_t i : kept) kept_residual.push_back(after[i]);
     sigma = std::max(o.min_sigma_mm, median(kept_residual) / kChi3Median);
   }
   out.registration = current;
-  out.residual_mm = residuals(current);
+  out.residual_mm = data.residuals(current);
   out.robust_sigma_mm = sigma;
   for (std::size_t i = 0; i < n; ++i)
     if (std::find(kept.begin(), kept.end(), i) == kept.end()) out.excluded.push_back(i);
@@ -155,7 +185,7 @@ ReRegistration reregister(const CompensationModel& model, const robot::MdhModel&
                      source);
   }
   out.registration.points = kept.size();
-  out.nominal_registration = fit_on(kept, fk);
+  out.nominal_registration = data.fit_on(kept, fk);
   out.nominal_registration.points = kept.size();
   return out;
 }

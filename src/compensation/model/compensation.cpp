@@ -603,6 +603,54 @@ ErrorPrediction CompensationModel::predict_at_labelled_point(const JointVector& 
   return p;
 }
 
+namespace {
+
+/// How the error at a point on the flange combines the errors at points with a field, through the
+/// small rigid motion (t, w) of the flange they imply: the residual at a point p moved by it is
+/// t + w x p = [I, -[p]x] (t, w), with p in the robot frame (the flange's rotation at q applied); the
+/// fields' predictions at the known points give (t, w) by least squares, which then gives the point's.
+struct RigidMotionCombination {
+  Eigen::Matrix<double, 3, 6> at_point;  ///< the point's error per rigid motion (t, w)
+  Eigen::MatrixXd combination;           ///< 3 x 3k: the point's error per known points' errors
+  /// Rigid motions none of the known points observes (points on one line: the rotation about it),
+  /// scaled to a unit rotation.
+  std::vector<Eigen::Matrix<double, 6, 1>> unobservable;
+
+  RigidMotionCombination(const Eigen::Matrix3d& rotation, const std::vector<Eigen::Vector3d>& known_points_mm,
+                         const Eigen::Vector3d& point_mm) {
+    const auto k = static_cast<Eigen::Index>(known_points_mm.size());
+    Eigen::MatrixXd a(3 * k, 6);
+    for (Eigen::Index j = 0; j < k; ++j) {
+      a.block<3, 3>(3 * j, 0).setIdentity();
+      a.block<3, 3>(3 * j, 3) = -cross_matrix(rotation * known_points_mm[static_cast<std::size_t>(j)]);
+    }
+    at_point << Eigen::Matrix3d::Identity(), -cross_matrix(rotation * point_mm);
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeFullV);
+    const Eigen::VectorXd& s = svd.singularValues();
+    // Points on one line leave the rotation about it unobservable (one singular value ~0).
+    const double cutoff = 1e-9 * s[0];
+    Eigen::MatrixXd pseudo_inverse = Eigen::MatrixXd::Zero(6, 3 * k);
+    for (Eigen::Index c = 0; c < 6; ++c) {
+      if (c < s.size() && s[c] > cutoff) {
+        pseudo_inverse += svd.matrixV().col(c) * svd.matrixU().col(c).transpose() / s[c];
+      } else {
+        const Eigen::Matrix<double, 6, 1> v = svd.matrixV().col(c);
+        if (v.tail<3>().norm() > 1e-12) unobservable.push_back(v / v.tail<3>().norm());
+      }
+    }
+    // Of the motions that fit, the one that does not turn about the unobservable axis (the prior's
+    // mean, isotropic in the rotation): the least-norm solution would mix translation into it.
+    for (const Eigen::Matrix<double, 6, 1>& v : unobservable) {
+      Eigen::Matrix<double, 6, 6> keep = Eigen::Matrix<double, 6, 6>::Identity();
+      keep.rightCols<3>() -= v * v.tail<3>().transpose();
+      pseudo_inverse = keep * pseudo_inverse;
+    }
+    combination = at_point * pseudo_inverse;
+  }
+};
+
+}  // namespace
+
 ErrorPrediction CompensationModel::predict_by_rigid_motion(const JointVector& q_deg, const MdhModel& point,
                                                            bool orientation_variance) const {
   // The points with a field (flange frame) and their fields: the own point first.
@@ -618,39 +666,13 @@ ErrorPrediction CompensationModel::predict_by_rigid_motion(const JointVector& q_
       known.push_back({flange_points_[k].position_mm, flange_points_[k].field.get(),
                        k < point_function_rows_.size() ? point_function_rows_[k].get() : nullptr});
   const Eigen::Index k = static_cast<Eigen::Index>(known.size());
-  // The residual at a point p of the flange moved by a small rigid motion (t, w) is t + w x p =
-  // [I, -[p]x] (t, w), with p in the robot frame (the flange's rotation at q applied): the fields'
-  // predictions at the known points give (t, w) by least squares, which then gives the point's.
   const Eigen::Matrix3d rotation = forward_kinematics(command_model_, q_deg, EndFrame::flange).linear();
-  Eigen::MatrixXd a(3 * k, 6);
-  for (Eigen::Index j = 0; j < k; ++j) {
-    a.block<3, 3>(3 * j, 0).setIdentity();
-    a.block<3, 3>(3 * j, 3) = -cross_matrix(rotation * known[static_cast<std::size_t>(j)].point_mm);
-  }
-  Eigen::Matrix<double, 3, 6> at_point;
-  at_point << Eigen::Matrix3d::Identity(), -cross_matrix(rotation * point.tool().translation());
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeFullV);
-  const Eigen::VectorXd& s = svd.singularValues();
-  // Points on one line leave the rotation about it unobservable (one singular value ~0).
-  const double cutoff = 1e-9 * s[0];
-  Eigen::MatrixXd pseudo_inverse = Eigen::MatrixXd::Zero(6, 3 * k);
-  std::vector<Eigen::Matrix<double, 6, 1>> unobservable;  // scaled to a unit rotation
-  for (Eigen::Index c = 0; c < 6; ++c) {
-    if (c < s.size() && s[c] > cutoff) {
-      pseudo_inverse += svd.matrixV().col(c) * svd.matrixU().col(c).transpose() / s[c];
-    } else {
-      const Eigen::Matrix<double, 6, 1> v = svd.matrixV().col(c);
-      if (v.tail<3>().norm() > 1e-12) unobservable.push_back(v / v.tail<3>().norm());
-    }
-  }
-  // Of the motions that fit, the one that does not turn about the unobservable axis (the prior's
-  // mean, isotropic in the rotation): the least-norm solution would mix translation into it.
-  for (const Eigen::Matrix<double, 6, 1>& v : unobservable) {
-    Eigen::Matrix<double, 6, 6> keep = Eigen::Matrix<double, 6, 6>::Identity();
-    keep.rightCols<3>() -= v * v.tail<3>().transpose();
-    pseudo_inverse = keep * pseudo_inverse;
-  }
-  const Eigen::MatrixXd combination = at_point * pseudo_inverse;  // 3 x 3k
+  std::vector<Eigen::Vector3d> known_points_mm;
+  for (const Known& point_of_field : known) known_points_mm.push_back(point_of_field.point_mm);
+  const RigidMotionCombination motion(rotation, known_points_mm, point.tool().translation());
+  const Eigen::MatrixXd& combination = motion.combination;
+  const Eigen::Matrix<double, 3, 6>& at_point = motion.at_point;
+  const std::vector<Eigen::Matrix<double, 6, 1>>& unobservable = motion.unobservable;
   const Eigen::Vector3d at = forward_position(nominal_model(), q_deg);
   ErrorPrediction p;
   p.variance_mm2 = 0.0;
@@ -1057,23 +1079,23 @@ void check_flange_points(const CompensationModel& model, const std::string& sour
   }
 }
 
-}  // namespace
-
-CompensationModel CompensationModel::from_json(const nlohmann::json& j, const std::string& source) {
+CompensationMethod method_of_model(const nlohmann::json& j, const std::string& source) {
   if (!j.is_object()) fail_model(source, "expected a JSON object (an errfield compensation model)");
   if (j.value("format", std::string()) != "errfield-compensation-model")
     fail_model(source, "member \"format\" must be \"errfield-compensation-model\" (is this a model written by 'errfield fit'?)");
   if (!j.contains("version") || json_integer_in(j["version"], 1, 1) != 1)
     fail_model(source, "member \"version\": expected 1");
   if (!j.contains("method") || !j["method"].is_string()) fail_model(source, "member \"method\": expected a string");
-  CompensationMethod method;
   try {
-    method = method_from_name(j["method"].get<std::string>());
+    return method_from_name(j["method"].get<std::string>());
   } catch (const ArgumentError& e) {
     fail_model(source, std::string("member \"method\": ") + e.what());
   }
-  if (!j.contains("command_model")) fail_model(source, "member \"command_model\" is missing");
-  MdhModel command = robot::detail::json_nested_model(j, "command_model", source);
+}
+
+/// The model's field, refused when the method corrects through none or through another kind.
+std::shared_ptr<const ErrorField> field_of_model(const nlohmann::json& j, CompensationMethod method,
+                                                 const std::string& source) {
   auto field = error_field_from_json(j.contains("field") ? j["field"] : nlohmann::json(nullptr), source);
   // A method that corrects through a field, without one, would send uncorrected joints as "ok".
   const bool needs_field = method != CompensationMethod::none && method != CompensationMethod::kinematic;
@@ -1091,6 +1113,239 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
     fail_model(source, "member \"field.kind\": \"" + std::string(kind) + "\", but method \"" +
                            std::string(method_name(method)) + "\" fits a \"" + std::string(field_kind_of(method)) +
                            "\" field; the file was edited or mixed from two models: refit it with 'errfield fit'");
+  return field;
+}
+
+/// Informative members (notes, excluded rows): read back so a model loaded and saved again keeps them.
+void read_strings(const nlohmann::json& j, const char* key, const std::string& source, std::vector<std::string>& into) {
+  if (!j.contains(key)) return;
+  if (!j[key].is_array()) fail_model(source, std::string("member \"") + key + "\": expected an array of strings");
+  for (std::size_t i = 0; i < j[key].size(); ++i) {
+    if (!j[key][i].is_string())
+      fail_model(source, std::string("member \"") + key + "\"[" + std::to_string(i) + "]: expected a string, got " +
+                             j[key][i].dump());
+    into.push_back(j[key][i].get<std::string>());
+  }
+}
+
+bool is_flange_coordinate(const nlohmann::json& v) {
+  return v.is_number() && std::isfinite(v.get<double>()) && std::abs(v.get<double>()) <= kMaxToolPointMm;
+}
+
+/// Member "flange_points": each point's label, position, own field (of the model's field kind
+/// `kind`, when the model has a field) and nominal position.
+std::vector<CompensationModel::LabelledPoint> flange_points_of_model(const nlohmann::json& f, bool has_field,
+                                                                     std::string_view kind, const std::string& source) {
+  if (!f.is_array()) fail_model(source, "member \"flange_points\": expected an array of {\"label\", \"mm\": [x, y, z]}");
+  std::vector<CompensationModel::LabelledPoint> points;
+  for (std::size_t k = 0; k < f.size(); ++k) {
+    const nlohmann::json& e = f[k];
+    const bool ok = e.is_object() && e.contains("label") && e["label"].is_string() && e.contains("mm") &&
+                    e["mm"].is_array() && e["mm"].size() == 3 && std::all_of(e["mm"].begin(), e["mm"].end(), is_flange_coordinate);
+    if (!ok)
+      fail_model(source, "member \"flange_points\"[" + std::to_string(k) + "]: expected {\"label\": text, \"mm\": [x, y, z] "
+                         "within " + format_number(kMaxToolPointMm) + " mm}, got " + e.dump());
+    std::shared_ptr<const ErrorField> point_field;
+    if (e.contains("field")) {
+      // A further point's field is of the own field's kind (kinematic+kriging models only).
+      const std::string where = "member \"flange_points\"[" + std::to_string(k) + "].field";
+      if (!has_field || !e["field"].is_object() || !e["field"].contains("kind") || !e["field"]["kind"].is_string() ||
+          e["field"]["kind"].get<std::string>() != kind)
+        fail_model(source, where + ": expected a field of the model's own kind (\"" + std::string(kind) + "\")");
+      point_field = error_field_from_json(e["field"], source);
+    }
+    std::optional<Eigen::Vector3d> nominal_point;
+    if (e.contains("nominal_mm")) {
+      const nlohmann::json& n = e["nominal_mm"];
+      if (!n.is_array() || n.size() != 3 || !std::all_of(n.begin(), n.end(), is_flange_coordinate))
+        fail_model(source, "member \"flange_points\"[" + std::to_string(k) + "].nominal_mm: expected [x, y, z] within " +
+                               format_number(kMaxToolPointMm) + " mm, got " + n.dump());
+      nominal_point = Eigen::Vector3d(n[0].get<double>(), n[1].get<double>(), n[2].get<double>());
+    }
+    points.push_back({e["label"].get<std::string>(),
+                      Eigen::Vector3d(e["mm"][0].get<double>(), e["mm"][1].get<double>(), e["mm"][2].get<double>()),
+                      std::move(point_field), nominal_point});
+  }
+  return points;
+}
+
+MeasuredOrientation orientation_residual_of_model(const nlohmann::json& o, const std::string& source) {
+  // 0.1 rad (5.7 deg) of residual orientation after calibration is no robot: a hand edit.
+  if (!o.is_object() || !o.contains("sigma_rad") || !o["sigma_rad"].is_number() || !o.contains("readings") ||
+      !o["readings"].is_number_unsigned() || !o.contains("add_floor") || !o["add_floor"].is_boolean() ||
+      !(o["sigma_rad"].get<double>() >= 0.0 && o["sigma_rad"].get<double>() < 0.1))
+    fail_model(source, "member \"orientation_residual\": expected {\"sigma_rad\": 0 <= number < 0.1, \"readings\": "
+                       "count, \"add_floor\": bool}, got " + o.dump());
+  return MeasuredOrientation{o["sigma_rad"].get<double>(), o["readings"].get<std::size_t>(), o["add_floor"].get<bool>()};
+}
+
+/// Member "flange_error_covariance" of a model with fields at `k` points.
+FlangeErrorCovariance flange_error_covariance_of_model(const nlohmann::json& c, std::size_t k, const std::string& source) {
+  const std::string expected = "member \"flange_error_covariance\": expected {\"field_covariance_mm2\": a symmetric "
+                               "positive semi-definite " + std::to_string(3 * k) + " x " + std::to_string(3 * k) +
+                               " matrix (3 rows per point with a field, " + std::to_string(k) +
+                               " here) below 1 mm², \"mean_field_variance_mm2\": a positive number, \"poses\": count}, got ";
+  FlangeErrorCovariance f;
+  const std::optional<Eigen::MatrixXd> matrix =
+      c.is_object() && c.contains("field_covariance_mm2")
+          ? square_matrix_of(c["field_covariance_mm2"], static_cast<Eigen::Index>(3 * k))
+          : std::nullopt;
+  bool valid = k >= 2 && matrix && c.contains("mean_field_variance_mm2") && c["mean_field_variance_mm2"].is_number() &&
+               c.contains("poses") && c["poses"].is_number_unsigned();
+  if (valid) {
+    f.field_covariance_mm2 = *matrix;
+    f.mean_field_variance_mm2 = c["mean_field_variance_mm2"].get<double>();
+    f.poses = c["poses"].get<std::size_t>();
+    const Eigen::MatrixXd& m = f.field_covariance_mm2;
+    const double largest = m.cwiseAbs().maxCoeff();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(m, Eigen::EigenvaluesOnly);
+    valid = m.allFinite() && (m - m.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * largest &&
+            eig.eigenvalues().minCoeff() >= -1e-9 * largest && largest < 1.0 &&
+            std::isfinite(f.mean_field_variance_mm2) && f.mean_field_variance_mm2 > 0.0;
+  }
+  if (!valid) fail_model(source, expected + c.dump());
+  return f;
+}
+
+/// Member "rotation_calibration" of a model with fields at `fielded_points` points.
+RotationCalibration rotation_calibration_of_model(const nlohmann::json& c, std::size_t fielded_points,
+                                                  const std::string& source) {
+  const std::string expected = "member \"rotation_calibration\": expected {\"flange_covariance_rad2\": a symmetric "
+                               "positive definite 3 x 3 matrix below 0.01 rad² (5.7 deg sd), "
+                               "\"mean_independent_trace_rad2\": a positive number, \"poses\": count}, got ";
+  RotationCalibration r;
+  const std::optional<Eigen::MatrixXd> matrix =
+      c.is_object() && c.contains("flange_covariance_rad2") ? square_matrix_of(c["flange_covariance_rad2"], 3) : std::nullopt;
+  bool valid = matrix && c.contains("mean_independent_trace_rad2") && c["mean_independent_trace_rad2"].is_number() &&
+               c.contains("poses") && c["poses"].is_number_unsigned();
+  if (valid) {
+    r.flange_covariance_rad2 = *matrix;
+    r.mean_independent_trace_rad2 = c["mean_independent_trace_rad2"].get<double>();
+    r.poses = c["poses"].get<std::size_t>();
+    const Eigen::Matrix3d& m = r.flange_covariance_rad2;
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m, Eigen::EigenvaluesOnly);
+    valid = m.allFinite() && (m - m.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * m.cwiseAbs().maxCoeff() &&
+            eig.eigenvalues().minCoeff() > 0.0 && eig.eigenvalues().maxCoeff() < 0.01 &&
+            std::isfinite(r.mean_independent_trace_rad2) && r.mean_independent_trace_rad2 > 0.0;
+  }
+  if (!valid) fail_model(source, expected + c.dump());
+  if (fielded_points < 3)
+    fail_model(source, "member \"rotation_calibration\": the model has fields at fewer than three points on the flange");
+  return r;
+}
+
+Registration nominal_registration_of_model(const nlohmann::json& r, const std::string& source) {
+  try {
+    return compensation::registration_from_json(r, source);
+  } catch (const InputError& e) {
+    // The reader names "registration.<member>"; this is the other one.
+    std::string what = e.what();
+    if (const auto at = what.find("\"registration"); at != std::string::npos) what.insert(at + 1, "nominal_");
+    throw InputError(what, source);
+  }
+}
+
+/// Member "credible_range": its centre has as many values as the field (of kind `kind`, when the
+/// model has one) predicts.
+CredibleRange credible_range_of_model(const nlohmann::json& c, bool has_field, std::string_view kind,
+                                      const std::string& source) {
+  CredibleRange r;
+  if (!c.is_object() || !c.contains("center_mm") || !c["center_mm"].is_array() || !c.contains("radius_mm") ||
+      !c["radius_mm"].is_number())
+    fail_model(source, "member \"credible_range\": expected {\"center_mm\": [1 or 3 numbers], \"radius_mm\": number}");
+  for (const auto& v : c["center_mm"]) {
+    if (!v.is_number()) fail_model(source, "member \"credible_range.center_mm\": expected numbers");
+    r.center_mm.push_back(v.get<double>());
+  }
+  r.radius_mm = c["radius_mm"].get<double>();
+  if ((r.center_mm.size() != 1 && r.center_mm.size() != 3) || !(r.radius_mm >= 0.0))
+    fail_model(source, "member \"credible_range\": expected 1 or 3 centre values and a radius >= 0");
+  const std::size_t dims = kind.starts_with("distance") ? 1 : 3;
+  if (has_field && r.center_mm.size() != dims)
+    fail_model(source, "member \"credible_range.center_mm\": " + std::to_string(r.center_mm.size()) +
+                           " values, but a \"" + std::string(kind) + "\" field predicts " + std::to_string(dims) +
+                           " (a " + (dims == 1 ? "distance error" : "3-D error") + ")");
+  for (double value : r.center_mm)
+    if (!std::isfinite(value)) fail_model(source, "member \"credible_range.center_mm\": not finite");
+  return r;
+}
+
+/// A point on the flange (tool_point_mm, reflector_mm): 3 finite numbers, or none when absent.
+std::optional<Eigen::Vector3d> flange_point_of_model(const nlohmann::json& j, const char* key, const std::string& source) {
+  if (!j.contains(key)) return std::nullopt;
+  const auto& v = j[key];
+  if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
+    fail_model(source, std::string("member \"") + key + "\": expected 3 numbers (mm, flange frame)");
+  const Eigen::Vector3d p(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+  if (!p.allFinite()) fail_model(source, std::string("member \"") + key + "\": not finite");
+  return p;
+}
+
+/// Members "working_tool" and "working_tool_located" (j holds "working_tool").
+void read_working_tool(const nlohmann::json& j, const std::string& source, std::optional<Eigen::Isometry3d>& tool,
+                       bool& located) {
+  const nlohmann::json& t = j["working_tool"];
+  // The model file states every member (to_json writes all six): one missing is a hand edit, and a
+  // default of 0 would turn the tool without a word (a robot JSON's tool may leave them out).
+  if (t.is_object())
+    for (const char* key : {"x_mm", "y_mm", "z_mm", "rx_deg", "ry_deg", "rz_deg"})
+      if (!t.contains(key))
+        fail_model(source, std::string("member \"working_tool\".") + key +
+                               ": missing (a model file states all six of x_mm, y_mm, z_mm, rx_deg, ry_deg, rz_deg)");
+  tool = robot::detail::json_pose(t, "working_tool", source);
+  if (j.contains("working_tool_located")) {
+    if (!j["working_tool_located"].is_boolean()) fail_model(source, "member \"working_tool_located\": expected true or false");
+    located = j["working_tool_located"].get<bool>();
+  }
+  try {
+    check_tool_point(*tool, "member \"working_tool\"");
+  } catch (const ArgumentError& e) {
+    fail_model(source, e.what());
+  }
+}
+
+/// Member "tool_point_correction": the residual of the located working tool's readings, which
+/// applies at that tool only.
+std::shared_ptr<const ToolPointCorrection> tool_point_correction_of_model(
+    const nlohmann::json& c, const std::optional<Eigen::Isometry3d>& working_tool, const std::string& source) {
+  auto correction = std::make_shared<const ToolPointCorrection>(ToolPointCorrection::from_json(c, source));
+  // It is the residual of the working tool's readings against this model: at another point it
+  // belongs to another model (or the file was edited).
+  if (!working_tool || (working_tool->translation() - correction->point_mm()).norm() > kSameFlangePointMm)
+    fail_model(source, "member \"tool_point_correction\" is for the point (" + format_number(correction->point_mm().x()) +
+                           ", " + format_number(correction->point_mm().y()) + ", " +
+                           format_number(correction->point_mm().z()) + ") mm, but the model's working_tool is " +
+                           (working_tool ? "elsewhere" : "not set") +
+                           ": it holds the residual of the located point's readings and applies there only "
+                           "(run locate-tool again rather than editing either)");
+  return correction;
+}
+
+std::vector<JointVector> data_joints_of_model(const nlohmann::json& q, const std::string& source) {
+  if (!q.is_array()) fail_model(source, "member \"data_joints_deg\": expected an array of 6-number arrays");
+  std::vector<JointVector> joints;
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    if (!q[i].is_array() || q[i].size() != 6)
+      fail_model(source, "member \"data_joints_deg\"[" + std::to_string(i) + "]: expected 6 numbers");
+    JointVector v;
+    for (int k = 0; k < 6; ++k) {
+      if (!q[i][static_cast<std::size_t>(k)].is_number())
+        fail_model(source, "member \"data_joints_deg\"[" + std::to_string(i) + "]: expected 6 numbers");
+      v[k] = q[i][static_cast<std::size_t>(k)].get<double>();
+    }
+    joints.push_back(v);
+  }
+  return joints;
+}
+
+}  // namespace
+
+CompensationModel CompensationModel::from_json(const nlohmann::json& j, const std::string& source) {
+  const CompensationMethod method = method_of_model(j, source);
+  if (!j.contains("command_model")) fail_model(source, "member \"command_model\" is missing");
+  MdhModel command = robot::detail::json_nested_model(j, "command_model", source);
+  auto field = field_of_model(j, method, source);
+  const std::string_view kind = field ? std::string_view(j["field"]["kind"].get_ref<const std::string&>()) : "";
   CompensationModel model(method, std::move(command), std::move(field));
   if (j.contains("nominal_model")) {
     model.nominal_model_ = robot::detail::json_nested_model(j, "nominal_model", source);
@@ -1103,158 +1358,29 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
                          "; the file was edited or mixed from two models: refit it with 'errfield fit'");
   }
   model.registration_ = compensation::find_registration(j, source);
-  // Informative members: read back so a model loaded and saved again keeps them.
-  auto strings = [&](const char* key, std::vector<std::string>& into) {
-    if (!j.contains(key)) return;
-    if (!j[key].is_array()) fail_model(source, std::string("member \"") + key + "\": expected an array of strings");
-    for (std::size_t i = 0; i < j[key].size(); ++i) {
-      if (!j[key][i].is_string())
-        fail_model(source, std::string("member \"") + key + "\"[" + std::to_string(i) + "]: expected a string, got " +
-                               j[key][i].dump());
-      into.push_back(j[key][i].get<std::string>());
-    }
-  };
-  strings("notes", model.notes_);
-  strings("excluded_rows", model.excluded_rows_);
-  if (j.contains("flange_points")) {
-    const nlohmann::json& f = j["flange_points"];
-    if (!f.is_array()) fail_model(source, "member \"flange_points\": expected an array of {\"label\", \"mm\": [x, y, z]}");
-    for (std::size_t k = 0; k < f.size(); ++k) {
-      const nlohmann::json& e = f[k];
-      const bool ok = e.is_object() && e.contains("label") && e["label"].is_string() && e.contains("mm") &&
-                      e["mm"].is_array() && e["mm"].size() == 3 &&
-                      std::all_of(e["mm"].begin(), e["mm"].end(), [](const nlohmann::json& v) {
-                        return v.is_number() && std::isfinite(v.get<double>()) && std::abs(v.get<double>()) <= kMaxToolPointMm;
-                      });
-      if (!ok)
-        fail_model(source, "member \"flange_points\"[" + std::to_string(k) + "]: expected {\"label\": text, \"mm\": [x, y, z] "
-                           "within " + format_number(kMaxToolPointMm) + " mm}, got " + e.dump());
-      std::shared_ptr<const ErrorField> point_field;
-      if (e.contains("field")) {
-        // A further point's field is of the own field's kind (kinematic+kriging models only).
-        const std::string where = "member \"flange_points\"[" + std::to_string(k) + "].field";
-        if (!model.field_ || !e["field"].is_object() || !e["field"].contains("kind") || !e["field"]["kind"].is_string() ||
-            e["field"]["kind"].get<std::string>() != kind)
-          fail_model(source, where + ": expected a field of the model's own kind (\"" + std::string(kind) + "\")");
-        point_field = error_field_from_json(e["field"], source);
-      }
-      std::optional<Eigen::Vector3d> nominal_point;
-      if (e.contains("nominal_mm")) {
-        const nlohmann::json& n = e["nominal_mm"];
-        if (!n.is_array() || n.size() != 3 || !std::all_of(n.begin(), n.end(), [](const nlohmann::json& v) {
-              return v.is_number() && std::isfinite(v.get<double>()) && std::abs(v.get<double>()) <= kMaxToolPointMm;
-            }))
-          fail_model(source, "member \"flange_points\"[" + std::to_string(k) + "].nominal_mm: expected [x, y, z] within " +
-                                 format_number(kMaxToolPointMm) + " mm, got " + n.dump());
-        nominal_point = Eigen::Vector3d(n[0].get<double>(), n[1].get<double>(), n[2].get<double>());
-      }
-      model.flange_points_.push_back({e["label"].get<std::string>(),
-                                      Eigen::Vector3d(e["mm"][0].get<double>(), e["mm"][1].get<double>(), e["mm"][2].get<double>()),
-                                      std::move(point_field), nominal_point});
-    }
-  }
+  read_strings(j, "notes", source, model.notes_);
+  read_strings(j, "excluded_rows", source, model.excluded_rows_);
+  if (j.contains("flange_points"))
+    model.flange_points_ = flange_points_of_model(j["flange_points"], model.field_ != nullptr, kind, source);
   if (j.contains("calibration_leverage")) {
-    if (method != CompensationMethod::kinematic && method != CompensationMethod::kinematic_kriging)
+    if (!is_calibrated(method))
       fail_model(source, "member \"calibration_leverage\": only calibrated models (kinematic, kinematic+kriging) have one");
     model.calibration_leverage_ = CalibrationLeverage::from_json(j["calibration_leverage"], source);
   }
-  if (j.contains("orientation_residual")) {
-    const nlohmann::json& o = j["orientation_residual"];
-    // 0.1 rad (5.7 deg) of residual orientation after calibration is no robot: a hand edit.
-    if (!o.is_object() || !o.contains("sigma_rad") || !o["sigma_rad"].is_number() || !o.contains("readings") ||
-        !o["readings"].is_number_unsigned() || !o.contains("add_floor") || !o["add_floor"].is_boolean() ||
-        !(o["sigma_rad"].get<double>() >= 0.0 && o["sigma_rad"].get<double>() < 0.1))
-      fail_model(source, "member \"orientation_residual\": expected {\"sigma_rad\": 0 <= number < 0.1, \"readings\": "
-                         "count, \"add_floor\": bool}, got " + o.dump());
-    model.measured_orientation_ =
-        MeasuredOrientation{o["sigma_rad"].get<double>(), o["readings"].get<std::size_t>(), o["add_floor"].get<bool>()};
-  }
+  if (j.contains("orientation_residual"))
+    model.measured_orientation_ = orientation_residual_of_model(j["orientation_residual"], source);
   check_flange_points(model, source,
                       j.contains("working_tool") && j.contains("working_tool_located") && j["working_tool_located"] == true);
-  if (j.contains("flange_error_covariance")) {
-    const nlohmann::json& c = j["flange_error_covariance"];
-    const std::size_t k = model.fielded_points().size();
-    const std::string expected = "member \"flange_error_covariance\": expected {\"field_covariance_mm2\": a symmetric "
-                                 "positive semi-definite " + std::to_string(3 * k) + " x " + std::to_string(3 * k) +
-                                 " matrix (3 rows per point with a field, " + std::to_string(k) +
-                                 " here) below 1 mm², \"mean_field_variance_mm2\": a positive number, \"poses\": count}, got ";
-    FlangeErrorCovariance f;
-    const std::optional<Eigen::MatrixXd> matrix =
-        c.is_object() && c.contains("field_covariance_mm2")
-            ? square_matrix_of(c["field_covariance_mm2"], static_cast<Eigen::Index>(3 * k))
-            : std::nullopt;
-    bool valid = k >= 2 && matrix && c.contains("mean_field_variance_mm2") && c["mean_field_variance_mm2"].is_number() &&
-                 c.contains("poses") && c["poses"].is_number_unsigned();
-    if (valid) {
-      f.field_covariance_mm2 = *matrix;
-      f.mean_field_variance_mm2 = c["mean_field_variance_mm2"].get<double>();
-      f.poses = c["poses"].get<std::size_t>();
-      const Eigen::MatrixXd& m = f.field_covariance_mm2;
-      const double largest = m.cwiseAbs().maxCoeff();
-      const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(m, Eigen::EigenvaluesOnly);
-      valid = m.allFinite() && (m - m.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * largest &&
-              eig.eigenvalues().minCoeff() >= -1e-9 * largest && largest < 1.0 &&
-              std::isfinite(f.mean_field_variance_mm2) && f.mean_field_variance_mm2 > 0.0;
-    }
-    if (!valid) fail_model(source, expected + c.dump());
-    model.flange_error_covariance_ = f;
-  }
-  if (j.contains("rotation_calibration")) {
-    const nlohmann::json& c = j["rotation_calibration"];
-    const std::string expected = "member \"rotation_calibration\": expected {\"flange_covariance_rad2\": a symmetric "
-                                 "positive definite 3 x 3 matrix below 0.01 rad² (5.7 deg sd), "
-                                 "\"mean_independent_trace_rad2\": a positive number, \"poses\": count}, got ";
-    RotationCalibration r;
-    const std::optional<Eigen::MatrixXd> matrix =
-        c.is_object() && c.contains("flange_covariance_rad2") ? square_matrix_of(c["flange_covariance_rad2"], 3) : std::nullopt;
-    bool valid = matrix && c.contains("mean_independent_trace_rad2") && c["mean_independent_trace_rad2"].is_number() &&
-                 c.contains("poses") && c["poses"].is_number_unsigned();
-    if (valid) {
-      r.flange_covariance_rad2 = *matrix;
-      r.mean_independent_trace_rad2 = c["mean_independent_trace_rad2"].get<double>();
-      r.poses = c["poses"].get<std::size_t>();
-      const Eigen::Matrix3d& m = r.flange_covariance_rad2;
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m, Eigen::EigenvaluesOnly);
-      valid = m.allFinite() && (m - m.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * m.cwiseAbs().maxCoeff() &&
-              eig.eigenvalues().minCoeff() > 0.0 && eig.eigenvalues().maxCoeff() < 0.01 &&
-              std::isfinite(r.mean_independent_trace_rad2) && r.mean_independent_trace_rad2 > 0.0;
-    }
-    if (!valid) fail_model(source, expected + c.dump());
-    if (model.fielded_points().size() < 3)
-      fail_model(source, "member \"rotation_calibration\": the model has fields at fewer than three points on the flange");
-    model.rotation_calibration_ = r;
-  }
-  if (j.contains("nominal_registration")) {
-    try {
-      model.nominal_registration_ = compensation::registration_from_json(j["nominal_registration"], source);
-    } catch (const InputError& e) {
-      // The reader names "registration.<member>"; this is the other one.
-      std::string what = e.what();
-      if (const auto at = what.find("\"registration"); at != std::string::npos) what.insert(at + 1, "nominal_");
-      throw InputError(what, source);
-    }
-  }
+  if (j.contains("flange_error_covariance"))
+    model.flange_error_covariance_ =
+        flange_error_covariance_of_model(j["flange_error_covariance"], model.fielded_points().size(), source);
+  if (j.contains("rotation_calibration"))
+    model.rotation_calibration_ =
+        rotation_calibration_of_model(j["rotation_calibration"], model.fielded_points().size(), source);
+  if (j.contains("nominal_registration"))
+    model.nominal_registration_ = nominal_registration_of_model(j["nominal_registration"], source);
   if (j.contains("credible_range")) {
-    const auto& c = j["credible_range"];
-    CredibleRange r;
-    if (!c.is_object() || !c.contains("center_mm") || !c["center_mm"].is_array() || !c.contains("radius_mm") ||
-        !c["radius_mm"].is_number())
-      fail_model(source, "member \"credible_range\": expected {\"center_mm\": [1 or 3 numbers], \"radius_mm\": number}");
-    for (const auto& v : c["center_mm"]) {
-      if (!v.is_number()) fail_model(source, "member \"credible_range.center_mm\": expected numbers");
-      r.center_mm.push_back(v.get<double>());
-    }
-    r.radius_mm = c["radius_mm"].get<double>();
-    if ((r.center_mm.size() != 1 && r.center_mm.size() != 3) || !(r.radius_mm >= 0.0))
-      fail_model(source, "member \"credible_range\": expected 1 or 3 centre values and a radius >= 0");
-    const std::size_t dims = kind.starts_with("distance") ? 1 : 3;
-    if (model.field_ && r.center_mm.size() != dims)
-      fail_model(source, "member \"credible_range.center_mm\": " + std::to_string(r.center_mm.size()) +
-                             " values, but a \"" + std::string(kind) + "\" field predicts " + std::to_string(dims) +
-                             " (a " + (dims == 1 ? "distance error" : "3-D error") + ")");
-    for (double c : r.center_mm)
-      if (!std::isfinite(c)) fail_model(source, "member \"credible_range.center_mm\": not finite");
-    model.credible_ = r;
+    model.credible_ = credible_range_of_model(j["credible_range"], model.field_ != nullptr, kind, source);
   } else if (model.field_) {
     // Without it every prediction, however far beyond the fitted errors, would be "credible"
     // (errfield fit always writes it).
@@ -1263,53 +1389,14 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
   }
   if (model.field_) check_stored_samples(model, j["field"], source);
   // The tool point compensate aims and the reflector measured (flange frame).
-  auto point = [&](const char* key) -> std::optional<Eigen::Vector3d> {
-    if (!j.contains(key)) return std::nullopt;
-    const auto& v = j[key];
-    if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
-      fail_model(source, std::string("member \"") + key + "\": expected 3 numbers (mm, flange frame)");
-    const Eigen::Vector3d p(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
-    if (!p.allFinite()) fail_model(source, std::string("member \"") + key + "\": not finite");
-    return p;
-  };
-  model.tool_point_ = point("tool_point_mm");
-  model.reflector_ = point("reflector_mm");
-  if (model.tool_point_ && method != CompensationMethod::kinematic && method != CompensationMethod::kinematic_kriging)
+  model.tool_point_ = flange_point_of_model(j, "tool_point_mm", source);
+  model.reflector_ = flange_point_of_model(j, "reflector_mm", source);
+  if (model.tool_point_ && !is_calibrated(method))
     fail_model(source, "member \"tool_point_mm\": only calibrated models (kinematic, kinematic+kriging) aim a tool "
                        "point on their calibrated flange; method \"" + std::string(method_name(method)) + "\" has none");
-  if (j.contains("working_tool")) {
-    // The model file states every member (to_json writes all six): one missing is a hand edit, and a
-    // default of 0 would turn the tool without a word (a robot JSON's tool may leave them out).
-    if (j["working_tool"].is_object())
-      for (const char* key : {"x_mm", "y_mm", "z_mm", "rx_deg", "ry_deg", "rz_deg"})
-        if (!j["working_tool"].contains(key))
-          fail_model(source, std::string("member \"working_tool\".") + key +
-                                 ": missing (a model file states all six of x_mm, y_mm, z_mm, rx_deg, ry_deg, rz_deg)");
-    model.working_tool_ = robot::detail::json_pose(j["working_tool"], "working_tool", source);
-    if (j.contains("working_tool_located")) {
-      if (!j["working_tool_located"].is_boolean())
-        fail_model(source, "member \"working_tool_located\": expected true or false");
-      model.working_tool_located_ = j["working_tool_located"].get<bool>();
-    }
-    try {
-      check_tool_point(*model.working_tool_, "member \"working_tool\"");
-    } catch (const ArgumentError& e) {
-      fail_model(source, e.what());
-    }
-  }
-  if (j.contains("tool_point_correction")) {
-    auto c = std::make_shared<const ToolPointCorrection>(ToolPointCorrection::from_json(j["tool_point_correction"], source));
-    // It is the residual of the working tool's readings against this model: at another point it
-    // belongs to another model (or the file was edited).
-    if (!model.working_tool_ || (model.working_tool_->translation() - c->point_mm()).norm() > kSameFlangePointMm)
-      fail_model(source, "member \"tool_point_correction\" is for the point (" + format_number(c->point_mm().x()) + ", " +
-                             format_number(c->point_mm().y()) + ", " + format_number(c->point_mm().z()) +
-                             ") mm, but the model's working_tool is " +
-                             (model.working_tool_ ? "elsewhere" : "not set") +
-                             ": it holds the residual of the located point's readings and applies there only "
-                             "(run locate-tool again rather than editing either)");
-    model.tool_point_correction_ = std::move(c);
-  }
+  if (j.contains("working_tool")) read_working_tool(j, source, model.working_tool_, model.working_tool_located_);
+  if (j.contains("tool_point_correction"))
+    model.tool_point_correction_ = tool_point_correction_of_model(j["tool_point_correction"], model.working_tool_, source);
   if (j.contains("joint_error_functions")) {
     // Evaluated through the calibrated command model's Jacobian and added to a field's prediction:
     // meaningless for any other method (a hand-edited or mixed file).
@@ -1319,21 +1406,7 @@ CompensationModel CompensationModel::from_json(const nlohmann::json& j, const st
     model.joint_functions_ = JointErrorFunctions::from_json(j["joint_error_functions"], source);
     model.set_function_rows_at_samples();
   }
-  if (j.contains("data_joints_deg")) {
-    const auto& q = j["data_joints_deg"];
-    if (!q.is_array()) fail_model(source, "member \"data_joints_deg\": expected an array of 6-number arrays");
-    for (std::size_t i = 0; i < q.size(); ++i) {
-      if (!q[i].is_array() || q[i].size() != 6)
-        fail_model(source, "member \"data_joints_deg\"[" + std::to_string(i) + "]: expected 6 numbers");
-      JointVector v;
-      for (int k = 0; k < 6; ++k) {
-        if (!q[i][static_cast<std::size_t>(k)].is_number())
-          fail_model(source, "member \"data_joints_deg\"[" + std::to_string(i) + "]: expected 6 numbers");
-        v[k] = q[i][static_cast<std::size_t>(k)].get<double>();
-      }
-      model.data_joints_.push_back(v);
-    }
-  }
+  if (j.contains("data_joints_deg")) model.data_joints_ = data_joints_of_model(j["data_joints_deg"], source);
   return model;
 }
 

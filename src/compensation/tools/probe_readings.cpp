@@ -28,6 +28,51 @@ bool has_any(const CsvTable& t, const std::vector<std::string>& names) {
   return false;
 }
 
+/// Every orientation column of the chosen spelling (`names`), and the position beside them.
+void require_probe_columns(const CsvTable& table, const std::vector<std::string>& names, bool angles) {
+  const std::string& source = table.source();
+  if (!has_all(table, names)) {
+    std::string missing;
+    for (const std::string& n : names)
+      if (!table.has_column(n)) missing += (missing.empty() ? "" : ",") + n;
+    throw InputError(source + ": the probe's orientation needs columns " + (angles ? "mrx,mry,mrz" : "mqw,mqx,mqy,mqz") +
+                         "; missing " + missing,
+                     source, 0, missing);
+  }
+  for (const char* n : {"mx", "my", "mz"})
+    if (!table.has_column(n))
+      throw InputError(source + ": probe orientation without its position: column '" + std::string(n) + "' missing",
+                       source, 0, n);
+}
+
+/// The probe's rotation in row r, from its angles (deg) or its unit quaternion (w first).
+Eigen::Matrix3d probe_rotation(const CsvTable& table, std::size_t r, const std::vector<std::string>& names,
+                               const std::vector<std::size_t>& orientation_col, bool angles) {
+  const std::string& source = table.source();
+  const std::string line = source + ":" + std::to_string(table.line_of_row(r));
+  if (angles) {
+    double a[3];
+    for (int k = 0; k < 3; ++k) {
+      a[k] = table.numeric_cell(r, orientation_col[static_cast<std::size_t>(k)]);
+      // An angle far beyond a turn (1e300) is no tracker's output: its sine is rounding noise, a
+      // rotation that was accepted and then failed later without a line.
+      if (!(std::abs(a[k]) <= kMaxProbeAngleDeg))
+        throw InputError(line + ": column " + names[static_cast<std::size_t>(k)] + " = " + format_number(a[k]) +
+                             " deg; expected a probe angle in degrees within +-" + format_number(kMaxProbeAngleDeg),
+                         source, table.line_of_row(r), names[static_cast<std::size_t>(k)]);
+    }
+    return robot::rotation_from_rpy_deg(a[0], a[1], a[2]);
+  }
+  double v[4];
+  for (int k = 0; k < 4; ++k) v[k] = table.numeric_cell(r, orientation_col[static_cast<std::size_t>(k)]);
+  const Eigen::Quaterniond q(v[0], v[1], v[2], v[3]);
+  if (!(std::abs(q.norm() - 1.0) <= 1e-3))
+    throw InputError(line + ": the quaternion mqw,mqx,mqy,mqz has norm " + format_number(q.norm()) +
+                         ", not 1 (a probe's orientation is a unit quaternion, w first)",
+                     source, table.line_of_row(r), "mqw");
+  return q.normalized().toRotationMatrix();
+}
+
 }  // namespace
 
 bool has_probe_orientation(const CsvTable& table) {
@@ -42,18 +87,7 @@ CsvTable expand_probe_readings(const CsvTable& table) {
     throw InputError(source + ": both mrx,mry,mrz and mqw,mqx,mqy,mqz: give the probe's orientation one way", source, 0,
                      "mrx");
   const std::vector<std::string>& names = angles ? kAngleColumns : kQuaternionColumns;
-  if (!has_all(table, names)) {
-    std::string missing;
-    for (const std::string& n : names)
-      if (!table.has_column(n)) missing += (missing.empty() ? "" : ",") + n;
-    throw InputError(source + ": the probe's orientation needs columns " + (angles ? "mrx,mry,mrz" : "mqw,mqx,mqy,mqz") +
-                         "; missing " + missing,
-                     source, 0, missing);
-  }
-  for (const char* n : {"mx", "my", "mz"})
-    if (!table.has_column(n))
-      throw InputError(source + ": probe orientation without its position: column '" + std::string(n) + "' missing",
-                       source, 0, n);
+  require_probe_columns(table, names, angles);
   std::vector<std::size_t> orientation_col, position_col;
   for (const std::string& n : names) orientation_col.push_back(table.column_index(n));
   for (const char* n : {"mx", "my", "mz"}) position_col.push_back(table.column_index(n));
@@ -100,29 +134,7 @@ CsvTable expand_probe_readings(const CsvTable& table) {
       throw InputError(line + ": the probe's orientation is given in part: fill " +
                            (angles ? std::string("mrx,mry,mrz") : std::string("mqw,mqx,mqy,mqz")) + " or none",
                        source, table.line_of_row(r), names.front());
-    Eigen::Matrix3d rotation;
-    if (angles) {
-      double a[3];
-      for (int k = 0; k < 3; ++k) {
-        a[k] = table.numeric_cell(r, orientation_col[static_cast<std::size_t>(k)]);
-        // An angle far beyond a turn (1e300) is no tracker's output: its sine is rounding noise, a
-        // rotation that was accepted and then failed later without a line.
-        if (!(std::abs(a[k]) <= kMaxProbeAngleDeg))
-          throw InputError(line + ": column " + names[static_cast<std::size_t>(k)] + " = " + format_number(a[k]) +
-                               " deg; expected a probe angle in degrees within +-" + format_number(kMaxProbeAngleDeg),
-                           source, table.line_of_row(r), names[static_cast<std::size_t>(k)]);
-      }
-      rotation = robot::rotation_from_rpy_deg(a[0], a[1], a[2]);
-    } else {
-      double v[4];
-      for (int k = 0; k < 4; ++k) v[k] = table.numeric_cell(r, orientation_col[static_cast<std::size_t>(k)]);
-      const Eigen::Quaterniond q(v[0], v[1], v[2], v[3]);
-      if (!(std::abs(q.norm() - 1.0) <= 1e-3))
-        throw InputError(line + ": the quaternion mqw,mqx,mqy,mqz has norm " + format_number(q.norm()) +
-                             ", not 1 (a probe's orientation is a unit quaternion, w first)",
-                         source, table.line_of_row(r), "mqw");
-      rotation = q.normalized().toRotationMatrix();
-    }
+    const Eigen::Matrix3d rotation = probe_rotation(table, r, names, orientation_col, angles);
     Eigen::Vector3d probe;
     for (int k = 0; k < 3; ++k) probe[k] = table.numeric_cell(r, position_col[static_cast<std::size_t>(k)]);
     const Eigen::Vector3d along[2] = {rotation.col(0) * kProbeLeverMm, rotation.col(1) * kProbeLeverMm};

@@ -157,26 +157,31 @@ double chi_square_lower_95(double dof) {
   return dof * std::max(t, 1e-3) * std::max(t, 1e-3) * std::max(t, 1e-3);
 }
 
-}  // namespace
-
-ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d, const ToolLocationOptions& options) {
-  options.validate();
-  const std::string& src = d.source;
-  if (d.measured_mm.empty())
-    throw InputError(src + ": no tracker readings (columns mx,my,mz): locate-tool needs readings of the point", src);
-  if (!model.registration())
-    throw InputError(src + ": the model holds no tracker registration (fit or calibrate it from data with mx,my,mz), "
-                           "so readings cannot be put in the robot frame", src);
-  const Registration& reg = *model.registration();
-  const MdhModel& robot = model.command_model();
-  refuse_repeated_poses(d);
-  // The flange origin as the model's point: the field's correction and the functions' displacement there.
-  const MdhModel flange_model = robot.with_tool(Eigen::Isometry3d::Identity());
-  ToolLocation out;
-  out.field_used = model.field() != nullptr;
+/// One reading's equation of the point p on the flange: a p = b (robot frame), with the flange's
+/// rotation and position at the pose and the model's error there taken out of b.
+struct LocationEquations {
   std::vector<Eigen::Matrix3d> a, rotations;
   std::vector<Eigen::Vector3d> b;
-  std::vector<std::size_t> used;
+  std::vector<std::size_t> used;  ///< the reading (row) of each equation
+
+  void keep(const std::vector<std::size_t>& kept) {
+    LocationEquations k;
+    for (std::size_t i : kept) {
+      k.a.push_back(a[i]);
+      k.b.push_back(b[i]);
+      k.rotations.push_back(rotations[i]);
+      k.used.push_back(used[i]);
+    }
+    *this = std::move(k);
+  }
+};
+
+LocationEquations location_equations(const CompensationModel& model, const MeasurementSet& d, ToolLocation& out) {
+  const Registration& reg = *model.registration();
+  const MdhModel& robot = model.command_model();
+  // The flange origin as the model's point: the field's correction and the functions' displacement there.
+  const MdhModel flange_model = robot.with_tool(Eigen::Isometry3d::Identity());
+  LocationEquations eq;
   for (std::size_t i = 0; i < d.q_deg.size(); ++i) {
     const JointVector& q = d.q_deg[i];
     const Eigen::Isometry3d flange = forward_kinematics(robot, q, EndFrame::flange);
@@ -194,13 +199,114 @@ ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d
         turn += skew(geometric_jacobian(robot, q, EndFrame::flange).bottomRows<3>() * dq_rad);
       }
     }
-    a.push_back(turn * flange.linear());
-    b.push_back(reg.robot_from_tracker * d.measured_mm[i] - flange.translation() - shift);
-    rotations.push_back(flange.linear());
-    used.push_back(i);
+    eq.a.push_back(turn * flange.linear());
+    eq.b.push_back(reg.robot_from_tracker * d.measured_mm[i] - flange.translation() - shift);
+    eq.rotations.push_back(flange.linear());
+    eq.used.push_back(i);
   }
-  out.readings = used.size();
-  out.orientations = distinct_orientations(rotations, options.distinct_orientation_deg * M_PI / 180.0);
+  return eq;
+}
+
+/// The point by least squares over the equations: its position, residuals and standard deviation
+/// (in `out`); returns the residual sum of squares.
+double solve_location(const LocationEquations& eq, const CompensationModel& model, ToolLocation& out) {
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  for (std::size_t k = 0; k < eq.a.size(); ++k) {
+    normal += eq.a[k].transpose() * eq.a[k];
+    rhs += eq.a[k].transpose() * eq.b[k];
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> solve(normal);
+  out.tool_mm = solve.solve(rhs);
+  double ss = 0.0;
+  for (std::size_t k = 0; k < eq.a.size(); ++k) {
+    out.residual_mm.push_back(eq.a[k] * out.tool_mm - eq.b[k]);
+    ss += out.residual_mm.back().squaredNorm();
+  }
+  const double n = static_cast<double>(eq.a.size());
+  out.residual_rms_mm = std::sqrt(ss / n);
+  // Residual variance per coordinate with 3 parameters fitted from 3n numbers.
+  const double s2 = eq.a.size() > 1 ? ss / (3.0 * n - 3.0) : 0.0;
+  out.sd_mm = (s2 * solve.solve(Eigen::Matrix3d::Identity())).diagonal().cwiseSqrt();
+  out.lever_mm = (out.tool_mm - model.measured_point_mm()).norm();
+  return ss;
+}
+
+/// What the model states at the located point, summed over the readings used.
+struct StatedAtPoint {
+  double variance_sum = 0.0;  ///< predictive variance (mm²)
+  double stated_sum = 0.0;    ///< the same without the orientation term (mm²)
+  double lever_ss = 0.0;      ///< E|w x L|² per unit rotation variance, summed (mm²)
+  std::size_t count = 0;      ///< readings with a finite variance
+  std::vector<ErrorPrediction> predictions;  ///< per reading used
+};
+
+StatedAtPoint stated_at_point(const CompensationModel& model, const CompensationModel& at_tool, const MeasurementSet& d,
+                              const LocationEquations& eq, const ToolLocation& out) {
+  const MdhModel& robot = model.command_model();
+  StatedAtPoint s;
+  for (std::size_t i : eq.used) {
+    const ErrorPrediction& e = s.predictions.emplace_back(at_tool.predict_error(d.q_deg[i]));
+    const double v = e.predictive_variance_mm2();
+    if (std::isfinite(v)) {
+      s.variance_sum += v;
+      s.stated_sum += v - (std::isfinite(e.orientation_variance_mm2) ? e.orientation_variance_mm2 : 0.0);
+      ++s.count;
+    }
+    const Eigen::Vector3d lever =
+        forward_kinematics(robot, d.q_deg[i], EndFrame::flange).linear() * (out.tool_mm - model.measured_point_mm());
+    s.lever_ss += 2.0 * lever.squaredNorm();
+  }
+  return s;
+}
+
+/// Along the lever no turn of the flange moves the point (w x L is perpendicular to L), so there the
+/// residual is what the model states without its orientation term. The orientation term widens the
+/// rigidity check enough that readings of another unit of the same robot model passed it (0.655 mm
+/// held out, 0 % coverage, issue 47); along the lever they stand out.
+void refuse_another_unit(const CompensationModel& model, const LocationEquations& eq, const StatedAtPoint& stated,
+                         const ToolLocation& out, const ToolLocationOptions& options, const std::string& src) {
+  const double n = static_cast<double>(eq.a.size());
+  double along_ss = 0.0;
+  for (std::size_t k = 0; k < eq.a.size(); ++k) {
+    const Eigen::Vector3d u = (eq.rotations[k] * (out.tool_mm - model.measured_point_mm())).normalized();
+    along_ss += std::pow(out.residual_mm[k].dot(u), 2);
+  }
+  const double along_rms = std::sqrt(along_ss / (n - 1.0));  // one of the n numbers spent on the point
+  // Per axis: the model's stated variance there, but no less than what its own training readings
+  // left per axis after the fit (the registration residual). A stated 0.005 mm, under the tracker's
+  // noise, refused readings of the same SIMULATED robot that left 0.019 mm along the lever; another
+  // unit left 0.655 mm.
+  const double fit_rms_per_axis = model.registration() ? model.registration()->residual_rms_mm / std::sqrt(3.0) : 0.0;
+  const double stated_rms = std::max(std::sqrt(stated.stated_sum / (3.0 * n)), fit_rms_per_axis);
+  if (along_rms > options.not_rigid_factor * stated_rms)
+    throw InputError(src + ": the " + std::to_string(out.readings) + " readings are not of this robot's flange as the "
+                         "model knows it: along the lever from the model's reflector, where no turn of the flange "
+                         "moves the point, they leave " + mm(along_rms) + " mm RMS, more than " +
+                         format_number(options.not_rigid_factor) + " x the " + mm(stated_rms) +
+                         " mm per axis the model states there (readings of another unit of the robot, another "
+                         "registration, or two points mixed)",
+                     src);
+}
+
+}  // namespace
+
+ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d, const ToolLocationOptions& options) {
+  options.validate();
+  const std::string& src = d.source;
+  if (d.measured_mm.empty())
+    throw InputError(src + ": no tracker readings (columns mx,my,mz): locate-tool needs readings of the point", src);
+  if (!model.registration())
+    throw InputError(src + ": the model holds no tracker registration (fit or calibrate it from data with mx,my,mz), "
+                           "so readings cannot be put in the robot frame", src);
+  const Registration& reg = *model.registration();
+  const MdhModel& robot = model.command_model();
+  refuse_repeated_poses(d);
+  ToolLocation out;
+  out.field_used = model.field() != nullptr;
+  LocationEquations eq = location_equations(model, d, out);
+  out.readings = eq.used.size();
+  out.orientations = distinct_orientations(eq.rotations, options.distinct_orientation_deg * M_PI / 180.0);
   if (out.orientations < options.min_orientations)
     throw InputError(src + ": " + std::to_string(out.readings) + " reading(s)" +
                          (out.left_out ? " (" + std::to_string(out.left_out) + " more outside the model's region)" : "") +
@@ -212,67 +318,25 @@ ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d
                      src);
   // A gross reading (a bumped nest, a beam break) is left out of the location, not only of the
   // correction kriged after it.
-  if (const std::vector<std::size_t> kept = screened_readings(a, b); kept.size() < a.size()) {
-    out.gross = a.size() - kept.size();
-    std::vector<Eigen::Matrix3d> a_kept, rotations_kept;
-    std::vector<Eigen::Vector3d> b_kept;
-    std::vector<std::size_t> used_kept;
-    for (std::size_t k : kept) {
-      a_kept.push_back(a[k]);
-      b_kept.push_back(b[k]);
-      rotations_kept.push_back(rotations[k]);
-      used_kept.push_back(used[k]);
-    }
-    a = std::move(a_kept);
-    b = std::move(b_kept);
-    rotations = std::move(rotations_kept);
-    used = std::move(used_kept);
-    out.readings = used.size();
+  if (const std::vector<std::size_t> kept = screened_readings(eq.a, eq.b); kept.size() < eq.a.size()) {
+    out.gross = eq.a.size() - kept.size();
+    eq.keep(kept);
+    out.readings = eq.used.size();
   }
-  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    normal += a[k].transpose() * a[k];
-    rhs += a[k].transpose() * b[k];
-  }
-  const Eigen::LDLT<Eigen::Matrix3d> solve(normal);
-  out.tool_mm = solve.solve(rhs);
-  double ss = 0.0;
-  for (std::size_t k = 0; k < a.size(); ++k) {
-    out.residual_mm.push_back(a[k] * out.tool_mm - b[k]);
-    ss += out.residual_mm.back().squaredNorm();
-  }
-  const double n = static_cast<double>(a.size());
-  out.residual_rms_mm = std::sqrt(ss / n);
-  // Residual variance per coordinate with 3 parameters fitted from 3n numbers.
-  const double s2 = a.size() > 1 ? ss / (3.0 * n - 3.0) : 0.0;
-  out.sd_mm = (s2 * solve.solve(Eigen::Matrix3d::Identity())).diagonal().cwiseSqrt();
-  out.lever_mm = (out.tool_mm - model.measured_point_mm()).norm();
+  const double ss = solve_location(eq, model, out);
+  const double n = static_cast<double>(eq.a.size());
 
   // What the model's own errors explain at the located point.
   Eigen::Isometry3d tool = robot.tool();
   tool.translation() = out.tool_mm;
   // An earlier located point's correction is of its readings: not this point's.
   const CompensationModel at_tool = model.with_working_tool(tool).with_tool_point_correction(nullptr);
-  double var_sum = 0.0, stated_sum = 0.0, lever_ss = 0.0;
-  std::size_t var_count = 0;
-  std::vector<ErrorPrediction> at_point;  // per reading used
-  for (std::size_t i : used) {
-    const ErrorPrediction& e = at_point.emplace_back(at_tool.predict_error(d.q_deg[i]));
-    const double v = e.predictive_variance_mm2();
-    if (std::isfinite(v)) {
-      var_sum += v;
-      stated_sum += v - (std::isfinite(e.orientation_variance_mm2) ? e.orientation_variance_mm2 : 0.0);
-      ++var_count;
-    }
-    const Eigen::Vector3d lever =
-        forward_kinematics(robot, d.q_deg[i], EndFrame::flange).linear() * (out.tool_mm - model.measured_point_mm());
-    lever_ss += 2.0 * lever.squaredNorm();
-  }
+  const StatedAtPoint stated = stated_at_point(model, at_tool, d, eq, out);
+  const bool every_variance = stated.count == eq.used.size();
   // The orientation residual at this lever, as fit measures it at other points (MeasuredOrientation):
   // what the readings leave beyond the stated variance (their sum of squares taken per degree of
   // freedom: 3n numbers, 3 spent on the point), over E|w x L|^2 = 2 sigma^2 |L|^2.
-  if (out.field_used && var_count == used.size() && a.size() > 1 && out.lever_mm > kReflectorAtToolMm && lever_ss > 0.0) {
+  if (out.field_used && every_variance && eq.a.size() > 1 && out.lever_mm > kReflectorAtToolMm && stated.lever_ss > 0.0) {
     // From a few readings that estimate is itself uncertain (3n - 3 degrees of freedom: 6 from 3
     // readings), and the point's own location error, a constant offset in the flange frame, moves
     // every later prediction there too: their 95 % radius held 72 % of held-out readings from 3
@@ -282,16 +346,17 @@ ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d
     const double upper_ss = ss * (3.0 * n) / chi_square_lower_95(dof);
     const double location_variance = out.sd_mm.squaredNorm() * n;  // summed over the n readings
     out.orientation = MeasuredOrientation{
-        std::sqrt(std::max(0.0, upper_ss + location_variance - stated_sum) / lever_ss), used.size(), false};
+        std::sqrt(std::max(0.0, upper_ss + location_variance - stated.stated_sum) / stated.lever_ss), eq.used.size(), false};
   }
-  if (var_count == used.size() && var_count > 0) {
-    out.expected_rms_mm = std::sqrt(var_sum / static_cast<double>(var_count));
+  if (every_variance && stated.count > 0) {
+    out.expected_rms_mm = std::sqrt(stated.variance_sum / static_cast<double>(stated.count));
     out.expected_basis = "the model's predictive variance at the point";
   } else {
     out.expected_rms_mm = reg.residual_rms_mm;
     out.expected_basis = "the model's registration residual";
   }
-  if (out.field_used) out.correction = correction_at_located_point(at_tool, d, used, rotations, at_point, out);
+  if (out.field_used)
+    out.correction = correction_at_located_point(at_tool, d, eq.used, eq.rotations, stated.predictions, out);
   if (out.residual_rms_mm > options.not_rigid_factor * out.expected_rms_mm)
     throw InputError(src + ": the " + std::to_string(out.readings) + " readings are not one point rigidly attached to "
                          "the flange: located at (" + mm(out.tool_mm.x()) + ", " + mm(out.tool_mm.y()) + ", " +
@@ -300,10 +365,6 @@ ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d
                          mm(out.expected_rms_mm) + " mm that " + out.expected_basis +
                          " explains (readings of two points mixed, a moved nest, or another robot's)",
                      src);
-  // Along the lever no turn of the flange moves the point (w x L is perpendicular to L), so there the
-  // residual is what the model states without its orientation term. The orientation term widens the
-  // check above enough that readings of another unit of the same robot model passed it (0.655 mm
-  // held out, 0 % coverage, issue 47); along the lever they stand out.
   // (A model with fields at several points predicts the flange origin by their rigid motion, turn
   // included, so there the lever from its reflector is no longer free of the turn: one-point models.)
   // (Calibrated models only: a field alone, in task space, states its kriging variance at the reflector's
@@ -311,29 +372,9 @@ ToolLocation locate_tool(const CompensationModel& model, const MeasurementSet& d
   // SIMULATED robot left 22x that along the lever: the field's limit, not another unit.)
   const bool calibrated =
       model.method() == CompensationMethod::kinematic || model.method() == CompensationMethod::kinematic_kriging;
-  if (calibrated && model.fielded_points().size() == 1 && var_count == used.size() && a.size() > 1 &&
-      out.lever_mm > kReflectorAtToolMm && stated_sum > 0.0) {
-    double along_ss = 0.0;
-    for (std::size_t k = 0; k < a.size(); ++k) {
-      const Eigen::Vector3d u = (rotations[k] * (out.tool_mm - model.measured_point_mm())).normalized();
-      along_ss += std::pow(out.residual_mm[k].dot(u), 2);
-    }
-    const double along_rms = std::sqrt(along_ss / (n - 1.0));  // one of the n numbers spent on the point
-    // Per axis: the model's stated variance there, but no less than what its own training readings
-    // left per axis after the fit (the registration residual). A stated 0.005 mm, under the tracker's
-    // noise, refused readings of the same SIMULATED robot that left 0.019 mm along the lever; another
-    // unit left 0.655 mm.
-    const double fit_rms_per_axis = model.registration() ? model.registration()->residual_rms_mm / std::sqrt(3.0) : 0.0;
-    const double stated_rms = std::max(std::sqrt(stated_sum / (3.0 * n)), fit_rms_per_axis);
-    if (along_rms > options.not_rigid_factor * stated_rms)
-      throw InputError(src + ": the " + std::to_string(out.readings) + " readings are not of this robot's flange as the "
-                           "model knows it: along the lever from the model's reflector, where no turn of the flange "
-                           "moves the point, they leave " + mm(along_rms) + " mm RMS, more than " +
-                           format_number(options.not_rigid_factor) + " x the " + mm(stated_rms) +
-                           " mm per axis the model states there (readings of another unit of the robot, another "
-                           "registration, or two points mixed)",
-                       src);
-  }
+  if (calibrated && model.fielded_points().size() == 1 && every_variance && eq.a.size() > 1 &&
+      out.lever_mm > kReflectorAtToolMm && stated.stated_sum > 0.0)
+    refuse_another_unit(model, eq, stated, out, options, src);
   return out;
 }
 
