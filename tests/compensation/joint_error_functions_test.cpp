@@ -10,6 +10,7 @@
 
 #include "errfield/compensation/model/compensation.hpp"
 #include "errfield/compensation/fitting/held_out_shift.hpp"
+#include "compensation/fitting/fit_checks.hpp"
 #include "errfield/compensation/model/kriging_fields.hpp"
 #include "errfield/error.hpp"
 #include "errfield/robot/builtin_robots.hpp"
@@ -676,6 +677,59 @@ TEST(JointFunctionPrior, GravityTermsWhoseLeverDoesNotVaryAreLeftOut) {
   EXPECT_TRUE(fit.functions.gravity_terms.empty());
   ASSERT_FALSE(fit.undetermined_gravity_terms.empty());
   EXPECT_EQ(fit.undetermined_gravity_terms.front().rfind("joint ", 0), 0u);
+}
+
+
+// size_over against a computation of its own: the polynomial part from the Legendre P1 = u written
+// out, the gravity part from the lever as minus the derivative of the loaded point's height (central
+// differences of the FK), and the largest error and opposing pair found by brute force.
+TEST(JointErrorFunctions, SizeOverPosesFindsTheLargestErrorAndTheCancellingPair) {
+  const MdhModel m = robot_with_tool();
+  Eigen::MatrixXd c = Eigen::MatrixXd::Zero(6, 1);
+  c(1, 0) = -40.0;  // joint 2: -40 u mrad
+  c(4, 0) = 3.0;    // joint 5: 3 u mrad, no gravity term
+  JointErrorFunctions f = functions_over_the_box(c);
+  f.gravity_terms.push_back({1, 7, 0.5, 20.0});  // joint 2, the tool point, 20 mrad per 0.5 m of lever
+  const std::vector<JointVector> poses = random_poses(60, 71);
+  double largest = 0.0, cancelling = 0.0;
+  int largest_joint = -1;
+  for (const JointVector& q : poses) {
+    const double u2 = 2.0 * (q[1] - f.lo_deg[1]) / (f.hi_deg[1] - f.lo_deg[1]) - 1.0;
+    const double u5 = 2.0 * (q[4] - f.lo_deg[4]) / (f.hi_deg[4] - f.lo_deg[4]) - 1.0;
+    const double h = 1e-4;  // deg
+    JointVector up = q, down = q;
+    up[1] += h;
+    down[1] -= h;
+    const double dz_per_rad = (forward_position(m, up).z() - forward_position(m, down).z()) / (2.0 * h * M_PI / 180.0);
+    const double polynomial = -40.0 * u2, gravity = 20.0 * (-1e-3 * dz_per_rad) / 0.5;
+    const double joint5 = 3.0 * u5;
+    if (std::abs(polynomial + gravity) > largest) largest = std::abs(polynomial + gravity), largest_joint = 1;
+    if (std::abs(joint5) > largest) largest = std::abs(joint5), largest_joint = 4;
+    if (polynomial * gravity < 0.0) cancelling = std::max(cancelling, std::min(std::abs(polynomial), std::abs(gravity)));
+  }
+  const JointErrorFunctions::Size size = f.size_over(m, poses);
+  EXPECT_NEAR(size.largest_mrad, largest, 1e-5);
+  EXPECT_EQ(size.largest_joint, largest_joint);
+  EXPECT_NEAR(size.cancelling_mrad, cancelling, 1e-5);
+  ASSERT_GT(cancelling, 10.0);  // the draw holds a pair beyond the plausible size: the warning's case
+  EXPECT_EQ(size.cancelling_joint, 1);
+  EXPECT_NEAR(std::min(std::abs(size.cancelling_polynomial_mrad), std::abs(size.cancelling_gravity_mrad)), cancelling, 1e-5);
+  EXPECT_LT(size.cancelling_polynomial_mrad * size.cancelling_gravity_mrad, 0.0);
+  const std::optional<std::string> warning = implausible_joint_functions(size);
+  ASSERT_TRUE(warning.has_value());
+  EXPECT_NE(warning->find("cancel"), std::string::npos) << *warning;
+  EXPECT_NE(warning->find("--joint-functions 0"), std::string::npos) << *warning;
+
+  // A tenth of that is a joint's plausible error: no warning, and no pair without gravity terms.
+  JointErrorFunctions small = functions_over_the_box(0.1 * c);
+  EXPECT_FALSE(implausible_joint_functions(small.size_over(m, poses)).has_value());
+  EXPECT_EQ(small.size_over(m, poses).cancelling_joint, -1);
+  // Large without cancelling: a warning that names the size and no pair.
+  JointErrorFunctions large = functions_over_the_box(c);
+  const std::optional<std::string> alone = implausible_joint_functions(large.size_over(m, poses));
+  ASSERT_TRUE(alone.has_value());
+  EXPECT_EQ(alone->find("cancel"), std::string::npos) << *alone;
+  EXPECT_TRUE(f.size_over(m, {}).largest_joint == -1);
 }
 
 }  // namespace joint_error_functions_test

@@ -125,4 +125,20 @@ FitResult attach_artifacts(FitResult fit, const MdhModel& nominal, const Measure
   return fit;
 }
 
+std::optional<std::string> implausible_joint_functions(const JointErrorFunctions::Size& size) {
+  if (size.largest_mrad <= kPlausibleJointErrorMrad && size.cancelling_mrad <= kPlausibleJointErrorMrad) return std::nullopt;
+  const auto mrad = [](double v) { return format_number(std::round(v * 100.0) / 100.0); };
+  return "the joint error functions reach " + mrad(size.largest_mrad) + " mrad at joint " +
+         std::to_string(size.largest_joint + 1) +
+         (size.cancelling_mrad > kPlausibleJointErrorMrad
+              ? " and cancel: at joint " + std::to_string(size.cancelling_joint + 1) + " a polynomial part of " +
+                    mrad(size.cancelling_polynomial_mrad) + " mrad against a gravity-load part of " +
+                    mrad(size.cancelling_gravity_mrad) + " mrad"
+              : std::string()) +
+         "; beyond the " + format_number(kPlausibleJointErrorMrad) +
+         " mrad a joint's transmission or load plausibly errs, they fit the measured point and may move any other "
+         "point on the flange. Check the robot description (D-H parameters, joint offsets, joints in degrees), and "
+         "compare on held-out readings (errfield validate) with --gravity-load off or --joint-functions 0";
+}
+
 }  // namespace errfield::compensation

@@ -875,6 +875,25 @@ void refit_joint_functions(JointErrorFunctionFit& jf, const MeasurementSet& dd,
   }
 }
 
+/// The final functions' size over the training poses, in the notes, and a warning when it is beyond
+/// what a joint plausibly errs or when their polynomial and gravity-load parts cancel.
+void note_joint_function_size(FitResult& out, const JointErrorFunctions& f, const MdhModel& model,
+                              const std::vector<JointVector>& poses) {
+  const JointErrorFunctions::Size size = f.size_over(model, poses);
+  if (size.largest_joint < 0) return;
+  const auto mrad = [](double v) { return format_number(std::round(v * 100.0) / 100.0); };
+  const std::string cancelling =
+      size.cancelling_joint < 0
+          ? std::string()
+          : "; at joint " + std::to_string(size.cancelling_joint + 1) + " a polynomial part of " +
+                mrad(size.cancelling_polynomial_mrad) + " mrad against a gravity-load part of " +
+                mrad(size.cancelling_gravity_mrad) + " mrad";
+  out.notes.push_back("joint error functions as written: largest joint angle error over the " +
+                      std::to_string(poses.size()) + " training poses " + mrad(size.largest_mrad) + " mrad (joint " +
+                      std::to_string(size.largest_joint + 1) + ", gravity-load terms included)" + cancelling);
+  if (std::optional<std::string> why = implausible_joint_functions(size)) out.warnings.push_back(std::move(*why));
+}
+
 /// Data of several points on the flange: the covariances the model states at a point between or
 /// beyond the measured ones, from the fields' leave-one-out at the training poses.
 void add_point_covariances(FitResult& out) {
@@ -978,6 +997,7 @@ FitResult fit_kinematic_model(const FitInputs& in) {
   std::optional<JointErrorFunctions> functions;
   if (jf) {
     refit_joint_functions(*jf, dd, calibration.residual_mm, own_samples, ko, o, fit, out);
+    note_joint_function_size(out, jf->functions, kin.model, dd.q_deg);
     functions = std::move(jf->functions);
   }
   out.model = CompensationModel(method, kin.model, fit.field)

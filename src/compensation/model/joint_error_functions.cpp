@@ -432,6 +432,30 @@ double JointErrorFunctions::largest_angle_error_mrad() const {
   return largest;
 }
 
+JointErrorFunctions::Size JointErrorFunctions::size_over(const robot::MdhModel& model,
+                                                         const std::vector<robot::JointVector>& poses_deg) const {
+  Size out;
+  for (const robot::JointVector& q : poses_deg) {
+    const Eigen::Matrix<double, 6, 1> polynomial = angle_error_mrad(q);
+    const Eigen::Matrix<double, 6, 1> total = angle_error_mrad(q, &model);
+    for (int j = 0; j < kJoints; ++j) {
+      if (out.largest_joint < 0 || std::abs(total[j]) > out.largest_mrad) {
+        out.largest_mrad = std::abs(total[j]);
+        out.largest_joint = j;
+      }
+      const double gravity = total[j] - polynomial[j];
+      const double smaller = std::min(std::abs(polynomial[j]), std::abs(gravity));
+      if (polynomial[j] * gravity < 0.0 && smaller > out.cancelling_mrad) {
+        out.cancelling_mrad = smaller;
+        out.cancelling_polynomial_mrad = polynomial[j];
+        out.cancelling_gravity_mrad = gravity;
+        out.cancelling_joint = j;
+      }
+    }
+  }
+  return out;
+}
+
 nlohmann::json JointErrorFunctions::to_json() const {
   nlohmann::json c = nlohmann::json::array();
   for (int j = 0; j < kJoints; ++j) {

@@ -127,6 +127,17 @@ struct JointErrorFunctions {
                                        const robot::JointVector& q_deg) const;
   /// The largest |dq_j| of the polynomials over each joint's range (mrad), sampled: for people.
   double largest_angle_error_mrad() const;
+  /// How large they are over `poses` (angle errors in mrad, gravity terms through `model`'s frames).
+  struct Size {
+    double largest_mrad = 0.0;  ///< the largest |dq_j| (polynomials + gravity terms)
+    int largest_joint = -1;     ///< 0-based joint of it; -1: no pose
+    /// The largest cancelling pair: at one pose and joint, a polynomial part and a gravity part of
+    /// opposite signs; `cancelling_mrad` is the smaller of the two magnitudes (0: none cancel).
+    double cancelling_mrad = 0.0;
+    double cancelling_polynomial_mrad = 0.0, cancelling_gravity_mrad = 0.0;
+    int cancelling_joint = -1;
+  };
+  Size size_over(const robot::MdhModel& model, const std::vector<robot::JointVector>& poses_deg) const;
 
   /// {"degree": K, "lo_deg": [6], "hi_deg": [6], "coefficients_mrad": [[K] x 6],
   ///  "gravity_terms": [{"joint": 1..6, "frame": joint+1..7, "scale_m", "coefficient_mrad"}] (optional),
