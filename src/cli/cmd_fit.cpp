@@ -166,7 +166,7 @@ void run_fit(const FitArgs& a) {
   for (const auto& w : r.warnings) std::cerr << "errfield fit: warning: " << w << "\n";
 }
 
-void add_method_options(CLI::App* cmd, const std::shared_ptr<FitArgs>& a) {
+void add_fit_method_options(CLI::App* cmd, const std::shared_ptr<FitArgs>& a) {
   cmd->add_option("--robot", a->robot,
                   "nominal robot JSON or built-in name (er20-c10, kr16, ur5e, ur5, ur10); default: built-in ER20-C10, no tool. "
                   "x,y,z that are not its FK (within 5 mm) are refused with the likely cause");
@@ -309,7 +309,7 @@ void add_fit_command(CLI::App& app) {
       "distances otherwise: the most accurate on held-out points of the data in docs/robot.md.\n"
       "Example: errfield fit --robot robot.json --data measured.csv --out model.json\n"
       "Example: errfield fit --robot robot.json --data grid.csv --method distance-idw --out model.json   # the paper's method");
-  add_method_options(cmd, a);
+  add_fit_method_options(cmd, a);
   add_base_and_limit_options(cmd, a);
   add_calibration_options(cmd, a);
   add_joint_function_options(cmd, a);

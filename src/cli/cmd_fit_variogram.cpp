@@ -984,7 +984,7 @@ void add_input_options(CLI::App* cmd, const std::shared_ptr<FitVariogramArgs>& a
                   "columns --input holds");
 }
 
-// The options below that are given are remembered (*_given): each applies to some methods only and is refused by the others.
+// Each records that it was given (*_given): it applies to some methods only, and the others refuse it.
 void add_likelihood_model_options(CLI::App* cmd, const std::shared_ptr<FitVariogramArgs>& args) {
   cmd->add_option("--anisotropy", args->anisotropy,
                   "ml/reml: none (default, one range), ard (one range per --coords column; the model gets @ard(...)) "
