@@ -32,11 +32,8 @@ struct CalibrateArgs {
   std::string tool_reflector;
 };
 
-void run_calibrate(const CalibrateArgs& a) {
-  refuse_same_output({{"--out", &a.out}, {"--report", &a.report}, {"--robot-out", &a.robot_out}});
-  using namespace robot;
-  const MdhModel nominal = load_robot_or_default(a.robot);
-  CalibrationOptions options;
+robot::CalibrationOptions calibration_options(const CalibrateArgs& a) {
+  robot::CalibrationOptions options;
   if (!a.robust.empty() && a.robust != "none" && a.robust != "igg3")
     throw ArgumentError("--robust: expected 'none' or 'igg3', got '" + a.robust + "'");
   if (a.no_robust && a.robust == "igg3") throw ArgumentError("--no-robust contradicts --robust igg3; give one");
@@ -47,14 +44,26 @@ void run_calibrate(const CalibrateArgs& a) {
   options.max_condition_number = a.max_condition;
   naming_options([&] { options.validate(); }, {{"CalibrationOptions::max_condition_number", "--max-condition"},
                                                {"CalibrationOptions::robust: need 0 < k0 < k1", "need 0 < --k0 < --k1"}});
-  // A 6-DoF probe's rows become three points on the flange (probe_readings.hpp).
-  const CsvTable table = compensation::expand_probe_readings(CsvTable::read(a.data));
-  const auto q = read_joint_columns(table);
-  // Misuse is an error with a reason (robot/input_checks.hpp); x,y,z of another robot say more
-  // than its joints beyond this robot's limits, so first.
+  return options;
+}
+
+// --base-point X,Y,Z, repeatable: the fixed base points' nominal positions (robot base frame, mm).
+std::vector<Eigen::Vector3d> base_points(const CalibrateArgs& a) {
+  std::vector<Eigen::Vector3d> points;
+  for (const auto& b : a.base_points) {
+    const auto v = parse_numbers(b, 3, "--base-point");
+    points.emplace_back(v[0], v[1], v[2]);
+  }
+  return points;
+}
+
+// Misuse is an error with a reason (robot/input_checks.hpp); x,y,z of another robot say more
+// than its joints beyond this robot's limits, so first.
+void check_calibration_data(const CalibrateArgs& a, const CsvTable& table, const std::vector<robot::JointVector>& q,
+                            const robot::MdhModel& nominal, bool several_points) {
+  using namespace robot;
   // Readings of several points on the flange: x,y,z are each point's nominal position, which only
   // the tool point's rows share with the robot JSON; each label's registration checks the robot.
-  const bool several_points = compensation::several_reflector_labels(table);
   if (several_points && a.model != "position")
     throw InputError(a.data + ": readings of several points on the flange (column 'reflector') calibrate with "
                          "--model position",
@@ -72,97 +81,161 @@ void run_calibrate(const CalibrateArgs& a) {
                        a.data, table.line_of_row(i), col);
     }
   warn_if_metres(table, nominal, "calibrate", a.model == "position" ? kMeasuredXyz : kDistances);
-  if (a.model == "distance") {
-    // 0 is accepted only at a base point itself (the paper's P0 as a grid vertex; such pairs are skipped).
-    std::vector<Eigen::Vector3d> points;
-    for (const auto& b : a.base_points) {
-      const auto v = parse_numbers(b, 3, "--base-point");
-      points.emplace_back(v[0], v[1], v[2]);
-    }
-    check_distance_columns(table, &nominal, points);
-  }
-  std::ostringstream text;
-  CalibrationResult result;
-  MdhModel identified = nominal;
+  // 0 is accepted only at a base point itself (the paper's P0 as a grid vertex; such pairs are skipped).
+  if (a.model == "distance") check_distance_columns(table, &nominal, base_points(a));
+}
+
+// What a calibration identified: the model, and for positions the registration stored with it.
+struct Identified {
+  robot::CalibrationResult result;
+  robot::MdhModel model;
   std::optional<compensation::Registration> registration;  // stored with the model (positions only)
-  std::vector<bool> other_point_row(q.size(), false);      // several points: rows not of the tool point
+  std::vector<bool> other_point_row;                       // several points: rows not of the tool point
+};
+
+// Several points on the flange: each label's registration checks the robot, then each label is
+// located on the flange (one of them the tool point).
+robot::LabelledFlangePoints locate_flange_points(const CalibrateArgs& a, const CsvTable& table,
+                                                 const robot::MdhModel& nominal,
+                                                 std::vector<robot::PositionMeasurement>& data,
+                                                 const robot::CalibrationOptions& options) {
+  using namespace robot;
+  const std::size_t col = table.column_index("reflector");
+  std::vector<std::string> labels;
+  for (std::size_t i = 0; i < table.row_count(); ++i) labels.emplace_back(table.cell(i, col));
+  for (const std::string& l : std::vector<std::string>(labels)) {  // each label is one rigid point
+    std::vector<PositionMeasurement> own;
+    for (std::size_t i = 0; i < data.size(); ++i)
+      if (labels[i] == l) own.push_back(data[i]);
+    (void)check_tracker_registration(nominal, own, a.data + " (reflector '" + l + "')", {!a.robot.empty(), ""},
+                                     a.max_registration_rms, options);
+  }
+  return assign_flange_points(nominal, data, labels, a.tool_reflector, options, a.data);
+}
+
+// --model position: registration first (tracker <- robot base and reflector offset), then the full
+// model in the tracker frame; the output is expressed back in the registered robot frame.
+Identified calibrate_positions_model(const CalibrateArgs& a, const CsvTable& table,
+                                     const std::vector<robot::JointVector>& q, const robot::MdhModel& nominal,
+                                     const robot::CalibrationOptions& options, bool several_points,
+                                     std::ostringstream& text) {
+  using namespace robot;
+  Identified id{{}, nominal, std::nullopt, std::vector<bool>(q.size(), false)};
+  const Eigen::MatrixXd m = table.numeric_columns({"mx", "my", "mz"});
+  std::vector<PositionMeasurement> data;
+  for (std::size_t i = 0; i < q.size(); ++i) data.push_back({q[i], m.row(static_cast<Eigen::Index>(i)).transpose()});
+  {
+    Eigen::MatrixXd p(m.rows(), 3);
+    for (std::size_t i = 0; i < q.size(); ++i) p.row(static_cast<Eigen::Index>(i)) = forward_position(nominal, q[i]).transpose();
+    if (const auto why = tracker_frozen(m, p)) throw InputError(a.data + ": " + *why, a.data, 0, "mx");
+  }
+  // The check fit, validate, predict and compensate run too (robot/input_checks.hpp).
+  std::optional<LabelledFlangePoints> points;
+  if (several_points) {
+    points = locate_flange_points(a, table, nominal, data, options);
+    for (std::size_t i = 0; i < data.size(); ++i) id.other_point_row[i] = data[i].flange_point != 0;
+  } else if (!a.tool_reflector.empty()) {
+    throw ArgumentError("--tool-reflector: " + a.data + " has no 'reflector' column with several labels");
+  }
+  const CalibrationResult reg = with_source(a.data, [&] {
+    if (points) return register_tracker(nominal, data, points->further_points_mm(), options);
+    const auto checked = check_tracker_registration(nominal, data, a.data, {!a.robot.empty(), ""},
+                                                    a.max_registration_rms, options);
+    return checked ? *checked : register_tracker(nominal, data, options);
+  });
+  text << "== registration (tracker <- robot base, reflector offset) ==\n" << reg.report();
+  const PoseXyzRpy t = to_xyz_rpy(reg.model.base());
+  text << "tracker <- robot base: x " << t.x_mm << " y " << t.y_mm << " z " << t.z_mm << " mm, rx " << t.rx_deg
+       << " ry " << t.ry_deg << " rz " << t.rz_deg << " deg\n\n";
+  std::vector<Eigen::Vector3d> further;
+  for (const FlangePointEstimate& p : reg.flange_points) further.push_back(p.position_mm);
+  id.result = with_source(a.data, [&] { return calibrate_positions(reg.model, data, further, options); });
+  if (points) {
+    text << "points on the flange (flange frame, mm): '" << points->labels[0] << "' is the tool point ("
+         << id.result.model.tool().translation().transpose() << ")";
+    for (std::size_t k = 1; k < points->labels.size(); ++k)
+      text << "; '" << points->labels[k] << "' is flange point " << k << " ("
+           << id.result.flange_points[k - 1].position_mm.transpose() << ")";
+    text << "\n";
+  }
+  // reg.model.base() is tracker <- robot chain, the nominal base world <- robot chain.
+  id.model = id.result.model.with_base(nominal.base() * reg.model.base().inverse() * id.result.model.base());
+  // Tracker readings map into the identified model's world frame by nominal.base · reg.base^-1: keep it (and the
+  // reflector offset found with it) at full precision, for validate, predict and fk.
+  id.registration.emplace();
+  id.registration->robot_from_tracker = nominal.base() * reg.model.base().inverse();
+  id.registration->reflector_offset_mm = Eigen::Vector3d(reg.model.tool().translation());
+  id.registration->points = data.size();
+  id.registration->residual_rms_mm = id.result.after.rms_mm;
+  return id;
+}
+
+Identified calibrate_distances_model(const CalibrateArgs& a, const CsvTable& table,
+                                     const std::vector<robot::JointVector>& q, const robot::MdhModel& nominal,
+                                     const robot::CalibrationOptions& options, std::ostringstream& text) {
+  using namespace robot;
+  Identified id{{}, nominal, std::nullopt, std::vector<bool>(q.size(), false)};
+  const std::vector<Eigen::Vector3d> fixed = base_points(a);
+  const DistanceTable pairs = distance_measurements_from_table(table, q, nominal, fixed);
+  text << pairs.note;
+  id.result = with_source(a.data, [&] {
+    return fixed.empty() ? calibrate_distances(nominal, pairs.data, options)
+                         : calibrate_distances(nominal, pairs.data, fixed, options);
+  });
+  id.model = id.result.model;
+  return id;
+}
+
+// --robot-out: the nominal robot with the reflector offset the data found as its tool point (the
+// nominal tool's orientation kept): what scores `--method none` or fits a field on this reflector
+// without the calibrated links, instead of a robot JSON edited by hand.
+nlohmann::json nominal_with_reflector(const CalibrateArgs& a, const CsvTable& table,
+                                      const std::vector<robot::JointVector>& q, const robot::MdhModel& nominal,
+                                      const Identified& id) {
+  const Eigen::Vector3d reflector =
+      id.registration ? *id.registration->reflector_offset_mm : Eigen::Vector3d(id.model.tool().translation());
+  Eigen::Isometry3d tool = nominal.tool();
+  tool.translation() = reflector;
+  nlohmann::json nominal_json =
+      nominal.with_tool(tool).with_name(nominal.name() + " (nominal, reflector offset from " + a.data + ")").to_json();
+  if (id.registration) {
+    // The registration found with the nominal links (tracker -> robot base, the frame the calibrated
+    // model is expressed in too), with the residual the nominal links leave.
+    compensation::Registration own = *id.registration;
+    double ss = 0.0;
+    const Eigen::MatrixXd m = table.numeric_columns({"mx", "my", "mz"});
+    const robot::MdhModel with_reflector = nominal.with_tool(tool);
+    std::size_t rows = 0;
+    for (std::size_t i = 0; i < q.size(); ++i)
+      if (!id.other_point_row[i] && ++rows)
+        ss += (own.robot_from_tracker * Eigen::Vector3d(m.row(static_cast<Eigen::Index>(i)).transpose()) -
+               forward_position(with_reflector, q[i]))
+                  .squaredNorm();
+    own.residual_rms_mm = std::sqrt(ss / static_cast<double>(rows));
+    nominal_json["registration"] = compensation::registration_to_json(own);
+  }
+  return nominal_json;
+}
+
+void run_calibrate(const CalibrateArgs& a) {
+  refuse_same_output({{"--out", &a.out}, {"--report", &a.report}, {"--robot-out", &a.robot_out}});
+  using namespace robot;
+  const MdhModel nominal = load_robot_or_default(a.robot);
+  const CalibrationOptions options = calibration_options(a);
+  // A 6-DoF probe's rows become three points on the flange (probe_readings.hpp).
+  const CsvTable table = compensation::expand_probe_readings(CsvTable::read(a.data));
+  const auto q = read_joint_columns(table);
+  const bool several_points = compensation::several_reflector_labels(table);
+  check_calibration_data(a, table, q, nominal, several_points);
+  std::ostringstream text;
   if (a.model == "position" && !a.base_points.empty())
     throw ArgumentError("--base-point: fixed base points are for --model distance, not --model position");
-  if (a.model == "position") {
-    const Eigen::MatrixXd m = table.numeric_columns({"mx", "my", "mz"});
-    std::vector<PositionMeasurement> data;
-    for (std::size_t i = 0; i < q.size(); ++i) data.push_back({q[i], m.row(static_cast<Eigen::Index>(i)).transpose()});
-    {
-      Eigen::MatrixXd p(m.rows(), 3);
-      for (std::size_t i = 0; i < q.size(); ++i) p.row(static_cast<Eigen::Index>(i)) = forward_position(nominal, q[i]).transpose();
-      if (const auto why = tracker_frozen(m, p)) throw InputError(a.data + ": " + *why, a.data, 0, "mx");
-    }
-    // Registration first (tracker <- robot base and reflector offset), then the full model in the
-    // tracker frame; the output is expressed back in the registered robot frame.
-    // The check fit, validate, predict and compensate run too (robot/input_checks.hpp).
-    std::optional<LabelledFlangePoints> points;
-    if (several_points) {
-      const std::size_t col = table.column_index("reflector");
-      std::vector<std::string> labels;
-      for (std::size_t i = 0; i < table.row_count(); ++i) labels.emplace_back(table.cell(i, col));
-      for (const std::string& l : std::vector<std::string>(labels)) {  // each label is one rigid point
-        std::vector<PositionMeasurement> own;
-        for (std::size_t i = 0; i < data.size(); ++i)
-          if (labels[i] == l) own.push_back(data[i]);
-        (void)check_tracker_registration(nominal, own, a.data + " (reflector '" + l + "')", {!a.robot.empty(), ""},
-                                         a.max_registration_rms, options);
-      }
-      points = assign_flange_points(nominal, data, labels, a.tool_reflector, options, a.data);
-      for (std::size_t i = 0; i < data.size(); ++i) other_point_row[i] = data[i].flange_point != 0;
-    } else if (!a.tool_reflector.empty()) {
-      throw ArgumentError("--tool-reflector: " + a.data + " has no 'reflector' column with several labels");
-    }
-    const CalibrationResult reg = with_source(a.data, [&] {
-      if (points) return register_tracker(nominal, data, points->further_points_mm(), options);
-      const auto checked = check_tracker_registration(nominal, data, a.data, {!a.robot.empty(), ""},
-                                                      a.max_registration_rms, options);
-      return checked ? *checked : register_tracker(nominal, data, options);
-    });
-    text << "== registration (tracker <- robot base, reflector offset) ==\n" << reg.report();
-    const PoseXyzRpy t = to_xyz_rpy(reg.model.base());
-    text << "tracker <- robot base: x " << t.x_mm << " y " << t.y_mm << " z " << t.z_mm << " mm, rx " << t.rx_deg
-         << " ry " << t.ry_deg << " rz " << t.rz_deg << " deg\n\n";
-    std::vector<Eigen::Vector3d> further;
-    for (const FlangePointEstimate& p : reg.flange_points) further.push_back(p.position_mm);
-    result = with_source(a.data, [&] { return calibrate_positions(reg.model, data, further, options); });
-    if (points) {
-      text << "points on the flange (flange frame, mm): '" << points->labels[0] << "' is the tool point ("
-           << result.model.tool().translation().transpose() << ")";
-      for (std::size_t k = 1; k < points->labels.size(); ++k)
-        text << "; '" << points->labels[k] << "' is flange point " << k << " ("
-             << result.flange_points[k - 1].position_mm.transpose() << ")";
-      text << "\n";
-    }
-    // reg.model.base() is tracker <- robot chain, the nominal base world <- robot chain.
-    identified = result.model.with_base(nominal.base() * reg.model.base().inverse() * result.model.base());
-    // Tracker readings map into the identified model's world frame by nominal.base · reg.base^-1: keep it (and the
-    // reflector offset found with it) at full precision, for validate, predict and fk.
-    registration.emplace();
-    registration->robot_from_tracker = nominal.base() * reg.model.base().inverse();
-    registration->reflector_offset_mm = Eigen::Vector3d(reg.model.tool().translation());
-    registration->points = data.size();
-    registration->residual_rms_mm = result.after.rms_mm;
-  } else if (a.model == "distance") {
-    std::vector<Eigen::Vector3d> fixed;
-    for (const auto& b : a.base_points) {
-      const auto v = parse_numbers(b, 3, "--base-point");
-      fixed.emplace_back(v[0], v[1], v[2]);
-    }
-    const DistanceTable pairs = distance_measurements_from_table(table, q, nominal, fixed);
-    text << pairs.note;
-    result = with_source(a.data, [&] {
-      return fixed.empty() ? calibrate_distances(nominal, pairs.data, options)
-                           : calibrate_distances(nominal, pairs.data, fixed, options);
-    });
-    identified = result.model;
-  } else {
+  if (a.model != "position" && a.model != "distance")
     throw ArgumentError("--model: expected 'distance' or 'position', got '" + a.model + "'");
-  }
+  const Identified id = a.model == "position"
+                            ? calibrate_positions_model(a, table, q, nominal, options, several_points, text)
+                            : calibrate_distances_model(a, table, q, nominal, options, text);
+  const CalibrationResult& result = id.result;
   text << "== kinematic calibration (" << a.model << " model, " << result.before.count << " measurements) ==\n"
        << result.report();
   std::cout << text.str();
@@ -170,38 +243,11 @@ void run_calibrate(const CalibrateArgs& a) {
   // --out and --report all or none: an unwritable --report must not leave a new model next to an
   // old report (or the reverse).
   AtomicFileSet outputs;
-  nlohmann::json model_json = identified.with_name(nominal.name() + " (calibrated, " + a.model + " model)").to_json();
-  if (registration) model_json["registration"] = compensation::registration_to_json(*registration);
+  nlohmann::json model_json = id.model.with_name(nominal.name() + " (calibrated, " + a.model + " model)").to_json();
+  if (id.registration) model_json["registration"] = compensation::registration_to_json(*id.registration);
   outputs.add(a.out, model_json.dump(2) + "\n");
   if (!a.report.empty()) outputs.add(a.report, text.str());
-  if (!a.robot_out.empty()) {
-    // The nominal robot with the reflector offset the data found as its tool point (the nominal tool's
-    // orientation kept): what scores `--method none` or fits a field on this reflector without the
-    // calibrated links, instead of a robot JSON edited by hand.
-    const Eigen::Vector3d reflector =
-        registration ? *registration->reflector_offset_mm : Eigen::Vector3d(identified.tool().translation());
-    Eigen::Isometry3d tool = nominal.tool();
-    tool.translation() = reflector;
-    nlohmann::json nominal_json =
-        nominal.with_tool(tool).with_name(nominal.name() + " (nominal, reflector offset from " + a.data + ")").to_json();
-    if (registration) {
-      // The registration found with the nominal links (tracker -> robot base, the frame the calibrated
-      // model is expressed in too), with the residual the nominal links leave.
-      compensation::Registration own = *registration;
-      double ss = 0.0;
-      const Eigen::MatrixXd m = table.numeric_columns({"mx", "my", "mz"});
-      const MdhModel with_reflector = nominal.with_tool(tool);
-      std::size_t rows = 0;
-      for (std::size_t i = 0; i < q.size(); ++i)
-        if (!other_point_row[i] && ++rows)
-          ss += (own.robot_from_tracker * Eigen::Vector3d(m.row(static_cast<Eigen::Index>(i)).transpose()) -
-               forward_position(with_reflector, q[i]))
-                  .squaredNorm();
-      own.residual_rms_mm = std::sqrt(ss / static_cast<double>(rows));
-      nominal_json["registration"] = compensation::registration_to_json(own);
-    }
-    outputs.add(a.robot_out, nominal_json.dump(2) + "\n");
-  }
+  if (!a.robot_out.empty()) outputs.add(a.robot_out, nominal_with_reflector(a, table, q, nominal, id).dump(2) + "\n");
   require_standard_output();  // the report went to standard output: all or nothing
   outputs.commit();
   std::cerr << "calibrate: identified model written to " << a.out << "\n";

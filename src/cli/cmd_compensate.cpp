@@ -77,24 +77,10 @@ std::string frame_line(const compensation::CompensationModel& model, const Compe
   return line;
 }
 
-void run_compensate(const CompensateArgs& a) {
+// --seed and --config: where IK starts and which arm configuration it keeps.
+compensation::CompensationTargets target_options(const CompensateArgs& a) {
   using namespace robot;
   using namespace compensation;
-  // p_inside is P(|error| <= tolerance): 0, a negative or a NaN tolerance makes it meaningless.
-  if (!(std::isfinite(a.tolerance) && a.tolerance > 0.0))
-    throw ArgumentError("--tolerance: " + format_number(a.tolerance) + "; expected a finite tolerance > 0 (mm)");
-  const TargetFrame frame = parse_target_frame(a.frame, "--frame");
-  const nlohmann::json j = read_json_file(a.model, "model file");
-  const CompensationModel stored = with_json_source(a.model, [&] { return CompensationModel::from_json(j, a.model); });
-  const auto tool = parse_tool_option(a.tool, stored.aimed_model().tool());
-  const CompensationModel model = tool ? stored.with_working_tool(stored.tool_in_model_frame(*tool)) : stored;
-  const bool kinematic = model.method() == CompensationMethod::kinematic ||
-                         model.method() == CompensationMethod::kinematic_kriging;
-  if (kinematic && a.robot.empty() && !model.has_nominal_model())
-    throw ArgumentError("--robot: a kinematic model's command model is the calibrated robot; give the nominal robot JSON");
-  const MdhModel nominal_robot = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
-  // Targets are poses (or the FK) of the working tool.
-  const MdhModel nominal = nominal_at_working_tool(model, nominal_robot);
   CompensationTargets targets;
   if (!a.seed.empty()) {
     const auto v = parse_numbers(a.seed, 6, "--seed");
@@ -106,15 +92,14 @@ void run_compensate(const CompensateArgs& a) {
       throw ArgumentError("--config: '" + a.config +
                           "'; expected s, e and w each followed by + or -, e.g. s+e+w- (docs/robot.md, \"Arm configuration\")");
   }
-  const CsvTable t = CsvTable::read(a.targets);
-  const bool joints = has_joint_columns(t);
-  const std::vector<std::string> pose_cols{"x", "y", "z", "rx", "ry", "rz"};
-  bool pose = true;
-  for (const auto& c : pose_cols) pose = pose && t.has_column(c);
-  if (!joints && !pose)
-    throw InputError(a.targets + ": targets need columns q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg)",
-                     a.targets);
-  const std::size_t n = t.row_count();
+  return targets;
+}
+
+// The targets as nominal joints (q1..q6) or poses (x,y,z,rx,ry,rz), checked against the robot.
+void read_targets(const CompensateArgs& a, const CsvTable& t, bool joints, const compensation::CompensationModel& model,
+                  const robot::MdhModel& nominal, compensation::CompensationTargets& targets) {
+  using namespace robot;
+  using namespace compensation;
   if (joints) {
     // Targets that carry measurements must be of this robot (the check of fit and validate).
     check_table_fits_robot(t, nominal,
@@ -125,49 +110,30 @@ void run_compensate(const CompensateArgs& a) {
     if (const auto w = joints_outside_limits(targets.joints_deg, nominal, row_labels_of(t, "row")))
       std::cerr << "errfield compensate: warning: " << *w << " (status outside-limits: no joints written)\n";
   } else {
-    targets.poses = t.numeric_columns(pose_cols);
+    targets.poses = t.numeric_columns({"x", "y", "z", "rx", "ry", "rz"});
     // Per-row seeds (e.g. the taught joints): solved from, and kept on, their arm configuration.
     targets.seed_rows_deg = seed_rows_of(t);
     warn_if_metres(t, nominal, "compensate", kNominalXyz);
     check_frame_column(t, a.frame);
   }
-  bring_targets_to_robot_frame(targets, model, frame, "--frame", a.targets, a.model);
-  check_seed_joints(targets, nominal, &t);
-  if (!(std::isfinite(a.max_correction) && a.max_correction >= 0.0))
-    throw ArgumentError("--max-correction: " + format_number(a.max_correction) +
-                        "; expected a ceiling > 0 (mm), or 0 for the default");
-  const StepColumns step = compensate_columns(model, nominal, targets, a.tolerance, a.max_correction);
-  const std::size_t refused = step.refused, no_prediction = step.no_prediction;
-  const std::vector<std::string>& status = step.columns.back().words;
-  // The first refused rows, as file:line: status, for the messages below.
-  const auto refused_rows = [&] {
-    std::string rows;
-    std::size_t named = 0;
-    for (std::size_t i = 0; i < n && named < 5; ++i) {
-      if (status[i] == "ok") continue;
-      rows += (named++ ? "; " : "") + a.targets + ":" + std::to_string(t.line_of_row(i)) + ": " + status[i];
-    }
-    return rows + (refused > named ? "; ..." : "");
-  };
-  // Nothing compensated is a failed job, as in predict, validate and cv (exit 1, nothing written,
-  // a previous output kept): a script that checks the exit status must not send a file of refusals
-  // to the robot. The message carries what the statuses would have said: the tally of the reasons
-  // and the first rows.
-  if (n > 0 && refused == n)
-    throw Error("compensate: none of the " + std::to_string(n) + " targets of " + a.targets + " could be compensated with " +
-                std::string(method_name(model.method())) + " from " + a.model + " (" + refusal_tally(status) + "; first rows: " +
-                refused_rows() + "); " + a.out + " not written");
-  OutputTable out;
-  out.add_all_columns(t);
-  add_step_columns(out, step);
-  // The frame of the row's own x,y,z,rx,ry,rz (written as given): a later run on this file, or a
-  // reader of it, need not guess (check_frame_column).
-  if (!joints) out.add_column("frame", std::vector<std::string>(n, a.frame));
-  // `--strict`: any refusal fails the job. Checked before writing: a job that fails leaves any
-  // previous output as it was.
-  if (a.strict && refused)
-    throw Error("--strict: " + std::to_string(refused) + " of " + std::to_string(n) + " target(s) refused (" +
-                refused_rows() + "); " + a.out + " not written");
+}
+
+// The first refused rows, as file:line: status, for the messages that fail the job.
+std::string refused_rows(const CompensateArgs& a, const CsvTable& t, const std::vector<std::string>& status,
+                         std::size_t refused) {
+  std::string rows;
+  std::size_t named = 0;
+  for (std::size_t i = 0; i < t.row_count() && named < 5; ++i) {
+    if (status[i] == "ok") continue;
+    rows += (named++ ? "; " : "") + a.targets + ":" + std::to_string(t.line_of_row(i)) + ": " + status[i];
+  }
+  return rows + (refused > named ? "; ..." : "");
+}
+
+void print_compensate_summary(const CompensateArgs& a, const compensation::CompensationModel& model,
+                              const compensation::StepColumns& step, std::size_t n, bool joints) {
+  using namespace compensation;
+  const std::size_t refused = step.refused;
   std::cout << "compensate: " << n - refused << " of " << n << " targets compensated with " << method_name(model.method())
             << (refused ? "; " + std::to_string(refused) + " refused (status column): no joints written for them" : "")
             << "\n  written to " << a.out << "\n";
@@ -187,6 +153,9 @@ void run_compensate(const CompensateArgs& a) {
                                              format_number(kMaxCorrectionFloorMm) + " mm")
             << ")\n";
   print_working_tool(std::cout, model);
+}
+
+void warn_refusals(const compensation::StepColumns& step) {
   if (step.too_large)
     std::cerr << "errfield compensate: warning: " << step.too_large << " target(s) would move the tool point by more "
               << "than " << format_number(step.max_correction_mm)
@@ -196,10 +165,69 @@ void run_compensate(const CompensateArgs& a) {
     std::cerr << "errfield compensate: warning: " << step.singular << " target(s) near a singular configuration "
               << "(status wrist-singular, elbow-singular, shoulder-singular or near-singular, no joints written): "
                  "their compensated joints turn by far more than the correction warrants\n";
-  if (no_prediction)
-    std::cerr << "errfield compensate: warning: " << no_prediction
+  if (step.no_prediction)
+    std::cerr << "errfield compensate: warning: " << step.no_prediction
               << " target(s) got no finite prediction from the model's field (status no-prediction); no joints "
                  "written for them\n";
+}
+
+void run_compensate(const CompensateArgs& a) {
+  using namespace robot;
+  using namespace compensation;
+  // p_inside is P(|error| <= tolerance): 0, a negative or a NaN tolerance makes it meaningless.
+  if (!(std::isfinite(a.tolerance) && a.tolerance > 0.0))
+    throw ArgumentError("--tolerance: " + format_number(a.tolerance) + "; expected a finite tolerance > 0 (mm)");
+  const TargetFrame frame = parse_target_frame(a.frame, "--frame");
+  const nlohmann::json j = read_json_file(a.model, "model file");
+  const CompensationModel stored = with_json_source(a.model, [&] { return CompensationModel::from_json(j, a.model); });
+  const auto tool = parse_tool_option(a.tool, stored.aimed_model().tool());
+  const CompensationModel model = tool ? stored.with_working_tool(stored.tool_in_model_frame(*tool)) : stored;
+  const bool kinematic = model.method() == CompensationMethod::kinematic ||
+                         model.method() == CompensationMethod::kinematic_kriging;
+  if (kinematic && a.robot.empty() && !model.has_nominal_model())
+    throw ArgumentError("--robot: a kinematic model's command model is the calibrated robot; give the nominal robot JSON");
+  const MdhModel nominal_robot = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
+  // Targets are poses (or the FK) of the working tool.
+  const MdhModel nominal = nominal_at_working_tool(model, nominal_robot);
+  CompensationTargets targets = target_options(a);
+  const CsvTable t = CsvTable::read(a.targets);
+  const bool joints = has_joint_columns(t);
+  bool pose = true;
+  for (const char* c : {"x", "y", "z", "rx", "ry", "rz"}) pose = pose && t.has_column(c);
+  if (!joints && !pose)
+    throw InputError(a.targets + ": targets need columns q1..q6 (nominal joints, deg) or x,y,z,rx,ry,rz (mm, deg)",
+                     a.targets);
+  const std::size_t n = t.row_count();
+  read_targets(a, t, joints, model, nominal, targets);
+  bring_targets_to_robot_frame(targets, model, frame, "--frame", a.targets, a.model);
+  check_seed_joints(targets, nominal, &t);
+  if (!(std::isfinite(a.max_correction) && a.max_correction >= 0.0))
+    throw ArgumentError("--max-correction: " + format_number(a.max_correction) +
+                        "; expected a ceiling > 0 (mm), or 0 for the default");
+  const StepColumns step = compensate_columns(model, nominal, targets, a.tolerance, a.max_correction);
+  const std::size_t refused = step.refused;
+  const std::vector<std::string>& status = step.columns.back().words;
+  // Nothing compensated is a failed job, as in predict, validate and cv (exit 1, nothing written,
+  // a previous output kept): a script that checks the exit status must not send a file of refusals
+  // to the robot. The message carries what the statuses would have said: the tally of the reasons
+  // and the first rows.
+  if (n > 0 && refused == n)
+    throw Error("compensate: none of the " + std::to_string(n) + " targets of " + a.targets + " could be compensated with " +
+                std::string(method_name(model.method())) + " from " + a.model + " (" + refusal_tally(status) + "; first rows: " +
+                refused_rows(a, t, status, refused) + "); " + a.out + " not written");
+  OutputTable out;
+  out.add_all_columns(t);
+  add_step_columns(out, step);
+  // The frame of the row's own x,y,z,rx,ry,rz (written as given): a later run on this file, or a
+  // reader of it, need not guess (check_frame_column).
+  if (!joints) out.add_column("frame", std::vector<std::string>(n, a.frame));
+  // `--strict`: any refusal fails the job. Checked before writing: a job that fails leaves any
+  // previous output as it was.
+  if (a.strict && refused)
+    throw Error("--strict: " + std::to_string(refused) + " of " + std::to_string(n) + " target(s) refused (" +
+                refused_rows(a, t, status, refused) + "); " + a.out + " not written");
+  print_compensate_summary(a, model, step, n, joints);
+  warn_refusals(step);
   require_standard_output();  // before the write: a run that fails leaves the previous file
   out.write(a.out);
 }

@@ -99,6 +99,169 @@ std::string fixed(double v, int decimals) {
   return s.str();
 }
 
+// --tool NAME=... and --wobj NAME=...: frames the program names but does not declare.
+struct NamedFrames {
+  std::map<std::string, Eigen::Isometry3d> tools, wobjs;
+};
+
+NamedFrames named_frames(const CompensateProgramArgs& a, const std::string& format) {
+  NamedFrames f;
+  for (const std::string& t : a.tools) {
+    auto [name, numbers] = named_numbers(t, "--tool");
+    const Eigen::Isometry3d tool = frame_of(numbers, format);
+    compensation::check_tool_point(tool, "--tool " + name);
+    f.tools[name] = tool;
+  }
+  for (const std::string& w : a.wobjs) {
+    auto [name, numbers] = named_numbers(w, "--wobj");
+    f.wobjs[name] = frame_of(numbers, format);
+  }
+  return f;
+}
+
+// The files a reader may rewrite (the program, and for KRL the .dat beside the .src), where each
+// is written, and the targets read from them.
+struct ReadProgram {
+  std::vector<programs::ProgramFile> written;
+  std::vector<std::string> written_to;
+  std::vector<programs::ProgramTarget> targets;
+};
+
+ReadProgram read_program(const CompensateProgramArgs& a, const std::string& format, const NamedFrames& frames,
+                         const robot::MdhModel& nominal_robot) {
+  using namespace programs;
+  ReadProgram p{{{a.program, read_program_bytes(a.program, "--program")}}, {a.out}, {}};
+  std::vector<ProgramFile> includes;
+  for (const std::string& path : a.includes) includes.push_back({path, read_program_bytes(path, "--include")});
+  if (format == "rapid") {
+    RapidReadOptions options;
+    options.tools = frames.tools;
+    options.wobjs = frames.wobjs;
+    p.targets = read_rapid_targets(p.written.front(), includes, nominal_robot, options);
+  } else if (format == "krl") {
+    KrlReadOptions options;
+    options.tools = frames.tools;
+    options.bases = frames.wobjs;
+    ProgramFile dat;
+    if (const std::string path = dat_beside(a.program); !path.empty()) {
+      dat = {path, read_program_bytes(path, "the .dat beside --program")};
+      p.written.push_back(dat);
+      p.written_to.push_back(std::filesystem::path(a.out).replace_extension(std::filesystem::path(path).extension()).string());
+      refuse_same_output(
+          {{"--out's .dat", &p.written_to.back()}, {"--out", &a.out}, {"--program's .dat", &path}, {"--report", &a.report}});
+    }
+    p.targets = read_krl_targets(p.written.front(), dat, includes, nominal_robot, options);
+  } else {
+    if (!frames.wobjs.empty()) throw ArgumentError("--wobj: URScript poses are in the robot base frame; there is no work object to give");
+    for (const auto& [name, tool] : frames.tools)
+      if (name != "tcp") throw ArgumentError("--tool " + name + "=...: a URScript program's tool is named tcp (--tool tcp=X,Y,Z,RX,RY,RZ)");
+    if (!includes.empty()) throw ArgumentError("--include: a URScript program is read as one file");
+    UrscriptReadOptions options;
+    options.tools = frames.tools;
+    p.targets = read_urscript_targets(p.written.front(), options);
+  }
+  if (p.targets.empty())
+    throw InputError(a.program + ": no motion with a target found (" +
+                         std::string(format == "rapid" ? "MoveL, MoveJ, MoveC, MoveAbsJ" : format == "krl" ? "PTP, LIN, CIRC, SPTP, SLIN, SPL" : "movel, movej, movep, movec") +
+                         ", ...); " + a.out + " not written",
+                     a.program);
+  return p;
+}
+
+// Counts per status and each problem once (the reason's first clause, with how many rows and the first line).
+struct StatusTally {
+  std::map<std::string, std::size_t> count;
+  std::vector<std::pair<std::string, std::pair<std::size_t, std::string>>> problems;
+  std::string problem_lines;
+};
+
+StatusTally tally_statuses(const programs::ProgramCompensation& result) {
+  StatusTally t;
+  for (const programs::ProgramReportRow& r : result.rows) {
+    ++t.count[r.status];
+    if (r.status != programs::kStatusRefused) continue;
+    // The reason's first clause: up to the first "; " outside parentheses.
+    std::size_t cut = r.reason.size();
+    int depth = 0;
+    for (std::size_t c = 0; c + 1 < r.reason.size(); ++c) {
+      depth += r.reason[c] == '(' ? 1 : r.reason[c] == ')' ? -1 : 0;
+      if (depth == 0 && r.reason[c] == ';' && r.reason[c + 1] == ' ') {
+        cut = c;
+        break;
+      }
+    }
+    const std::string problem = r.reason.substr(0, cut);
+    auto it = std::find_if(t.problems.begin(), t.problems.end(), [&](const auto& p) { return p.first == problem; });
+    if (it == t.problems.end()) t.problems.push_back({problem, {1, r.file + ":" + std::to_string(r.line)}});
+    else ++it->second.first;
+  }
+  for (const auto& [p, where] : t.problems)
+    t.problem_lines += "  problem: " + p + " (" + std::to_string(where.first) + " target(s), first at " + where.second + ")\n";
+  return t;
+}
+
+// What a controller of this kind already corrects, so that the model does not correct it twice.
+const char* controller_note(const std::string& format) {
+  if (format == "rapid")
+    return "  note: if this controller runs ABB Absolute Accuracy it already corrects pose targets: a model fitted on the "
+           "nominal kinematics would correct twice; fit the model on data taken with Absolute Accuracy active, or "
+           "turn it off\n";
+  if (format == "krl")
+    return "  note: if this robot is a KUKA positionally accurate robot (absolutely accurate model active) the "
+           "controller already corrects pose targets: a model fitted on the nominal kinematics would correct twice; "
+           "fit the model on data taken with it active, or turn it off\n";
+  return "  warning: a Universal Robots controller applies its factory kinematic calibration to every pose target: "
+         "a model fitted on the nominal D-H would correct twice; fit the model on poses commanded through that "
+         "controller (measured targets against the poses the program sent), so it learns only the error left "
+         "after the factory calibration\n";
+}
+
+std::string program_summary(const CompensateProgramArgs& a, const std::string& format, const ReadProgram& p,
+                            const programs::ProgramCompensation& result, StatusTally& t) {
+  using namespace programs;
+  std::ostringstream summary;
+  summary << "  largest correction " << fixed(result.largest_correction_mm, 3) << " mm (ceiling "
+          << fixed(result.max_correction_mm, 3) << " mm)\n"
+          << t.problem_lines;
+  if (t.count[kStatusComputed])
+    summary << "  " << t.count[kStatusComputed]
+            << " target(s) are computed by the controller (relative moves, frame products, function calls, run-time "
+               "assignments): they are not rewritten; a computed target moves with the literal it is computed from only "
+               "where that literal was rewritten\n";
+  summary << controller_note(format);
+  summary << "  program written to " << a.out;
+  for (std::size_t f = 1; f < p.written_to.size(); ++f) summary << " and " << p.written_to[f];
+  summary << (a.report.empty() ? "" : "; report to " + a.report) << "\n";
+  return summary.str();
+}
+
+// --report: one row per target occurrence, in the order of the program.
+std::string program_report_csv(const programs::ProgramCompensation& result) {
+  OutputTable t;
+  const std::size_t n = result.rows.size();
+  std::vector<std::string> file(n), line(n), target(n), status(n), reason(n);
+  std::vector<std::vector<double>> num(12, std::vector<double>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    const programs::ProgramReportRow& r = result.rows[i];
+    file[i] = r.file;
+    line[i] = std::to_string(r.line);
+    target[i] = r.target;
+    status[i] = r.status;
+    reason[i] = r.reason;
+    for (int k = 0; k < 3; ++k) num[static_cast<std::size_t>(k)][i] = r.d_mm[k];
+    for (int k = 0; k < 6; ++k) num[static_cast<std::size_t>(3 + k)][i] = r.q_deg[k];
+    for (int k = 0; k < 3; ++k) num[static_cast<std::size_t>(9 + k)][i] = r.rotation_mdeg[k];
+  }
+  t.add_column("file", file);
+  t.add_column("line", line);
+  t.add_column("target", target);
+  t.add_column("status", status);
+  t.add_column("reason", reason);
+  const char* names[] = {"dx_mm", "dy_mm", "dz_mm", "q1", "q2", "q3", "q4", "q5", "q6", "dwx_mdeg", "dwy_mdeg", "dwz_mdeg"};
+  for (std::size_t c = 0; c < 12; ++c) t.add_numbers(names[c], std::move(num[c]));
+  return t.to_csv();
+}
+
 void run_compensate_program(const CompensateProgramArgs& a) {
   using namespace programs;
   refuse_same_output({{"--out", &a.out}, {"--report", &a.report}, {"--program", &a.program}});
@@ -117,154 +280,36 @@ void run_compensate_program(const CompensateProgramArgs& a) {
   if (kinematic && a.robot.empty() && !model.has_nominal_model())
     throw ArgumentError("--robot: a kinematic model's command model is the calibrated robot; give the nominal robot JSON");
   const robot::MdhModel nominal_robot = a.robot.empty() ? model.nominal_model() : load_robot_or_default(a.robot);
-
-  std::map<std::string, Eigen::Isometry3d> tools, wobjs;
-  for (const std::string& t : a.tools) {
-    auto [name, numbers] = named_numbers(t, "--tool");
-    const Eigen::Isometry3d tool = frame_of(numbers, format);
-    compensation::check_tool_point(tool, "--tool " + name);
-    tools[name] = tool;
-  }
-  for (const std::string& w : a.wobjs) {
-    auto [name, numbers] = named_numbers(w, "--wobj");
-    wobjs[name] = frame_of(numbers, format);
-  }
-  // The files a reader may rewrite: the program, and for KRL the .dat beside the .src.
-  std::vector<ProgramFile> written{{a.program, read_program_bytes(a.program, "--program")}};
-  std::vector<std::string> written_to{a.out};
-  std::vector<ProgramFile> includes;
-  for (const std::string& path : a.includes) includes.push_back({path, read_program_bytes(path, "--include")});
-  std::vector<ProgramTarget> targets;
-  if (format == "rapid") {
-    RapidReadOptions options;
-    options.tools = tools;
-    options.wobjs = wobjs;
-    targets = read_rapid_targets(written.front(), includes, nominal_robot, options);
-  } else if (format == "krl") {
-    KrlReadOptions options;
-    options.tools = tools;
-    options.bases = wobjs;
-    ProgramFile dat;
-    if (const std::string path = dat_beside(a.program); !path.empty()) {
-      dat = {path, read_program_bytes(path, "the .dat beside --program")};
-      written.push_back(dat);
-      written_to.push_back(std::filesystem::path(a.out).replace_extension(std::filesystem::path(path).extension()).string());
-      refuse_same_output(
-          {{"--out's .dat", &written_to.back()}, {"--out", &a.out}, {"--program's .dat", &path}, {"--report", &a.report}});
-    }
-    targets = read_krl_targets(written.front(), dat, includes, nominal_robot, options);
-  } else {
-    if (!wobjs.empty()) throw ArgumentError("--wobj: URScript poses are in the robot base frame; there is no work object to give");
-    for (const auto& [name, tool] : tools)
-      if (name != "tcp") throw ArgumentError("--tool " + name + "=...: a URScript program's tool is named tcp (--tool tcp=X,Y,Z,RX,RY,RZ)");
-    if (!includes.empty()) throw ArgumentError("--include: a URScript program is read as one file");
-    UrscriptReadOptions options;
-    options.tools = tools;
-    targets = read_urscript_targets(written.front(), options);
-  }
-  if (targets.empty())
-    throw InputError(a.program + ": no motion with a target found (" +
-                         std::string(format == "rapid" ? "MoveL, MoveJ, MoveC, MoveAbsJ" : format == "krl" ? "PTP, LIN, CIRC, SPTP, SLIN, SPL" : "movel, movej, movep, movec") +
-                         ", ...); " + a.out + " not written",
-                     a.program);
+  const NamedFrames frames = named_frames(a, format);
+  const ReadProgram p = read_program(a, format, frames, nominal_robot);
   ProgramCompensationOptions copt;
   copt.tolerance_mm = a.tolerance;
   copt.max_correction_mm = a.max_correction;
-  const ProgramCompensation result = compensate_program_targets(model, nominal_robot, targets, copt);
+  const ProgramCompensation result = compensate_program_targets(model, nominal_robot, p.targets, copt);
 
-  // Counts per status and each problem once (the reason's first clause, with how many rows and the first line).
-  std::map<std::string, std::size_t> count;
-  std::vector<std::pair<std::string, std::pair<std::size_t, std::string>>> problems;
-  for (const ProgramReportRow& r : result.rows) {
-    ++count[r.status];
-    if (r.status != kStatusRefused) continue;
-    // The reason's first clause: up to the first "; " outside parentheses.
-    std::size_t cut = r.reason.size();
-    int depth = 0;
-    for (std::size_t c = 0; c + 1 < r.reason.size(); ++c) {
-      depth += r.reason[c] == '(' ? 1 : r.reason[c] == ')' ? -1 : 0;
-      if (depth == 0 && r.reason[c] == ';' && r.reason[c + 1] == ' ') {
-        cut = c;
-        break;
-      }
-    }
-    const std::string problem = r.reason.substr(0, cut);
-    auto it = std::find_if(problems.begin(), problems.end(), [&](const auto& p) { return p.first == problem; });
-    if (it == problems.end()) problems.push_back({problem, {1, r.file + ":" + std::to_string(r.line)}});
-    else ++it->second.first;
-  }
+  StatusTally tally = tally_statuses(result);
   std::ostringstream summary;
-  summary << "compensate-program: " << targets.size() << " target occurrence(s) in " << a.program << ": ";
+  summary << "compensate-program: " << p.targets.size() << " target occurrence(s) in " << a.program << ": ";
   bool first = true;
   for (const char* s : {kStatusOk, kStatusComputed, kStatusUnchanged, kStatusRefused}) {
-    summary << (first ? "" : ", ") << count[s] << " " << s;
+    summary << (first ? "" : ", ") << tally.count[s] << " " << s;
     first = false;
   }
   summary << "\n";
-  std::string problem_lines;
-  for (const auto& [p, where] : problems)
-    problem_lines += "  problem: " + p + " (" + std::to_string(where.first) + " target(s), first at " + where.second + ")\n";
-  if (count[kStatusOk] == 0 && count[kStatusRefused] > 0)
+  if (tally.count[kStatusOk] == 0 && tally.count[kStatusRefused] > 0)
     throw Error("compensate-program: no target of " + a.program + " could be compensated with " +
-                std::string(compensation::method_name(model.method())) + " from " + a.model + ":\n" + problem_lines + a.out +
-                " not written");
-  summary << "  largest correction " << fixed(result.largest_correction_mm, 3) << " mm (ceiling "
-          << fixed(result.max_correction_mm, 3) << " mm)\n"
-          << problem_lines;
-  if (count[kStatusComputed])
-    summary << "  " << count[kStatusComputed]
-            << " target(s) are computed by the controller (relative moves, frame products, function calls, run-time "
-               "assignments): they are not rewritten; a computed target moves with the literal it is computed from only "
-               "where that literal was rewritten\n";
-  if (format == "rapid")
-    summary << "  note: if this controller runs ABB Absolute Accuracy it already corrects pose targets: a model fitted on the "
-               "nominal kinematics would correct twice; fit the model on data taken with Absolute Accuracy active, or "
-               "turn it off\n";
-  else if (format == "krl")
-    summary << "  note: if this robot is a KUKA positionally accurate robot (absolutely accurate model active) the "
-               "controller already corrects pose targets: a model fitted on the nominal kinematics would correct twice; "
-               "fit the model on data taken with it active, or turn it off\n";
-  else
-    summary << "  warning: a Universal Robots controller applies its factory kinematic calibration to every pose target: "
-               "a model fitted on the nominal D-H would correct twice; fit the model on poses commanded through that "
-               "controller (measured targets against the poses the program sent), so it learns only the error left "
-               "after the factory calibration\n";
-  summary << "  program written to " << a.out;
-  for (std::size_t f = 1; f < written_to.size(); ++f) summary << " and " << written_to[f];
-  summary << (a.report.empty() ? "" : "; report to " + a.report) << "\n";
+                std::string(compensation::method_name(model.method())) + " from " + a.model + ":\n" + tally.problem_lines +
+                a.out + " not written");
+  summary << program_summary(a, format, p, result, tally);
 
   AtomicFileSet outputs;
-  for (std::size_t f = 0; f < written.size(); ++f) {
+  for (std::size_t f = 0; f < p.written.size(); ++f) {
     std::vector<Replacement> edits;
     for (const Replacement& r : result.replacements)
       if (r.file == f) edits.push_back(r);
-    outputs.add(written_to[f], apply_replacements(written[f].bytes, std::move(edits)));
+    outputs.add(p.written_to[f], apply_replacements(p.written[f].bytes, std::move(edits)));
   }
-  if (!a.report.empty()) {
-    OutputTable t;
-    const std::size_t n = result.rows.size();
-    std::vector<std::string> file(n), line(n), target(n), status(n), reason(n);
-    std::vector<std::vector<double>> num(12, std::vector<double>(n));
-    for (std::size_t i = 0; i < n; ++i) {
-      const ProgramReportRow& r = result.rows[i];
-      file[i] = r.file;
-      line[i] = std::to_string(r.line);
-      target[i] = r.target;
-      status[i] = r.status;
-      reason[i] = r.reason;
-      for (int k = 0; k < 3; ++k) num[static_cast<std::size_t>(k)][i] = r.d_mm[k];
-      for (int k = 0; k < 6; ++k) num[static_cast<std::size_t>(3 + k)][i] = r.q_deg[k];
-      for (int k = 0; k < 3; ++k) num[static_cast<std::size_t>(9 + k)][i] = r.rotation_mdeg[k];
-    }
-    t.add_column("file", file);
-    t.add_column("line", line);
-    t.add_column("target", target);
-    t.add_column("status", status);
-    t.add_column("reason", reason);
-    const char* names[] = {"dx_mm", "dy_mm", "dz_mm", "q1", "q2", "q3", "q4", "q5", "q6", "dwx_mdeg", "dwy_mdeg", "dwz_mdeg"};
-    for (std::size_t c = 0; c < 12; ++c) t.add_numbers(names[c], std::move(num[c]));
-    outputs.add(a.report, t.to_csv());
-  }
+  if (!a.report.empty()) outputs.add(a.report, program_report_csv(result));
   commit_after_standard_output(outputs, summary.str());
 }
 

@@ -63,10 +63,8 @@ std::string with_unit(double v, const std::string& unit) {
   return unit.empty() ? std::string(buf) : std::string(buf) + " " + unit;
 }
 
-void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& owners) {
-  const InterpolationMethod& method = find_method(a.method, true);
-  owners.check(method.name, method.accepts, {h.power, h.neighbors, h.radius});
-
+// The request's options: folds, seed and the shared neighbourhood options the method accepts.
+CrossValidationRequest cv_request(const CvArgs& a, const CvHandles& h) {
   CrossValidationRequest r;
   r.value_columns = split_column_list(a.value, "--value");
   r.folds = parse_folds(a.folds);
@@ -88,16 +86,12 @@ void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& ow
     r.shared.radius = a.radius;
   }
   with_value_type(r.value_columns.size(), []<class V>() {});
+  return r;
+}
 
-  CoordinateSystem cs;
-  if (!a.crs.empty()) cs.add(parse_crs(a.crs, "--crs"), "--crs");
-  const bool gaps = method.takes_missing_values && method.takes_missing_values();
-  const PointTable points = read_point_table(a.samples, "--samples", {r.value_columns, gaps});
+// The samples into the request (which points at `samples`: it must outlive the request).
+void attach_samples(const CvArgs& a, const PointTable& points, bool gaps, CrossValidationRequest& r) {
   const CsvTable& samples = points.table;
-  cs.add(points.crs, "--samples " + a.samples, a.samples);
-  r.coord_columns = points.coordinate_columns(a.coords, "--coords");
-  r.coordinate_system = &cs;
-  if (const std::string w = cs.geographic_warning(); !w.empty()) std::cerr << "errfield cv: " << w << "\n";
   const std::size_t n = samples.row_count();
   if (n < 2)
     throw InputError(a.samples + ": " + std::to_string(n) + " data rows; cross-validation needs at least 2", a.samples);
@@ -109,129 +103,176 @@ void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& ow
   // Heterotopic cokriging (kriging with an LMC --model): an empty cell is that component not
   // measured at the sample; every other method keeps refusing empty cells.
   r.sample_values = gaps ? numeric_columns_with_gaps(samples, r.value_columns) : samples.numeric_columns(r.value_columns);
-  const bool heterotopic = r.sample_values.array().isNaN().any();
   r.sample_labels = points.labels("sample");
+}
 
+// The columns --out adds: pred and residual (one per component), refused before the work when the
+// samples already have one of them.
+struct CvColumns {
+  std::vector<std::string> pred, residual;
+};
+
+CvColumns cv_columns(const CvArgs& a, const CrossValidationRequest& r) {
   const std::size_t c = r.value_columns.size();
-  std::vector<std::string> pred_names, res_names;
+  CvColumns names;
   for (const auto& v : r.value_columns) {
-    pred_names.push_back(c == 1 ? "pred" : "pred_" + v);
-    res_names.push_back(c == 1 ? "residual" : "residual_" + v);
+    names.pred.push_back(c == 1 ? "pred" : "pred_" + v);
+    names.residual.push_back(c == 1 ? "residual" : "residual_" + v);
   }
   std::vector<std::string> added{"fold"};
-  added.insert(added.end(), pred_names.begin(), pred_names.end());
-  added.insert(added.end(), res_names.begin(), res_names.end());
+  added.insert(added.end(), names.pred.begin(), names.pred.end());
+  added.insert(added.end(), names.residual.begin(), names.residual.end());
   added.push_back("abs_residual");
   added.push_back("var");
   if (!a.out.empty())
     for (const auto& name : added)
-      if (samples.has_column(name))
+      if (r.samples->has_column(name))
         throw InputError(a.samples + ": already has a column '" + name + "', which the output would repeat; rename it",
                          a.samples, 1, name);
+  return names;
+}
+
+// No prediction at all is a failed job (k-fold said "predicted 0 of 12" and exited 0), whatever
+// made every fold fail; the notes say why.
+void refuse_nothing_predicted(const CvArgs& a, const std::string& method, const CrossValidationRequest& r,
+                              const CrossValidationOutput& result, const CrossValidationSummary& s, bool heterotopic) {
+  const bool nothing_predicted =
+      heterotopic ? !(r.sample_values.array().isFinite() && result.pred.array().isFinite()).any() : s.predicted == 0;
+  if (!nothing_predicted) return;
+  std::string why;
+  for (const auto& note : result.notes) why += "; " + note;
+  throw Error("cv: none of the " + std::to_string(r.samples->row_count()) + " samples of " + a.samples +
+              " could be predicted by --method " + method +
+              (why.empty() ? std::string(" (e.g. no neighbour within --radius)") : why) + "; nothing written");
+}
+
+// --out: the samples with fold, predictions, residuals, |residual|, variance and the method's extras.
+OutputTable cv_table(const CvArgs& a, const CrossValidationRequest& r, const CvColumns& names,
+                     const CrossValidationOutput& result, const Eigen::MatrixXd& residuals) {
+  const CsvTable& samples = *r.samples;
+  const std::size_t n = samples.row_count(), c = r.value_columns.size();
+  OutputTable out;
+  out.add_all_columns(samples);
+  std::vector<std::string> folds(n);
+  for (std::size_t i = 0; i < n; ++i) folds[i] = std::to_string(result.fold[i]);
+  out.add_column("fold", std::move(folds));
+  for (std::size_t k = 0; k < c; ++k) {
+    std::vector<std::string> p(n), e(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      p[i] = cell(result.pred(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)));
+      e[i] = cell(residuals(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)));
+    }
+    out.add_column(names.pred[k], std::move(p));
+    out.add_column(names.residual[k], std::move(e));
+  }
+  std::vector<std::string> abs(n);
+  for (std::size_t i = 0; i < n; ++i) abs[i] = cell(residuals.row(static_cast<Eigen::Index>(i)).norm());
+  out.add_column("abs_residual", std::move(abs));
+  if (!result.variance.empty()) {
+    std::vector<std::string> var(n);
+    for (std::size_t i = 0; i < n; ++i) var[i] = cell(result.variance[i]);
+    out.add_column("var", std::move(var));
+  }
+  for (const auto& [name, values] : result.extra_columns) {
+    if (samples.has_column(name))
+      throw InputError(a.samples + ": already has a column '" + name + "', which the output would repeat; rename it",
+                       a.samples, 1, name);
+    std::vector<std::string> cells(n);
+    for (std::size_t i = 0; i < n; ++i) cells[i] = cell(values[i]);
+    out.add_column(name, std::move(cells));
+  }
+  return out;
+}
+
+void print_cv_summary(const CvArgs& a, const std::string& method, const CrossValidationRequest& r,
+                      const CrossValidationSummary& s, const std::string& unit) {
+  const std::size_t c = r.value_columns.size();
+  const std::string what = c == 1 ? r.value_columns.front() : "(" + a.value + ")";
+  std::cout << "cross-validation of --method " << method << " on " << a.samples << ": " << r.samples->row_count()
+            << " samples, "
+            << (r.folds == 0 ? std::string("leave-one-out") : std::to_string(r.folds) + "-fold (seed " + std::to_string(r.seed) + ")")
+            << "\n";
+  std::cout << "  value            " << what << (unit.empty() ? "" : " [" + unit + "]") << "\n";
+  std::cout << "  predicted        " << s.predicted << " of " << s.samples << "\n";
+  if (s.predicted == 0) return;
+  std::cout << "  mean error       ";
+  for (std::size_t k = 0; k < c; ++k) std::cout << (k ? ", " : "") << with_unit(s.mean_error[k], unit);
+  std::cout << "   (observed - predicted" << (c > 1 ? ", per component" : "") << ")\n";
+  std::cout << "  mean |error|     " << with_unit(s.mean_abs_error, unit) << (c > 1 ? "   (Euclidean norm)" : "") << "\n";
+  std::cout << "  max |error|      " << with_unit(s.max_abs_error, unit) << "   at " << r.sample_labels(s.max_abs_index)
+            << "\n";
+  std::cout << "  RMS error        " << with_unit(s.rms_error, unit) << "\n";
+  if (s.mean_z) {
+    std::cout << "  mean z           " << with_unit(*s.mean_z, "") << "   (residual / prediction sd; ~0)\n";
+    std::cout << "  mean z^2         " << with_unit(*s.mean_squared_z, "") << "   (~1 when the variance is right)\n";
+  }
+}
+
+// Heterotopic: the summary is over the samples where every component is measured (and predicted);
+// each component's own figures are over the samples that measure it.
+void print_per_component(const CrossValidationRequest& r, const Eigen::MatrixXd& residuals, const std::string& unit) {
+  std::cout << "  per component    (heterotopic: the lines above are over the samples measuring every component, "
+               "these each over the samples that measure it)\n";
+  for (std::size_t k = 0; k < r.value_columns.size(); ++k) {
+    const auto col = residuals.col(static_cast<Eigen::Index>(k));
+    std::size_t measured = 0, predicted = 0;
+    double sum = 0.0, sum_sq = 0.0;
+    for (Eigen::Index i = 0; i < col.size(); ++i) {
+      if (std::isnan(r.sample_values(i, static_cast<Eigen::Index>(k)))) continue;
+      ++measured;
+      if (!std::isfinite(col(i))) continue;
+      ++predicted;
+      sum += col(i);
+      sum_sq += col(i) * col(i);
+    }
+    std::cout << "    " << r.value_columns[k] << ": predicted " << predicted << " of " << measured;
+    if (predicted > 0)
+      std::cout << ", mean error " << with_unit(sum / static_cast<double>(predicted), unit) << ", RMS error "
+                << with_unit(std::sqrt(sum_sq / static_cast<double>(predicted)), unit);
+    std::cout << "\n";
+  }
+}
+
+void run_cv(const CvArgs& a, const CvHandles& h, const MethodOptionOwnership& owners) {
+  const InterpolationMethod& method = find_method(a.method, true);
+  owners.check(method.name, method.accepts, {h.power, h.neighbors, h.radius});
+  CrossValidationRequest r = cv_request(a, h);
+
+  CoordinateSystem cs;
+  if (!a.crs.empty()) cs.add(parse_crs(a.crs, "--crs"), "--crs");
+  const bool gaps = method.takes_missing_values && method.takes_missing_values();
+  const PointTable points = read_point_table(a.samples, "--samples", {r.value_columns, gaps});
+  const CsvTable& samples = points.table;
+  cs.add(points.crs, "--samples " + a.samples, a.samples);
+  r.coord_columns = points.coordinate_columns(a.coords, "--coords");
+  r.coordinate_system = &cs;
+  if (const std::string w = cs.geographic_warning(); !w.empty()) std::cerr << "errfield cv: " << w << "\n";
+  attach_samples(a, points, gaps, r);
+  const bool heterotopic = r.sample_values.array().isNaN().any();
+  const CvColumns names = cv_columns(a, r);
 
   const CrossValidationOutput result = method.cross_validate(r);
-  const auto rows = static_cast<Eigen::Index>(n);
-  if (result.pred.rows() != rows || result.pred.cols() != static_cast<Eigen::Index>(c) || result.fold.size() != n)
+  const std::size_t n = samples.row_count(), c = r.value_columns.size();
+  if (result.pred.rows() != static_cast<Eigen::Index>(n) || result.pred.cols() != static_cast<Eigen::Index>(c) ||
+      result.fold.size() != n)
     throw Error("cv: method " + method.name + " returned results of the wrong size");
   const Eigen::MatrixXd residuals = r.sample_values - result.pred;
   const CrossValidationSummary s = summarize_residuals(residuals, result.variance);
-  // No prediction at all is a failed job (k-fold said "predicted 0 of 12" and exited 0), whatever
-  // made every fold fail; the notes say why.
-  const bool nothing_predicted =
-      heterotopic ? !(r.sample_values.array().isFinite() && result.pred.array().isFinite()).any() : s.predicted == 0;
-  if (nothing_predicted) {
-    std::string why;
-    for (const auto& note : result.notes) why += "; " + note;
-    throw Error("cv: none of the " + std::to_string(n) + " samples of " + a.samples + " could be predicted by --method " +
-                method.name + (why.empty() ? std::string(" (e.g. no neighbour within --radius)") : why) +
-                "; nothing written");
-  }
+  refuse_nothing_predicted(a, method.name, r, result, s, heterotopic);
 
   // Written after the summary (require_standard_output): a standard output that cannot be written
   // (> /dev/full) replaced --out, then exited 1 (issue 47, the class of item 10).
   std::optional<OutputTable> table;
-  if (!a.out.empty()) {
-    OutputTable& out = table.emplace();
-    out.add_all_columns(samples);
-    std::vector<std::string> folds(n);
-    for (std::size_t i = 0; i < n; ++i) folds[i] = std::to_string(result.fold[i]);
-    out.add_column("fold", std::move(folds));
-    for (std::size_t k = 0; k < c; ++k) {
-      std::vector<std::string> p(n), e(n);
-      for (std::size_t i = 0; i < n; ++i) {
-        p[i] = cell(result.pred(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)));
-        e[i] = cell(residuals(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)));
-      }
-      out.add_column(pred_names[k], std::move(p));
-      out.add_column(res_names[k], std::move(e));
-    }
-    std::vector<std::string> abs(n);
-    for (std::size_t i = 0; i < n; ++i) abs[i] = cell(residuals.row(static_cast<Eigen::Index>(i)).norm());
-    out.add_column("abs_residual", std::move(abs));
-    if (!result.variance.empty()) {
-      std::vector<std::string> var(n);
-      for (std::size_t i = 0; i < n; ++i) var[i] = cell(result.variance[i]);
-      out.add_column("var", std::move(var));
-    }
-    for (const auto& [name, values] : result.extra_columns) {
-      if (samples.has_column(name))
-        throw InputError(a.samples + ": already has a column '" + name + "', which the output would repeat; rename it",
-                         a.samples, 1, name);
-      std::vector<std::string> cells(n);
-      for (std::size_t i = 0; i < n; ++i) cells[i] = cell(values[i]);
-      out.add_column(name, std::move(cells));
-    }
-  }
+  if (!a.out.empty()) table = cv_table(a, r, names, result, residuals);
 
   // Units from the value columns' headers ("dL [mm]"); shown only when all columns agree.
   std::string unit = unit_of_column(samples, r.value_columns.front());
   for (const auto& v : r.value_columns)
     if (unit_of_column(samples, v) != unit) unit.clear();
-  const std::string what = c == 1 ? r.value_columns.front() : "(" + a.value + ")";
-  std::cout << "cross-validation of --method " << method.name << " on " << a.samples << ": " << n << " samples, "
-            << (r.folds == 0 ? std::string("leave-one-out") : std::to_string(r.folds) + "-fold (seed " + std::to_string(r.seed) + ")")
-            << "\n";
-  std::cout << "  value            " << what << (unit.empty() ? "" : " [" + unit + "]") << "\n";
-  std::cout << "  predicted        " << s.predicted << " of " << s.samples << "\n";
-  if (s.predicted > 0) {
-    std::cout << "  mean error       ";
-    for (std::size_t k = 0; k < c; ++k) std::cout << (k ? ", " : "") << with_unit(s.mean_error[k], unit);
-    std::cout << "   (observed - predicted" << (c > 1 ? ", per component" : "") << ")\n";
-    std::cout << "  mean |error|     " << with_unit(s.mean_abs_error, unit) << (c > 1 ? "   (Euclidean norm)" : "") << "\n";
-    std::cout << "  max |error|      " << with_unit(s.max_abs_error, unit) << "   at " << r.sample_labels(s.max_abs_index)
-              << "\n";
-    std::cout << "  RMS error        " << with_unit(s.rms_error, unit) << "\n";
-    if (s.mean_z) {
-      std::cout << "  mean z           " << with_unit(*s.mean_z, "") << "   (residual / prediction sd; ~0)\n";
-      std::cout << "  mean z^2         " << with_unit(*s.mean_squared_z, "") << "   (~1 when the variance is right)\n";
-    }
-  }
-  if (heterotopic) {
-    // The lines above are over the samples where every component is measured (and predicted);
-    // each component's own figures are over the samples that measure it.
-    std::cout << "  per component    (heterotopic: the lines above are over the samples measuring every component, "
-                 "these each over the samples that measure it)\n";
-    for (std::size_t k = 0; k < c; ++k) {
-      const auto col = residuals.col(static_cast<Eigen::Index>(k));
-      std::size_t measured = 0, predicted = 0;
-      double sum = 0.0, sum_sq = 0.0;
-      for (Eigen::Index i = 0; i < col.size(); ++i) {
-        if (std::isnan(r.sample_values(i, static_cast<Eigen::Index>(k)))) continue;
-        ++measured;
-        if (!std::isfinite(col(i))) continue;
-        ++predicted;
-        sum += col(i);
-        sum_sq += col(i) * col(i);
-      }
-      std::cout << "    " << r.value_columns[k] << ": predicted " << predicted << " of " << measured;
-      if (predicted > 0)
-        std::cout << ", mean error " << with_unit(sum / static_cast<double>(predicted), unit) << ", RMS error "
-                  << with_unit(std::sqrt(sum_sq / static_cast<double>(predicted)), unit);
-      std::cout << "\n";
-    }
-  } else if (s.predicted < s.samples) {
+  print_cv_summary(a, method.name, r, s, unit);
+  if (heterotopic) print_per_component(r, residuals, unit);
+  else if (s.predicted < s.samples)
     std::cout << "  " << (s.samples - s.predicted) << " samples had no prediction (e.g. no neighbour within --radius)\n";
-  }
   for (const auto& note : result.notes) std::cerr << "errfield cv: " << note << "\n";
   if (table) {
     std::cout << "wrote " << a.out << "\n";

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <memory>
 #include <optional>
 
 #include <nlohmann/json.hpp>
@@ -165,22 +166,7 @@ void run_fit(const FitArgs& a) {
   for (const auto& w : r.warnings) std::cerr << "errfield fit: warning: " << w << "\n";
 }
 
-void add_fit_command(CLI::App& app) {
-  auto a = std::make_shared<FitArgs>();
-  auto* cmd = app.add_subcommand(
-      "fit",
-      "Build a compensation model from measurements (the columns of 'errfield simulate': point, kind,\n"
-      "q1..q6, x,y,z, mx,my,mz, dist_b0..). Methods: distance-idw (the paper's: 8-vertex IDW of distance\n"
-      "errors on a complete grid, radial correction), position-idw (IDW of registered 3-D position errors),\n"
-      "distance-kriging, vector-kriging (3-D errors from >= 3 base points' distances, else from positions),\n"
-      "kinematic and kinematic+kriging (kinematic calibration from the tracker positions mx,my,mz when the\n"
-      "data have them: registration with the reflector offset, then the model; or from the distances to a\n"
-      "base row, or to every --base-point, whose coordinates are then identified too). Prints a leave-one-out\n"
-      "summary. Kriging models follow gstat's vgm: range is the scale parameter a.\n"
-      "Default (auto): kinematic+kriging in joint space when the data have tracker positions, kinematic from\n"
-      "distances otherwise: the most accurate on held-out points of the data in docs/robot.md.\n"
-      "Example: errfield fit --robot robot.json --data measured.csv --out model.json\n"
-      "Example: errfield fit --robot robot.json --data grid.csv --method distance-idw --out model.json   # the paper's method");
+void add_fit_method_options(CLI::App* cmd, const std::shared_ptr<FitArgs>& a) {
   cmd->add_option("--robot", a->robot,
                   "nominal robot JSON or built-in name (er20-c10, kr16, ur5e, ur5, ur10); default: built-in ER20-C10, no tool. "
                   "x,y,z that are not its FK (within 5 mm) are refused with the likely cause");
@@ -204,6 +190,9 @@ void add_fit_command(CLI::App& app) {
                   "kriging methods: ordinary (default), universal1 or universal2 (linear / quadratic drift in the "
                   "field's coordinates)")
       ->capture_default_str();
+}
+
+void add_base_and_limit_options(CLI::App* cmd, const std::shared_ptr<FitArgs>& a) {
   cmd->add_option("--base", a->base, "index K of the base point whose distances dist_bK the distance methods use")
       ->check(kUnsignedInteger)
       ->capture_default_str();
@@ -223,6 +212,9 @@ void add_fit_command(CLI::App& app) {
                   "kriging: predict this far beyond the samples' box (mm in task space, deg per joint in joint space); "
                   "default 5 deg in joint space (measured, docs/robot.md), 0 mm in task space")
       ->check(CLI::NonNegativeNumber);
+}
+
+void add_calibration_options(CLI::App* cmd, const std::shared_ptr<FitArgs>& a) {
   cmd->add_option("--calibration", a->calibration,
                   "kinematic methods: calibrate from 'position' (tracker positions mx,my,mz; the default when the "
                   "data have them) or 'distance' (dist_bK to a base point)");
@@ -251,6 +243,9 @@ void add_fit_command(CLI::App& app) {
                   "and r95_mm hold on held-out readings (docs/robot.md, 'Predictive uncertainty'); stored in the "
                   "model file")
       ->capture_default_str();
+}
+
+void add_joint_function_options(CLI::App* cmd, const std::shared_ptr<FitArgs>& a) {
   cmd->add_option("--joint-functions", a->joint_functions,
                   "kinematic+kriging: DEGREE of per-joint angle-error functions (Legendre polynomials of each joint's "
                   "angle over its measured range, no constant: that is the joint offset) fitted to the calibration's "
@@ -283,6 +278,9 @@ void add_fit_command(CLI::App& app) {
                   "which data decided the default")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+}
+
+void add_reflector_and_output_options(CLI::App* cmd, const std::shared_ptr<FitArgs>& a) {
   cmd->add_flag("--reflector-far-ok", a->reflector_far_ok,
                 "kinematic methods from positions: accept a reflector found more than 50 mm from --robot's tool "
                 "point (a second nest, a tool-less robot JSON on purpose); compensate still aims the tool point "
@@ -293,6 +291,29 @@ void add_fit_command(CLI::App& app) {
                   "fitted to them; the others are located and determine the flange's orientation in the "
                   "calibration). Default: the label the data locate nearest --robot's tool point");
   cmd->add_option("--out", a->out, "model JSON (written atomically)")->required();
+}
+
+void add_fit_command(CLI::App& app) {
+  auto a = std::make_shared<FitArgs>();
+  auto* cmd = app.add_subcommand(
+      "fit",
+      "Build a compensation model from measurements (the columns of 'errfield simulate': point, kind,\n"
+      "q1..q6, x,y,z, mx,my,mz, dist_b0..). Methods: distance-idw (the paper's: 8-vertex IDW of distance\n"
+      "errors on a complete grid, radial correction), position-idw (IDW of registered 3-D position errors),\n"
+      "distance-kriging, vector-kriging (3-D errors from >= 3 base points' distances, else from positions),\n"
+      "kinematic and kinematic+kriging (kinematic calibration from the tracker positions mx,my,mz when the\n"
+      "data have them: registration with the reflector offset, then the model; or from the distances to a\n"
+      "base row, or to every --base-point, whose coordinates are then identified too). Prints a leave-one-out\n"
+      "summary. Kriging models follow gstat's vgm: range is the scale parameter a.\n"
+      "Default (auto): kinematic+kriging in joint space when the data have tracker positions, kinematic from\n"
+      "distances otherwise: the most accurate on held-out points of the data in docs/robot.md.\n"
+      "Example: errfield fit --robot robot.json --data measured.csv --out model.json\n"
+      "Example: errfield fit --robot robot.json --data grid.csv --method distance-idw --out model.json   # the paper's method");
+  add_fit_method_options(cmd, a);
+  add_base_and_limit_options(cmd, a);
+  add_calibration_options(cmd, a);
+  add_joint_function_options(cmd, a);
+  add_reflector_and_output_options(cmd, a);
   cmd->callback([a] { run_fit(*a); });
 }
 

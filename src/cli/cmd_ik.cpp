@@ -20,57 +20,54 @@ struct IkArgs {
   int max_iterations = 100;
 };
 
-void run_ik(const IkArgs& a) {
-  const robot::MdhModel model = load_robot_or_default(a.robot);
-  robot::IkOptions options;
-  options.frame = robot::parse_end_frame(a.frame);
-  options.position_only = a.position_only;
-  options.max_iterations = a.max_iterations;
-  naming_options([&] { options.validate(); }, {{"IkOptions::max_iterations", "--max-iterations"}});
-  const CsvTable table = CsvTable::read(a.input);
-  const Eigen::MatrixXd xyz = table.numeric_columns({"x", "y", "z"});
-  const std::size_t n = static_cast<std::size_t>(xyz.rows());
-  warn_if_metres(table, model, "ik", kNominalXyz);
-
-  const bool has_matrix = table.has_column("r11");
-  const bool has_euler = table.has_column("rx");
+// Each target's orientation: r11..r33 (re-orthonormalized) or rx,ry,rz; identity with --position-only.
+std::vector<Eigen::Matrix3d> target_rotations(const IkArgs& a, const CsvTable& table, std::size_t n) {
   std::vector<Eigen::Matrix3d> rotations(n, Eigen::Matrix3d::Identity());
-  if (!a.position_only) {
-    if (has_matrix) {
-      const Eigen::MatrixXd r = table.numeric_columns(rotation_column_names());
-      for (std::size_t i = 0; i < n; ++i) {
-        Eigen::Matrix3d m;
-        for (int k = 0; k < 9; ++k) m(k / 3, k % 3) = r(static_cast<Eigen::Index>(i), k);
-        const double orth = (m.transpose() * m - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-        if (orth > 1e-6 || m.determinant() < 0)
-          throw InputError(table.source() + ":" + std::to_string(table.line_of_row(i)) +
-                               ": r11..r33 is not a rotation matrix (|R^T R - I| = " + std::to_string(orth) + ")",
-                           table.source(), table.line_of_row(i), "r11");
-        // Re-orthonormalize so a matrix printed with 6 digits is still an exact rotation.
-        Eigen::JacobiSVD<Eigen::Matrix3d> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
-        rotations[i] = svd.matrixU() * svd.matrixV().transpose();
-      }
-    } else if (has_euler) {
-      const Eigen::MatrixXd e = table.numeric_columns({"rx", "ry", "rz"});
-      for (std::size_t i = 0; i < n; ++i) {
-        const auto r = static_cast<Eigen::Index>(i);
-        rotations[i] = robot::rotation_from_rpy_deg(e(r, 0), e(r, 1), e(r, 2));
-      }
-    } else {
-      throw InputError(table.source() +
-                           ": no orientation columns: expected r11..r33 (rotation matrix) or rx,ry,rz (deg, "
-                           "R = Rz(rz) Ry(ry) Rx(rx)); use --position-only for 3-D targets",
-                       table.source(), 1, "r11");
+  if (a.position_only) return rotations;
+  if (table.has_column("r11")) {
+    const Eigen::MatrixXd r = table.numeric_columns(rotation_column_names());
+    for (std::size_t i = 0; i < n; ++i) {
+      Eigen::Matrix3d m;
+      for (int k = 0; k < 9; ++k) m(k / 3, k % 3) = r(static_cast<Eigen::Index>(i), k);
+      const double orth = (m.transpose() * m - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+      if (orth > 1e-6 || m.determinant() < 0)
+        throw InputError(table.source() + ":" + std::to_string(table.line_of_row(i)) +
+                             ": r11..r33 is not a rotation matrix (|R^T R - I| = " + std::to_string(orth) + ")",
+                         table.source(), table.line_of_row(i), "r11");
+      // Re-orthonormalize so a matrix printed with 6 digits is still an exact rotation.
+      Eigen::JacobiSVD<Eigen::Matrix3d> svd(m, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      rotations[i] = svd.matrixU() * svd.matrixV().transpose();
     }
+  } else if (table.has_column("rx")) {
+    const Eigen::MatrixXd e = table.numeric_columns({"rx", "ry", "rz"});
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto r = static_cast<Eigen::Index>(i);
+      rotations[i] = robot::rotation_from_rpy_deg(e(r, 0), e(r, 1), e(r, 2));
+    }
+  } else {
+    throw InputError(table.source() +
+                         ": no orientation columns: expected r11..r33 (rotation matrix) or rx,ry,rz (deg, "
+                         "R = Rz(rz) Ry(ry) Rx(rx)); use --position-only for 3-D targets",
+                     table.source(), 1, "r11");
   }
-  const bool has_seed = has_joint_columns(table);
-  std::vector<robot::JointVector> seeds;
-  if (has_seed) seeds = read_joint_columns(table);
+  return rotations;
+}
 
-  std::vector<std::vector<double>> q(robot::kJointCount, std::vector<double>(n));
-  std::vector<std::string> status(n), config(n), config_source(n);
-  std::vector<double> res_mm(n), res_deg(n);
+// The solutions' columns, one cell per target.
+struct IkColumns {
+  std::vector<std::vector<double>> q;
+  std::vector<std::string> status, config, config_source;
+  std::vector<double> res_mm, res_deg;
   std::size_t failures = 0;
+};
+
+IkColumns solve_targets(const robot::MdhModel& model, const robot::IkOptions& options, const Eigen::MatrixXd& xyz,
+                        const std::vector<Eigen::Matrix3d>& rotations, const std::vector<robot::JointVector>& seeds) {
+  const std::size_t n = rotations.size();
+  const bool has_seed = !seeds.empty();
+  IkColumns c{std::vector<std::vector<double>>(robot::kJointCount, std::vector<double>(n)),
+              std::vector<std::string>(n), std::vector<std::string>(n), std::vector<std::string>(n),
+              std::vector<double>(n), std::vector<double>(n), 0};
   robot::JointVector previous;
   bool have_previous = false;
   Progress progress("ik", n);
@@ -84,59 +81,83 @@ void run_ik(const IkArgs& a) {
     // the configuration the pose was taught on (issue 35: never silent).
     if (has_seed) {
       r = robot::inverse_kinematics(model, target, seeds[i], options);
-      config_source[i] = "seed";
+      c.config_source[i] = "seed";
     } else {
       // Without seeds, the previous row's solution keeps neighbouring targets on one branch.
       if (have_previous) {
         r = robot::inverse_kinematics(model, target, previous, options);
-        config_source[i] = "previous-row";
+        c.config_source[i] = "previous-row";
       }
       if (!have_previous || !r.ok()) {
         r = robot::inverse_kinematics_multistart(model, target, options);
-        config_source[i] = "multistart";
+        c.config_source[i] = "multistart";
       }
     }
-    if (r.ok()) config[i] = robot::arm_configuration(model, r.q_deg).to_string();
+    if (r.ok()) c.config[i] = robot::arm_configuration(model, r.q_deg).to_string();
     if (r.ok()) {
       previous = r.q_deg;
       have_previous = true;
     } else {
-      ++failures;
+      ++c.failures;
     }
-    for (int k = 0; k < robot::kJointCount; ++k) q[static_cast<std::size_t>(k)][i] = r.q_deg[k];
-    status[i] = robot::to_string(r.status);
-    res_mm[i] = r.position_residual_mm;
-    res_deg[i] = r.orientation_residual_rad * 180.0 / std::numbers::pi;
+    for (int k = 0; k < robot::kJointCount; ++k) c.q[static_cast<std::size_t>(k)][i] = r.q_deg[k];
+    c.status[i] = robot::to_string(r.status);
+    c.res_mm[i] = r.position_residual_mm;
+    c.res_deg[i] = r.orientation_residual_rad * 180.0 / std::numbers::pi;
     progress.update(i + 1);
   }
   progress.finish();
+  return c;
+}
+
+OutputTable ik_table(const CsvTable& table, bool has_seed, const IkColumns& c) {
+  const std::size_t n = table.row_count();
   OutputTable out;
   // Input columns are kept, except seed columns q1..q6, which the solution replaces.
   const auto qnames = joint_column_names();
   // So are the columns ik computes (ik run on its own output): dropped here and written anew, in
   // the same order as the first time.
   const std::vector<std::string> computed{"status", "residual_mm", "residual_deg", "config", "config_source"};
-  for (std::size_t c = 0; c < table.header().size(); ++c) {
+  for (std::size_t col = 0; col < table.header().size(); ++col) {
     bool is_seed = false;
-    for (const auto& qn : qnames) is_seed = is_seed || (has_seed && table.column_index(qn) == c);
-    if (is_seed || std::find(computed.begin(), computed.end(), column_key(table.header()[c])) != computed.end()) continue;
+    for (const auto& qn : qnames) is_seed = is_seed || (has_seed && table.column_index(qn) == col);
+    if (is_seed || std::find(computed.begin(), computed.end(), column_key(table.header()[col])) != computed.end()) continue;
     std::vector<std::string> cells(n);
-    for (std::size_t r = 0; r < n; ++r) cells[r] = table.cell(r, c);
-    out.put_column(table.header()[c], std::move(cells));  // the input's own text
+    for (std::size_t r = 0; r < n; ++r) cells[r] = table.cell(r, col);
+    out.put_column(table.header()[col], std::move(cells));  // the input's own text
   }
-  for (int k = 0; k < robot::kJointCount; ++k) out.add_numeric_column(qnames[static_cast<std::size_t>(k)], q[static_cast<std::size_t>(k)]);
-  out.add_column("status", status);
-  out.add_numeric_column("residual_mm", res_mm);
-  out.add_numeric_column("residual_deg", res_deg);
-  out.add_column("config", config);
-  out.add_column("config_source", config_source);
-  out.write(a.out);
-  std::cerr << "ik: " << n - failures << " of " << n << " targets solved";
-  if (failures) std::cerr << "; " << failures << " not (see the status and residual columns)";
+  for (int k = 0; k < robot::kJointCount; ++k) out.add_numeric_column(qnames[static_cast<std::size_t>(k)], c.q[static_cast<std::size_t>(k)]);
+  out.add_column("status", c.status);
+  out.add_numeric_column("residual_mm", c.res_mm);
+  out.add_numeric_column("residual_deg", c.res_deg);
+  out.add_column("config", c.config);
+  out.add_column("config_source", c.config_source);
+  return out;
+}
+
+void run_ik(const IkArgs& a) {
+  const robot::MdhModel model = load_robot_or_default(a.robot);
+  robot::IkOptions options;
+  options.frame = robot::parse_end_frame(a.frame);
+  options.position_only = a.position_only;
+  options.max_iterations = a.max_iterations;
+  naming_options([&] { options.validate(); }, {{"IkOptions::max_iterations", "--max-iterations"}});
+  const CsvTable table = CsvTable::read(a.input);
+  const Eigen::MatrixXd xyz = table.numeric_columns({"x", "y", "z"});
+  const std::size_t n = static_cast<std::size_t>(xyz.rows());
+  warn_if_metres(table, model, "ik", kNominalXyz);
+  const std::vector<Eigen::Matrix3d> rotations = target_rotations(a, table, n);
+  const bool has_seed = has_joint_columns(table);
+  std::vector<robot::JointVector> seeds;
+  if (has_seed) seeds = read_joint_columns(table);
+  const IkColumns c = solve_targets(model, options, xyz, rotations, seeds);
+  ik_table(table, has_seed, c).write(a.out);
+  std::cerr << "ik: " << n - c.failures << " of " << n << " targets solved";
+  if (c.failures) std::cerr << "; " << c.failures << " not (see the status and residual columns)";
   std::cerr << "; arm configuration from (column config_source):";
   bool first = true;
   for (const char* source : {"seed", "previous-row", "multistart"}) {
-    const auto count = std::count(config_source.begin(), config_source.end(), source);
+    const auto count = std::count(c.config_source.begin(), c.config_source.end(), source);
     if (count == 0) continue;
     std::cerr << (first ? " " : ", ") << source << " " << count;
     first = false;

@@ -253,25 +253,26 @@ void write_geopackage(const InterpolateArgs& a, const InterpolationRequest& r, c
                                           std::to_string(r.target_coords.rows()) + " points)" + crs_note(cs) + "\n");
 }
 
-void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, const MethodOptionOwnership& owners) {
-  const InterpolationMethod& method = find_method(a.method, false);
-  owners.check(method.name, method.accepts, h.all());
+// Where the predictions go: a raster, a GeoPackage or a CSV; targets from a file or a --grid.
+struct OutputShape {
+  std::optional<RasterFormat> raster;
+  bool geopackage = false;
+  std::optional<NodeGrid> grid;
+};
 
-  InterpolationRequest r;
-  r.value_columns = split_column_list(a.value, "--value");
-  r.shared = read_shared(a, h);
-  with_value_type(r.value_columns.size(), []<class V>() {});  // reject unsupported counts early
-
+OutputShape output_shape(const InterpolateArgs& a) {
   if (a.targets.empty() == a.grid.empty())
     throw ArgumentError(a.grid.empty() ? "interpolate needs --targets FILE or --grid XMIN:XMAX:DX,YMIN:YMAX:DY"
                                        : "--targets and --grid both give the targets; give one of them");
   if (!a.mask.empty() && a.grid.empty())
     throw ArgumentError("--mask " + a.mask + " restricts the nodes of --grid; give --grid (with --targets, leave out the "
                         "points you do not want)");
-  const std::optional<RasterFormat> raster = output_raster_format(a);
-  const bool geopackage = !raster && a.raster_format != "csv" && is_geopackage_path(a.out);
-  std::optional<NodeGrid> grid;
-  if (!a.grid.empty()) grid = parse_node_grid(a.grid, "--grid", a.max_grid_nodes, "--max-grid-nodes");
+  OutputShape o;
+  o.raster = output_raster_format(a);
+  o.geopackage = !o.raster && a.raster_format != "csv" && is_geopackage_path(a.out);
+  if (!a.grid.empty()) o.grid = parse_node_grid(a.grid, "--grid", a.max_grid_nodes, "--max-grid-nodes");
+  const auto& raster = o.raster;
+  const auto& grid = o.grid;
   if (raster && !grid)
     throw ArgumentError("--out " + a.out + " is a raster (" + (*raster == RasterFormat::GeoTiff ? "GeoTIFF" : "ESRI ASCII grid") +
                         "); a raster needs targets on a grid: give --grid instead of --targets, or a .csv --out");
@@ -281,40 +282,38 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
                         format_number(grid->dx) + " and dy " + format_number(grid->dy) +
                         ": give equal steps or write a GeoTIFF (.tif)");
   if (!std::isfinite(a.nodata)) throw ArgumentError("--nodata is " + format_number(a.nodata) + "; expected a finite number");
-  CoordinateSystem cs;
-  if (!a.crs.empty()) cs.add(parse_crs(a.crs, "--crs"), "--crs");
+  return o;
+}
 
-  const bool gaps = method.takes_missing_values && method.takes_missing_values();
-  const PointTable sample_points = read_point_table(a.samples, "--samples", {r.value_columns, gaps});
+void check_grid_size(const InterpolateArgs& a, const NodeGrid& grid, std::size_t coords) {
+  if (coords != 2)
+    throw ArgumentError("--grid is a 2-D grid; --coords names " + std::to_string(coords) + " columns, expected 2 (x,y)");
+  if (grid.size() > a.max_grid_nodes)
+    throw ResourceError("--grid " + a.grid + " has " + std::to_string(grid.nx) + " x " + std::to_string(grid.ny) +
+                        " = " + std::to_string(grid.size()) + " nodes, more than --max-grid-nodes " +
+                        std::to_string(a.max_grid_nodes) + "; give a coarser step or a larger --max-grid-nodes");
+}
+
+// --mask: the nodes predicted (those on a pixel with data); empty without --mask.
+std::vector<char> mask_nodes(const InterpolateArgs& a, const std::optional<NodeGrid>& grid, CoordinateSystem& cs) {
+  std::vector<char> inside;
+  if (a.mask.empty()) return inside;
+  const CovariateRaster mask = read_covariate_raster(a.mask);
+  cs.add(mask.crs, "--mask " + a.mask, a.mask);
+  inside = nodes_inside_mask(*grid, mask);
+  if (std::find(inside.begin(), inside.end(), 1) == inside.end())
+    throw InputError("--mask " + a.mask + ": none of the " + std::to_string(grid->size()) + " nodes of --grid " + a.grid +
+                         " falls on a pixel with data; expected the grid and the mask to overlap",
+                     a.mask);
+  return inside;
+}
+
+// The samples and targets into the request (which points at both tables: they must outlive it).
+void attach_tables(const InterpolateArgs& a, const PointTable& sample_points, bool gaps, const CsvTable& targets,
+                   const std::optional<PointTable>& target_points, const std::vector<char>& inside,
+                   InterpolationRequest& r) {
+  const bool grid = !target_points;
   const CsvTable& samples = sample_points.table;
-  cs.add(sample_points.crs, "--samples " + a.samples, a.samples);
-  r.coord_columns = sample_points.coordinate_columns(a.coords, "--coords");
-  if (grid) {
-    if (r.coord_columns.size() != 2)
-      throw ArgumentError("--grid is a 2-D grid; --coords names " + std::to_string(r.coord_columns.size()) +
-                          " columns, expected 2 (x,y)");
-    if (grid->size() > a.max_grid_nodes)
-      throw ResourceError("--grid " + a.grid + " has " + std::to_string(grid->nx) + " x " + std::to_string(grid->ny) +
-                          " = " + std::to_string(grid->size()) + " nodes, more than --max-grid-nodes " +
-                          std::to_string(a.max_grid_nodes) + "; give a coarser step or a larger --max-grid-nodes");
-  }
-  std::vector<char> inside;  // --mask: the nodes predicted
-  if (!a.mask.empty()) {
-    const CovariateRaster mask = read_covariate_raster(a.mask);
-    cs.add(mask.crs, "--mask " + a.mask, a.mask);
-    inside = nodes_inside_mask(*grid, mask);
-    if (std::find(inside.begin(), inside.end(), 1) == inside.end())
-      throw InputError("--mask " + a.mask + ": none of the " + std::to_string(grid->size()) + " nodes of --grid " + a.grid +
-                           " falls on a pixel with data; expected the grid and the mask to overlap",
-                       a.mask);
-  }
-  std::optional<PointTable> target_points;
-  if (!grid) {
-    target_points = read_point_table(a.targets, "--targets");
-    cs.add(target_points->crs, "--targets " + a.targets, a.targets);
-  }
-  const CsvTable targets = grid ? grid_targets(*grid, r.coord_columns, inside) : target_points->table;
-  const std::string targets_name = grid ? "--grid " + a.grid : a.targets;
   if (samples.row_count() == 0) throw InputError(a.samples + ": no data rows; expected samples", a.samples);
   if (targets.row_count() == 0) throw InputError(a.targets + ": no data rows; expected targets", a.targets);
   r.samples = &samples;
@@ -329,6 +328,90 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
     for (std::size_t i = 0; i < inside.size(); ++i)
       if (inside[i]) r.target_labels.lines.push_back(i);
   }
+}
+
+// The prediction columns' names: the method's own, else pred (pred_<col>); refused when the
+// targets already have them, and the result's size checked.
+std::vector<std::string> checked_prediction_names(const InterpolateArgs& a, const InterpolationMethod& method,
+                                                  const CsvTable& targets, const std::vector<std::string>& default_names,
+                                                  const InterpolationResult& result) {
+  const auto m = static_cast<Eigen::Index>(targets.row_count());
+  const std::vector<std::string> pred_names = result.prediction_names.empty() ? default_names : result.prediction_names;
+  for (const auto& name : result.prediction_names)
+    if (targets.has_column(name))
+      throw InputError(a.targets + ": already has a column '" + name + "', which the output would repeat; rename it",
+                       a.targets, 1, name);
+  if (result.pred.rows() != m || result.pred.cols() != static_cast<Eigen::Index>(pred_names.size()))
+    throw Error("interpolate: method " + method.name + " returned " + std::to_string(result.pred.rows()) + " x " +
+                std::to_string(result.pred.cols()) + " predictions; expected " + std::to_string(m) + " x " +
+                std::to_string(pred_names.size()));
+  return pred_names;
+}
+
+// Targets without a prediction; none predicted is a failed job, as in predict, validate and cv (a
+// file of empty cells exited 0).
+std::size_t count_missing(const InterpolateArgs& a, const InterpolationMethod& method, const InterpolationRequest& r,
+                          const InterpolationResult& result, const std::string& targets_name, bool masked) {
+  const Eigen::Index m = result.pred.rows();
+  std::size_t missing = 0;
+  for (Eigen::Index i = 0; i < m; ++i) missing += std::isnan(result.pred(i, 0)) ? 1 : 0;
+  if (m > 0 && missing == static_cast<std::size_t>(m)) {
+    std::string why;
+    for (const auto& note : result.notes) why += "; " + note;
+    if (r.shared.radius)
+      why += "; no target has a sample within --radius " + format_number(*r.shared.radius) +
+             " (in the scaled coordinates, where an anisotropy applies): a larger --radius or fewer targets far "
+             "from the samples";
+    throw Error("interpolate: none of the " + std::to_string(m) + (masked ? " unmasked" : "") + " targets of " +
+                targets_name + " got a prediction with --method " + method.name + why + "; " + a.out + " not written");
+  }
+  return missing;
+}
+
+// The targets' columns, then the predictions and the method's extra columns, as numbers.
+void write_csv_output(const InterpolateArgs& a, const CsvTable& written_targets, const std::vector<std::string>& pred_names,
+                      InterpolationResult& result, const std::string& line) {
+  OutputTable out;
+  out.add_all_columns(written_targets);
+  // Numbers, not text: formatted straight into the file (a NaN, not predicted, is an empty cell).
+  for (std::size_t c = 0; c < pred_names.size(); ++c) {
+    const auto column = result.pred.col(static_cast<Eigen::Index>(c));
+    out.add_numbers(pred_names[c], std::vector<double>(column.data(), column.data() + column.size()));
+  }
+  for (auto& [name, values] : result.extra_columns) out.add_numbers(name, std::move(values));
+  std::cout << line << "; wrote " << a.out << "\n";
+  require_standard_output();  // before the write: a run that fails leaves the previous file
+  out.write(a.out);
+}
+
+void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, const MethodOptionOwnership& owners) {
+  const InterpolationMethod& method = find_method(a.method, false);
+  owners.check(method.name, method.accepts, h.all());
+
+  InterpolationRequest r;
+  r.value_columns = split_column_list(a.value, "--value");
+  r.shared = read_shared(a, h);
+  with_value_type(r.value_columns.size(), []<class V>() {});  // reject unsupported counts early
+  const OutputShape shape = output_shape(a);
+  const std::optional<NodeGrid>& grid = shape.grid;
+  CoordinateSystem cs;
+  if (!a.crs.empty()) cs.add(parse_crs(a.crs, "--crs"), "--crs");
+
+  const bool gaps = method.takes_missing_values && method.takes_missing_values();
+  const PointTable sample_points = read_point_table(a.samples, "--samples", {r.value_columns, gaps});
+  const CsvTable& samples = sample_points.table;
+  cs.add(sample_points.crs, "--samples " + a.samples, a.samples);
+  r.coord_columns = sample_points.coordinate_columns(a.coords, "--coords");
+  if (grid) check_grid_size(a, *grid, r.coord_columns.size());
+  const std::vector<char> inside = mask_nodes(a, grid, cs);
+  std::optional<PointTable> target_points;
+  if (!grid) {
+    target_points = read_point_table(a.targets, "--targets");
+    cs.add(target_points->crs, "--targets " + a.targets, a.targets);
+  }
+  const CsvTable targets = grid ? grid_targets(*grid, r.coord_columns, inside) : target_points->table;
+  const std::string targets_name = grid ? "--grid " + a.grid : a.targets;
+  attach_tables(a, sample_points, gaps, targets, target_points, inside, r);
   r.coordinate_system = &cs;
   if (const std::string w = cs.geographic_warning(); !w.empty()) std::cerr << "errfield interpolate: " << w << "\n";
 
@@ -341,29 +424,8 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
 
   InterpolationResult result = method.interpolate(r);
   const auto m = static_cast<Eigen::Index>(targets.row_count());
-  const std::vector<std::string> pred_names = result.prediction_names.empty() ? default_pred_names : result.prediction_names;
-  for (const auto& name : result.prediction_names)
-    if (targets.has_column(name))
-      throw InputError(a.targets + ": already has a column '" + name + "', which the output would repeat; rename it",
-                       a.targets, 1, name);
-  if (result.pred.rows() != m || result.pred.cols() != static_cast<Eigen::Index>(pred_names.size()))
-    throw Error("interpolate: method " + method.name + " returned " + std::to_string(result.pred.rows()) + " x " +
-                std::to_string(result.pred.cols()) + " predictions; expected " + std::to_string(m) + " x " +
-                std::to_string(pred_names.size()));
-
-  std::size_t missing = 0;
-  for (Eigen::Index i = 0; i < m; ++i) missing += std::isnan(result.pred(i, 0)) ? 1 : 0;
-  // Nothing predicted is a failed job, as in predict, validate and cv (a file of empty cells exited 0).
-  if (m > 0 && missing == static_cast<std::size_t>(m)) {
-    std::string why;
-    for (const auto& note : result.notes) why += "; " + note;
-    if (r.shared.radius)
-      why += "; no target has a sample within --radius " + format_number(*r.shared.radius) +
-             " (in the scaled coordinates, where an anisotropy applies): a larger --radius or fewer targets far "
-             "from the samples";
-    throw Error("interpolate: none of the " + std::to_string(m) + (inside.empty() ? "" : " unmasked") + " targets of " +
-                targets_name + " got a prediction with --method " + method.name + why + "; " + a.out + " not written");
-  }
+  const std::vector<std::string> pred_names = checked_prediction_names(a, method, targets, default_pred_names, result);
+  const std::size_t missing = count_missing(a, method, r, result, targets_name, !inside.empty());
   std::string counts = std::to_string(static_cast<std::size_t>(m) - missing) + " predicted";
   if (!inside.empty()) counts += ", " + std::to_string(grid->size() - static_cast<std::size_t>(m)) + " outside --mask";
   if (missing) counts += ", " + std::to_string(missing) + " without prediction";
@@ -373,31 +435,22 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
   if (!inside.empty()) spread_to_grid(result, inside);
   const CsvTable& written_targets = inside.empty() ? targets : all_nodes;
   const auto rows = static_cast<Eigen::Index>(written_targets.row_count());
-  if (raster) {  // the bands straight from the numbers: no text cells for millions of nodes
-    write_raster(*raster, *grid, a, pred_names, result, rows, counts, samples.row_count(), method.name, cs);
+  if (shape.raster) {  // the bands straight from the numbers: no text cells for millions of nodes
+    write_raster(*shape.raster, *grid, a, pred_names, result, rows, counts, samples.row_count(), method.name, cs);
     return;
   }
   const std::string where = grid ? "the " + std::to_string(grid->nx) + " x " + std::to_string(grid->ny) + " nodes of --grid"
                                  : std::to_string(m) + " targets";
   const std::string summary = "interpolate: " + where + " from " + std::to_string(samples.row_count()) +
                               " samples with --method " + method.name + "; " + counts;
-  if (geopackage) {
+  if (shape.geopackage) {
     InterpolationRequest points = r;
     if (!inside.empty()) points.target_coords = all_nodes.numeric_columns(r.coord_columns);
     write_geopackage(a, points, written_targets, pred_names, result, summary, cs);
     return;
   }
-  OutputTable out;
-  out.add_all_columns(written_targets);
-  // Numbers, not text: formatted straight into the file (a NaN, not predicted, is an empty cell).
-  for (std::size_t c = 0; c < pred_names.size(); ++c) {
-    const auto column = result.pred.col(static_cast<Eigen::Index>(c));
-    out.add_numbers(pred_names[c], std::vector<double>(column.data(), column.data() + column.size()));
-  }
-  for (auto& [name, values] : result.extra_columns) out.add_numbers(name, std::move(values));
-  std::cout << summary << (missing || !inside.empty() ? " (empty cells)" : "") << "; wrote " << a.out << "\n";
-  require_standard_output();  // before the write: a run that fails leaves the previous file
-  out.write(a.out);
+  write_csv_output(a, written_targets, pred_names, result,
+                   summary + (missing || !inside.empty() ? " (empty cells)" : ""));
 }
 
 void add_interpolate_command(CLI::App& app) {

@@ -45,10 +45,8 @@ std::string three_digits(double v) {
   return s.str();
 }
 
-/// `plan --candidates`: the next poses to measure from a pool, with the predicted RMS (stopping rule).
-void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
-  using namespace robot;
-  using namespace compensation;
+// Grid options refused, and --count and --target-rms checked, before anything is read.
+void check_candidate_options(const PlanArgs& a, CLI::App* cmd) {
   for (const char* grid_only : {"--cube", "--base-point", "--samples-out", "--variogram", "--variogram-model"})
     if (cmd->count(grid_only))
       throw ArgumentError(std::string(grid_only) + " plans a grid; --candidates chooses from a pool: give one or the other");
@@ -58,11 +56,12 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
   if (cmd->count("--target-rms") && a.model.empty())
     throw ArgumentError("--target-rms needs --model: the predicted RMS comes from a fitted model's field");
   refuse_same_output({{"--out", &a.out}, {"--summary-out", &a.summary_out}});
-  std::optional<CompensationModel> model;
-  if (!a.model.empty()) {
-    const nlohmann::json j = read_json_file(a.model, "model file");
-    model.emplace(with_json_source(a.model, [&] { return CompensationModel::from_json(j, a.model); }));
-  }
+}
+
+// The robot that judges the pool: --robot, else the model's nominal (or command) robot, else the built-in.
+robot::MdhModel plan_robot(const PlanArgs& a, const std::optional<compensation::CompensationModel>& model) {
+  using namespace robot;
+  using namespace compensation;
   const MdhModel robot = !a.robot.empty() || !model ? load_robot_or_default(a.robot)
                          : model->has_nominal_model() ? model->nominal_model() : model->command_model();
   // A --robot beside a model must be the robot the model was fitted on: its joint limits and FK
@@ -71,11 +70,19 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
     if (const auto why = differs_beyond_calibration(model->nominal_model(), robot))
       throw ArgumentError("--robot " + a.robot + " is not the robot of --model " + a.model + " ('" +
                           model->nominal_model().name() + "'): " + *why + "; leave --robot out (the model's robot is used)");
-  const RobotOrigin origin{!a.robot.empty() || model.has_value(),
-                           !a.robot.empty() ? "--robot " + a.robot
-                           : model         ? "the nominal robot of " + a.model
-                                           : std::string("the built-in ER20-C10 (no --robot)")};
-  const CsvTable pool = CsvTable::read(a.candidates);
+  return robot;
+}
+
+// The pool's rows still to choose from, and the poses measured so far.
+struct OpenPool {
+  std::vector<std::size_t> rows;
+  std::vector<robot::JointVector> open, measured;
+};
+
+OpenPool open_pool(const PlanArgs& a, const CsvTable& pool, const robot::MdhModel& robot,
+                   const robot::RobotOrigin& origin) {
+  using namespace robot;
+  using namespace compensation;
   const std::vector<JointVector> pool_q = read_joint_columns(pool);
   if (const auto w = joints_outside_limits(pool_q, robot, row_labels_of(pool, "row")))
     throw InputError(a.candidates + ": " + *w + "; check units (degrees), joint order and --robot", a.candidates);
@@ -84,42 +91,33 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
   check_table_fits_robot(pool, robot, origin);
   // Measured so far: conditioned on, and never chosen again (matched by `point`, and by joints in
   // select_poses: data without a point column had 39 measured poses chosen again).
-  std::vector<JointVector> measured;
+  OpenPool p;
   std::set<std::string> measured_points;
   if (!a.data.empty()) {
     const CsvTable d = CsvTable::read(a.data);
-    measured = read_joint_columns(d);
+    p.measured = read_joint_columns(d);
     check_table_fits_robot(d, robot, origin);
     if (d.has_column("point") && pool.has_column("point"))
       for (std::size_t i = 0; i < d.row_count(); ++i) measured_points.emplace(d.cell(i, d.column_index("point")));
   }
-  std::vector<std::size_t> rows;  // pool rows still to choose from
-  std::vector<JointVector> open;
   for (std::size_t i = 0; i < pool.row_count(); ++i) {
     if (!measured_points.empty() && measured_points.count(std::string(pool.cell(i, pool.column_index("point"))))) continue;
-    rows.push_back(i);
-    open.push_back(pool_q[i]);
+    p.rows.push_back(i);
+    p.open.push_back(pool_q[i]);
   }
-  if (open.size() < a.count)
-    throw InputError(a.candidates + ": " + std::to_string(open.size()) + " candidate poses not yet measured, --count " +
+  if (p.open.size() < a.count)
+    throw InputError(a.candidates + ": " + std::to_string(p.open.size()) + " candidate poses not yet measured, --count " +
                          std::to_string(a.count),
                      a.candidates);
+  return p;
+}
+
+// Pool rows left out as repeats: said, naming the first few (a warning: the choice is still right).
+void warn_left_out(const PlanArgs& a, const CsvTable& pool, const OpenPool& p, const compensation::PoseSelection& sel) {
   const RowLabels labels = row_labels_of(pool, "row");
-  PoseSelectionOptions o;
-  o.count = a.count;
-  if (a.local_scale != "on" && a.local_scale != "off")
-    throw ArgumentError("--local-scale: expected on or off, got '" + a.local_scale + "'");
-  o.local_scale = a.local_scale == "on";
-  if (cmd->count("--target-rms")) o.target_rms_mm = a.target_rms;
-  o.spacing_floor = a.spacing_floor;
-  PoseSelection sel;
-  naming_options([&] { sel = select_poses(open, measured, model ? &*model : nullptr, o); },
-                 {{"PoseSelectionOptions::count", "--count"}, {"PoseSelectionOptions::target_rms_mm", "--target-rms"},
-                  {"PoseSelectionOptions::spacing_floor", "--spacing-floor"}});
-  // Pool rows left out as repeats: said, naming the first few (a warning: the choice is still right).
   auto name_rows = [&](const std::vector<std::size_t>& ks) {
     std::string s;
-    for (std::size_t n = 0; n < ks.size() && n < 5; ++n) s += (n ? ", " : "") + labels(rows[ks[n]]);
+    for (std::size_t n = 0; n < ks.size() && n < 5; ++n) s += (n ? ", " : "") + labels(p.rows[ks[n]]);
     return s + (ks.size() > 5 ? ", ..." : "");
   };
   if (!sel.repeated.empty())
@@ -128,63 +126,105 @@ void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
   if (!sel.already_measured.empty())
     std::cerr << "errfield plan: warning: " << sel.already_measured.size() << " pool row(s) have the joints of a pose in "
               << a.data << " and were left out as measured (" << name_rows(sel.already_measured) << ")\n";
+}
+
+std::string rms_range(const compensation::PoseSelection& sel, std::size_t k) {
+  return three_digits(sel.predicted_rms_low_mm[k]) + "-" + three_digits(sel.predicted_rms_high_mm[k]);
+}
+
+// --target-rms: how many more poses reach it, said only as far as the prediction's range allows.
+void say_poses_for_target(const PlanArgs& a, const compensation::PoseSelection& sel, double target_rms,
+                          nlohmann::json& summary, std::ostringstream& text) {
+  summary["target_rms_mm"] = target_rms;
+  auto count_or_null = [](const std::optional<std::size_t>& n) { return n ? nlohmann::json(*n) : nlohmann::json(nullptr); };
+  summary["poses_for_target"] = count_or_null(sel.poses_for_target);
+  summary["poses_for_target_range"] = {count_or_null(sel.poses_for_target_low), count_or_null(sel.poses_for_target_high)};
+  const std::string target = "  target " + format_number(target_rms) + " mm: ";
+  const std::size_t horizon = sel.predicted_rms_mm.size() - 1;
+  if (sel.poses_for_target_high && *sel.poses_for_target_high == 0) {
+    text << target << "reached (predicted, the whole 90 % range) with the poses measured so far\n";
+  } else if (sel.poses_for_target_low && *sel.poses_for_target_low == 0) {
+    // The range covers the target now: a number of poses would be the noise of the estimate.
+    text << target << "within the prediction's 90 % range now (" << rms_range(sel, 0)
+         << " mm): no count is given; measure the batch and validate on held-out poses to tell\n";
+  } else if (sel.poses_for_target_low) {
+    text << target << "about " << (sel.poses_for_target ? std::to_string(*sel.poses_for_target) : std::string("?"))
+         << " more poses chosen this way (90 % range " << *sel.poses_for_target_low << " to "
+         << (sel.poses_for_target_high ? std::to_string(*sel.poses_for_target_high)
+                                       : "beyond " + std::to_string(horizon) + " (not reached within this pool)")
+         << "; " << (sel.poses_for_target && *sel.poses_for_target <= a.count ? "within" : "beyond") << " this batch)\n";
+  } else {
+    text << target << "not reached within " << horizon << " more poses of this pool, even at the low end of the "
+         << "prediction's range (predicted " << three_digits(sel.predicted_rms_mm.back()) << " mm, "
+         << rms_range(sel, horizon) << ", at the end): a finer model, a larger pool or less measurement noise is needed\n";
+  }
+}
+
+// With a model: the predicted RMS now and after the batch, with its range (stopping rule).
+void say_predicted_rms(const PlanArgs& a, const compensation::PoseSelection& sel,
+                       const compensation::PoseSelectionOptions& o, const compensation::CompensationModel& model,
+                       nlohmann::json& summary, std::ostringstream& text) {
+  const std::size_t at_end = std::min(a.count, sel.predicted_rms_mm.size() - 1);
+  const double now = sel.predicted_rms_mm.front(), after = sel.predicted_rms_mm[at_end];
+  text << "  predicted 3-D RMS of a new reading over the pool: " << three_digits(now) << " mm (90 % range "
+       << rms_range(sel, 0) << ") with the " << sel.conditioned_on << " poses measured, " << three_digits(after)
+       << " mm (" << rms_range(sel, at_end) << ") after these " << a.count
+       << " (the field's own variance with its nugget"
+       << (model.joint_error_functions() ? ", plus what the field's correction leaves of the joint error functions' estimation variance" : "")
+       << "; calibration and registration uncertainty not included)\n";
+  if (sel.leave_one_out_scores > 0)
+    text << "  the range: the level of the prediction is the mean of the model's " << sel.leave_one_out_scores
+         << " leave-one-out scores (z^2), known to +/-" << format_number(std::round(1000.0 * sel.predicted_mse_relative_se) / 10.0)
+         << " % in the mean square (one standard error)\n";
+  summary["predicted_rms_mm"] = {{"now", now},
+                                 {"after", after},
+                                 {"by_pose", sel.predicted_rms_mm},
+                                 {"now_range", {sel.predicted_rms_low_mm.front(), sel.predicted_rms_high_mm.front()}},
+                                 {"after_range", {sel.predicted_rms_low_mm[at_end], sel.predicted_rms_high_mm[at_end]}},
+                                 {"mse_relative_se", sel.predicted_mse_relative_se},
+                                 {"leave_one_out_scores", sel.leave_one_out_scores}};
+  if (o.target_rms_mm) say_poses_for_target(a, sel, *o.target_rms_mm, summary, text);
+}
+
+/// `plan --candidates`: the next poses to measure from a pool, with the predicted RMS (stopping rule).
+void run_plan_from_candidates(const PlanArgs& a, CLI::App* cmd) {
+  using namespace robot;
+  using namespace compensation;
+  check_candidate_options(a, cmd);
+  std::optional<CompensationModel> model;
+  if (!a.model.empty()) {
+    const nlohmann::json j = read_json_file(a.model, "model file");
+    model.emplace(with_json_source(a.model, [&] { return CompensationModel::from_json(j, a.model); }));
+  }
+  const MdhModel robot = plan_robot(a, model);
+  const RobotOrigin origin{!a.robot.empty() || model.has_value(),
+                           !a.robot.empty() ? "--robot " + a.robot
+                           : model         ? "the nominal robot of " + a.model
+                                           : std::string("the built-in ER20-C10 (no --robot)")};
+  const CsvTable pool = CsvTable::read(a.candidates);
+  const OpenPool p = open_pool(a, pool, robot, origin);
+  PoseSelectionOptions o;
+  o.count = a.count;
+  if (a.local_scale != "on" && a.local_scale != "off")
+    throw ArgumentError("--local-scale: expected on or off, got '" + a.local_scale + "'");
+  o.local_scale = a.local_scale == "on";
+  if (cmd->count("--target-rms")) o.target_rms_mm = a.target_rms;
+  o.spacing_floor = a.spacing_floor;
+  PoseSelection sel;
+  naming_options([&] { sel = select_poses(p.open, p.measured, model ? &*model : nullptr, o); },
+                 {{"PoseSelectionOptions::count", "--count"}, {"PoseSelectionOptions::target_rms_mm", "--target-rms"},
+                  {"PoseSelectionOptions::spacing_floor", "--spacing-floor"}});
+  warn_left_out(a, pool, p, sel);
   OutputTable out;
   std::vector<std::size_t> picked;
-  for (std::size_t k : sel.chosen) picked.push_back(rows[k]);
+  for (std::size_t k : sel.chosen) picked.push_back(p.rows[k]);
   out.add_all_columns(pool, picked);
-  nlohmann::json summary = {{"candidates", pool.row_count()}, {"measured", measured.size()},
+  nlohmann::json summary = {{"candidates", pool.row_count()}, {"measured", p.measured.size()},
                             {"chosen", sel.chosen.size()}, {"design", sel.design}};
   std::ostringstream text;
-  text << "plan: " << sel.chosen.size() << " of " << open.size() << " candidate poses chosen, in measuring order ("
+  text << "plan: " << sel.chosen.size() << " of " << p.open.size() << " candidate poses chosen, in measuring order ("
        << sel.design << ")\n";
-  if (!sel.predicted_rms_mm.empty()) {
-    const std::size_t at_end = std::min(a.count, sel.predicted_rms_mm.size() - 1);
-    const double now = sel.predicted_rms_mm.front(), after = sel.predicted_rms_mm[at_end];
-    auto range = [&](std::size_t k) {
-      return three_digits(sel.predicted_rms_low_mm[k]) + "-" + three_digits(sel.predicted_rms_high_mm[k]);
-    };
-    text << "  predicted 3-D RMS of a new reading over the pool: " << three_digits(now) << " mm (90 % range " << range(0)
-         << ") with the " << sel.conditioned_on << " poses measured, " << three_digits(after) << " mm (" << range(at_end)
-         << ") after these " << a.count << " (the field's own variance with its nugget"
-         << (model->joint_error_functions() ? ", plus what the field's correction leaves of the joint error functions' estimation variance" : "")
-         << "; calibration and registration uncertainty not included)\n";
-    if (sel.leave_one_out_scores > 0)
-      text << "  the range: the level of the prediction is the mean of the model's " << sel.leave_one_out_scores
-           << " leave-one-out scores (z^2), known to +/-" << format_number(std::round(1000.0 * sel.predicted_mse_relative_se) / 10.0)
-           << " % in the mean square (one standard error)\n";
-    summary["predicted_rms_mm"] = {{"now", now},
-                                   {"after", after},
-                                   {"by_pose", sel.predicted_rms_mm},
-                                   {"now_range", {sel.predicted_rms_low_mm.front(), sel.predicted_rms_high_mm.front()}},
-                                   {"after_range", {sel.predicted_rms_low_mm[at_end], sel.predicted_rms_high_mm[at_end]}},
-                                   {"mse_relative_se", sel.predicted_mse_relative_se},
-                                   {"leave_one_out_scores", sel.leave_one_out_scores}};
-    if (o.target_rms_mm) {
-      summary["target_rms_mm"] = *o.target_rms_mm;
-      auto count_or_null = [](const std::optional<std::size_t>& n) { return n ? nlohmann::json(*n) : nlohmann::json(nullptr); };
-      summary["poses_for_target"] = count_or_null(sel.poses_for_target);
-      summary["poses_for_target_range"] = {count_or_null(sel.poses_for_target_low), count_or_null(sel.poses_for_target_high)};
-      const std::string target = "  target " + format_number(*o.target_rms_mm) + " mm: ";
-      const std::size_t horizon = sel.predicted_rms_mm.size() - 1;
-      if (sel.poses_for_target_high && *sel.poses_for_target_high == 0) {
-        text << target << "reached (predicted, the whole 90 % range) with the poses measured so far\n";
-      } else if (sel.poses_for_target_low && *sel.poses_for_target_low == 0) {
-        // The range covers the target now: a number of poses would be the noise of the estimate.
-        text << target << "within the prediction's 90 % range now (" << range(0)
-             << " mm): no count is given; measure the batch and validate on held-out poses to tell\n";
-      } else if (sel.poses_for_target_low) {
-        text << target << "about " << (sel.poses_for_target ? std::to_string(*sel.poses_for_target) : std::string("?"))
-             << " more poses chosen this way (90 % range " << *sel.poses_for_target_low << " to "
-             << (sel.poses_for_target_high ? std::to_string(*sel.poses_for_target_high)
-                                           : "beyond " + std::to_string(horizon) + " (not reached within this pool)")
-             << "; " << (sel.poses_for_target && *sel.poses_for_target <= a.count ? "within" : "beyond") << " this batch)\n";
-      } else {
-        text << target << "not reached within " << horizon << " more poses of this pool, even at the low end of the "
-             << "prediction's range (predicted " << three_digits(sel.predicted_rms_mm.back()) << " mm, "
-             << range(horizon) << ", at the end): a finer model, a larger pool or less measurement noise is needed\n";
-      }
-    }
-  }
+  if (!sel.predicted_rms_mm.empty()) say_predicted_rms(a, sel, o, *model, summary, text);
   AtomicFileSet outputs;
   outputs.add(a.out, out.to_csv());
   if (!a.summary_out.empty()) outputs.add(a.summary_out, summary.dump(2) + "\n");

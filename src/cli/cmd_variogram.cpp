@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <iostream>
+#include <memory>
 #include <optional>
 
 #include "cli/cli_support.hpp"
@@ -136,11 +137,8 @@ LagBins parse_bins_option(const std::string& spec) {
 
 std::string cell(double v) { return std::isnan(v) ? std::string() : format_number(v); }
 
-// --cloud: one row per pair within the cutoff (gstat's variogram(..., cloud = TRUE)); --map DX,DY:
-// the variogram map (gstat's map = TRUE). Options that shape bins are refused by name.
-void run_cloud_or_map(const VariogramArgs& a, const Eigen::MatrixXd& x, const Eigen::MatrixXd& z,
-                      const std::vector<DirectionalRun>& runs, const std::vector<std::string>& coord_names) {
-  const std::string what = a.cloud ? "--cloud" : "--map";
+// --cloud and --map: the options that shape bins are refused by name.
+void refuse_bin_options(const VariogramArgs& a, const std::string& what) {
   if (a.cloud && !a.map.empty()) throw ArgumentError("--cloud and --map are two outputs; run them separately");
   const auto refuse = [&](bool given, const std::string& option, const std::string& why) {
     if (given) throw ArgumentError(option + " does not apply to " + what + ": " + why);
@@ -160,85 +158,112 @@ void run_cloud_or_map(const VariogramArgs& a, const Eigen::MatrixXd& x, const Ei
     refuse(!a.alpha.empty() || !a.beta.empty(), "--alpha/--beta", "the map shows every direction");
     if (std::isnan(a.cutoff)) throw ArgumentError("--map needs --cutoff C: the map covers lag vectors from -C to C in x and y");
   }
-  OutputTable out;
+}
+
+// A table and the line that sums it up on standard error.
+struct SummarizedTable {
+  OutputTable table;
   std::string summary;
-  if (a.cloud) {
-    VariogramCloudOptions o;
-    // gstat's cutoff: given, or the last edge of --bins, or a third of the bounding-box diagonal.
-    o.cutoff = !std::isnan(a.cutoff) ? a.cutoff : a.bins.empty() ? LagBins::gstat_default(x).edges().back()
-                                                                 : parse_bins_option(a.bins).edges().back();
-    std::vector<std::string> left, right, dist, gamma, alpha, beta;
-    for (const DirectionalRun& run : runs) {
-      o.direction = run.direction;
-      o.max_pairs = a.max_pairs - left.size();  // one budget for all directions together
-      VariogramCloud c;
-      try {
-        naming_options([&] { c = variogram_cloud(x, z, o); }, {{"variogram cloud: cutoff", "--cutoff"},
-                                                                {"variogram direction: alpha/beta", "--alpha/--beta"},
-                                                                {"variogram direction: tol_ver", "--tol-ver"}});
-      } catch (const ResourceError& e) {
-        if (runs.size() == 1) throw;
-        throw ResourceError(std::string(e.what()) + " (the budget left after the earlier directions, which have " +
-                            std::to_string(left.size()) + " of --max-pairs " + std::to_string(a.max_pairs) + ")");
-      }
-      for (std::size_t k = 0; k < c.size(); ++k) {
-        left.push_back(std::to_string(c.left[k] + 1));
-        right.push_back(std::to_string(c.right[k] + 1));
-        dist.push_back(format_number(c.dist[k]));
-        gamma.push_back(format_number(c.gamma[k]));
-        alpha.push_back(run.alpha);
-        beta.push_back(run.beta);
-      }
+};
+
+SummarizedTable cloud_table(const VariogramArgs& a, const Eigen::MatrixXd& x, const Eigen::MatrixXd& z,
+                            const std::vector<DirectionalRun>& runs) {
+  VariogramCloudOptions o;
+  // gstat's cutoff: given, or the last edge of --bins, or a third of the bounding-box diagonal.
+  o.cutoff = !std::isnan(a.cutoff) ? a.cutoff : a.bins.empty() ? LagBins::gstat_default(x).edges().back()
+                                                               : parse_bins_option(a.bins).edges().back();
+  std::vector<std::string> left, right, dist, gamma, alpha, beta;
+  for (const DirectionalRun& run : runs) {
+    o.direction = run.direction;
+    o.max_pairs = a.max_pairs - left.size();  // one budget for all directions together
+    VariogramCloud c;
+    try {
+      naming_options([&] { c = variogram_cloud(x, z, o); }, {{"variogram cloud: cutoff", "--cutoff"},
+                                                              {"variogram direction: alpha/beta", "--alpha/--beta"},
+                                                              {"variogram direction: tol_ver", "--tol-ver"}});
+    } catch (const ResourceError& e) {
+      if (runs.size() == 1) throw;
+      throw ResourceError(std::string(e.what()) + " (the budget left after the earlier directions, which have " +
+                          std::to_string(left.size()) + " of --max-pairs " + std::to_string(a.max_pairs) + ")");
     }
-    out.add_column("left", left);
-    out.add_column("right", right);
-    out.add_column("dist", dist);
-    out.add_column("gamma", gamma);
-    if (!a.alpha.empty()) out.add_column("direction", alpha);
-    if (!a.beta.empty()) out.add_column("dip", beta);
-    summary = std::to_string(dist.size()) + " pairs within the cutoff " + format_number(o.cutoff);
-  } else {
-    if (coord_names.size() != 2)
-      throw ArgumentError("--map: " + std::to_string(coord_names.size()) +
-                          " --coords columns; a variogram map is of 2-D lag vectors (give 2 coordinates)");
-    const auto widths = split_list(a.map, "--map");
-    VariogramMapOptions o;
-    o.cutoff = a.cutoff;
-    std::vector<double> w;
-    for (const auto& item : widths) {
-      double v = 0.0;
-      const auto res = std::from_chars(item.data(), item.data() + item.size(), v);
-      if (item.empty() || res.ec != std::errc() || res.ptr != item.data() + item.size() || !(v > 0.0) || !std::isfinite(v))
-        throw ArgumentError("--map: '" + item + "' in '" + a.map + "' is not a cell width > 0; expected DX,DY (e.g. 50,50)");
-      w.push_back(v);
+    for (std::size_t k = 0; k < c.size(); ++k) {
+      left.push_back(std::to_string(c.left[k] + 1));
+      right.push_back(std::to_string(c.right[k] + 1));
+      dist.push_back(format_number(c.dist[k]));
+      gamma.push_back(format_number(c.gamma[k]));
+      alpha.push_back(run.alpha);
+      beta.push_back(run.beta);
     }
-    if (w.size() != 2) throw ArgumentError("--map: '" + a.map + "' has " + std::to_string(w.size()) + " widths; expected DX,DY");
-    o.width_x = w[0];
-    o.width_y = w[1];
-    VariogramMap m;
-    naming_options([&] { m = variogram_map(x, z, o); },
-                                          {{"variogram map: cutoff", "--cutoff"}, {"variogram map: cell width", "--map"}});
-    std::vector<std::string> dx, dy, np, gamma;
-    for (int r = 0; r < m.rows; ++r)
-      for (int c = 0; c < m.columns; ++c) {
-        const auto k = static_cast<std::size_t>(r) * static_cast<std::size_t>(m.columns) + static_cast<std::size_t>(c);
-        dx.push_back(format_number(m.lag_x[static_cast<std::size_t>(c)]));
-        dy.push_back(format_number(m.lag_y[static_cast<std::size_t>(r)]));
-        np.push_back(std::to_string(m.pairs[k]));
-        gamma.push_back(cell(m.gamma[k]));
-      }
-    out.add_column("dx", dx);
-    out.add_column("dy", dy);
-    out.add_column("np", np);
-    out.add_column("gamma", gamma);
-    summary = std::to_string(m.columns) + " x " + std::to_string(m.rows) + " cells of " + format_number(o.width_x) +
-              " x " + format_number(o.width_y) + " over lags -" + format_number(o.cutoff) + " .. " + format_number(o.cutoff);
   }
+  SummarizedTable out;
+  out.table.add_column("left", left);
+  out.table.add_column("right", right);
+  out.table.add_column("dist", dist);
+  out.table.add_column("gamma", gamma);
+  if (!a.alpha.empty()) out.table.add_column("direction", alpha);
+  if (!a.beta.empty()) out.table.add_column("dip", beta);
+  out.summary = std::to_string(dist.size()) + " pairs within the cutoff " + format_number(o.cutoff);
+  return out;
+}
+
+// --map DX,DY: the cell widths, each > 0.
+std::vector<double> map_cell_widths(const VariogramArgs& a) {
+  std::vector<double> w;
+  for (const auto& item : split_list(a.map, "--map")) {
+    double v = 0.0;
+    const auto res = std::from_chars(item.data(), item.data() + item.size(), v);
+    if (item.empty() || res.ec != std::errc() || res.ptr != item.data() + item.size() || !(v > 0.0) || !std::isfinite(v))
+      throw ArgumentError("--map: '" + item + "' in '" + a.map + "' is not a cell width > 0; expected DX,DY (e.g. 50,50)");
+    w.push_back(v);
+  }
+  if (w.size() != 2) throw ArgumentError("--map: '" + a.map + "' has " + std::to_string(w.size()) + " widths; expected DX,DY");
+  return w;
+}
+
+SummarizedTable map_table(const VariogramArgs& a, const Eigen::MatrixXd& x, const Eigen::MatrixXd& z,
+                          const std::vector<std::string>& coord_names) {
+  if (coord_names.size() != 2)
+    throw ArgumentError("--map: " + std::to_string(coord_names.size()) +
+                        " --coords columns; a variogram map is of 2-D lag vectors (give 2 coordinates)");
+  VariogramMapOptions o;
+  o.cutoff = a.cutoff;
+  const std::vector<double> w = map_cell_widths(a);
+  o.width_x = w[0];
+  o.width_y = w[1];
+  VariogramMap m;
+  naming_options([&] { m = variogram_map(x, z, o); },
+                 {{"variogram map: cutoff", "--cutoff"}, {"variogram map: cell width", "--map"}});
+  std::vector<std::string> dx, dy, np, gamma;
+  for (int r = 0; r < m.rows; ++r)
+    for (int c = 0; c < m.columns; ++c) {
+      const auto k = static_cast<std::size_t>(r) * static_cast<std::size_t>(m.columns) + static_cast<std::size_t>(c);
+      dx.push_back(format_number(m.lag_x[static_cast<std::size_t>(c)]));
+      dy.push_back(format_number(m.lag_y[static_cast<std::size_t>(r)]));
+      np.push_back(std::to_string(m.pairs[k]));
+      gamma.push_back(cell(m.gamma[k]));
+    }
+  SummarizedTable out;
+  out.table.add_column("dx", dx);
+  out.table.add_column("dy", dy);
+  out.table.add_column("np", np);
+  out.table.add_column("gamma", gamma);
+  out.summary = std::to_string(m.columns) + " x " + std::to_string(m.rows) + " cells of " + format_number(o.width_x) +
+                " x " + format_number(o.width_y) + " over lags -" + format_number(o.cutoff) + " .. " + format_number(o.cutoff);
+  return out;
+}
+
+// --cloud: one row per pair within the cutoff (gstat's variogram(..., cloud = TRUE)); --map DX,DY:
+// the variogram map (gstat's map = TRUE).
+void run_cloud_or_map(const VariogramArgs& a, const Eigen::MatrixXd& x, const Eigen::MatrixXd& z,
+                      const std::vector<DirectionalRun>& runs, const std::vector<std::string>& coord_names) {
+  const std::string what = a.cloud ? "--cloud" : "--map";
+  refuse_bin_options(a, what);
+  const SummarizedTable out = a.cloud ? cloud_table(a, x, z, runs) : map_table(a, x, z, coord_names);
   if (a.out.empty()) {
-    std::cout << out.to_csv();
+    std::cout << out.table.to_csv();
   } else {
-    out.write(a.out);
-    std::cerr << "variogram " << what << ": " << x.rows() << " points, " << summary << ", written to " << a.out << "\n";
+    out.table.write(a.out);
+    std::cerr << "variogram " << what << ": " << x.rows() << " points, " << out.summary << ", written to " << a.out << "\n";
   }
 }
 
@@ -308,11 +333,7 @@ void run_pseudo(const VariogramArgs& a, const CsvTable& table, const Eigen::Matr
             << (bins ? "the bins given" : "gstat's default bins of each") << "), written to " << a.out << "\n";
 }
 
-void run_variogram(const VariogramArgs& a) {
-  const auto value_names = split_column_list(a.value, "--value");
-  // A CSV, or a point layer (GeoPackage, shapefile, GeoJSON) whose points give the coordinates.
-  const PointTable points = read_point_table(a.input, "--input", {value_names, value_names.size() >= 2 && a.covariates.empty()});
-  const auto coord_names = points.coordinate_columns(a.coords, "--coords");
+EmpiricalVariogramOptions variogram_options(const VariogramArgs& a, const std::vector<std::string>& value_names) {
   EmpiricalVariogramOptions options;
   options.estimator = estimator_from_name(a.estimator);
   // Without --bins (gstat's default bins, or --cutoff/--width), gstat's boundaries unless --convention says otherwise.
@@ -336,7 +357,20 @@ void run_variogram(const VariogramArgs& a) {
   naming_options([&] { options.validate(); }, {{"variogram options: pair_fraction", "--subsample"},
                                                {"pair_fraction", "--subsample"},
                                                {"variogram options: threads", "--threads"}});
+  return options;
+}
 
+// The samples as the variogram sees them: coordinates, values (or residuals of --covariates' trend)
+// and the directions asked for.
+struct VariogramSamples {
+  std::vector<DirectionalRun> runs;
+  Eigen::MatrixXd x, z;
+  bool heterotopic = false;
+};
+
+VariogramSamples read_variogram_samples(const VariogramArgs& a, const PointTable& points,
+                                        const std::vector<std::string>& value_names,
+                                        const std::vector<std::string>& coord_names) {
   const CsvTable& table = points.table;
   CoordinateSystem crs;  // the layer's; a covariate raster in another CRS is refused
   crs.add(points.crs, "--input " + a.input, a.input);
@@ -345,139 +379,155 @@ void run_variogram(const VariogramArgs& a) {
     throw InputError(a.input + ": " + std::to_string(table.row_count()) +
                          " data row(s); the variogram needs at least 2 points",
                      a.input);
-  const std::vector<DirectionalRun> runs = directions(a, coord_names);
-  Eigen::MatrixXd x = table.numeric_columns(coord_names);
+  VariogramSamples s;
+  s.runs = directions(a, coord_names);
+  s.x = table.numeric_columns(coord_names);
   // With 2 or more --value columns an empty cell is that column not measured there (heterotopic
   // data); each variogram is then over its own pairs. One column, or the trend of --covariates
   // (which needs every value), keeps refusing empty cells.
-  Eigen::MatrixXd z = a.covariates.empty() && value_names.size() >= 2 ? numeric_columns_with_gaps(table, value_names)
-                                                                      : table.numeric_columns(value_names);
-  apply_duplicates_option(a.duplicates, "variogram", !a.covariates.empty(), table, x, z);
-  const bool heterotopic = z.array().isNaN().any();
+  s.z = a.covariates.empty() && value_names.size() >= 2 ? numeric_columns_with_gaps(table, value_names)
+                                                        : table.numeric_columns(value_names);
+  apply_duplicates_option(a.duplicates, "variogram", !a.covariates.empty(), table, s.x, s.z);
+  s.heterotopic = s.z.array().isNaN().any();
   if (!a.covariates.empty()) {
     // gstat's variogram(z ~ cov): the variogram of the residuals of the ordinary least-squares trend.
     // COL or NAME=RASTER (the pixel at each point), as interpolate's external drift takes them.
     const CovariateSources sources = covariate_sources(split_column_list(a.covariates, "--covariates"), &crs);
-    const Eigen::MatrixXd covariates = covariate_values(sources, table, x, points.labels("sample"));
-    z = with_source(a.input, [&] { return ols_trend_residuals(z, covariates, sources.names); });
+    const Eigen::MatrixXd covariates = covariate_values(sources, table, s.x, points.labels("sample"));
+    s.z = with_source(a.input, [&] { return ols_trend_residuals(s.z, covariates, sources.names); });
   }
-  if (a.cloud || !a.map.empty()) {
-    if (heterotopic)
-      throw InputError(a.input + ": empty --value cells; --cloud and --map need every value column measured at every row",
-                       a.input);
-    run_cloud_or_map(a, x, z, runs, coord_names);
-    return;
-  }
-  const std::optional<LagBins> given_bins = bins_from_options(a, x);
-  if (a.pseudo) {
-    run_pseudo(a, table, x, z, value_names, given_bins, options.convention);
-    return;
-  }
-  const LagBins bins = given_bins ? *given_bins : LagBins::gstat_default(x);
-  if (!given_bins)
-    std::cerr << "variogram: no --bins: gstat's default, 15 bins of " << format_number(bins.lag_hi(0))
-              << " up to " << format_number(bins.edges().back()) << " (a third of the data's bounding-box diagonal)"
-              << (options.convention == BinConvention::Gstat ? ", gstat's boundaries" : "") << "\n";
+  return s;
+}
+
+// The cells of the binned variogram, one row per bin and direction.
+struct BinnedCells {
   std::vector<std::string> lo, hi, mean, gamma, pairs, alpha, beta, coordinate;
-  std::vector<std::vector<std::string>> per_component(value_names.size());
-  std::vector<std::vector<std::string>> cross(value_names.size() * (value_names.size() - 1) / 2);
+  std::vector<std::vector<std::string>> per_component, cross;
   // Heterotopic: pairs and mean lag of each direct and cross variogram.
-  std::vector<std::vector<std::string>> component_pairs(value_names.size()), component_lag(value_names.size());
-  std::vector<std::vector<std::string>> cross_pairs(cross.size()), cross_lag(cross.size());
+  std::vector<std::vector<std::string>> component_pairs, component_lag, cross_pairs, cross_lag;
   std::uint64_t total = 0;
-  if (!a.plot.empty() && runs.size() > 1)
-    throw ArgumentError("--plot draws one variogram; " + std::to_string(runs.size()) +
-                        " directions were asked (--alpha/--beta/--per-coordinate): plot one direction at a time");
   VariogramPlot plot;
   std::vector<std::uint64_t> first_run_pairs;  // the first direction's pair counts (the --bins edge check)
-  for (const DirectionalRun& run : runs) {
+};
+
+void add_bin_cells(const VariogramArgs& a, const DirectionalRun& run, bool first_run, const EmpiricalVariogram& v,
+                   const HeterotopicVariogram& h, bool heterotopic, BinnedCells& t) {
+  const std::size_t values = t.per_component.size();
+  for (std::size_t b = 0; b < v.bins.size(); ++b) {
+    const VariogramBin& bin = v.bins[b];
+    t.lo.push_back(format_number(bin.lag_lo));
+    t.hi.push_back(format_number(bin.lag_hi));
+    t.mean.push_back(cell(bin.lag_mean));
+    t.gamma.push_back(cell(bin.gamma));
+    t.pairs.push_back(std::to_string(bin.pairs));
+    t.alpha.push_back(run.alpha);
+    t.beta.push_back(run.beta);
+    t.coordinate.push_back(run.coordinate);
+    for (int c = 0; c < v.components(); ++c)
+      t.per_component[static_cast<std::size_t>(c)].push_back(cell(v.component_gamma(static_cast<Eigen::Index>(b), c)));
+    for (std::size_t c = 0; c < t.cross.size() && a.cross; ++c)
+      t.cross[c].push_back(cell(v.cross_gamma(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(c))));
+    if (heterotopic) {
+      const auto k = static_cast<Eigen::Index>(b);
+      for (std::size_t c = 0; c < values; ++c) {
+        t.component_pairs[c].push_back(format_number(h.component_pairs(k, static_cast<Eigen::Index>(c))));
+        t.component_lag[c].push_back(cell(h.component_lag(k, static_cast<Eigen::Index>(c))));
+      }
+      for (std::size_t c = 0; c < t.cross.size() && a.cross; ++c) {
+        t.cross_pairs[c].push_back(format_number(h.cross_pairs(k, static_cast<Eigen::Index>(c))));
+        t.cross_lag[c].push_back(cell(h.cross_lag(k, static_cast<Eigen::Index>(c))));
+      }
+    }
+    t.total += bin.pairs;
+    if (bin.pairs > 0) t.plot.bins.push_back({bin.lag_mean, bin.gamma, bin.pairs});
+    if (first_run) t.first_run_pairs.push_back(bin.pairs);
+  }
+}
+
+BinnedCells binned_variograms(const VariogramArgs& a, const VariogramSamples& s, const LagBins& bins,
+                              EmpiricalVariogramOptions& options, std::size_t values) {
+  BinnedCells t;
+  t.per_component.resize(values);
+  t.cross.resize(values * (values - 1) / 2);
+  t.component_pairs.resize(values);
+  t.component_lag.resize(values);
+  t.cross_pairs.resize(t.cross.size());
+  t.cross_lag.resize(t.cross.size());
+  if (!a.plot.empty() && s.runs.size() > 1)
+    throw ArgumentError("--plot draws one variogram; " + std::to_string(s.runs.size()) +
+                        " directions were asked (--alpha/--beta/--per-coordinate): plot one direction at a time");
+  for (const DirectionalRun& run : s.runs) {
     options.direction = run.direction;
     EmpiricalVariogram v;
     HeterotopicVariogram h;
     naming_options([&] {
-                     if (heterotopic) {
-                       h = heterotopic_variogram(x, z, bins, options);
+                     if (s.heterotopic) {
+                       h = heterotopic_variogram(s.x, s.z, bins, options);
                        v = h.variogram;
                      } else {
-                       v = empirical_variogram(x, z, bins, options);
+                       v = empirical_variogram(s.x, s.z, bins, options);
                      }
                    },
                    {{"max_stored_differences", "--max-stored"}, {"pair_fraction (--subsample)", "--subsample"},
                     {"variogram direction: alpha/beta", "--alpha/--beta"},
                     {"variogram direction: tol_ver", "--tol-ver"}});
-    for (std::size_t b = 0; b < v.bins.size(); ++b) {
-      const VariogramBin& bin = v.bins[b];
-      lo.push_back(format_number(bin.lag_lo));
-      hi.push_back(format_number(bin.lag_hi));
-      mean.push_back(cell(bin.lag_mean));
-      gamma.push_back(cell(bin.gamma));
-      pairs.push_back(std::to_string(bin.pairs));
-      alpha.push_back(run.alpha);
-      beta.push_back(run.beta);
-      coordinate.push_back(run.coordinate);
-      for (int c = 0; c < v.components(); ++c)
-        per_component[static_cast<std::size_t>(c)].push_back(cell(v.component_gamma(static_cast<Eigen::Index>(b), c)));
-      for (std::size_t c = 0; c < cross.size() && a.cross; ++c)
-        cross[c].push_back(cell(v.cross_gamma(static_cast<Eigen::Index>(b), static_cast<Eigen::Index>(c))));
-      if (heterotopic) {
-        const auto k = static_cast<Eigen::Index>(b);
-        for (std::size_t c = 0; c < value_names.size(); ++c) {
-          component_pairs[c].push_back(format_number(h.component_pairs(k, static_cast<Eigen::Index>(c))));
-          component_lag[c].push_back(cell(h.component_lag(k, static_cast<Eigen::Index>(c))));
-        }
-        for (std::size_t c = 0; c < cross.size() && a.cross; ++c) {
-          cross_pairs[c].push_back(format_number(h.cross_pairs(k, static_cast<Eigen::Index>(c))));
-          cross_lag[c].push_back(cell(h.cross_lag(k, static_cast<Eigen::Index>(c))));
-        }
-      }
-      total += bin.pairs;
-      if (bin.pairs > 0) plot.bins.push_back({bin.lag_mean, bin.gamma, bin.pairs});
-      if (&run == &runs.front()) first_run_pairs.push_back(bin.pairs);
-    }
+    add_bin_cells(a, run, &run == &s.runs.front(), v, h, s.heterotopic, t);
   }
-  if (!a.bins.empty() && a.convention.empty()) warn_lags_on_edges(x, z, bins, options, runs.front(), first_run_pairs, heterotopic);
+  return t;
+}
 
+OutputTable binned_table(const VariogramArgs& a, const std::vector<std::string>& value_names, bool heterotopic,
+                         const BinnedCells& t) {
   OutputTable out;
-  out.add_column("lag_lo", lo);
-  out.add_column("lag_hi", hi);
-  out.add_column("lag_mean", mean);
-  out.add_column("gamma", gamma);
-  out.add_column("pairs", pairs);
+  out.add_column("lag_lo", t.lo);
+  out.add_column("lag_hi", t.hi);
+  out.add_column("lag_mean", t.mean);
+  out.add_column("gamma", t.gamma);
+  out.add_column("pairs", t.pairs);
   if (a.per_component || a.cross)
-    for (std::size_t c = 0; c < value_names.size(); ++c) out.add_column("gamma_" + value_names[c], per_component[c]);
+    for (std::size_t c = 0; c < value_names.size(); ++c) out.add_column("gamma_" + value_names[c], t.per_component[c]);
   if (a.cross) {
     // Pairs A before B in --value order: EmpiricalVariogram::cross_column's order.
     std::size_t c = 0;
     for (std::size_t i = 0; i < value_names.size(); ++i)
       for (std::size_t j = i + 1; j < value_names.size(); ++j)
-        out.add_column("gamma_" + value_names[i] + "_" + value_names[j], cross[c++]);
+        out.add_column("gamma_" + value_names[i] + "_" + value_names[j], t.cross[c++]);
   }
   if (heterotopic) {
     // Each variogram's own pairs: pairs_<A>, lag_mean_<A>, then pairs_<A>_<B>, lag_mean_<A>_<B>.
     for (std::size_t c = 0; c < value_names.size(); ++c) {
-      out.add_column("pairs_" + value_names[c], component_pairs[c]);
-      out.add_column("lag_mean_" + value_names[c], component_lag[c]);
+      out.add_column("pairs_" + value_names[c], t.component_pairs[c]);
+      out.add_column("lag_mean_" + value_names[c], t.component_lag[c]);
     }
     std::size_t c = 0;
     for (std::size_t i = 0; i < value_names.size() && a.cross; ++i)
       for (std::size_t j = i + 1; j < value_names.size(); ++j, ++c) {
-        out.add_column("pairs_" + value_names[i] + "_" + value_names[j], cross_pairs[c]);
-        out.add_column("lag_mean_" + value_names[i] + "_" + value_names[j], cross_lag[c]);
+        out.add_column("pairs_" + value_names[i] + "_" + value_names[j], t.cross_pairs[c]);
+        out.add_column("lag_mean_" + value_names[i] + "_" + value_names[j], t.cross_lag[c]);
       }
   }
-  if (!a.alpha.empty()) out.add_column("direction", alpha);
-  if (!a.beta.empty()) out.add_column("dip", beta);
-  if (a.per_coordinate) out.add_column("coordinate", coordinate);
-  std::string svg;
-  if (!a.plot.empty()) {
-    plot.title = "empirical variogram of " + a.value + (runs.front().alpha.empty() ? "" : ", direction " + runs.front().alpha) +
-                 (runs.front().beta.empty() ? "" : ", dip " + runs.front().beta) + " (" + std::to_string(x.rows()) + " points)";
-    const std::string lag_unit = unit_of_column(table, coord_names.front());
-    const std::string value_unit = value_names.size() == 1 ? unit_of_column(table, value_names.front()) : std::string();
-    plot.lag_label = "lag" + (lag_unit.empty() ? std::string() : " [" + lag_unit + "]");
-    plot.gamma_label = "semivariance" + (value_unit.empty() ? std::string() : " [" + value_unit + "^2]");
-    svg = variogram_svg_text(plot);
-  }
+  if (!a.alpha.empty()) out.add_column("direction", t.alpha);
+  if (!a.beta.empty()) out.add_column("dip", t.beta);
+  if (a.per_coordinate) out.add_column("coordinate", t.coordinate);
+  return out;
+}
+
+// --plot: the picture of the (one direction's) binned variogram, its axes in the columns' units.
+std::string variogram_picture(const VariogramArgs& a, const CsvTable& table, const VariogramSamples& s,
+                              const std::vector<std::string>& value_names, const std::vector<std::string>& coord_names,
+                              VariogramPlot plot) {
+  const DirectionalRun& run = s.runs.front();
+  plot.title = "empirical variogram of " + a.value + (run.alpha.empty() ? "" : ", direction " + run.alpha) +
+               (run.beta.empty() ? "" : ", dip " + run.beta) + " (" + std::to_string(s.x.rows()) + " points)";
+  const std::string lag_unit = unit_of_column(table, coord_names.front());
+  const std::string value_unit = value_names.size() == 1 ? unit_of_column(table, value_names.front()) : std::string();
+  plot.lag_label = "lag" + (lag_unit.empty() ? std::string() : " [" + lag_unit + "]");
+  plot.gamma_label = "semivariance" + (value_unit.empty() ? std::string() : " [" + value_unit + "^2]");
+  return variogram_svg_text(plot);
+}
+
+void write_binned_variogram(const VariogramArgs& a, const OutputTable& out, const std::string& svg,
+                            const VariogramSamples& s, const LagBins& bins, std::uint64_t total) {
   if (a.out.empty()) {
     // The table first: a standard output that cannot be written (> /dev/full) leaves the picture
     // untouched, as --out would.
@@ -486,32 +536,53 @@ void run_variogram(const VariogramArgs& a) {
       require_standard_output();
       write_file_atomically(a.plot, svg);
     }
-  } else {
-    AtomicFileSet files;  // the CSV and the picture: both or neither
-    files.add(a.out, out.to_csv());
-    if (!svg.empty()) files.add(a.plot, svg);
-    files.commit();
-    std::cerr << "variogram: " << x.rows() << " points, " << total << " pairs in "
-              << bins.size() << " bins";
-    if (!svg.empty()) std::cerr << " (picture " << a.plot << ")";
-    if (runs.size() > 1) std::cerr << " x " << runs.size() << " directions";
-    std::cerr << " written to " << a.out << "\n";
+    return;
   }
+  AtomicFileSet files;  // the CSV and the picture: both or neither
+  files.add(a.out, out.to_csv());
+  if (!svg.empty()) files.add(a.plot, svg);
+  files.commit();
+  std::cerr << "variogram: " << s.x.rows() << " points, " << total << " pairs in "
+            << bins.size() << " bins";
+  if (!svg.empty()) std::cerr << " (picture " << a.plot << ")";
+  if (s.runs.size() > 1) std::cerr << " x " << s.runs.size() << " directions";
+  std::cerr << " written to " << a.out << "\n";
 }
 
-void add_variogram_command(CLI::App& app) {
-  auto args = std::make_shared<VariogramArgs>();
-  auto* cmd = app.add_subcommand(
-      "variogram",
-      "Empirical semivariogram: gamma(h) = 1/(2 N(h)) sum (z_i - z_j)^2 over the pairs whose lag\n"
-      "(Euclidean distance between the --coords columns) falls in each bin. Writes CSV with the\n"
-      "columns lag_lo,lag_hi,lag_mean,gamma,pairs; an empty bin has pairs 0 and empty lag_mean and\n"
-      "gamma. Several --value columns form a vector value: gamma is then half the mean squared norm\n"
-      "of the difference (the sum of the per-column variograms, which --per-component adds as\n"
-      "gamma_<column>); --cross also adds the cross-variograms gamma_<A>_<B> (the input of\n"
-      "fit-variogram --lmc). --cloud writes every pair (left,right,dist,gamma) instead of bins and\n"
-      "--map DX,DY --cutoff C the variogram map of 2-D data (dx,dy,np,gamma), both as R gstat's;\n"
-      "--plot FILE.svg also draws the binned variogram. See docs/geostatistics.md.");
+void run_variogram(const VariogramArgs& a) {
+  const auto value_names = split_column_list(a.value, "--value");
+  // A CSV, or a point layer (GeoPackage, shapefile, GeoJSON) whose points give the coordinates.
+  const PointTable points = read_point_table(a.input, "--input", {value_names, value_names.size() >= 2 && a.covariates.empty()});
+  const auto coord_names = points.coordinate_columns(a.coords, "--coords");
+  EmpiricalVariogramOptions options = variogram_options(a, value_names);
+  const VariogramSamples s = read_variogram_samples(a, points, value_names, coord_names);
+  if (a.cloud || !a.map.empty()) {
+    if (s.heterotopic)
+      throw InputError(a.input + ": empty --value cells; --cloud and --map need every value column measured at every row",
+                       a.input);
+    run_cloud_or_map(a, s.x, s.z, s.runs, coord_names);
+    return;
+  }
+  const std::optional<LagBins> given_bins = bins_from_options(a, s.x);
+  if (a.pseudo) {
+    run_pseudo(a, points.table, s.x, s.z, value_names, given_bins, options.convention);
+    return;
+  }
+  const LagBins bins = given_bins ? *given_bins : LagBins::gstat_default(s.x);
+  if (!given_bins)
+    std::cerr << "variogram: no --bins: gstat's default, 15 bins of " << format_number(bins.lag_hi(0))
+              << " up to " << format_number(bins.edges().back()) << " (a third of the data's bounding-box diagonal)"
+              << (options.convention == BinConvention::Gstat ? ", gstat's boundaries" : "") << "\n";
+  const BinnedCells cells = binned_variograms(a, s, bins, options, value_names.size());
+  if (!a.bins.empty() && a.convention.empty())
+    warn_lags_on_edges(s.x, s.z, bins, options, s.runs.front(), cells.first_run_pairs, s.heterotopic);
+  const OutputTable out = binned_table(a, value_names, s.heterotopic, cells);
+  const std::string svg =
+      a.plot.empty() ? std::string() : variogram_picture(a, points.table, s, value_names, coord_names, cells.plot);
+  write_binned_variogram(a, out, svg, s, bins, cells.total);
+}
+
+void add_input_options(CLI::App* cmd, const std::shared_ptr<VariogramArgs>& args) {
   cmd->add_option("--input", args->input,
                   "CSV with the coordinate and value columns, or a point layer (.gpkg, .shp, .geojson: the coordinates "
                   "are the points', the values attributes)")->required();
@@ -521,6 +592,9 @@ void add_variogram_command(CLI::App& app) {
   cmd->add_option("--value", args->value,
                   "value column, or several comma-separated columns for a vector value (dx,dy,dz)")
       ->required();
+}
+
+void add_binning_options(CLI::App* cmd, const std::shared_ptr<VariogramArgs>& args) {
   cmd->add_option("--bins", args->bins,
                   "lo:max:width for bins [lo,lo+w), ... up to max (e.g. 0:2200:200), or explicit "
                   "increasing edges e0,e1,... (e.g. 0,10,20,50); default: gstat's, 15 bins up to a third of the "
@@ -544,6 +618,9 @@ void add_variogram_command(CLI::App& app) {
                   "use a deterministic fraction of the pairs, in (0,1] (default 1: all pairs)");
   cmd->add_option("--seed", args->seed, "seed of --subsample (default 0)")->check(kUnsignedInteger);
   cmd->add_option("--threads", args->threads, "OpenMP threads (default: all); the result does not depend on it");
+}
+
+void add_direction_and_trend_options(CLI::App* cmd, const std::shared_ptr<VariogramArgs>& args) {
   cmd->add_option("--alpha", args->alpha,
                   "directional variogram(s), as gstat's alpha: horizontal direction(s) in degrees "
                   "clockwise from +y (2nd coordinate) towards +x (1st), e.g. 0,45,90,135; 2 or 3 "
@@ -567,6 +644,9 @@ void add_variogram_command(CLI::App& app) {
                   "(COL[,COL...] of --input, or NAME=FILE.tif|.asc: the raster's pixel at each point, 2-D --coords), "
                   "as R gstat's variogram(z ~ COL); for kriging with external drift "
                   "(interpolate --method kriging --covariates)");
+}
+
+void add_cloud_and_map_options(CLI::App* cmd, const std::shared_ptr<VariogramArgs>& args) {
   cmd->add_flag("--cloud", args->cloud,
                 "the variogram cloud instead of bins: one row per pair (i, j) within --cutoff, columns left,right "
                 "(1-based data rows, left > right, gstat's order), dist and gamma = 0.5 (z_left - z_right)^2 (summed "
@@ -596,6 +676,9 @@ void add_variogram_command(CLI::App& app) {
                 "b each column minus its mean, as R gstat's variogram(g, pseudo = TRUE). Columns id (A, B, A.B as gstat), lag_lo,lag_hi,lag_mean,gamma,"
                 "pairs; without --bins/--cutoff each variogram gets gstat's default bins of its own; pairs at lag 0 "
                 "in a row of their own. The input of fit-variogram --lmc");
+}
+
+void add_output_options(CLI::App* cmd, const std::shared_ptr<VariogramArgs>& args) {
   cmd->add_option("--plot", args->plot,
                   "also write an SVG picture of the binned variogram (points labelled by pair count), written atomically");
   cmd->add_option("--duplicates", args->duplicates,
@@ -604,6 +687,26 @@ void add_variogram_command(CLI::App& app) {
                   "rows measuring it, as gstat users average before krige) | first (the first row's values) | refuse "
                   "(an error naming both lines)");
   cmd->add_option("--out", args->out, "output CSV (written atomically); default: standard output");
+}
+
+void add_variogram_command(CLI::App& app) {
+  auto args = std::make_shared<VariogramArgs>();
+  auto* cmd = app.add_subcommand(
+      "variogram",
+      "Empirical semivariogram: gamma(h) = 1/(2 N(h)) sum (z_i - z_j)^2 over the pairs whose lag\n"
+      "(Euclidean distance between the --coords columns) falls in each bin. Writes CSV with the\n"
+      "columns lag_lo,lag_hi,lag_mean,gamma,pairs; an empty bin has pairs 0 and empty lag_mean and\n"
+      "gamma. Several --value columns form a vector value: gamma is then half the mean squared norm\n"
+      "of the difference (the sum of the per-column variograms, which --per-component adds as\n"
+      "gamma_<column>); --cross also adds the cross-variograms gamma_<A>_<B> (the input of\n"
+      "fit-variogram --lmc). --cloud writes every pair (left,right,dist,gamma) instead of bins and\n"
+      "--map DX,DY --cutoff C the variogram map of 2-D data (dx,dy,np,gamma), both as R gstat's;\n"
+      "--plot FILE.svg also draws the binned variogram. See docs/geostatistics.md.");
+  add_input_options(cmd, args);
+  add_binning_options(cmd, args);
+  add_direction_and_trend_options(cmd, args);
+  add_cloud_and_map_options(cmd, args);
+  add_output_options(cmd, args);
   cmd->footer(
       "Example:\n"
       "  errfield variogram --input errors.csv --coords x,y,z --value dL --bins 0:2200:200 "

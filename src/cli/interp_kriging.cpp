@@ -66,12 +66,8 @@ std::vector<CLI::Option*> indicator_only_options;  // --order-correction: refuse
 // refused; its value alone cannot tell `--indicator ''` from no --indicator.
 CLI::Option* indicator_option = nullptr;
 
-void add_kriging_options(CLI::App& cmd) {
-  auto& o = cli_options;
-  // run_cli() may run more than once in a process (the CLI fuzzer): start from the defaults, not
-  // from the previous run's values.
-  o = KrigingCliOptions{};
-  const char* group = "kriging (--method kriging)";
+// The model and the kriging system: what interpolate and cv share.
+void add_kriging_model_options(CLI::App& cmd, KrigingCliOptions& o, const char* group) {
   cmd.add_option("--model", o.model,
                  "Variogram model in gstat's vgm terms, e.g. \"sph(sill=0.3,range=400)+nug(0.002)\" (models: nug, sph, "
                  "exp, gau, mat, wen; 'sill' is the partial sill of that component). NOTE: 'range' of exp and gau is "
@@ -127,7 +123,9 @@ void add_kriging_options(CLI::App& cmd) {
                  "raster or on a nodata pixel is refused)")
       ->delimiter(',')
       ->group(group);
-  if (cmd.get_name() != "interpolate") return;  // cv has its own --seed (the folds')
+}
+
+void add_block_options(CLI::App& cmd, KrigingCliOptions& o, const char* group) {
   cmd.add_option("--block", o.block,
                  "Block kriging: predict the average over a block of size DX,DY[,DZ] (one size per --coords column, in "
                  "their unit) centred on each target, and that average's error variance (gstat's krige(..., block = "
@@ -144,6 +142,10 @@ void add_kriging_options(CLI::App& cmd) {
                                     "gstat's set = list(nblockdiscr = N))")
                          ->check(CLI::IsMember({"gauss", "regular"}))
                          ->group(group);
+  block_only_options = {block_points, block_rule};
+}
+
+void add_simulation_options(CLI::App& cmd, KrigingCliOptions& o, const char* group) {
   cmd.add_option("--simulations", o.simulations,
                  "Conditional Gaussian simulation: also write N realisations of the field that honour the samples "
                  "and the model (nugget and drift included), columns sim1..simN (sim<k>_<col> for vectors); their "
@@ -169,6 +171,10 @@ void add_kriging_options(CLI::App& cmd) {
                  "path per draw, each draw's own approximation error, 100 times the cost)")
       ->check(CLI::Range(std::size_t{1}, std::size_t{100000}))
       ->group(group);
+  simulation_only_options = {seed, method, neighbours, per_path};
+}
+
+void add_indicator_options(CLI::App& cmd, KrigingCliOptions& o, const char* group) {
   indicator_option = cmd.add_option("--indicator", o.indicator,
                  "Indicator kriging: thresholds T1,T2,... (increasing) of the one --value column. For each, the samples "
                  "become I(z < T) (1 below, 0 at or above: gstat's krige(I(z < T) ~ 1)), kriged with that threshold's "
@@ -184,8 +190,19 @@ void add_kriging_options(CLI::App& cmd) {
                     ->check(CLI::IsMember({"gslib", "none"}))
                     ->group(group);
   indicator_only_options = {order};
-  simulation_only_options = {seed, method, neighbours, per_path};
-  block_only_options = {block_points, block_rule};
+}
+
+void add_kriging_options(CLI::App& cmd) {
+  auto& o = cli_options;
+  // run_cli() may run more than once in a process (the CLI fuzzer): start from the defaults, not
+  // from the previous run's values.
+  o = KrigingCliOptions{};
+  const char* group = "kriging (--method kriging)";
+  add_kriging_model_options(cmd, o, group);
+  if (cmd.get_name() != "interpolate") return;  // cv has its own --seed (the folds')
+  add_block_options(cmd, o, group);
+  add_simulation_options(cmd, o, group);
+  add_indicator_options(cmd, o, group);
 }
 
 // gstat's defaults for variogram(): cutoff one third of the bounding-box diagonal, 15 bins.
@@ -366,10 +383,9 @@ KrigingOptions cokriging_options(const CsvTable& samples, const SharedInterpolat
   return options;
 }
 
-// --indicator T1,T2,...: indicator kriging (errfield/indicator_kriging.hpp), one model per threshold.
-InterpolationResult interpolate_indicator(const InterpolationRequest& r) {
+// What indicator kriging does not combine with, refused by name, and --model and thresholds required.
+void refuse_with_indicator(const InterpolationRequest& r) {
   const auto& o = cli_options;
-  InterpolationResult result;
   const auto refuse = [&](bool given, const std::string& option, const std::string& why) {
     if (given) throw ArgumentError(option + " does not combine with --indicator: " + why);
   };
@@ -388,8 +404,17 @@ InterpolationResult interpolate_indicator(const InterpolationRequest& r) {
   if (o.indicator.find_first_not_of(" \t") == std::string::npos)
     throw ArgumentError("--indicator is '" + o.indicator + "': no thresholds; expected increasing thresholds T1,T2,... in "
                         "the unit of --value, e.g. 200,400,800 (or drop --indicator for kriging of the values)");
-  std::vector<std::string> threshold_texts;
-  std::vector<double> thresholds;
+}
+
+// --indicator T1,T2,...: the thresholds as given (they name the columns) and as numbers.
+struct Thresholds {
+  std::vector<std::string> texts;
+  std::vector<double> values;
+};
+
+Thresholds indicator_thresholds() {
+  const auto& o = cli_options;
+  Thresholds t;
   for (auto item : split_list(o.indicator, "--indicator")) {
     item.erase(0, item.find_first_not_of(" \t"));
     item.erase(item.find_last_not_of(" \t") + 1);
@@ -398,11 +423,17 @@ InterpolationResult interpolate_indicator(const InterpolationRequest& r) {
     if (item.empty() || res.ec != std::errc() || res.ptr != item.data() + item.size() || !std::isfinite(v))
       throw ArgumentError("--indicator: '" + item + "' in '" + o.indicator + "' is not a finite number; expected "
                           "increasing thresholds T1,T2,... in the unit of --value, e.g. 200,400,800");
-    threshold_texts.push_back(item);
-    thresholds.push_back(v);
+    t.texts.push_back(item);
+    t.values.push_back(v);
   }
-  naming_options([&] { check_indicator_thresholds(thresholds); }, {{"indicator kriging: thresholds", "--indicator: thresholds"},
-                                                                   {"indicator kriging: threshold", "--indicator: threshold"}});
+  naming_options([&] { check_indicator_thresholds(t.values); }, {{"indicator kriging: thresholds", "--indicator: thresholds"},
+                                                                 {"indicator kriging: threshold", "--indicator: threshold"}});
+  return t;
+}
+
+// --model: one model for all thresholds, or one per threshold separated by ';'.
+std::vector<std::string> indicator_model_texts(std::size_t thresholds) {
+  const auto& o = cli_options;
   std::vector<std::string> model_texts;
   for (std::size_t start = 0;;) {
     const auto end = o.model.find(';', start);
@@ -410,20 +441,24 @@ InterpolationResult interpolate_indicator(const InterpolationRequest& r) {
     if (end == std::string::npos) break;
     start = end + 1;
   }
-  if (model_texts.size() != 1 && model_texts.size() != thresholds.size())
+  if (model_texts.size() != 1 && model_texts.size() != thresholds)
     throw ArgumentError("--model: " + std::to_string(model_texts.size()) + " models (';'-separated) for " +
-                        std::to_string(thresholds.size()) + " --indicator thresholds; give one model for all, or one per threshold");
-  KrigingOptions options = kriging_options_from_cli(r.shared);
-  options.sample_labels = row_labels_of(*r.samples, "sample");
-  const Eigen::VectorXd z = r.sample_values.col(0);
+                        std::to_string(thresholds) + " --indicator thresholds; give one model for all, or one per threshold");
+  return model_texts;
+}
+
+// Each threshold's model: given, or (auto) fitted to that threshold's indicators.
+std::vector<VariogramModel> indicator_models(const InterpolationRequest& r, const Thresholds& t,
+                                             const std::vector<std::string>& model_texts, const KrigingOptions& options,
+                                             const Eigen::VectorXd& z, std::vector<std::string>& notes) {
   std::vector<VariogramModel> models;
-  for (std::size_t k = 0; k < thresholds.size(); ++k) {
+  for (std::size_t k = 0; k < t.values.size(); ++k) {
     const std::string& text = model_texts[model_texts.size() == 1 ? 0 : k];
     if (text == "auto") {
-      const std::vector<double> ind = indicators_below(std::span<const double>(z.data(), static_cast<std::size_t>(z.size())), thresholds[k]);
+      const std::vector<double> ind = indicators_below(std::span<const double>(z.data(), static_cast<std::size_t>(z.size())), t.values[k]);
       const Eigen::MatrixXd indicator = Eigen::Map<const Eigen::VectorXd>(ind.data(), static_cast<Eigen::Index>(ind.size()));
       if (indicator.minCoeff() == indicator.maxCoeff())
-        throw InputError(r.samples->source() + ": --indicator " + threshold_texts[k] + ": every sample is " +
+        throw InputError(r.samples->source() + ": --indicator " + t.texts[k] + ": every sample is " +
                              (indicator(0, 0) == 1.0 ? "below" : "at or above") +
                              " it, so --model auto has no variogram to fit; drop the threshold or give its model",
                          r.samples->source());
@@ -432,66 +467,71 @@ InterpolationResult interpolate_indicator(const InterpolationRequest& r) {
         return options.backend == KrigingBackend::Sparse ? auto_model(r.sample_coords, indicator, true, fit_notes)
                                                          : likelihood_auto_model(r.sample_coords, indicator, options, fit_notes);
       }));
-      for (const auto& n : fit_notes) result.notes.push_back("threshold " + threshold_texts[k] + ": " + n);
+      for (const auto& n : fit_notes) notes.push_back("threshold " + t.texts[k] + ": " + n);
     } else if (model_texts.size() == 1 && k > 0) {
       models.push_back(models.front());
     } else {
       models.push_back(load_variogram_model(text));
     }
   }
+  return models;
+}
+
+// p_lt_<T> and var_lt_<T> per threshold, and the notes that say what was kriged and corrected.
+void add_indicator_results(const InterpolationRequest& r, const Thresholds& t, const std::vector<VariogramModel>& models,
+                           const Eigen::VectorXd& z, const IndicatorKrigingResult& ik, bool correct_order,
+                           std::size_t targets, InterpolationResult& result) {
+  if (!ik.message.empty()) result.notes.push_back(ik.message);
+  result.pred = ik.probability;
+  for (std::size_t k = 0; k < t.values.size(); ++k) {
+    result.prediction_names.push_back("p_lt_" + t.texts[k]);
+    const Eigen::VectorXd v = ik.variance.col(static_cast<Eigen::Index>(k));
+    result.extra_columns.emplace_back("var_lt_" + t.texts[k], std::vector<double>(v.data(), v.data() + v.size()));
+    const auto below = (z.array() < t.values[k]).count();
+    result.notes.push_back("indicator kriging: I(" + r.value_columns[0] + " < " + t.texts[k] + ") with " +
+                           models[k].to_string() + " (" + std::to_string(below) + " of " + std::to_string(z.size()) +
+                           " samples below)");
+  }
+  if (ik.failed_targets)
+    result.notes.push_back(std::to_string(ik.failed_targets) + " of " + std::to_string(targets) +
+                           " targets could not be kriged for some threshold; their cells are empty");
+  if (correct_order)
+    result.notes.push_back("order relations: " + std::to_string(ik.correction.rows_changed) + " of " +
+                           std::to_string(targets) + " targets corrected (clipped to [0,1] and made non-decreasing, "
+                           "GSLIB's average of upward and downward passes), largest change " +
+                           format_number(ik.correction.max_change) + (ik.correction.max_change > 0.1 ? " - large: check "
+                           "that the models of neighbouring thresholds agree" : ""));
+}
+
+// --indicator T1,T2,...: indicator kriging (errfield/indicator_kriging.hpp), one model per threshold.
+InterpolationResult interpolate_indicator(const InterpolationRequest& r) {
+  const auto& o = cli_options;
+  InterpolationResult result;
+  refuse_with_indicator(r);
+  const Thresholds t = indicator_thresholds();
+  const std::vector<std::string> model_texts = indicator_model_texts(t.values.size());
+  KrigingOptions options = kriging_options_from_cli(r.shared);
+  options.sample_labels = row_labels_of(*r.samples, "sample");
+  const Eigen::VectorXd z = r.sample_values.col(0);
+  const std::vector<VariogramModel> models = indicator_models(r, t, model_texts, options, z, result.notes);
   const auto points = rows_as_points(r.sample_coords);
   const auto targets = rows_as_points(r.target_coords);
   IndicatorKrigingOptions io;
   io.correct_order = o.order_correction == "gslib";
   const IndicatorKrigingResult ik = indicator_kriging<Eigen::VectorXd>(
       std::span<const Eigen::VectorXd>(points), std::span<const double>(z.data(), static_cast<std::size_t>(z.size())),
-      std::span<const Eigen::VectorXd>(targets), std::span<const double>(thresholds),
+      std::span<const Eigen::VectorXd>(targets), std::span<const double>(t.values),
       std::span<const VariogramModel>(models), options, io);
   if (!ik.usable())
     throw Error(r.samples->source() + ": indicator kriging failed: " + std::string(status_word(ik.status)) + ": " + ik.message);
-  if (!ik.message.empty()) result.notes.push_back(ik.message);
-  result.pred = ik.probability;
-  for (std::size_t k = 0; k < thresholds.size(); ++k) {
-    result.prediction_names.push_back("p_lt_" + threshold_texts[k]);
-    const Eigen::VectorXd v = ik.variance.col(static_cast<Eigen::Index>(k));
-    result.extra_columns.emplace_back("var_lt_" + threshold_texts[k], std::vector<double>(v.data(), v.data() + v.size()));
-    const auto below = (z.array() < thresholds[k]).count();
-    result.notes.push_back("indicator kriging: I(" + r.value_columns[0] + " < " + threshold_texts[k] + ") with " +
-                           models[k].to_string() + " (" + std::to_string(below) + " of " + std::to_string(z.size()) +
-                           " samples below)");
-  }
-  if (ik.failed_targets)
-    result.notes.push_back(std::to_string(ik.failed_targets) + " of " + std::to_string(targets.size()) +
-                           " targets could not be kriged for some threshold; their cells are empty");
-  if (io.correct_order)
-    result.notes.push_back("order relations: " + std::to_string(ik.correction.rows_changed) + " of " +
-                           std::to_string(targets.size()) + " targets corrected (clipped to [0,1] and made non-decreasing, "
-                           "GSLIB's average of upward and downward passes), largest change " +
-                           format_number(ik.correction.max_change) + (ik.correction.max_change > 0.1 ? " - large: check "
-                           "that the models of neighbouring thresholds agree" : ""));
+  add_indicator_results(r, t, models, z, ik, io.correct_order, targets.size(), result);
   return result;
 }
 
-InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
-  if (!cli_options.indicator.empty() || (indicator_option != nullptr && indicator_option->count() > 0))
-    return interpolate_indicator(r);
-  for (const CLI::Option* o : indicator_only_options)
-    if (o->count()) throw ArgumentError(o->get_name() + " applies to --indicator T1,T2,... (indicator kriging); add it or drop " + o->get_name());
-  InterpolationResult result;
-  if (model_file_is_lmc(cli_options.model)) {
-    const KrigingOptions options = cokriging_options(*r.samples, r.shared, true);
-    return interpolate_cokriging(r, load_lmc_for_values(cli_options.model, r.value_columns), options);
-  }
-  const Setup s = make_setup(*r.samples, r.sample_coords, r.sample_values, r.sample_labels, r.coordinate_system, r.shared, result.notes);
-  const auto points = rows_as_points(r.sample_coords);
-  const auto targets = rows_as_points(r.target_coords);
+// The options of one output (--simulations, --block) refused without it or with the other; the
+// columns they would add refused when the targets already have them.
+UnconditionalMethod check_output_options(const InterpolationRequest& r) {
   const std::size_t c = r.value_columns.size();
-  std::vector<std::string> var_names;
-  for (const auto& v : r.value_columns) var_names.push_back(c == 1 ? "var" : "var_" + v);
-  for (const auto& name : var_names)
-    if (r.targets->has_column(name))
-      throw InputError(r.targets->source() + ": already has a column '" + name + "', which the output would repeat; rename it",
-                       r.targets->source(), 1, name);
   if (cli_options.simulations == 0)
     for (const CLI::Option* o : simulation_only_options)
       if (o->count()) throw ArgumentError(o->get_name() + " applies to --simulations N (conditional simulation); add it or drop " + o->get_name());
@@ -516,6 +556,109 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
         throw InputError(r.targets->source() + ": already has a column '" + name + "', which the output would repeat; rename it",
                          r.targets->source(), 1, name);
     }
+  return simulation_method;
+}
+
+// --simulations N: the draws' mean and variance are the prediction; the draws become columns
+// sim<k>[_<col>].
+template <class V>
+KrigingPrediction<V> simulated_prediction(const InterpolationRequest& r, const Setup& s, const auto& points,
+                                          const auto& values, const auto& targets, std::span<const double> meas,
+                                          UnconditionalMethod simulation_method, InterpolationResult& result) {
+  const std::size_t c = r.value_columns.size();
+  KrigingPrediction<V> pred;
+  SimulationOptions so;
+  so.draws = cli_options.simulations;
+  so.seed = cli_options.seed;
+  so.method = simulation_method;
+  so.neighbours = cli_options.simulation_neighbours;
+  so.draws_per_path = cli_options.simulation_draws_per_path;
+  const Eigen::MatrixXd target_covariates = s.target_covariates(r);
+  const auto sim = simulate_conditional<Eigen::VectorXd, V>(points, values, s.sample_covariates, targets,
+                                                            target_covariates, s.model, s.options, so, {}, meas);
+  pred.status = sim.status;
+  pred.message = sim.message;
+  pred.mean = sim.mean;
+  pred.variance = sim.variance;
+  pred.failed_targets = sim.failed_targets;
+  for (std::size_t k = 0; k < sim.draws.size(); ++k) {
+    const Eigen::MatrixXd draw = values_as_rows(sim.draws[k]);
+    for (std::size_t j = 0; j < c; ++j) {
+      const std::string name = "sim" + std::to_string(k + 1) + (c == 1 ? std::string() : "_" + r.value_columns[j]);
+      const Eigen::VectorXd column = draw.col(static_cast<Eigen::Index>(j));
+      result.extra_columns.emplace_back(name, std::vector<double>(column.data(), column.data() + column.size()));
+    }
+  }
+  result.notes.push_back("simulation: " + std::to_string(sim.draws.size()) + " conditional draws (seed " +
+                         std::to_string(cli_options.seed) + "), unconditional field by " + sim.method);
+  return pred;
+}
+
+// --block DX,DY[,DZ]: the block averages centred on the targets.
+template <class V>
+KrigingPrediction<V> block_prediction(const InterpolationRequest& r, const Setup& s,
+                                      const Kriging<Eigen::VectorXd, V>& kriging, const auto& targets,
+                                      InterpolationResult& result) {
+  BlockDiscretization block{cli_options.block, cli_options.block_points};
+  block.rule = cli_options.block_rule == "regular" ? BlockDiscretization::Rule::Regular
+                                                   : BlockDiscretization::Rule::GaussLegendre;
+  const Eigen::MatrixXd target_covariates = s.target_covariates(r);
+  KrigingPrediction<V> pred = kriging.predict_blocks(targets, block, target_covariates, r.target_labels);
+  result.notes.push_back("block kriging: blocks of " + format_number(cli_options.block[0]) +
+                         [&] {
+                           std::string t;
+                           for (std::size_t k = 1; k < cli_options.block.size(); ++k) t += " x " + format_number(cli_options.block[k]);
+                           return t;
+                         }() +
+                         " centred on the targets, " + std::to_string(block.offsets(static_cast<int>(cli_options.block.size())).cols()) +
+                         " " + cli_options.block_rule + " points each; pred and var are of the block averages");
+  return pred;
+}
+
+// pred, var (before the draws' columns) and the notes that say what was kriged and where it failed.
+template <class V>
+void add_kriging_results(const InterpolationRequest& r, const Setup& s, const auto& rep, const KrigingPrediction<V>& pred,
+                         const std::vector<std::string>& var_names, std::size_t targets, InterpolationResult& result) {
+  result.pred = values_as_rows(pred.mean);
+  if (pred.failed_targets) {
+    Eigen::Index first = 0;
+    while (first < result.pred.rows() && !std::isnan(result.pred(first, 0))) ++first;
+    result.notes.push_back(std::to_string(pred.failed_targets) + " of " + std::to_string(targets) +
+                           " targets could not be kriged (" + status_word(pred.status) + "; first: " +
+                           r.target_labels(static_cast<std::size_t>(first)) + "); their cells are empty");
+  }
+  // var before the draws' columns
+  for (auto it = var_names.rbegin(); it != var_names.rend(); ++it)
+    result.extra_columns.emplace(result.extra_columns.begin(), *it, pred.variance);
+  result.notes.push_back("kriging: " + std::string(kriging_kind_name(s.options.kind)) +
+                         (s.options.kind == KrigingKind::Universal ? " (drift order " + std::to_string(s.options.drift_order) + ")" : std::string()) +
+                         (s.options.covariates.empty() ? std::string() : " with external drift (" + std::to_string(s.options.covariates.size()) + " covariate(s))") +
+                         ", model " + s.model.to_string() + ", " + std::string(kriging_backend_name(s.options.backend)) +
+                         " back end" +
+                         (std::isfinite(rep.condition_number) ? ", condition number ~" + format_number(rep.condition_number) : std::string()));
+}
+
+InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
+  if (!cli_options.indicator.empty() || (indicator_option != nullptr && indicator_option->count() > 0))
+    return interpolate_indicator(r);
+  for (const CLI::Option* o : indicator_only_options)
+    if (o->count()) throw ArgumentError(o->get_name() + " applies to --indicator T1,T2,... (indicator kriging); add it or drop " + o->get_name());
+  InterpolationResult result;
+  if (model_file_is_lmc(cli_options.model)) {
+    const KrigingOptions options = cokriging_options(*r.samples, r.shared, true);
+    return interpolate_cokriging(r, load_lmc_for_values(cli_options.model, r.value_columns), options);
+  }
+  const Setup s = make_setup(*r.samples, r.sample_coords, r.sample_values, r.sample_labels, r.coordinate_system, r.shared, result.notes);
+  const auto points = rows_as_points(r.sample_coords);
+  const auto targets = rows_as_points(r.target_coords);
+  const std::size_t c = r.value_columns.size();
+  std::vector<std::string> var_names;
+  for (const auto& v : r.value_columns) var_names.push_back(c == 1 ? "var" : "var_" + v);
+  for (const auto& name : var_names)
+    if (r.targets->has_column(name))
+      throw InputError(r.targets->source() + ": already has a column '" + name + "', which the output would repeat; rename it",
+                       r.targets->source(), 1, name);
+  const UnconditionalMethod simulation_method = check_output_options(r);
   with_value_type(c, [&]<class V>() {
     const auto values = rows_as_values<V>(r.sample_values);
     std::span<const double> meas(s.measurement_variance.data(), static_cast<std::size_t>(s.measurement_variance.size()));
@@ -526,67 +669,14 @@ InterpolationResult interpolate_kriging(const InterpolationRequest& r) {
     if (!rep.message.empty()) result.notes.push_back(std::string(status_word(rep.status)) + ": " + rep.message);
     if (rep.merged_duplicates) result.notes.push_back(std::to_string(rep.merged_duplicates) + " duplicate samples merged");
     KrigingPrediction<V> pred;
-    if (cli_options.simulations > 0) {
-      SimulationOptions so;
-      so.draws = cli_options.simulations;
-      so.seed = cli_options.seed;
-      so.method = simulation_method;
-      so.neighbours = cli_options.simulation_neighbours;
-      so.draws_per_path = cli_options.simulation_draws_per_path;
-      const Eigen::MatrixXd target_covariates = s.target_covariates(r);
-      const auto sim = simulate_conditional<Eigen::VectorXd, V>(points, values, s.sample_covariates, targets,
-                                                                target_covariates, s.model, s.options, so, {}, meas);
-      pred.status = sim.status;
-      pred.message = sim.message;
-      pred.mean = sim.mean;
-      pred.variance = sim.variance;
-      pred.failed_targets = sim.failed_targets;
-      for (std::size_t k = 0; k < sim.draws.size(); ++k) {
-        const Eigen::MatrixXd draw = values_as_rows(sim.draws[k]);
-        for (std::size_t j = 0; j < c; ++j) {
-          const std::string name = "sim" + std::to_string(k + 1) + (c == 1 ? std::string() : "_" + r.value_columns[j]);
-          const Eigen::VectorXd column = draw.col(static_cast<Eigen::Index>(j));
-          result.extra_columns.emplace_back(name, std::vector<double>(column.data(), column.data() + column.size()));
-        }
-      }
-      result.notes.push_back("simulation: " + std::to_string(sim.draws.size()) + " conditional draws (seed " +
-                             std::to_string(cli_options.seed) + "), unconditional field by " + sim.method);
-    } else if (!cli_options.block.empty()) {
-      BlockDiscretization block{cli_options.block, cli_options.block_points};
-      block.rule = cli_options.block_rule == "regular" ? BlockDiscretization::Rule::Regular
-                                                       : BlockDiscretization::Rule::GaussLegendre;
-      const Eigen::MatrixXd target_covariates = s.target_covariates(r);
-      pred = kriging.predict_blocks(targets, block, target_covariates, r.target_labels);
-      result.notes.push_back("block kriging: blocks of " + format_number(cli_options.block[0]) +
-                             [&] {
-                               std::string t;
-                               for (std::size_t k = 1; k < cli_options.block.size(); ++k) t += " x " + format_number(cli_options.block[k]);
-                               return t;
-                             }() +
-                             " centred on the targets, " + std::to_string(block.offsets(static_cast<int>(cli_options.block.size())).cols()) +
-                             " " + cli_options.block_rule + " points each; pred and var are of the block averages");
-    } else {
-      pred = s.options.covariates.empty()
-                 ? kriging.predict(targets)
-                 : kriging.predict(targets, s.target_covariates(r), r.target_labels);
-    }
-    result.pred = values_as_rows(pred.mean);
-    if (pred.failed_targets) {
-      Eigen::Index first = 0;
-      while (first < result.pred.rows() && !std::isnan(result.pred(first, 0))) ++first;
-      result.notes.push_back(std::to_string(pred.failed_targets) + " of " + std::to_string(targets.size()) +
-                             " targets could not be kriged (" + status_word(pred.status) + "; first: " +
-                             r.target_labels(static_cast<std::size_t>(first)) + "); their cells are empty");
-    }
-    // var before the draws' columns
-    for (auto it = var_names.rbegin(); it != var_names.rend(); ++it)
-      result.extra_columns.emplace(result.extra_columns.begin(), *it, pred.variance);
-    result.notes.push_back("kriging: " + std::string(kriging_kind_name(s.options.kind)) +
-                           (s.options.kind == KrigingKind::Universal ? " (drift order " + std::to_string(s.options.drift_order) + ")" : std::string()) +
-                           (s.options.covariates.empty() ? std::string() : " with external drift (" + std::to_string(s.options.covariates.size()) + " covariate(s))") +
-                           ", model " + s.model.to_string() + ", " + std::string(kriging_backend_name(s.options.backend)) +
-                           " back end" +
-                           (std::isfinite(rep.condition_number) ? ", condition number ~" + format_number(rep.condition_number) : std::string()));
+    if (cli_options.simulations > 0)
+      pred = simulated_prediction<V>(r, s, points, values, targets, meas, simulation_method, result);
+    else if (!cli_options.block.empty())
+      pred = block_prediction<V>(r, s, kriging, targets, result);
+    else
+      pred = s.options.covariates.empty() ? kriging.predict(targets)
+                                          : kriging.predict(targets, s.target_covariates(r), r.target_labels);
+    add_kriging_results<V>(r, s, rep, pred, var_names, targets.size(), result);
   });
   return result;
 }

@@ -82,6 +82,107 @@ bool is_geometry_name(const std::string& field, bool three_d) {
   return lower == "x" || lower == "y" || (three_d && lower == "z");
 }
 
+// errfield reads a file of one point layer; several are refused, naming them.
+OGRLayerH single_layer(const GdalApi& g, GDALDatasetH ds, const std::string& path, const std::string& option) {
+  const int layers = g.GDALDatasetGetLayerCount(ds);
+  if (layers != 1) {
+    std::string names;
+    for (int i = 0; i < layers; ++i) names += (i ? ", " : "") + std::string(g.OGR_L_GetName(g.GDALDatasetGetLayer(ds, i)));
+    throw InputError(option + " " + path + ": holds " + std::to_string(layers) + " layers" +
+                         (names.empty() ? "" : " (" + names + ")") +
+                         "; errfield reads a file of one point layer: extract it (ogr2ogr points.gpkg " + path + " LAYER)",
+                     path);
+  }
+  return g.GDALDatasetGetLayer(ds, 0);
+}
+
+struct LayerFields {
+  std::vector<std::string> names;
+  std::vector<OGRFieldType> types;
+};
+
+LayerFields layer_fields(const GdalApi& g, OGRLayerH layer) {
+  OGRFeatureDefnH defn = g.OGR_L_GetLayerDefn(layer);
+  const int field_count = g.OGR_FD_GetFieldCount(defn);
+  LayerFields fields;
+  for (int f = 0; f < field_count; ++f) {
+    OGRFieldDefnH fd = g.OGR_FD_GetFieldDefn(defn, f);
+    fields.names.emplace_back(g.OGR_Fld_GetNameRef(fd));
+    fields.types.push_back(g.OGR_Fld_GetType(fd));
+  }
+  return fields;
+}
+
+// The indices of the fields read as numbers (--value): each must exist and be numeric.
+std::vector<int> required_field_indices(const LayerFields& fields, const RequiredFields& required,
+                                        const std::string& where, const std::string& path) {
+  const auto& field_names = fields.names;
+  std::vector<int> required_index;
+  for (const auto& name : required.numeric) {
+    const auto it = std::find_if(field_names.begin(), field_names.end(),
+                                 [&](const std::string& f) { return column_key(f) == column_key(name); });
+    if (it == field_names.end()) {
+      std::string list;
+      for (const auto& f : field_names) list += (list.empty() ? "" : ", ") + f;
+      throw InputError(where + ": has no field '" + name + "'; its fields: " + (list.empty() ? "none" : list), path, 0, name);
+    }
+    const auto t = fields.types[static_cast<std::size_t>(it - field_names.begin())];
+    if (t != OFTReal && t != OFTInteger && t != OFTInteger64)
+      throw InputError(where + ": field '" + *it + "' holds text, not numbers; expected a numeric field (Real or Integer)", path, 0,
+                       name);
+    required_index.push_back(static_cast<int>(it - field_names.begin()));
+  }
+  return required_index;
+}
+
+// A feature's geometry: a point, 2-D or 3-D like the features before it (`three_d`).
+OGRGeometryH point_geometry(const GdalApi& g, OGRFeatureH feature, const std::string& at, const std::string& path,
+                            long long fid, std::optional<bool>& three_d) {
+  OGRGeometryH geometry = g.OGR_F_GetGeometryRef(feature);
+  if (!geometry || g.OGR_G_IsEmpty(geometry))
+    throw InputError(at + ": has no geometry; expected a point", path, static_cast<std::size_t>(fid));
+  const OGRwkbGeometryType type = g.OGR_G_GetGeometryType(geometry);
+  if (g.OGR_GT_Flatten(type) != wkbPoint)
+    throw InputError(at + ": the geometry is a " + std::string(g.OGRGeometryTypeToName(type)) +
+                         "; expected a Point (a multipoint: ogr2ogr -explodecollections; a polygon: its centroid, "
+                         "ogr2ogr -dialect sqlite -sql 'SELECT ST_Centroid(geometry), * FROM layer')",
+                     path, static_cast<std::size_t>(fid));
+  const bool has_z = g.OGR_GT_HasZ(type) != 0;
+  if (three_d && *three_d != has_z)
+    throw InputError(at + ": is a " + std::string(has_z ? "3-D" : "2-D") + " point among " + (has_z ? "2-D" : "3-D") +
+                         " ones; expected all points alike",
+                     path, static_cast<std::size_t>(fid));
+  three_d = has_z;
+  return geometry;
+}
+
+// Each field's text after the point's coordinates (numbers in shortest round-trip form; null: empty).
+void append_field_cells(const GdalApi& g, OGRFeatureH feature, const LayerFields& fields, bool has_z,
+                        const std::string& at, const std::string& path, long long fid, std::vector<std::string>& cells) {
+  const auto& field_names = fields.names;
+  for (int f = 0; f < static_cast<int>(field_names.size()); ++f) {
+    if (is_geometry_name(field_names[static_cast<std::size_t>(f)], has_z)) continue;
+    if (!g.OGR_F_IsFieldSetAndNotNull(feature, f)) {
+      cells.emplace_back();
+      continue;
+    }
+    switch (fields.types[static_cast<std::size_t>(f)]) {
+      case OFTReal: {
+        const double v = g.OGR_F_GetFieldAsDouble(feature, f);
+        if (!std::isfinite(v))
+          throw InputError(at + ": field '" + field_names[static_cast<std::size_t>(f)] + "' is " + format_number(v) +
+                               "; expected a finite number or null",
+                           path, static_cast<std::size_t>(fid), field_names[static_cast<std::size_t>(f)]);
+        cells.push_back(format_number(v));
+        break;
+      }
+      case OFTInteger:
+      case OFTInteger64: cells.push_back(std::to_string(g.OGR_F_GetFieldAsInteger64(feature, f))); break;
+      default: cells.emplace_back(g.OGR_F_GetFieldAsString(feature, f)); break;
+    }
+  }
+}
+
 }  // namespace
 
 PointTable read_point_table(const std::string& path, const std::string& option, const RequiredFields& required) {
@@ -94,44 +195,13 @@ PointTable read_point_table(const std::string& path, const std::string& option, 
   register_all_drivers();
   Dataset ds(g.GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
   if (!ds.h) throw InputError(option + " " + path + ": cannot be read as a vector layer" + gdal_message(), path);
-  const int layers = g.GDALDatasetGetLayerCount(ds.h);
-  if (layers != 1) {
-    std::string names;
-    for (int i = 0; i < layers; ++i) names += (i ? ", " : "") + std::string(g.OGR_L_GetName(g.GDALDatasetGetLayer(ds.h, i)));
-    throw InputError(option + " " + path + ": holds " + std::to_string(layers) + " layers" +
-                         (names.empty() ? "" : " (" + names + ")") +
-                         "; errfield reads a file of one point layer: extract it (ogr2ogr points.gpkg " + path + " LAYER)",
-                     path);
-  }
-  OGRLayerH layer = g.GDALDatasetGetLayer(ds.h, 0);
+  OGRLayerH layer = single_layer(g, ds.h, path, option);
   PointTable p;
   p.layer = g.OGR_L_GetName(layer);
   p.crs = optional_crs_of(g.OGR_L_GetSpatialRef(layer));
   const std::string where = path + ", layer '" + p.layer + "'";
-  OGRFeatureDefnH defn = g.OGR_L_GetLayerDefn(layer);
-  const int field_count = g.OGR_FD_GetFieldCount(defn);
-  std::vector<std::string> field_names;
-  std::vector<OGRFieldType> field_types;
-  for (int f = 0; f < field_count; ++f) {
-    OGRFieldDefnH fd = g.OGR_FD_GetFieldDefn(defn, f);
-    field_names.emplace_back(g.OGR_Fld_GetNameRef(fd));
-    field_types.push_back(g.OGR_Fld_GetType(fd));
-  }
-  std::vector<int> required_index;
-  for (const auto& name : required.numeric) {
-    const auto it = std::find_if(field_names.begin(), field_names.end(),
-                                 [&](const std::string& f) { return column_key(f) == column_key(name); });
-    if (it == field_names.end()) {
-      std::string list;
-      for (const auto& f : field_names) list += (list.empty() ? "" : ", ") + f;
-      throw InputError(where + ": has no field '" + name + "'; its fields: " + (list.empty() ? "none" : list), path, 0, name);
-    }
-    const auto t = field_types[static_cast<std::size_t>(it - field_names.begin())];
-    if (t != OFTReal && t != OFTInteger && t != OFTInteger64)
-      throw InputError(where + ": field '" + *it + "' holds text, not numbers; expected a numeric field (Real or Integer)", path, 0,
-                       name);
-    required_index.push_back(static_cast<int>(it - field_names.begin()));
-  }
+  const LayerFields fields = layer_fields(g, layer);
+  const std::vector<int> required_index = required_field_indices(fields, required, where, path);
 
   // Every feature: its point, then each field's text (numbers in shortest round-trip form).
   std::vector<std::vector<std::string>> rows;
@@ -142,55 +212,22 @@ PointTable read_point_table(const std::string& path, const std::string& option, 
     if (!feature.h) break;
     const long long fid = static_cast<long long>(g.OGR_F_GetFID(feature.h));
     const std::string at = where + ", feature FID " + std::to_string(fid);
-    OGRGeometryH geometry = g.OGR_F_GetGeometryRef(feature.h);
-    if (!geometry || g.OGR_G_IsEmpty(geometry))
-      throw InputError(at + ": has no geometry; expected a point", path, static_cast<std::size_t>(fid));
-    const OGRwkbGeometryType type = g.OGR_G_GetGeometryType(geometry);
-    if (g.OGR_GT_Flatten(type) != wkbPoint)
-      throw InputError(at + ": the geometry is a " + std::string(g.OGRGeometryTypeToName(type)) +
-                           "; expected a Point (a multipoint: ogr2ogr -explodecollections; a polygon: its centroid, "
-                           "ogr2ogr -dialect sqlite -sql 'SELECT ST_Centroid(geometry), * FROM layer')",
-                       path, static_cast<std::size_t>(fid));
-    const bool has_z = g.OGR_GT_HasZ(type) != 0;
-    if (three_d && *three_d != has_z)
-      throw InputError(at + ": is a " + std::string(has_z ? "3-D" : "2-D") + " point among " + (has_z ? "2-D" : "3-D") +
-                           " ones; expected all points alike",
-                       path, static_cast<std::size_t>(fid));
-    three_d = has_z;
+    OGRGeometryH geometry = point_geometry(g, feature.h, at, path, fid, three_d);
+    const bool has_z = *three_d;
     for (const int f : required_index)
       if (!g.OGR_F_IsFieldSetAndNotNull(feature.h, f) && !required.allow_null)
-        throw InputError(at + ": field '" + field_names[static_cast<std::size_t>(f)] + "' is null; expected a number", path,
-                         static_cast<std::size_t>(fid), field_names[static_cast<std::size_t>(f)]);
+        throw InputError(at + ": field '" + fields.names[static_cast<std::size_t>(f)] + "' is null; expected a number", path,
+                         static_cast<std::size_t>(fid), fields.names[static_cast<std::size_t>(f)]);
     std::vector<std::string> cells{format_number(g.OGR_G_GetX(geometry, 0)), format_number(g.OGR_G_GetY(geometry, 0))};
     if (has_z) cells.push_back(format_number(g.OGR_G_GetZ(geometry, 0)));
-    for (int f = 0; f < field_count; ++f) {
-      if (is_geometry_name(field_names[static_cast<std::size_t>(f)], has_z)) continue;
-      if (!g.OGR_F_IsFieldSetAndNotNull(feature.h, f)) {
-        cells.emplace_back();
-        continue;
-      }
-      switch (field_types[static_cast<std::size_t>(f)]) {
-        case OFTReal: {
-          const double v = g.OGR_F_GetFieldAsDouble(feature.h, f);
-          if (!std::isfinite(v))
-            throw InputError(at + ": field '" + field_names[static_cast<std::size_t>(f)] + "' is " + format_number(v) +
-                                 "; expected a finite number or null",
-                             path, static_cast<std::size_t>(fid), field_names[static_cast<std::size_t>(f)]);
-          cells.push_back(format_number(v));
-          break;
-        }
-        case OFTInteger:
-        case OFTInteger64: cells.push_back(std::to_string(g.OGR_F_GetFieldAsInteger64(feature.h, f))); break;
-        default: cells.emplace_back(g.OGR_F_GetFieldAsString(feature.h, f)); break;
-      }
-    }
+    append_field_cells(g, feature.h, fields, has_z, at, path, fid, cells);
     p.feature_ids.push_back(fid);
     rows.push_back(std::move(cells));
   }
   p.geometry_columns = {"x", "y"};
   if (three_d.value_or(false)) p.geometry_columns.push_back("z");
   std::vector<std::string> header = p.geometry_columns;
-  for (const auto& f : field_names)
+  for (const auto& f : fields.names)
     if (!is_geometry_name(f, three_d.value_or(false))) header.push_back(f);
   std::string text;
   append_csv_line(text, header);

@@ -564,9 +564,7 @@ class PyGridIdw {
   std::shared_ptr<const GridBase> impl_;
 };
 
-}  // namespace
-
-void bind_interpolation(py::module_& m) {
+void bind_cross_validation(py::module_& m) {
   py::class_<PyCrossValidation>(m, "CrossValidation",
                                 "Per-sample cross-validation results and the summary `errfield cv` prints. "
                                 "residual = observed - predicted (value unit, e.g. mm).")
@@ -583,7 +581,9 @@ void bind_interpolation(py::module_& m) {
       .def_readonly("rms_error", &PyCrossValidation::rms_error, "sqrt(mean |residual|^2)")
       .def_readonly("mean_z", &PyCrossValidation::mean_z, "mean residual/sqrt(variance), or None")
       .def_readonly("mean_squared_z", &PyCrossValidation::mean_squared_z, "mean residual^2/variance (MSDR), or None");
+}
 
+void bind_indicator_kriging(py::module_& m) {
   m.def("indicator_kriging", &indicator_kriging_py, py::arg("coords"), py::arg("values"), py::arg("targets"),
         py::arg("thresholds"), py::arg("models"), py::kw_only(), py::arg("kind") = "ordinary",
         py::arg("backend") = py::none(), py::arg("neighbors") = py::none(), py::arg("radius") = py::none(),
@@ -595,6 +595,9 @@ void bind_interpolation(py::module_& m) {
         "Returns a dict: probability (M, K), P(z < T) with order relations corrected as GSLIB (clip to [0, 1],\n"
         "average of upward and downward passes) unless order_correction=False; raw (M, K) as kriged; variance\n"
         "(M, K); targets_corrected, max_correction, message. docs/kriging.md, \"Indicator kriging\".");
+}
+
+void bind_kriging(py::module_& m) {
   py::class_<PyKriging>(m, "Kriging",
                         "Simple, ordinary or universal kriging (best linear unbiased prediction with its variance), "
                         "as `errfield interpolate --method kriging`. Construction factors the covariance once "
@@ -651,7 +654,9 @@ void bind_interpolation(py::module_& m) {
       .def_property_readonly("report", &PyKriging::report,
                              "dict: status, message, condition_number, jitter, samples_used, merged_duplicates, drift_terms")
       .def_property_readonly("model", &PyKriging::model);
+}
 
+void bind_idw(py::module_& m) {
   py::class_<PyScatteredIdw>(m, "ScatteredIdw",
                              "Inverse-distance weighting over scattered samples, as `errfield interpolate --method idw`: "
                              "v(x) = sum w_i v_i / sum w_i with w_i = 1/d^power over the k nearest (neighbors) and/or "
@@ -677,6 +682,16 @@ void bind_interpolation(py::module_& m) {
       .def("predict", &PyGridIdw::predict, py::arg("targets"),
            "Values at targets (M, 3). Raises OutsideGridError for a target outside the grid unless clamp=True.")
       .def_property_readonly("grid", &PyGridIdw::grid, "dict: origin, step (mm), counts, description");
+}
+
+}  // namespace
+
+void bind_interpolation(py::module_& m) {
+  // In this order: a signature shows a class's Python name only once the class is registered.
+  bind_cross_validation(m);
+  bind_indicator_kriging(m);
+  bind_kriging(m);
+  bind_idw(m);
 }
 
 }  // namespace errfield::python

@@ -185,9 +185,7 @@ MdhModel from_json_text(const std::string& text, const std::string& source) {
   return MdhModel::from_json(j, source);
 }
 
-}  // namespace
-
-void bind_robot(py::module_& m) {
+void bind_ik_solution(py::module_& m) {
   py::class_<PyIkSolution>(m, "IkSolution",
                            "Inverse kinematics per target, the columns of `errfield ik`. A target counts as solved "
                            "only where ok is True (status 'converged'); elsewhere q is the best joints found within "
@@ -198,10 +196,11 @@ void bind_robot(py::module_& m) {
       .def_readonly("residual_mm", &PyIkSolution::residual_mm, "(N,) position residual, mm")
       .def_readonly("residual_deg", &PyIkSolution::residual_deg, "(N,) orientation residual, deg")
       .def_readonly("iterations", &PyIkSolution::iterations);
+}
 
-  py::class_<MdhModel>(m, "Robot",
-                       "A 6-joint serial robot in modified (Craig) Denavit-Hartenberg form with joint limits, base and "
-                       "tool transforms. Joints in degrees, lengths in mm. docs/robot.md.")
+// Construction, the MD-H table, limits, base and tool.
+void bind_robot_description(py::class_<MdhModel>& robot_class) {
+  robot_class
       .def_static(
           "builtin",
           [](const std::string& name) {
@@ -247,7 +246,11 @@ void bind_robot(py::module_& m) {
           py::arg("tool"), "A copy with the tool transform (4, 4), mm.")
       .def(
           "with_base", [](const MdhModel& r, const py::object& t) { return r.with_base(transform_arg(t, "base")); },
-          py::arg("base"), "A copy with the base transform (4, 4), mm.")
+          py::arg("base"), "A copy with the base transform (4, 4), mm.");
+}
+
+void bind_robot_kinematics(py::class_<MdhModel>& robot_class) {
+  robot_class
       .def(
           "within_limits",
           [](const MdhModel& r, const py::object& q, double slack_deg) {
@@ -332,7 +335,11 @@ void bind_robot(py::module_& m) {
           },
           py::arg("q"),
           "Derivative (N, 3, 39) of the world tool position with respect to the identification parameters\n"
-          "(names: Robot.parameter_names(); angles per rad, lengths per mm).")
+          "(names: Robot.parameter_names(); angles per rad, lengths per mm).");
+}
+
+void bind_robot_parameters(py::class_<MdhModel>& robot_class) {
+  robot_class
       .def_static(
           "parameter_names",
           [] {
@@ -352,13 +359,31 @@ void bind_robot(py::module_& m) {
           },
           py::arg("delta"),
           "A copy with an identification-parameter increment (39,) applied (angles rad, lengths mm); FK of the\n"
-          "result equals FK + identification_jacobian @ delta to first order.")
+          "result equals FK + identification_jacobian @ delta to first order.");
+}
+
+void bind_robot_ik(py::class_<MdhModel>& robot_class) {
+  robot_class
       .def("ik", &solve_ik, py::arg("targets"), py::kw_only(), py::arg("seed") = py::none(), py::arg("frame") = "tool",
            py::arg("position_only") = false, py::arg("max_iterations") = 100,
            "Inverse kinematics as `errfield ik`: targets (N, 4, 4) poses in mm (or (N, 3) positions with\n"
            "position_only=True); seed (N, 6) deg, or None: each target then starts from the previous solution\n"
            "(the first from a few standard postures). Returns IkSolution; only rows with ok=True are solutions.")
       .def("__repr__", [](const MdhModel& r) { return "Robot('" + r.name() + "')"; });
+}
+
+}  // namespace
+
+void bind_robot(py::module_& m) {
+  bind_ik_solution(m);
+
+  py::class_<MdhModel> robot_class(m, "Robot",
+                                   "A 6-joint serial robot in modified (Craig) Denavit-Hartenberg form with joint "
+                                   "limits, base and tool transforms. Joints in degrees, lengths in mm. docs/robot.md.");
+  bind_robot_description(robot_class);
+  bind_robot_kinematics(robot_class);
+  bind_robot_parameters(robot_class);
+  bind_robot_ik(robot_class);
 }
 
 }  // namespace errfield::python

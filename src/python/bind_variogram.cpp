@@ -432,9 +432,7 @@ ScalarSamples scalar_samples(const py::object& coords, const py::object& values)
   return s;
 }
 
-}  // namespace
-
-void bind_variogram(py::module_& m) {
+void bind_empirical_variograms(py::module_& m) {
   py::class_<PyVariogram>(m, "EmpiricalVariogram",
                           "Empirical semivariogram, one entry per lag bin: the columns of the CLI's "
                           "`errfield variogram` CSV as NumPy arrays. Empty bins have pairs 0 and NaN "
@@ -503,7 +501,9 @@ void bind_variogram(py::module_& m) {
         "Returns a dict: structures (list of dicts kind, range, nu, sills (P, P)), json (the LMC JSON that\n"
         "`fit-variogram --lmc --out` writes, without its 'fit' object), weighted_residual, iterations,\n"
         "converged, smallest_eigenvalue_before_projection (per structure), bins_used, message.");
+}
 
+void bind_variogram_model(py::module_& m) {
   py::class_<VariogramModel>(m, "VariogramModel",
                              "A variogram model in gstat's vgm vocabulary, e.g. 'sph(sill=0.3,range=400)+nug(0.002)'. "
                              "sill in value unit^2 (mm^2), range in lag unit (mm or deg); range of exp/gau is the "
@@ -554,7 +554,9 @@ void bind_variogram(py::module_& m) {
         "range_max: upper bound of the ranges (lag unit); 0 = automatic.\n"
         "Returns a dict: model (VariogramModel), weighted_sse, status ('converged' | 'max_evaluations'), message,\n"
         "evaluations, bins_used. Raises errfield.Error when the optimizer fails.");
+}
 
+void bind_likelihood(py::module_& m) {
   m.def(
       "fit_likelihood",
       [](const py::object& coords, const py::object& values, const std::string& model, const std::string& method,
@@ -629,6 +631,15 @@ void bind_variogram(py::module_& m) {
       py::arg("covariates") = py::none(),
       "The (restricted) negative log-likelihood of a Gaussian field with covariance `model` at the samples\n"
       "(+inf when the covariance is not positive definite). Formula: include/errfield/kriging_likelihood.hpp.");
+}
+
+}  // namespace
+
+void bind_variogram(py::module_& m) {
+  // In this order: a signature shows a class's Python name only once the class is registered.
+  bind_empirical_variograms(m);
+  bind_variogram_model(m);
+  bind_likelihood(m);
 }
 
 }  // namespace errfield::python
