@@ -57,6 +57,40 @@ struct CokrigingWorkspace : NeighbourBuffers {
 
 std::string cokriging_mib(double bytes) { return format_number(std::round(bytes / (1 << 20))); }
 
+// Validated statuses, never a silent NaN: how many targets failed, and why the first did.
+void report_local_failures(const std::vector<CokrigingOutcome>& outcome, bool leave_one_out,
+                           std::size_t min_neighbours, CokrigingOutput& out) {
+  std::size_t failed = 0, first = 0;
+  for (std::size_t t = 0; t < outcome.size(); ++t)
+    if (outcome[t] != CokrigingOutcome::Ok && failed++ == 0) first = t;
+  out.failed_targets = failed;
+  if (failed == 0) return;
+  std::string why;
+  switch (outcome[first]) {
+    case CokrigingOutcome::TooFew:
+      out.status = KrigingStatus::TooFewSamples;
+      why = "fewer neighbours than drift terms (or none) within the search radius";
+      break;
+    case CokrigingOutcome::BelowMinimum:
+      out.status = KrigingStatus::TooFewSamples;
+      why = "fewer than min_neighbours = " + std::to_string(min_neighbours) + " neighbours within the search radius";
+      break;
+    case CokrigingOutcome::NotPositiveDefinite:
+      out.status = KrigingStatus::NotPositiveDefinite;
+      why = "local cokriging matrix not positive definite after the jitter retries";
+      break;
+    case CokrigingOutcome::SingularDrift:
+      out.status = KrigingStatus::SingularDrift;
+      why = "the drift terms are linearly dependent over its neighbours; use a lower drift order or more neighbours";
+      break;
+    case CokrigingOutcome::Ok:
+    case CokrigingOutcome::OverBudget: break;
+  }
+  out.message = std::to_string(failed) + " of " + std::to_string(outcome.size()) + (leave_one_out ? " samples" : " targets") +
+                " could not be cokriged (mean and covariance NaN); first: " + (leave_one_out ? "sample " : "target ") +
+                std::to_string(first) + ": " + why;
+}
+
 }  // namespace
 
 Eigen::MatrixXd cokriging_embedding(const Eigen::MatrixXd& raw, const std::vector<double>& scales,
@@ -95,6 +129,14 @@ class CokrigingEngine {
   int thread_count() const { return options_.threads > 0 ? options_.threads : omp_get_max_threads(); }
   // Local back end: the kP x kP system of the samples in ws.chosen for one target.
   CokrigingOutcome solve_local(const double* target, const double* target_raw, CokrigingWorkspace& ws) const;
+  // Its steps: the system's rows and each component's drift slot (TooFew when a component has
+  // fewer rows than drift terms); K built and factored in place with growing jitter (false: not
+  // positive definite); the right-hand sides L^-1 k0 and L^-1 y; universal kriging's drift
+  // (false: singular). `bp` is a P x P scratch block.
+  CokrigingOutcome local_rows(CokrigingWorkspace& ws, Eigen::Index& present) const;
+  bool factor_local(CokrigingWorkspace& ws, Eigen::Index np, double* bp) const;
+  void local_right_hand_sides(const double* target, CokrigingWorkspace& ws, Eigen::Index np, double* bp) const;
+  bool local_drift(const double* target_raw, CokrigingWorkspace& ws, Eigen::Index np, Eigen::Index pp) const;
   CokrigingOutput predict_dense(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw) const;
   CokrigingOutput predict_local(const Eigen::MatrixXd& embedded, const Eigen::MatrixXd& raw, bool leave_one_out) const;
   CokrigingOutput loo_dense() const;
@@ -498,7 +540,7 @@ CokrigingOutput CokrigingEngine::loo_dense() const {
   return out;
 }
 
-CokrigingOutcome CokrigingEngine::solve_local(const double* target, const double* target_raw, CokrigingWorkspace& ws) const {
+CokrigingOutcome CokrigingEngine::local_rows(CokrigingWorkspace& ws, Eigen::Index& present) const {
   const auto nn = static_cast<Eigen::Index>(ws.chosen.size());
   const Eigen::Index P = components_, p = drift_terms_;
   // The rows of the chosen samples (one per measured component) and the components they cover.
@@ -515,35 +557,18 @@ CokrigingOutcome CokrigingEngine::solve_local(const double* target, const double
   }
   const auto np = static_cast<Eigen::Index>(ws.row_sample.size());
   if (np == 0) return CokrigingOutcome::TooFew;
-  Eigen::Index present = 0;
+  present = 0;
   for (Eigen::Index a = 0; a < P; ++a) {
     const int count = ws.slot[static_cast<std::size_t>(a)];
     if (count > 0 && count < p) return CokrigingOutcome::TooFew;
     ws.slot[static_cast<std::size_t>(a)] = count > 0 ? static_cast<int>(present++) : -1;
   }
-  const Eigen::Index pp = p * present;
-  if (ws.k.rows() < np) {
-    ws.k.resize(np, np);
-    ws.w.resize(np, P);
-    ws.q.resize(np, p * P);
-    ws.y.resize(np);
-  }
-  if (ws.cov.rows() != P) {
-    ws.cov.resize(P, P);
-    ws.mean.resize(P);
-    ws.f0.resize(p * P, P);
-    ws.g.resize(p * P, p * P);
-    ws.r.resize(p * P, P);
-    ws.beta.resize(p * P);
-  }
+  return CokrigingOutcome::Ok;
+}
+
+bool CokrigingEngine::factor_local(CokrigingWorkspace& ws, Eigen::Index np, double* bp) const {
+  const Eigen::Index P = components_;
   auto kb = ws.k.topLeftCorner(np, np);
-  double block[64];  // P * P doubles for P <= 8, else big_block
-  Eigen::MatrixXd big_block;
-  double* bp = block;
-  if (P * P > 64) {
-    big_block.resize(P, P);
-    bp = big_block.data();
-  }
   const auto entry = [&](Eigen::Index r, Eigen::Index c) {
     return bp[ws.row_component[static_cast<std::size_t>(r)] + P * ws.row_component[static_cast<std::size_t>(c)]];
   };
@@ -572,18 +597,19 @@ CokrigingOutcome CokrigingEngine::solve_local(const double* target, const double
   };
   const double scale = sill_.diagonal().maxCoeff();
   double jitter = 0.0;
-  bool factored = false;
   for (int attempt = 0; attempt <= options_.max_jitter_retries; ++attempt) {
     build(jitter);
     Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(kb);
-    if (llt.info() == Eigen::Success) {
-      factored = true;
-      break;
-    }
+    if (llt.info() == Eigen::Success) return true;
     jitter = attempt == 0 ? options_.initial_jitter * scale : jitter * options_.jitter_growth;
   }
-  if (!factored) return CokrigingOutcome::NotPositiveDefinite;
-  const auto lower = kb.triangularView<Eigen::Lower>();
+  return false;
+}
+
+void CokrigingEngine::local_right_hand_sides(const double* target, CokrigingWorkspace& ws, Eigen::Index np,
+                                             double* bp) const {
+  const Eigen::Index P = components_;
+  const auto lower = ws.k.topLeftCorner(np, np).triangularView<Eigen::Lower>();
   auto w = ws.w.topRows(np);
   auto y = ws.y.head(np);
   for (Eigen::Index r0 = 0; r0 < np;) {
@@ -598,55 +624,97 @@ CokrigingOutcome CokrigingEngine::solve_local(const double* target, const double
   }
   lower.solveInPlace(w);
   lower.solveInPlace(y);
+}
+
+bool CokrigingEngine::local_drift(const double* target_raw, CokrigingWorkspace& ws, Eigen::Index np,
+                                  Eigen::Index pp) const {
+  const Eigen::Index P = components_, p = drift_terms_;
+  const auto lower = ws.k.topLeftCorner(np, np).triangularView<Eigen::Lower>();
+  auto w = ws.w.topRows(np);
+  auto y = ws.y.head(np);
+  auto q = ws.q.topLeftCorner(np, pp);
+  auto f0 = ws.f0.topRows(pp);
+  auto beta = ws.beta.head(pp);
+  auto r = ws.r.topRows(pp);
+  q.setZero();
+  f0.setZero();
+  double frow[16];
+  std::vector<double> frow_big;
+  double* fp = frow;
+  if (p > 16) {
+    frow_big.resize(static_cast<std::size_t>(p));
+    fp = frow_big.data();
+  }
+  for (Eigen::Index i = 0; i < np; ++i) {
+    drift_row(raw_.col(ws.row_sample[static_cast<std::size_t>(i)]).data(), fp);
+    const int slot = ws.slot[static_cast<std::size_t>(ws.row_component[static_cast<std::size_t>(i)])];
+    for (Eigen::Index t = 0; t < p; ++t) q(i, slot * p + t) = fp[t];
+  }
+  drift_row(target_raw, fp);
+  for (Eigen::Index b = 0; b < P; ++b)
+    if (const int slot = ws.slot[static_cast<std::size_t>(b)]; slot >= 0)
+      for (Eigen::Index t = 0; t < p; ++t) f0(slot * p + t, b) = fp[t];
+  lower.solveInPlace(q);
+  auto g = ws.g.topLeftCorner(pp, pp);
+  g.noalias() = q.transpose() * q;
+  Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> g_llt(g);
+  if (g_llt.info() != Eigen::Success || !(g_llt.rcond() > 1e-14)) return false;
+  beta.noalias() = q.transpose() * y;
+  g_llt.solveInPlace(beta);
+  y.noalias() -= q * beta;
+  ws.mean.noalias() = f0.transpose() * beta;
+  ws.mean.noalias() += w.transpose() * y;
+  r = f0;
+  r.noalias() -= q.transpose() * w;
+  g_llt.matrixL().solveInPlace(r);
+  ws.cov.noalias() += r.transpose() * r;
+  // A component with no row here has no unbiased predictor (see the top of the file).
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (Eigen::Index b = 0; b < P; ++b)
+    if (ws.slot[static_cast<std::size_t>(b)] < 0) {
+      ws.mean[b] = nan;
+      ws.cov.row(b).setConstant(nan);
+      ws.cov.col(b).setConstant(nan);
+    }
+  return true;
+}
+
+CokrigingOutcome CokrigingEngine::solve_local(const double* target, const double* target_raw, CokrigingWorkspace& ws) const {
+  const Eigen::Index P = components_, p = drift_terms_;
+  Eigen::Index present = 0;
+  if (const CokrigingOutcome rows = local_rows(ws, present); rows != CokrigingOutcome::Ok) return rows;
+  const auto np = static_cast<Eigen::Index>(ws.row_sample.size());
+  const Eigen::Index pp = p * present;
+  if (ws.k.rows() < np) {
+    ws.k.resize(np, np);
+    ws.w.resize(np, P);
+    ws.q.resize(np, p * P);
+    ws.y.resize(np);
+  }
+  if (ws.cov.rows() != P) {
+    ws.cov.resize(P, P);
+    ws.mean.resize(P);
+    ws.f0.resize(p * P, P);
+    ws.g.resize(p * P, p * P);
+    ws.r.resize(p * P, P);
+    ws.beta.resize(p * P);
+  }
+  double block[64];  // P * P doubles for P <= 8, else big_block
+  Eigen::MatrixXd big_block;
+  double* bp = block;
+  if (P * P > 64) {
+    big_block.resize(P, P);
+    bp = big_block.data();
+  }
+  if (!factor_local(ws, np, bp)) return CokrigingOutcome::NotPositiveDefinite;
+  local_right_hand_sides(target, ws, np, bp);
+  auto w = ws.w.topRows(np);
   ws.cov = target_zero_;
   ws.cov.noalias() -= w.transpose() * w;
   if (p > 0) {
-    auto q = ws.q.topLeftCorner(np, pp);
-    auto f0 = ws.f0.topRows(pp);
-    auto beta = ws.beta.head(pp);
-    auto r = ws.r.topRows(pp);
-    q.setZero();
-    f0.setZero();
-    double frow[16];
-    std::vector<double> frow_big;
-    double* fp = frow;
-    if (p > 16) {
-      frow_big.resize(static_cast<std::size_t>(p));
-      fp = frow_big.data();
-    }
-    for (Eigen::Index i = 0; i < np; ++i) {
-      drift_row(raw_.col(ws.row_sample[static_cast<std::size_t>(i)]).data(), fp);
-      const int slot = ws.slot[static_cast<std::size_t>(ws.row_component[static_cast<std::size_t>(i)])];
-      for (Eigen::Index t = 0; t < p; ++t) q(i, slot * p + t) = fp[t];
-    }
-    drift_row(target_raw, fp);
-    for (Eigen::Index b = 0; b < P; ++b)
-      if (const int slot = ws.slot[static_cast<std::size_t>(b)]; slot >= 0)
-        for (Eigen::Index t = 0; t < p; ++t) f0(slot * p + t, b) = fp[t];
-    lower.solveInPlace(q);
-    auto g = ws.g.topLeftCorner(pp, pp);
-    g.noalias() = q.transpose() * q;
-    Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> g_llt(g);
-    if (g_llt.info() != Eigen::Success || !(g_llt.rcond() > 1e-14)) return CokrigingOutcome::SingularDrift;
-    beta.noalias() = q.transpose() * y;
-    g_llt.solveInPlace(beta);
-    y.noalias() -= q * beta;
-    ws.mean.noalias() = f0.transpose() * beta;
-    ws.mean.noalias() += w.transpose() * y;
-    r = f0;
-    r.noalias() -= q.transpose() * w;
-    g_llt.matrixL().solveInPlace(r);
-    ws.cov.noalias() += r.transpose() * r;
-    // A component with no row here has no unbiased predictor (see the top of the file).
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    for (Eigen::Index b = 0; b < P; ++b)
-      if (ws.slot[static_cast<std::size_t>(b)] < 0) {
-        ws.mean[b] = nan;
-        ws.cov.row(b).setConstant(nan);
-        ws.cov.col(b).setConstant(nan);
-      }
+    if (!local_drift(target_raw, ws, np, pp)) return CokrigingOutcome::SingularDrift;
   } else {
-    ws.mean.noalias() = w.transpose() * y;
+    ws.mean.noalias() = w.transpose() * ws.y.head(np);
   }
   return CokrigingOutcome::Ok;
 }
@@ -729,37 +797,7 @@ CokrigingOutput CokrigingEngine::predict_local(const Eigen::MatrixXd& embedded, 
 
   out.status = report_.status;
   out.message = report_.message;
-  std::size_t failed = 0, first = 0;
-  for (std::size_t t = 0; t < outcome.size(); ++t)
-    if (outcome[t] != CokrigingOutcome::Ok && failed++ == 0) first = t;
-  out.failed_targets = failed;
-  if (failed > 0) {
-    std::string why;
-    switch (outcome[first]) {
-      case CokrigingOutcome::TooFew:
-        out.status = KrigingStatus::TooFewSamples;
-        why = "fewer neighbours than drift terms (or none) within the search radius";
-        break;
-      case CokrigingOutcome::BelowMinimum:
-        out.status = KrigingStatus::TooFewSamples;
-        why = "fewer than min_neighbours = " + std::to_string(options_.min_neighbours) +
-              " neighbours within the search radius";
-        break;
-      case CokrigingOutcome::NotPositiveDefinite:
-        out.status = KrigingStatus::NotPositiveDefinite;
-        why = "local cokriging matrix not positive definite after the jitter retries";
-        break;
-      case CokrigingOutcome::SingularDrift:
-        out.status = KrigingStatus::SingularDrift;
-        why = "the drift terms are linearly dependent over its neighbours; use a lower drift order or more neighbours";
-        break;
-      case CokrigingOutcome::Ok:
-      case CokrigingOutcome::OverBudget: break;
-    }
-    out.message = std::to_string(failed) + " of " + std::to_string(m) + (leave_one_out ? " samples" : " targets") +
-                  " could not be cokriged (mean and covariance NaN); first: " + (leave_one_out ? "sample " : "target ") +
-                  std::to_string(first) + ": " + why;
-  }
+  report_local_failures(outcome, leave_one_out, options_.min_neighbours, out);
   return out;
 }
 

@@ -496,43 +496,27 @@ LikelihoodFitResult fit_likelihood_checked(const Eigen::MatrixXd& coordinates, c
   return fit_bobyqa(coordinates, values, structure, options);
 }
 
-LikelihoodFitResult fit_bobyqa(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
-                               const std::vector<ModelComponent>& structure, const LikelihoodFitOptions& options) {
-  Problem pr;
+// The structure's covariance components (the nugget is a parameter of its own).
+std::vector<ModelComponent> covariance_components(const std::vector<ModelComponent>& structure) {
+  std::vector<ModelComponent> out;
   for (const auto& c : structure)
     if (c.kind != ModelKind::Nugget) {
       if (!c.bounded())
         throw ArgumentError("likelihood: component '" + std::string(model_kind_name(c.kind)) +
                             "' has no covariance (pow, lin); use nug, sph, exp, gau, mat or wen");
-      pr.structure.push_back(c);
+      out.push_back(c);
     }
-  if (pr.structure.empty()) throw ArgumentError("likelihood: the structure has no non-nugget component");
-  Eigen::MatrixXd z = values;
-  if (options.kind == KrigingKind::Simple) z.array() -= options.simple_mean;
-  const Eigen::MatrixXd f = drift(coordinates, options);
-  if (f.cols() >= coordinates.rows())
-    throw InputError("likelihood: " + std::to_string(coordinates.rows()) + " samples for " + std::to_string(f.cols()) +
-                     " drift terms");
-  pr.x = &coordinates;
-  pr.z = &z;
-  pr.f = &f;
-  pr.fit_nugget = options.fit_nugget;
-  pr.options = &options;
-  detail::VecchiaNeighbours neighbours;
-  if (likelihood_uses_vecchia(options, static_cast<long>(coordinates.rows()))) {
-    neighbours = detail::find_vecchia_neighbours(coordinates.transpose(), options.vecchia_neighbours,
-                                                 options.vecchia_ordering);
-    pr.neighbours = &neighbours;
-  }
+  if (out.empty()) throw ArgumentError("likelihood: the structure has no non-nugget component");
+  return out;
+}
 
-  const double var = std::max((values.rowwise() - values.colwise().mean()).array().square().mean(), 1e-300);
-  const double extent = (coordinates.colwise().maxCoeff() - coordinates.colwise().minCoeff()).norm();
-  // All samples at one place: the ranges have no scale and every covariance matrix is singular
-  // without a nugget; the fit "converged" with a likelihood of inf.
-  if (!(extent > 0.0))
-    throw InputError("likelihood: all " + std::to_string(coordinates.rows()) +
-                     " samples are at one location; a variogram needs samples at different places");
-  const double span = extent;
+// Log parameters (sill, range per component, then a free nugget), their start and box from the
+// values' variance and the samples' span; pr.is_free marks the held ones.
+struct LogParameters {
+  std::vector<double> x0, lb, ub;
+};
+
+LogParameters log_parameters(Problem& pr, const LikelihoodFitOptions& options, double var, double span) {
   std::vector<double> x0, lb, ub;
   const double ns = static_cast<double>(pr.structure.size());
   for (const auto* hold : {&options.hold_sill, &options.hold_range})
@@ -568,6 +552,42 @@ LikelihoodFitResult fit_bobyqa(const Eigen::MatrixXd& coordinates, const Eigen::
   }
   for (std::size_t i = 0; i < x0.size(); ++i)
     if (pr.is_free[i]) x0[i] = std::min(std::max(x0[i], lb[i]), ub[i]);  // held: as given, even outside
+  return {std::move(x0), std::move(lb), std::move(ub)};
+}
+
+LikelihoodFitResult fit_bobyqa(const Eigen::MatrixXd& coordinates, const Eigen::MatrixXd& values,
+                               const std::vector<ModelComponent>& structure, const LikelihoodFitOptions& options) {
+  Problem pr;
+  pr.structure = covariance_components(structure);
+  Eigen::MatrixXd z = values;
+  if (options.kind == KrigingKind::Simple) z.array() -= options.simple_mean;
+  const Eigen::MatrixXd f = drift(coordinates, options);
+  if (f.cols() >= coordinates.rows())
+    throw InputError("likelihood: " + std::to_string(coordinates.rows()) + " samples for " + std::to_string(f.cols()) +
+                     " drift terms");
+  pr.x = &coordinates;
+  pr.z = &z;
+  pr.f = &f;
+  pr.fit_nugget = options.fit_nugget;
+  pr.options = &options;
+  detail::VecchiaNeighbours neighbours;
+  if (likelihood_uses_vecchia(options, static_cast<long>(coordinates.rows()))) {
+    neighbours = detail::find_vecchia_neighbours(coordinates.transpose(), options.vecchia_neighbours,
+                                                 options.vecchia_ordering);
+    pr.neighbours = &neighbours;
+  }
+
+  const double var = std::max((values.rowwise() - values.colwise().mean()).array().square().mean(), 1e-300);
+  const double extent = (coordinates.colwise().maxCoeff() - coordinates.colwise().minCoeff()).norm();
+  // All samples at one place: the ranges have no scale and every covariance matrix is singular
+  // without a nugget; the fit "converged" with a likelihood of inf.
+  if (!(extent > 0.0))
+    throw InputError("likelihood: all " + std::to_string(coordinates.rows()) +
+                     " samples are at one location; a variogram needs samples at different places");
+  LogParameters params = log_parameters(pr, options, var, extent);
+  std::vector<double>& x0 = params.x0;
+  const std::vector<double>& lb = params.lb;
+  const std::vector<double>& ub = params.ub;
   pr.full = x0;
   if (std::count(pr.is_free.begin(), pr.is_free.end(), true) == 0)
     throw ArgumentError("likelihood: every parameter is held; nothing to fit");

@@ -247,70 +247,65 @@ void ModelChoiceOptions::validate() const {
                         "near_singular_condition must be > 1");
 }
 
-ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::MatrixXd& values,
-                                    const ModelChoiceOptions& o) {
-  o.validate();
-  const bool use_bic = o.criterion == ModelChoiceOptions::Criterion::Bic;
-  const std::string criterion_name = use_bic ? "BIC" : "AIC";
+namespace {
+
+// The rows of an order-independent random subset of `size` samples (all when there are no more).
+struct Rows {
+  bool subset = false;
+  Eigen::MatrixXd x, values;
+};
+
+Rows rows_of(const Eigen::MatrixXd& x, const Eigen::MatrixXd& values, std::size_t size, std::uint64_t seed) {
   const auto n = static_cast<std::size_t>(x.rows());
-  // The rows of an order-independent random subset of `size` samples (all when there are no more).
-  struct Rows {
-    bool subset = false;
-    Eigen::MatrixXd x, values;
-  };
-  auto rows_of = [&](std::size_t size, std::uint64_t seed) {
-    Rows r;
-    r.subset = size > 0 && n > size;
-    if (r.subset) {
-      const std::vector<Eigen::Index> order = order_independent_subset(x, values, size, seed);
-      r.x = x(order, Eigen::all);
-      r.values = values(order, Eigen::all);
-    }
-    return r;
-  };
-  const Rows ranking_rows = rows_of(o.choice_subsample, 20261123);
-  const bool subset = ranking_rows.subset;
-  const Eigen::MatrixXd& xr = subset ? ranking_rows.x : x;
-  const Eigen::MatrixXd& vr = subset ? ranking_rows.values : values;
-  // The confirming fits' samples: all, or a larger subset (confirm_subsample).
-  const Rows confirm_rows = rows_of(o.confirm_subsample, 20261207);
-  const bool confirm_subset = confirm_rows.subset;
-  const Eigen::MatrixXd& xconf = confirm_subset ? confirm_rows.x : x;
-  const Eigen::MatrixXd& vconf = confirm_subset ? confirm_rows.values : values;
-  const Eigen::RowVectorXd extent = x.colwise().maxCoeff() - x.colwise().minCoeff();
-  const Eigen::RowVectorXd extent_r = xr.colwise().maxCoeff() - xr.colwise().minCoeff();
-  const double spacing = smallest_sample_spacing(x);  // of all samples, for the subset's fits too
-  const std::vector<CandidateSpec> specs = candidate_specs(o, x.cols());
-  std::vector<std::size_t> every(specs.size());
+  Rows r;
+  r.subset = size > 0 && n > size;
+  if (r.subset) {
+    const std::vector<Eigen::Index> order = order_independent_subset(x, values, size, seed);
+    r.x = x(order, Eigen::all);
+    r.values = values(order, Eigen::all);
+  }
+  return r;
+}
+
+// What every stage reads: the samples (all, the ranking's, the confirming fits'), their extents
+// and spacing, the candidates and the options.
+struct ChoiceInputs {
+  const Eigen::MatrixXd& x;
+  const Eigen::MatrixXd& values;
+  const Eigen::MatrixXd& xr;
+  const Eigen::MatrixXd& vr;
+  const Eigen::MatrixXd& xconf;
+  const Eigen::MatrixXd& vconf;
+  const Eigen::RowVectorXd& extent;
+  const Eigen::RowVectorXd& extent_r;
+  double spacing;
+  const std::vector<CandidateSpec>& specs;
+  const ModelChoiceOptions& o;
+  bool use_bic;
+  bool confirm_needed;
+};
+
+// Stage 1: rank every candidate; while every one is ill-conditioned, raise the nugget floor
+// (with nugget/sill >= N / limit the 2-norm condition number of the correlation matrix is below ~limit).
+// Returns whether the floor was raised; `rank` and `fit` take the raised floor.
+bool rank_candidates(const ChoiceInputs& in, LikelihoodFitOptions& rank, LikelihoodFitOptions& fit,
+                     std::vector<CandidateFit>& ranked, ModelChoice& choice) {
+  const ModelChoiceOptions& o = in.o;
+  std::vector<std::size_t> every(in.specs.size());
   for (std::size_t i = 0; i < every.size(); ++i) every[i] = i;
-
-  LikelihoodFitOptions fit = o.fit;
-  fit.fit_nugget = true;
-  LikelihoodFitOptions rank = fit;
-  if (o.ranking_starts > 0) rank.starts = o.ranking_starts;
-  if (o.ranking_local_runs > 0) rank.local_runs = o.ranking_local_runs;
-  // Ranking fits that are not the plain fits on all samples are confirmed (stage 2).
-  const bool confirm_needed = subset || rank.starts != fit.starts || rank.local_runs != fit.local_runs;
-  // The ranking only compares likelihoods; the standard errors, where wanted, come from the fit on all samples.
-  if (confirm_needed) rank.standard_errors = false;
-
-  // Stage 1: rank every candidate; while every one is ill-conditioned, raise the nugget floor
-  // (with nugget/sill >= N / limit the 2-norm condition number of the correlation matrix is below ~limit).
-  ModelChoice choice;
-  std::vector<CandidateFit> ranked;
   std::string last_notes;
   bool any_accepted = false;
   int attempt = 0;
   for (; attempt < 4 && !any_accepted; ++attempt) {
     if (attempt > 0) {
-      rank.min_nugget_ratio = std::max(rank.min_nugget_ratio * 100.0, static_cast<double>(xr.rows()) / o.max_condition_number);
+      rank.min_nugget_ratio = std::max(rank.min_nugget_ratio * 100.0, static_cast<double>(in.xr.rows()) / o.max_condition_number);
       fit.min_nugget_ratio = std::max(fit.min_nugget_ratio, rank.min_nugget_ratio);
     }
-    ranked = fit_candidates(xr, vr, specs, every, rank, {});
-    choice.candidates.assign(specs.size(), {});
+    ranked = fit_candidates(in.xr, in.vr, in.specs, every, rank, {});
+    choice.candidates.assign(in.specs.size(), {});
     int fitted = 0;
     std::string first_refusal;
-    for (std::size_t i = 0; i < specs.size(); ++i) {
+    for (std::size_t i = 0; i < in.specs.size(); ++i) {
       auto& cand = choice.candidates[i];
       if (!ranked[i].fit) {
         cand.note = ranked[i].refusal;
@@ -318,8 +313,8 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
         continue;
       }
       ++fitted;
-      record_fit(cand, *ranked[i].fit, xr, extent_r, spacing, use_bic, o);
-      if (!confirm_needed) cand.all_samples_criterion = cand.criterion;
+      record_fit(cand, *ranked[i].fit, in.xr, in.extent_r, in.spacing, in.use_bic, o);
+      if (!in.confirm_needed) cand.all_samples_criterion = cand.criterion;
       any_accepted = any_accepted || cand.accepted;
     }
     // Every candidate refused the data itself (e.g. values that are all equal): a higher nugget
@@ -334,106 +329,129 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
     throw InputError("model choice: no candidate model gave a kriging system with condition number <= " +
                      format_number(o.max_condition_number) + " (the first candidates of the last attempt: " + last_notes +
                      ")");
-  const bool floor_raised = attempt > 1;
+  return attempt > 1;
+}
 
-  // The accepted candidates, best ranked first.
+// The accepted candidates, best ranked first.
+std::vector<std::size_t> accepted_by_rank(const ModelChoice& choice) {
   std::vector<std::size_t> order;
-  for (std::size_t i = 0; i < specs.size(); ++i)
+  for (std::size_t i = 0; i < choice.candidates.size(); ++i)
     if (choice.candidates[i].accepted) order.push_back(i);
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
     return choice.candidates[a].criterion < choice.candidates[b].criterion;
   });
+  return order;
+}
 
-  // Stage 2: confirm on all samples the best ranked (and the next, batch by batch, until one is
-  // plausible and well conditioned on all samples).
-  std::vector<std::optional<LikelihoodFitResult>> final_fit(specs.size());
+// Stage 2: confirm on all samples the best ranked (and the next, batch by batch, until one is
+// plausible and well conditioned on all samples). Returns the confirmed candidates, in order.
+std::vector<std::size_t> confirm_candidates(const ChoiceInputs& in, const LikelihoodFitOptions& fit,
+                                            const std::vector<std::size_t>& order,
+                                            std::vector<std::optional<LikelihoodFitResult>>& final_fit,
+                                            ModelChoice& choice) {
+  const ModelChoiceOptions& o = in.o;
   std::vector<std::size_t> confirmed;
-  if (!confirm_needed) {
-    for (std::size_t i : order) final_fit[i] = ranked[i].fit;
-    confirmed = order;
-  } else {
-    LikelihoodFitOptions confirm = fit;
-    // By Vecchia's likelihood the plain fit's neighbour sets differ from the warm-started fit's, so
-    // more runs would not make that guarantee; one run from the best screened start (nearly always
-    // the subset estimate) keeps the cost of large N near the single refit it was.
-    if (!o.confirm_with_plain_starts || likelihood_uses_vecchia(fit, static_cast<long>(xconf.rows()))) confirm.local_runs = 1;
-    else confirm.local_runs = fit.local_runs + 1;
-    std::size_t next = 0;
-    auto plausible_confirmed = [&] {
-      for (std::size_t i : confirmed)
-        if (choice.candidates[i].accepted && choice.candidates[i].implausible.empty()) return true;
-      return false;
-    };
-    while (next < order.size() && !plausible_confirmed()) {
-      std::vector<std::size_t> batch;
-      std::vector<std::optional<VariogramModel>> initial;
-      const std::size_t want = confirmed.empty() ? o.confirmed : 1;
-      while (next < order.size() && batch.size() < want) {
-        const std::size_t i = order[next++];
-        batch.push_back(i);
-        initial.emplace_back(choice.candidates[i].model);
+  LikelihoodFitOptions confirm = fit;
+  // By Vecchia's likelihood the plain fit's neighbour sets differ from the warm-started fit's, so
+  // more runs would not make that guarantee; one run from the best screened start (nearly always
+  // the subset estimate) keeps the cost of large N near the single refit it was.
+  if (!o.confirm_with_plain_starts || likelihood_uses_vecchia(fit, static_cast<long>(in.xconf.rows()))) confirm.local_runs = 1;
+  else confirm.local_runs = fit.local_runs + 1;
+  std::size_t next = 0;
+  auto plausible_confirmed = [&] {
+    for (std::size_t i : confirmed)
+      if (choice.candidates[i].accepted && choice.candidates[i].implausible.empty()) return true;
+    return false;
+  };
+  while (next < order.size() && !plausible_confirmed()) {
+    std::vector<std::size_t> batch;
+    std::vector<std::optional<VariogramModel>> initial;
+    const std::size_t want = confirmed.empty() ? o.confirmed : 1;
+    while (next < order.size() && batch.size() < want) {
+      const std::size_t i = order[next++];
+      batch.push_back(i);
+      initial.emplace_back(choice.candidates[i].model);
+    }
+    const std::vector<CandidateFit> r = fit_candidates(in.xconf, in.vconf, in.specs, batch, confirm, initial);
+    for (std::size_t k = 0; k < batch.size(); ++k) {
+      const std::size_t i = batch[k];
+      auto& cand = choice.candidates[i];
+      confirmed.push_back(i);
+      if (!r[k].fit) {
+        cand.accepted = false;
+        cand.note = "refused on all samples: " + r[k].refusal;
+        continue;
       }
-      const std::vector<CandidateFit> r = fit_candidates(xconf, vconf, specs, batch, confirm, initial);
-      for (std::size_t k = 0; k < batch.size(); ++k) {
-        const std::size_t i = batch[k];
-        auto& cand = choice.candidates[i];
-        confirmed.push_back(i);
-        if (!r[k].fit) {
-          cand.accepted = false;
-          cand.note = "refused on all samples: " + r[k].refusal;
-          continue;
-        }
-        const double ranking_criterion = cand.criterion;
-        record_fit(cand, *r[k].fit, x, extent, spacing, use_bic, o);
-        cand.all_samples_criterion = cand.criterion;
-        cand.criterion = ranking_criterion;
-        final_fit[i] = r[k].fit;
-      }
+      const double ranking_criterion = cand.criterion;
+      record_fit(cand, *r[k].fit, in.x, in.extent, in.spacing, in.use_bic, o);
+      cand.all_samples_criterion = cand.criterion;
+      cand.criterion = ranking_criterion;
+      final_fit[i] = r[k].fit;
     }
   }
+  return confirmed;
+}
 
-  // The winner: the smallest all-sample criterion among the confirmed, accepted, plausible fits;
-  // if none is plausible, the smallest among the accepted, with a warning.
+// The winner (-1: none): the smallest all-sample criterion among the confirmed, accepted, plausible
+// fits; best_any the same among the accepted, plausible or not.
+struct Winner {
   int best = -1, best_any = -1;
+};
+
+Winner smallest_criterion(const ModelChoice& choice, const std::vector<std::size_t>& confirmed,
+                          const std::vector<std::optional<LikelihoodFitResult>>& final_fit) {
+  Winner w;
   for (std::size_t i : confirmed) {
     const auto& c = choice.candidates[i];
     if (!c.accepted || !final_fit[i]) continue;
-    if (best_any < 0 || c.all_samples_criterion < choice.candidates[static_cast<std::size_t>(best_any)].all_samples_criterion)
-      best_any = static_cast<int>(i);
+    if (w.best_any < 0 || c.all_samples_criterion < choice.candidates[static_cast<std::size_t>(w.best_any)].all_samples_criterion)
+      w.best_any = static_cast<int>(i);
     if (c.implausible.empty() &&
-        (best < 0 || c.all_samples_criterion < choice.candidates[static_cast<std::size_t>(best)].all_samples_criterion))
-      best = static_cast<int>(i);
+        (w.best < 0 || c.all_samples_criterion < choice.candidates[static_cast<std::size_t>(w.best)].all_samples_criterion))
+      w.best = static_cast<int>(i);
   }
-  if (best_any < 0) {
-    // Every confirmed candidate ill-conditioned on all samples: the best ranked, with the nugget
-    // floor raised until it is not (as the ranking does).
-    const std::size_t i = order.front();
-    LikelihoodFitOptions f = fit;
-    f.initial_model = choice.candidates[i].model;
-    double cond = std::numeric_limits<double>::infinity();
-    for (int k = 0; k < 4; ++k) {
-      f.min_nugget_ratio = std::max(f.min_nugget_ratio * 100.0, static_cast<double>(n) / o.max_condition_number);
-      const std::vector<CandidateFit> r = fit_candidates(x, values, specs, {i}, f, {});
-      if (!r[0].fit) break;
-      cond = condition_number(x, r[0].fit->model);
-      if (cond <= o.max_condition_number) {
-        record_fit(choice.candidates[i], *r[0].fit, x, extent, spacing, use_bic, o);
-        choice.candidates[i].all_samples_criterion = choice.candidates[i].criterion;
-        final_fit[i] = r[0].fit;
-        best_any = static_cast<int>(i);
-        if (choice.candidates[i].implausible.empty()) best = best_any;
-        break;
-      }
+  return w;
+}
+
+// Every confirmed candidate ill-conditioned on all samples: the best ranked, with the nugget
+// floor raised until it is not (as the ranking does).
+Winner refit_best_ranked(const ChoiceInputs& in, const LikelihoodFitOptions& fit, std::size_t i,
+                         std::vector<std::optional<LikelihoodFitResult>>& final_fit, ModelChoice& choice) {
+  const ModelChoiceOptions& o = in.o;
+  const auto n = static_cast<std::size_t>(in.x.rows());
+  Winner w;
+  LikelihoodFitOptions f = fit;
+  f.initial_model = choice.candidates[i].model;
+  double cond = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 4; ++k) {
+    f.min_nugget_ratio = std::max(f.min_nugget_ratio * 100.0, static_cast<double>(n) / o.max_condition_number);
+    const std::vector<CandidateFit> r = fit_candidates(in.x, in.values, in.specs, {i}, f, {});
+    if (!r[0].fit) break;
+    cond = condition_number(in.x, r[0].fit->model);
+    if (cond <= o.max_condition_number) {
+      record_fit(choice.candidates[i], *r[0].fit, in.x, in.extent, in.spacing, in.use_bic, o);
+      choice.candidates[i].all_samples_criterion = choice.candidates[i].criterion;
+      final_fit[i] = r[0].fit;
+      w.best_any = static_cast<int>(i);
+      if (choice.candidates[i].implausible.empty()) w.best = w.best_any;
+      break;
     }
-    if (best_any < 0)
-      throw InputError("model choice: the refit of " + choice.candidates[i].model.to_string() + " on all " +
-                       std::to_string(n) + " samples stays ill-conditioned (condition number " + format_number(cond) + ")");
   }
-  const bool kept_implausible = best < 0;
-  const auto w = static_cast<std::size_t>(kept_implausible ? best_any : best);
+  if (w.best_any < 0)
+    throw InputError("model choice: the refit of " + choice.candidates[i].model.to_string() + " on all " +
+                     std::to_string(n) + " samples stays ill-conditioned (condition number " + format_number(cond) + ")");
+  return w;
+}
+
+// One line on what won and how it was found, and the warnings about what was set aside.
+void explain_choice(const ChoiceInputs& in, const LikelihoodFitOptions& fit, bool subset, bool confirm_subset,
+                    bool floor_raised, const std::vector<std::size_t>& confirmed, std::size_t w, bool kept_implausible,
+                    ModelChoice& choice) {
+  const ModelChoiceOptions& o = in.o;
+  const std::vector<CandidateSpec>& specs = in.specs;
+  const auto n = static_cast<std::size_t>(in.x.rows());
+  const std::string criterion_name = in.use_bic ? "BIC" : "AIC";
   const auto& winner = choice.candidates[w];
-  choice.model = final_fit[w]->model;
-  choice.fit = *final_fit[w];
   choice.reason = "smallest " + criterion_name + " (" + format_number(winner.all_samples_criterion) + ") of ";
   if (subset)
     choice.reason += std::to_string(specs.size()) + " " + (fit.restricted ? "REML" : "ML") +
@@ -441,7 +459,7 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
                      std::to_string(o.choice_subsample) + " of the " + std::to_string(n) + " samples, the best " +
                      std::to_string(confirmed.size()) + " refitted on " +
                      (confirm_subset ? "a subset of " + std::to_string(o.confirm_subsample) : std::string("all"));
-  else if (confirm_needed)
+  else if (in.confirm_needed)
     choice.reason += std::to_string(specs.size()) + " " + (fit.restricted ? "REML" : "ML") +
                      " fits (sph/exp/gau/mat with a nugget, isotropic and ARD), the best " +
                      std::to_string(confirmed.size()) + " refitted with more starts";
@@ -465,9 +483,59 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
     choice.warnings.push_back(note);
   } else {
     // A plausible winner may still have one ARD range far beyond its coordinate's extent: a trend there.
-    for (const std::string& r : implausible_ranges(choice.model, extent, 0.0, o.pathological_range_factor))
+    for (const std::string& r : implausible_ranges(choice.model, in.extent, 0.0, o.pathological_range_factor))
       choice.warnings.push_back(spec_name(specs[w]) + ": " + r);
   }
+}
+
+}  // namespace
+
+ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::MatrixXd& values,
+                                    const ModelChoiceOptions& o) {
+  o.validate();
+  const Rows ranking_rows = rows_of(x, values, o.choice_subsample, 20261123);
+  const bool subset = ranking_rows.subset;
+  // The confirming fits' samples: all, or a larger subset (confirm_subsample).
+  const Rows confirm_rows = rows_of(x, values, o.confirm_subsample, 20261207);
+  const Eigen::MatrixXd& xr = subset ? ranking_rows.x : x;
+  const Eigen::RowVectorXd extent = x.colwise().maxCoeff() - x.colwise().minCoeff();
+  const Eigen::RowVectorXd extent_r = xr.colwise().maxCoeff() - xr.colwise().minCoeff();
+  const std::vector<CandidateSpec> specs = candidate_specs(o, x.cols());
+
+  LikelihoodFitOptions fit = o.fit;
+  fit.fit_nugget = true;
+  LikelihoodFitOptions rank = fit;
+  if (o.ranking_starts > 0) rank.starts = o.ranking_starts;
+  if (o.ranking_local_runs > 0) rank.local_runs = o.ranking_local_runs;
+  // Ranking fits that are not the plain fits on all samples are confirmed (stage 2).
+  const bool confirm_needed = subset || rank.starts != fit.starts || rank.local_runs != fit.local_runs;
+  // The ranking only compares likelihoods; the standard errors, where wanted, come from the fit on all samples.
+  if (confirm_needed) rank.standard_errors = false;
+  const ChoiceInputs in{x, values, xr, subset ? ranking_rows.values : values,
+                        confirm_rows.subset ? confirm_rows.x : x, confirm_rows.subset ? confirm_rows.values : values,
+                        extent, extent_r,
+                        smallest_sample_spacing(x),  // of all samples, for the subset's fits too
+                        specs, o, o.criterion == ModelChoiceOptions::Criterion::Bic, confirm_needed};
+
+  ModelChoice choice;
+  std::vector<CandidateFit> ranked;
+  const bool floor_raised = rank_candidates(in, rank, fit, ranked, choice);
+  const std::vector<std::size_t> order = accepted_by_rank(choice);
+  std::vector<std::optional<LikelihoodFitResult>> final_fit(specs.size());
+  std::vector<std::size_t> confirmed;
+  if (!confirm_needed) {
+    for (std::size_t i : order) final_fit[i] = ranked[i].fit;
+    confirmed = order;
+  } else {
+    confirmed = confirm_candidates(in, fit, order, final_fit, choice);
+  }
+  Winner winner = smallest_criterion(choice, confirmed, final_fit);
+  if (winner.best_any < 0) winner = refit_best_ranked(in, fit, order.front(), final_fit, choice);
+  const bool kept_implausible = winner.best < 0;
+  const auto w = static_cast<std::size_t>(kept_implausible ? winner.best_any : winner.best);
+  choice.model = final_fit[w]->model;
+  choice.fit = *final_fit[w];
+  explain_choice(in, fit, subset, confirm_rows.subset, floor_raised, confirmed, w, kept_implausible, choice);
   return choice;
 }
 

@@ -212,34 +212,37 @@ double profiled_negative_log_likelihood(const Eigen::MatrixXd& x, const Eigen::M
   return v;
 }
 
-LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z,
-                                            const Eigen::MatrixXd& f, const ModelComponent& structure,
-                                            const LikelihoodFitOptions& o) {
-  Profile pr;
-  pr.x = &x;
-  pr.z = &z;
-  pr.f = &f;
-  pr.corr = correlation_of(structure);
-  pr.ard = o.anisotropy == LikelihoodFitOptions::Anisotropy::Ard;
-  pr.fit_nugget = o.fit_nugget;
-  pr.restricted = o.restricted;
-  pr.dims = static_cast<int>(x.cols());
-  const int nr = pr.range_count();
-  const int np = nr + (o.fit_nugget ? 1 : 0);
+namespace {
 
-  // Box and starts from the extent of the samples along each coordinate (or overall).
+// The search box in log range (and log nugget / partial sill), from the extent of the samples
+// along each coordinate (or overall): `scale` is each range's natural size.
+struct SearchBox {
+  std::vector<double> scale, lb, ub;
+};
+
+SearchBox search_box(const Eigen::MatrixXd& x, const Profile& pr, const LikelihoodFitOptions& o, int nr, int np) {
   const Eigen::RowVectorXd extent = x.colwise().maxCoeff() - x.colwise().minCoeff();
   const double diagonal = extent.norm() > 0.0 ? extent.norm() : 1.0;
-  std::vector<double> scale(nr), lb(np), ub(np);
+  SearchBox b;
+  b.scale.resize(static_cast<std::size_t>(nr));
+  b.lb.resize(static_cast<std::size_t>(np));
+  b.ub.resize(static_cast<std::size_t>(np));
   for (int k = 0; k < nr; ++k) {
-    scale[k] = pr.ard ? (extent[k] > 0.0 ? extent[k] : diagonal) : diagonal;
-    lb[k] = std::log(scale[k] * 1e-4);
-    ub[k] = std::log(scale[k] * 1e3);
+    b.scale[k] = pr.ard ? (extent[k] > 0.0 ? extent[k] : diagonal) : diagonal;
+    b.lb[k] = std::log(b.scale[k] * 1e-4);
+    b.ub[k] = std::log(b.scale[k] * 1e3);
   }
   if (o.fit_nugget) {
-    lb[nr] = std::log(std::max(o.min_nugget_ratio, 1e-15));
-    ub[nr] = std::log(10.0);
+    b.lb[nr] = std::log(std::max(o.min_nugget_ratio, 1e-15));
+    b.ub[nr] = std::log(10.0);
   }
+  return b;
+}
+
+// Fixed fractions of each range's scale and nugget ratios, jittered by a fixed seed beyond the
+// third start with ARD.
+std::vector<std::vector<double>> plain_starts(const SearchBox& b, const Profile& pr, const LikelihoodFitOptions& o,
+                                              int nr, int np) {
   std::vector<std::vector<double>> starts;
   const double factors[] = {0.5, 0.15, 1.5};
   const double nuggets[] = {0.05, 0.005, 0.3};
@@ -248,96 +251,80 @@ LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eige
   for (int s = 0; s < std::max(o.starts, 1); ++s) {
     std::vector<double> t(np);
     for (int k = 0; k < nr; ++k) {
-      t[k] = std::log(scale[k] * factors[s % 3]);
+      t[k] = std::log(b.scale[k] * factors[s % 3]);
       if (s >= 3 && pr.ard) t[k] += jitter(rng);
     }
     if (o.fit_nugget) t[nr] = std::log(nuggets[(s / 3 + s) % 3]);
-    for (int k = 0; k < np; ++k) t[k] = std::clamp(t[k], lb[k], ub[k]);
+    for (int k = 0; k < np; ++k) t[k] = std::clamp(t[k], b.lb[k], b.ub[k]);
     starts.push_back(std::move(t));
   }
-  // Vecchia: neighbour sets in the coordinates scaled by the initial model's ranges, else by the
-  // starting ranges' common shape (the extent along each coordinate with ARD; any common scale
-  // leaves isotropic sets unchanged), fixed
-  // during the search so that the objective is smooth, then found again at the fitted ranges and
-  // the search resumed from there (below).
-  const bool vecchia = likelihood_uses_vecchia(o, static_cast<long>(x.rows()));
-  VecchiaNeighbours neighbours;
-  auto find_neighbours = [&](const std::vector<double>& ranges) {
-    Eigen::MatrixXd scaled = x.transpose();
-    for (int k = 0; k < pr.dims; ++k) scaled.row(k) /= ranges[static_cast<std::size_t>(pr.ard ? k : 0)];
-    neighbours = find_vecchia_neighbours(scaled, o.vecchia_neighbours, o.vecchia_ordering);
-    pr.vecchia = &neighbours;
-  };
-  // The given model: its ranges along each coordinate (the isotropic range everywhere, or the
-  // largest ARD range for an isotropic fit) and its nugget / partial sill, first of the starts.
+  return starts;
+}
+
+// The given model: its ranges along each coordinate (the isotropic range everywhere, or the
+// largest ARD range for an isotropic fit) and its nugget / partial sill, first of the starts.
+// Returns its ranges (empty: no usable model given).
+std::vector<double> add_initial_model_start(const LikelihoodFitOptions& o, const Profile& pr, const SearchBox& b,
+                                            int nr, int np, std::vector<std::vector<double>>& starts) {
   std::vector<double> initial_ranges;
-  if (o.initial_model) {
-    const VariogramModel& m = *o.initial_model;
-    double range = 0.0, partial = 0.0;
-    for (const auto& comp : m.components())
-      if (comp.kind != ModelKind::Nugget) range = std::max(range, comp.range), partial += comp.sill;
-    const Anisotropy& an = m.anisotropy();
-    if (range > 0.0 && partial > 0.0) {
-      std::vector<double> t(np);
-      for (int k = 0; k < nr; ++k) {
-        double rk = range;
-        if (pr.ard && an.type() == Anisotropy::Type::Ard && an.dimension() == pr.dims) rk = range * an.parameters()[k];
-        initial_ranges.push_back(rk);
-        t[k] = std::clamp(std::log(rk), lb[k], ub[k]);
-      }
-      if (o.fit_nugget) t[nr] = std::clamp(std::log(std::max(m.nugget() / partial, 1e-300)), lb[nr], ub[nr]);
-      starts.insert(starts.begin(), std::move(t));
+  if (!o.initial_model) return initial_ranges;
+  const VariogramModel& m = *o.initial_model;
+  double range = 0.0, partial = 0.0;
+  for (const auto& comp : m.components())
+    if (comp.kind != ModelKind::Nugget) range = std::max(range, comp.range), partial += comp.sill;
+  const Anisotropy& an = m.anisotropy();
+  if (range > 0.0 && partial > 0.0) {
+    std::vector<double> t(np);
+    for (int k = 0; k < nr; ++k) {
+      double rk = range;
+      if (pr.ard && an.type() == Anisotropy::Type::Ard && an.dimension() == pr.dims) rk = range * an.parameters()[k];
+      initial_ranges.push_back(rk);
+      t[k] = std::clamp(std::log(rk), b.lb[k], b.ub[k]);
     }
+    if (o.fit_nugget) t[nr] = std::clamp(std::log(std::max(m.nugget() / partial, 1e-300)), b.lb[nr], b.ub[nr]);
+    starts.insert(starts.begin(), std::move(t));
   }
-  if (vecchia) find_neighbours(initial_ranges.empty() ? scale : initial_ranges);
+  return initial_ranges;
+}
+
+struct Search {
+  double best = std::numeric_limits<double>::infinity();
+  std::vector<double> theta;
+  LbfgsOutcome outcome;
+  int evaluations = 0, runs = 0;
+};
+
+// Every start screened by its likelihood, L-BFGS from the best local_runs of them.
+Search search_from_screened(Profile& pr, const std::vector<std::vector<double>>& starts, const SearchBox& b,
+                            const LikelihoodFitOptions& o) {
   std::vector<std::pair<double, std::size_t>> screened;
   for (std::size_t s = 0; s < starts.size(); ++s) screened.emplace_back(pr.evaluate(starts[s].data(), nullptr), s);
   std::sort(screened.begin(), screened.end());
-
-  LikelihoodFitResult res;
-  double best = std::numeric_limits<double>::infinity();
-  std::vector<double> best_theta;
-  LbfgsOutcome best_outcome;
-  int evaluations = static_cast<int>(starts.size());
-  const int runs = std::min<int>(std::max(o.local_runs, 1), static_cast<int>(screened.size()));
-  for (int run = 0; run < runs; ++run) {
+  Search r;
+  r.evaluations = static_cast<int>(starts.size());
+  r.runs = std::min<int>(std::max(o.local_runs, 1), static_cast<int>(screened.size()));
+  for (int run = 0; run < r.runs; ++run) {
     std::vector<double> t = starts[screened[static_cast<std::size_t>(run)].second];
-    const LbfgsOutcome out = minimize_lbfgs(&objective, &pr, t, lb, ub, o.relative_tolerance, o.max_evaluations);
-    evaluations += out.evaluations;
-    if (out.objective < best) {
-      best = out.objective;
-      best_theta = t;
-      best_outcome = out;
+    const LbfgsOutcome out = minimize_lbfgs(&objective, &pr, t, b.lb, b.ub, o.relative_tolerance, o.max_evaluations);
+    r.evaluations += out.evaluations;
+    if (out.objective < r.best) {
+      r.best = out.objective;
+      r.theta = t;
+      r.outcome = out;
     }
   }
-  if (!(best < kFailed))
-    throw InputError("likelihood: the covariance is not positive definite at any starting point (values or "
-                     "coordinates of extreme magnitude? rescale them to units of order 1)");
-  if (vecchia && pr.ard) {
-    std::vector<double> fitted(static_cast<std::size_t>(nr));
-    for (int k = 0; k < nr; ++k) fitted[static_cast<std::size_t>(k)] = std::exp(best_theta[static_cast<std::size_t>(k)]);
-    find_neighbours(fitted);
-    std::vector<double> t = best_theta;
-    const LbfgsOutcome out = minimize_lbfgs(&objective, &pr, t, lb, ub, o.relative_tolerance, o.max_evaluations);
-    evaluations += out.evaluations;
-    best = out.objective;
-    best_theta = t;
-    best_outcome = out;
-  }
-  std::vector<double> se_log(static_cast<std::size_t>(nr), std::numeric_limits<double>::quiet_NaN());
-  if (o.standard_errors) {
-    se_log = log_range_errors(pr, best_theta);
-    evaluations += np + 2;
-  }
-  pr.evaluate(best_theta.data(), nullptr);
+  return r;
+}
 
-  std::vector<double> ranges(nr);
-  for (int k = 0; k < nr; ++k) ranges[k] = std::exp(best_theta[k]);
+// The structure at the fitted log ranges and nugget ratio, with sigma² (pr.sigma2, at best_theta).
+VariogramModel fitted_model(const ModelComponent& structure, const Profile& pr, const std::vector<double>& best_theta,
+                            const std::vector<double>& ranges, bool fit_nugget) {
+  const int nr = static_cast<int>(ranges.size());
   ModelComponent c = structure;
   c.sill = pr.sigma2;
   c.range = *std::max_element(ranges.begin(), ranges.end());
   std::vector<ModelComponent> comps{c};
-  if (o.fit_nugget) {
+  if (fit_nugget) {
     ModelComponent nug;
     nug.kind = ModelKind::Nugget;
     nug.sill = pr.sigma2 * std::exp(best_theta[nr]);
@@ -349,19 +336,15 @@ LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eige
     for (int k = 0; k < nr; ++k) mult[k] = ranges[k] / c.range;
     aniso = Anisotropy::ard(std::move(mult));
   }
-  res.model = VariogramModel(std::move(comps), std::move(aniso));
-  res.negative_log_likelihood = best;
-  res.evaluations = evaluations;
-  res.converged = best_outcome.converged;
-  res.message = best_outcome.message + " (best of " + std::to_string(runs) + " L-BFGS runs from " +
-                std::to_string(starts.size()) + " screened starts" +
-                (vecchia ? std::string("; Vecchia likelihood, ") + std::to_string(o.vecchia_neighbours) +
-                               " neighbours" + (pr.ard ? ", sets found again at the fitted ranges" : "")
-                         : std::string()) +
-                ")";
-  // A range on its box bound is no estimate: the likelihood still improved towards the bound. With
-  // one range (or all ARD ranges there) the fit has not found a model; one ARD range on its upper
-  // bound alone says the field hardly varies along that coordinate, which is an answer: noted only.
+  return VariogramModel(std::move(comps), std::move(aniso));
+}
+
+// A range on its box bound is no estimate: the likelihood still improved towards the bound. With
+// one range (or all ARD ranges there) the fit has not found a model; one ARD range on its upper
+// bound alone says the field hardly varies along that coordinate, which is an answer: noted only.
+void judge_bounds(const std::vector<double>& best_theta, const SearchBox& b, int nr, LikelihoodFitResult& res) {
+  const std::vector<double>& lb = b.lb;
+  const std::vector<double>& ub = b.ub;
   int at_upper = 0, at_lower = 0;
   std::string notes;
   for (int k = 0; k < nr; ++k) {
@@ -389,6 +372,78 @@ LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eige
   } else {
     res.message += notes;
   }
+}
+
+}  // namespace
+
+LikelihoodFitResult fit_profiled_likelihood(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z,
+                                            const Eigen::MatrixXd& f, const ModelComponent& structure,
+                                            const LikelihoodFitOptions& o) {
+  Profile pr;
+  pr.x = &x;
+  pr.z = &z;
+  pr.f = &f;
+  pr.corr = correlation_of(structure);
+  pr.ard = o.anisotropy == LikelihoodFitOptions::Anisotropy::Ard;
+  pr.fit_nugget = o.fit_nugget;
+  pr.restricted = o.restricted;
+  pr.dims = static_cast<int>(x.cols());
+  const int nr = pr.range_count();
+  const int np = nr + (o.fit_nugget ? 1 : 0);
+  const SearchBox box = search_box(x, pr, o, nr, np);
+  std::vector<std::vector<double>> starts = plain_starts(box, pr, o, nr, np);
+  // Vecchia: neighbour sets in the coordinates scaled by the initial model's ranges, else by the
+  // starting ranges' common shape (the extent along each coordinate with ARD; any common scale
+  // leaves isotropic sets unchanged), fixed
+  // during the search so that the objective is smooth, then found again at the fitted ranges and
+  // the search resumed from there (below).
+  const bool vecchia = likelihood_uses_vecchia(o, static_cast<long>(x.rows()));
+  VecchiaNeighbours neighbours;
+  auto find_neighbours = [&](const std::vector<double>& ranges) {
+    Eigen::MatrixXd scaled = x.transpose();
+    for (int k = 0; k < pr.dims; ++k) scaled.row(k) /= ranges[static_cast<std::size_t>(pr.ard ? k : 0)];
+    neighbours = find_vecchia_neighbours(scaled, o.vecchia_neighbours, o.vecchia_ordering);
+    pr.vecchia = &neighbours;
+  };
+  const std::vector<double> initial_ranges = add_initial_model_start(o, pr, box, nr, np, starts);
+  if (vecchia) find_neighbours(initial_ranges.empty() ? box.scale : initial_ranges);
+  Search search = search_from_screened(pr, starts, box, o);
+  if (!(search.best < kFailed))
+    throw InputError("likelihood: the covariance is not positive definite at any starting point (values or "
+                     "coordinates of extreme magnitude? rescale them to units of order 1)");
+  if (vecchia && pr.ard) {
+    std::vector<double> fitted(static_cast<std::size_t>(nr));
+    for (int k = 0; k < nr; ++k) fitted[static_cast<std::size_t>(k)] = std::exp(search.theta[static_cast<std::size_t>(k)]);
+    find_neighbours(fitted);
+    std::vector<double> t = search.theta;
+    const LbfgsOutcome out = minimize_lbfgs(&objective, &pr, t, box.lb, box.ub, o.relative_tolerance, o.max_evaluations);
+    search.evaluations += out.evaluations;
+    search.best = out.objective;
+    search.theta = t;
+    search.outcome = out;
+  }
+  const std::vector<double>& best_theta = search.theta;
+  std::vector<double> se_log(static_cast<std::size_t>(nr), std::numeric_limits<double>::quiet_NaN());
+  if (o.standard_errors) {
+    se_log = log_range_errors(pr, best_theta);
+    search.evaluations += np + 2;
+  }
+  pr.evaluate(best_theta.data(), nullptr);
+
+  std::vector<double> ranges(nr);
+  for (int k = 0; k < nr; ++k) ranges[k] = std::exp(best_theta[k]);
+  LikelihoodFitResult res;
+  res.model = fitted_model(structure, pr, best_theta, ranges, o.fit_nugget);
+  res.negative_log_likelihood = search.best;
+  res.evaluations = search.evaluations;
+  res.converged = search.outcome.converged;
+  res.message = search.outcome.message + " (best of " + std::to_string(search.runs) + " L-BFGS runs from " +
+                std::to_string(starts.size()) + " screened starts" +
+                (vecchia ? std::string("; Vecchia likelihood, ") + std::to_string(o.vecchia_neighbours) +
+                               " neighbours" + (pr.ard ? ", sets found again at the fitted ranges" : "")
+                         : std::string()) +
+                ")";
+  judge_bounds(best_theta, box, nr, res);
   res.parameters = np + 1;
   res.ranges = ranges;
   for (int k = 0; k < nr; ++k) res.range_standard_errors.push_back(ranges[k] * se_log[k]);

@@ -116,20 +116,10 @@ std::vector<double> sorted_angles(const std::vector<double>& angles, const std::
   return angles_of(s);
 }
 
-}  // namespace
-
-LikelihoodFitResult fit_rotated_likelihood(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z,
-                                           const Eigen::MatrixXd& f, const ModelComponent& structure,
-                                           const LikelihoodFitOptions& options) {
-  const int d = static_cast<int>(x.cols());
-  if (d != 2 && d != 3)
-    throw ArgumentError("likelihood: rotated anisotropy (gstat's anis) needs 2 or 3 coordinates, got " +
-                        std::to_string(d) + "; use ARD in other dimensions");
-  RotatedProfile pr{&x, &z, &f, structure, options};
-  pr.ard_options.anisotropy = LikelihoodFitOptions::Anisotropy::Ard;
-  pr.ard_options.initial_model.reset();  // its ranges are along the given axes, not the rotated ones
-  // Angle boxes: a rotation by 90 degrees swaps the roles of the axes (ARD's ranges absorb it), so
-  // 2-D needs [0, 90); 3-D azimuth [0, 180), dip and rotation [-90, 90).
+// The angles with the smallest profile likelihood: the centres of a coarse grid, then golden
+// sections along each angle in turn. Angle boxes: a rotation by 90 degrees swaps the roles of the
+// axes (ARD's ranges absorb it), so 2-D needs [0, 90); 3-D azimuth [0, 180), dip and rotation [-90, 90).
+std::vector<double> best_angles(RotatedProfile& pr, int d) {
   std::vector<double> lo, hi;
   std::vector<int> grid;
   if (d == 2) {
@@ -169,28 +159,35 @@ LikelihoodFitResult fit_rotated_likelihood(const Eigen::MatrixXd& x, const Eigen
       const double v = pr.value(t);
       if (v < best_value) best_value = v, best = t;
     }
-
   // 3-D: rewrite the frame with the longest range first (gstat wants ratios <= 1); the profile is
   // the same function of the frame, so the fit there is the same up to the optimizer's tolerance.
   if (na == 3) {
     const std::vector<double> sorted = sorted_angles(best, pr.fit_at(best).ranges);
     if (pr.value(sorted) <= best_value + 1e-6 * std::fabs(best_value)) best = sorted;
   }
-  LikelihoodFitResult r = pr.fit_at(best);
-  // Standard errors of the angles from the profile's curvature (step 1 degree; NaN if not convex).
-  std::vector<double> angle_se(na, std::numeric_limits<double>::quiet_NaN());
-  for (std::size_t k = 0; k < na; ++k) {
+  return best;
+}
+
+// Standard errors of the angles from the profile's curvature (step 1 degree; NaN if not convex).
+std::vector<double> angle_standard_errors(RotatedProfile& pr, const std::vector<double>& best, double nll) {
+  std::vector<double> angle_se(best.size(), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t k = 0; k < best.size(); ++k) {
     const double h = 1.0;
     std::vector<double> p = best, m = best;
     p[k] += h;
     m[k] -= h;
-    const double curvature_deg = (pr.value(p) - 2.0 * r.negative_log_likelihood + pr.value(m)) / (h * h);
+    const double curvature_deg = (pr.value(p) - 2.0 * nll + pr.value(m)) / (h * h);
     const double curvature_rad = curvature_deg * (180.0 / std::numbers::pi) * (180.0 / std::numbers::pi);
     if (curvature_rad > 0.0) angle_se[k] = std::sqrt(1.0 / curvature_rad) * (180.0 / std::numbers::pi);
   }
-  // ARD ranges on the rotated axes -> range = the one along the first axis, ratios to it. In 2-D
-  // the major axis is made the longer one (ratio <= 1, angle + 90 otherwise), as gstat writes it;
-  // in 3-D the frame was sorted above (ratios <= 1 unless the refit there moved).
+  return angle_se;
+}
+
+// ARD ranges on the rotated axes -> range = the one along the first axis, ratios to it. In 2-D
+// the major axis is made the longer one (ratio <= 1, angle + 90 otherwise), as gstat writes it;
+// in 3-D the frame was sorted (ratios <= 1 unless the refit there moved).
+void as_gstat_anisotropy(const std::vector<double>& best, LikelihoodFitResult& r) {
+  const std::size_t na = best.size();
   const std::vector<double> ranges = r.ranges;  // along the rotated axes
   std::vector<double> range_se = r.range_standard_errors;
   double angle0 = best[0];
@@ -216,8 +213,26 @@ LikelihoodFitResult fit_rotated_likelihood(const Eigen::MatrixXd& x, const Eigen
   }
   r.range_standard_errors = range_se;
   r.angles_deg.assign(gstat_anis.begin(), gstat_anis.begin() + static_cast<std::ptrdiff_t>(na));
+}
+
+}  // namespace
+
+LikelihoodFitResult fit_rotated_likelihood(const Eigen::MatrixXd& x, const Eigen::MatrixXd& z,
+                                           const Eigen::MatrixXd& f, const ModelComponent& structure,
+                                           const LikelihoodFitOptions& options) {
+  const int d = static_cast<int>(x.cols());
+  if (d != 2 && d != 3)
+    throw ArgumentError("likelihood: rotated anisotropy (gstat's anis) needs 2 or 3 coordinates, got " +
+                        std::to_string(d) + "; use ARD in other dimensions");
+  RotatedProfile pr{&x, &z, &f, structure, options};
+  pr.ard_options.anisotropy = LikelihoodFitOptions::Anisotropy::Ard;
+  pr.ard_options.initial_model.reset();  // its ranges are along the given axes, not the rotated ones
+  const std::vector<double> best = best_angles(pr, d);
+  LikelihoodFitResult r = pr.fit_at(best);
+  std::vector<double> angle_se = angle_standard_errors(pr, best, r.negative_log_likelihood);
+  as_gstat_anisotropy(best, r);
   r.angle_standard_errors_deg = angle_se;
-  r.parameters += static_cast<int>(na);
+  r.parameters += static_cast<int>(best.size());
   r.evaluations = pr.evaluations;
   r.message += "; angles by a profile search over " + std::to_string(pr.inner_fits) + " ARD fits";
   return r;

@@ -98,6 +98,112 @@ GlsFit gls(const Eigen::MatrixXd& w, Eigen::Index c, Eigen::Index p) {
   return r;
 }
 
+// One thread's buffers for one sample's conditional given its k <= mmax neighbours (column-major
+// k x k blocks, columns of leading dimension mmax): allocated once per thread, never per sample.
+struct ConditionalWorkspace {
+  ConditionalWorkspace(std::size_t mmax, std::size_t nv, std::size_t np)
+      : rcc(mmax * mmax), dcoef(mmax * mmax), r(mmax), dr_coef(mmax), r2(mmax), b(mmax), values(mmax * nv),
+        h(mmax * np), bdr(np), y(nv) {}
+  std::vector<double> rcc, dcoef, r, dr_coef, r2, b;
+  std::vector<double> values, h, bdr, y;
+};
+
+// R_cc (lower triangle, 1 + g on the diagonal) among the neighbours and r between them and the
+// sample, with the correlation's derivative coefficients and the squared lags to the sample.
+inline void neighbour_correlations(const Eigen::MatrixXd& u, const Correlation& corr, double g, int dims,
+                                   const double* us, const Eigen::Index* set, std::size_t k,
+                                   ConditionalWorkspace& ws) {
+  for (std::size_t a = 0; a < k; ++a) {
+    const double* ua = u.col(set[a]).data();
+    ws.rcc[a + a * k] = 1.0 + g;
+    for (std::size_t q = 0; q < a; ++q) {
+      const double* uq = u.col(set[q]).data();
+      double d2 = 0.0;
+      for (int e = 0; e < dims; ++e) d2 += (ua[e] - uq[e]) * (ua[e] - uq[e]);
+      double rho, dc;
+      corr(std::sqrt(d2), rho, dc);
+      ws.rcc[a + q * k] = rho;
+      ws.dcoef[a + q * k] = dc;
+    }
+    double d2 = 0.0;
+    for (int e = 0; e < dims; ++e) d2 += (ua[e] - us[e]) * (ua[e] - us[e]);
+    double rho, dc;
+    corr(std::sqrt(d2), rho, dc);
+    ws.r[a] = rho;
+    ws.dr_coef[a] = dc;
+    ws.r2[a] = d2;
+  }
+}
+
+// h_k = dr_k - dR_k b and b'dr_k, for the ranges (dR_ss = 0); the nugget's are set by the caller.
+inline void range_derivative_terms(const Eigen::MatrixXd& u, int dims, bool ard, const double* us,
+                                   const Eigen::Index* set, std::size_t k, std::size_t mmax,
+                                   ConditionalWorkspace& ws) {
+  std::vector<double>& h = ws.h;
+  std::vector<double>& bdr = ws.bdr;
+  const std::vector<double>& b = ws.b;
+  std::fill(h.begin(), h.end(), 0.0);
+  std::fill(bdr.begin(), bdr.end(), 0.0);
+  for (std::size_t a = 0; a < k; ++a) {
+    const double* ua = u.col(set[a]).data();
+    if (ard) {
+      for (int e = 0; e < dims; ++e) {
+        const double drk = -ws.dr_coef[a] * (ua[e] - us[e]) * (ua[e] - us[e]);
+        h[static_cast<std::size_t>(e) * mmax + a] += drk;
+        bdr[static_cast<std::size_t>(e)] += b[a] * drk;
+      }
+    } else {
+      const double drk = -ws.dr_coef[a] * ws.r2[a];
+      h[a] += drk;
+      bdr[0] += b[a] * drk;
+    }
+    for (std::size_t q = 0; q < a; ++q) {
+      const double dc = ws.dcoef[a + q * k];
+      if (dc == 0.0) continue;
+      const double* uq = u.col(set[q]).data();
+      if (ard) {
+        for (int e = 0; e < dims; ++e) {
+          const double t = -dc * (ua[e] - uq[e]) * (ua[e] - uq[e]);
+          h[static_cast<std::size_t>(e) * mmax + a] -= t * b[q];
+          h[static_cast<std::size_t>(e) * mmax + q] -= t * b[a];
+        }
+      } else {
+        double d2 = 0.0;
+        for (int e = 0; e < dims; ++e) d2 += (ua[e] - uq[e]) * (ua[e] - uq[e]);
+        h[a] += dc * d2 * b[q];
+        h[q] += dc * d2 * b[a];
+      }
+    }
+  }
+}
+
+// The whole likelihood's derivative from the per-sample pieces:
+// d nll = 0.5 C sum dd/d + (C m / S) sum e'(dy - dq beta) [+ C sum (G^-1 q_i)'dq_i for REML]
+void add_profile_gradient(const GlsFit& fit, const Eigen::MatrixXd& w, const Eigen::MatrixXd& dw,
+                          const Eigen::MatrixXd& dd_over_d, Eigen::Index c, Eigen::Index p, int np, double m,
+                          bool restricted, double* grad) {
+  const Eigen::Index n = w.rows(), nv = c + p;
+  const double cc = static_cast<double>(c);
+  const double scale = cc * m / fit.s;
+  Eigen::VectorXd weight(nv), gq(p);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    for (Eigen::Index v = 0; v < c; ++v) weight[v] = scale * fit.e(i, v);
+    if (p > 0) {
+      if (restricted) gq = fit.g.solve(w.row(i).tail(p).transpose());
+      for (Eigen::Index a = 0; a < p; ++a) {
+        double t = restricted ? cc * gq[a] : 0.0;
+        for (Eigen::Index v = 0; v < c; ++v) t -= scale * fit.e(i, v) * fit.beta(a, v);
+        weight[c + a] = t;
+      }
+    }
+    for (int t = 0; t < np; ++t) {
+      double gt = 0.5 * cc * dd_over_d(i, t);
+      for (Eigen::Index v = 0; v < nv; ++v) gt += weight[v] * dw(i, t * nv + v);
+      grad[t] += gt;
+    }
+  }
+}
+
 }  // namespace
 
 double vecchia_profiled_nll(const Eigen::MatrixXd& u, const Eigen::MatrixXd& z, const Eigen::MatrixXd& f,
@@ -117,35 +223,21 @@ double vecchia_profiled_nll(const Eigen::MatrixXd& u, const Eigen::MatrixXd& z, 
   int failed = 0;
 #pragma omp parallel reduction(+ : failed)
   {
-    std::vector<double> rcc(mmax * mmax), dcoef(mmax * mmax), r(mmax), dr_coef(mmax), r2(mmax), b(mmax);
-    std::vector<double> values(mmax * static_cast<std::size_t>(nv)), h(mmax * static_cast<std::size_t>(np)),
-        bdr(static_cast<std::size_t>(np)), y(static_cast<std::size_t>(nv));
+    ConditionalWorkspace ws(mmax, static_cast<std::size_t>(nv), static_cast<std::size_t>(np));
+    std::vector<double>& rcc = ws.rcc;
+    std::vector<double>& r = ws.r;
+    std::vector<double>& b = ws.b;
+    std::vector<double>& values = ws.values;
+    std::vector<double>& h = ws.h;
+    std::vector<double>& bdr = ws.bdr;
+    std::vector<double>& y = ws.y;
 #pragma omp for schedule(dynamic, 64)
     for (Eigen::Index i = 0; i < n; ++i) {
       const Eigen::Index s = nb.order[static_cast<std::size_t>(i)];
       const std::size_t k = nb.offsets[static_cast<std::size_t>(i) + 1] - nb.offsets[static_cast<std::size_t>(i)];
       const Eigen::Index* set = nb.sets.data() + nb.offsets[static_cast<std::size_t>(i)];
       const double* us = u.col(s).data();
-      for (std::size_t a = 0; a < k; ++a) {
-        const double* ua = u.col(set[a]).data();
-        rcc[a + a * k] = 1.0 + g;
-        for (std::size_t q = 0; q < a; ++q) {
-          const double* uq = u.col(set[q]).data();
-          double d2 = 0.0;
-          for (int e = 0; e < dims; ++e) d2 += (ua[e] - uq[e]) * (ua[e] - uq[e]);
-          double rho, dc;
-          corr(std::sqrt(d2), rho, dc);
-          rcc[a + q * k] = rho;
-          dcoef[a + q * k] = dc;
-        }
-        double d2 = 0.0;
-        for (int e = 0; e < dims; ++e) d2 += (ua[e] - us[e]) * (ua[e] - us[e]);
-        double rho, dc;
-        corr(std::sqrt(d2), rho, dc);
-        r[a] = rho;
-        dr_coef[a] = dc;
-        r2[a] = d2;
-      }
+      neighbour_correlations(u, corr, g, dims, us, set, k, ws);
       if (k > 0 && !cholesky(rcc.data(), k)) {
         ++failed;
         continue;
@@ -170,46 +262,13 @@ double vecchia_profiled_nll(const Eigen::MatrixXd& u, const Eigen::MatrixXd& z, 
       if (!want) continue;
       // R_cc^-1 v_c for each column (overwriting v_c: the gradient needs only these).
       solve(rcc.data(), k, values.data(), static_cast<std::size_t>(nv), mmax);
-      // h_k = dr_k - dR_k b and b'dr_k, for the ranges (dR_ss = 0) and the nugget (dR = g I, dr = 0).
-      std::fill(h.begin(), h.end(), 0.0);
-      std::fill(bdr.begin(), bdr.end(), 0.0);
-      for (std::size_t a = 0; a < k; ++a) {
-        const double* ua = u.col(set[a]).data();
-        if (ard) {
-          for (int e = 0; e < dims; ++e) {
-            const double drk = -dr_coef[a] * (ua[e] - us[e]) * (ua[e] - us[e]);
-            h[static_cast<std::size_t>(e) * mmax + a] += drk;
-            bdr[static_cast<std::size_t>(e)] += b[a] * drk;
-          }
-        } else {
-          const double drk = -dr_coef[a] * r2[a];
-          h[a] += drk;
-          bdr[0] += b[a] * drk;
-        }
-        for (std::size_t q = 0; q < a; ++q) {
-          const double dc = dcoef[a + q * k];
-          if (dc == 0.0) continue;
-          const double* uq = u.col(set[q]).data();
-          if (ard) {
-            for (int e = 0; e < dims; ++e) {
-              const double t = -dc * (ua[e] - uq[e]) * (ua[e] - uq[e]);
-              h[static_cast<std::size_t>(e) * mmax + a] -= t * b[q];
-              h[static_cast<std::size_t>(e) * mmax + q] -= t * b[a];
-            }
-          } else {
-            double d2 = 0.0;
-            for (int e = 0; e < dims; ++e) d2 += (ua[e] - uq[e]) * (ua[e] - uq[e]);
-            h[a] += dc * d2 * b[q];
-            h[q] += dc * d2 * b[a];
-          }
-        }
-      }
+      range_derivative_terms(u, dims, ard, us, set, k, mmax, ws);
       for (int t = 0; t < np; ++t) {
         double* ht = h.data() + static_cast<std::size_t>(t) * mmax;
         double dd;
         if (t < nr) {
           dd = -bdr[static_cast<std::size_t>(t)] - dot(b.data(), ht, k);
-        } else {
+        } else {  // the nugget: dR = g I, dr = 0
           for (std::size_t a = 0; a < k; ++a) ht[a] = -g * b[a];
           dd = g * (1.0 + dot(b.data(), b.data(), k));
         }
@@ -233,25 +292,7 @@ double vecchia_profiled_nll(const Eigen::MatrixXd& u, const Eigen::MatrixXd& z, 
   const double nll = 0.5 * (cc * logdet + (restricted ? cc * fit.logdet_g : 0.0) + cc * m * std::log(s2) +
                             cc * m * (1.0 + std::log(2.0 * std::numbers::pi)));
   if (!want) return nll;
-  // d nll = 0.5 C sum dd/d + (C m / S) sum e'(dy - dq beta) [+ C sum (G^-1 q_i)'dq_i for REML]
-  const double scale = cc * m / fit.s;
-  Eigen::VectorXd weight(nv), gq(p);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    for (Eigen::Index v = 0; v < c; ++v) weight[v] = scale * fit.e(i, v);
-    if (p > 0) {
-      if (restricted) gq = fit.g.solve(w.row(i).tail(p).transpose());
-      for (Eigen::Index a = 0; a < p; ++a) {
-        double t = restricted ? cc * gq[a] : 0.0;
-        for (Eigen::Index v = 0; v < c; ++v) t -= scale * fit.e(i, v) * fit.beta(a, v);
-        weight[c + a] = t;
-      }
-    }
-    for (int t = 0; t < np; ++t) {
-      double gt = 0.5 * cc * dd_over_d(i, t);
-      for (Eigen::Index v = 0; v < nv; ++v) gt += weight[v] * dw(i, t * nv + v);
-      grad[t] += gt;
-    }
-  }
+  add_profile_gradient(fit, w, dw, dd_over_d, c, p, np, m, restricted, grad);
   return nll;
 }
 

@@ -71,60 +71,78 @@ std::string refusal_reason(const std::string& status) {
   return status;
 }
 
-}  // namespace
-
-std::vector<JointVector> solutions_on_configuration(const robot::MdhModel& nominal, const Eigen::Isometry3d& target,
-                                                    const std::function<bool(const JointVector&)>& wanted,
-                                                    const std::optional<JointVector>& near_deg) {
+// One model per tool: compensate's --tool (the working tool, in the model's flange frame).
+struct ToolGroup {
+  compensation::CompensationModel model;
+  robot::MdhModel nominal;
+  std::vector<std::size_t> rows;
   std::vector<JointVector> seeds;
-  if (near_deg) seeds.push_back(*near_deg);
-  const JointVector lo = nominal.q_min_deg(), hi = nominal.q_max_deg();
-  for (double f1 : {0.5, 0.2, 0.8, 0.05, 0.35, 0.65, 0.95})
-    for (double f3 : {0.5, 0.15, 0.85})
-      for (double f5 : {0.3, 0.7}) {
-        JointVector s;
-        const double f[6] = {f1, 0.5, f3, 0.5, f5, 0.5};
-        for (int k = 0; k < 6; ++k) s[k] = lo[k] + f[k] * (hi[k] - lo[k]);
-        seeds.push_back(s);
-      }
-  std::vector<JointVector> found;
-  for (const JointVector& seed : seeds) {
-    const robot::IkResult ik = robot::inverse_kinematics(nominal, target, seed);
-    if (!ik.ok()) continue;
-    for (const JointVector& v : variants(nominal, ik.q_deg, target)) {
-      if (wanted && !wanted(v)) continue;
-      const bool known = std::any_of(found.begin(), found.end(), [&](const JointVector& f) { return joint_distance(f, v) < kSameSolutionDeg; });
-      if (!known) found.push_back(v);
-    }
-  }
-  if (near_deg)
-    std::stable_sort(found.begin(), found.end(), [&](const JointVector& a, const JointVector& b) {
-      return (a - *near_deg).norm() < (b - *near_deg).norm();
-    });
-  return found;
+};
+
+std::string tool_key(const Eigen::Isometry3d& t) {
+  std::string k;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 4; ++j) k += std::to_string(t.matrix()(i, j)) + ",";
+  return k;
 }
 
-ProgramCompensation compensate_program_targets(const compensation::CompensationModel& model,
+// The nominal joints the controller would take: on the requested configuration, or (configuration
+// ignored or none asked) the solution nearest the previous target's. Empty when the target is refused
+// (the row says why); a kept seed may still leave a note in the row's reason.
+std::optional<JointVector> controller_joints(const ToolGroup& g, const Eigen::Isometry3d& target,
+                                             const ConfigurationRequest& conf,
+                                             const std::optional<JointVector>& previous, ProgramReportRow& row) {
+  const robot::MdhModel& nominal = g.nominal;
+  std::optional<JointVector> seed;
+  if (conf.matches && !conf.ignored) {
+    // The quick answers first (the previous target's branch, compensate's own start), the search
+    // over every solution only when neither is on the requested configuration.
+    if (previous) {
+      const robot::IkResult ik = robot::inverse_kinematics(nominal, target, *previous);
+      if (ik.ok() && conf.matches(ik.q_deg)) seed = ik.q_deg;
+    }
+    if (!seed) {
+      const compensation::BranchIkResult ik = compensation::solve_on_branch(nominal, target, g.model.data_joints());
+      if (ik.ok() && conf.matches(ik.ik.q_deg)) seed = ik.ik.q_deg;
+    }
+    const auto on = seed ? std::vector<JointVector>{*seed} : solutions_on_configuration(nominal, target, conf.matches, previous);
+    if (on.empty()) {
+      row.status = kStatusRefused;
+      row.reason = "configuration " + conf.text + " matches no joint solution of the target (a placeholder? the "
+                   "controller would refuse the move unless the configuration check is off)";
+      return std::nullopt;
+    }
+    return on.front();
+  }
+  if (previous) {
+    const robot::IkResult ik = robot::inverse_kinematics(nominal, target, *previous);
+    if (ik.ok()) seed = ik.q_deg;
+  }
+  if (!seed) {
+    const compensation::BranchIkResult ik = compensation::solve_on_branch(nominal, target, g.model.data_joints());
+    if (ik.ok()) seed = ik.ik.q_deg;
+  }
+  if (!seed) {
+    row.status = kStatusRefused;
+    row.reason = "unreachable: no joint solution reaches the target";
+    return std::nullopt;
+  }
+  std::string how = previous ? "the solution nearest the previous target's joints" : "the solution nearest the model's training joints";
+  if (conf.ignored) {
+    const bool match = conf.matches && conf.matches(*seed);
+    row.reason = conf.off_by + ": configuration " + conf.text + (match ? " kept" : " not matched") + "; " + how + " is used";
+  } else {
+    row.reason = "no configuration given: " + how + " is used";
+  }
+  return seed;
+}
+
+// Every literal target into its tool's group with its seed joints; what cannot be compensated
+// (computed, joints, refused by the reader, a bad tool, no solution) gets its row's status here.
+std::map<std::string, ToolGroup> group_by_tool(const compensation::CompensationModel& model,
                                                const robot::MdhModel& nominal_robot,
-                                               const std::vector<ProgramTarget>& targets,
-                                               const ProgramCompensationOptions& options) {
-  using compensation::CompensationModel;
-  ProgramCompensation out;
-  out.rows.resize(targets.size());
-  // One model per tool: compensate's --tool (the working tool, in the model's flange frame).
-  struct ToolGroup {
-    CompensationModel model;
-    robot::MdhModel nominal;
-    std::vector<std::size_t> rows;
-    std::vector<JointVector> seeds;
-  };
+                                               const std::vector<ProgramTarget>& targets, ProgramCompensation& out) {
   std::map<std::string, ToolGroup> groups;
-  auto tool_key = [](const Eigen::Isometry3d& t) {
-    std::string k;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 4; ++j) k += std::to_string(t.matrix()(i, j)) + ",";
-    return k;
-  };
   std::optional<JointVector> previous;  // the nominal joints of the previous literal target
   for (std::size_t i = 0; i < targets.size(); ++i) {
     const ProgramTarget& t = targets[i];
@@ -147,7 +165,7 @@ ProgramCompensation compensate_program_targets(const compensation::CompensationM
     if (g == groups.end()) {
       try {
         compensation::check_tool_point(t.tool, "tool " + t.tool_name);
-        CompensationModel with_tool = model.with_working_tool(model.tool_in_model_frame(t.tool));
+        compensation::CompensationModel with_tool = model.with_working_tool(model.tool_in_model_frame(t.tool));
         robot::MdhModel nominal = compensation::nominal_at_working_tool(with_tool, nominal_robot);
         g = groups.emplace(key, ToolGroup{std::move(with_tool), std::move(nominal), {}, {}}).first;
       } catch (const Error& e) {
@@ -156,60 +174,23 @@ ProgramCompensation compensate_program_targets(const compensation::CompensationM
         continue;
       }
     }
-    const robot::MdhModel& nominal = g->second.nominal;
-    const Eigen::Isometry3d target = t.frame * t.pose_in_frame;
-    // The nominal joints the controller would take: on the requested configuration, or (configuration
-    // ignored or none asked) the solution nearest the previous target's.
-    std::optional<JointVector> seed;
-    const ConfigurationRequest& conf = t.configuration;
-    if (conf.matches && !conf.ignored) {
-      // The quick answers first (the previous target's branch, compensate's own start), the search
-      // over every solution only when neither is on the requested configuration.
-      if (previous) {
-        const robot::IkResult ik = robot::inverse_kinematics(nominal, target, *previous);
-        if (ik.ok() && conf.matches(ik.q_deg)) seed = ik.q_deg;
-      }
-      if (!seed) {
-        const compensation::BranchIkResult ik = compensation::solve_on_branch(nominal, target, g->second.model.data_joints());
-        if (ik.ok() && conf.matches(ik.ik.q_deg)) seed = ik.ik.q_deg;
-      }
-      const auto on = seed ? std::vector<JointVector>{*seed} : solutions_on_configuration(nominal, target, conf.matches, previous);
-      if (on.empty()) {
-        row.status = kStatusRefused;
-        row.reason = "configuration " + conf.text + " matches no joint solution of the target (a placeholder? the "
-                     "controller would refuse the move unless the configuration check is off)";
-        continue;
-      }
-      seed = on.front();
-    } else {
-      if (previous) {
-        const robot::IkResult ik = robot::inverse_kinematics(nominal, target, *previous);
-        if (ik.ok()) seed = ik.q_deg;
-      }
-      if (!seed) {
-        const compensation::BranchIkResult ik = compensation::solve_on_branch(nominal, target, g->second.model.data_joints());
-        if (ik.ok()) seed = ik.ik.q_deg;
-      }
-      if (!seed) {
-        row.status = kStatusRefused;
-        row.reason = "unreachable: no joint solution reaches the target";
-        continue;
-      }
-      std::string how = previous ? "the solution nearest the previous target's joints" : "the solution nearest the model's training joints";
-      if (conf.ignored) {
-        const bool match = conf.matches && conf.matches(*seed);
-        row.reason = conf.off_by + ": configuration " + conf.text + (match ? " kept" : " not matched") + "; " + how + " is used";
-      } else {
-        row.reason = "no configuration given: " + how + " is used";
-      }
-    }
+    const std::optional<JointVector> seed = controller_joints(g->second, t.frame * t.pose_in_frame, t.configuration, previous, row);
+    if (!seed) continue;
     previous = seed;
     g->second.rows.push_back(i);
     g->second.seeds.push_back(*seed);
   }
-  // compensate's computation, once per tool, on poses in the robot base frame with the joints found
-  // above as each row's seed (the configuration compensate holds the row to).
-  std::map<std::size_t, Eigen::Isometry3d> new_pose;  // row -> new pose in the target's frame
+  return groups;
+}
+
+// compensate's computation, once per tool, on poses in the robot base frame with the joints found
+// above as each row's seed (the configuration compensate holds the row to). Returns row -> new pose
+// in the target's frame.
+std::map<std::size_t, Eigen::Isometry3d> compensate_groups(std::map<std::string, ToolGroup>& groups,
+                                                           const std::vector<ProgramTarget>& targets,
+                                                           const ProgramCompensationOptions& options,
+                                                           ProgramCompensation& out) {
+  std::map<std::size_t, Eigen::Isometry3d> new_pose;
   for (auto& [key, g] : groups) {
     compensation::CompensationTargets ct;
     ct.poses.resize(static_cast<Eigen::Index>(g.rows.size()), 6);
@@ -249,7 +230,12 @@ ProgramCompensation compensate_program_targets(const compensation::CompensationM
       new_pose[i] = moved;
     }
   }
-  // Declared targets: one rewrite for all their uses, only when every use asks for the same.
+  return new_pose;
+}
+
+// Declared targets: one rewrite for all their uses, only when every use asks for the same.
+std::vector<bool> rows_to_rewrite(const std::vector<ProgramTarget>& targets,
+                                  const std::map<std::size_t, Eigen::Isometry3d>& new_pose, ProgramCompensation& out) {
   std::map<std::string, std::vector<std::size_t>> shared;
   for (std::size_t i = 0; i < targets.size(); ++i)
     if (targets[i].kind == TargetKind::literal && !targets[i].shared_key.empty()) shared[targets[i].shared_key].push_back(i);
@@ -283,6 +269,51 @@ ProgramCompensation compensate_program_targets(const compensation::CompensationM
         out.rows[i].rotation_mdeg.setConstant(std::numeric_limits<double>::quiet_NaN());
       }
   }
+  return write;
+}
+
+}  // namespace
+
+std::vector<JointVector> solutions_on_configuration(const robot::MdhModel& nominal, const Eigen::Isometry3d& target,
+                                                    const std::function<bool(const JointVector&)>& wanted,
+                                                    const std::optional<JointVector>& near_deg) {
+  std::vector<JointVector> seeds;
+  if (near_deg) seeds.push_back(*near_deg);
+  const JointVector lo = nominal.q_min_deg(), hi = nominal.q_max_deg();
+  for (double f1 : {0.5, 0.2, 0.8, 0.05, 0.35, 0.65, 0.95})
+    for (double f3 : {0.5, 0.15, 0.85})
+      for (double f5 : {0.3, 0.7}) {
+        JointVector s;
+        const double f[6] = {f1, 0.5, f3, 0.5, f5, 0.5};
+        for (int k = 0; k < 6; ++k) s[k] = lo[k] + f[k] * (hi[k] - lo[k]);
+        seeds.push_back(s);
+      }
+  std::vector<JointVector> found;
+  for (const JointVector& seed : seeds) {
+    const robot::IkResult ik = robot::inverse_kinematics(nominal, target, seed);
+    if (!ik.ok()) continue;
+    for (const JointVector& v : variants(nominal, ik.q_deg, target)) {
+      if (wanted && !wanted(v)) continue;
+      const bool known = std::any_of(found.begin(), found.end(), [&](const JointVector& f) { return joint_distance(f, v) < kSameSolutionDeg; });
+      if (!known) found.push_back(v);
+    }
+  }
+  if (near_deg)
+    std::stable_sort(found.begin(), found.end(), [&](const JointVector& a, const JointVector& b) {
+      return (a - *near_deg).norm() < (b - *near_deg).norm();
+    });
+  return found;
+}
+
+ProgramCompensation compensate_program_targets(const compensation::CompensationModel& model,
+                                               const robot::MdhModel& nominal_robot,
+                                               const std::vector<ProgramTarget>& targets,
+                                               const ProgramCompensationOptions& options) {
+  ProgramCompensation out;
+  out.rows.resize(targets.size());
+  std::map<std::string, ToolGroup> groups = group_by_tool(model, nominal_robot, targets, out);
+  std::map<std::size_t, Eigen::Isometry3d> new_pose = compensate_groups(groups, targets, options, out);
+  const std::vector<bool> write = rows_to_rewrite(targets, new_pose, out);
   for (std::size_t i = 0; i < targets.size(); ++i) {
     if (out.rows[i].status == kStatusOk) out.largest_correction_mm = std::max(out.largest_correction_mm, out.rows[i].d_mm.norm());
     if (!write[i]) continue;

@@ -389,168 +389,211 @@ std::string ImportedMeasurements::csv() const {
   return out;
 }
 
-ImportedMeasurements import_measurements(const CsvTable& t, const ImportOptions& o) {
-  o.validate();
-  const std::string& src = t.source();
-  if (t.row_count() == 0) throw InputError(src + ": no data rows below the header", src);
+namespace {
 
-  const Group joints = find_group(t, o, kJoints, "joints q1..q6");
-  const bool from_target = o.position_from != PositionFrom::measured;
-  const Group measured = from_target ? Group{} : find_group(t, o, kMeasured, "measured position mx,my,mz");
-  const Group target = from_target ? find_group(t, o, kTarget, "target position tx,ty,tz") : Group{};
-  const Group difference = from_target ? find_group(t, o, kDifference, "difference dx,dy,dz") : Group{};
-  if (from_target && (!target.present() || !difference.present()))
+constexpr std::size_t kAbsent = static_cast<std::size_t>(-1);
+
+// Where each quantity is in the file: groups of columns, orientations, and the optional single
+// columns (their index, or kAbsent).
+struct SourceColumns {
+  Group joints, measured, target, difference, flange;
+  Orientation orientation, flange_orientation;
+  bool from_target = false;
+  std::size_t temperature = kAbsent, time = kAbsent, point = kAbsent;
+};
+
+// Every column the options name or imply, refusing a file that lacks what an import needs.
+SourceColumns find_columns(const CsvTable& t, const ImportOptions& o) {
+  const std::string& src = t.source();
+  SourceColumns c;
+  c.joints = find_group(t, o, kJoints, "joints q1..q6");
+  c.from_target = o.position_from != PositionFrom::measured;
+  const bool from_target = c.from_target;
+  c.measured = from_target ? Group{} : find_group(t, o, kMeasured, "measured position mx,my,mz");
+  c.target = from_target ? find_group(t, o, kTarget, "target position tx,ty,tz") : Group{};
+  c.difference = from_target ? find_group(t, o, kDifference, "difference dx,dy,dz") : Group{};
+  if (from_target && (!c.target.present() || !c.difference.present()))
     throw InputError(src + ": --position-from " +
                          (o.position_from == PositionFrom::target_plus_difference ? "target+dif" : "target-dif") +
                          " needs the target tx,ty,tz and the difference dx,dy,dz (map them with --map tx=COLUMN,...)",
-                     src, 1, target.present() ? "dx" : "tx");
-  if (!from_target && !measured.present())
+                     src, 1, c.target.present() ? "dx" : "tx");
+  if (!from_target && !c.measured.present())
     throw InputError(src + ": no measured position: map mx,my,mz (--map mx=COLUMN,...), or a target and a difference "
                          "(tx..tz, dx..dz with --position-from target+dif or target-dif)",
                      src, 1, "mx");
-  const Orientation orientation =
-      find_orientation(t, o, kEulerByAxis, &kEulerBySequence, kQuaternion, "mq", "measured orientation");
-  const Group flange = find_group(t, o, kFlangePosition, "flange position flange_x..flange_z");
-  const Orientation flange_orientation =
+  c.orientation = find_orientation(t, o, kEulerByAxis, &kEulerBySequence, kQuaternion, "mq", "measured orientation");
+  c.flange = find_group(t, o, kFlangePosition, "flange position flange_x..flange_z");
+  c.flange_orientation =
       find_orientation(t, o, kFlangeEuler, nullptr, kFlangeQuaternion, "flange_q", "flange orientation");
-  if (flange.present() != (flange_orientation.kind != Orientation::Kind::none))
+  if (c.flange.present() != (c.flange_orientation.kind != Orientation::Kind::none))
     throw InputError(src + ": a flange pose needs its position and its orientation (flange_x..flange_z and "
                          "flange_qw..flange_qz or flange_rx..flange_rz)",
-                     src, 1, flange.present() ? "flange_qw" : "flange_x");
-  if (!joints.present() && !flange.present()) {
+                     src, 1, c.flange.present() ? "flange_qw" : "flange_x");
+  if (!c.joints.present() && !c.flange.present()) {
     std::string available;
     for (const std::string& h : t.header()) available += (available.empty() ? "" : ", ") + h;
     throw InputError(src + ": no joints q1..q6 (map them: --map q1=COLUMN,...,q6=COLUMN) and no flange pose; the "
                          "file's columns are: " + available,
                      src, 1, "q1");
   }
-  // Optional columns: their index, or kAbsent.
-  constexpr std::size_t kAbsent = static_cast<std::size_t>(-1);
   const auto optional_column = [&](const char* name) {
     return t.has_column(o.column_for(name)) ? t.column_index(o.column_for(name)) : kAbsent;
   };
-  const std::size_t temperature = optional_column("temperature_c");
-  std::size_t time = optional_column("time");
-  const std::size_t point = optional_column("point");
+  c.temperature = optional_column("temperature_c");
+  c.time = optional_column("time");
+  c.point = optional_column("point");
   for (const char* name : {"temperature_c", "time", "point"})
     if (o.mapped(name)) (void)t.column_index(o.column_for(name));  // a mapped column must exist: say which
+  return c;
+}
 
-  ImportedMeasurements out;
-  out.notes = o.notes;
-  // Timestamps a spreadsheet rounded are dropped whole: some rows' times and not others' would be
-  // worse than none.
-  if (time != kAbsent) {
-    std::size_t rounded = 0;
-    std::string example;
-    for (std::size_t r = 0; r < t.row_count(); ++r)
-      if (spreadsheet_rounded(t.cell(r, time))) {
-        if (rounded++ == 0) example = std::string(t.cell(r, time));
-      }
-    if (rounded > 0) {
-      out.notes.push_back("column '" + t.header()[time] + "' dropped: " + std::to_string(rounded) + " of " +
-                          std::to_string(t.row_count()) + " cells are a spreadsheet's rounding ('" + example +
-                          "': a few significant digits of a long number), not a time");
-      time = kAbsent;
+// Timestamps a spreadsheet rounded are dropped whole: some rows' times and not others' would be
+// worse than none. Returns the time column to keep (kAbsent when dropped), noting why in `notes`.
+std::size_t time_column_kept(const CsvTable& t, std::size_t time, std::vector<std::string>& notes) {
+  if (time == kAbsent) return time;
+  std::size_t rounded = 0;
+  std::string example;
+  for (std::size_t r = 0; r < t.row_count(); ++r)
+    if (spreadsheet_rounded(t.cell(r, time))) {
+      if (rounded++ == 0) example = std::string(t.cell(r, time));
     }
-  }
+  if (rounded == 0) return time;
+  notes.push_back("column '" + t.header()[time] + "' dropped: " + std::to_string(rounded) + " of " +
+                  std::to_string(t.row_count()) + " cells are a spreadsheet's rounding ('" + example +
+                  "': a few significant digits of a long number), not a time");
+  return kAbsent;
+}
 
+struct RowValues {
+  std::array<double, 6> q{};
+  Eigen::Vector3d position, flange_position;
+  Eigen::Matrix3d rotation, flange_rotation;
+};
+
+// Every row's numbers in errfield's units (mm, degrees), checked as a whole for units that look
+// wrong before anything is written.
+std::vector<RowValues> read_values(const CsvTable& t, const ImportOptions& o, const SourceColumns& c) {
   std::vector<std::array<double, 6>> all_joints;
   std::vector<Eigen::Vector3d> positions, flange_positions;
-  struct RowValues {
-    std::array<double, 6> q{};
-    Eigen::Vector3d position, flange_position;
-    Eigen::Matrix3d rotation, flange_rotation;
-  };
   std::vector<RowValues> values(t.row_count());
   const double length = length_scale(o.length_unit);
   for (std::size_t r = 0; r < t.row_count(); ++r) {
     RowValues& v = values[r];
-    if (joints.present()) {
+    if (c.joints.present()) {
       for (std::size_t j = 0; j < 6; ++j)
-        v.q[j] = decimal_cell(t, r, joints.columns[j], o.decimal) * angle_scale_deg(o.joint_unit);
+        v.q[j] = decimal_cell(t, r, c.joints.columns[j], o.decimal) * angle_scale_deg(o.joint_unit);
       all_joints.push_back(v.q);
     }
     for (int k = 0; k < 3; ++k) {
-      const auto c = static_cast<std::size_t>(k);
-      if (from_target) {
+      const auto i = static_cast<std::size_t>(k);
+      if (c.from_target) {
         const double sign = o.position_from == PositionFrom::target_plus_difference ? 1.0 : -1.0;
-        v.position[k] = (decimal_cell(t, r, target.columns[c], o.decimal) +
-                         sign * decimal_cell(t, r, difference.columns[c], o.decimal)) *
+        v.position[k] = (decimal_cell(t, r, c.target.columns[i], o.decimal) +
+                         sign * decimal_cell(t, r, c.difference.columns[i], o.decimal)) *
                         length;
       } else {
-        v.position[k] = decimal_cell(t, r, measured.columns[c], o.decimal) * length;
+        v.position[k] = decimal_cell(t, r, c.measured.columns[i], o.decimal) * length;
       }
     }
     positions.push_back(v.position);
-    if (orientation.kind != Orientation::Kind::none) v.rotation = read_rotation(t, r, orientation, o);
-    if (flange.present()) {
+    if (c.orientation.kind != Orientation::Kind::none) v.rotation = read_rotation(t, r, c.orientation, o);
+    if (c.flange.present()) {
       for (int k = 0; k < 3; ++k)
-        v.flange_position[k] = decimal_cell(t, r, flange.columns[static_cast<std::size_t>(k)], o.decimal) *
+        v.flange_position[k] = decimal_cell(t, r, c.flange.columns[static_cast<std::size_t>(k)], o.decimal) *
                                length_scale(o.flange_length_unit);
       flange_positions.push_back(v.flange_position);
-      v.flange_rotation = read_rotation(t, r, flange_orientation, o);
+      v.flange_rotation = read_rotation(t, r, c.flange_orientation, o);
     }
   }
   check_joints(t, all_joints, o);
   check_lengths(t, positions, o.length_unit, "measured positions", "--length-units", o);
-  if (flange.present()) check_lengths(t, flange_positions, o.flange_length_unit, "flange positions", "--flange-length-units", o);
+  if (c.flange.present()) check_lengths(t, flange_positions, o.flange_length_unit, "flange positions", "--flange-length-units", o);
+  return values;
+}
 
-  out.header = {"point"};
-  if (joints.present()) out.header.insert(out.header.end(), kJoints.begin(), kJoints.end());
-  out.header.insert(out.header.end(), kMeasured.begin(), kMeasured.end());
-  if (orientation.kind != Orientation::Kind::none)
-    out.header.insert(out.header.end(), kEulerByAxis.begin(), kEulerByAxis.end());
-  if (flange.present()) {
-    out.header.insert(out.header.end(), kFlangePosition.begin(), kFlangePosition.end());
-    out.header.insert(out.header.end(), kFlangeEuler.begin(), kFlangeEuler.end());
+std::vector<std::string> output_header(const SourceColumns& c, const ImportOptions& o) {
+  std::vector<std::string> header = {"point"};
+  if (c.joints.present()) header.insert(header.end(), kJoints.begin(), kJoints.end());
+  header.insert(header.end(), kMeasured.begin(), kMeasured.end());
+  if (c.orientation.kind != Orientation::Kind::none) header.insert(header.end(), kEulerByAxis.begin(), kEulerByAxis.end());
+  if (c.flange.present()) {
+    header.insert(header.end(), kFlangePosition.begin(), kFlangePosition.end());
+    header.insert(header.end(), kFlangeEuler.begin(), kFlangeEuler.end());
   }
-  if (temperature != kAbsent) out.header.emplace_back("temperature_c");
-  if (time != kAbsent) out.header.emplace_back("time");
-  if (!o.series.empty()) out.header.emplace_back("series");
+  if (c.temperature != kAbsent) header.emplace_back("temperature_c");
+  if (c.time != kAbsent) header.emplace_back("time");
+  if (!o.series.empty()) header.emplace_back("series");
+  return header;
+}
 
+// A time cell: a number (a timestamp such as 20200714163904, seconds) in errfield's decimal point;
+// any other text (an ISO date) as given.
+std::string time_text(std::string_view cell, char decimal) {
+  std::string text(cell);
+  if (decimal == ',') std::replace(text.begin(), text.end(), ',', '.');
+  double seconds = 0.0;
+  const auto res = std::from_chars(text.data(), text.data() + text.size(), seconds);
+  return res.ec == std::errc() && res.ptr == text.data() + text.size() && std::isfinite(seconds) &&
+                 cell.find_first_of("eE") == std::string_view::npos
+             ? text
+             : std::string(cell);
+}
+
+// The point's name: the file's, or the row's number; names must be present and unique.
+std::string point_name(const CsvTable& t, std::size_t r, std::size_t point,
+                       std::map<std::string, std::size_t>& line_of_point) {
+  const std::string& src = t.source();
+  std::string name = point != kAbsent ? std::string(t.cell(r, point)) : std::to_string(r + 1);
+  if (name.empty())
+    throw InputError(line_of(t, r) + ": column '" + t.header()[point] + "' is empty; expected the point's name", src,
+                     t.line_of_row(r), t.header()[point]);
+  if (const auto [it, fresh] = line_of_point.emplace(name, t.line_of_row(r)); !fresh)
+    throw InputError(line_of(t, r) + ": point '" + name + "' again (first on line " + std::to_string(it->second) +
+                         "); every row needs its own point name",
+                     src, t.line_of_row(r), point != kAbsent ? t.header()[point] : "point");
+  return name;
+}
+
+std::vector<std::string> output_row(const CsvTable& t, std::size_t r, const RowValues& v, const SourceColumns& c,
+                                    const ImportOptions& o, std::string name, std::size_t width) {
+  std::vector<std::string> row;
+  row.reserve(width);
+  row.push_back(std::move(name));
+  if (c.joints.present())
+    for (double q : v.q) row.push_back(format_number(q));
+  for (int k = 0; k < 3; ++k) row.push_back(format_number(v.position[k]));
+  if (c.orientation.kind != Orientation::Kind::none) {
+    const Eigen::Vector3d rpy = robot::rpy_deg_from_rotation(v.rotation);
+    for (int k = 0; k < 3; ++k) row.push_back(format_number(rpy[k]));
+  }
+  if (c.flange.present()) {
+    for (int k = 0; k < 3; ++k) row.push_back(format_number(v.flange_position[k]));
+    const Eigen::Vector3d rpy = robot::rpy_deg_from_rotation(v.flange_rotation);
+    for (int k = 0; k < 3; ++k) row.push_back(format_number(rpy[k]));
+  }
+  if (c.temperature != kAbsent) row.push_back(format_number(decimal_cell(t, r, c.temperature, o.decimal)));
+  if (c.time != kAbsent) row.push_back(time_text(t.cell(r, c.time), o.decimal));
+  if (!o.series.empty()) row.push_back(o.series);
+  return row;
+}
+
+}  // namespace
+
+ImportedMeasurements import_measurements(const CsvTable& t, const ImportOptions& o) {
+  o.validate();
+  const std::string& src = t.source();
+  if (t.row_count() == 0) throw InputError(src + ": no data rows below the header", src);
+  SourceColumns columns = find_columns(t, o);
+  ImportedMeasurements out;
+  out.notes = o.notes;
+  columns.time = time_column_kept(t, columns.time, out.notes);
+  const std::vector<RowValues> values = read_values(t, o, columns);
+  out.header = output_header(columns, o);
   std::map<std::string, std::size_t> line_of_point;
   out.rows.reserve(t.row_count());
   for (std::size_t r = 0; r < t.row_count(); ++r) {
-    const RowValues& v = values[r];
-    std::vector<std::string> row;
-    row.reserve(out.header.size());
-    std::string name = point != kAbsent ? std::string(t.cell(r, point)) : std::to_string(r + 1);
-    if (name.empty())
-      throw InputError(line_of(t, r) + ": column '" + t.header()[point] + "' is empty; expected the point's name", src,
-                       t.line_of_row(r), t.header()[point]);
-    if (const auto [it, fresh] = line_of_point.emplace(name, t.line_of_row(r)); !fresh)
-      throw InputError(line_of(t, r) + ": point '" + name + "' again (first on line " + std::to_string(it->second) +
-                           "); every row needs its own point name",
-                       src, t.line_of_row(r), point != kAbsent ? t.header()[point] : "point");
-    row.push_back(std::move(name));
-    if (joints.present())
-      for (double q : v.q) row.push_back(format_number(q));
-    for (int k = 0; k < 3; ++k) row.push_back(format_number(v.position[k]));
-    if (orientation.kind != Orientation::Kind::none) {
-      const Eigen::Vector3d rpy = robot::rpy_deg_from_rotation(v.rotation);
-      for (int k = 0; k < 3; ++k) row.push_back(format_number(rpy[k]));
-    }
-    if (flange.present()) {
-      for (int k = 0; k < 3; ++k) row.push_back(format_number(v.flange_position[k]));
-      const Eigen::Vector3d rpy = robot::rpy_deg_from_rotation(v.flange_rotation);
-      for (int k = 0; k < 3; ++k) row.push_back(format_number(rpy[k]));
-    }
-    if (temperature != kAbsent) row.push_back(format_number(decimal_cell(t, r, temperature, o.decimal)));
-    if (time != kAbsent) {
-      // A number (a timestamp such as 20200714163904, seconds) in errfield's decimal point; any
-      // other text (an ISO date) as given.
-      const std::string_view cell = t.cell(r, time);
-      std::string text(cell);
-      if (o.decimal == ',') std::replace(text.begin(), text.end(), ',', '.');
-      double seconds = 0.0;
-      const auto res = std::from_chars(text.data(), text.data() + text.size(), seconds);
-      row.push_back(res.ec == std::errc() && res.ptr == text.data() + text.size() && std::isfinite(seconds) &&
-                            cell.find_first_of("eE") == std::string_view::npos
-                        ? text
-                        : std::string(cell));
-    }
-    if (!o.series.empty()) row.push_back(o.series);
-    out.rows.push_back(std::move(row));
+    std::string name = point_name(t, r, columns.point, line_of_point);
+    out.rows.push_back(output_row(t, r, values[r], columns, o, std::move(name), out.header.size()));
   }
   return out;
 }

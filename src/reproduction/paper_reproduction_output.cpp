@@ -246,77 +246,142 @@ report::LinePlot variogram_plot(const VariogramComparison& v) {
   return p;
 }
 
-}  // namespace
+// A CSV cell of a number; empty when it is not finite. Text cells (method and stage names) go
+// through csv_cell like every CSV writer's.
+std::string finite_cell(double v) { return std::isfinite(v) ? format_number(v) : std::string(); }
 
-std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& r, const std::filesystem::path& dir) {
-  // Every file is assembled in memory first and then replaced all or none (AtomicFileSet): a
-  // failure or a signal never leaves this run's tables next to an older run's report.
-  AtomicFileSet outputs;
-  std::vector<std::filesystem::path> written;
-  auto put = [&](const std::string& name, std::string content) {
-    outputs.add(dir / name, std::move(content));
-    written.push_back(dir / name);
-  };
-  auto n = [](double v) { return std::isfinite(v) ? format_number(v) : std::string(); };
-  // Text cells (method and stage names) go through csv_cell like every CSV writer's.
+std::string variogram_csv(const VariogramComparison& v) {
+  std::string csv = "lag_lo,lag_hi,lag_mean,gamma,pairs,model_gamma,paper_gamma\n";
+  for (const auto& row : v.rows)
+    csv += finite_cell(row.lag_lo) + "," + finite_cell(row.lag_hi) + "," + finite_cell(row.lag_mean) + "," + finite_cell(row.gamma_mm2) + "," +
+           std::to_string(row.pairs) + "," + finite_cell(row.model_gamma_mm2) + "," + finite_cell(row.paper_gamma_mm2) + "\n";
+  return csv;
+}
 
-  for (const auto* v : {&r.joint_variogram, &r.task_variogram}) {
-    std::string csv = "lag_lo,lag_hi,lag_mean,gamma,pairs,model_gamma,paper_gamma\n";
-    for (const auto& row : v->rows)
-      csv += n(row.lag_lo) + "," + n(row.lag_hi) + "," + n(row.lag_mean) + "," + n(row.gamma_mm2) + "," +
-             std::to_string(row.pairs) + "," + n(row.model_gamma_mm2) + "," + n(row.paper_gamma_mm2) + "\n";
-    put(v == &r.joint_variogram ? "table3.csv" : "table4.csv", csv);
+std::string grid_step_csv(const ReproductionResult& r) {
+  std::string csv = "step_mm,nodes,mean_abs_error_mm,max_abs_error_mm,rms_error_mm\n";
+  for (const auto& g : r.grid_steps)
+    csv += finite_cell(g.step_mm) + "," + std::to_string(g.nodes) + "," + finite_cell(g.mean_abs_error_mm) + "," +
+           finite_cell(g.max_abs_error_mm) + "," + finite_cell(g.rms_error_mm) + "\n";
+  return csv;
+}
+
+struct Table6Csv {
+  std::string headline, spread, points;
+};
+
+// table6.csv holds the two headline metrics only (distance, position), medians over the runs;
+// every metric with its spread is in table6_spread.csv.
+Table6Csv table6_csv(const ReproductionResult& r) {
+  Table6Csv out;
+  std::string& csv = out.headline;
+  std::string& spread = out.spread;
+  csv = "method,metric,max_mm,mean_mm,std_mm\n";
+  spread = "method,metric,figure,median_mm,q25_mm,q75_mm,min_mm,max_mm,runs,refused_targets\n";
+  for (const auto& row : r.table6.rows) {
+    if (row.metric == "distance" || row.metric == "position")
+      csv += csv_cell(row.method) + "," + csv_cell(row.metric) + "," + finite_cell(row.max_mm.median) + "," + finite_cell(row.mean_mm.median) + "," +
+           finite_cell(row.std_mm.median) + "\n";
+    for (auto [fig, s] : {std::pair<const char*, const Spread*>{"max", &row.max_mm}, {"mean", &row.mean_mm},
+                          {"std", &row.std_mm}})
+      spread += csv_cell(row.method) + "," + csv_cell(row.metric) + "," + fig + "," + finite_cell(s->median) + "," + finite_cell(s->q25) + "," +
+                finite_cell(s->q75) + "," + finite_cell(s->min) + "," + finite_cell(s->max) + "," + std::to_string(r.table6.runs) + "," +
+                std::to_string(row.failed_targets) + "\n";
   }
-  {
-    std::string csv = "step_mm,nodes,mean_abs_error_mm,max_abs_error_mm,rms_error_mm\n";
-    for (const auto& g : r.grid_steps)
-      csv += n(g.step_mm) + "," + std::to_string(g.nodes) + "," + n(g.mean_abs_error_mm) + "," +
-             n(g.max_abs_error_mm) + "," + n(g.rms_error_mm) + "\n";
-    put("fig5.csv", csv);
+  out.points = "method,sample,distance_error_mm,position_error_mm\n";
+  for (const auto& m : r.table6.first_run)
+    for (std::size_t i = 0; i < m.distance_error_mm.size(); ++i)
+      out.points += csv_cell(m.method) + "," + std::to_string(i + 1) + "," + finite_cell(m.distance_error_mm[i]) + "," +
+                    finite_cell(m.position_error_mm[i]) + "\n";
+  return out;
+}
+
+std::string assembly_csv(const ReproductionResult& r) {
+  std::string csv = "stage,max_mm,mean_mm,std_mm\n";
+  for (const auto& a : r.assembly)
+    csv += csv_cell(a.stage) + "," + finite_cell(a.deviation.max_mm) + "," + finite_cell(a.deviation.mean_mm) + "," + finite_cell(a.deviation.std_mm) + "\n";
+  return csv;
+}
+
+std::string orientation_csv(const ReproductionResult& r) {
+  const auto& e = r.beyond_orientation;
+  std::string csv =
+      "orientation,orientation_spread_deg,method,space,training_poses,validation_poses,max_mm,mean_mm,std_mm,"
+      "refused_targets\n";
+  for (const auto& row : e.rows)
+    csv += csv_cell(row.orientation) + "," + finite_cell(row.orientation == "varying" ? e.options.orientation_spread_deg : 0.0) + "," +
+           csv_cell(row.method) + "," + csv_cell(row.space) + "," + std::to_string(e.options.training_poses) + "," +
+           std::to_string(e.options.validation_poses) + "," + finite_cell(row.max_mm) + "," + finite_cell(row.mean_mm) + "," +
+           finite_cell(row.std_mm) + "," + std::to_string(row.refused) + "\n";
+  return csv;
+}
+
+report::LinePlot grid_step_plot(const ReproductionResult& r) {
+  report::LinePlot p;
+  p.title = "Fig. 5: prediction error against grid step";
+  p.x_axis = {"grid step", "mm", 0.0};
+  p.y_axis = {"prediction error", "mm", std::nullopt, std::nullopt, true};
+  report::Series mean{"mean |error|", {}, {}, report::SeriesStyle::LinePoints, ""};
+  report::Series rms{"RMS", {}, {}, report::SeriesStyle::LinePoints, ""};
+  report::Series mx{"max |error|", {}, {}, report::SeriesStyle::LinePoints, ""};
+  for (const auto& g : r.grid_steps) {
+    mean.x.push_back(g.step_mm), mean.y.push_back(g.mean_abs_error_mm);
+    rms.x.push_back(g.step_mm), rms.y.push_back(g.rms_error_mm);
+    mx.x.push_back(g.step_mm), mx.y.push_back(g.max_abs_error_mm);
   }
-  {
-    // table6.csv holds the two headline metrics only (distance, position), medians over the runs;
-    // every metric with its spread is in table6_spread.csv.
-    std::string csv = "method,metric,max_mm,mean_mm,std_mm\n";
-    std::string spread = "method,metric,figure,median_mm,q25_mm,q75_mm,min_mm,max_mm,runs,refused_targets\n";
-    for (const auto& row : r.table6.rows) {
-      if (row.metric == "distance" || row.metric == "position")
-        csv += csv_cell(row.method) + "," + csv_cell(row.metric) + "," + n(row.max_mm.median) + "," + n(row.mean_mm.median) + "," +
-             n(row.std_mm.median) + "\n";
-      for (auto [fig, s] : {std::pair<const char*, const Spread*>{"max", &row.max_mm}, {"mean", &row.mean_mm},
-                            {"std", &row.std_mm}})
-        spread += csv_cell(row.method) + "," + csv_cell(row.metric) + "," + fig + "," + n(s->median) + "," + n(s->q25) + "," +
-                  n(s->q75) + "," + n(s->min) + "," + n(s->max) + "," + std::to_string(r.table6.runs) + "," +
-                  std::to_string(row.failed_targets) + "\n";
+  p.series = {mean, rms, mx};
+  return p;
+}
+
+// Fig. 9 (distance) or the 3-D position error, per sample of the first run.
+report::LinePlot per_sample_plot(const ReproductionResult& r, bool dist) {
+  report::LinePlot p;
+  p.title = dist ? "Fig. 9: distance error per sample (run 1)" : "3-D position error per sample (run 1)";
+  p.x_axis = {"sample", ""};
+  p.y_axis = {dist ? "|distance error|" : "|position error|", "mm", std::nullopt, std::nullopt, true};
+  for (const auto& m : r.table6.first_run) {
+    report::Series s{m.method, {}, {}, report::SeriesStyle::LinePoints, ""};
+    const auto& v = dist ? m.distance_error_mm : m.position_error_mm;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      s.x.push_back(static_cast<double>(i + 1));
+      s.y.push_back(std::abs(v[i]));
     }
-    put("table6.csv", csv);
-    put("table6_spread.csv", spread);
-    std::string points = "method,sample,distance_error_mm,position_error_mm\n";
-    for (const auto& m : r.table6.first_run)
-      for (std::size_t i = 0; i < m.distance_error_mm.size(); ++i)
-        points += csv_cell(m.method) + "," + std::to_string(i + 1) + "," + n(m.distance_error_mm[i]) + "," +
-                  n(m.position_error_mm[i]) + "\n";
-    put("table6_points.csv", points);
+    p.series.push_back(std::move(s));
   }
-  {
-    std::string csv = "stage,max_mm,mean_mm,std_mm\n";
-    for (const auto& a : r.assembly)
-      csv += csv_cell(a.stage) + "," + n(a.deviation.max_mm) + "," + n(a.deviation.mean_mm) + "," + n(a.deviation.std_mm) + "\n";
-    put("table8.csv", csv);
-  }
-  {
-    const auto& e = r.beyond_orientation;
-    std::string csv =
-        "orientation,orientation_spread_deg,method,space,training_poses,validation_poses,max_mm,mean_mm,std_mm,"
-        "refused_targets\n";
-    for (const auto& row : e.rows)
-      csv += csv_cell(row.orientation) + "," + n(row.orientation == "varying" ? e.options.orientation_spread_deg : 0.0) + "," +
-             csv_cell(row.method) + "," + csv_cell(row.space) + "," + std::to_string(e.options.training_poses) + "," +
-             std::to_string(e.options.validation_poses) + "," + n(row.max_mm) + "," + n(row.mean_mm) + "," +
-             n(row.std_mm) + "," + std::to_string(row.refused) + "\n";
-    put("beyond_orientation.csv", csv);
-  }
+  p.height_px = 460;
+  return p;
+}
 
+void add_table6(report::HtmlReport& html, const ReproductionResult& r) {
+  html.add_heading("Table 6: compensation accuracy");
+  html.add_paragraph("Median over " + std::to_string(r.table6.runs) +
+                     " runs (new samples, measurement noise and repeatability on the same simulated robot), with the "
+                     "25%–75% range in brackets.");
+  for (const auto& note : r.table6.notes) html.add_paragraph(note);
+  for (const char* m : kMetrics) html.add_table(table6_table(r.table6, m, std::string(m) == "distance"), metric_title(m));
+  for (const char* which : {"distance", "position"}) {
+    const bool dist = std::string(which) == "distance";
+    html.add_figure(per_sample_plot(r, dist),
+                    dist ? "Absolute distance error (as measured) at each of the 64 samples after each method."
+                         : "Full 3-D position error at each sample: what the radial correction of the "
+                           "distance methods cannot remove.");
+  }
+}
+
+void add_assembly(report::HtmlReport& html, const ReproductionResult& r) {
+  html.add_heading("Table 8: assembly test");
+  html.add_table(assembly_table(r.assembly), "Tool-tip deviation from the 15 holes");
+  if (r.assembly.empty()) return;
+  report::BarChart c;
+  c.title = "Fig. 11: tool-tip deviation per hole";
+  c.category_label = "hole";
+  c.y_axis = {"deviation", "mm"};
+  for (std::size_t i = 0; i < r.assembly.front().per_hole_mm.size(); ++i) c.categories.push_back(std::to_string(i + 1));
+  for (const auto& a : r.assembly) c.series.push_back({a.stage, a.per_hole_mm, ""});
+  html.add_figure(c, "Deviation of the simulated tool tip from each hole before and after compensation.");
+}
+
+std::string report_html(const ReproductionResult& r) {
   report::HtmlReport html("errfield: reproduction of Wang et al. (2026) on a simulated ER20-C10", true);
   html.add_heading("Set-up");
   for (const auto& s : r.setup) html.add_paragraph(s);
@@ -327,61 +392,11 @@ std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& 
     html.add_table(variogram_table(*v), v->space == "joint" ? "Table 3 (joint space)" : "Table 4 (task space)");
   }
   html.add_heading("Fig. 5: choice of the grid step");
-  {
-    report::LinePlot p;
-    p.title = "Fig. 5: prediction error against grid step";
-    p.x_axis = {"grid step", "mm", 0.0};
-    p.y_axis = {"prediction error", "mm", std::nullopt, std::nullopt, true};
-    report::Series mean{"mean |error|", {}, {}, report::SeriesStyle::LinePoints, ""};
-    report::Series rms{"RMS", {}, {}, report::SeriesStyle::LinePoints, ""};
-    report::Series mx{"max |error|", {}, {}, report::SeriesStyle::LinePoints, ""};
-    for (const auto& g : r.grid_steps) {
-      mean.x.push_back(g.step_mm), mean.y.push_back(g.mean_abs_error_mm);
-      rms.x.push_back(g.step_mm), rms.y.push_back(g.rms_error_mm);
-      mx.x.push_back(g.step_mm), mx.y.push_back(g.max_abs_error_mm);
-    }
-    p.series = {mean, rms, mx};
-    html.add_figure(p, "Distance-error IDW from grids of each step, evaluated at held-out points of the 500 mm cube "
-                       "against the simulated robot's true distance error. The paper chose 125 mm.");
-    html.add_table(grid_step_table(r.grid_steps), "Fig. 5 data");
-  }
-  html.add_heading("Table 6: compensation accuracy");
-  html.add_paragraph("Median over " + std::to_string(r.table6.runs) +
-                     " runs (new samples, measurement noise and repeatability on the same simulated robot), with the "
-                     "25%–75% range in brackets.");
-  for (const auto& note : r.table6.notes) html.add_paragraph(note);
-  for (const char* m : kMetrics) html.add_table(table6_table(r.table6, m, std::string(m) == "distance"), metric_title(m));
-  for (const char* which : {"distance", "position"}) {
-    report::LinePlot p;
-    const bool dist = std::string(which) == "distance";
-    p.title = dist ? "Fig. 9: distance error per sample (run 1)" : "3-D position error per sample (run 1)";
-    p.x_axis = {"sample", ""};
-    p.y_axis = {dist ? "|distance error|" : "|position error|", "mm", std::nullopt, std::nullopt, true};
-    for (const auto& m : r.table6.first_run) {
-      report::Series s{m.method, {}, {}, report::SeriesStyle::LinePoints, ""};
-      const auto& v = dist ? m.distance_error_mm : m.position_error_mm;
-      for (std::size_t i = 0; i < v.size(); ++i) {
-        s.x.push_back(static_cast<double>(i + 1));
-        s.y.push_back(std::abs(v[i]));
-      }
-      p.series.push_back(std::move(s));
-    }
-    p.height_px = 460;
-    html.add_figure(p, dist ? "Absolute distance error (as measured) at each of the 64 samples after each method."
-                            : "Full 3-D position error at each sample: what the radial correction of the "
-                              "distance methods cannot remove.");
-  }
-  html.add_heading("Table 8: assembly test");
-  html.add_table(assembly_table(r.assembly), "Tool-tip deviation from the 15 holes");
-  if (!r.assembly.empty()) {
-    report::BarChart c;
-    c.title = "Fig. 11: tool-tip deviation per hole";
-    c.category_label = "hole";
-    c.y_axis = {"deviation", "mm"};
-    for (std::size_t i = 0; i < r.assembly.front().per_hole_mm.size(); ++i) c.categories.push_back(std::to_string(i + 1));
-    for (const auto& a : r.assembly) c.series.push_back({a.stage, a.per_hole_mm, ""});
-    html.add_figure(c, "Deviation of the simulated tool tip from each hole before and after compensation.");
-  }
+  html.add_figure(grid_step_plot(r), "Distance-error IDW from grids of each step, evaluated at held-out points of the 500 mm cube "
+                                     "against the simulated robot's true distance error. The paper chose 125 mm.");
+  html.add_table(grid_step_table(r.grid_steps), "Fig. 5 data");
+  add_table6(html, r);
+  add_assembly(html, r);
   html.add_heading("Beyond the paper: compensation with varying tool orientation (SIMULATED)");
   html.add_paragraph("The paper compensates at one constant tool orientation, where a position fixes the joints and "
                      "task and joint space carry the same information. Here the orientation varies from target to "
@@ -395,8 +410,11 @@ std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& 
   html.add_heading("Run");
   html.add_preformatted("errfield reproduce --seed " + std::to_string(r.options.seed) + " --runs " +
                         std::to_string(r.options.runs));
-  put("report.html", html.to_html());
+  return html.to_html();
+}
 
+// The directory is made if needed, and removed again (when still empty) if the files cannot go in.
+void commit_into(AtomicFileSet& outputs, const std::filesystem::path& dir) {
   std::error_code ec;
   const bool existed = std::filesystem::is_directory(dir, ec);
   if (!existed) {
@@ -409,6 +427,30 @@ std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& 
     if (!existed) std::filesystem::remove(dir, ec);  // only if still empty
     throw;
   }
+}
+
+}  // namespace
+
+std::vector<std::filesystem::path> write_reproduction(const ReproductionResult& r, const std::filesystem::path& dir) {
+  // Every file is assembled in memory first and then replaced all or none (AtomicFileSet): a
+  // failure or a signal never leaves this run's tables next to an older run's report.
+  AtomicFileSet outputs;
+  std::vector<std::filesystem::path> written;
+  auto put = [&](const std::string& name, std::string content) {
+    outputs.add(dir / name, std::move(content));
+    written.push_back(dir / name);
+  };
+  put("table3.csv", variogram_csv(r.joint_variogram));
+  put("table4.csv", variogram_csv(r.task_variogram));
+  put("fig5.csv", grid_step_csv(r));
+  Table6Csv table6 = table6_csv(r);
+  put("table6.csv", std::move(table6.headline));
+  put("table6_spread.csv", std::move(table6.spread));
+  put("table6_points.csv", std::move(table6.points));
+  put("table8.csv", assembly_csv(r));
+  put("beyond_orientation.csv", orientation_csv(r));
+  put("report.html", report_html(r));
+  commit_into(outputs, dir);
   return written;
 }
 

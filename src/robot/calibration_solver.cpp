@@ -252,43 +252,35 @@ std::vector<double> igg3_weights(const std::vector<double>& sizes, int dim, cons
 }
 
 
-CalibrationResult solve_calibration(const CalibrationProblem& problem, const CalibrationState& start,
-                                    const std::vector<int>& candidates, const CalibrationOptions& o) {
-  o.validate();
-  const MdhModel& initial = start.model;
-  CalibrationResult out;
-  out.model = initial;
-  out.reach_mm = arm_reach_mm(initial);
+namespace {
+
+// Too few poses: fail here, naming the count needed, rather than fit the few parameters these
+// data happen to move and claim convergence.
+void require_enough_poses(const CalibrationProblem& problem, const CalibrationState& start,
+                          const std::vector<int>& candidates, const CalibrationOptions& o, double reach_mm) {
   const int dim = problem.dim();
   const std::size_t n = problem.count();
-  // Too few poses: fail here, naming the count needed, rather than fit the few parameters these
-  // data happen to move and claim convergence.
-  const std::size_t identifiable =
-      generically_identifiable(problem, start, candidates, out.reach_mm, o.redundancy_tolerance);
+  const std::size_t identifiable = generically_identifiable(problem, start, candidates, reach_mm, o.redundancy_tolerance);
   const std::size_t needed = identifiable / static_cast<std::size_t>(dim) + 1;  // more equations than unknowns
   const std::size_t distinct = problem.distinct();
-  if (distinct < needed) {
-    const std::string kind = dim == 3 ? "position" : "distance";
-    const std::string repeats =
-        distinct < n ? " at " + std::to_string(distinct) + " distinct " + (dim == 3 ? "pose(s)" : "pose pair(s)") +
-                           " (the others repeat one)"
-                     : std::string();
-    throw InputError("calibration: " + std::to_string(n) + " measured " + kind + "(s)" + repeats + " give " +
-                     std::to_string(distinct * static_cast<std::size_t>(dim)) + " equation(s), but " + kind +
-                     " measurements identify " + std::to_string(identifiable) + " parameters of robot '" +
-                     initial.name() + "' (of " + std::to_string(candidates.size()) + " candidates); need at least " +
-                     std::to_string(needed) + " measured " + kind +
-                     "s at distinct poses (more equations than parameters), in practice several times as many, "
-                     "spread over the workspace");
-  }
+  if (distinct >= needed) return;
+  const std::string kind = dim == 3 ? "position" : "distance";
+  const std::string repeats =
+      distinct < n ? " at " + std::to_string(distinct) + " distinct " + (dim == 3 ? "pose(s)" : "pose pair(s)") +
+                         " (the others repeat one)"
+                   : std::string();
+  throw InputError("calibration: " + std::to_string(n) + " measured " + kind + "(s)" + repeats + " give " +
+                   std::to_string(distinct * static_cast<std::size_t>(dim)) + " equation(s), but " + kind +
+                   " measurements identify " + std::to_string(identifiable) + " parameters of robot '" +
+                   start.model.name() + "' (of " + std::to_string(candidates.size()) + " candidates); need at least " +
+                   std::to_string(needed) + " measured " + kind +
+                   "s at distinct poses (more equations than parameters), in practice several times as many, "
+                   "spread over the workspace");
+}
 
-  Eigen::VectorXd r;
-  Eigen::MatrixXd jac;
-  problem.evaluate(start, candidates, r, &jac);
-  if (!r.allFinite() || !jac.allFinite())
-    throw ArgumentError("calibration: non-finite residual or Jacobian at the initial model");
-  out.before = summarize(residual_sizes(r, dim));
-
+// Which parameters to fit, from the Jacobian at the initial model.
+ParameterSelection choose_parameters(const Eigen::MatrixXd& jac, const std::vector<int>& candidates, int dim,
+                                     double reach_mm, const CalibrationOptions& o) {
   // Distances (one equation per pair, the frame free) leave more directions weakly determined than
   // positions, and there removing whole parameters until the rest is well conditioned made the
   // kept ones absorb what the removed ones carried, by tens of mm (KR 16 at one orientation):
@@ -299,94 +291,98 @@ CalibrationResult solve_calibration(const CalibrationProblem& problem, const Cal
   // rose from 0.188 to 0.235 mm; 0.3 to 0.7 alike (0.192); 0.8 removed the KR 16's link4.alpha
   // again (docs/robot.md "Distances: regularized toward nominal").
   constexpr double kMinParticipation = 0.5;
-  const ParameterSelection sel =
-      dim == 1 ? select_parameters_regularized(jac, candidates, out.reach_mm, o.redundancy_tolerance,
-                                               o.max_condition_number, kMinParticipation)
-               : select_parameters(jac, candidates, out.reach_mm, o.redundancy_tolerance, o.max_condition_number);
-  out.regularization = sel.regularization;
-  out.removed = sel.removed;
-  out.condition_number = sel.condition_number;
-  const auto p = static_cast<Eigen::Index>(sel.kept.size());
-  if (static_cast<std::size_t>(p) >= n * static_cast<std::size_t>(dim))
-    throw ArgumentError("calibration: " + std::to_string(p) + " identifiable parameters but only " +
-                        std::to_string(n * static_cast<std::size_t>(dim)) + " equations; measure more points");
+  return dim == 1 ? select_parameters_regularized(jac, candidates, reach_mm, o.redundancy_tolerance,
+                                                  o.max_condition_number, kMinParticipation)
+                  : select_parameters(jac, candidates, reach_mm, o.redundancy_tolerance, o.max_condition_number);
+}
 
-  double mu = sel.regularization;
-  LmSolution sol = solve_lm(problem, start, sel.kept, Eigen::VectorXd::Zero(p), mu, out.reach_mm,
-                            std::vector<double>(n, 1.0), o);
-  std::vector<int> active = sel.kept;
-  // The refinements below refit with the first fit's IGG3 weights held (settled there): weights
-  // re-estimated along with a lighter penalty kept flipping near k0/k1 without settling.
-  CalibrationOptions held_weights = o;
-  held_weights.robust.enabled = false;
-  auto take = [&](LmSolution& better) {
-    better.rounds = sol.rounds;
-    better.weight_change = sol.weight_change;
-    better.weights_settled = sol.weights_settled;
-    out.iterations += sol.iterations;
-    sol = std::move(better);
-  };
-  if (!sel.weak.empty()) {
-    // Weak parameters are judged at the initial model, and removing one fixes it at nominal: where
-    // it is really off, the kept ones absorb its share and the fit to the data suffers (a KR 16-class
-    // arm off by 0.3 deg / 3 mm: link4.alpha, 47 % determined, removed; link4.a moved by 79 mm; the
-    // distances fitted to 0.15 mm RMS where the noise is 0.01). They come back, regularized like the
-    // rest, when the data ask for them: an F test on the drop of the residual sum of squares, the
-    // wider fit started afresh (the reduced fit may have wandered far) and scored with the reduced
-    // fit's weights.
-    std::vector<int> all = sel.kept;
-    all.insert(all.end(), sel.weak.begin(), sel.weak.end());
-    const auto q = static_cast<Eigen::Index>(all.size()) - p;
-    LmSolution wide =
-        solve_lm(problem, start, all, Eigen::VectorXd::Zero(p + q), mu, out.reach_mm, sol.w, held_weights);
-    const double reduced_ss = weighted_cost(sol.r, sol.w, dim), wide_ss = weighted_cost(wide.r, sol.w, dim);
-    double equations = 0;
-    for (double wi : sol.w) equations += wi > 0 ? dim : 0.0;
-    const double dof = equations - static_cast<double>(p + q);
-    const double f =
-        dof > 0 && wide_ss > 0 ? (reduced_ss - wide_ss) / static_cast<double>(q) / (wide_ss / dof) : 0.0;
-    if (f > kReentryF) {
-      std::erase_if(out.removed, [&](const RemovedParameter& m) {
-        return std::find(all.begin(), all.end(), m.index) != all.end();
-      });
-      take(wide);
-      active = all;
-      out.condition_number = condition_number(sol.jac * physical_units(active, out.reach_mm).asDiagonal());
-    } else {
-      out.iterations += wide.iterations;  // counted: the work was done, its answer not taken
-    }
+// The fit being refined: its solution, the parameters it moves and the Tikhonov weight.
+struct Refinement {
+  LmSolution sol;
+  std::vector<int> active;
+  double mu;
+};
+
+// A refit replaces the current solution; the weighting rounds stay the first fit's (the refits
+// hold its weights), the iterations of every fit are counted.
+void take(Refinement& fit, LmSolution& better, CalibrationResult& out) {
+  better.rounds = fit.sol.rounds;
+  better.weight_change = fit.sol.weight_change;
+  better.weights_settled = fit.sol.weights_settled;
+  out.iterations += fit.sol.iterations;
+  fit.sol = std::move(better);
+}
+
+double weighted_equations(const std::vector<double>& w, int dim) {
+  double equations = 0;
+  for (double wi : w) equations += wi > 0 ? dim : 0.0;
+  return equations;
+}
+
+// Weak parameters are judged at the initial model, and removing one fixes it at nominal: where
+// it is really off, the kept ones absorb its share and the fit to the data suffers (a KR 16-class
+// arm off by 0.3 deg / 3 mm: link4.alpha, 47 % determined, removed; link4.a moved by 79 mm; the
+// distances fitted to 0.15 mm RMS where the noise is 0.01). They come back, regularized like the
+// rest, when the data ask for them: an F test on the drop of the residual sum of squares, the
+// wider fit started afresh (the reduced fit may have wandered far) and scored with the reduced
+// fit's weights.
+void reenter_weak_parameters(const CalibrationProblem& problem, const CalibrationState& start,
+                             const ParameterSelection& sel, const CalibrationOptions& held_weights, Refinement& fit,
+                             CalibrationResult& out) {
+  if (sel.weak.empty()) return;
+  const int dim = problem.dim();
+  const auto p = static_cast<Eigen::Index>(sel.kept.size());
+  const LmSolution& sol = fit.sol;
+  std::vector<int> all = sel.kept;
+  all.insert(all.end(), sel.weak.begin(), sel.weak.end());
+  const auto q = static_cast<Eigen::Index>(all.size()) - p;
+  LmSolution wide =
+      solve_lm(problem, start, all, Eigen::VectorXd::Zero(p + q), fit.mu, out.reach_mm, sol.w, held_weights);
+  const double reduced_ss = weighted_cost(sol.r, sol.w, dim), wide_ss = weighted_cost(wide.r, sol.w, dim);
+  const double equations = weighted_equations(sol.w, dim);
+  const double dof = equations - static_cast<double>(p + q);
+  const double f = dof > 0 && wide_ss > 0 ? (reduced_ss - wide_ss) / static_cast<double>(q) / (wide_ss / dof) : 0.0;
+  if (f > kReentryF) {
+    std::erase_if(out.removed, [&](const RemovedParameter& m) {
+      return std::find(all.begin(), all.end(), m.index) != all.end();
+    });
+    take(fit, wide, out);
+    fit.active = all;
+    out.condition_number = condition_number(fit.sol.jac * physical_units(fit.active, out.reach_mm).asDiagonal());
+  } else {
+    out.iterations += wide.iterations;  // counted: the work was done, its answer not taken
   }
-  // The weight mu is set by the Jacobian alone (the cap), not by the noise: where the arm is off
-  // by more than the weight allows for and the data are precise, it holds real deviations back (a
-  // KR 16-class arm off by 0.3 deg / 3 mm, 0.03 mm noise: held-out error 1.15x the least-squares
-  // reference's). Relaxed by steps of kRelaxation while the data ask for it: an F test on the drop
-  // of the residual sum of squares per effective parameter gained.
-  for (int k = 0; mu > 0 && k < kMaxRelaxations; ++k) {
-    const double lighter = mu / kRelaxation;
-    LmSolution trial = solve_lm(problem, sol.state, active, sol.offset, lighter, out.reach_mm, sol.w, held_weights);
+}
+
+// The weight mu is set by the Jacobian alone (the cap), not by the noise: where the arm is off
+// by more than the weight allows for and the data are precise, it holds real deviations back (a
+// KR 16-class arm off by 0.3 deg / 3 mm, 0.03 mm noise: held-out error 1.15x the least-squares
+// reference's). Relaxed by steps of kRelaxation while the data ask for it: an F test on the drop
+// of the residual sum of squares per effective parameter gained.
+void relax_regularization(const CalibrationProblem& problem, const CalibrationOptions& held_weights, Refinement& fit,
+                          CalibrationResult& out) {
+  const int dim = problem.dim();
+  for (int k = 0; fit.mu > 0 && k < kMaxRelaxations; ++k) {
+    const LmSolution& sol = fit.sol;
+    const double lighter = fit.mu / kRelaxation;
+    LmSolution trial = solve_lm(problem, sol.state, fit.active, sol.offset, lighter, out.reach_mm, sol.w, held_weights);
     const double held_ss = weighted_cost(sol.r, sol.w, dim), free_ss = weighted_cost(trial.r, sol.w, dim);
     // Both counted at the lighter fit's Jacobian, so that the difference is the weight's alone.
-    const double held_p = effective_parameters(trial, sol.w, dim, mu);
+    const double held_p = effective_parameters(trial, sol.w, dim, fit.mu);
     const double free_p = effective_parameters(trial, sol.w, dim, lighter);
-    double equations = 0;
-    for (double wi : sol.w) equations += wi > 0 ? dim : 0.0;
+    const double equations = weighted_equations(sol.w, dim);
     const double gained = free_p - held_p, dof = equations - free_p;
     const double f = gained > 0 && dof > 0 && free_ss > 0 ? (held_ss - free_ss) / gained / (free_ss / dof) : 0.0;
     if (!(f > kReentryF)) {
       out.iterations += trial.iterations;  // counted: the work was done, its answer not taken
       break;
     }
-    take(trial);
-    mu = lighter;
+    take(fit, trial, out);
+    fit.mu = lighter;
   }
-  out.regularization = mu;
-  const auto p_final = static_cast<Eigen::Index>(active.size());
-  CalibrationState& state = sol.state;
-  r = sol.r;
-  jac = sol.jac;
-  const Eigen::VectorXd& scale = sol.scale;
-  const Eigen::VectorXd& prior = sol.prior;
-  const std::vector<double>& w = sol.w;
+}
+
+void report_convergence(const LmSolution& sol, CalibrationResult& out) {
   out.iterations += sol.iterations;
   out.rounds = sol.rounds;
   out.weight_change = sol.weight_change;
@@ -404,15 +400,22 @@ CalibrationResult solve_calibration(const CalibrationProblem& problem, const Cal
   } else {
     out.message = "converged";
   }
-  const MdhModel& model = state.model;
-  out.model = model;
-  out.weights = w;
-  out.rejected = static_cast<std::size_t>(std::count(w.begin(), w.end(), 0.0));
-  out.after = summarize(residual_sizes(r, dim));
+}
 
-  // Standard errors at the solution (weighted, column-scaled for the SVD's sake).
-  Eigen::MatrixXd js = jac * scale.cwiseInverse().asDiagonal();
-  for (std::size_t i = 0; i < n; ++i) js.middleRows(static_cast<Eigen::Index>(i) * dim, dim) *= std::sqrt(w[i]);
+// Standard errors at the solution (weighted, column-scaled for the SVD's sake): the covariance of
+// the scaled parameters and the residual variance's degrees of freedom.
+struct ScaledCovariance {
+  Eigen::MatrixXd cov;
+  double sigma2;
+};
+
+ScaledCovariance scaled_covariance(const LmSolution& sol, double mu, int dim) {
+  const Eigen::VectorXd& scale = sol.scale;
+  const Eigen::VectorXd& prior = sol.prior;
+  const std::vector<double>& w = sol.w;
+  const auto p_final = static_cast<Eigen::Index>(scale.size());
+  Eigen::MatrixXd js = sol.jac * scale.cwiseInverse().asDiagonal();
+  for (std::size_t i = 0; i < w.size(); ++i) js.middleRows(static_cast<Eigen::Index>(i) * dim, dim) *= std::sqrt(w[i]);
   double used = 0;
   for (double wi : w) used += wi > 0 ? 1.0 : 0.0;
   // Covariance of the scaled parameters: sigma² V S⁻² Vᵀ; regularized (distances), the sandwich
@@ -433,34 +436,90 @@ CalibrationResult solve_calibration(const CalibrationProblem& problem, const Cal
     cov_scaled = svd.matrixV() * inv_s2.asDiagonal() * svd.matrixV().transpose();
     dof = used * dim - static_cast<double>(p_final);
   }
-  const double sigma2 = dof > 0 ? weighted_cost(r, w, dim) / dof : 0.0;
+  const double sigma2 = dof > 0 ? weighted_cost(sol.r, w, dim) / dof : 0.0;
+  return {std::move(cov_scaled), sigma2};
+}
+
+// Each fitted parameter's increment and standard error, and the extra points' positions.
+void report_estimates(const CalibrationState& start, const Refinement& fit, int dim, CalibrationResult& out) {
+  const MdhModel& initial = start.model;
+  const MdhModel& model = fit.sol.state.model;
+  const Eigen::VectorXd& scale = fit.sol.scale;
+  const std::vector<int>& active = fit.active;
+  const ScaledCovariance c = scaled_covariance(fit.sol, fit.mu, dim);
   // The extra points are fixed base points (distances) or further flange points (positions).
   std::vector<BasePointEstimate>& points = dim == 3 ? out.flange_points : out.base_points;
   points.resize(static_cast<std::size_t>(start.extra.size() / 3));
   for (std::size_t k = 0; k < points.size(); ++k) {
     points[k].nominal_mm = start.extra.segment<3>(3 * static_cast<Eigen::Index>(k));
-    points[k].position_mm = state.extra.segment<3>(3 * static_cast<Eigen::Index>(k));
+    points[k].position_mm = fit.sol.state.extra.segment<3>(3 * static_cast<Eigen::Index>(k));
   }
-  for (Eigen::Index c = 0; c < p_final; ++c) {
-    const double var_scaled = cov_scaled(c, c);
-    if (active[static_cast<std::size_t>(c)] >= param::kCount) {  // an extra point's coordinate (mm)
-      const int e = extra_index(active[static_cast<std::size_t>(c)]);
+  for (Eigen::Index col = 0; col < static_cast<Eigen::Index>(active.size()); ++col) {
+    const double var_scaled = c.cov(col, col);
+    if (active[static_cast<std::size_t>(col)] >= param::kCount) {  // an extra point's coordinate (mm)
+      const int e = extra_index(active[static_cast<std::size_t>(col)]);
       BasePointEstimate& b = points[static_cast<std::size_t>(e / 3)];
       b.identified[e % 3] = true;
-      b.standard_error_mm[e % 3] = std::sqrt(sigma2 * var_scaled) / scale[c];
+      b.standard_error_mm[e % 3] = std::sqrt(c.sigma2 * var_scaled) / scale[col];
       continue;
     }
     ParameterEstimate e;
-    e.index = active[static_cast<std::size_t>(c)];
+    e.index = active[static_cast<std::size_t>(col)];
     e.name = parameter_name(e.index);
     const bool angle = parameter_is_angle(e.index);
     e.unit = angle ? "deg" : "mm";
     const bool relative = e.index >= param::kBaseTranslation;
     e.nominal = relative ? 0.0 : report_value(initial, initial, e.index);
     e.increment = report_value(model, initial, e.index) - e.nominal;
-    e.standard_error = std::sqrt(sigma2 * var_scaled) / scale[c] / (angle ? kDeg : 1.0);
+    e.standard_error = std::sqrt(c.sigma2 * var_scaled) / scale[col] / (angle ? kDeg : 1.0);
     out.parameters.push_back(e);
   }
+}
+
+}  // namespace
+
+CalibrationResult solve_calibration(const CalibrationProblem& problem, const CalibrationState& start,
+                                    const std::vector<int>& candidates, const CalibrationOptions& o) {
+  o.validate();
+  CalibrationResult out;
+  out.model = start.model;
+  out.reach_mm = arm_reach_mm(start.model);
+  const int dim = problem.dim();
+  const std::size_t n = problem.count();
+  require_enough_poses(problem, start, candidates, o, out.reach_mm);
+
+  Eigen::VectorXd r;
+  Eigen::MatrixXd jac;
+  problem.evaluate(start, candidates, r, &jac);
+  if (!r.allFinite() || !jac.allFinite())
+    throw ArgumentError("calibration: non-finite residual or Jacobian at the initial model");
+  out.before = summarize(residual_sizes(r, dim));
+
+  const ParameterSelection sel = choose_parameters(jac, candidates, dim, out.reach_mm, o);
+  out.regularization = sel.regularization;
+  out.removed = sel.removed;
+  out.condition_number = sel.condition_number;
+  const auto p = static_cast<Eigen::Index>(sel.kept.size());
+  if (static_cast<std::size_t>(p) >= n * static_cast<std::size_t>(dim))
+    throw ArgumentError("calibration: " + std::to_string(p) + " identifiable parameters but only " +
+                        std::to_string(n * static_cast<std::size_t>(dim)) + " equations; measure more points");
+
+  Refinement fit{solve_lm(problem, start, sel.kept, Eigen::VectorXd::Zero(p), sel.regularization, out.reach_mm,
+                          std::vector<double>(n, 1.0), o),
+                 sel.kept, sel.regularization};
+  // The refinements refit with the first fit's IGG3 weights held (settled there): weights
+  // re-estimated along with a lighter penalty kept flipping near k0/k1 without settling.
+  CalibrationOptions held_weights = o;
+  held_weights.robust.enabled = false;
+  reenter_weak_parameters(problem, start, sel, held_weights, fit, out);
+  relax_regularization(problem, held_weights, fit, out);
+  out.regularization = fit.mu;
+  report_convergence(fit.sol, out);
+  out.model = fit.sol.state.model;
+  out.weights = fit.sol.w;
+  out.rejected = static_cast<std::size_t>(std::count(out.weights.begin(), out.weights.end(), 0.0));
+  out.after = summarize(residual_sizes(fit.sol.r, dim));
+  report_estimates(start, fit, dim, out);
   return out;
 }
 

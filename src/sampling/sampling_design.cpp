@@ -346,151 +346,19 @@ std::vector<std::size_t> select_maximin(const Eigen::MatrixXd& candidates, const
   return farthest_points(z, nearest2, options.count);
 }
 
-VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candidates, const Eigen::MatrixXd& measured,
-                                                   const VariogramModel& model,
-                                                   const VarianceReductionOptions& options) {
+namespace {
+
+void check_variance_reduction_inputs(const Eigen::MatrixXd& candidates, const Eigen::MatrixXd& measured,
+                                     const VariogramModel& model, const VarianceReductionOptions& options) {
   check_columns(candidates, measured);
   if (!model.bounded())
     throw ArgumentError("variance reduction needs a bounded variogram model (a covariance), got " + model.to_string());
   if (!(options.mean_variance_factor > 0.0 && std::isfinite(options.mean_variance_factor)))
     throw ArgumentError("mean_variance_factor: " + format_number(options.mean_variance_factor) + "; expected > 0");
   if (options.max_references == 0) throw ArgumentError("max_references: expected at least 1");
-  VarianceReductionPlan plan;
-  const Eigen::Index C = candidates.rows();
-  if (C == 0) return plan;
-  const double nugget = model.nugget();
-  PriorCovariance k{model.isotropic_part(), model.sill() - nugget, 0.0};
-  if (!(k.field_variance > 0.0)) throw ArgumentError("the model has no structured variance (a pure nugget): " + model.to_string());
-  k.mean_variance = options.mean_variance_factor * k.field_variance;
-  // A measurement's noise; a nugget-free model gets a relative jitter so the systems stay solvable.
-  const double noise = nugget > 0.0 ? nugget : 1e-10 * k.field_variance;
+}
 
-  const Eigen::MatrixXd xc = mapped_by_anisotropy(candidates, model.anisotropy());
-  const Eigen::MatrixXd xd = mapped_by_anisotropy(measured, model.anisotropy());
-  // References: every candidate, or an evenly spread subset (maximin in the mapped coordinates).
-  std::vector<std::size_t> ref_rows;
-  if (static_cast<std::size_t>(C) <= options.max_references) {
-    for (Eigen::Index i = 0; i < C; ++i) ref_rows.push_back(static_cast<std::size_t>(i));
-  } else {
-    MaximinOptions mo;
-    mo.count = options.max_references;
-    mo.axis_scale.assign(static_cast<std::size_t>(xc.cols()), 1.0);
-    ref_rows = select_maximin(xc, Eigen::MatrixXd(0, xc.cols()), mo);
-    std::sort(ref_rows.begin(), ref_rows.end());
-  }
-  const Eigen::Index R = static_cast<Eigen::Index>(ref_rows.size());
-  plan.references = ref_rows.size();
-  const Eigen::VectorXd scale_c = variance_multipliers(options.variance_scale, C, "variance_scale", "candidates");
-  Eigen::VectorXd scale_r(R);
-  for (Eigen::Index i = 0; i < R; ++i) scale_r[i] = scale_c[static_cast<Eigen::Index>(ref_rows[static_cast<std::size_t>(i)])];
-  constexpr double kMaxBytes = 4.0 * 1024 * 1024 * 1024;
-  if (static_cast<double>(R) * static_cast<double>(C) * 8.0 > kMaxBytes)
-    throw ResourceError("variance reduction over " + std::to_string(R) + " references x " + std::to_string(C) +
-                        " candidates needs more than 4 GiB; lower max_references or the number of candidates");
-  Eigen::MatrixXd xr(R, xc.cols());
-  for (Eigen::Index i = 0; i < R; ++i) xr.row(i) = xc.row(static_cast<Eigen::Index>(ref_rows[static_cast<std::size_t>(i)]));
-
-  // Posterior after the measured locations: Σ(a,b) = k(a,b) − W_a' W_b, W = L⁻¹ K_D·, L L' = K_DD + noise I.
-  Eigen::MatrixXd cross = k.between(xr, xc);                 // Σ(R, C), updated in place
-  Eigen::VectorXd var_c = Eigen::VectorXd::Constant(C, k(0.0));  // Σ(c, c)
-  Eigen::MatrixXd w_c;  // M x C, kept for the candidate-candidate covariances of later picks
-  Eigen::MatrixXd measured_inverse;  // (K_DD + noise I)^-1, for the leave-one-out variances below
-  Eigen::LLT<Eigen::MatrixXd> llt;
-  if (xd.rows() > 0) {
-    Eigen::MatrixXd kdd = k.between(xd, xd);
-    kdd.diagonal().array() += noise;
-    llt.compute(kdd);
-    if (llt.info() != Eigen::Success)
-      throw ArgumentError("the measured locations' covariance is not positive definite under " + model.to_string());
-    w_c = llt.matrixL().solve(k.between(xd, xc));
-    const Eigen::MatrixXd w_r = llt.matrixL().solve(k.between(xd, xr));
-    cross.noalias() -= w_r.transpose() * w_c;
-    var_c -= w_c.colwise().squaredNorm().transpose();
-    measured_inverse = llt.solve(Eigen::MatrixXd::Identity(xd.rows(), xd.rows()));
-  }
-  // Leave-one-out variances: a measured or picked location counts in the prediction with the
-  // field's variance there given every other reading, 1 / (K_S^-1)_ii - noise over the set S of
-  // measured and picked locations (what a new pose near it, not on it, would see). K_S^-1 is kept
-  // explicitly and grown by one row and column per pick (a bordered inverse, O(|S|^2) each).
-  const Eigen::Index M = xd.rows();
-  const Eigen::Index E = options.measured_in_prediction ? M : 0;
-  const Eigen::VectorXd scale_e =
-      variance_multipliers(E > 0 ? options.measured_scale : std::vector<double>{}, E, "measured_scale", "measured locations");
-  const std::size_t total = std::min<std::size_t>(options.count + options.lookahead, static_cast<std::size_t>(C));
-  const Eigen::Index S_max = M + static_cast<Eigen::Index>(total);
-  Eigen::MatrixXd k_inverse(S_max, S_max);  // top-left |S| x |S| in use
-  Eigen::MatrixXd x_set(S_max, xc.cols());
-  Eigen::Index S = M;
-  if (M > 0) {
-    k_inverse.topLeftCorner(M, M) = measured_inverse;
-    x_set.topRows(M) = xd;
-  }
-  std::vector<Eigen::Index> set_of_candidate(static_cast<std::size_t>(C), -1);  // a pick's index in S
-  // A member's variance can only fall as readings are added: at most what it was when the member
-  // joined (a pick: its variance before its pick; a measured location: given the other measured
-  // ones). The bordered inverse's rounding breaks that where K_S is near singular (a Gaussian
-  // model of range 10^5 degrees fitted on 40 poses gave (K_S^-1)_ii of either sign, and the
-  // prediction jumped by 20 % between two picks); the cap keeps what exact arithmetic guarantees.
-  std::vector<double> member_cap(static_cast<std::size_t>(S_max), 0.0);
-  for (Eigen::Index i = 0; i < M; ++i) member_cap[static_cast<std::size_t>(i)] = std::max(1.0 / measured_inverse(i, i) - noise, 0.0);
-  auto loo = [&](Eigen::Index i) {
-    const double cap = member_cap[static_cast<std::size_t>(i)];
-    return k_inverse(i, i) > 0.0 ? std::clamp(1.0 / k_inverse(i, i) - noise, 0.0, cap) : cap;
-  };
-  // A new reading's error variance, (field + nugget) times the local scale, averaged over every
-  // candidate (and measured location): the pool as a whole, which the poses asked for later
-  // resemble. Averaged over the candidates not picked alone it was biased low after a greedy
-  // batch, which leaves the candidates whose variance it did not need to reduce.
-  std::vector<char> taken(static_cast<std::size_t>(C), 0);
-  const double scale_all = (scale_c.sum() + scale_e.sum()) / static_cast<double>(C + E);
-  // The linear term, conditioned on the measured locations (LinearTermPosterior).
-  const auto& lin = options.linear_term;
-  const bool linear = lin.covariance.size() > 0;
-  const Eigen::Index K = linear ? lin.components : 1;
-  std::optional<LinearTermPosterior> linear_posterior;
-  if (linear) {
-    const Eigen::Index p = lin.covariance.rows();
-    if (K < 1 || K > kMaxLinearComponents || lin.covariance.cols() != p || lin.candidate_rows.rows() != K * C || lin.candidate_rows.cols() != p ||
-        !lin.covariance.allFinite() || !lin.candidate_rows.allFinite())
-      throw ArgumentError("linear_term: expected 1 to " + std::to_string(kMaxLinearComponents) +
-                          " components, a finite p x p covariance and " + std::to_string(K) + " x " +
-                          std::to_string(C) + " candidate rows of p columns, got " + std::to_string(lin.covariance.rows()) +
-                          " x " + std::to_string(lin.covariance.cols()) + " and " + std::to_string(lin.candidate_rows.rows()) +
-                          " x " + std::to_string(lin.candidate_rows.cols()));
-    if (lin.measured_rows.rows() != K * M || (M > 0 && lin.measured_rows.cols() != p) || !lin.measured_rows.allFinite())
-      throw ArgumentError("linear_term.measured_rows: expected " + std::to_string(K) + " x " + std::to_string(M) +
-                          " finite rows of " + std::to_string(p) + " columns (the term's design at the measured locations), got " +
-                          std::to_string(lin.measured_rows.rows()) + " x " + std::to_string(lin.measured_rows.cols()));
-    linear_posterior.emplace(lin, C, S_max);
-    if (M > 0) linear_posterior->condition_on_measured(lin.measured_rows, llt, w_c, measured_inverse);
-  }
-  auto mse = [&] {
-    double sum = 0.0;
-    for (Eigen::Index c = 0; c < C; ++c) {
-      const Eigen::Index i = set_of_candidate[static_cast<std::size_t>(c)];
-      sum += scale_c[c] * (i >= 0 ? loo(i) : std::max(var_c[c], 0.0));
-    }
-    for (Eigen::Index e = 0; e < E; ++e) sum += scale_e[e] * loo(e);
-    if (linear_posterior)
-      sum += linear_posterior->variance_sum(set_of_candidate, M, E, S - M) / static_cast<double>(K);
-    return sum / static_cast<double>(C + E) + scale_all * nugget;
-  };
-  plan.predicted_mse.push_back(xd.rows() > 0 ? mse() : std::numeric_limits<double>::quiet_NaN());
-
-  if (!(options.spacing_floor >= 0.0 && options.spacing_floor < 1.0))
-    throw ArgumentError("spacing_floor: " + format_number(options.spacing_floor) + "; expected a fraction in [0, 1)");
-  // The spacing floor's distances: each candidate's squared (scaled) distance to the nearest
-  // measured or picked location, infinite while there is none.
-  Eigen::MatrixXd z_spacing;
-  Eigen::VectorXd nearest2_spacing;
-  if (options.spacing_floor > 0.0) {
-    const Eigen::RowVectorXd s = axis_scales(candidates, {});
-    z_spacing = candidates.array().rowwise() / s.array();
-    nearest2_spacing = measured.rows() > 0 ? squared_distance_to_set(z_spacing, measured.array().rowwise() / s.array())
-                                           : Eigen::VectorXd::Constant(C, std::numeric_limits<double>::infinity());
-  }
-
-  std::vector<Eigen::VectorXd> u_c;  // the picks' rank-one updates over the candidates
+void check_first_picks(const VarianceReductionOptions& options, Eigen::Index C) {
   if (options.first_picks.size() > options.count)
     throw ArgumentError("first_picks: " + std::to_string(options.first_picks.size()) + " rows for a count of " +
                         std::to_string(options.count));
@@ -502,75 +370,286 @@ VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candid
       throw ArgumentError("first_picks[" + std::to_string(f) + "]: row " + std::to_string(row) +
                           " is beyond the candidates or given twice");
   }
-  for (std::size_t pick = 0; pick < total; ++pick) {
-    Eigen::Index best = -1;
-    if (pick < options.first_picks.size()) {
-      best = static_cast<Eigen::Index>(options.first_picks[pick]);
-    } else {
-      // The R x C work of a pick, one candidate column per iteration: each column's sum runs over
-      // the references in their order, whatever the thread count.
-      Eigen::VectorXd reduction(C);
-#pragma omp parallel for schedule(static)
-      for (Eigen::Index c = 0; c < C; ++c) reduction[c] = (cross.col(c).array().square() * scale_r.array()).sum();
-      // The linear term's reduction of its mean variance over the candidates, times the
-      // references (the field's reduction is summed over them), each candidate alone.
-      const Eigen::VectorXd linear_reduction = linear_posterior
-                                                   ? Eigen::VectorXd(linear_posterior->reductions(var_c, noise, taken) * static_cast<double>(R))
-                                                   : Eigen::VectorXd::Zero(C);
-      // Eligible under the spacing floor: at least the floor's fraction of the largest distance.
-      double min_spacing2 = -1.0;
-      if (nearest2_spacing.size() > 0) {
-        double largest2 = 0.0;
-        for (Eigen::Index c = 0; c < C; ++c)
-          if (!taken[static_cast<std::size_t>(c)]) largest2 = std::max(largest2, nearest2_spacing[c]);
-        if (std::isfinite(largest2)) min_spacing2 = options.spacing_floor * options.spacing_floor * largest2;
-      }
-      double best_score = -1.0;
-      for (Eigen::Index c = 0; c < C; ++c) {
-        if (taken[static_cast<std::size_t>(c)]) continue;
-        if (min_spacing2 > 0.0 && nearest2_spacing[c] < min_spacing2) continue;
-        const double score = reduction[c] / (std::max(var_c[c], 0.0) + noise) + linear_reduction[c];
-        if (score > best_score) best_score = score, best = c;
-      }
-      // Every score NaN (variances that overflowed on the way) chose nothing: index -1 was written
-      // as taken, a heap corruption (plan --candidates aborted with "double free").
-      if (best < 0)
-        throw Error("variance reduction: no candidate has a finite score at pick " + std::to_string(pick + 1) +
-                    " (the model's variances overflow double precision: " + model.to_string() + ")");
+}
+
+// The greedy batch's state: the field's posterior covariance between the references and the
+// candidates, the candidates' variances, the set S of measured and picked locations with its
+// inverse covariance, the linear term's posterior and the spacing floor's distances. Built in the
+// order the inputs are checked (the first bad input is the one reported).
+class GreedyVarianceReduction {
+ public:
+  GreedyVarianceReduction(const Eigen::MatrixXd& candidates, const Eigen::MatrixXd& measured,
+                          const VariogramModel& model, const VarianceReductionOptions& options)
+      : model_(model), o_(options), C(candidates.rows()), nugget(model.nugget()),
+        k{model.isotropic_part(), model.sill() - nugget, 0.0} {
+    if (!(k.field_variance > 0.0)) throw ArgumentError("the model has no structured variance (a pure nugget): " + model.to_string());
+    k.mean_variance = options.mean_variance_factor * k.field_variance;
+    // A measurement's noise; a nugget-free model gets a relative jitter so the systems stay solvable.
+    noise = nugget > 0.0 ? nugget : 1e-10 * k.field_variance;
+    xc = mapped_by_anisotropy(candidates, model.anisotropy());
+    xd = mapped_by_anisotropy(measured, model.anisotropy());
+    choose_references();
+    condition_on_measured();
+    start_set();
+    start_linear_term();
+  }
+
+  std::size_t references() const { return ref_rows.size(); }
+  Eigen::Index measured() const { return xd.rows(); }
+  // Picks to make: the count and the lookahead, at most every candidate.
+  std::size_t total() const { return total_; }
+
+  // The mean predictive variance of a new measurement over the candidates (and measured locations).
+  double mse() const {
+    double sum = 0.0;
+    for (Eigen::Index c = 0; c < C; ++c) {
+      const Eigen::Index i = set_of_candidate[static_cast<std::size_t>(c)];
+      sum += scale_c[c] * (i >= 0 ? loo(i) : std::max(var_c[c], 0.0));
     }
-    taken[static_cast<std::size_t>(best)] = 1;
-    if (nearest2_spacing.size() > 0)
-      nearest2_spacing = nearest2_spacing.cwiseMin((z_spacing.rowwise() - z_spacing.row(best)).rowwise().squaredNorm());
+    for (Eigen::Index e = 0; e < E; ++e) sum += scale_e[e] * loo(e);
+    if (linear_posterior)
+      sum += linear_posterior->variance_sum(set_of_candidate, M, E, S - M) / static_cast<double>(K);
+    return sum / static_cast<double>(C + E) + scale_all * nugget;
+  }
+
+  // The spacing floor's distances: each candidate's squared (scaled) distance to the nearest
+  // measured or picked location, infinite while there is none.
+  void start_spacing(const Eigen::MatrixXd& candidates, const Eigen::MatrixXd& measured) {
+    if (!(o_.spacing_floor >= 0.0 && o_.spacing_floor < 1.0))
+      throw ArgumentError("spacing_floor: " + format_number(o_.spacing_floor) + "; expected a fraction in [0, 1)");
+    if (o_.spacing_floor > 0.0) {
+      const Eigen::RowVectorXd s = axis_scales(candidates, {});
+      z_spacing = candidates.array().rowwise() / s.array();
+      nearest2_spacing = measured.rows() > 0 ? squared_distance_to_set(z_spacing, measured.array().rowwise() / s.array())
+                                             : Eigen::VectorXd::Constant(C, std::numeric_limits<double>::infinity());
+    }
+  }
+
+  Eigen::Index best_candidate(std::size_t pick) const;
+  void take(Eigen::Index best);
+
+ private:
+  // Leave-one-out variance of member i of the set, capped (see member_cap).
+  double loo(Eigen::Index i) const {
+    const double cap = member_cap[static_cast<std::size_t>(i)];
+    return k_inverse(i, i) > 0.0 ? std::clamp(1.0 / k_inverse(i, i) - noise, 0.0, cap) : cap;
+  }
+  void choose_references();
+  void condition_on_measured();
+  void start_set();
+  void start_linear_term();
+
+  const VariogramModel& model_;
+  const VarianceReductionOptions& o_;
+  Eigen::Index C, R = 0, M = 0, E = 0, K = 1, S_max = 0, S = 0;
+  double nugget, noise = 0.0, scale_all = 0.0;
+  PriorCovariance k;
+  std::size_t total_ = 0;
+  Eigen::MatrixXd xc, xd, xr;
+  std::vector<std::size_t> ref_rows;
+  Eigen::VectorXd scale_c, scale_r, scale_e;
+  Eigen::MatrixXd cross;             // Σ(R, C), updated in place
+  Eigen::VectorXd var_c;             // Σ(c, c)
+  Eigen::MatrixXd w_c;               // M x C, kept for the candidate-candidate covariances of later picks
+  Eigen::MatrixXd measured_inverse;  // (K_DD + noise I)^-1, for the leave-one-out variances
+  Eigen::LLT<Eigen::MatrixXd> llt;
+  Eigen::MatrixXd k_inverse;  // top-left |S| x |S| in use
+  Eigen::MatrixXd x_set;
+  std::vector<Eigen::Index> set_of_candidate;  // a pick's index in S
+  std::vector<double> member_cap;
+  std::vector<char> taken;
+  std::optional<LinearTermPosterior> linear_posterior;
+  Eigen::MatrixXd z_spacing;
+  Eigen::VectorXd nearest2_spacing;
+  std::vector<Eigen::VectorXd> u_c;  // the picks' rank-one updates over the candidates
+};
+
+// References: every candidate, or an evenly spread subset (maximin in the mapped coordinates).
+void GreedyVarianceReduction::choose_references() {
+  if (static_cast<std::size_t>(C) <= o_.max_references) {
+    for (Eigen::Index i = 0; i < C; ++i) ref_rows.push_back(static_cast<std::size_t>(i));
+  } else {
+    MaximinOptions mo;
+    mo.count = o_.max_references;
+    mo.axis_scale.assign(static_cast<std::size_t>(xc.cols()), 1.0);
+    ref_rows = select_maximin(xc, Eigen::MatrixXd(0, xc.cols()), mo);
+    std::sort(ref_rows.begin(), ref_rows.end());
+  }
+  R = static_cast<Eigen::Index>(ref_rows.size());
+  scale_c = variance_multipliers(o_.variance_scale, C, "variance_scale", "candidates");
+  scale_r.resize(R);
+  for (Eigen::Index i = 0; i < R; ++i) scale_r[i] = scale_c[static_cast<Eigen::Index>(ref_rows[static_cast<std::size_t>(i)])];
+  constexpr double kMaxBytes = 4.0 * 1024 * 1024 * 1024;
+  if (static_cast<double>(R) * static_cast<double>(C) * 8.0 > kMaxBytes)
+    throw ResourceError("variance reduction over " + std::to_string(R) + " references x " + std::to_string(C) +
+                        " candidates needs more than 4 GiB; lower max_references or the number of candidates");
+  xr.resize(R, xc.cols());
+  for (Eigen::Index i = 0; i < R; ++i) xr.row(i) = xc.row(static_cast<Eigen::Index>(ref_rows[static_cast<std::size_t>(i)]));
+}
+
+// Posterior after the measured locations: Σ(a,b) = k(a,b) − W_a' W_b, W = L⁻¹ K_D·, L L' = K_DD + noise I.
+void GreedyVarianceReduction::condition_on_measured() {
+  cross = k.between(xr, xc);
+  var_c = Eigen::VectorXd::Constant(C, k(0.0));
+  if (xd.rows() > 0) {
+    Eigen::MatrixXd kdd = k.between(xd, xd);
+    kdd.diagonal().array() += noise;
+    llt.compute(kdd);
+    if (llt.info() != Eigen::Success)
+      throw ArgumentError("the measured locations' covariance is not positive definite under " + model_.to_string());
+    w_c = llt.matrixL().solve(k.between(xd, xc));
+    const Eigen::MatrixXd w_r = llt.matrixL().solve(k.between(xd, xr));
+    cross.noalias() -= w_r.transpose() * w_c;
+    var_c -= w_c.colwise().squaredNorm().transpose();
+    measured_inverse = llt.solve(Eigen::MatrixXd::Identity(xd.rows(), xd.rows()));
+  }
+}
+
+// Leave-one-out variances: a measured or picked location counts in the prediction with the
+// field's variance there given every other reading, 1 / (K_S^-1)_ii - noise over the set S of
+// measured and picked locations (what a new pose near it, not on it, would see). K_S^-1 is kept
+// explicitly and grown by one row and column per pick (a bordered inverse, O(|S|^2) each).
+void GreedyVarianceReduction::start_set() {
+  M = xd.rows();
+  E = o_.measured_in_prediction ? M : 0;
+  scale_e = variance_multipliers(E > 0 ? o_.measured_scale : std::vector<double>{}, E, "measured_scale", "measured locations");
+  total_ = std::min<std::size_t>(o_.count + o_.lookahead, static_cast<std::size_t>(C));
+  S_max = M + static_cast<Eigen::Index>(total_);
+  k_inverse.resize(S_max, S_max);
+  x_set.resize(S_max, xc.cols());
+  S = M;
+  if (M > 0) {
+    k_inverse.topLeftCorner(M, M) = measured_inverse;
+    x_set.topRows(M) = xd;
+  }
+  set_of_candidate.assign(static_cast<std::size_t>(C), -1);
+  // A member's variance can only fall as readings are added: at most what it was when the member
+  // joined (a pick: its variance before its pick; a measured location: given the other measured
+  // ones). The bordered inverse's rounding breaks that where K_S is near singular (a Gaussian
+  // model of range 10^5 degrees fitted on 40 poses gave (K_S^-1)_ii of either sign, and the
+  // prediction jumped by 20 % between two picks); the cap keeps what exact arithmetic guarantees.
+  member_cap.assign(static_cast<std::size_t>(S_max), 0.0);
+  for (Eigen::Index i = 0; i < M; ++i) member_cap[static_cast<std::size_t>(i)] = std::max(1.0 / measured_inverse(i, i) - noise, 0.0);
+  // A new reading's error variance, (field + nugget) times the local scale, averaged over every
+  // candidate (and measured location): the pool as a whole, which the poses asked for later
+  // resemble. Averaged over the candidates not picked alone it was biased low after a greedy
+  // batch, which leaves the candidates whose variance it did not need to reduce.
+  taken.assign(static_cast<std::size_t>(C), 0);
+  scale_all = (scale_c.sum() + scale_e.sum()) / static_cast<double>(C + E);
+}
+
+// The linear term, conditioned on the measured locations (LinearTermPosterior).
+void GreedyVarianceReduction::start_linear_term() {
+  const auto& lin = o_.linear_term;
+  const bool linear = lin.covariance.size() > 0;
+  K = linear ? lin.components : 1;
+  if (!linear) return;
+  const Eigen::Index p = lin.covariance.rows();
+  if (K < 1 || K > kMaxLinearComponents || lin.covariance.cols() != p || lin.candidate_rows.rows() != K * C || lin.candidate_rows.cols() != p ||
+      !lin.covariance.allFinite() || !lin.candidate_rows.allFinite())
+    throw ArgumentError("linear_term: expected 1 to " + std::to_string(kMaxLinearComponents) +
+                        " components, a finite p x p covariance and " + std::to_string(K) + " x " +
+                        std::to_string(C) + " candidate rows of p columns, got " + std::to_string(lin.covariance.rows()) +
+                        " x " + std::to_string(lin.covariance.cols()) + " and " + std::to_string(lin.candidate_rows.rows()) +
+                        " x " + std::to_string(lin.candidate_rows.cols()));
+  if (lin.measured_rows.rows() != K * M || (M > 0 && lin.measured_rows.cols() != p) || !lin.measured_rows.allFinite())
+    throw ArgumentError("linear_term.measured_rows: expected " + std::to_string(K) + " x " + std::to_string(M) +
+                        " finite rows of " + std::to_string(p) + " columns (the term's design at the measured locations), got " +
+                        std::to_string(lin.measured_rows.rows()) + " x " + std::to_string(lin.measured_rows.cols()));
+  linear_posterior.emplace(lin, C, S_max);
+  if (M > 0) linear_posterior->condition_on_measured(lin.measured_rows, llt, w_c, measured_inverse);
+}
+
+// The candidate whose reading lowers the summed variance most, among those the spacing floor allows.
+Eigen::Index GreedyVarianceReduction::best_candidate(std::size_t pick) const {
+  // The R x C work of a pick, one candidate column per iteration: each column's sum runs over
+  // the references in their order, whatever the thread count.
+  Eigen::VectorXd reduction(C);
+#pragma omp parallel for schedule(static)
+  for (Eigen::Index c = 0; c < C; ++c) reduction[c] = (cross.col(c).array().square() * scale_r.array()).sum();
+  // The linear term's reduction of its mean variance over the candidates, times the
+  // references (the field's reduction is summed over them), each candidate alone.
+  const Eigen::VectorXd linear_reduction = linear_posterior
+                                               ? Eigen::VectorXd(linear_posterior->reductions(var_c, noise, taken) * static_cast<double>(R))
+                                               : Eigen::VectorXd::Zero(C);
+  // Eligible under the spacing floor: at least the floor's fraction of the largest distance.
+  double min_spacing2 = -1.0;
+  if (nearest2_spacing.size() > 0) {
+    double largest2 = 0.0;
+    for (Eigen::Index c = 0; c < C; ++c)
+      if (!taken[static_cast<std::size_t>(c)]) largest2 = std::max(largest2, nearest2_spacing[c]);
+    if (std::isfinite(largest2)) min_spacing2 = o_.spacing_floor * o_.spacing_floor * largest2;
+  }
+  Eigen::Index best = -1;
+  double best_score = -1.0;
+  for (Eigen::Index c = 0; c < C; ++c) {
+    if (taken[static_cast<std::size_t>(c)]) continue;
+    if (min_spacing2 > 0.0 && nearest2_spacing[c] < min_spacing2) continue;
+    const double score = reduction[c] / (std::max(var_c[c], 0.0) + noise) + linear_reduction[c];
+    if (score > best_score) best_score = score, best = c;
+  }
+  // Every score NaN (variances that overflowed on the way) chose nothing: index -1 was written
+  // as taken, a heap corruption (plan --candidates aborted with "double free").
+  if (best < 0)
+    throw Error("variance reduction: no candidate has a finite score at pick " + std::to_string(pick + 1) +
+                " (the model's variances overflow double precision: " + model_.to_string() + ")");
+  return best;
+}
+
+// A reading at candidate `best`: every covariance, variance and the set's inverse conditioned on it.
+void GreedyVarianceReduction::take(Eigen::Index best) {
+  taken[static_cast<std::size_t>(best)] = 1;
+  if (nearest2_spacing.size() > 0)
+    nearest2_spacing = nearest2_spacing.cwiseMin((z_spacing.rowwise() - z_spacing.row(best)).rowwise().squaredNorm());
+  // Σ(C, best): prior, minus the measured locations' part, minus the earlier picks' parts.
+  Eigen::VectorXd col(C);
+  for (Eigen::Index c = 0; c < C; ++c) col[c] = k((xc.row(c) - xc.row(best)).norm());
+  if (w_c.size()) col.noalias() -= w_c.transpose() * w_c.col(best);
+  for (const Eigen::VectorXd& u : u_c) col -= u[best] * u;
+  const double denominator = std::sqrt(std::max(var_c[best], 0.0) + noise);
+  const Eigen::VectorXd uc = col / denominator;
+  const Eigen::VectorXd ur = cross.col(best) / denominator;
+#pragma omp parallel for schedule(static)
+  for (Eigen::Index c = 0; c < C; ++c) cross.col(c) -= uc[c] * ur;
+  // The linear term sees the pick's reading with the field's variance before it.
+  if (linear_posterior) linear_posterior->pick(best, denominator * denominator, uc / denominator, S);
+  {
+    // K_S^-1 bordered by the pick: b = k(S, pick), a = K_S^-1 b, s = k(pick, pick) + noise - b'a.
+    Eigen::VectorXd b(S);
+    for (Eigen::Index i = 0; i < S; ++i) b[i] = k((x_set.row(i) - xc.row(best)).norm());
+    const Eigen::VectorXd a = k_inverse.topLeftCorner(S, S) * b;
+    const double schur = k(0.0) + noise - b.dot(a);
+    k_inverse.topLeftCorner(S, S).noalias() += (a / schur) * a.transpose();
+    k_inverse.block(0, S, S, 1) = -a / schur;
+    k_inverse.block(S, 0, 1, S) = (-a / schur).transpose();
+    k_inverse(S, S) = 1.0 / schur;
+    x_set.row(S) = xc.row(best);
+    member_cap[static_cast<std::size_t>(S)] = std::max(var_c[best], 0.0);
+    set_of_candidate[static_cast<std::size_t>(best)] = S++;
+  }
+  var_c -= uc.cwiseAbs2();
+  u_c.push_back(uc);
+}
+
+}  // namespace
+
+VarianceReductionPlan select_by_variance_reduction(const Eigen::MatrixXd& candidates, const Eigen::MatrixXd& measured,
+                                                   const VariogramModel& model,
+                                                   const VarianceReductionOptions& options) {
+  check_variance_reduction_inputs(candidates, measured, model, options);
+  VarianceReductionPlan plan;
+  if (candidates.rows() == 0) return plan;
+  GreedyVarianceReduction greedy(candidates, measured, model, options);
+  plan.references = greedy.references();
+  plan.predicted_mse.push_back(greedy.measured() > 0 ? greedy.mse() : std::numeric_limits<double>::quiet_NaN());
+  greedy.start_spacing(candidates, measured);
+  check_first_picks(options, candidates.rows());
+  for (std::size_t pick = 0; pick < greedy.total(); ++pick) {
+    const Eigen::Index best = pick < options.first_picks.size() ? static_cast<Eigen::Index>(options.first_picks[pick])
+                                                                : greedy.best_candidate(pick);
     (pick < options.count ? plan.chosen : plan.lookahead_rows).push_back(static_cast<std::size_t>(best));
-    // Σ(C, best): prior, minus the measured locations' part, minus the earlier picks' parts.
-    Eigen::VectorXd col(C);
-    for (Eigen::Index c = 0; c < C; ++c) col[c] = k((xc.row(c) - xc.row(best)).norm());
-    if (w_c.size()) col.noalias() -= w_c.transpose() * w_c.col(best);
-    for (const Eigen::VectorXd& u : u_c) col -= u[best] * u;
-    const double denominator = std::sqrt(std::max(var_c[best], 0.0) + noise);
-    const Eigen::VectorXd uc = col / denominator;
-    const Eigen::VectorXd ur = cross.col(best) / denominator;
-#pragma omp parallel for schedule(static)
-    for (Eigen::Index c = 0; c < C; ++c) cross.col(c) -= uc[c] * ur;
-    // The linear term sees the pick's reading with the field's variance before it.
-    if (linear_posterior) linear_posterior->pick(best, denominator * denominator, uc / denominator, S);
-    {
-      // K_S^-1 bordered by the pick: b = k(S, pick), a = K_S^-1 b, s = k(pick, pick) + noise - b'a.
-      Eigen::VectorXd b(S);
-      for (Eigen::Index i = 0; i < S; ++i) b[i] = k((x_set.row(i) - xc.row(best)).norm());
-      const Eigen::VectorXd a = k_inverse.topLeftCorner(S, S) * b;
-      const double schur = k(0.0) + noise - b.dot(a);
-      k_inverse.topLeftCorner(S, S).noalias() += (a / schur) * a.transpose();
-      k_inverse.block(0, S, S, 1) = -a / schur;
-      k_inverse.block(S, 0, 1, S) = (-a / schur).transpose();
-      k_inverse(S, S) = 1.0 / schur;
-      x_set.row(S) = xc.row(best);
-      member_cap[static_cast<std::size_t>(S)] = std::max(var_c[best], 0.0);
-      set_of_candidate[static_cast<std::size_t>(best)] = S++;
-    }
-    var_c -= uc.cwiseAbs2();
-    u_c.push_back(uc);
-    plan.predicted_mse.push_back(mse());
+    greedy.take(best);
+    plan.predicted_mse.push_back(greedy.mse());
     if (pick + 1 >= options.count && options.lookahead_done && options.lookahead_done(plan.predicted_mse.back())) break;
   }
   return plan;

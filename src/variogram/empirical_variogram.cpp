@@ -247,28 +247,68 @@ int variogram_thread_index() {
 #endif
 }
 
-bool build_variogram_cells(const double* axis_major, std::size_t n, int dimension,
-                           const std::vector<double>& axis_bound, bool force, VariogramCells& cells) {
-  if (n < 2 || n >= std::numeric_limits<std::uint32_t>::max()) return false;
-  if (!force && n < kCellListMinPoints) return false;
-  // Cells a little wider than bound / reach: a pair within the bound then differs by less than
-  // `reach` cells on the axis even after the rounding of (x - lo) / side (relative ~1e-16 per cell
-  // index, far below the margin for the at most 2^28 cells allowed), so the kernel finds it.
-  constexpr double kSideMargin = 1e-6;
-  struct Axis {
-    int axis;
-    double lo, extent, side, cells, bound;
+namespace {
+
+// Cells (or columns) a little wider than bound / reach: a pair within the bound then differs by
+// less than `reach` cells on the axis even after the rounding of (x - lo) / side (relative ~1e-16
+// per cell index, far below the margin for the at most 2^28 cells allowed), so the kernel finds it.
+constexpr double kSideMargin = 1e-6;
+
+// One gridded axis: its cells of `side` over [lo, lo + extent] (`bound`: the cell list's pair bound).
+struct GridAxis {
+  int axis;
+  double lo, extent, side, cells, bound;
+};
+
+double cells_for(double extent, double side) {
+  return std::min(std::floor(extent / side) + 1.0, 1099511627776.0);  // 2^40: coarsened below
+}
+
+// The widest axis's cells doubled in size until there are at most `max_cells` in all; an axis
+// left with fewer than `min_cells` is not gridded.
+void coarsen(std::vector<GridAxis>& axes, double max_cells, double min_cells) {
+  auto total = [&] {
+    double t = 1.0;
+    for (const GridAxis& x : axes) t *= x.cells;
+    return t;
   };
-  // Cells of half the bound: a pair within the cutoff is at most 2 cells apart on an axis, and
-  // the cells the kernel skips by their distance to the point (beyond the bound) take ~half of
-  // the 3-D neighbourhood away (measured: docs/variogram.md).
-  constexpr std::size_t kCellReach = 2;
-  constexpr double kMinCells = 2.0 * kCellReach + 1.0;
-  static_assert(kCellReach >= 1 && kCellReach <= kernels::kCellListMaxReach);
-  auto cells_for = [](double extent, double side) {
-    return std::min(std::floor(extent / side) + 1.0, 1099511627776.0);  // 2^40: coarsened below
-  };
-  std::vector<Axis> axes;
+  while (!axes.empty() && total() > max_cells) {
+    auto widest = std::max_element(axes.begin(), axes.end(),
+                                   [](const GridAxis& p, const GridAxis& q) { return p.cells < q.cells; });
+    widest->side *= 2.0;
+    widest->cells = cells_for(widest->extent, widest->side);
+    if (widest->cells < min_cells) axes.erase(widest);
+  }
+}
+
+// Most cells first (the first axis on ties).
+void sort_by_cells(std::vector<GridAxis>& axes) {
+  std::sort(axes.begin(), axes.end(), [](const GridAxis& p, const GridAxis& q) {
+    return p.cells > q.cells || (p.cells == q.cells && p.axis < q.axis);
+  });
+}
+
+// Expected share of the pairs in neighbouring cells within `reach` on gridded axes of c cells:
+// ((2r + 1) c - r (r + 1)) / c^2 per axis (uniform points), times `start`.
+double visited_share(const std::vector<GridAxis>& axes, std::size_t reach, double start) {
+  double visited = start;
+  const double r = static_cast<double>(reach);
+  for (const GridAxis& x : axes)
+    visited *= std::min(1.0, ((2.0 * r + 1.0) * x.cells - r * (r + 1.0)) / (x.cells * x.cells));
+  return visited;
+}
+
+// Cells of half the bound: a pair within the cutoff is at most 2 cells apart on an axis, and
+// the cells the kernel skips by their distance to the point (beyond the bound) take ~half of
+// the 3-D neighbourhood away (measured: docs/variogram.md).
+constexpr std::size_t kCellReach = 2;
+constexpr double kMinCells = 2.0 * kCellReach + 1.0;
+static_assert(kCellReach >= 1 && kCellReach <= kernels::kCellListMaxReach);
+
+// The axes worth gridding for the cell list, most cells first, coarsened to ~2 cells per point.
+std::vector<GridAxis> cell_list_axes(const double* axis_major, std::size_t n, int dimension,
+                                     const std::vector<double>& axis_bound) {
+  std::vector<GridAxis> axes;
   for (int a = 0; a < dimension; ++a) {
     const double b = axis_bound[static_cast<std::size_t>(a)];
     if (!(std::isfinite(b) && b > 0.0)) continue;
@@ -280,33 +320,18 @@ bool build_variogram_cells(const double* axis_major, std::size_t n, int dimensio
     // With fewer cells every cell neighbours every other: gridding the axis saves nothing.
     if (count >= kMinCells) axes.push_back({a, *lo, extent, side, count, b});
   }
-  std::sort(axes.begin(), axes.end(), [](const Axis& p, const Axis& q) {
-    return p.cells > q.cells || (p.cells == q.cells && p.axis < q.axis);
-  });
+  sort_by_cells(axes);
   if (axes.size() > static_cast<std::size_t>(kernels::kCellListMaxAxes))
     axes.resize(static_cast<std::size_t>(kernels::kCellListMaxAxes));
   // At most ~2 cells per point (more cells are mostly empty and only cost their visits).
-  const double max_cells = std::min(2.0 * static_cast<double>(n), 268435456.0);
-  auto total = [&] {
-    double t = 1.0;
-    for (const Axis& x : axes) t *= x.cells;
-    return t;
-  };
-  while (!axes.empty() && total() > max_cells) {
-    auto widest = std::max_element(axes.begin(), axes.end(),
-                                   [](const Axis& p, const Axis& q) { return p.cells < q.cells; });
-    widest->side *= 2.0;
-    widest->cells = cells_for(widest->extent, widest->side);
-    if (widest->cells < kMinCells) axes.erase(widest);
-  }
-  if (axes.empty()) return false;
-  double visited = 1.0;  // expected share of the pairs in neighbouring cells
-  // (c cells, reach r: sum over cells of the neighbours within r, over c^2), before the skipping.
-  const double r = static_cast<double>(kCellReach);
-  for (const Axis& x : axes)
-    visited *= std::min(1.0, ((2.0 * r + 1.0) * x.cells - r * (r + 1.0)) / (x.cells * x.cells));
-  if (!force && visited > kCellListMaxFraction) return false;
+  coarsen(axes, std::min(2.0 * static_cast<double>(n), 268435456.0), kMinCells);
+  return axes;
+}
 
+// The points sorted by cell (counting sort; ascending original index within a cell), with their
+// coordinates in that order, and the kernel's view of them.
+void fill_cell_list(const std::vector<GridAxis>& axes, const double* axis_major, std::size_t n, int dimension,
+                    VariogramCells& cells) {
   kernels::CellList& g = cells.list;
   g = kernels::CellList{};
   g.n = n;
@@ -334,7 +359,6 @@ bool build_variogram_cells(const double* axis_major, std::size_t n, int dimensio
     }
     cells.cell_of[i] = static_cast<std::uint32_t>(cell);
   }
-  // Counting sort by cell; ascending original index within a cell.
   cells.cell_start.assign(cell_count + 1, 0);
   for (std::size_t i = 0; i < n; ++i) ++cells.cell_start[cells.cell_of[i] + 1];
   for (std::size_t c = 0; c < cell_count; ++c) cells.cell_start[c + 1] += cells.cell_start[c];
@@ -357,81 +381,56 @@ bool build_variogram_cells(const double* axis_major, std::size_t n, int dimensio
   g.position = cells.position.data();
   g.cell_of = cells.cell_of.data();
   g.cell_start = cells.cell_start.data();
-  return true;
 }
 
-bool build_variogram_columns(const double* axis_major, const double* values, std::size_t n,
-                             int dimension, double cutoff, bool force, double max_share,
-                             VariogramColumns& columns) {
-  if (dimension < 1 || dimension > 3) return false;
-  if (n < 2 || n > kernels::kSimdMaxPoints) return false;
-  if (!force && n < kCellListMinPoints) return false;
-  if (!(std::isfinite(cutoff) && cutoff > 0.0)) return false;
-  // Columns of half the cutoff (a pair within it is at most 2 columns apart), as the cell list's
-  // cells: the gap of a point to a column trims the run on the sort axis to the circle's chord.
-  constexpr std::size_t kReach = 2;
-  constexpr double kSideMargin = 1e-6;  // see build_variogram_cells
-  constexpr double kMinColumns = 2.0 * kReach + 1.0;
-  static_assert(kReach >= 1 && kReach <= kernels::kColumnMaxReach);
-  struct Axis {
-    int axis;
-    double lo, extent, side, cells;
-  };
-  auto cells_for = [](double extent, double side) {
-    return std::min(std::floor(extent / side) + 1.0, 1099511627776.0);  // 2^40: coarsened below
-  };
-  std::vector<Axis> all;
+// Columns of half the cutoff (a pair within it is at most 2 columns apart), as the cell list's
+// cells: the gap of a point to a column trims the run on the sort axis to the circle's chord.
+constexpr std::size_t kColumnReach = 2;
+constexpr double kMinColumns = 2.0 * kColumnReach + 1.0;
+static_assert(kColumnReach >= 1 && kColumnReach <= kernels::kColumnMaxReach);
+
+// The sort axis (the largest extent, first on ties) and the gridded ones: those with enough
+// columns for some to be out of reach, most columns first, coarsened to one column per point.
+struct ColumnAxes {
+  GridAxis sort_axis;
+  std::vector<GridAxis> grid;
+  std::size_t reach = 1;
+};
+
+ColumnAxes column_axes(const double* axis_major, std::size_t n, int dimension, double cutoff) {
+  std::vector<GridAxis> all;
   for (int a = 0; a < dimension; ++a) {
     const double* x = axis_major + static_cast<std::size_t>(a) * n;
     const auto [lo, hi] = std::minmax_element(x, x + n);
-    const double side = cutoff * (1.0 + kSideMargin) / static_cast<double>(kReach);
-    all.push_back({a, *lo, *hi - *lo, side, cells_for(*hi - *lo, side)});
+    const double side = cutoff * (1.0 + kSideMargin) / static_cast<double>(kColumnReach);
+    all.push_back({a, *lo, *hi - *lo, side, cells_for(*hi - *lo, side), cutoff});
   }
-  // The sort axis: the largest extent (first on ties); the others are gridded when they have
-  // enough columns for some to be out of reach, most columns first.
   const auto sort_it = std::max_element(all.begin(), all.end(),
-                                        [](const Axis& p, const Axis& q) { return p.extent < q.extent; });
-  const Axis sort_axis = *sort_it;
-  std::vector<Axis> grid;
-  for (const Axis& x : all)
-    if (x.axis != sort_axis.axis && x.cells >= kMinColumns) grid.push_back(x);
-  std::sort(grid.begin(), grid.end(), [](const Axis& p, const Axis& q) {
-    return p.cells > q.cells || (p.cells == q.cells && p.axis < q.axis);
-  });
+                                        [](const GridAxis& p, const GridAxis& q) { return p.extent < q.extent; });
+  ColumnAxes c{*sort_it, {}, 1};
+  for (const GridAxis& x : all)
+    if (x.axis != c.sort_axis.axis && x.cells >= kMinColumns) c.grid.push_back(x);
+  sort_by_cells(c.grid);
   // At most one column per point: emptier columns only cost their visits.
-  auto total = [&] {
-    double t = 1.0;
-    for (const Axis& x : grid) t *= x.cells;
-    return t;
-  };
-  while (!grid.empty() && total() > static_cast<double>(n)) {
-    auto widest = std::max_element(grid.begin(), grid.end(),
-                                   [](const Axis& p, const Axis& q) { return p.cells < q.cells; });
-    widest->side *= 2.0;
-    widest->cells = cells_for(widest->extent, widest->side);
-    if (widest->cells < kMinColumns) grid.erase(widest);
-  }
+  coarsen(c.grid, static_cast<double>(n), kMinColumns);
   // Columns coarsened to a side >= the cutoff need a stencil of 1 column only: a pair within the
   // cutoff is at most floor(cutoff / side) + 1 columns apart.
-  std::size_t reach = 1;
-  for (const Axis& x : grid)
-    reach = std::max(reach, std::min(kReach, static_cast<std::size_t>(std::floor(cutoff / x.side)) + 1));
-  // Expected share of the pairs visited (uniform points): within the cutoff on the sort axis,
-  // 2u - u^2 for u = cutoff / extent; within reach on a gridded axis of c columns,
-  // ((2r + 1) c - r (r + 1)) / c^2.
-  const double u = sort_axis.extent > 0.0 ? std::min(1.0, cutoff / sort_axis.extent) : 1.0;
-  double visited = 2.0 * u - u * u;
-  const double r = static_cast<double>(reach);
-  for (const Axis& x : grid)
-    visited *= std::min(1.0, ((2.0 * r + 1.0) * x.cells - r * (r + 1.0)) / (x.cells * x.cells));
-  if (!force && visited > max_share) return false;
+  for (const GridAxis& x : c.grid)
+    c.reach = std::max(c.reach, std::min(kColumnReach, static_cast<std::size_t>(std::floor(cutoff / x.side)) + 1));
+  return c;
+}
 
+// The points sorted by column (counting sort), each column by the sort axis (index breaks ties:
+// deterministic), with their coordinates and values in that order, and the kernel's view of them.
+void fill_columns(const ColumnAxes& c, const double* axis_major, const double* values, std::size_t n, int dimension,
+                  double cutoff, VariogramColumns& columns) {
+  const std::vector<GridAxis>& grid = c.grid;
   kernels::SortedColumns& g = columns.list;
   g = kernels::SortedColumns{};
   g.dimension = dimension;
-  g.sort_axis = sort_axis.axis;
+  g.sort_axis = c.sort_axis.axis;
   g.grid_axes = static_cast<int>(grid.size());
-  g.reach = reach;
+  g.reach = c.reach;
   g.cutoff = cutoff;
   for (std::size_t k = 0; k < grid.size(); ++k) {
     g.grid_axis[k] = grid[k].axis;
@@ -450,18 +449,17 @@ bool build_variogram_columns(const double* axis_major, const double* values, std
     }
     column_of[i] = static_cast<std::uint32_t>(column);
   }
-  // Counting sort by column, then each column by the sort axis (index breaks ties: deterministic).
   columns.column_start.assign(column_count + 1, 0);
   for (std::size_t i = 0; i < n; ++i) ++columns.column_start[column_of[i] + 1];
-  for (std::size_t c = 0; c < column_count; ++c) columns.column_start[c + 1] += columns.column_start[c];
+  for (std::size_t k = 0; k < column_count; ++k) columns.column_start[k + 1] += columns.column_start[k];
   std::vector<std::uint32_t> point(n);
   {
     std::vector<std::uint32_t> next(columns.column_start.begin(), columns.column_start.end() - 1);
     for (std::size_t i = 0; i < n; ++i) point[next[column_of[i]]++] = static_cast<std::uint32_t>(i);
   }
-  const double* key = axis_major + static_cast<std::size_t>(sort_axis.axis) * n;
-  for (std::size_t c = 0; c < column_count; ++c)
-    std::sort(point.begin() + columns.column_start[c], point.begin() + columns.column_start[c + 1],
+  const double* key = axis_major + static_cast<std::size_t>(c.sort_axis.axis) * n;
+  for (std::size_t k = 0; k < column_count; ++k)
+    std::sort(point.begin() + columns.column_start[k], point.begin() + columns.column_start[k + 1],
               [key](std::uint32_t p, std::uint32_t q) { return key[p] < key[q] || (key[p] == key[q] && p < q); });
   const std::size_t D = static_cast<std::size_t>(dimension);
   columns.coordinates.resize(n * D);
@@ -473,6 +471,35 @@ bool build_variogram_columns(const double* axis_major, const double* values, std
   g.values = columns.values.data();
   g.column_start = columns.column_start.data();
   g.n = n;
+}
+
+}  // namespace
+
+bool build_variogram_cells(const double* axis_major, std::size_t n, int dimension,
+                           const std::vector<double>& axis_bound, bool force, VariogramCells& cells) {
+  if (n < 2 || n >= std::numeric_limits<std::uint32_t>::max()) return false;
+  if (!force && n < kCellListMinPoints) return false;
+  const std::vector<GridAxis> axes = cell_list_axes(axis_major, n, dimension, axis_bound);
+  if (axes.empty()) return false;
+  // The expected share of the pairs in neighbouring cells, before the skipping.
+  if (!force && visited_share(axes, kCellReach, 1.0) > kCellListMaxFraction) return false;
+  fill_cell_list(axes, axis_major, n, dimension, cells);
+  return true;
+}
+
+bool build_variogram_columns(const double* axis_major, const double* values, std::size_t n,
+                             int dimension, double cutoff, bool force, double max_share,
+                             VariogramColumns& columns) {
+  if (dimension < 1 || dimension > 3) return false;
+  if (n < 2 || n > kernels::kSimdMaxPoints) return false;
+  if (!force && n < kCellListMinPoints) return false;
+  if (!(std::isfinite(cutoff) && cutoff > 0.0)) return false;
+  const ColumnAxes axes = column_axes(axis_major, n, dimension, cutoff);
+  // Expected share of the pairs visited (uniform points): within the cutoff on the sort axis,
+  // 2u - u^2 for u = cutoff / extent, times the gridded axes' share within reach.
+  const double u = axes.sort_axis.extent > 0.0 ? std::min(1.0, cutoff / axes.sort_axis.extent) : 1.0;
+  if (!force && visited_share(axes.grid, axes.reach, 2.0 * u - u * u) > max_share) return false;
+  fill_columns(axes, axis_major, values, n, dimension, cutoff, columns);
   return true;
 }
 

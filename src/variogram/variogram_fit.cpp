@@ -122,30 +122,8 @@ struct Problem {
 
 double objective(const double* x, void* data) { return static_cast<Problem*>(data)->sse(x); }
 
-}  // namespace
-
-double weighted_sse(std::span<const double> lag, std::span<const double> gamma,
-                    std::span<const std::uint64_t> pairs, const VariogramModel& model,
-                    FitWeighting weighting) {
-  double s = 0.0;
-  for (std::size_t j = 0; j < lag.size(); ++j) {
-    if (pairs[j] == 0) continue;
-    const double m = model.gamma(lag[j]);
-    const double r = gamma[j] - m;
-    s += weight(weighting, pairs[j], lag[j], m) * r * r;
-  }
-  return s;
-}
-
-VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const double> gamma,
-                                 std::span<const std::uint64_t> pairs,
-                                 const std::vector<ModelComponent>& structure_in,
-                                 const VariogramFitOptions& options) {
-  options.validate();
-  if (lag.size() != gamma.size() || lag.size() != pairs.size())
-    throw ArgumentError("fit_variogram: " + std::to_string(lag.size()) + " lags, " +
-                        std::to_string(gamma.size()) + " semivariances and " +
-                        std::to_string(pairs.size()) + " pair counts; expected equal sizes");
+// The components to fit: the structure without its nugget (options.nugget says what becomes of it).
+std::vector<ModelComponent> fitted_structure(const std::vector<ModelComponent>& structure_in) {
   std::vector<ModelComponent> structure;
   for (const auto& c : structure_in)
     if (c.kind != ModelKind::Nugget) structure.push_back(c);
@@ -156,10 +134,19 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
     if (c.kind == ModelKind::Matern && !(c.nu > 0.0 && c.nu <= kMaxMaternNu))
       throw ArgumentError("fit_variogram: Matérn nu = " + format_number(c.nu) + "; expected 0 < nu <= " +
                           format_number(kMaxMaternNu) + " (kMaxMaternNu: beyond it the model is gau's)");
+  return structure;
+}
 
-  Problem pr;
-  pr.weighting = options.weighting;
-  pr.structure = structure;
+// Lags and semivariances are fitted divided by their largest values, so that the bounds and
+// starting points below hold for data in any unit.
+struct Scales {
+  double h = 1.0, g = 1.0;
+  std::vector<double> h_used, g_used;  // the bins that take part, in the data's units (for the reported SSE)
+};
+
+// The bins that take part, into `pr` in scaled units.
+Scales take_bins(std::span<const double> lag, std::span<const double> gamma, std::span<const std::uint64_t> pairs,
+                 const VariogramFitOptions& options, Problem& pr) {
   for (std::size_t j = 0; j < lag.size(); ++j) {
     if (pairs[j] == 0) continue;
     if (!std::isfinite(lag[j]) || lag[j] < 0.0)
@@ -174,59 +161,74 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
     pr.g.push_back(gamma[j]);
     pr.n.push_back(pairs[j]);
   }
-  const std::vector<double> h_used = pr.h, g_used = pr.g;  // data units, for the reported SSE
-  const double h_scale = pr.h.empty() ? 1.0 : *std::max_element(pr.h.begin(), pr.h.end());
-  double g_scale = pr.g.empty() ? 1.0 : *std::max_element(pr.g.begin(), pr.g.end());
-  if (!(g_scale > 0.0)) g_scale = 1.0;
-  for (auto& v : pr.h) v /= h_scale;
-  for (auto& v : pr.g) v /= g_scale;
-  pr.free_nugget = options.nugget == NuggetMode::Free;
-  pr.fixed_nugget = options.nugget == NuggetMode::Fixed ? options.nugget_value / g_scale : 0.0;
+  Scales sc;
+  sc.h_used = pr.h;
+  sc.g_used = pr.g;
+  sc.h = pr.h.empty() ? 1.0 : *std::max_element(pr.h.begin(), pr.h.end());
+  sc.g = pr.g.empty() ? 1.0 : *std::max_element(pr.g.begin(), pr.g.end());
+  if (!(sc.g > 0.0)) sc.g = 1.0;
+  for (auto& v : pr.h) v /= sc.h;
+  for (auto& v : pr.g) v /= sc.g;
+  return sc;
+}
 
-  // Parameter layout and bounds (scaled).
-  const double sill_hi = options.sill_max > 0.0 ? options.sill_max / g_scale : 100.0;
-  const double range_lo = options.range_min > 0.0 ? options.range_min / h_scale : 1e-6;
-  const double range_hi = options.range_max > 0.0 ? options.range_max / h_scale : 100.0;
+struct Box {
   std::vector<double> lb, ub;
+};
+
+// Parameter layout and bounds (scaled).
+Box parameter_box(const std::vector<ModelComponent>& structure, const VariogramFitOptions& options, const Scales& sc,
+                  bool free_nugget) {
+  const double sill_hi = options.sill_max > 0.0 ? options.sill_max / sc.g : 100.0;
+  const double range_lo = options.range_min > 0.0 ? options.range_min / sc.h : 1e-6;
+  const double range_hi = options.range_max > 0.0 ? options.range_max / sc.h : 100.0;
+  Box b;
   for (const auto& c : structure) {
-    lb.push_back(0.0);
-    ub.push_back(c.kind == ModelKind::Power || c.kind == ModelKind::Linear
-                     ? std::numeric_limits<double>::max() / 4  // slope-like: no natural scale cap
-                     : sill_hi);
+    b.lb.push_back(0.0);
+    b.ub.push_back(c.kind == ModelKind::Power || c.kind == ModelKind::Linear
+                       ? std::numeric_limits<double>::max() / 4  // slope-like: no natural scale cap
+                       : sill_hi);
     if (c.kind == ModelKind::Power) {
-      lb.push_back(1e-3);
-      ub.push_back(1.999);
+      b.lb.push_back(1e-3);
+      b.ub.push_back(1.999);
     } else if (has_range(c.kind)) {
-      lb.push_back(range_lo);
-      ub.push_back(range_hi);
+      b.lb.push_back(range_lo);
+      b.ub.push_back(range_hi);
     }
   }
-  if (pr.free_nugget) {
-    lb.push_back(0.0);
-    ub.push_back(sill_hi);
+  if (free_nugget) {
+    b.lb.push_back(0.0);
+    b.ub.push_back(sill_hi);
   }
-  for (auto& u : ub)
+  for (auto& u : b.ub)
     if (u > 1e6) u = 1e6;  // BOBYQA wants finite bounds; 10^6 x the scaled data is far outside
+  return b;
+}
 
-  // The caller's own parameters in scaled units (0 where not given): one of the starts, and the
-  // values of held parameters.
+// The caller's own parameters in scaled units (0 where not given): one of the starts, and the
+// values of held parameters.
+std::vector<double> given_parameters(const std::vector<ModelComponent>& structure, const VariogramFitOptions& options,
+                                     const Scales& sc, bool free_nugget) {
   std::vector<double> given;
   for (const auto& c : structure) {
     if (c.kind == ModelKind::Power) {
-      given.push_back(c.sill > 0.0 ? c.sill * std::pow(h_scale, c.range) / g_scale : 0.0);
+      given.push_back(c.sill > 0.0 ? c.sill * std::pow(sc.h, c.range) / sc.g : 0.0);
       given.push_back(c.range);
     } else if (c.kind == ModelKind::Linear) {
-      given.push_back(c.sill > 0.0 ? c.sill * h_scale / g_scale : 0.0);
+      given.push_back(c.sill > 0.0 ? c.sill * sc.h / sc.g : 0.0);
     } else {
-      given.push_back(c.sill > 0.0 ? c.sill / g_scale : 0.0);
-      given.push_back(c.range > 0.0 ? c.range / h_scale : 0.0);
+      given.push_back(c.sill > 0.0 ? c.sill / sc.g : 0.0);
+      given.push_back(c.range > 0.0 ? c.range / sc.h : 0.0);
     }
   }
-  const double nugget_given = options.nugget_start > 0.0 ? options.nugget_start / g_scale : 0.0;
-  if (pr.free_nugget) given.push_back(nugget_given);
+  const double nugget_given = options.nugget_start > 0.0 ? options.nugget_start / sc.g : 0.0;
+  if (free_nugget) given.push_back(nugget_given);
+  return given;
+}
 
-  // Held parameters (gstat's fit.sills / fit.ranges = FALSE).
-  const std::size_t n_full = lb.size();
+// Held parameters (gstat's fit.sills / fit.ranges = FALSE): pr.is_free over the full layout.
+void mark_held(const std::vector<ModelComponent>& structure, const VariogramFitOptions& options, std::size_t n_full,
+               Problem& pr) {
   pr.is_free.assign(n_full, true);
   for (const auto* hold : {&options.hold_sill, &options.hold_range}) {
     if (!hold->empty() && hold->size() != structure.size())
@@ -234,46 +236,43 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
                           std::to_string(structure.size()) +
                           " structure component(s); expected one per non-nugget component");
   }
-  {
-    std::size_t p = 0;
-    for (std::size_t i = 0; i < structure.size(); ++i) {
-      const ModelComponent& c = structure[i];
-      const std::string name = std::string(model_kind_name(c.kind)) + " (structure " + std::to_string(i + 1) + ")";
-      if (!options.hold_sill.empty() && options.hold_sill[i]) {
-        if (!(c.sill > 0.0 && std::isfinite(c.sill)))
-          throw ArgumentError("fit_variogram: the sill of " + name + " is held but given as " +
-                              format_number(c.sill) + "; a held sill needs a value > 0");
+  std::size_t p = 0;
+  for (std::size_t i = 0; i < structure.size(); ++i) {
+    const ModelComponent& c = structure[i];
+    const std::string name = std::string(model_kind_name(c.kind)) + " (structure " + std::to_string(i + 1) + ")";
+    if (!options.hold_sill.empty() && options.hold_sill[i]) {
+      if (!(c.sill > 0.0 && std::isfinite(c.sill)))
+        throw ArgumentError("fit_variogram: the sill of " + name + " is held but given as " +
+                            format_number(c.sill) + "; a held sill needs a value > 0");
+      pr.is_free[p] = false;
+    }
+    ++p;
+    if (has_range(c.kind)) {
+      if (!options.hold_range.empty() && options.hold_range[i]) {
+        if (!(c.range > 0.0 && std::isfinite(c.range)))
+          throw ArgumentError("fit_variogram: the range of " + name + " is held but given as " +
+                              format_number(c.range) + "; a held range needs a value > 0");
         pr.is_free[p] = false;
       }
       ++p;
-      if (has_range(c.kind)) {
-        if (!options.hold_range.empty() && options.hold_range[i]) {
-          if (!(c.range > 0.0 && std::isfinite(c.range)))
-            throw ArgumentError("fit_variogram: the range of " + name + " is held but given as " +
-                                format_number(c.range) + "; a held range needs a value > 0");
-          pr.is_free[p] = false;
-        }
-        ++p;
-      } else if (!options.hold_range.empty() && options.hold_range[i]) {
-        throw ArgumentError("fit_variogram: " + name + " has no range to hold");
-      }
+    } else if (!options.hold_range.empty() && options.hold_range[i]) {
+      throw ArgumentError("fit_variogram: " + name + " has no range to hold");
     }
   }
-  pr.full = given;
-  const std::size_t dim = static_cast<std::size_t>(std::count(pr.is_free.begin(), pr.is_free.end(), true));
-  if (dim == 0)
-    throw ArgumentError("fit_variogram: every parameter is held; nothing to fit");
-  if (pr.h.size() < dim)
-    throw ArgumentError("fit_variogram: " + std::to_string(pr.h.size()) + " usable bin(s) for " +
-                        std::to_string(dim) + " free parameter(s); need at least as many bins");
+}
 
-  // Starting points: sill shared by the structure, ranges at fractions of the largest lag.
+// Starting points (free entries only): sill shared by the structure, ranges at fractions of the
+// largest lag, and first the caller's own parameters when every free one is given.
+std::vector<std::vector<double>> starting_points(const Problem& pr, const std::vector<double>& given, const Box& box,
+                                                 int wanted_starts) {
+  const std::vector<ModelComponent>& structure = pr.structure;
+  const std::size_t n_full = box.lb.size();
   const double g_max = 1.0;
   const double g_first = pr.g.front();
   const double nug0 = pr.free_nugget ? std::min(0.5 * g_first, 0.5 * g_max) : 0.0;
   const double fractions[] = {1.0 / 3.0, 0.1, 0.6, 1.0, 0.03, 2.0, 0.2, 0.45, 1.5, 5.0};
   std::vector<std::vector<double>> starts;  // full vectors
-  const int n_starts = std::min<int>(options.starts, static_cast<int>(std::size(fractions)));
+  const int n_starts = std::min<int>(wanted_starts, static_cast<int>(std::size(fractions)));
   const double k = static_cast<double>(structure.size());
   for (int s = 0; s < n_starts; ++s) {
     std::vector<double> x;
@@ -305,12 +304,21 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
   for (auto& x : starts)
     for (std::size_t p = 0; p < n_full; ++p) {
       if (!pr.is_free[p]) x[p] = given[p];  // held: exactly the given value, even outside the box
-      else x[p] = std::clamp(x[p], lb[p], ub[p]);
+      else x[p] = std::clamp(x[p], box.lb[p], box.ub[p]);
     }
-  std::vector<double> lb_free = pr.compress(lb), ub_free = pr.compress(ub);
   for (auto& x : starts) x = pr.compress(x);
+  return starts;
+}
 
-  detail::Bobyqa bobyqa(lb_free, ub_free, options.relative_tolerance, options.max_evaluations, "fit_variogram");
+struct BestRun {
+  std::vector<double> x;
+  detail::BobyqaOutcome outcome;
+};
+
+// A local BOBYQA run from each start, then a restart from the best: its trust region often shrinks
+// early on flat valleys. The best converged run, or the first failure when none converged.
+BestRun best_of_starts(detail::Bobyqa& bobyqa, Problem& pr, const std::vector<std::vector<double>>& starts,
+                       std::size_t dim) {
   auto local = [&](std::vector<double>& x) {
     // Initial steps: a tenth of the parameter's size, at least a small absolute one.
     std::vector<double> step(dim);
@@ -318,7 +326,6 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
       step[p] = std::max(0.1 * std::max(std::fabs(x[p]), 0.1), 1e-4);
     return bobyqa.minimize(&objective, &pr, x, step);
   };
-
   std::vector<double> best = starts.front();
   std::optional<detail::BobyqaOutcome> best_run;   // the best converged run
   std::optional<detail::BobyqaOutcome> first_failure;
@@ -334,7 +341,6 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
     }
   }
   if (best_run) {
-    // A restart from the best point: BOBYQA's trust region often shrinks early on flat valleys.
     std::vector<double> x = best;
     const auto run = local(x);
     if (run.converged && run.objective <= best_run->objective) {
@@ -342,44 +348,99 @@ VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const do
       best = x;
     }
   }
-  const detail::BobyqaOutcome outcome = best_run ? *best_run : *first_failure;
+  return {std::move(best), best_run ? *best_run : *first_failure};
+}
 
-  VariogramFitResult result;
-  result.evaluations = pr.evaluations;
-  result.bins_used = pr.h.size();
-  result.message = bobyqa.describe(outcome, "SSE");
-  result.status = outcome.converged              ? FitStatus::Converged
-                  : outcome.hit_evaluation_limit ? FitStatus::MaxEvaluations
-                                                 : FitStatus::Failed;
-  // A parameter stuck at an upper bound usually means the structure does not fit the data (e.g. a
-  // bounded model on a variogram that keeps rising): say so.
-  const std::vector<double> best_full = pr.expand(best.data());
-  for (std::size_t p = 0; p < n_full; ++p)
-    if (pr.is_free[p] && ub[p] > lb[p] && best_full[p] >= ub[p] * (1 - 1e-9))
-      result.message += "; parameter " + std::to_string(p + 1) + " at its upper bound";
-  // Back to the data's units.
+// The fitted full parameter vector back to the data's units; held values and a fixed nugget
+// exactly as given (the scaling's round trip may change the last bit).
+VariogramModel model_in_data_units(const Problem& pr, const std::vector<double>& best_full, const Scales& sc,
+                                   const std::vector<ModelComponent>& structure, const VariogramFitOptions& options) {
   std::vector<ModelComponent> comps = pr.components_of_full(best_full.data());
   for (auto& c : comps) {
     switch (c.kind) {
-      case ModelKind::Power: c.sill = c.sill * g_scale / std::pow(h_scale, c.range); break;
-      case ModelKind::Linear: c.sill = c.sill * g_scale / h_scale; break;
-      case ModelKind::Nugget: c.sill *= g_scale; break;
+      case ModelKind::Power: c.sill = c.sill * sc.g / std::pow(sc.h, c.range); break;
+      case ModelKind::Linear: c.sill = c.sill * sc.g / sc.h; break;
+      case ModelKind::Nugget: c.sill *= sc.g; break;
       default:
-        c.sill *= g_scale;
-        c.range *= h_scale;
+        c.sill *= sc.g;
+        c.range *= sc.h;
     }
   }
-  for (std::size_t i = 0; i < structure.size(); ++i) {  // held values exactly as given
+  for (std::size_t i = 0; i < structure.size(); ++i) {
     if (!options.hold_sill.empty() && options.hold_sill[i]) comps[i].sill = structure[i].sill;
     if (!options.hold_range.empty() && options.hold_range[i]) comps[i].range = structure[i].range;
   }
   if (options.nugget == NuggetMode::Fixed) {
-    // Keep the exact fixed value (scaling round trip may change the last bit).
     for (auto& c : comps)
       if (c.kind == ModelKind::Nugget) c.sill = options.nugget_value;
   }
-  result.model = VariogramModel(std::move(comps));
-  result.weighted_sse = weighted_sse(h_used, g_used, pr.n, result.model, options.weighting);
+  return VariogramModel(std::move(comps));
+}
+
+
+}  // namespace
+
+double weighted_sse(std::span<const double> lag, std::span<const double> gamma,
+                    std::span<const std::uint64_t> pairs, const VariogramModel& model,
+                    FitWeighting weighting) {
+  double s = 0.0;
+  for (std::size_t j = 0; j < lag.size(); ++j) {
+    if (pairs[j] == 0) continue;
+    const double m = model.gamma(lag[j]);
+    const double r = gamma[j] - m;
+    s += weight(weighting, pairs[j], lag[j], m) * r * r;
+  }
+  return s;
+}
+
+VariogramFitResult fit_variogram(std::span<const double> lag, std::span<const double> gamma,
+                                 std::span<const std::uint64_t> pairs,
+                                 const std::vector<ModelComponent>& structure_in,
+                                 const VariogramFitOptions& options) {
+  options.validate();
+  if (lag.size() != gamma.size() || lag.size() != pairs.size())
+    throw ArgumentError("fit_variogram: " + std::to_string(lag.size()) + " lags, " +
+                        std::to_string(gamma.size()) + " semivariances and " +
+                        std::to_string(pairs.size()) + " pair counts; expected equal sizes");
+  const std::vector<ModelComponent> structure = fitted_structure(structure_in);
+  Problem pr;
+  pr.weighting = options.weighting;
+  pr.structure = structure;
+  const Scales sc = take_bins(lag, gamma, pairs, options, pr);
+  pr.free_nugget = options.nugget == NuggetMode::Free;
+  pr.fixed_nugget = options.nugget == NuggetMode::Fixed ? options.nugget_value / sc.g : 0.0;
+  const Box box = parameter_box(structure, options, sc, pr.free_nugget);
+  const std::vector<double> given = given_parameters(structure, options, sc, pr.free_nugget);
+  const std::size_t n_full = box.lb.size();
+  mark_held(structure, options, n_full, pr);
+  pr.full = given;
+  const std::size_t dim = static_cast<std::size_t>(std::count(pr.is_free.begin(), pr.is_free.end(), true));
+  if (dim == 0)
+    throw ArgumentError("fit_variogram: every parameter is held; nothing to fit");
+  if (pr.h.size() < dim)
+    throw ArgumentError("fit_variogram: " + std::to_string(pr.h.size()) + " usable bin(s) for " +
+                        std::to_string(dim) + " free parameter(s); need at least as many bins");
+
+  const std::vector<std::vector<double>> starts = starting_points(pr, given, box, options.starts);
+  detail::Bobyqa bobyqa(pr.compress(box.lb), pr.compress(box.ub), options.relative_tolerance, options.max_evaluations,
+                        "fit_variogram");
+  const BestRun best = best_of_starts(bobyqa, pr, starts, dim);
+
+  VariogramFitResult result;
+  result.evaluations = pr.evaluations;
+  result.bins_used = pr.h.size();
+  result.message = bobyqa.describe(best.outcome, "SSE");
+  result.status = best.outcome.converged              ? FitStatus::Converged
+                  : best.outcome.hit_evaluation_limit ? FitStatus::MaxEvaluations
+                                                      : FitStatus::Failed;
+  // A parameter stuck at an upper bound usually means the structure does not fit the data (e.g. a
+  // bounded model on a variogram that keeps rising): say so.
+  const std::vector<double> best_full = pr.expand(best.x.data());
+  for (std::size_t p = 0; p < n_full; ++p)
+    if (pr.is_free[p] && box.ub[p] > box.lb[p] && best_full[p] >= box.ub[p] * (1 - 1e-9))
+      result.message += "; parameter " + std::to_string(p + 1) + " at its upper bound";
+  result.model = model_in_data_units(pr, best_full, sc, structure, options);
+  result.weighted_sse = weighted_sse(sc.h_used, sc.g_used, pr.n, result.model, options.weighting);
   return result;
 }
 
