@@ -635,7 +635,9 @@ void note_kriged_field(FitResult& out, const KrigingFieldFit& fit, FieldSpace sp
 }
 
 FitResult fit_distance_idw(const FitInputs& in) {
-  const auto& [robot, d, o, model_estimated] = in;
+  const MdhModel& robot = in.robot;
+  const MeasurementSet& d = in.d;
+  const FitOptions& o = in.o;
   const CompensationMethod method = CompensationMethod::distance_idw;
   require_base_point(d, o);
   GridIdwOptions idw;
@@ -677,7 +679,9 @@ FitResult fit_distance_idw(const FitInputs& in) {
 }
 
 FitResult fit_position_idw(const FitInputs& in) {
-  const auto& [robot, d, o, model_estimated] = in;
+  const MdhModel& robot = in.robot;
+  const MeasurementSet& d = in.d;
+  const FitOptions& o = in.o;
   const CompensationMethod method = CompensationMethod::position_idw;
   GridIdwOptions idw;
   idw.power = o.idw_power;
@@ -699,7 +703,10 @@ FitResult fit_position_idw(const FitInputs& in) {
 }
 
 FitResult fit_distance_kriging(const FitInputs& in) {
-  const auto& [robot, d, o, model_estimated] = in;
+  const MdhModel& robot = in.robot;
+  const MeasurementSet& d = in.d;
+  const FitOptions& o = in.o;
+  const bool model_estimated = in.model_estimated;
   const CompensationMethod method = CompensationMethod::distance_kriging;
   require_base_point(d, o);
   std::string model_reason;
@@ -746,7 +753,10 @@ Eigen::MatrixXd rows_of_vectors(const std::vector<Eigen::Vector3d>& v) {
 }
 
 FitResult fit_vector_kriging(const FitInputs& in) {
-  const auto& [robot, d, o, model_estimated] = in;
+  const MdhModel& robot = in.robot;
+  const MeasurementSet& d = in.d;
+  const FitOptions& o = in.o;
+  const bool model_estimated = in.model_estimated;
   const CompensationMethod method = CompensationMethod::vector_kriging;
   std::string model_reason;
   const FieldSamples samples{d.nominal_mm, d.q_deg};
@@ -954,7 +964,10 @@ void add_further_points(FitResult& out, const MeasurementSet& d, const detail::K
 /// Kinematic calibration, then (kinematic+kriging) joint error functions and a field on what the
 /// calibration leaves at the model's own point, then the further points on the flange.
 FitResult fit_kinematic_model(const FitInputs& in) {
-  const auto& [robot, d, o, model_estimated] = in;
+  const MdhModel& robot = in.robot;
+  const MeasurementSet& d = in.d;
+  const FitOptions& o = in.o;
+  const bool model_estimated = in.model_estimated;
   const CompensationMethod method = o.method;
   const detail::KinematicFit kin = detail::fit_kinematic(robot, d, o);
   std::vector<CompensationModel::LabelledPoint> located;
