@@ -593,15 +593,6 @@ FitResult with_nominal_flange_points(FitResult fit, const MdhModel& nominal, con
   return fit;
 }
 
-/// What every method's fit reads: the nominal robot, the data and the options, and whether the
-/// variogram is the data's own estimate (field_options) rather than the user's.
-struct FitInputs {
-  const MdhModel& robot;
-  const MeasurementSet& d;
-  const FitOptions& o;
-  bool model_estimated;
-};
-
 void require_base_point(const MeasurementSet& d, const FitOptions& o) {
   if (o.base >= d.base_nominal_mm.size())
     throw InputError(d.source + ": base point " + std::to_string(o.base) + " requested but the data have " +
@@ -634,10 +625,7 @@ void note_kriged_field(FitResult& out, const KrigingFieldFit& fit, FieldSpace sp
   note_variance_calibration(out, fit);
 }
 
-FitResult fit_distance_idw(const FitInputs& in) {
-  const MdhModel& robot = in.robot;
-  const MeasurementSet& d = in.d;
-  const FitOptions& o = in.o;
+FitResult fit_distance_idw(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
   const CompensationMethod method = CompensationMethod::distance_idw;
   require_base_point(d, o);
   GridIdwOptions idw;
@@ -678,10 +666,7 @@ FitResult fit_distance_idw(const FitInputs& in) {
   return out;
 }
 
-FitResult fit_position_idw(const FitInputs& in) {
-  const MdhModel& robot = in.robot;
-  const MeasurementSet& d = in.d;
-  const FitOptions& o = in.o;
+FitResult fit_position_idw(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o) {
   const CompensationMethod method = CompensationMethod::position_idw;
   GridIdwOptions idw;
   idw.power = o.idw_power;
@@ -702,11 +687,7 @@ FitResult fit_position_idw(const FitInputs& in) {
   return out;
 }
 
-FitResult fit_distance_kriging(const FitInputs& in) {
-  const MdhModel& robot = in.robot;
-  const MeasurementSet& d = in.d;
-  const FitOptions& o = in.o;
-  const bool model_estimated = in.model_estimated;
+FitResult fit_distance_kriging(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o, bool model_estimated) {
   const CompensationMethod method = CompensationMethod::distance_kriging;
   require_base_point(d, o);
   std::string model_reason;
@@ -752,11 +733,7 @@ Eigen::MatrixXd rows_of_vectors(const std::vector<Eigen::Vector3d>& v) {
   return flat;
 }
 
-FitResult fit_vector_kriging(const FitInputs& in) {
-  const MdhModel& robot = in.robot;
-  const MeasurementSet& d = in.d;
-  const FitOptions& o = in.o;
-  const bool model_estimated = in.model_estimated;
+FitResult fit_vector_kriging(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o, bool model_estimated) {
   const CompensationMethod method = CompensationMethod::vector_kriging;
   std::string model_reason;
   const FieldSamples samples{d.nominal_mm, d.q_deg};
@@ -963,11 +940,7 @@ void add_further_points(FitResult& out, const MeasurementSet& d, const detail::K
 
 /// Kinematic calibration, then (kinematic+kriging) joint error functions and a field on what the
 /// calibration leaves at the model's own point, then the further points on the flange.
-FitResult fit_kinematic_model(const FitInputs& in) {
-  const MdhModel& robot = in.robot;
-  const MeasurementSet& d = in.d;
-  const FitOptions& o = in.o;
-  const bool model_estimated = in.model_estimated;
+FitResult fit_kinematic_model(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o, bool model_estimated) {
   const CompensationMethod method = o.method;
   const detail::KinematicFit kin = detail::fit_kinematic(robot, d, o);
   std::vector<CompensationModel::LabelledPoint> located;
@@ -1027,16 +1000,15 @@ FitResult fit_kinematic_model(const FitInputs& in) {
 }
 
 FitResult fit_unchecked(const MdhModel& robot, const MeasurementSet& d, const FitOptions& o, bool model_estimated) {
-  const FitInputs in{robot, d, o, model_estimated};
   switch (o.method) {
     case CompensationMethod::none:
       return {CompensationModel(o.method, robot, nullptr), std::nullopt, std::nullopt, {"no correction"}, {}};
-    case CompensationMethod::distance_idw: return fit_distance_idw(in);
-    case CompensationMethod::position_idw: return fit_position_idw(in);
-    case CompensationMethod::distance_kriging: return fit_distance_kriging(in);
-    case CompensationMethod::vector_kriging: return fit_vector_kriging(in);
+    case CompensationMethod::distance_idw: return fit_distance_idw(robot, d, o);
+    case CompensationMethod::position_idw: return fit_position_idw(robot, d, o);
+    case CompensationMethod::distance_kriging: return fit_distance_kriging(robot, d, o, model_estimated);
+    case CompensationMethod::vector_kriging: return fit_vector_kriging(robot, d, o, model_estimated);
     case CompensationMethod::kinematic:
-    case CompensationMethod::kinematic_kriging: return fit_kinematic_model(in);
+    case CompensationMethod::kinematic_kriging: return fit_kinematic_model(robot, d, o, model_estimated);
   }
   throw ArgumentError("fit: unknown method");
 }
