@@ -313,6 +313,34 @@ TEST(ModelChoice, AnImplausibleWinnerIsSetAsideWithTheReason) {
   EXPECT_TRUE(finite) << choice.model.to_string();
 }
 
+TEST(RangePlausibility, AStripeFlatAlongOneCoordinateCountsTheLongRangeAtItsLimit) {
+  // Issue 49: fulmar's indicator at 5 got exp@ard with a range of 2.5e8 along x and 92 m along y
+  // over an extent of 249,605 x 455,995 m (the samples lie on survey lines, the closest 10 m apart):
+  // the anisotropy ratio left the range beyond 10 x the extent out, so the stripe passed.
+  Eigen::RowVectorXd extent(2);
+  extent << 249605.0, 455995.0;
+  const VariogramModel stripe(VariogramModel::parse("exp(sill=0.065,range=2.49605e8)+nug(6.5e-11)").components(),
+                              Anisotropy::ard({1.0, 3.6757579698466787e-07}));
+  const std::vector<std::string> why = implausible_range_shape(stripe, extent);
+  ASSERT_EQ(why.size(), 1u);
+  // The limit along x, 10 x 249,605 = 2,496,050 m, against 91.75 m along y.
+  EXPECT_NE(why[0].find("anisotropy ratio 27205."), std::string::npos) << why[0];
+  EXPECT_NE(why[0].find("counted as 2496050: a stripe, not a field"), std::string::npos) << why[0];
+  // Flat along x with a range along y within the ratio of the limit: an answer, not a stripe.
+  const VariogramModel flat(VariogramModel::parse("exp(sill=1,range=2.49605e8)").components(),
+                            Anisotropy::ard({1.0, 1.2e-4}));  // 29,953 m along y: ratio 83
+  EXPECT_TRUE(implausible_range_shape(flat, extent).empty());
+  // Every range beyond the limit: a trend; two ranges within it compared as they are.
+  const VariogramModel trend(VariogramModel::parse("exp(sill=1,range=1e8)").components(), Anisotropy::ard({1.0, 1.0}));
+  ASSERT_EQ(implausible_range_shape(trend, extent).size(), 1u);
+  EXPECT_NE(implausible_range_shape(trend, extent)[0].find("along every coordinate"), std::string::npos);
+  const VariogramModel narrow(VariogramModel::parse("exp(sill=1,range=1e5)").components(), Anisotropy::ard({1.0, 0.001}));
+  ASSERT_EQ(implausible_range_shape(narrow, extent).size(), 1u);
+  EXPECT_NE(implausible_range_shape(narrow, extent)[0].find("anisotropy ratio 1000 > 100 (ranges 1e+05 and 100)"),
+            std::string::npos)
+      << implausible_range_shape(narrow, extent)[0];
+}
+
 TEST(RangePlausibility, NamesAStripeBelowTheSpacingAndATrendBeyondTheExtent) {
   // Issue 49's fulmar indicator: an ARD model with a range of 2.5e8 along x and 92 along y. Here:
   // exp(range 10) with multipliers 1e6 and 0.5 over a 100 x 100 extent whose samples are >= 20 apart.

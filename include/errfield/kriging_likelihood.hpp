@@ -138,6 +138,10 @@ struct LikelihoodFitOptions {
   /// path: the gradient path (isotropic, ARD, rotated) and BOBYQA's nested models (their sets found
   /// once, in the isotropic metric).
   LikelihoodMethod method = LikelihoodMethod::Auto;
+  /// Auto: the exact likelihood up to this many samples, Vecchia's beyond (1 to
+  /// kExactLikelihoodMaxSamples). `interpolate --model auto` lowers it to 500 for its confirming fits:
+  /// an exact evaluation costs ~0.1 s at 1,000 samples, a Vecchia one ~0.01 s (docs/kriging.md).
+  long exact_max_samples = kExactLikelihoodMaxSamples;
   /// Vecchia: how many nearest predecessors each sample is conditioned on (m). 30 keeps the
   /// approximate REML ranges well within their standard errors of the exact ones in 2-D (measured,
   /// docs/kriging.md); a very smooth field in six dimensions (the robot's joint space) needed 80.
@@ -265,6 +269,12 @@ struct ModelChoiceOptions {
   /// 1 local runs (never worse than the plain fit on the exact path). false: one local run from the
   /// best screened start (nearly always the subset estimate): cheaper, without that guarantee.
   bool confirm_with_plain_starts = true;
+  /// true: the candidates plausible on the ranking's samples are confirmed first (best ranked
+  /// first), and no others; when none is, only the best `confirmed` are (the best kept with a
+  /// warning). false: by rank alone, batch by batch until one is plausible on all samples, through
+  /// every candidate if need be (ten full fits when every candidate is implausible: an indicator
+  /// of a rare class took 2.2 s of `interpolate --model auto` that way, issue 49).
+  bool confirm_plausible_first = false;
   double pathological_range_factor = 10.0;
   double pathological_anisotropy_ratio = 100.0;
   double near_singular_condition = 1e10;

@@ -29,4 +29,13 @@ double smallest_sample_spacing(const Eigen::MatrixXd& coordinates);
 std::vector<std::string> implausible_ranges(const VariogramModel& model, const Eigen::RowVectorXd& extent, double spacing,
                                             double factor = 10.0);
 
+/// The shape of `model`'s ranges for samples spanning `extent`, one sentence per problem (empty:
+/// none): every range beyond `factor` x its coordinate's extent (a trend, not a range), or an
+/// anisotropy ratio (longest / shortest range) beyond `ratio`, where a range beyond the factor
+/// counts as factor x its extent: flat along one coordinate is an answer, flat along it with a
+/// range along another far below the extent is a stripe per sample line. ARD ranges are compared
+/// per coordinate, an isotropic range against the diagonal.
+std::vector<std::string> implausible_range_shape(const VariogramModel& model, const Eigen::RowVectorXd& extent,
+                                                 double factor = 10.0, double ratio = 100.0);
+
 }  // namespace errfield

@@ -292,7 +292,7 @@ LikelihoodFitResult fit_bobyqa(const Eigen::MatrixXd& coordinates, const Eigen::
 
 bool likelihood_uses_vecchia(const LikelihoodFitOptions& options, long samples) {
   return options.method == LikelihoodMethod::Vecchia ||
-         (options.method == LikelihoodMethod::Auto && samples > kExactLikelihoodMaxSamples);
+         (options.method == LikelihoodMethod::Auto && samples > options.exact_max_samples);
 }
 
 namespace {
@@ -358,6 +358,9 @@ void check_likelihood_budget(Eigen::Index samples, Eigen::Index columns, const L
 }
 
 void LikelihoodFitOptions::validate() const {
+  if (exact_max_samples < 1 || exact_max_samples > kExactLikelihoodMaxSamples)
+    throw ArgumentError("likelihood options: exact_max_samples = " + std::to_string(exact_max_samples) +
+                        " is outside 1.." + std::to_string(kExactLikelihoodMaxSamples));
   if (vecchia_neighbours < 1 || vecchia_neighbours > kMaxVecchiaNeighbours)
     throw ArgumentError("likelihood options: vecchia_neighbours = " + std::to_string(vecchia_neighbours) +
                         "; expected 1 to " + std::to_string(kMaxVecchiaNeighbours));

@@ -168,42 +168,12 @@ double practical_range_factor(const ModelComponent& c) {
 }
 
 // Why `model` is implausible for samples spanning `extent` (max - min per coordinate) with this
-// condition number, or empty. Ranges are compared along each coordinate (ARD: range x multiplier;
-// isotropic: against the diagonal). A range far beyond its coordinate's extent only says that the
-// field is flat along it, so the anisotropy ratio is taken among the ranges within that factor.
+// condition number, or empty: its ranges' shape (implausible_range_shape), a range below the
+// smallest spacing, a near-singular kriging system.
 std::string implausibility(const VariogramModel& model, const Eigen::RowVectorXd& extent, double spacing, double condition,
                            const ModelChoiceOptions& o) {
-  double range = 0.0;
-  for (const auto& c : model.components())
-    if (c.kind != ModelKind::Nugget) range = std::max(range, c.range);
-  std::vector<std::string> why;
-  const Anisotropy& an = model.anisotropy();
-  const bool ard = an.type() == Anisotropy::Type::Ard && an.dimension() == extent.size();
-  const double diagonal = extent.norm();
-  std::vector<double> within;  // ranges within the factor of their coordinate's extent
-  bool all_beyond = true;
-  double longest = 0.0, longest_extent = 0.0;
-  for (Eigen::Index k = 0; k < (ard ? extent.size() : 1); ++k) {
-    const double a = ard ? range * an.parameters()[static_cast<std::size_t>(k)] : range;
-    const double e = ard ? extent[k] : diagonal;
-    if (!(e > 0.0)) continue;
-    if (a <= o.pathological_range_factor * e) {
-      all_beyond = false;
-      within.push_back(a);
-    } else if (a / e > longest / std::max(longest_extent, 1e-300) || longest == 0.0) {
-      longest = a;
-      longest_extent = e;
-    }
-  }
-  if (all_beyond && longest > 0.0)
-    why.push_back("range " + format_number(longest) + " beyond " + format_number(o.pathological_range_factor) +
-                  " x the samples' extent " + format_number(longest_extent) + (ard ? " along every coordinate" : ""));
-  if (within.size() >= 2) {
-    const auto [lo, hi] = std::minmax_element(within.begin(), within.end());
-    if (*hi > o.pathological_anisotropy_ratio * *lo)
-      why.push_back("anisotropy ratio " + format_number(*hi / *lo) + " > " + format_number(o.pathological_anisotropy_ratio) +
-                    " (ranges " + format_number(*hi) + " and " + format_number(*lo) + ")");
-  }
+  std::vector<std::string> why =
+      implausible_range_shape(model, extent, o.pathological_range_factor, o.pathological_anisotropy_ratio);
   // A range the samples cannot resolve (below their smallest spacing): what the fit calls a range is a nugget.
   for (const std::string& r : implausible_ranges(model, extent, spacing, std::numeric_limits<double>::infinity()))
     why.push_back(r);
@@ -332,13 +302,17 @@ bool rank_candidates(const ChoiceInputs& in, LikelihoodFitOptions& rank, Likelih
   return attempt > 1;
 }
 
-// The accepted candidates, best ranked first.
-std::vector<std::size_t> accepted_by_rank(const ModelChoice& choice) {
+// The accepted candidates, best ranked first (plausible_first: those plausible on the ranking's
+// samples first, each group best ranked first).
+std::vector<std::size_t> accepted_by_rank(const ModelChoice& choice, bool plausible_first) {
   std::vector<std::size_t> order;
   for (std::size_t i = 0; i < choice.candidates.size(); ++i)
     if (choice.candidates[i].accepted) order.push_back(i);
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return choice.candidates[a].criterion < choice.candidates[b].criterion;
+    const auto& ca = choice.candidates[a];
+    const auto& cb = choice.candidates[b];
+    if (plausible_first && ca.implausible.empty() != cb.implausible.empty()) return ca.implausible.empty();
+    return ca.criterion < cb.criterion;
   });
   return order;
 }
@@ -357,17 +331,26 @@ std::vector<std::size_t> confirm_candidates(const ChoiceInputs& in, const Likeli
   // the subset estimate) keeps the cost of large N near the single refit it was.
   if (!o.confirm_with_plain_starts || likelihood_uses_vecchia(fit, static_cast<long>(in.xconf.rows()))) confirm.local_runs = 1;
   else confirm.local_runs = fit.local_runs + 1;
+  // confirm_plausible_first: the order holds the candidates plausible on the ranking's samples
+  // first; the confirmation stops where they end, and when there are none it confirms only the
+  // first batch (the best kept with a warning) instead of every candidate one by one.
+  std::size_t stop = order.size();
+  if (o.confirm_plausible_first) {
+    stop = 0;
+    while (stop < order.size() && choice.candidates[order[stop]].implausible.empty()) ++stop;
+    if (stop == 0) stop = std::min(order.size(), o.confirmed);
+  }
   std::size_t next = 0;
   auto plausible_confirmed = [&] {
     for (std::size_t i : confirmed)
       if (choice.candidates[i].accepted && choice.candidates[i].implausible.empty()) return true;
     return false;
   };
-  while (next < order.size() && !plausible_confirmed()) {
+  while (next < stop && !plausible_confirmed()) {
     std::vector<std::size_t> batch;
     std::vector<std::optional<VariogramModel>> initial;
     const std::size_t want = confirmed.empty() ? o.confirmed : 1;
-    while (next < order.size() && batch.size() < want) {
+    while (next < stop && batch.size() < want) {
       const std::size_t i = order[next++];
       batch.push_back(i);
       initial.emplace_back(choice.candidates[i].model);
@@ -458,7 +441,8 @@ void explain_choice(const ChoiceInputs& in, const LikelihoodFitOptions& fit, boo
                      " fits (sph/exp/gau/mat with a nugget, isotropic and ARD) ranked on a random subset of " +
                      std::to_string(o.choice_subsample) + " of the " + std::to_string(n) + " samples, the best " +
                      std::to_string(confirmed.size()) + " refitted on " +
-                     (confirm_subset ? "a subset of " + std::to_string(o.confirm_subsample) : std::string("all"));
+                     (confirm_subset ? "a subset of " + std::to_string(o.confirm_subsample) : std::string("all")) +
+                     (likelihood_uses_vecchia(fit, static_cast<long>(in.xconf.rows())) ? " by Vecchia's likelihood" : "");
   else if (in.confirm_needed)
     choice.reason += std::to_string(specs.size()) + " " + (fit.restricted ? "REML" : "ML") +
                      " fits (sph/exp/gau/mat with a nugget, isotropic and ARD), the best " +
@@ -520,7 +504,7 @@ ModelChoice choose_likelihood_model(const Eigen::MatrixXd& x, const Eigen::Matri
   ModelChoice choice;
   std::vector<CandidateFit> ranked;
   const bool floor_raised = rank_candidates(in, rank, fit, ranked, choice);
-  const std::vector<std::size_t> order = accepted_by_rank(choice);
+  const std::vector<std::size_t> order = accepted_by_rank(choice, o.confirm_plausible_first);
   std::vector<std::optional<LikelihoodFitResult>> final_fit(specs.size());
   std::vector<std::size_t> confirmed;
   if (!confirm_needed) {
@@ -582,6 +566,58 @@ std::vector<std::string> implausible_ranges(const VariogramModel& model, const E
     }
   }
   return out;
+}
+
+// Ranges are compared along each coordinate (ARD: range x multiplier; isotropic: against the
+// diagonal). A range far beyond its coordinate's extent only says that the field is flat along it,
+// so in the anisotropy ratio it counts as that limit (factor x extent), not as itself: a field flat
+// along x is an answer, but one flat along x whose range along y is a thousandth of the data's
+// extent is a stripe per sample line (issue 49: exp@ard with 2.5e8 along x and 92 m along y for
+// fulmar's indicator at 5, taken because the ratio left out the long range).
+std::vector<std::string> implausible_range_shape(const VariogramModel& model, const Eigen::RowVectorXd& extent,
+                                                 double factor, double ratio) {
+  double range = 0.0;
+  for (const auto& c : model.components())
+    if (c.kind != ModelKind::Nugget) range = std::max(range, c.range);
+  std::vector<std::string> why;
+  const Anisotropy& an = model.anisotropy();
+  const bool ard = an.type() == Anisotropy::Type::Ard && an.dimension() == extent.size();
+  const double diagonal = extent.norm();
+  std::vector<double> within;  // ranges within the factor of their coordinate's extent
+  std::vector<double> capped;  // the others, at the factor x their extent
+  bool all_beyond = true;
+  double longest = 0.0, longest_extent = 0.0;
+  for (Eigen::Index k = 0; k < (ard ? extent.size() : 1); ++k) {
+    const double a = ard ? range * an.parameters()[static_cast<std::size_t>(k)] : range;
+    const double e = ard ? extent[k] : diagonal;
+    if (!(e > 0.0)) continue;
+    if (a <= factor * e) {
+      all_beyond = false;
+      within.push_back(a);
+    } else {
+      capped.push_back(factor * e);
+      if (a / e > longest / std::max(longest_extent, 1e-300) || longest == 0.0) {
+        longest = a;
+        longest_extent = e;
+      }
+    }
+  }
+  if (all_beyond && longest > 0.0)
+    why.push_back("range " + format_number(longest) + " beyond " + format_number(factor) + " x the samples' extent " +
+                  format_number(longest_extent) + (ard ? " along every coordinate" : ""));
+  if (!within.empty() && within.size() + capped.size() >= 2) {
+    const double lo = *std::min_element(within.begin(), within.end());
+    const double hi_within = *std::max_element(within.begin(), within.end());
+    const double hi_capped = capped.empty() ? 0.0 : *std::max_element(capped.begin(), capped.end());
+    const double hi = std::max(hi_within, hi_capped);
+    if (hi > ratio * lo)
+      why.push_back("anisotropy ratio " + format_number(hi / lo) + " > " + format_number(ratio) +
+                    (hi_capped > hi_within
+                         ? " (range " + format_number(lo) + " against one beyond " + format_number(factor) +
+                               " x its coordinate's extent, counted as " + format_number(hi) + ": a stripe, not a field)"
+                         : " (ranges " + format_number(hi) + " and " + format_number(lo) + ")"));
+  }
+  return why;
 }
 
 }  // namespace errfield

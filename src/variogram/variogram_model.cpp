@@ -182,6 +182,12 @@ double ModelComponent::gamma(double h) const {
         const double fraction = std::tgamma(1.0 - nu) / std::tgamma(1.0 + nu) * std::pow(r / 2.0, 2.0 * nu);
         return sill * std::min(fraction, 1.0);
       }
+      // Half-integer nu (--model auto's mat(1.5) and mat(2.5), and 0.5 = exp): the closed forms of
+      // 2^(1-nu)/Gamma(nu) r^nu K_nu(r). The Bessel function and Gamma were a third of an automatic
+      // model choice's time at 1,000 samples (issue 49); the values agree to a few ulps.
+      if (nu == 0.5) return sill * -std::expm1(-r);
+      if (nu == 1.5) return sill * std::clamp(-std::expm1(-r) - r * std::exp(-r), 0.0, 1.0);
+      if (nu == 2.5) return sill * std::clamp(-std::expm1(-r) - r * (1.0 + r / 3.0) * std::exp(-r), 0.0, 1.0);
       const double k = std::cyl_bessel_k(nu, r);
       if (!std::isfinite(k)) {
         // Near r = 0, K_nu(r) overflows while r^nu underflows (their product is finite). Use the
