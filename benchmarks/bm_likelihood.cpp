@@ -8,6 +8,9 @@
 //   BM_RemlVecchia   : the same REML ARD fit by the Vecchia likelihood (30 max-min neighbours, one
 //                      local run from 4 screened starts, as the robot fit's refit); {N, D, C}: the
 //                      robot's {5000, 6, 3} and a large map's {50000, 3, 1}.
+//   BM_ModelChoice   : choose_likelihood_model (`interpolate --model auto`) on a 2-D scalar field;
+//                      {N, fast}: ModelChoiceOptions::fast() (the CLI's default, issue 49's target:
+//                      <= 1 s at N = 1,000 on 2 cores) or the defaults (--auto-search thorough).
 //   BM_PredictIso/Ard: dense kriging prediction of 20,000 targets from N = 2,000 samples in 6-D
 //                      with an isotropic and with an ARD model (same set-up otherwise); {threads}.
 
@@ -43,6 +46,19 @@ Eigen::MatrixXd values(const Eigen::MatrixXd& x, int c, unsigned seed) {
       z(i, k) = s + e(rng);
     }
   return z;
+}
+
+void BM_ModelChoice(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const Eigen::MatrixXd x = points(n, 2, 5);
+  const Eigen::MatrixXd z = values(x, 1, 6);
+  errfield::ModelChoiceOptions o = state.range(1) ? errfield::ModelChoiceOptions::fast() : errfield::ModelChoiceOptions{};
+  o.fit.standard_errors = false;
+  if (!state.range(1)) {
+    o.ranking_starts = 4;
+    o.ranking_local_runs = 1;
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(errfield::choose_likelihood_model(x, z, o));
 }
 
 void BM_RemlArd(benchmark::State& state) {
@@ -85,6 +101,7 @@ void BM_RemlVecchia(benchmark::State& state) {
   }
   state.counters["evaluations"] = evaluations;
 }
+BENCHMARK(BM_ModelChoice)->Args({1000, 1})->Args({595, 1})->Args({1000, 0})->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 BENCHMARK(BM_RemlVecchia)->Args({5000, 6, 3})->Args({50000, 3, 1})->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 
 // `scale` divides every coordinate (samples and targets) before kriging: an isotropic model on

@@ -85,8 +85,8 @@ void add_kriging_model_options(CLI::App& cmd, KrigingCliOptions& o, const char* 
       ->group(group);
   cmd.add_option("--auto-search", o.auto_search,
                  "--model auto: fast (default: the 10 candidates ranked on a random subset of up to 250 samples, the "
-                 "best 3 polished on all samples from their ranking estimate by the exact likelihood up to 500 "
-                 "samples and Vecchia's beyond; ~1 s at 1,000 samples) | thorough (ranked on up to 700, the best 3 "
+                 "best 2 plausible ones polished on all samples from their ranking estimate by the exact likelihood up to 500 "
+                 "samples and Vecchia's beyond; ~0.7 s at 1,000 samples in 2-D) | thorough (ranked on up to 700, the best 3 "
                  "refitted on all from fit-variogram's starts as well, exact up to 3,000: never less likely than a "
                  "plain fit-variogram --method reml of their family; ~10x slower). docs/kriging.md compares them on "
                  "gstat's data sets")
@@ -260,35 +260,25 @@ VariogramModel auto_model(const Eigen::MatrixXd& coords, const Eigen::MatrixXd& 
 
 // --model auto: REML fits of sph/exp/gau/mat(1.5, 2.5) with a nugget, isotropic and ARD, for the
 // kriging kind asked; the smallest AIC on all samples among the well-conditioned, plausible ones
-// (ranked on a subset, the best three refitted on all; the Vecchia likelihood beyond a size, so
+// (ranked on a subset, the best two or three refitted on all; the Vecchia likelihood beyond a size, so
 // more samples never change the family to one without a nugget or ARD).
 VariogramModel likelihood_auto_model(const Eigen::MatrixXd& coords, const Eigen::MatrixXd& values,
                                      const KrigingOptions& kriging, std::vector<std::string>& notes) {
-  ModelChoiceOptions mo;
+  // fast: ModelChoiceOptions::fast() (~0.7 s at 1,000 samples; docs/kriging.md compares it with
+  // thorough on gstat's data sets). thorough: ten candidates ranked by one polished run each from
+  // the best of four screened starts on up to 700 samples; the best three fitted again with
+  // fit-variogram's starts (8 screened, 2 runs) plus their ranking estimate, so that a plain
+  // `fit-variogram --method reml` of their family never beats the choice.
+  ModelChoiceOptions mo = cli_options.auto_search == "fast" ? ModelChoiceOptions::fast() : ModelChoiceOptions{};
+  if (cli_options.auto_search != "fast") {
+    mo.ranking_starts = 4;
+    mo.ranking_local_runs = 1;
+  }
   mo.fit.kind = kriging.kind;
   mo.fit.drift_order = kriging.drift_order;
   if (kriging.kind == KrigingKind::Simple) mo.fit.simple_mean = kriging.simple_mean.empty() ? 0.0 : kriging.simple_mean[0];
   mo.max_condition_number = kriging.max_condition_number;
-  // Ten candidates ranked by one polished run each from the best of four screened starts.
   mo.fit.standard_errors = false;
-  mo.ranking_starts = 4;
-  mo.ranking_local_runs = 1;
-  if (cli_options.auto_search == "fast") {
-    // Issue 49: 5-8 s per indicator threshold on fulmar's 595 samples and 14 s at 1,000 were nearly
-    // all exact-likelihood evaluations (N^3 each, ~0.1 s at 1,000 samples) in the confirming fits.
-    // Ranked on 250, the best three polished from their ranking estimate by one L-BFGS run to a
-    // relative tolerance of 1e-6 (the AIC to ~1e-3), by Vecchia's likelihood beyond 500 samples:
-    // ~0.9 s at 1,000; the chosen models' exact AIC on gstat's data sets and held-out scores
-    // are in docs/kriging.md.
-    mo.choice_subsample = 250;
-    mo.confirm_with_plain_starts = false;
-    mo.confirm_plausible_first = true;
-    mo.fit.relative_tolerance = 1e-6;
-    mo.fit.exact_max_samples = 500;
-  }
-  // thorough: ranked on 700; the best three fitted again with fit-variogram's starts (8 screened,
-  // 2 runs) plus their ranking estimate, so that a plain `fit-variogram --method reml` of their
-  // family never beats the choice.
   const ModelChoice choice = choose_likelihood_model(coords, values, mo);
   for (const auto& w : choice.warnings) notes.push_back("--model auto: warning: " + w);
   notes.push_back("--model auto: " + choice.model.to_string() + ", chosen by " + choice.reason);

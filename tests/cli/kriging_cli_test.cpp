@@ -383,5 +383,44 @@ TEST_F(KrigingCli, IndicatorWritesTheLibrarysProbabilitiesAndRefusesMisuse) {
   EXPECT_THAT(r.err, HasSubstr("2 models"));
 }
 
+// --auto-search fast (the default) and thorough: both choose a model and say how; fast ranks on a
+// subset of 250 and names it, thorough sees all 400; their held-out errors on the same SIMULATED
+// field (smooth sine + noise 0.05) agree within 5 %; a wrong word is refused naming the option.
+TEST_F(KrigingCli, AutoSearchFastAndThoroughAgreeHeldOut) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1000.0);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  std::ofstream s(path("a.csv")), t(path("at.csv"));
+  s.precision(10);
+  t.precision(10);
+  s << "x,y,v\n";
+  t << "x,y,v\n";
+  for (int i = 0; i < 500; ++i) {
+    const double x = u(rng), y = u(rng);
+    const double v = std::sin(x / 170.0) * std::cos(y / 230.0) + noise(rng);
+    (i < 400 ? s : t) << x << ',' << y << ',' << v << '\n';
+  }
+  s.close();
+  t.close();
+  std::array<double, 2> rmse{};
+  for (int k = 0; k < 2; ++k) {
+    const std::string search = k == 0 ? "fast" : "thorough";
+    const auto r = run("interpolate --method kriging --samples " + path("a.csv") + " --targets " + path("at.csv") +
+                       " --coords x,y --value v --model auto --auto-search " + search + " --out " + path("A.csv"));
+    ASSERT_EQ(r.exit_code, 0) << r.output();
+    EXPECT_THAT(r.output(), HasSubstr(k == 0 ? "ranked on a random subset of 250 of the 400 samples, the best 2 refitted on all"
+                                             : "the best 3 refitted with more starts"));
+    const Eigen::MatrixXd got = CsvTable::read(path("A.csv")).numeric_columns({"v", "pred"});
+    rmse[static_cast<std::size_t>(k)] = std::sqrt((got.col(0) - got.col(1)).squaredNorm() / static_cast<double>(got.rows()));
+  }
+  EXPECT_LT(rmse[0], 1.05 * rmse[1]) << rmse[0] << " vs " << rmse[1];
+  EXPECT_LT(rmse[0], 0.08);  // the noise alone is 0.05
+  const auto bad = run("interpolate --method kriging --samples " + path("a.csv") + " --targets " + path("at.csv") +
+                       " --coords x,y --value v --model auto --auto-search quick --out " + path("B.csv"));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_THAT(bad.output(), HasSubstr("--auto-search"));
+  EXPECT_FALSE(fs::exists(path("B.csv")));
+}
+
 }  // namespace
 }  // namespace errfield
