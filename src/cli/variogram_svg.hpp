@@ -73,12 +73,72 @@ inline std::string tick_label(double v) {
   return s.str();
 }
 
+/// `text` with every number written to 4 significant digits ("range=489.37901359674305" ->
+/// "range=489.4"): a caption a reader can take in; the full text stays in the element's <title>.
+inline std::string shortened_numbers(const std::string& text) {
+  std::string out;
+  std::size_t i = 0;
+  while (i < text.size()) {
+    const char c = text[i];
+    const bool starts = (c >= '0' && c <= '9') || (c == '.' && i + 1 < text.size() && text[i + 1] >= '0' && text[i + 1] <= '9');
+    if (!starts) {
+      out += c;
+      ++i;
+      continue;
+    }
+    std::size_t used = 0;
+    double v = 0.0;
+    try {
+      v = std::stod(text.substr(i), &used);
+    } catch (...) {
+      used = 0;
+    }
+    if (used == 0) {
+      out += c;
+      ++i;
+      continue;
+    }
+    std::ostringstream s;
+    s.precision(4);
+    s << v;
+    out += s.str();
+    i += used;
+  }
+  return out;
+}
+
+/// `text` cut into lines of at most `width` characters after a '+', ',' or ' ' where it can be (a
+/// longer piece without one is cut where it must).
+inline std::vector<std::string> wrapped(const std::string& text, std::size_t width) {
+  std::vector<std::string> lines;
+  std::string rest = text;
+  while (rest.size() > width) {
+    std::size_t cut = std::string::npos;
+    for (std::size_t k = width; k > width / 2; --k)
+      if (rest[k - 1] == '+' || rest[k - 1] == ',' || rest[k - 1] == ' ') {
+        cut = k;
+        break;
+      }
+    if (cut == std::string::npos) cut = width;
+    lines.push_back(rest.substr(0, cut));
+    rest = rest.substr(cut);
+  }
+  if (!rest.empty()) lines.push_back(rest);
+  return lines;
+}
+
 }  // namespace variogram_svg
 
 /// The SVG document. Throws nothing; an empty `bins` gives empty axes.
 inline std::string variogram_svg_text(const VariogramPlot& p) {
   using namespace variogram_svg;
-  constexpr double kWidth = 720, kHeight = 480, kLeft = 80, kRight = 30, kTop = 50, kBottom = 60;
+  constexpr double kWidth = 720, kLeft = 80, kRight = 30, kBottom = 60, kCaptionLine = 15;
+  // The model's caption under the title, left-aligned inside the frame, wrapped (issue 49: written
+  // right-aligned on one line, a long nested or ARD model ran off the picture's left edge).
+  const std::vector<std::string> caption =
+      p.model ? wrapped(shortened_numbers(p.model->to_string()), 100) : std::vector<std::string>{};
+  const double kTop = 50 + kCaptionLine * static_cast<double>(caption.size());
+  const double kHeight = 430 + kTop;
   const double plot_w = kWidth - kLeft - kRight, plot_h = kHeight - kTop - kBottom;
   double max_lag = 0.0, max_gamma = 0.0;
   std::uint64_t max_pairs = 1;
@@ -140,18 +200,42 @@ inline std::string variogram_svg_text(const VariogramPlot& p) {
     for (std::size_t k = 0; k < curve.size(); ++k)
       s << (k ? " L" : "M") << px(X(curve[k].first)) << "," << px(Y(std::min(curve[k].second, y_top)));
     s << "\"><title>" << escaped(p.model->to_string()) << "</title></path>\n";
-    s << "<text x=\"" << px(kLeft + plot_w) << "\" y=\"28\" text-anchor=\"end\" fill=\"#c0392b\">"
-      << escaped(p.model->to_string()) << "</text>\n";
+    s << "<text class=\"caption\" x=\"" << px(kLeft) << "\" y=\"46\" fill=\"#c0392b\" font-size=\"11\"><title>"
+      << escaped(p.model->to_string()) << "</title>";
+    for (std::size_t k = 0; k < caption.size(); ++k)
+      s << "<tspan x=\"" << px(kLeft) << "\" dy=\"" << (k ? px(kCaptionLine) : "0") << "\">" << escaped(caption[k])
+        << "</tspan>";
+    s << "</text>\n";
   }
-  // One point per bin: area proportional to its pairs, the count beside it.
+  // One point per bin: area proportional to its pairs, the count beside it (above right, else below
+  // right; left out where both would overlap a count already written: issue 49, the counts of close
+  // bins were written over each other; every count stays in its point's <title>).
+  struct Box {
+    double x0, y0, x1, y1;
+  };
+  std::vector<Box> placed;
+  const auto free_at = [&](const Box& b) {
+    for (const Box& o : placed)
+      if (b.x0 < o.x1 && o.x0 < b.x1 && b.y0 < o.y1 && o.y0 < b.y1) return false;
+    return true;
+  };
   s << "<g id=\"bins\" fill=\"#1f4e79\">\n";
   for (const auto& b : p.bins) {
     const double r = 2.0 + 5.0 * std::sqrt(static_cast<double>(b.pairs) / static_cast<double>(max_pairs));
     s << "<circle class=\"bin\" cx=\"" << px(X(b.lag)) << "\" cy=\"" << px(Y(b.gamma)) << "\" r=\"" << px(r)
       << "\"><title>lag " << format_number(b.lag) << ", gamma " << format_number(b.gamma) << ", " << b.pairs
-      << " pairs</title></circle>\n"
-      << "<text class=\"pairs\" x=\"" << px(X(b.lag) + r + 2) << "\" y=\"" << px(Y(b.gamma) - r - 2)
-      << "\" font-size=\"10\">" << b.pairs << "</text>\n";
+      << " pairs</title></circle>\n";
+    // 10 px text: ~6 px per digit, 10 px high above its baseline.
+    const double w = 6.0 * static_cast<double>(std::to_string(b.pairs).size());
+    const double lx = X(b.lag) + r + 2;
+    for (const double base : {Y(b.gamma) - r - 2, Y(b.gamma) + r + 10}) {
+      const Box box{lx, base - 10.0, lx + w, base + 1.0};
+      if (!free_at(box)) continue;
+      placed.push_back(box);
+      s << "<text class=\"pairs\" x=\"" << px(lx) << "\" y=\"" << px(base) << "\" font-size=\"10\">" << b.pairs
+        << "</text>\n";
+      break;
+    }
   }
   s << "</g>\n</svg>\n";
   return s.str();
