@@ -317,23 +317,33 @@ TEST_F(KrigingCli, BlockKrigingWritesTheLibrarysBlocks) {
   EXPECT_FALSE(fs::exists(path("Q.csv")));
 }
 
+// SIMULATED: n samples uniform in [0, 1000]^2 of sin(x / a) cos(y / b) + N(0, noise^2), as x,y,v:
+// the first `train` rows to `file`, the others to `held_out`.
+void write_sine_field(const std::string& file, const std::string& held_out, int n, int train, double a, double b,
+                      double noise, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1000.0);
+  std::normal_distribution<double> e(0.0, noise);
+  std::ofstream s(file), t;
+  if (!held_out.empty()) t.open(held_out);
+  s.precision(10);
+  t.precision(10);
+  s << "x,y,v\n";
+  t << "x,y,v\n";
+  for (int i = 0; i < n; ++i) {
+    const double x = u(rng), y = u(rng);
+    (i < train ? s : t) << x << ',' << y << ',' << std::sin(x / a) * std::cos(y / b) + e(rng) << '\n';
+  }
+}
+
 TEST_F(KrigingCli, ModelAutoKeepsTheLikelihoodFamiliesBeyond3000Samples) {
   // Issue 23: beyond 3,000 samples --model auto used to fall back to a weighted fit of the empirical
   // variogram (isotropic, and on a 125 mm grid no nugget). Now the families are the same at any N:
   // compared on 700 samples, the winner refitted on all by the Vecchia likelihood. SIMULATED 2-D
   // field with noise variance 4e-4: the nugget must be found, near that.
-  std::mt19937 rng(31);
-  std::uniform_real_distribution<double> u(0.0, 1000.0);
-  std::normal_distribution<double> noise(0.0, 0.02);
-  std::ofstream s(path("big.csv")), t(path("bigt.csv"));
-  s.precision(10);
-  s << "x,y,v\n";
-  for (int i = 0; i < 3100; ++i) {
-    const double x = u(rng), y = u(rng);
-    s << x << ',' << y << ',' << std::sin(x / 150.0) * std::cos(y / 220.0) + noise(rng) << '\n';
-  }
+  write_sine_field(path("big.csv"), "", 3100, 3100, 150.0, 220.0, 0.02, 31);
+  std::ofstream t(path("bigt.csv"));
   t << "x,y\n500,500\n250,750\n";
-  s.close();
   t.close();
   const auto r = run("interpolate --method kriging --samples " + path("big.csv") + " --targets " + path("bigt.csv") +
                      " --coords x,y --value v --model auto --neighbors 16 --out " + path("P.csv"));
@@ -387,21 +397,7 @@ TEST_F(KrigingCli, IndicatorWritesTheLibrarysProbabilitiesAndRefusesMisuse) {
 // subset of 250 and names it, thorough sees all 400; their held-out errors on the same SIMULATED
 // field (smooth sine + noise 0.05) agree within 5 %; a wrong word is refused naming the option.
 TEST_F(KrigingCli, AutoSearchFastAndThoroughAgreeHeldOut) {
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> u(0.0, 1000.0);
-  std::normal_distribution<double> noise(0.0, 0.05);
-  std::ofstream s(path("a.csv")), t(path("at.csv"));
-  s.precision(10);
-  t.precision(10);
-  s << "x,y,v\n";
-  t << "x,y,v\n";
-  for (int i = 0; i < 500; ++i) {
-    const double x = u(rng), y = u(rng);
-    const double v = std::sin(x / 170.0) * std::cos(y / 230.0) + noise(rng);
-    (i < 400 ? s : t) << x << ',' << y << ',' << v << '\n';
-  }
-  s.close();
-  t.close();
+  write_sine_field(path("a.csv"), path("at.csv"), 500, 400, 170.0, 230.0, 0.05, 11);
   std::array<double, 2> rmse{};
   for (int k = 0; k < 2; ++k) {
     const std::string search = k == 0 ? "fast" : "thorough";
