@@ -410,6 +410,15 @@ struct BinnedCells {
   std::vector<std::uint64_t> first_run_pairs;  // the first direction's pair counts (the --bins edge check)
 };
 
+// A direction as the legend of a picture of several names it.
+std::string direction_name(const DirectionalRun& run) {
+  if (!run.coordinate.empty()) return "along " + run.coordinate;
+  std::string name;
+  if (!run.alpha.empty()) name = "direction " + run.alpha;
+  if (!run.beta.empty()) name += (name.empty() ? "dip " : ", dip ") + run.beta;
+  return name.empty() ? "all directions" : name;
+}
+
 void add_bin_cells(const VariogramArgs& a, const DirectionalRun& run, bool first_run, const EmpiricalVariogram& v,
                    const HeterotopicVariogram& h, bool heterotopic, BinnedCells& t) {
   const std::size_t values = t.per_component.size();
@@ -439,7 +448,8 @@ void add_bin_cells(const VariogramArgs& a, const DirectionalRun& run, bool first
       }
     }
     t.total += bin.pairs;
-    if (bin.pairs > 0) t.plot.bins.push_back({bin.lag_mean, bin.gamma, bin.pairs});
+    if (b == 0) t.plot.series.push_back({direction_name(run), {}});
+    if (bin.pairs > 0) t.plot.series.back().bins.push_back({bin.lag_mean, bin.gamma, bin.pairs});
     if (first_run) t.first_run_pairs.push_back(bin.pairs);
   }
 }
@@ -453,9 +463,6 @@ BinnedCells binned_variograms(const VariogramArgs& a, const VariogramSamples& s,
   t.component_lag.resize(values);
   t.cross_pairs.resize(t.cross.size());
   t.cross_lag.resize(t.cross.size());
-  if (!a.plot.empty() && s.runs.size() > 1)
-    throw ArgumentError("--plot draws one variogram; " + std::to_string(s.runs.size()) +
-                        " directions were asked (--alpha/--beta/--per-coordinate): plot one direction at a time");
   for (const DirectionalRun& run : s.runs) {
     options.direction = run.direction;
     EmpiricalVariogram v;
@@ -512,13 +519,21 @@ OutputTable binned_table(const VariogramArgs& a, const std::vector<std::string>&
   return out;
 }
 
-// --plot: the picture of the (one direction's) binned variogram, its axes in the columns' units.
+// --plot: the picture of the binned variogram (several directions: one colour each, with a legend),
+// its axes in the columns' units.
 std::string variogram_picture(const VariogramArgs& a, const CsvTable& table, const VariogramSamples& s,
                               const std::vector<std::string>& value_names, const std::vector<std::string>& coord_names,
                               VariogramPlot plot) {
   const DirectionalRun& run = s.runs.front();
-  plot.title = "empirical variogram of " + a.value + (run.alpha.empty() ? "" : ", direction " + run.alpha) +
-               (run.beta.empty() ? "" : ", dip " + run.beta) + " (" + std::to_string(s.x.rows()) + " points)";
+  if (s.runs.size() == 1) {
+    plot.bins = plot.series.front().bins;
+    plot.series.clear();
+  }
+  plot.title = "empirical variogram of " + a.value +
+               (s.runs.size() > 1 ? ", " + std::to_string(s.runs.size()) + " directions"
+                                  : (run.alpha.empty() ? "" : ", direction " + run.alpha) +
+                                        (run.beta.empty() ? "" : ", dip " + run.beta)) +
+               " (" + std::to_string(s.x.rows()) + " points)";
   const std::string lag_unit = unit_of_column(table, coord_names.front());
   const std::string value_unit = value_names.size() == 1 ? unit_of_column(table, value_names.front()) : std::string();
   plot.lag_label = "lag" + (lag_unit.empty() ? std::string() : " [" + lag_unit + "]");
@@ -680,7 +695,8 @@ void add_cloud_and_map_options(CLI::App* cmd, const std::shared_ptr<VariogramArg
 
 void add_output_options(CLI::App* cmd, const std::shared_ptr<VariogramArgs>& args) {
   cmd->add_option("--plot", args->plot,
-                  "also write an SVG picture of the binned variogram (points labelled by pair count), written atomically");
+                  "also write an SVG picture of the binned variogram (points labelled by pair count; several directions "
+                  "--alpha/--beta/--per-coordinate on one picture, a colour each with a legend), written atomically");
   cmd->add_option("--duplicates", args->duplicates,
                   "rows at exactly the same coordinates: keep (default: every row, as gstat's variogram; their pairs have "
                   "lag 0, in the first bin) | average (one sample per location, the mean of each --value column over the "

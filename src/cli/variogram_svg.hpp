@@ -24,8 +24,15 @@ struct VariogramPlotBin {
   std::uint64_t pairs = 0;
 };
 
+/// One direction's bins on a picture of several (variogram --alpha 0,45,90 --plot).
+struct VariogramPlotSeries {
+  std::string name;  ///< in the legend, e.g. "direction 45"
+  std::vector<VariogramPlotBin> bins;
+};
+
 struct VariogramPlot {
-  std::vector<VariogramPlotBin> bins;  ///< non-empty bins
+  std::vector<VariogramPlotBin> bins;  ///< non-empty bins (one variogram; ignored when `series` is given)
+  std::vector<VariogramPlotSeries> series;  ///< several directions, each its colour and a legend
   std::optional<VariogramModel> model; ///< drawn as a curve (its isotropic part) when given
   std::string title;                   ///< e.g. "dL" or the model text
   std::string lag_label = "lag";       ///< x axis, with its unit if known: "lag [mm]"
@@ -140,13 +147,16 @@ inline std::string variogram_svg_text(const VariogramPlot& p) {
   const double kTop = 50 + kCaptionLine * static_cast<double>(caption.size());
   const double kHeight = 430 + kTop;
   const double plot_w = kWidth - kLeft - kRight, plot_h = kHeight - kTop - kBottom;
+  const std::vector<VariogramPlotSeries> series =
+      p.series.empty() ? std::vector<VariogramPlotSeries>{{std::string(), p.bins}} : p.series;
   double max_lag = 0.0, max_gamma = 0.0;
   std::uint64_t max_pairs = 1;
-  for (const auto& b : p.bins) {
-    max_lag = std::max(max_lag, b.lag);
-    max_gamma = std::max(max_gamma, b.gamma);
-    max_pairs = std::max(max_pairs, b.pairs);
-  }
+  for (const auto& one : series)
+    for (const auto& b : one.bins) {
+      max_lag = std::max(max_lag, b.lag);
+      max_gamma = std::max(max_gamma, b.gamma);
+      max_pairs = std::max(max_pairs, b.pairs);
+    }
   if (!(max_lag > 0.0)) max_lag = 1.0;
   const double x_step = nice_step(max_lag * 1.05, 6);
   const double x_top = std::ceil(max_lag * 1.05 / x_step) * x_step;
@@ -219,12 +229,28 @@ inline std::string variogram_svg_text(const VariogramPlot& p) {
       if (b.x0 < o.x1 && o.x0 < b.x1 && b.y0 < o.y1 && o.y0 < b.y1) return false;
     return true;
   };
-  s << "<g id=\"bins\" fill=\"#1f4e79\">\n";
-  for (const auto& b : p.bins) {
+  // Several directions: a colour each (colour-blind safe, Okabe & Ito) and a legend at the top right
+  // of the plot area, whose box no count is written over.
+  static const char* const kColours[] = {"#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9", "#000000"};
+  if (series.size() > 1) {
+    s << "<g id=\"legend\">\n";
+    for (std::size_t k = 0; k < series.size(); ++k) {
+      const double ly = kTop + 12 + 16.0 * static_cast<double>(k);
+      const double lx = kLeft + plot_w - 150;
+      s << "<circle cx=\"" << px(lx) << "\" cy=\"" << px(ly - 4) << "\" r=\"5\" fill=\"" << kColours[k % 7] << "\"/>"
+        << "<text x=\"" << px(lx + 10) << "\" y=\"" << px(ly) << "\">" << escaped(series[k].name) << "</text>\n";
+    }
+    s << "</g>\n";
+    placed.push_back({kLeft + plot_w - 158, kTop, kLeft + plot_w, kTop + 16.0 * static_cast<double>(series.size()) + 4});
+  }
+  for (std::size_t k = 0; k < series.size(); ++k) {
+  s << "<g class=\"bins\"" << (k == 0 ? " id=\"bins\"" : "") << " fill=\"" << (series.size() > 1 ? kColours[k % 7] : "#1f4e79")
+    << "\">\n";
+  for (const auto& b : series[k].bins) {
     const double r = 2.0 + 5.0 * std::sqrt(static_cast<double>(b.pairs) / static_cast<double>(max_pairs));
     s << "<circle class=\"bin\" cx=\"" << px(X(b.lag)) << "\" cy=\"" << px(Y(b.gamma)) << "\" r=\"" << px(r)
-      << "\"><title>lag " << format_number(b.lag) << ", gamma " << format_number(b.gamma) << ", " << b.pairs
-      << " pairs</title></circle>\n";
+      << "\"><title>" << (series[k].name.empty() ? std::string() : escaped(series[k].name) + ": ") << "lag "
+      << format_number(b.lag) << ", gamma " << format_number(b.gamma) << ", " << b.pairs << " pairs</title></circle>\n";
     // 10 px text: ~6 px per digit, 10 px high above its baseline.
     const double w = 6.0 * static_cast<double>(std::to_string(b.pairs).size());
     const double lx = X(b.lag) + r + 2;
@@ -237,7 +263,9 @@ inline std::string variogram_svg_text(const VariogramPlot& p) {
       break;
     }
   }
-  s << "</g>\n</svg>\n";
+  s << "</g>\n";
+  }
+  s << "</svg>\n";
   return s.str();
 }
 

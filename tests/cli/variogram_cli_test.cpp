@@ -6,7 +6,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <random>
+#include <set>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -448,6 +450,45 @@ TEST_F(VariogramCli, PlotsAreWellFormedSvgWithAPointPerBinAndTheFittedCurve) {
   r = run("fit-variogram --input " + path("v.csv") + " --model sph --plot " + path("dir.svg") + " --out " + path("g.json"));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_FALSE(fs::exists(path("g.json")));
+}
+
+// variogram --plot with several directions (issue 49): one picture, well-formed SVG, every direction's
+// non-empty bins as points of its own colour, a legend naming each direction.
+TEST_F(VariogramCli, PlotOfSeveralDirectionsHasEachDirectionsBinsAndALegend) {
+  Eigen::MatrixXd x, z;
+  write("in.csv", simulated_csv(150, 2, &x, &z));
+  const auto r = run("variogram --input " + path("in.csv") + " --coords x,y --value dL --bins 0:800:100 --alpha 0,45,90 --out " +
+                     path("v.csv") + " --plot " + path("v.svg"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CsvTable v = CsvTable::read(path("v.csv"));
+  std::map<std::string, int> bins;
+  for (std::size_t i = 0; i < v.row_count(); ++i)
+    if (v.cell(i, v.column_index("pairs")) != std::string_view("0")) ++bins[std::string(v.cell(i, v.column_index("direction")))];
+  ASSERT_EQ(bins.size(), 3u);
+  write("check.py",
+        "import sys, xml.etree.ElementTree as E\n"
+        "ns = '{http://www.w3.org/2000/svg}'\n"
+        "root = E.parse(sys.argv[1]).getroot()\n"
+        "for g in root.iter(ns + 'g'):\n"
+        "    if g.get('class') == 'bins':\n"
+        "        print(g.get('fill'), sum(1 for c in g.iter(ns + 'circle') if c.get('class') == 'bin'))\n"
+        "    if g.get('id') == 'legend':\n"
+        "        print('legend', '|'.join(t.text for t in g.iter(ns + 'text')))\n");
+  const std::string cmd = "/usr/bin/python3 " + path("check.py") + " " + path("v.svg") + " > " + path("check.out") + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  std::ifstream in(path("check.out"));
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 4u);
+  EXPECT_EQ(lines[0], "legend direction 0|direction 45|direction 90");
+  std::set<std::string> colours;
+  const std::vector<std::string> order{"0", "45", "90"};
+  for (std::size_t k = 0; k < 3; ++k) {
+    const std::string& line = lines[k + 1];
+    colours.insert(line.substr(0, line.find(' ')));
+    EXPECT_EQ(line.substr(line.find(' ') + 1), std::to_string(bins[order[k]])) << line;
+  }
+  EXPECT_EQ(colours.size(), 3u);
 }
 
 }  // namespace
