@@ -17,6 +17,7 @@
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
 #include "cli/coordinate_system.hpp"
+#include "cli/grid_map_svg.hpp"
 #include "cli/interpolation_methods.hpp"
 #include "cli/point_layer.hpp"
 #include "cli/raster_file.hpp"
@@ -43,6 +44,7 @@ struct InterpolateArgs {
   std::string raster_format;  // "" = by --out's extension
   std::string crs;            // --crs: the coordinates' CRS, written into raster and vector outputs
   std::string mask;           // --mask FILE: with --grid, predict only where this raster has data
+  std::string plot;           // --plot FILE.svg: with --grid, the prediction map with the samples
   double nodata = -9999.0;
   double power = 0.0;
   std::size_t neighbors = 0;
@@ -169,7 +171,7 @@ std::string sibling_path(const std::string& out, const std::string& column) {
 void write_raster(RasterFormat format, const NodeGrid& grid, const InterpolateArgs& a,
                   const std::vector<std::string>& pred_names, const InterpolationResult& result, Eigen::Index m,
                   const std::string& counts, std::size_t sample_count, const std::string& method,
-                  const CoordinateSystem& cs) {
+                  const CoordinateSystem& cs, const std::string& svg) {
   std::vector<std::string> names = pred_names;
   std::vector<std::vector<double>> bands;
   for (std::size_t c = 0; c < pred_names.size(); ++c) {
@@ -216,6 +218,10 @@ void write_raster(RasterFormat format, const NodeGrid& grid, const InterpolateAr
   if (!prj_files.empty()) {
     text += " with its CRS in ";
     for (std::size_t k = 0; k < prj_files.size(); ++k) text += (k ? ", " : "") + prj_files[k];
+  }
+  if (!svg.empty()) {
+    files.add(a.plot, svg);
+    text += " and the map " + a.plot;
   }
   commit_after_standard_output(files, text + crs_note(cs) + "\n");
 }
@@ -282,6 +288,11 @@ OutputShape output_shape(const InterpolateArgs& a) {
                         format_number(grid->dx) + " and dy " + format_number(grid->dy) +
                         ": give equal steps or write a GeoTIFF (.tif)");
   if (!std::isfinite(a.nodata)) throw ArgumentError("--nodata is " + format_number(a.nodata) + "; expected a finite number");
+  if (!a.plot.empty() && !grid)
+    throw ArgumentError("--plot " + a.plot + " draws the map of a --grid; with --targets there is no map (give --grid)");
+  if (!a.plot.empty() && o.geopackage)
+    throw ArgumentError("--plot " + a.plot + " with a GeoPackage --out: give a raster (.tif, .asc) or CSV --out with the map");
+  if (!a.plot.empty() && a.plot == a.out) throw ArgumentError("--plot and --out are the same file " + a.out);
   return o;
 }
 
@@ -370,7 +381,7 @@ std::size_t count_missing(const InterpolateArgs& a, const InterpolationMethod& m
 
 // The targets' columns, then the predictions and the method's extra columns, as numbers.
 void write_csv_output(const InterpolateArgs& a, const CsvTable& written_targets, const std::vector<std::string>& pred_names,
-                      InterpolationResult& result, const std::string& line) {
+                      InterpolationResult& result, const std::string& line, const std::string& svg) {
   OutputTable out;
   out.add_all_columns(written_targets);
   // Numbers, not text: formatted straight into the file (a NaN, not predicted, is an empty cell).
@@ -379,9 +390,38 @@ void write_csv_output(const InterpolateArgs& a, const CsvTable& written_targets,
     out.add_numbers(pred_names[c], std::vector<double>(column.data(), column.data() + column.size()));
   }
   for (auto& [name, values] : result.extra_columns) out.add_numbers(name, std::move(values));
-  std::cout << line << "; wrote " << a.out << "\n";
+  std::cout << line << "; wrote " << a.out << (svg.empty() ? std::string() : " and the map " + a.plot) << "\n";
   require_standard_output();  // before the write: a run that fails leaves the previous file
-  out.write(a.out);
+  if (svg.empty()) {
+    out.write(a.out);
+    return;
+  }
+  AtomicFileSet files;  // the table and the map: both or neither
+  files.add(a.out, out.to_csv());
+  files.add(a.plot, svg);
+  files.commit();
+}
+
+// --plot: the map of the first prediction column over the whole grid, the samples on it.
+std::string prediction_map(const InterpolateArgs& a, const NodeGrid& grid, const InterpolationRequest& r,
+                           const std::vector<std::string>& pred_names, const InterpolationResult& result,
+                           const std::string& method) {
+  GridMapPlot map;
+  map.nx = grid.nx;
+  map.ny = grid.ny;
+  map.x_min = grid.x_min;
+  map.dx = grid.dx;
+  map.y_min = grid.y_min;
+  map.dy = grid.dy;
+  const Eigen::VectorXd column = result.pred.col(0);
+  map.values.assign(column.data(), column.data() + column.size());
+  for (Eigen::Index i = 0; i < r.sample_coords.rows(); ++i) map.points.push_back({r.sample_coords(i, 0), r.sample_coords(i, 1)});
+  map.x_label = r.coord_columns[0];
+  map.y_label = r.coord_columns[1];
+  map.value_label = pred_names.front();
+  map.title = "interpolate --method " + method + ": " + pred_names.front() + " of " + a.value + " from " +
+              std::to_string(r.sample_coords.rows()) + " samples (points)";
+  return grid_map_svg_text(map);
 }
 
 void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, const MethodOptionOwnership& owners) {
@@ -435,8 +475,9 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
   if (!inside.empty()) spread_to_grid(result, inside);
   const CsvTable& written_targets = inside.empty() ? targets : all_nodes;
   const auto rows = static_cast<Eigen::Index>(written_targets.row_count());
+  const std::string svg = a.plot.empty() ? std::string() : prediction_map(a, *grid, r, pred_names, result, method.name);
   if (shape.raster) {  // the bands straight from the numbers: no text cells for millions of nodes
-    write_raster(*shape.raster, *grid, a, pred_names, result, rows, counts, samples.row_count(), method.name, cs);
+    write_raster(*shape.raster, *grid, a, pred_names, result, rows, counts, samples.row_count(), method.name, cs, svg);
     return;
   }
   const std::string where = grid ? "the " + std::to_string(grid->nx) + " x " + std::to_string(grid->ny) + " nodes of --grid"
@@ -450,7 +491,7 @@ void run_interpolate(const InterpolateArgs& a, const SharedOptionHandles& h, con
     return;
   }
   write_csv_output(a, written_targets, pred_names, result,
-                   summary + (missing || !inside.empty() ? " (empty cells)" : ""));
+                   summary + (missing || !inside.empty() ? " (empty cells)" : ""), svg);
 }
 
 void add_interpolate_command(CLI::App& app) {
@@ -492,6 +533,10 @@ void add_interpolate_command(CLI::App& app) {
                   "--grid: predict only at the nodes that fall on a pixel with data of this raster (.tif, any raster GDAL "
                   "reads: outside it, nodata or NaN is masked out); the others are written as --nodata (empty cells in "
                   "a CSV). Its CRS must be that of the other inputs");
+  cmd->add_option("--plot", args->plot,
+                  "--grid: also write FILE.svg, the map of the first prediction column (pred, pred_<col> or p_lt_<T>) with "
+                  "the samples as points, cells to scale, a colour bar (viridis); written together with --out (both or "
+                  "neither)");
   cmd->add_option("--max-grid-nodes", args->max_grid_nodes, "--grid: refuse more nodes than this (exit 3; default 4000000)")
       ->check(kUnsignedInteger);
   cmd->add_option("--raster-format", args->raster_format,

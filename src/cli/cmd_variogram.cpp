@@ -6,12 +6,14 @@
 #include <charconv>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 
 #include "cli/cli_support.hpp"
 #include "cli/covariate_sources.hpp"
 #include "cli/duplicate_locations.hpp"
+#include "cli/grid_map_svg.hpp"
 #include "cli/command_registry.hpp"
 #include "cli/interpolation_methods.hpp"
 #include "cli/pseudo_variogram_table.hpp"
@@ -151,7 +153,7 @@ void refuse_bin_options(const VariogramArgs& a, const std::string& what) {
   refuse(!a.convention.empty(), "--convention", "there are no bins");
   refuse(!std::isnan(a.width), "--width", "there are no bins (--map takes its cell widths as --map DX,DY)");
   refuse(a.pseudo, "--pseudo", "the cloud and the map are of one variable's pairs");
-  refuse(!a.plot.empty(), "--plot", "the plot is of the binned variogram");
+  if (a.cloud) refuse(!a.plot.empty(), "--plot", "the plot is of the binned variogram or of the map");
   if (a.cloud) refuse(!a.bins.empty() && !std::isnan(a.cutoff), "--bins", "--cutoff already sets the cloud's cutoff");
   if (!a.cloud) {
     refuse(!a.bins.empty(), "--bins", "give --cutoff C and the cell widths --map DX,DY");
@@ -164,6 +166,7 @@ void refuse_bin_options(const VariogramArgs& a, const std::string& what) {
 struct SummarizedTable {
   OutputTable table;
   std::string summary;
+  std::string svg;  // --map --plot: the picture of the map
 };
 
 SummarizedTable cloud_table(const VariogramArgs& a, const Eigen::MatrixXd& x, const Eigen::MatrixXd& z,
@@ -249,6 +252,23 @@ SummarizedTable map_table(const VariogramArgs& a, const Eigen::MatrixXd& x, cons
   out.table.add_column("gamma", gamma);
   out.summary = std::to_string(m.columns) + " x " + std::to_string(m.rows) + " cells of " + format_number(o.width_x) +
                 " x " + format_number(o.width_y) + " over lags -" + format_number(o.cutoff) + " .. " + format_number(o.cutoff);
+  if (!a.plot.empty()) {
+    // Rows from the largest dy down, dx increasing: the picture's order.
+    GridMapPlot map;
+    map.nx = static_cast<std::size_t>(m.columns);
+    map.ny = static_cast<std::size_t>(m.rows);
+    map.x_min = m.lag_x.front();
+    map.dx = o.width_x;
+    map.y_min = m.lag_y.back();
+    map.dy = o.width_y;
+    for (std::size_t k = 0; k < m.gamma.size(); ++k)
+      map.values.push_back(m.pairs[k] > 0 ? m.gamma[k] : std::numeric_limits<double>::quiet_NaN());
+    map.x_label = "dx (lag along " + coord_names[0] + ")";
+    map.y_label = "dy (lag along " + coord_names[1] + ")";
+    map.value_label = "gamma";
+    map.title = "variogram map of " + a.value + " (" + std::to_string(x.rows()) + " points; white: no pair)";
+    out.svg = grid_map_svg_text(map);
+  }
   return out;
 }
 
@@ -261,9 +281,20 @@ void run_cloud_or_map(const VariogramArgs& a, const Eigen::MatrixXd& x, const Ei
   const SummarizedTable out = a.cloud ? cloud_table(a, x, z, runs) : map_table(a, x, z, coord_names);
   if (a.out.empty()) {
     std::cout << out.table.to_csv();
-  } else {
+    if (!out.svg.empty()) {
+      require_standard_output();
+      write_file_atomically(a.plot, out.svg);
+    }
+  } else if (out.svg.empty()) {
     out.table.write(a.out);
     std::cerr << "variogram " << what << ": " << x.rows() << " points, " << out.summary << ", written to " << a.out << "\n";
+  } else {
+    AtomicFileSet files;  // the map's table and its picture: both or neither
+    files.add(a.out, out.table.to_csv());
+    files.add(a.plot, out.svg);
+    files.commit();
+    std::cerr << "variogram " << what << ": " << x.rows() << " points, " << out.summary << " (picture " << a.plot
+              << "), written to " << a.out << "\n";
   }
 }
 
@@ -696,7 +727,8 @@ void add_cloud_and_map_options(CLI::App* cmd, const std::shared_ptr<VariogramArg
 void add_output_options(CLI::App* cmd, const std::shared_ptr<VariogramArgs>& args) {
   cmd->add_option("--plot", args->plot,
                   "also write an SVG picture of the binned variogram (points labelled by pair count; several directions "
-                  "--alpha/--beta/--per-coordinate on one picture, a colour each with a legend), written atomically");
+                  "--alpha/--beta/--per-coordinate on one picture, a colour each with a legend; with --map the map "
+                  "itself, cells coloured by gamma), written atomically");
   cmd->add_option("--duplicates", args->duplicates,
                   "rows at exactly the same coordinates: keep (default: every row, as gstat's variogram; their pairs have "
                   "lag 0, in the first bin) | average (one sample per location, the mean of each --value column over the "
