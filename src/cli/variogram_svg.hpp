@@ -136,6 +136,70 @@ inline std::vector<std::string> wrapped(const std::string& text, std::size_t wid
 
 }  // namespace variogram_svg
 
+/// The plot area: its corner and size in the picture, and the axes' ends.
+struct VariogramPlotFrame {
+  double left, top, width, height, x_top, y_top;
+  double X(double h) const { return left + width * h / x_top; }
+  double Y(double g) const { return top + height * (1.0 - g / y_top); }
+};
+
+/// The bins' points, their pair counts and (several directions) the legend.
+inline void write_bins(std::ostringstream& s, const std::vector<VariogramPlotSeries>& series, std::uint64_t max_pairs,
+                       const VariogramPlotFrame& f) {
+  using namespace variogram_svg;
+  const auto X = [&](double h) { return f.X(h); };
+  const auto Y = [&](double g) { return f.Y(g); };
+  const double kLeft = f.left, kTop = f.top, plot_w = f.width;
+  // One point per bin: area proportional to its pairs, the count beside it (above right, else below
+  // right; left out where both would overlap a count already written: issue 49, the counts of close
+  // bins were written over each other; every count stays in its point's <title>).
+  struct Box {
+    double x0, y0, x1, y1;
+  };
+  std::vector<Box> placed;
+  const auto free_at = [&](const Box& b) {
+    for (const Box& o : placed)
+      if (b.x0 < o.x1 && o.x0 < b.x1 && b.y0 < o.y1 && o.y0 < b.y1) return false;
+    return true;
+  };
+  // Several directions: a colour each (colour-blind safe, Okabe & Ito) and a legend at the top right
+  // of the plot area, whose box no count is written over.
+  static const char* const kColours[] = {"#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9", "#000000"};
+  if (series.size() > 1) {
+    s << "<g id=\"legend\">\n";
+    for (std::size_t k = 0; k < series.size(); ++k) {
+      const double ly = kTop + 12 + 16.0 * static_cast<double>(k);
+      const double lx = kLeft + plot_w - 150;
+      s << "<circle cx=\"" << px(lx) << "\" cy=\"" << px(ly - 4) << "\" r=\"5\" fill=\"" << kColours[k % 7] << "\"/>"
+        << "<text x=\"" << px(lx + 10) << "\" y=\"" << px(ly) << "\">" << escaped(series[k].name) << "</text>\n";
+    }
+    s << "</g>\n";
+    placed.push_back({kLeft + plot_w - 158, kTop, kLeft + plot_w, kTop + 16.0 * static_cast<double>(series.size()) + 4});
+  }
+  for (std::size_t k = 0; k < series.size(); ++k) {
+    s << "<g class=\"bins\"" << (k == 0 ? " id=\"bins\"" : "") << " fill=\""
+      << (series.size() > 1 ? kColours[k % 7] : "#1f4e79") << "\">\n";
+    for (const auto& b : series[k].bins) {
+      const double r = 2.0 + 5.0 * std::sqrt(static_cast<double>(b.pairs) / static_cast<double>(max_pairs));
+      s << "<circle class=\"bin\" cx=\"" << px(X(b.lag)) << "\" cy=\"" << px(Y(b.gamma)) << "\" r=\"" << px(r)
+        << "\"><title>" << (series[k].name.empty() ? std::string() : escaped(series[k].name) + ": ") << "lag "
+        << format_number(b.lag) << ", gamma " << format_number(b.gamma) << ", " << b.pairs << " pairs</title></circle>\n";
+      // 10 px text: ~6 px per digit, 10 px high above its baseline.
+      const double w = 6.0 * static_cast<double>(std::to_string(b.pairs).size());
+      const double lx = X(b.lag) + r + 2;
+      for (const double base : {Y(b.gamma) - r - 2, Y(b.gamma) + r + 10}) {
+        const Box box{lx, base - 10.0, lx + w, base + 1.0};
+        if (!free_at(box)) continue;
+        placed.push_back(box);
+        s << "<text class=\"pairs\" x=\"" << px(lx) << "\" y=\"" << px(base) << "\" font-size=\"10\">" << b.pairs
+          << "</text>\n";
+        break;
+      }
+    }
+    s << "</g>\n";
+  }
+}
+
 /// The SVG document. Throws nothing; an empty `bins` gives empty axes.
 inline std::string variogram_svg_text(const VariogramPlot& p) {
   using namespace variogram_svg;
@@ -217,54 +281,7 @@ inline std::string variogram_svg_text(const VariogramPlot& p) {
         << "</tspan>";
     s << "</text>\n";
   }
-  // One point per bin: area proportional to its pairs, the count beside it (above right, else below
-  // right; left out where both would overlap a count already written: issue 49, the counts of close
-  // bins were written over each other; every count stays in its point's <title>).
-  struct Box {
-    double x0, y0, x1, y1;
-  };
-  std::vector<Box> placed;
-  const auto free_at = [&](const Box& b) {
-    for (const Box& o : placed)
-      if (b.x0 < o.x1 && o.x0 < b.x1 && b.y0 < o.y1 && o.y0 < b.y1) return false;
-    return true;
-  };
-  // Several directions: a colour each (colour-blind safe, Okabe & Ito) and a legend at the top right
-  // of the plot area, whose box no count is written over.
-  static const char* const kColours[] = {"#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9", "#000000"};
-  if (series.size() > 1) {
-    s << "<g id=\"legend\">\n";
-    for (std::size_t k = 0; k < series.size(); ++k) {
-      const double ly = kTop + 12 + 16.0 * static_cast<double>(k);
-      const double lx = kLeft + plot_w - 150;
-      s << "<circle cx=\"" << px(lx) << "\" cy=\"" << px(ly - 4) << "\" r=\"5\" fill=\"" << kColours[k % 7] << "\"/>"
-        << "<text x=\"" << px(lx + 10) << "\" y=\"" << px(ly) << "\">" << escaped(series[k].name) << "</text>\n";
-    }
-    s << "</g>\n";
-    placed.push_back({kLeft + plot_w - 158, kTop, kLeft + plot_w, kTop + 16.0 * static_cast<double>(series.size()) + 4});
-  }
-  for (std::size_t k = 0; k < series.size(); ++k) {
-  s << "<g class=\"bins\"" << (k == 0 ? " id=\"bins\"" : "") << " fill=\"" << (series.size() > 1 ? kColours[k % 7] : "#1f4e79")
-    << "\">\n";
-  for (const auto& b : series[k].bins) {
-    const double r = 2.0 + 5.0 * std::sqrt(static_cast<double>(b.pairs) / static_cast<double>(max_pairs));
-    s << "<circle class=\"bin\" cx=\"" << px(X(b.lag)) << "\" cy=\"" << px(Y(b.gamma)) << "\" r=\"" << px(r)
-      << "\"><title>" << (series[k].name.empty() ? std::string() : escaped(series[k].name) + ": ") << "lag "
-      << format_number(b.lag) << ", gamma " << format_number(b.gamma) << ", " << b.pairs << " pairs</title></circle>\n";
-    // 10 px text: ~6 px per digit, 10 px high above its baseline.
-    const double w = 6.0 * static_cast<double>(std::to_string(b.pairs).size());
-    const double lx = X(b.lag) + r + 2;
-    for (const double base : {Y(b.gamma) - r - 2, Y(b.gamma) + r + 10}) {
-      const Box box{lx, base - 10.0, lx + w, base + 1.0};
-      if (!free_at(box)) continue;
-      placed.push_back(box);
-      s << "<text class=\"pairs\" x=\"" << px(lx) << "\" y=\"" << px(base) << "\" font-size=\"10\">" << b.pairs
-        << "</text>\n";
-      break;
-    }
-  }
-  s << "</g>\n";
-  }
+  write_bins(s, series, max_pairs, {kLeft, kTop, plot_w, plot_h, x_top, y_top});
   s << "</svg>\n";
   return s.str();
 }
