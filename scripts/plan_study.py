@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Measurement-plan study (issue 21): held-out 3-D RMS against the number of measured poses for
 random, maximin (space-filling) and adaptive (`errfield plan --model`) selection, with the RMS
-`plan` predicted beside the one achieved. All data SIMULATED by `errfield simulate`.
+`plan` predicted beside the one achieved. Data SIMULATED by `errfield simulate`, or real
+measurements with --measurements (the real-data scoreboard's imported CSVs).
 
 usage: scripts/plan_study.py ERRFIELD_BINARY WORKDIR [--robot kr16] [--seed 3] [--pool 2000]
        [--holdout 300] [--batch 40] [--batches 6] [--long-counts 320,480,687]
@@ -58,6 +59,11 @@ def main():
     ap.add_argument("--maximin-batches", type=int, default=1,
                     help="adaptive: how many first batches are maximin (model-free) before plan --model")
     ap.add_argument("--target-rms", default="", help="adaptive: ask plan for this target's advice at every batch")
+    ap.add_argument("--measurements", default="",
+                    help="real data instead of simulate: a measurement CSV (point,q1..q6,mx,my,mz, e.g. from "
+                         "import-measurements), shuffled with --seed, its first --pool rows the pool and the "
+                         "next --holdout held out; needs --robot-file")
+    ap.add_argument("--robot-file", default="", help="with --measurements: the robot JSON (its tool included)")
     ap.add_argument("--plan-extra", default="", help="more options for plan --model, e.g. \"--spacing-floor 0.5\"")
     ap.add_argument("--extra", default="--joint-box -150,150,-130,-30,70,150,-90,90,-110,110,-180,180 "
                                         "--systematic realistic --orientation-spread 30 --joint-decimals 3")
@@ -66,22 +72,35 @@ def main():
     os.makedirs(W, exist_ok=True)
     robot = os.path.join(W, "robot.json")
     allcsv = os.path.join(W, "all.csv")
-    if not os.path.exists(allcsv):
+    if a.measurements:
+        if not a.robot_file:
+            sys.exit("--measurements needs --robot-file")
+        robot = a.robot_file
+        header, rows = read(a.measurements)
+        random.Random(int(a.seed)).shuffle(rows)
+        write(allcsv, header, rows[: a.pool + a.holdout])
+    elif not os.path.exists(allcsv):
         run([E, "simulate", "--robot", a.robot, "--seed", a.seed, "--sample", f"scattered:{a.pool + a.holdout}",
              *a.extra.split(), "--measure", "positions", "--robot-out", robot, "--out", allcsv])
     header, rows = read(allcsv)
-    kind = header.index("kind")
-    targets = [r for r in rows if r[kind] == "target"]
-    pool, hold = targets[: a.pool], targets[a.pool:]
+    targets = [r for r in rows if r[header.index("kind")] == "target"] if "kind" in header else rows
+    # A pose read at several points on the flange (column 'reflector') has one row per point: the
+    # pool and the held-out set are counted in poses, each with all its rows.
+    point = header.index("point")
+    poses = list(dict.fromkeys(r[point] for r in targets))
+    in_pool = set(poses[: a.pool])
+    pool = [r for r in targets if r[point] in in_pool]
+    hold = [r for r in targets if r[point] not in in_pool and r[point] in set(poses[a.pool: a.pool + a.holdout])]
     write(os.path.join(W, "pool.csv"), header, pool)
     write(os.path.join(W, "hold.csv"), header, hold)
-    point = header.index("point")
-    by_point = {r[point]: r for r in pool}
+    by_point = {}
+    for r in pool:
+        by_point.setdefault(r[point], []).append(r)
     out_rows = []
 
     def score(tag, chosen, predicted=None, predicted_by_own=None):
         data = os.path.join(W, f"{tag}.csv")
-        write(data, header, [by_point[p] for p in chosen])
+        write(data, header, [r for p in chosen for r in by_point[p]])
         model = os.path.join(W, f"{tag}.json")
         run([E, "fit", "--robot", robot, "--data", data, "--out", model])
         s = os.path.join(W, f"{tag}_s.json")
@@ -101,7 +120,7 @@ def main():
     counts = [a.batch * (k + 1) for k in range(a.batches)]
     long_counts = sorted(set(counts) | {min(int(c), len(pool)) for c in a.long_counts.split(",") if c})
     if "random" in designs:
-        order = [r[point] for r in pool]
+        order = list(dict.fromkeys(r[point] for r in pool))
         random.Random(int(a.seed)).shuffle(order)
         for n in long_counts:
             score(f"random_{n}", order[:n])
@@ -109,7 +128,7 @@ def main():
         nxt = os.path.join(W, "maximin_order.csv")
         run([E, "plan", "--robot", robot, "--candidates", os.path.join(W, "pool.csv"), "--count",
              str(long_counts[-1]), "--out", nxt])
-        order = [r[header.index("point")] for r in read(nxt)[1]]
+        order = list(dict.fromkeys(r[point] for r in read(nxt)[1]))
         for n in long_counts:
             score(f"maximin_{n}", order[:n])
     if "adaptive" in designs:
@@ -128,7 +147,7 @@ def main():
             run(cmd)
             if model and n > a.batch * a.maximin_batches:
                 predicted = json.load(open(summ))["predicted_rms_mm"]["after"]
-            chosen += [r[header.index("point")] for r in read(nxt)[1]]
+            chosen += list(dict.fromkeys(r[point] for r in read(nxt)[1]))
             model, row = score(f"adaptive_{n}", chosen, predicted)
             # What the model fitted on these poses predicts for itself (plan's "now").
             own = os.path.join(W, f"adaptive_own_{n}.json")
