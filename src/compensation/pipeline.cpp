@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <optional>
 
@@ -86,10 +87,15 @@ void check_table_fits_robot(const CsvTable& table, const robot::MdhModel& robot,
   const std::vector<std::string> q_cols{"q1", "q2", "q3", "q4", "q5", "q6"};
   for (const auto& c : q_cols)
     if (!table.has_column(c)) return;
-  robot::check_nominal_positions(table, robot, origin.given);
+  // Readings of several points on the flange (column 'reflector', as fit takes them): x,y,z are
+  // each point's nominal position, which only the tool point's rows share with the robot JSON, so
+  // each label's readings are registered alone, with their own reflector offset (a pool of such
+  // rows was refused by plan as "not the FK of the robot").
+  const bool several_points = several_reflector_labels(table);
+  if (!several_points) robot::check_nominal_positions(table, robot, origin.given);
   if (!table.has_column("mx") || !table.has_column("my") || !table.has_column("mz")) return;
   const std::size_t mcol[3] = {table.column_index("mx"), table.column_index("my"), table.column_index("mz")};
-  std::vector<robot::PositionMeasurement> data;
+  std::map<std::string, std::vector<robot::PositionMeasurement>> by_label;
   for (std::size_t i = 0; i < table.row_count(); ++i) {
     const auto& row = table.row(i);
     if (row[mcol[0]].empty() || row[mcol[1]].empty() || row[mcol[2]].empty()) continue;
@@ -97,9 +103,12 @@ void check_table_fits_robot(const CsvTable& table, const robot::MdhModel& robot,
     for (int k = 0; k < robot::kJointCount; ++k)
       m.q_deg[k] = table.numeric_cell(i, table.column_index(q_cols[static_cast<std::size_t>(k)]));
     for (int k = 0; k < 3; ++k) m.measured_mm[k] = table.numeric_cell(i, mcol[k]);
-    data.push_back(m);
+    by_label[several_points ? std::string(row[table.column_index("reflector")]) : std::string()].push_back(m);
   }
-  (void)robot::check_tracker_registration(robot, data, table.source(), origin, max_registration_rms_mm);
+  for (const auto& [label, data] : by_label)
+    (void)robot::check_tracker_registration(
+        robot, data, several_points ? table.source() + " (reflector " + label + ")" : table.source(), origin,
+        max_registration_rms_mm);
 }
 
 TableFit fit_table(const robot::MdhModel& robot, const CsvTable& table, const FitTableOptions& options) {

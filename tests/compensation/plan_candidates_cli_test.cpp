@@ -2,6 +2,7 @@
 // fitted model, on SIMULATED data of a KR16 (scattered joints, not the built-in grid set-up).
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -386,6 +387,53 @@ TEST_F(PlanCandidates, PredictedRmsHoldsOnHeldOutPoses) {
   const double achieved = nlohmann::json::parse(read("v.json"))["position"]["after"]["rms_mm"].get<double>();
   const double predicted = nlohmann::json::parse(read("p.json"))["predicted_rms_mm"]["now"].get<double>();
   EXPECT_NEAR(predicted / achieved, 1.0, 0.1) << "predicted " << predicted << " mm, held-out " << achieved << " mm";
+}
+
+// A campaign read at three nests on one plate (SIMULATED KR16, `simulate --reflectors`), as a first
+// batch of 40 poses: the pool with its three rows per pose was refused by plan as "not the FK of the
+// robot" (each label's x,y,z is its own nest's nominal position); fit on those 40 poses wrote models
+// its own loader refused, with the robot JSON's tool at the nest r1 ("flange_points"[1]: 0.26 mm
+// from the nominal distance, limit 0.2) and with the tool at the flange, as `--robot-out` writes it
+// ("field.samples"[0]: 120 mm from the FK). Another robot is still refused, naming the nest.
+TEST_F(PlanCandidates, AFirstBatchReadAtSeveralNestsPlansFitsAndLoads) {
+  ASSERT_EQ(run("simulate --robot kr16 --seed 5 --sample scattered:40 --joint-box "
+                "-150,150,-130,-30,70,150,-90,90,-110,110,-180,180 --orientation-spread 30 --measure positions "
+                "--reflectors \"0,0,120;60,0,110;0,60,110\" --robot-out kr16.json --out nests.csv")
+                .exit_code,
+            0);
+  nlohmann::json robot = nlohmann::json::parse(read("kr16.json"));
+  ASSERT_NEAR(robot["tool"]["z_mm"].get<double>(), 0.0, 1e-12);  // the flange: the case that failed
+  robot["tool"] = {{"x_mm", 0.0}, {"y_mm", 0.0}, {"z_mm", 120.0}, {"rx_deg", 0.0}, {"ry_deg", 0.0}, {"rz_deg", 0.0}};
+  write("kr16_r1.json", robot.dump());
+
+  const auto plan = run("plan --robot kr16.json --candidates nests.csv --count 5 --out next.csv");
+  ASSERT_EQ(plan.exit_code, 0) << plan.err;
+  EXPECT_EQ(points("next.csv").size(), 5u);  // a pose's three rows count once
+  ASSERT_EQ(run("robots --show ur10 --out ur10.json").exit_code, 0);
+  const auto other = run("plan --robot ur10.json --candidates nests.csv --count 5 --out other.csv");
+  EXPECT_EQ(other.exit_code, 2);
+  EXPECT_NE(other.err.find("(reflector r1)"), std::string::npos) << other.err;
+
+  ASSERT_EQ(run("fit --robot kr16_r1.json --data nests.csv --out at_r1.json").exit_code, 0);
+  const auto v = run("validate --model at_r1.json --data nests.csv --reflector r2");
+  EXPECT_EQ(v.exit_code, 0) << v.err;
+  const nlohmann::json m = nlohmann::json::parse(read("at_r1.json"));
+  ASSERT_EQ(m["flange_points"].size(), 3u);
+  // The nominal positions are the calibrated ones moved rigidly: every distance agrees.
+  auto point = [&](std::size_t k, const char* member) {
+    const auto& a = m["flange_points"][k][member];
+    return std::array<double, 3>{a[0].get<double>(), a[1].get<double>(), a[2].get<double>()};
+  };
+  auto apart = [](std::array<double, 3> a, std::array<double, 3> b) {
+    return std::hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+  };
+  for (std::size_t a = 0; a < 3; ++a)
+    for (std::size_t b = a + 1; b < 3; ++b)
+      EXPECT_NEAR(apart(point(a, "mm"), point(b, "mm")), apart(point(a, "nominal_mm"), point(b, "nominal_mm")), 1e-9);
+
+  ASSERT_EQ(run("fit --robot kr16.json --data nests.csv --out at_flange.json").exit_code, 0);
+  const auto p = run("predict --model at_flange.json --joints nests.csv --out p.csv");
+  EXPECT_EQ(p.exit_code, 0) << p.err;
 }
 
 }  // namespace plan_candidates_cli_test

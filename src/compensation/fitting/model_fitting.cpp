@@ -8,6 +8,7 @@
 #include <map>
 
 #include <Eigen/Dense>
+#include <Eigen/Geometry>
 #include <cmath>
 #include <optional>
 
@@ -574,12 +575,18 @@ std::optional<FlangeErrorCovariance> flange_error_covariance_of(const Compensati
 
 /// Each labelled point's position on the nominal robot's flange (LabelledPoint::nominal_mm): the
 /// mean of its training readings mapped by the nominal registration into the nominal FK's flange
-/// frame.
+/// frame, then the calibrated points (LabelledPoint::position_mm) moved rigidly onto those means
+/// (least squares, no scaling), so that the plate is the same rigid plate in both frames as the
+/// model file's check requires. The means alone each carry the robot's error at their own lever:
+/// from 40 SIMULATED poses of a three-nest KR 16 their distances differed from the calibrated
+/// points' by 0.26 mm and fit wrote a model its own loader refused.
 FitResult with_nominal_flange_points(FitResult fit, const MdhModel& nominal, const MeasurementSet& d) {
   const std::optional<Registration>& frame = fit.model.nominal_registration();
   if (!frame || fit.model.flange_points().empty() || d.reflector.empty()) return fit;
   std::vector<CompensationModel::LabelledPoint> points = fit.model.flange_points();
-  for (CompensationModel::LabelledPoint& p : points) {
+  std::vector<std::size_t> with_mean;
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    CompensationModel::LabelledPoint& p = points[k];
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     std::size_t n = 0;
     for (std::size_t i = 0; i < d.reflector.size(); ++i) {
@@ -587,7 +594,17 @@ FitResult with_nominal_flange_points(FitResult fit, const MdhModel& nominal, con
       sum += forward_kinematics(nominal, d.q_deg[i], EndFrame::flange).inverse() * (frame->robot_from_tracker * d.measured_mm[i]);
       ++n;
     }
-    if (n > 0) p.nominal_mm = sum / static_cast<double>(n);
+    if (n > 0) p.nominal_mm = sum / static_cast<double>(n), with_mean.push_back(k);
+  }
+  if (with_mean.size() >= 2) {
+    Eigen::Matrix3Xd calibrated(3, static_cast<Eigen::Index>(with_mean.size())), means(3, calibrated.cols());
+    for (std::size_t c = 0; c < with_mean.size(); ++c) {
+      calibrated.col(static_cast<Eigen::Index>(c)) = points[with_mean[c]].position_mm;
+      means.col(static_cast<Eigen::Index>(c)) = *points[with_mean[c]].nominal_mm;
+    }
+    const Eigen::Matrix4d t = Eigen::umeyama(calibrated, means, false);
+    for (std::size_t k : with_mean)
+      points[k].nominal_mm = t.topLeftCorner<3, 3>() * points[k].position_mm + t.topRightCorner<3, 1>();
   }
   fit.model = fit.model.with_flange_points(std::move(points));
   return fit;
