@@ -77,8 +77,12 @@ def main():
             sys.exit("--measurements needs --robot-file")
         robot = a.robot_file
         header, rows = read(a.measurements)
-        random.Random(int(a.seed)).shuffle(rows)
-        write(allcsv, header, rows[: a.pool + a.holdout])
+        # Shuffled by pose (a pose read at several flange points keeps all its rows together).
+        pt = header.index("point")
+        order = list(dict.fromkeys(r[pt] for r in rows))
+        random.Random(int(a.seed)).shuffle(order)
+        rank = {p: k for k, p in enumerate(order[: a.pool + a.holdout])}
+        write(allcsv, header, sorted((r for r in rows if r[pt] in rank), key=lambda r: rank[r[pt]]))
     elif not os.path.exists(allcsv):
         run([E, "simulate", "--robot", a.robot, "--seed", a.seed, "--sample", f"scattered:{a.pool + a.holdout}",
              *a.extra.split(), "--measure", "positions", "--robot-out", robot, "--out", allcsv])
