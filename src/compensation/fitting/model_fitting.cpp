@@ -933,8 +933,14 @@ void add_further_points(FitResult& out, const MeasurementSet& d, const detail::K
                         const std::function<HeldOutShift(const MdhModel&)>& shift_at) {
   const MeasuredOrientation m = measured_orientation(out.model, d, kin, reg, other_points);
   out.model = out.model.with_measured_orientation(m);
+  // sigma is what the misses leave beyond the variance the model states there; none left is not
+  // "0 mrad" of orientation error (the real UR10 probe fit printed that), but an orientation
+  // error the stated variance already covers.
+  const std::string sigma_text =
+      m.sigma_rad > 0.0 ? format_number(std::round(m.sigma_rad * 1e7) / 1e4) + " mrad per axis (1 sd)"
+                        : "none beyond the variance the model states there (their misses are within it)";
   out.notes.push_back("orientation residual of the flange measured at the other points' " + std::to_string(m.readings) +
-                      " readings: " + format_number(std::round(m.sigma_rad * 1e7) / 1e4) + " mrad per axis (1 sd)" +
+                      " readings: " + sigma_text +
                       (!m.add_floor ? std::string()
                                      : " plus the 0.1 mrad floor (the points lie on a line: a rotation about it "
                                        "escapes them)") +
