@@ -403,7 +403,7 @@ TEST(CalibrationDistanceGeometry, GeneratedKr16ClassMatchesLeastSquares) {
       [&](std::uint64_t seed) { return geometric_cube_experiment(arm, kTool, 0.0, 120, 1, 0.03, seed, 3.0); }, 1, 10);
   ASSERT_LT(off.reference, 0.1 * off.nominal);
   EXPECT_LE(off.errfield, 1.10 * off.reference);
-  EXPECT_LE(off.worst_ratio, 2.0);  // measured 1.55 (seed 6), against 18x before
+  EXPECT_LE(off.worst_ratio, 2.0);  // measured 1.44 (1.55 before reselect_at_solution), against 18x before
 }
 
 // Issue 47 item 15: an arm off by five times true_arm's deviations (0.5 deg / 5 mm, the tool 2.5 mm)
@@ -424,6 +424,11 @@ TEST(CalibrationDistanceGeometry, ParametersRedundantOnlyAtNominalAreFittedWhenT
   const Scores x3 = compare(
       [&](std::uint64_t seed) { return geometric_cube_experiment(arm, kTool, 0.0, 120, 1, 0.01, seed, 3.0); }, 1, 10);
   EXPECT_LE(x3.errfield, 1.10 * x3.reference);  // measured 1.035, 1.46 before
+  // At 0.03 mm the F statistic of the four parameters the reselection adds is small: the test at
+  // the 0.01 % level (6.0 for four) takes them where a flat 10 per parameter did not.
+  const Scores x3_noisier = compare(
+      [&](std::uint64_t seed) { return geometric_cube_experiment(arm, kTool, 0.0, 120, 1, 0.03, seed, 3.0); }, 1, 10);
+  EXPECT_LE(x3_noisier.errfield, 1.05 * x3_noisier.reference);  // measured 1.010; 1.095 at a flat 10
   const BuiltinRobot& er20 = *find_builtin_robot("er20-c10");
   const Scores sim = compare([&](std::uint64_t seed) { return cube_experiment(er20, kTool, 0.0, 120, 1, seed); }, 1, 10);
   EXPECT_LE(sim.errfield, 1.10 * sim.reference);  // measured 1.006; 2.15 with the move unbounded
