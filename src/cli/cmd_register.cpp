@@ -7,6 +7,7 @@
 #include "cli/cli_support.hpp"
 #include "cli/command_registry.hpp"
 #include "cli/robot_cli.hpp"
+#include "compensation/fitting/fit_checks.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/compensation/fitting/model_fitting.hpp"
 #include "errfield/compensation/fitting/re_registration.hpp"
@@ -43,7 +44,11 @@ void run_register(const RegisterArgs& a) {
   warn_if_metres(table, nominal, "register");
   ReRegistrationOptions options;
   options.outlier_sigmas = a.outlier_sigmas;
-  const ReRegistration r = reregister(model, nominal, data.q_deg, data.measured_mm, a.data, options);
+  // The nominal robot's own registration ('before' in validate) at the point the readings are of, as
+  // fit and validate place it: at the robot JSON's tool, 16 mm from the real UR10's located T-Mac
+  // point, the stored frame put validate's 'before' at 15.4 mm instead of 1.1.
+  const robot::MdhModel nominal_at_readings = nominal_at_measured_point(model, model.nominal_model());
+  const ReRegistration r = reregister(model, nominal_at_readings, data.q_deg, data.measured_mm, a.data, options);
 
   // Everything else in the file stays as written: only the two registrations and a note change.
   nlohmann::json j = read_json_file(a.model, "model file");

@@ -64,9 +64,10 @@ class RegisterCli : public testing::CliTest {
   }
   nlohmann::json json(const std::string& file) const { return nlohmann::json::parse(read(file)); }
   double after_rms(const std::string& summary) const { return json(summary)["position"]["after"]["rms_mm"].get<double>(); }
-  static Eigen::Isometry3d robot_from_tracker(const nlohmann::json& model) {
+  double before_rms(const std::string& summary) const { return json(summary)["position"]["before"]["rms_mm"].get<double>(); }
+  static Eigen::Isometry3d robot_from_tracker(const nlohmann::json& model, const char* member = "registration") {
     Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-    const auto& m = model["registration"]["robot_from_tracker"];
+    const auto& m = model[member]["robot_from_tracker"];
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 3; ++c) t.linear()(r, c) = m[r][c].get<double>();
       t.translation()[r] = m[r][3].get<double>();
@@ -109,6 +110,20 @@ TEST_F(RegisterCli, ARegisteredModelScoresAMovedTrackerAsTheFirstDayAndKeepsEver
     worst = std::max(worst, (got * m - expected * m).norm());
   }
   EXPECT_LT(worst, rms1) << "registered frame off the true one by " << worst << " mm (model RMS " << rms1 << ")";
+  // The nominal robot's own registration ('before') too, at the reflector the readings are of, as fit
+  // places it: at the robot JSON's tool, 20 mm away, it was off by millimetres and day 2's 'before'
+  // read several times day 1's.
+  const Eigen::Isometry3d expected_nominal = robot_from_tracker(json("m.json"), "nominal_registration") * move.inverse();
+  const Eigen::Isometry3d got_nominal = robot_from_tracker(json("m2.json"), "nominal_registration");
+  double worst_nominal = 0.0;
+  for (std::size_t i = 0; i < d2.row_count(); ++i) {
+    const Eigen::Vector3d m(d2.numeric_cell(i, d2.column_index("mx")), d2.numeric_cell(i, d2.column_index("my")),
+                            d2.numeric_cell(i, d2.column_index("mz")));
+    worst_nominal = std::max(worst_nominal, (got_nominal * m - expected_nominal * m).norm());
+  }
+  const double before1 = before_rms("s1.json"), before2 = before_rms("s2.json");
+  EXPECT_LT(worst_nominal, before1) << "nominal frame off the true one by " << worst_nominal << " mm ('before' RMS " << before1 << ")";
+  EXPECT_LT(before2, 1.5 * before1) << "day 1 'before' " << before1 << " mm, day 2 " << before2 << " mm\n" << day2.out;
   // Everything but the registrations and a note is the day-1 model, member for member.
   nlohmann::json before = json("m.json"), after = json("m2.json");
   EXPECT_EQ(after["notes"].size(), before["notes"].size() + 1);
