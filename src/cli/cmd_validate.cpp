@@ -102,7 +102,7 @@ void run_validate(const ValidateArgs& a) {
     check_table_fits_robot(table, compensation::nominal_at_working_tool(model, nominal_robot),
                            {true, a.robot.empty() ? "the nominal robot of " + a.model : "--robot " + a.robot},
                            a.max_registration_rms);
-    const MeasurementSet data = MeasurementSet::from_table(table, nominal, fixed);
+    const MeasurementSet data = compensation::readings_at_measured_point(table, model, nominal_robot, fixed);
     warn_if_metres(table, nominal, "validate");
     // The registration check above fits a free reflector offset, so readings of another reflector
     // pass it; scored against the model's point they gave 150 mm "after" errors with exit 0.

@@ -14,6 +14,7 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
+#include "compensation/fitting/fit_checks.hpp"
 #include "errfield/atomic_file.hpp"
 #include "errfield/compensation/pipeline.hpp"
 #include "errfield/compensation/planning/pose_selection.hpp"
@@ -226,7 +227,6 @@ py::dict validate_py(const PyModel& m, const py::object& data, const py::object&
   const CsvTable table = targets ? file : rows_of_one_reflector(file, reflector, !tool.is_none(), model, "");
   const auto fixed = base_points_arg(base_points);
   const MdhModel nominal_robot = robot.is_none() ? model.nominal_model() : robot_arg(robot);
-  const MdhModel nominal = nominal_at_working_tool(model, nominal_robot);
   ValidationReport r;
   std::optional<RotationCheck> rotations;
   {
@@ -234,7 +234,8 @@ py::dict validate_py(const PyModel& m, const py::object& data, const py::object&
     if (targets) {
       r = validate_targets(table, model.registration(), fixed);
     } else {
-      r = validate_predictions(model, MeasurementSet::from_table(table, nominal, fixed));
+      // As the CLI: the nominal robot at the point the readings are of ('before').
+      r = validate_predictions(model, readings_at_measured_point(table, model, nominal_robot, fixed));
       if (file.has_column("reflector") && model.fielded_points().size() >= 3)
         rotations = validate_rotations(model, MeasurementSet::from_table(file, nominal_robot, fixed, true), nominal_robot);
     }

@@ -86,6 +86,19 @@ MdhModel nominal_at_measured_point(const CompensationModel& model, const MdhMode
   return nominal.with_tool_point(model.measured_point_mm());
 }
 
+MeasurementSet readings_at_measured_point(const CsvTable& table, const CompensationModel& model,
+                                          const MdhModel& nominal_robot, const std::vector<Eigen::Vector3d>& fixed_bases) {
+  const MdhModel at_point = nominal_at_measured_point(model, nominal_robot);
+  MeasurementSet d = MeasurementSet::from_table(table, at_point, fixed_bases);
+  const bool elsewhere = !at_point.tool().isApprox(nominal_at_working_tool(model, nominal_robot).tool(), 1e-12);
+  if (table.has_column("x") && elsewhere) {
+    for (std::size_t i = 0; i < d.q_deg.size(); ++i) d.nominal_mm[i] = forward_position(at_point, d.q_deg[i]);
+    // Base rows come first in base_nominal_mm (fixed bases are used only without them).
+    for (std::size_t k = 0; k < d.base_q_deg.size(); ++k) d.base_nominal_mm[k] = forward_position(at_point, d.base_q_deg[k]);
+  }
+  return d;
+}
+
 FitResult attach_artifacts(FitResult fit, const MdhModel& nominal, const MeasurementSet& d) {
   CompensationModel m = fit.model.with_data_joints(d.q_deg);
   const bool kinematic =

@@ -45,6 +45,16 @@ FitResult attach_artifacts(FitResult fit, const robot::MdhModel& nominal, const 
 /// data (issue 47).
 robot::MdhModel nominal_at_measured_point(const CompensationModel& model, const robot::MdhModel& nominal);
 
+/// Held-out readings as validate scores them: MeasurementSet::from_table with `nominal_robot` at the
+/// point they are of (nominal_at_measured_point). A file's x,y,z columns are the controller's FK at the
+/// robot JSON's (working) tool; where the model's point lies elsewhere they are not the readings'
+/// nominal positions, so those are the nominal robot's FK at the point, as the nominal registration
+/// was fitted (attach_artifacts). From x,y,z a KR 16 whose reflector the calibration found 19 mm from
+/// the JSON's tool read 18.9 mm "before" for 1.1.
+MeasurementSet readings_at_measured_point(const CsvTable& table, const CompensationModel& model,
+                                          const robot::MdhModel& nominal_robot,
+                                          const std::vector<Eigen::Vector3d>& fixed_bases);
+
 /// Refuses (InputError naming the file, line, column 'reflector' and the value) a measurement table
 /// whose rows carry more than one label in a column `reflector` (simulate --reflectors, nests on one
 /// plate): a model is fitted to one point at a time. One label (the user kept one reflector's rows)
