@@ -108,12 +108,27 @@ struct FitArgs {
   std::size_t base = 0;
   bool reflector_far_ok = false;
   std::string tool_reflector;
-  int joint_functions = compensation::FitOptions{}.joint_function_degree;
+  std::string joint_functions = "auto";
   std::string gravity_load = compensation::FitOptions{}.gravity_load ? "on" : "off";
   std::string joint_function_prior = default_prior_text();
   double gls_guard = compensation::FitOptions{}.gls_guard_ratio;
   std::size_t max_fit_readings = kDefaultMaxFitReadings;
 };
+
+/// --joint-functions: 'auto' (the degree from the number of poses) or a degree 0..20.
+int joint_function_degree_of(const std::string& text) {
+  if (text == "auto") return compensation::kJointFunctionDegreeByPoses;
+  std::size_t used = 0;
+  int degree = -1;
+  try {
+    degree = std::stoi(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || text.empty() || degree < 0 || degree > 20)
+    throw ArgumentError("--joint-functions: '" + text + "'; expected auto or a degree 0 (none) to 20");
+  return degree;
+}
 
 void run_fit(const FitArgs& a) {
   using namespace robot;
@@ -122,7 +137,7 @@ void run_fit(const FitArgs& a) {
   FitOptions o = fit_options_from_text({a.method, a.space, a.power, a.model, a.kind, a.base, a.region_margin,
                                               a.calibration, a.robust, a.max_condition, a.outlier_limit,
                                               a.variance_calibration});
-  o.joint_function_degree = a.joint_functions;
+  o.joint_function_degree = joint_function_degree_of(a.joint_functions);
   o.gravity_load = a.gravity_load == "on";
   o.joint_function_prior = parse_joint_function_prior(a.joint_function_prior);
   o.gls_guard_ratio = a.gls_guard;
@@ -251,9 +266,12 @@ void add_joint_function_options(CLI::App* cmd, const std::shared_ptr<FitArgs>& a
                   "angle over its measured range, no constant: that is the joint offset) fitted to the calibration's "
                   "residuals before the field krigs what they leave; they model errors that depend on one joint's "
                   "angle (growing toward the end of its travel, gear transmission, gain), which the kinematic model "
-                  "cannot express and the field learns only near its samples; 0 = none; docs/robot.md says which "
-                  "data decided the default")
-      ->check(CLI::Range(0, 20))
+                  "cannot express and the field learns only near its samples; 0 = none; auto = " +
+                      std::to_string(compensation::kJointFunctionDegreeManyPoses) + " from " +
+                      std::to_string(compensation::kJointFunctionManyPoses) + " poses, else " +
+                      std::to_string(compensation::kJointFunctionDegreeFewPoses) +
+                      " (real robots' joint errors vary faster than the simulator's; docs/robot.md and "
+                      "docs/realdata.md say which data decided)")
       ->capture_default_str();
   cmd->add_option("--gravity-load", a->gravity_load,
                   "kinematic+kriging with --joint-functions: on also fits each joint's deflection under the weight of "

@@ -380,7 +380,7 @@ def fit(
     outlier_limit: float = 5.0,
     reflector_far_ok: bool = False,
     variance_calibration: Literal["auto", "loo", "none"] = "auto",
-    joint_functions: int = 8,
+    joint_functions: int = -1,
 ) -> CompensationModel: ...
 def predict(
     model: CompensationModel,

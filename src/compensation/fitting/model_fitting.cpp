@@ -255,6 +255,11 @@ VarianceCalibrationChoice variance_calibration_from_name(std::string_view name) 
   throw ArgumentError("--variance-calibration: '" + std::string(name) + "'; expected auto, loo or none");
 }
 
+int FitOptions::joint_function_degree_for(std::size_t poses) const {
+  if (joint_function_degree != kJointFunctionDegreeByPoses) return joint_function_degree;
+  return poses >= kJointFunctionManyPoses ? kJointFunctionDegreeManyPoses : kJointFunctionDegreeFewPoses;
+}
+
 void FitOptions::validate() const {
   if (!(idw_power >= 0.0) || !std::isfinite(idw_power))
     throw ArgumentError("fit: idw power " + std::to_string(idw_power) + "; expected a finite value >= 0");
@@ -262,9 +267,10 @@ void FitOptions::validate() const {
     throw ArgumentError("fit: region margin " + std::to_string(*region_margin) + "; expected a finite value >= 0");
   if (!(outlier_limit >= 0.0) || !std::isfinite(outlier_limit))
     throw ArgumentError("fit: outlier limit " + std::to_string(outlier_limit) + "; expected a finite value >= 0 (0 = off)");
-  if (joint_function_degree < 0 || joint_function_degree > 20)
+  if ((joint_function_degree < 0 && joint_function_degree != kJointFunctionDegreeByPoses) || joint_function_degree > 20)
     throw ArgumentError("fit: joint function degree " + std::to_string(joint_function_degree) +
-                        "; expected 0 (none) to 20");
+                        "; expected 0 (none) to 20, or " + std::to_string(kJointFunctionDegreeByPoses) +
+                        " (by the number of poses)");
   joint_function_prior.validate();
   if (!(gls_guard_ratio >= 0.0) || !std::isfinite(gls_guard_ratio))
     throw ArgumentError("fit: GLS guard ratio " + format_number(gls_guard_ratio) + "; expected a finite value >= 0 (0 = off)");
@@ -809,8 +815,9 @@ CalibrationResidual calibration_residual(const detail::KinematicFit& kin, const 
 JointErrorFunctionFit ordinary_joint_functions(const detail::KinematicFit& kin, const MeasurementSet& dd,
                                                const std::vector<Eigen::Vector3d>& residual, const FitOptions& o,
                                                FitResult& out) {
-  JointErrorFunctionFit jf = fit_joint_error_functions(kin.model, dd.q_deg, residual, o.joint_function_degree,
-                                                       o.gravity_load, o.joint_function_prior);
+  const int degree = o.joint_function_degree_for(dd.q_deg.size());
+  JointErrorFunctionFit jf = fit_joint_error_functions(kin.model, dd.q_deg, residual, degree, o.gravity_load,
+                                                       o.joint_function_prior);
   if (!jf.undetermined_gravity_terms.empty()) {
     std::string which;
     for (const std::string& t : jf.undetermined_gravity_terms) which += (which.empty() ? "" : ", ") + t;
@@ -824,7 +831,12 @@ JointErrorFunctionFit ordinary_joint_functions(const detail::KinematicFit& kin, 
                            " gravity-load terms (largest deflection over the poses " +
                            format_number(std::round(jf.largest_gravity_deflection_mrad * 1e3) / 1e3) + " mrad)"
                      : std::string();
-  out.notes.push_back("joint error functions (Legendre degree " + std::to_string(o.joint_function_degree) +
+  const std::string by_poses =
+      o.joint_function_degree == kJointFunctionDegreeByPoses
+          ? " (" + std::to_string(kJointFunctionDegreeManyPoses) + " from " + std::to_string(kJointFunctionManyPoses) +
+                " poses, else " + std::to_string(kJointFunctionDegreeFewPoses) + ")"
+          : std::string();
+  out.notes.push_back("joint error functions (Legendre degree " + std::to_string(degree) + by_poses +
                       " per joint" + gravity + ", ridge by generalized cross-validation: " +
                       format_number(std::round(jf.effective_parameters * 10) / 10) +
                       " effective parameters): residual RMS " + format_number(std::round(jf.rms_before_mm * 1e4) / 1e4) +
@@ -983,7 +995,7 @@ FitResult fit_kinematic_model(const MdhModel& robot, const MeasurementSet& d, co
   if (!kin.registration) out.registration = calibration.registration;
   std::vector<Eigen::Vector3d> residual = calibration.residual_mm;
   std::optional<JointErrorFunctionFit> jf;
-  if (o.joint_function_degree > 0) {
+  if (o.joint_function_degree_for(dd.q_deg.size()) > 0) {
     jf = ordinary_joint_functions(kin, dd, residual, o, out);
     residual = jf->remaining_mm;
   }

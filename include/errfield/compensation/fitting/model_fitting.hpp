@@ -85,6 +85,19 @@ enum class VarianceCalibrationChoice {
 /// "auto" / "loo" / "none" (CLI `--variance-calibration`); throws ArgumentError otherwise.
 VarianceCalibrationChoice variance_calibration_from_name(std::string_view name);
 
+/// FitOptions::joint_function_degree's default: the degree from the number of poses. Real robots'
+/// joint errors vary faster with the angle than the simulator's: on every real laser-tracker set
+/// here (UR5 700 and 1,000 poses, UR10 1,046 and 1,941) degree 12 beat 8 on held-out poses (mean
+/// -4 to -12 %, RMS -5 to -12 %), while on SIMULATED sets of 40-240 poses it lost up to 40 % (80
+/// poses) and gained only where the simulator injects cyclic errors; simulated pools of 687 poses
+/// favoured 10-12 (docs/robot.md, "Joint error functions"; docs/realdata.md). Degrees 16-20 gained
+/// more on some real sets and oscillated at the ends of a joint's range on another (0.11 -> 2.1 mm at
+/// a UR10 B pose at the edge): not the default.
+inline constexpr int kJointFunctionDegreeByPoses = -1;
+inline constexpr int kJointFunctionDegreeFewPoses = 8;
+inline constexpr int kJointFunctionDegreeManyPoses = 12;
+inline constexpr std::size_t kJointFunctionManyPoses = 500;
+
 struct FitOptions {
   CompensationMethod method = CompensationMethod::distance_idw;
   /// Use choose_method(data) instead of `method` (`fit --method auto`, the CLI's default).
@@ -127,13 +140,16 @@ struct FitOptions {
   /// "Gross outliers in fit").
   double outlier_limit = 5.0;
   /// kinematic+kriging: before the field, fit per-joint angle-error functions of this Legendre degree
-  /// to the calibration's residuals (joint_error_functions.hpp) and krige what they leave; 0 = none.
-  /// Why 8: on SIMULATED held-out sets (KR 16 with realistic systematic effects, 40-240 poses from
+  /// to the calibration's residuals (joint_error_functions.hpp) and krige what they leave; 0 = none;
+  /// kJointFunctionDegreeByPoses (the default): joint_function_degree_for(poses).
+  /// Why 8 below 500 poses: on SIMULATED held-out sets (KR 16 with realistic systematic effects, 40-240 poses from
   /// random, maximin and adaptive designs; KR 16 with compliance only, with outliers, with rigid
   /// joints; UR5e; ER20-C10) it lowered the held-out RMS by a third from 80 poses on, by 12 % at 40,
   /// never raised it by more than 7 % (one set of 40 poses) and kept the 95 % coverage; degrees 10-12
   /// gained more on some sets and lost on others (docs/robot.md, "Joint error functions").
-  int joint_function_degree = 8;
+  int joint_function_degree = kJointFunctionDegreeByPoses;
+  /// The degree a fit on `poses` poses uses: joint_function_degree, or by the number of poses.
+  int joint_function_degree_for(std::size_t poses) const;
   /// With the joint error functions: also the gravity-load terms (joint_error_functions.hpp), each
   /// joint's deflection under the weight of the arm beyond it, which depends on several joints.
   /// Why on: on SIMULATED KR 16 with realistic effects they took 7-18 % off the held-out RMS at
