@@ -19,6 +19,7 @@
 
 #include <Eigen/Geometry>
 
+#include "errfield/compensation/model/compensation.hpp"
 #include "errfield/csv_table.hpp"
 #include "errfield/robot/pose.hpp"
 #include "support/cli_harness.hpp"
@@ -253,6 +254,53 @@ TEST(ProbeToolFrame, PredictedOrientationIsTheLocatedProbeFrameWithinItsRadius) 
               coverage, scored);
   EXPECT_GE(coverage, 0.85);
   EXPECT_LT(rms, 60.0);
+}
+
+// CompensationModel::predict_errors_at batches the field's kriging solves of many rows; it must be
+// predict_error_at row by row on every path: the own point (joint functions, their weights), a
+// further nest with a field of its own, a point between (the flange's rigid motion), a point far off,
+// at training poses and held-out ones.
+TEST_F(ToolPointResults, BatchedPredictionsEqualThePredictionsOneByOne) {
+  for (const std::string name : {"m1.json", "m3.json"}) {
+    const compensation::CompensationModel model = compensation::CompensationModel::from_json(json(name), name);
+    std::vector<robot::JointVector> poses;
+    for (const std::string file : {"train_r1.csv", "test_r1.csv"}) {
+      const CsvTable t = CsvTable::read((dir_ / file).string());
+      for (std::size_t i = 0; i < t.row_count(); ++i) {
+        robot::JointVector q;
+        for (int k = 0; k < 6; ++k) q[k] = t.numeric_cell(i, t.column_index("q" + std::to_string(k + 1)));
+        poses.push_back(q);
+      }
+    }
+    poses.push_back(robot::JointVector::Constant(170.0));  // far outside the fitted region
+    std::vector<robot::JointVector> q;
+    std::vector<robot::MdhModel> at;
+    const std::array<Eigen::Vector3d, 4> points = {model.measured_point_mm(), Eigen::Vector3d(110, 0, 60),
+                                                   Eigen::Vector3d(40, 30, 70), Eigen::Vector3d(0, 0, 400)};
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      q.push_back(poses[i]);
+      at.push_back(model.command_model().with_tool_point(points[i % points.size()]));
+    }
+    const std::vector<compensation::ErrorPrediction> batched = model.predict_errors_at(q, at);
+    ASSERT_EQ(batched.size(), q.size());
+    std::size_t inside = 0;
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      const compensation::ErrorPrediction one = model.predict_error_at(q[i], at[i]);
+      const compensation::ErrorPrediction& b = batched[i];
+      ASSERT_EQ(b.inside_region, one.inside_region) << name << " row " << i;
+      EXPECT_EQ(b.credible, one.credible) << name << " row " << i;
+      EXPECT_EQ(b.orientation_supported, one.orientation_supported) << name << " row " << i;
+      EXPECT_EQ(b.calibration_supported, one.calibration_supported) << name << " row " << i;
+      if (!one.inside_region) continue;
+      ++inside;
+      // The same sums in another order (a batch's tiled solve): equal to rounding.
+      EXPECT_LT((b.position_error_mm - one.position_error_mm).norm(), 1e-9) << name << " row " << i;
+      EXPECT_NEAR(b.variance_mm2, one.variance_mm2, 1e-9 * one.variance_mm2) << name << " row " << i;
+      EXPECT_NEAR(b.orientation_variance_mm2, one.orientation_variance_mm2, 1e-9 * one.variance_mm2) << name << " row " << i;
+      EXPECT_LT((b.axis_variance_mm2 - one.axis_variance_mm2).norm(), 1e-9 * one.variance_mm2) << name << " row " << i;
+    }
+    EXPECT_GE(inside, poses.size() / 2) << name;
+  }
 }
 
 }  // namespace tool_point_results_test

@@ -418,9 +418,17 @@ MeasuredOrientation measured_orientation(const CompensationModel& model, const M
   const Eigen::Vector3d own = kin.model.tool().translation();
   double miss_ss = 0.0, explained = 0.0, lever_ss = 0.0;
   MeasuredOrientation out;
+  std::vector<MdhModel> at_row;
+  std::vector<JointVector> q_row;
   for (std::size_t i : rows) {
-    const MdhModel at = model.command_model().with_tool_point(kin.flange_point_of_row_mm[i]);
-    const ErrorPrediction e = model.predict_error_at(d.q_deg[i], at);
+    at_row.push_back(model.command_model().with_tool_point(kin.flange_point_of_row_mm[i]));
+    q_row.push_back(d.q_deg[i]);
+  }
+  const std::vector<ErrorPrediction> predicted = model.predict_errors_at(q_row, at_row);
+  for (std::size_t k = 0; k < rows.size(); ++k) {
+    const std::size_t i = rows[k];
+    const MdhModel& at = at_row[k];
+    const ErrorPrediction& e = predicted[k];
     if (!e.inside_region || !std::isfinite(e.variance_mm2)) continue;
     const Eigen::Vector3d miss =
         reg.robot_from_tracker * d.measured_mm[i] - (forward_position(at, d.q_deg[i]) + e.position_error_mm);

@@ -772,7 +772,10 @@ std::optional<RotationPrediction> CompensationModel::predict_rotation(const Join
 }
 
 ErrorPrediction CompensationModel::predict_error_at(const JointVector& q_deg, const MdhModel& point) const {
-  ErrorPrediction p = predict_field_at(q_deg, point);
+  return with_calibration_leverage(predict_field_at(q_deg, point), q_deg);
+}
+
+ErrorPrediction CompensationModel::with_calibration_leverage(ErrorPrediction p, const JointVector& q_deg) const {
   // Judged at the measured point: how far the pose is from what the calibration's data determine
   // (a lever to another point is the orientation prior's).
   if (calibration_leverage_) {
@@ -782,13 +785,58 @@ ErrorPrediction CompensationModel::predict_error_at(const JointVector& q_deg, co
   return p;
 }
 
+std::vector<ErrorPrediction> CompensationModel::predict_errors_at(std::span<const JointVector> q_deg,
+                                                                  std::span<const MdhModel> at) const {
+  if (q_deg.size() != at.size())
+    throw ArgumentError("predict_errors_at: " + std::to_string(q_deg.size()) + " joint vectors for " +
+                        std::to_string(at.size()) + " points");
+  std::vector<ErrorPrediction> out(q_deg.size());
+  if (!field_) {
+    for (std::size_t i = 0; i < q_deg.size(); ++i) out[i] = predict_error_at(q_deg[i], at[i]);
+    return out;
+  }
+  // The rows the model's own field answers (predict_uncorrected_at's first branch not taken) have
+  // their field predictions batched; the others go one by one.
+  const bool several = std::any_of(flange_points_.begin(), flange_points_.end(), [](const LabelledPoint& lp) { return lp.field != nullptr; });
+  std::vector<std::size_t> own;
+  std::vector<Eigen::Vector3d> nominal;
+  std::vector<JointVector> joints;
+  for (std::size_t i = 0; i < q_deg.size(); ++i) {
+    if (several && (at[i].tool().translation() - measured_point_mm()).norm() > kSameFlangePointMm) {
+      out[i] = predict_error_at(q_deg[i], at[i]);
+      continue;
+    }
+    own.push_back(i);
+    nominal.push_back(forward_position(nominal_model(), q_deg[i]));
+    joints.push_back(q_deg[i]);
+  }
+  std::vector<std::vector<double>> weights;
+  std::vector<ErrorPrediction> fields = field_->predict_many(nominal, joints, function_rows_at_samples_ ? &weights : nullptr);
+  static const std::vector<double> kNoWeights;
+  for (std::size_t k = 0; k < own.size(); ++k) {
+    const std::size_t i = own[k];
+    const ToolPointCorrection* correction = tool_point_correction_at(at[i]);
+    ErrorPrediction p = completed_at_own_field(std::move(fields[k]), weights.empty() ? kNoWeights : weights[k], q_deg[i],
+                                               at[i], correction == nullptr);
+    out[i] = with_calibration_leverage(with_tool_point_correction(std::move(p), q_deg[i], correction), q_deg[i]);
+  }
+  return out;
+}
+
+const ToolPointCorrection* CompensationModel::tool_point_correction_at(const MdhModel& point) const {
+  return tool_point_correction_ && (tool_point_correction_->point_mm() - point.tool().translation()).norm() <= kSameFlangePointMm
+             ? tool_point_correction_.get()
+             : nullptr;
+}
+
 ErrorPrediction CompensationModel::predict_field_at(const JointVector& q_deg, const MdhModel& point) const {
   if (!field_) return {};
-  const ToolPointCorrection* correction =
-      tool_point_correction_ && (tool_point_correction_->point_mm() - point.tool().translation()).norm() <= kSameFlangePointMm
-          ? tool_point_correction_.get()
-          : nullptr;
-  ErrorPrediction p = predict_uncorrected_at(q_deg, point, correction == nullptr);
+  const ToolPointCorrection* correction = tool_point_correction_at(point);
+  return with_tool_point_correction(predict_uncorrected_at(q_deg, point, correction == nullptr), q_deg, correction);
+}
+
+ErrorPrediction CompensationModel::with_tool_point_correction(ErrorPrediction p, const JointVector& q_deg,
+                                                              const ToolPointCorrection* correction) const {
   if (!correction || !p.inside_region) return p;
   // What the point's own readings showed beyond the model's prediction there (the flange's turn the
   // model's points do not see), kriged; its variance is what the orientation term guessed.
@@ -848,6 +896,12 @@ ErrorPrediction CompensationModel::predict_uncorrected_at(const JointVector& q_d
   std::vector<double> w;  // the field's weights, when the functions' variance needs them
   const Eigen::Vector3d at = forward_position(nominal_model(), q_deg);
   ErrorPrediction p = function_rows_at_samples_ ? field_->predict_with_weights(at, q_deg, w) : field_->predict(at, q_deg);
+  return completed_at_own_field(std::move(p), w, q_deg, point, orientation_variance);
+}
+
+ErrorPrediction CompensationModel::completed_at_own_field(ErrorPrediction p, const std::vector<double>& w,
+                                                          const JointVector& q_deg, const MdhModel& point,
+                                                          bool orientation_variance) const {
   if (p.inside_region && credible_) p.credible = credible_->contains(p);
   // The credible range is the field's (its values are what the functions left); the functions are
   // smooth in each joint and clamped beyond the fitted range, so they add no extrapolation.

@@ -175,39 +175,76 @@ class KrigingField final : public ErrorField {
     return predict_weighing(p, q, &weights);
   }
 
+  std::vector<ErrorPrediction> predict_many(std::span<const Eigen::Vector3d> p, std::span<const JointVector> q,
+                                            std::vector<std::vector<double>>* weights) const override {
+    std::vector<ErrorPrediction> out(p.size());
+    if (weights) weights->assign(p.size(), {});
+    // Targets in batches: one pass over the factor serves a whole batch (a single target streams the
+    // N x N factor from memory for one triangular solve), and a batch's weights stay a few MiB.
+    constexpr std::size_t kBatch = 256;
+    std::vector<L> targets;
+    std::vector<std::size_t> rows;
+    auto flush = [&] {
+      if (targets.empty()) return;
+      const std::span<const L> at(targets);
+      const auto pred = weights ? kriging_.predict_with_weights(at) : kriging_.predict(at);
+      for (std::size_t t = 0; t < rows.size(); ++t) {
+        const std::size_t row = rows[t];
+        if (!pred.usable() || pred.mean.size() != rows.size()) {
+          out[row].inside_region = false;
+          continue;
+        }
+        out[row] = prediction_of(pred, t, p[row]);
+        if (weights && pred.weights.offset.size() == rows.size() + 1) {
+          std::vector<double>& w = (*weights)[row];
+          w.assign(values_.size(), 0.0);
+          for (std::size_t k = pred.weights.offset[t]; k < pred.weights.offset[t + 1]; ++k)
+            w[pred.weights.sample[k]] += pred.weights.weight[k];
+        }
+      }
+      targets.clear();
+      rows.clear();
+    };
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const std::optional<L> target = target_at(p[i], q[i]);
+      if (!target) {
+        out[i].inside_region = false;
+        continue;
+      }
+      targets.push_back(*target);
+      rows.push_back(i);
+      if (targets.size() == kBatch) flush();
+    }
+    flush();
+    return out;
+  }
+
   /// The prediction, and with `weights` the weights of the samples in it (one more triangular
   /// solve, so only when asked).
   ErrorPrediction predict_weighing(const Eigen::Vector3d& p, const JointVector& q, std::vector<double>* weights) const {
+    std::vector<std::vector<double>> w;
+    ErrorPrediction out = predict_many(std::span<const Eigen::Vector3d>(&p, 1), std::span<const JointVector>(&q, 1),
+                                       weights ? &w : nullptr)[0];
+    if (weights) *weights = std::move(w[0]);
+    return out;
+  }
+
+  /// Target `t` of a kriging prediction as the field's prediction at nominal position `p`.
+  template <class Prediction>
+  ErrorPrediction prediction_of(const Prediction& pred, std::size_t t, const Eigen::Vector3d& p) const {
     ErrorPrediction out;
-    if (weights) weights->clear();
-    const std::optional<L> target = target_at(p, q);
-    if (!target) {
-      out.inside_region = false;
-      return out;
-    }
-    const std::span<const L> at(&*target, 1);
-    const auto pred = weights ? kriging_.predict_with_weights(at) : kriging_.predict(at);
-    if (weights && pred.usable() && pred.weights.offset.size() == 2) {
-      weights->assign(values_.size(), 0.0);
-      for (std::size_t k = pred.weights.offset[0]; k < pred.weights.offset[1]; ++k)
-        (*weights)[pred.weights.sample[k]] += pred.weights.weight[k];
-    }
-    if (!pred.usable() || pred.mean.empty()) {
-      out.inside_region = false;
-      return out;
-    }
     // The kriging variance is of the noise-free field; a new reading adds the nugget when the
     // nugget stands for measurement error (tracker noise, repeatability). Leaving it out made the
     // 95 % region hold 37-48 % of real held-out readings (issue 19).
-    const double field = pred.variance.empty() ? NAN : pred.variance[0];
+    const double field = pred.variance.empty() ? NAN : pred.variance[t];
     const double noise = std::isfinite(field) && options_.nugget_is_measurement_error ? model_.nugget() : 0.0;
     if constexpr (std::is_same_v<V, double>) {
-      out.distance_error_mm = pred.mean[0];
-      out.position_error_mm = pred.mean[0] * radial_direction(p, *base_);
+      out.distance_error_mm = pred.mean[t];
+      out.position_error_mm = pred.mean[t] * radial_direction(p, *base_);
       out.variance_mm2 = field;
       out.noise_variance_mm2 = std::isfinite(field) ? noise : NAN;
     } else {
-      out.position_error_mm = pred.mean[0];
+      out.position_error_mm = pred.mean[t];
       // The model is per component (one shared structure, kriging.hpp): each axis has the same
       // variance; the 3-D error's is the sum.
       out.variance_mm2 = 3.0 * field;

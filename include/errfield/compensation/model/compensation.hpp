@@ -22,6 +22,7 @@
 #include <memory>
 #include <mutex>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -199,6 +200,18 @@ class ErrorField {
                                                std::vector<double>& weights) const {
     weights.clear();
     return predict(p_mm, q_deg);
+  }
+  /// predict() (with `weights`: predict_with_weights()) at each (p_mm[i], q_deg[i]); kriging fields
+  /// solve a batch of locations in one pass over their factor, much faster than one call per location.
+  virtual std::vector<ErrorPrediction> predict_many(std::span<const Eigen::Vector3d> p_mm,
+                                                    std::span<const robot::JointVector> q_deg,
+                                                    std::vector<std::vector<double>>* weights) const {
+    std::vector<ErrorPrediction> out;
+    out.reserve(p_mm.size());
+    if (weights) weights->assign(p_mm.size(), {});
+    for (std::size_t i = 0; i < p_mm.size(); ++i)
+      out.push_back(weights ? predict_with_weights(p_mm[i], q_deg[i], (*weights)[i]) : predict(p_mm[i], q_deg[i]));
+    return out;
   }
   /// The joints of the samples predict_with_weights() weighs; empty for fields without weights.
   virtual std::vector<robot::JointVector> sample_joints() const { return {}; }
@@ -390,6 +403,11 @@ class CompensationModel {
   /// carried to the point, with the fields' variances combined as if fully correlated (an upper
   /// bound) and, where the points lie on one line, the prior on the rotation about it.
   ErrorPrediction predict_error_at(const robot::JointVector& q_deg, const robot::MdhModel& at) const;
+  /// predict_error_at(q_deg[i], at[i]) for every i, the field's kriging solves at the model's own
+  /// point batched: one pass over the field's factor per batch of rows instead of one per row (a
+  /// fit's check of 3,882 probe readings against a 1,941-sample field: 18 s one by one).
+  std::vector<ErrorPrediction> predict_errors_at(std::span<const robot::JointVector> q_deg,
+                                                 std::span<const robot::MdhModel> at) const;
   /// The joint error functions' position error at the point `at` (a command model whose tool is that
   /// point), zero without functions: what fit takes from a further point's readings before kriging them.
   Eigen::Vector3d joint_function_error_at(const robot::JointVector& q_deg, const robot::MdhModel& at) const;
@@ -474,6 +492,17 @@ class CompensationModel {
   /// orientation term's variance out (the correction's measured variance takes its place).
   ErrorPrediction predict_uncorrected_at(const robot::JointVector& q_deg, const robot::MdhModel& at,
                                          bool orientation_variance) const;
+  /// predict_uncorrected_at's own-field branch after the field's prediction `p` (with its weights
+  /// `w`, or none): the credible range, the joint functions, the orientation term.
+  ErrorPrediction completed_at_own_field(ErrorPrediction p, const std::vector<double>& w, const robot::JointVector& q_deg,
+                                         const robot::MdhModel& at, bool orientation_variance) const;
+  /// The tool point correction that applies at `at`'s tool point, or null.
+  const ToolPointCorrection* tool_point_correction_at(const robot::MdhModel& at) const;
+  /// `p` with `correction` (null: none) added: predict_field_at after predict_uncorrected_at.
+  ErrorPrediction with_tool_point_correction(ErrorPrediction p, const robot::JointVector& q_deg,
+                                             const ToolPointCorrection* correction) const;
+  /// `p` with the calibration's leverage at `q_deg` judged: predict_error_at after predict_field_at.
+  ErrorPrediction with_calibration_leverage(ErrorPrediction p, const robot::JointVector& q_deg) const;
   /// predict_error_at away from every point with a field, when several points hold one.
   ErrorPrediction predict_by_rigid_motion(const robot::JointVector& q_deg, const robot::MdhModel& at,
                                           bool orientation_variance) const;
