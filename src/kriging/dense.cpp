@@ -9,6 +9,7 @@
 
 #include "errfield/csv_table.hpp"
 #include "kriging/kriging_engine.hpp"
+#include "dense_cholesky.hpp"
 #include "lower_triangular_solve.hpp"
 
 namespace errfield::detail {
@@ -165,7 +166,12 @@ KrigingOutput KrigingEngine::predict_dense(const Eigen::MatrixXd& embedded, cons
   return out;
 }
 
-Eigen::VectorXd KrigingEngine::loo_precision_diagonal() const {
+const Eigen::VectorXd& KrigingEngine::loo_precision_diagonal() const {
+  std::call_once(pdiag_once_, [this] { pdiag_ = compute_loo_precision_diagonal(); });
+  return pdiag_;
+}
+
+Eigen::VectorXd KrigingEngine::compute_loo_precision_diagonal() const {
   const Eigen::Index n = points_.cols();
   // diag(K^-1)_j = |L^-1 e_j|^2, and L^-1 e_j is zero above row j: each block of columns [c, c+w)
   // needs only the trailing triangle L[c:, c:], so the whole diagonal costs n^3/3 flops (not the n^3
@@ -184,7 +190,8 @@ Eigen::VectorXd KrigingEngine::loo_precision_diagonal() const {
       auto x = work.topLeftCorner(m, w);
       x.setZero();
       x.topRows(w).setIdentity();
-      l.bottomRightCorner(m, m).triangularView<Eigen::Lower>().solveInPlace(x);
+      kernels::lower_solve_in_place(&l(c, c), static_cast<std::size_t>(l.outerStride()), static_cast<std::size_t>(m),
+                                    x.data(), static_cast<std::size_t>(work.outerStride()), static_cast<std::size_t>(w));
       pdiag.segment(c, w) = x.colwise().squaredNorm().transpose();
     }
   }
@@ -203,7 +210,7 @@ KrigingOutput KrigingEngine::loo_dense() const {
   // block, P = K^-1 - K^-1 F G^-1 F' K^-1, the leave-one-out residual is alpha_i / P_ii and its
   // variance 1 / P_ii.
   const Eigen::Index n = points_.cols();
-  const Eigen::VectorXd pdiag = loo_precision_diagonal();
+  const Eigen::VectorXd& pdiag = loo_precision_diagonal();
   KrigingOutput out;
   out.status = report_.status;
   out.message = report_.message;
@@ -232,7 +239,7 @@ Eigen::MatrixXd KrigingEngine::leave_one_out_residuals_of(const Eigen::MatrixXd&
   llt_.matrixL().solveInPlace(y);
   if (drift_terms_ > 0) y -= q_ * g_llt_.solve(q_.transpose() * y);
   llt_.matrixU().solveInPlace(y);
-  const Eigen::VectorXd pdiag = loo_precision_diagonal();
+  const Eigen::VectorXd& pdiag = loo_precision_diagonal();
   Eigen::MatrixXd out(n, values.cols());
   for (Eigen::Index i = 0; i < n; ++i)
     out.row(static_cast<Eigen::Index>(original_index_[static_cast<std::size_t>(i)])) = y.row(i) / pdiag[i];

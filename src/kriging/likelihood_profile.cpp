@@ -8,6 +8,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "dense_cholesky.hpp"
 #include "errfield/csv_table.hpp"
 #include "kriging/correlation_derivative.hpp"
 #include "kriging/likelihood_vecchia.hpp"
@@ -31,19 +32,20 @@ void inverse_lower_triangle(const Eigen::MatrixXd& factor, Eigen::MatrixXd& linv
   const Eigen::Index blocks = (n + kBlock - 1) / kBlock;
   linv.setZero(n, n);
   w.setZero(n, n);
+  const auto size = [](Eigen::Index v) { return static_cast<std::size_t>(v); };
 #pragma omp parallel for schedule(dynamic, 1)
   for (Eigen::Index b = 0; b < blocks; ++b) {
     // Columns c0..c0+nc of L^-1 are zero above row c0: solve L[c0:, c0:] X = I[c0:, c0:c0+nc].
     const Eigen::Index c0 = b * kBlock, nc = std::min(kBlock, n - c0), m = n - c0;
-    auto x = linv.block(c0, c0, m, nc);
-    x.topRows(nc).setIdentity();
-    factor.bottomRightCorner(m, m).triangularView<Eigen::Lower>().solveInPlace(x);
+    linv.block(c0, c0, nc, nc).setIdentity();
+    kernels::lower_solve_in_place(&factor(c0, c0), size(n), size(m), &linv(c0, c0), size(n), size(nc));
   }
 #pragma omp parallel for schedule(dynamic, 1)
   for (Eigen::Index b = 0; b < blocks; ++b) {
     // W[i, j] = sum_k L^-1[k, i] L^-1[k, j]; for i, j >= c0 only rows k >= c0 contribute.
     const Eigen::Index c0 = b * kBlock, nc = std::min(kBlock, n - c0), m = n - c0;
-    w.block(c0, c0, m, nc).noalias() = linv.bottomRightCorner(m, m).transpose() * linv.block(c0, c0, m, nc);
+    kernels::transposed_product(&linv(c0, c0), size(n), &linv(c0, c0), size(n), size(m), size(m), size(nc), &w(c0, c0),
+                                size(n));
   }
 }
 
@@ -59,8 +61,7 @@ struct Profile {
   Correlation corr{ModelKind::Exponential, 1};
   bool ard = false, fit_nugget = true, restricted = true;
   int dims = 0;
-  Eigen::MatrixXd u, r, w, linv;
-  Eigen::LLT<Eigen::MatrixXd> llt;
+  Eigen::MatrixXd u, r, w, linv;  // r: the correlation matrix, then its Cholesky factor (lower triangle)
   double sigma2 = 0.0;
   const VecchiaNeighbours* vecchia = nullptr;  // set: the Vecchia approximation with these sets
 
@@ -89,12 +90,13 @@ struct Profile {
         r(i, j) = rho;
       }
     }
-    llt.compute(r);
+    const bool factored = kernels::cholesky_lower_in_place(r.data(), static_cast<std::size_t>(n), static_cast<std::size_t>(n));
     if (grad) std::fill(grad, grad + nr + (fit_nugget ? 1 : 0), 0.0);
-    if (llt.info() != Eigen::Success) return kFailed;
-    const auto l = llt.matrixL();
+    if (!factored) return kFailed;
+    const Eigen::MatrixXd& factor = r;
+    const auto l = factor.triangularView<Eigen::Lower>();
     double logdet = 0.0;
-    for (Eigen::Index i = 0; i < n; ++i) logdet += 2.0 * std::log(llt.matrixLLT()(i, i));
+    for (Eigen::Index i = 0; i < n; ++i) logdet += 2.0 * std::log(r(i, i));
     Eigen::MatrixXd y = l.solve(*z);
     // No drift (simple kriging): Eigen's triangular solve must not see a 0-column right-hand side.
     Eigen::MatrixXd q = p > 0 ? Eigen::MatrixXd(l.solve(*f)) : Eigen::MatrixXd(n, 0);
@@ -116,7 +118,7 @@ struct Profile {
     if (!grad) return nll;
 
     const Eigen::MatrixXd a = l.transpose().solve(y);  // P z
-    inverse_lower_triangle(llt.matrixLLT(), linv, w);  // (R + gI)^-1, the lower triangle the loop below reads
+    inverse_lower_triangle(r, linv, w);  // (R + gI)^-1, the lower triangle the loop below reads
     if (restricted && p > 0) {
       const Eigen::MatrixXd h = l.transpose().solve(q);  // (R + gI)^-1 F
       w.noalias() -= h * gl.solve(h.transpose());

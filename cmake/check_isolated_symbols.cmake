@@ -1,0 +1,38 @@
+# Checks that an object compiled with extra instruction sets (kernels/dense_cholesky_avx2.cpp) defines
+# no shared symbol outside its own namespaces: the linker keeps one copy of each weak symbol for the
+# whole program, so an AVX2 instance of a template under a common name (std::, Eigen::) could replace
+# the plain one everywhere and fault on a CPU without AVX2.
+#   cmake -DNM=nm -DOBJECTS="a.o;b.o" -DPATTERN=dense_cholesky_avx2 -DALLOWED="errfield_eigen_avx2|errfield::kernels::detail::avx2" -P check_isolated_symbols.cmake
+set(found "")
+foreach(object IN LISTS OBJECTS)
+  if(object MATCHES "${PATTERN}")
+    set(found "${object}")
+  endif()
+endforeach()
+if(NOT found)
+  message(FATAL_ERROR "no object matching ${PATTERN} among the library's objects")
+endif()
+execute_process(COMMAND ${NM} -C --defined-only "${found}" OUTPUT_VARIABLE symbols RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "${NM} failed on ${found}")
+endif()
+string(REPLACE "\n" ";" lines "${symbols}")
+set(shared 0)
+set(bad "")
+foreach(line IN LISTS lines)
+  # global or weak code and data (T, W, V, u); local symbols (t, b, d, r) cannot replace anything
+  if(line MATCHES "^[0-9a-f]* [TWVu] (.*)$")
+    set(name "${CMAKE_MATCH_1}")
+    math(EXPR shared "${shared} + 1")
+    if(NOT name MATCHES "${ALLOWED}" AND NOT name MATCHES "^DW\\.ref\\.__gxx_personality_v0$")
+      string(APPEND bad "  ${name}\n")
+    endif()
+  endif()
+endforeach()
+if(bad)
+  message(FATAL_ERROR "${found} defines shared symbols outside ${ALLOWED}:\n${bad}")
+endif()
+if(shared EQUAL 0)
+  message(FATAL_ERROR "${found} defines no shared symbol at all: is it still the AVX2 build?")
+endif()
+message(STATUS "${found}: ${shared} shared symbols, all in ${ALLOWED}")
