@@ -13,21 +13,21 @@ namespace detail::plain {
 namespace detail::avx2 {  // kernels/dense_cholesky_avx2.cpp
 bool cholesky_lower_in_place(double* a, std::size_t n, std::size_t lda);
 void lower_solve_in_place(const double* l, std::size_t ldl, std::size_t m, double* x, std::size_t ldx, std::size_t k);
-void transposed_product(const double* a, std::size_t lda, const double* b, std::size_t ldb, std::size_t k,
-                        std::size_t m, std::size_t nc, double* c, std::size_t ldc);
+void lower_transposed_product(const double* l, std::size_t ldl, std::size_t m, const double* b, std::size_t ldb,
+                              std::size_t nc, double* c, std::size_t ldc);
 }  // namespace detail::avx2
 #endif
 
 const DenseKernels& plain_dense_kernels() {
   static const DenseKernels k{detail::plain::cholesky_lower_in_place, detail::plain::lower_solve_in_place,
-                              detail::plain::transposed_product};
+                              detail::plain::lower_transposed_product};
   return k;
 }
 
 const DenseKernels* avx2_dense_kernels() {
 #if defined(ERRFIELD_DENSE_AVX2)
   static const DenseKernels k{detail::avx2::cholesky_lower_in_place, detail::avx2::lower_solve_in_place,
-                              detail::avx2::transposed_product};
+                              detail::avx2::lower_transposed_product};
   static const bool available = [] {
     __builtin_cpu_init();
     return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
@@ -55,9 +55,9 @@ void lower_solve_in_place(const double* l, std::size_t ldl, std::size_t m, doubl
   chosen().lower_solve_in_place(l, ldl, m, x, ldx, k);
 }
 
-void transposed_product(const double* a, std::size_t lda, const double* b, std::size_t ldb, std::size_t k,
-                        std::size_t m, std::size_t nc, double* c, std::size_t ldc) {
-  chosen().transposed_product(a, lda, b, ldb, k, m, nc, c, ldc);
+void lower_transposed_product(const double* l, std::size_t ldl, std::size_t m, const double* b, std::size_t ldb,
+                              std::size_t nc, double* c, std::size_t ldc) {
+  chosen().lower_transposed_product(l, ldl, m, b, ldb, nc, c, ldc);
 }
 
 }  // namespace errfield::kernels

@@ -24,16 +24,18 @@ bool cholesky_lower_in_place(double* a, std::size_t n, std::size_t lda);
 /// m x k (leading dimension ldx).
 void lower_solve_in_place(const double* l, std::size_t ldl, std::size_t m, double* x, std::size_t ldx, std::size_t k);
 
-/// C := Aᵀ B, with A k x m (leading dimension lda), B k x nc (ldb) and C m x nc (ldc).
-void transposed_product(const double* a, std::size_t lda, const double* b, std::size_t ldb, std::size_t k,
-                        std::size_t m, std::size_t nc, double* c, std::size_t ldc);
+/// C := Lᵀ B, with L the lower triangle of the m x m matrix `l` (leading dimension ldl; the strict
+/// upper triangle is not read), B m x nc (ldb) and C m x nc (ldc): the triangular product, half the
+/// flops of a general one.
+void lower_transposed_product(const double* l, std::size_t ldl, std::size_t m, const double* b, std::size_t ldb,
+                              std::size_t nc, double* c, std::size_t ldc);
 
 /// The three functions of one build, for tests and benchmarks that compare the builds.
 struct DenseKernels {
   bool (*cholesky_lower_in_place)(double* a, std::size_t n, std::size_t lda);
   void (*lower_solve_in_place)(const double* l, std::size_t ldl, std::size_t m, double* x, std::size_t ldx, std::size_t k);
-  void (*transposed_product)(const double* a, std::size_t lda, const double* b, std::size_t ldb, std::size_t k,
-                             std::size_t m, std::size_t nc, double* c, std::size_t ldc);
+  void (*lower_transposed_product)(const double* l, std::size_t ldl, std::size_t m, const double* b, std::size_t ldb,
+                                   std::size_t nc, double* c, std::size_t ldc);
 };
 /// The plain build's functions (what runs on every CPU).
 const DenseKernels& plain_dense_kernels();

@@ -24,7 +24,7 @@ constexpr double kFailed = 1e300;
 // except inside the diagonal blocks; callers read the lower triangle only). The gradient needs W at every evaluation, and forming it was
 // ~3n^3 flops on one core (a full triangular solve against the identity, then a general product):
 // most of a REML fit's time. Here, in fixed blocks of 64 columns, L^-1's zeros above the diagonal are
-// skipped (n^3/3 + 2n^3/3 flops) and the blocks run on the OpenMP threads. Every block is the same
+// skipped (n^3/3 flops for L^-1, n^3/6 for the triangular product) and the blocks run on the OpenMP threads. Every block is the same
 // single-threaded Eigen computation whatever the number of threads, so W does not depend on it.
 void inverse_lower_triangle(const Eigen::MatrixXd& factor, Eigen::MatrixXd& linv, Eigen::MatrixXd& w) {
   constexpr Eigen::Index kBlock = 64;
@@ -44,8 +44,8 @@ void inverse_lower_triangle(const Eigen::MatrixXd& factor, Eigen::MatrixXd& linv
   for (Eigen::Index b = 0; b < blocks; ++b) {
     // W[i, j] = sum_k L^-1[k, i] L^-1[k, j]; for i, j >= c0 only rows k >= c0 contribute.
     const Eigen::Index c0 = b * kBlock, nc = std::min(kBlock, n - c0), m = n - c0;
-    kernels::transposed_product(&linv(c0, c0), size(n), &linv(c0, c0), size(n), size(m), size(m), size(nc), &w(c0, c0),
-                                size(n));
+    kernels::lower_transposed_product(&linv(c0, c0), size(n), size(m), &linv(c0, c0), size(n), size(nc), &w(c0, c0),
+                                      size(n));
   }
 }
 

@@ -1,6 +1,6 @@
 // The likelihood's dense kernels (kernels/dense_cholesky.hpp), the plain build and the AVX2 + FMA one
 // where the CPU has it, against textbook loops written here: the Cholesky recurrence, forward
-// substitution and the triple loop of a product, on strided matrices of sizes around Eigen's blocks.
+// substitution and the loops of a triangular product, on strided matrices of sizes around Eigen's blocks.
 
 #include "dense_cholesky.hpp"
 
@@ -17,17 +17,16 @@ struct Build {
   const char* name;
   bool (*cholesky)(double*, std::size_t, std::size_t);
   void (*solve)(const double*, std::size_t, std::size_t, double*, std::size_t, std::size_t);
-  void (*product)(const double*, std::size_t, const double*, std::size_t, std::size_t, std::size_t, std::size_t, double*,
-                  std::size_t);
+  void (*product)(const double*, std::size_t, std::size_t, const double*, std::size_t, std::size_t, double*, std::size_t);
 };
 
 std::vector<Build> builds() {
   const kernels::DenseKernels& plain = kernels::plain_dense_kernels();
-  std::vector<Build> b = {{"plain", plain.cholesky_lower_in_place, plain.lower_solve_in_place, plain.transposed_product},
+  std::vector<Build> b = {{"plain", plain.cholesky_lower_in_place, plain.lower_solve_in_place, plain.lower_transposed_product},
                           {"dispatched", kernels::cholesky_lower_in_place, kernels::lower_solve_in_place,
-                           kernels::transposed_product}};
+                           kernels::lower_transposed_product}};
   if (const kernels::DenseKernels* avx2 = kernels::avx2_dense_kernels())
-    b.push_back({"avx2", avx2->cholesky_lower_in_place, avx2->lower_solve_in_place, avx2->transposed_product});
+    b.push_back({"avx2", avx2->cholesky_lower_in_place, avx2->lower_solve_in_place, avx2->lower_transposed_product});
   return b;
 }
 
@@ -81,7 +80,7 @@ TEST(DenseCholesky, RefusesAMatrixThatIsNotPositiveDefinite) {
   }
 }
 
-TEST(DenseCholesky, SolveAndTransposedProductEqualTheirLoops) {
+TEST(DenseCholesky, SolveAndTriangularProductEqualTheirLoops) {
   std::mt19937 rng(12);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (const Build& b : builds())
@@ -102,12 +101,14 @@ TEST(DenseCholesky, SolveAndTransposedProductEqualTheirLoops) {
         b.solve(l.data(), ldl, m, got.data(), ldx, k);
         for (std::size_t i = 0; i < got.size(); ++i) EXPECT_NEAR(got[i], ref[i], 1e-12 * static_cast<double>(m)) << b.name;
 
-        // C (m x k) = Aᵀ B with A rows x m and B rows x k, rows = m + 2
-        const std::size_t rows = m + 2, lda = rows + 1, ldb = rows + 2, ldc = m + 4;
-        std::vector<double> a(lda * m), bb(ldb * k), c(ldc * k, 5.0);
-        for (double& v : a) v = u(rng);
+        // C (m x k) = Lᵀ B with L the lower triangle of `l` (its upper triangle is not read)
+        std::vector<double> lu = l;
+        for (std::size_t j = 0; j < m; ++j)
+          for (std::size_t i = 0; i < j; ++i) lu[i + j * ldl] = 1e300;
+        const std::size_t ldb = m + 2, ldc = m + 4;
+        std::vector<double> bb(ldb * k), c(ldc * k, 5.0);
         for (double& v : bb) v = u(rng);
-        b.product(a.data(), lda, bb.data(), ldb, rows, m, k, c.data(), ldc);
+        b.product(lu.data(), ldl, m, bb.data(), ldb, k, c.data(), ldc);
         for (std::size_t j = 0; j < k; ++j)
           for (std::size_t i = 0; i < ldc; ++i) {
             if (i >= m) {
@@ -115,8 +116,8 @@ TEST(DenseCholesky, SolveAndTransposedProductEqualTheirLoops) {
               continue;
             }
             double s = 0.0;
-            for (std::size_t r = 0; r < rows; ++r) s += a[r + i * lda] * bb[r + j * ldb];
-            EXPECT_NEAR(c[i + j * ldc], s, 1e-13 * static_cast<double>(rows)) << b.name;
+            for (std::size_t r = i; r < m; ++r) s += l[r + i * ldl] * bb[r + j * ldb];
+            EXPECT_NEAR(c[i + j * ldc], s, 1e-13 * static_cast<double>(m)) << b.name;
           }
       }
 }
