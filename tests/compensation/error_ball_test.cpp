@@ -84,6 +84,21 @@ TEST(ErrorBall, UnequalVariancesMatchMonteCarlo) {
   EXPECT_LT(r95, std::sqrt(7.814727903251178 * v.maxCoeff()));
 }
 
+// The radius (safeguarded Newton steps) inverts the probability at any anisotropy and probability,
+// including a zero variance and ratios of a million, where a step can leave the bracket.
+TEST(ErrorBall, TheRadiusInvertsTheProbabilityAtAnyAnisotropy) {
+  const Eigen::Vector3d cases[] = {{1.0, 1e-6, 1e-6}, {1.0, 1.0, 1e-6}, {1e-6, 0.3, 1.0}, {1.0, 0.0, 0.0},
+                                   {2.0, 1.0, 0.5},   {1.0, 0.999, 1.0}, {4e-4, 1e-4, 2.5e-5}};
+  for (const Eigen::Vector3d& v : cases)
+    for (double p : {0.05, 0.5, 0.95, 0.999}) {
+      const double r = radius_with_probability(p, v);
+      ASSERT_TRUE(std::isfinite(r)) << v.transpose() << " p " << p;
+      EXPECT_NEAR(probability_within_radius(r, v), p, 1e-10) << v.transpose() << " p " << p;
+      // and it is the smallest such radius: a little less holds less
+      EXPECT_LT(probability_within_radius(r * (1.0 - 1e-6), v), p) << v.transpose() << " p " << p;
+    }
+}
+
 TEST(ErrorBall, RefusesWhatIsNoVariance) {
   EXPECT_TRUE(std::isnan(probability_within_radius(0.1, Eigen::Vector3d(0.01, -0.01, 0.01))));
   EXPECT_TRUE(std::isnan(probability_within_radius(0.1, Eigen::Vector3d(0.01, NAN, 0.01))));
